@@ -1,0 +1,1 @@
+"""Subcommands of `vinadv`; each module has `register(subparsers)`."""

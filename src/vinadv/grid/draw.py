@@ -1,0 +1,54 @@
+"""Drawing maps and paths with matplotlib (Agg; no display needed). Downstream stages reuse these."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+PATH_STYLES = {"expert": ("#2ca02c", "-"), "original": ("#d62728", "-"), "adversarial": ("#1f77b4", "--")}
+
+
+def draw_map(
+    ax,
+    obstacles: np.ndarray,
+    goal: np.ndarray | None = None,
+    start: np.ndarray | None = None,
+    paths: Sequence[tuple[str, np.ndarray]] = (),
+    added: np.ndarray | None = None,
+    title: str | None = None,
+) -> None:
+    """Draw one N x N map on `ax`: obstacles black, start green circle, goal red star, paths as lines.
+
+    `paths` is a sequence of `(label, cells (L, 2))`; a label in PATH_STYLES gets its colour. `added` marks the
+    adversarial obstacle with an orange square.
+    """
+    n = obstacles.shape[0]
+    ax.imshow(~np.asarray(obstacles, dtype=bool), cmap="gray", vmin=0, vmax=1, interpolation="nearest")
+    for label, cells in paths:
+        colour, style = PATH_STYLES.get(label, (None, "-"))
+        cells = np.asarray(cells)
+        ax.plot(cells[:, 1], cells[:, 0], style, color=colour, lw=2, label=label, alpha=0.9)
+    if added is not None:
+        ax.add_patch(plt.Rectangle((added[1] - 0.5, added[0] - 0.5), 1, 1, color="#ff7f0e", label="added obstacle"))
+    if start is not None:
+        ax.plot(start[1], start[0], "o", color="#2ca02c", ms=8, mec="k", label="start")
+    if goal is not None:
+        ax.plot(goal[1], goal[0], "*", color="#d62728", ms=13, mec="k", label="goal")
+    ax.set_xlim(-0.5, n - 0.5)
+    ax.set_ylim(n - 0.5, -0.5)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    if title:
+        ax.set_title(title, fontsize=9)
+
+
+def save_figure(fig, path: str | os.PathLike) -> None:
+    """Save and close `fig`; the format follows the file extension (png, svg, pdf)."""
+    fig.savefig(path, dpi=150, bbox_inches="tight")
+    plt.close(fig)

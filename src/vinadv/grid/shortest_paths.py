@@ -1,0 +1,229 @@
+"""Exact shortest paths on 8-connected grid worlds, batched over many maps.
+
+Dijkstra from the goal (the move graph is undirected: a move needs its destination free, and, without corner
+cutting, both cells beside a diagonal too, which is symmetric), compiled with Numba and run in parallel over
+maps. Besides the cost of every cell it returns the number of moves of an optimal path: an optimal cost
+`a + b*sqrt(2)` fixes the integers `a` and `b`, so every optimal path has the same `L = a + b` moves.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS, N_ACTIONS
+
+# Costs are sums of 1 and sqrt(2); two different sums of up to a few thousand terms differ by far more.
+COST_TOL = 1e-9
+
+
+def valid_moves(obstacles: np.ndarray, corner_cutting: bool = True) -> np.ndarray:
+    """Which of the 8 moves from each cell are legal: `(B, N, N, 8)` bool.
+
+    A move is legal when its destination is on the grid and free; without `corner_cutting`, a diagonal move
+    also needs both orthogonal cells it passes between to be free. The origin cell itself is not checked.
+    """
+    obstacles = np.asarray(obstacles, dtype=bool)
+    b, n, m = obstacles.shape
+    padded = np.ones((b, n + 2, m + 2), dtype=bool)
+    padded[:, 1:-1, 1:-1] = obstacles
+    free = ~padded
+    out = np.empty((b, n, m, N_ACTIONS), dtype=bool)
+    for a, (dr, dc) in enumerate(ACTION_DELTAS):
+        ok = free[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m]
+        if not corner_cutting and dr != 0 and dc != 0:
+            ok = ok & free[:, 1 + dr : 1 + dr + n, 1 : 1 + m] & free[:, 1 : 1 + n, 1 + dc : 1 + dc + m]
+        out[..., a] = ok
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _dijkstra_one(obstacles, gr, gc, corner_cutting, deltas, costs, dist, moves):
+    n, m = obstacles.shape
+    inf = np.inf
+    for r in range(n):
+        for c in range(m):
+            dist[r, c] = inf
+            moves[r, c] = -1
+    if obstacles[gr, gc]:
+        return
+    cap = 8 * n * m + 1
+    heap_key = np.empty(cap, dtype=np.float64)
+    heap_val = np.empty(cap, dtype=np.int64)
+    size = 0
+    done = np.zeros((n, m), dtype=np.bool_)
+    dist[gr, gc] = 0.0
+    moves[gr, gc] = 0
+    heap_key[0] = 0.0
+    heap_val[0] = gr * m + gc
+    size = 1
+    while size > 0:
+        key = heap_key[0]
+        node = heap_val[0]
+        # pop: move the last element to the root and sift it down
+        size -= 1
+        if size > 0:
+            lk = heap_key[size]
+            lv = heap_val[size]
+            i = 0
+            while True:
+                child = 2 * i + 1
+                if child >= size:
+                    break
+                if child + 1 < size and heap_key[child + 1] < heap_key[child]:
+                    child += 1
+                if heap_key[child] < lk:
+                    heap_key[i] = heap_key[child]
+                    heap_val[i] = heap_val[child]
+                    i = child
+                else:
+                    break
+            heap_key[i] = lk
+            heap_val[i] = lv
+        r = node // m
+        c = node - r * m
+        if done[r, c] or key > dist[r, c]:
+            continue
+        done[r, c] = True
+        for a in range(deltas.shape[0]):
+            nr = r + deltas[a, 0]
+            nc = c + deltas[a, 1]
+            if nr < 0 or nr >= n or nc < 0 or nc >= m or obstacles[nr, nc] or done[nr, nc]:
+                continue
+            if not corner_cutting and deltas[a, 0] != 0 and deltas[a, 1] != 0:
+                if obstacles[nr, c] or obstacles[r, nc]:
+                    continue
+            nd = key + costs[a]
+            if nd < dist[nr, nc] - 1e-9:
+                dist[nr, nc] = nd
+                moves[nr, nc] = moves[r, c] + 1
+                # push and sift up
+                i = size
+                size += 1
+                while i > 0:
+                    parent = (i - 1) // 2
+                    if heap_key[parent] > nd:
+                        heap_key[i] = heap_key[parent]
+                        heap_val[i] = heap_val[parent]
+                        i = parent
+                    else:
+                        break
+                heap_key[i] = nd
+                heap_val[i] = nr * m + nc
+
+
+@numba.njit(cache=True, parallel=True)
+def _dijkstra_batch(obstacles, goals, corner_cutting, deltas, costs, dist, moves):
+    for b in numba.prange(obstacles.shape[0]):
+        _dijkstra_one(
+            obstacles[b], goals[b, 0], goals[b, 1], corner_cutting, deltas, costs, dist[b], moves[b]
+        )
+
+
+def shortest_distances(
+    obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
+    """Optimal cost-to-goal and optimal move count of every cell, for a batch of maps.
+
+    Args:
+        obstacles: `(B, N, N)` bool, True = obstacle.
+        goals: `(B, 2)` int, `(row, col)` of each goal.
+        corner_cutting: whether a diagonal move may pass between two obstacles.
+
+    Returns:
+        `dist (B, N, N) float64` (inf where the goal cannot be reached, obstacles included) and
+        `moves (B, N, N) int32` (moves of an optimal path, -1 where unreachable).
+    """
+    obstacles = np.ascontiguousarray(obstacles, dtype=np.bool_)
+    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    dist = np.empty(obstacles.shape, dtype=np.float64)
+    moves = np.empty(obstacles.shape, dtype=np.int32)
+    if len(obstacles):
+        _dijkstra_batch(obstacles, goals, bool(corner_cutting), ACTION_DELTAS, ACTION_COSTS, dist, moves)
+    return dist, moves
+
+
+def optimal_actions(dist: np.ndarray, obstacles: np.ndarray, corner_cutting: bool = True) -> np.ndarray:
+    """Which actions are optimal at each cell: `(B, N, N, 8)` bool.
+
+    An action is optimal at a reachable, non-goal cell when it is legal and its cost plus the neighbour's
+    cost-to-goal equals the cell's cost-to-goal. The goal, obstacles and unreachable cells have none.
+    """
+    b, n, m = dist.shape
+    padded = np.full((b, n + 2, m + 2), np.inf)
+    padded[:, 1:-1, 1:-1] = dist
+    legal = valid_moves(obstacles, corner_cutting)
+    out = np.zeros((b, n, m, N_ACTIONS), dtype=bool)
+    target = np.where(np.isfinite(dist) & (dist > 0), dist, np.nan)
+    for a, (dr, dc) in enumerate(ACTION_DELTAS):
+        via = padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m] + ACTION_COSTS[a]
+        out[..., a] = legal[..., a] & (np.abs(via - target) <= COST_TOL)
+    return out
+
+
+def first_optimal_action(optimal: np.ndarray) -> np.ndarray:
+    """The lowest-index optimal action of each cell, `-1` where there is none: `(B, N, N)` int8."""
+    first = np.argmax(optimal, axis=-1).astype(np.int8)
+    first[~optimal.any(axis=-1)] = -1
+    return first
+
+
+@numba.njit(cache=True)
+def _follow_policy(actions, starts, goals, deltas, lengths, cells, fill):
+    # Two passes share this code: with fill False only `lengths` is written.
+    n_maps, n_starts = starts.shape[0], starts.shape[1]
+    pos = 0
+    for b in range(n_maps):
+        for s in range(n_starts):
+            r = starts[b, s, 0]
+            c = starts[b, s, 1]
+            count = 0
+            while True:
+                if fill:
+                    cells[pos, 0] = r
+                    cells[pos, 1] = c
+                pos += 1
+                count += 1
+                if r == goals[b, 0] and c == goals[b, 1]:
+                    break
+                a = actions[b, r, c]
+                if a < 0:
+                    break
+                r += deltas[a, 0]
+                c += deltas[a, 1]
+            lengths[b * n_starts + s] = count
+
+
+def expert_paths(
+    obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Optimal paths from every start to the goal (ties broken by the lowest action index).
+
+    Args:
+        obstacles: `(B, N, N)` bool. goals: `(B, 2)`. starts: `(B, S, 2)`, each able to reach its goal.
+
+    Returns:
+        `costs (B, S) float64`, and the paths packed flat, path `b * S + s` first: `cells (total, 2) int16`,
+        `offsets (B * S + 1,) int64`. A start that cannot reach the goal gets cost inf and a one-cell path.
+    """
+    dist, _ = shortest_distances(obstacles, goals, corner_cutting)
+    return expert_paths_from(dist, obstacles, goals, starts, corner_cutting)
+
+
+def expert_paths_from(
+    dist: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`expert_paths` for distances already computed by `shortest_distances`."""
+    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    actions = np.ascontiguousarray(first_optimal_action(optimal_actions(dist, obstacles, corner_cutting)))
+    b, s = starts.shape[:2]
+    lengths = np.zeros(b * s, dtype=np.int64)
+    dummy = np.zeros((0, 2), dtype=np.int16)
+    _follow_policy(actions, starts, goals, ACTION_DELTAS, lengths, dummy, False)
+    offsets = np.zeros(b * s + 1, dtype=np.int64)
+    np.cumsum(lengths, out=offsets[1:])
+    cells = np.empty((offsets[-1], 2), dtype=np.int16)
+    _follow_policy(actions, starts, goals, ACTION_DELTAS, lengths, cells, True)
+    costs = dist[np.arange(b)[:, None], starts[..., 0], starts[..., 1]]
+    return costs, cells, offsets

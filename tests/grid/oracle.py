@@ -1,0 +1,41 @@
+"""Brute-force oracles written straight from DESIGN.md, independent of vinadv's code."""
+
+import math
+
+DELTAS = [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)]
+
+
+def legal(obstacles, r, c, a, corner_cutting=True):
+    n, m = len(obstacles), len(obstacles[0])
+    dr, dc = DELTAS[a]
+    nr, nc = r + dr, c + dc
+    if not (0 <= nr < n and 0 <= nc < m) or obstacles[nr][nc]:
+        return False
+    if not corner_cutting and dr and dc and (obstacles[r + dr][c] or obstacles[r][c + dc]):
+        return False
+    return True
+
+
+def brute_distances(obstacles, goal, corner_cutting=True):
+    """Bellman-Ford over (cost, moves) pairs until nothing changes: slow and obviously right."""
+    n, m = len(obstacles), len(obstacles[0])
+    inf = (math.inf, -1)
+    best = {(r, c): inf for r in range(n) for c in range(m)}
+    if not obstacles[goal[0]][goal[1]]:
+        best[tuple(goal)] = (0.0, 0)
+    changed = True
+    while changed:
+        changed = False
+        for r in range(n):
+            for c in range(m):
+                if obstacles[r][c]:
+                    continue
+                for a, (dr, dc) in enumerate(DELTAS):
+                    if not legal(obstacles, r, c, a, corner_cutting):
+                        continue
+                    cost, moves = best[(r + dr, c + dc)]
+                    step = math.sqrt(2) if dr and dc else 1.0
+                    if cost + step < best[(r, c)][0] - 1e-9:
+                        best[(r, c)] = (cost + step, moves + 1)
+                        changed = True
+    return best

@@ -1,0 +1,78 @@
+import numpy as np
+import pytest
+
+from vinadv.cli import main
+from vinadv.errors import InputError
+from vinadv.grid import MapSet, generate_maps
+
+
+@pytest.fixture(scope="module")
+def maps():
+    return generate_maps(20, 16, seed=2, n_starts=4)
+
+
+def test_round_trip(tmp_path, maps):
+    maps.save(tmp_path / "m.npz")
+    back = MapSet.load(tmp_path / "m.npz")
+    for field in ("obstacles", "goals", "starts", "expert_costs", "expert_cells", "expert_offsets"):
+        np.testing.assert_array_equal(getattr(back, field), getattr(maps, field))
+    assert back.corner_cutting == maps.corner_cutting and back.seed == 2
+
+
+def _corrupt(tmp_path, maps, **changes):
+    data = dict(np.load(_saved(tmp_path, maps)))
+    for key, value in changes.items():
+        if value is None:
+            data.pop(key)
+        else:
+            data[key] = value
+    path = tmp_path / "bad.npz"
+    np.savez(path, **data)
+    return path
+
+
+def _saved(tmp_path, maps):
+    path = tmp_path / "good.npz"
+    maps.save(path)
+    return path
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"format": np.array("vinadv.maps/9")}, "format 'vinadv.maps/9' is not supported"),
+        ({"format": np.array("vinadv.pairs/1")}, "not a vinadv.maps file"),
+        ({"format": None}, "'format' missing"),
+        ({"obstacles": None}, "'obstacles' is missing"),
+        ({"obstacles": np.zeros((20, 16, 16), dtype=np.float32)}, "'obstacles' has dtype float32"),
+        ({"goals": np.zeros((19, 2), dtype=np.int64)}, "'goals' has shape"),
+        ({"starts": np.full((20, 4, 2), 40, dtype=np.int64)}, "'starts' has a cell outside"),
+        ({"expert_offsets": np.zeros(81, dtype=np.int64)}, "'expert_offsets' is not increasing"),
+    ],
+)
+def test_corrupted_files_are_refused(tmp_path, maps, change, message):
+    path = _corrupt(tmp_path, maps, **change)
+    with pytest.raises(InputError, match=message):
+        MapSet.load(path)
+
+
+def test_start_on_obstacle_is_refused(tmp_path, maps):
+    obstacles = maps.obstacles.copy()
+    obstacles[0, maps.starts[0, 0, 0], maps.starts[0, 0, 1]] = True
+    with pytest.raises(InputError, match="'starts' has a start on an obstacle"):
+        MapSet.load(_corrupt(tmp_path, maps, obstacles=obstacles))
+
+
+def test_cli_generate_show_and_bad_files(tmp_path, capsys):
+    out = tmp_path / "m.npz"
+    assert main(["maps", "generate", "--n", "5", "--size", "12", "--seed", "1", "--out", str(out), "--quiet"]) == 0
+    assert len(MapSet.load(out)) == 5
+    png = tmp_path / "m.png"
+    assert main(["maps", "show", str(out), "--index", "2", "--out", str(png)]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert main(["maps", "show", str(out), "--index", "9", "--out", str(png)]) == 2
+    assert "out of range" in capsys.readouterr().err
+    (tmp_path / "junk.npz").write_text("not a zip")
+    assert main(["maps", "show", str(tmp_path / "junk.npz"), "--out", str(png)]) == 2
+    assert "junk.npz: not an .npz file" in capsys.readouterr().err
+    assert main(["maps", "generate", "--n", "5", "--size", "4", "--out", str(out)]) == 2

@@ -1,0 +1,100 @@
+import math
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from tests.grid.oracle import brute_distances, legal
+from vinadv.grid import (
+    ACTION_COSTS,
+    ACTION_DELTAS,
+    expert_paths,
+    optimal_actions,
+    path_costs,
+    shortest_distances,
+    unpack_paths,
+    valid_moves,
+)
+
+
+@st.composite
+def small_maps(draw):
+    n = draw(st.integers(3, 8))
+    m = draw(st.integers(3, 8))
+    cells = draw(st.lists(st.booleans(), min_size=n * m, max_size=n * m))
+    obstacles = np.array(cells, dtype=bool).reshape(n, m)
+    goal = (draw(st.integers(0, n - 1)), draw(st.integers(0, m - 1)))
+    obstacles[goal] = False
+    return obstacles, np.array(goal)
+
+
+@settings(max_examples=120, deadline=None)
+@given(small_maps(), st.booleans())
+def test_dijkstra_matches_brute_force(case, corner_cutting):
+    obstacles, goal = case
+    dist, moves = shortest_distances(obstacles[None], goal[None], corner_cutting)
+    best = brute_distances(obstacles.tolist(), goal, corner_cutting)
+    for (r, c), (cost, n_moves) in best.items():
+        assert math.isclose(dist[0, r, c], cost, abs_tol=1e-9) or (math.isinf(cost) and math.isinf(dist[0, r, c]))
+        assert moves[0, r, c] == n_moves
+
+
+@settings(max_examples=60, deadline=None)
+@given(small_maps(), st.booleans())
+def test_optimal_actions_are_exactly_the_cost_preserving_legal_moves(case, corner_cutting):
+    obstacles, goal = case
+    dist, _ = shortest_distances(obstacles[None], goal[None], corner_cutting)
+    opt = optimal_actions(dist, obstacles[None], corner_cutting)[0]
+    legal_np = valid_moves(obstacles[None], corner_cutting)[0]
+    best = brute_distances(obstacles.tolist(), goal, corner_cutting)
+    for (r, c), (cost, _) in best.items():
+        for a, (dr, dc) in enumerate(ACTION_DELTAS):
+            is_legal = legal(obstacles.tolist(), r, c, a, corner_cutting)
+            if not obstacles[r, c]:
+                assert legal_np[r, c, a] == is_legal
+            expected = (
+                not obstacles[r, c] and math.isfinite(cost) and cost > 0 and is_legal
+                and math.isclose(best[(r + dr, c + dc)][0] + ACTION_COSTS[a], cost, abs_tol=1e-9)
+            )
+            assert opt[r, c, a] == expected
+
+
+def test_batches_agree_with_single_maps():
+    rng = np.random.default_rng(3)
+    obstacles = rng.random((20, 12, 12)) < 0.3
+    goals = rng.integers(0, 12, (20, 2))
+    obstacles[np.arange(20), goals[:, 0], goals[:, 1]] = False
+    dist, moves = shortest_distances(obstacles, goals)
+    for i in range(20):
+        d1, m1 = shortest_distances(obstacles[i : i + 1], goals[i : i + 1])
+        np.testing.assert_array_equal(d1[0], dist[i])
+        np.testing.assert_array_equal(m1[0], moves[i])
+
+
+def test_corner_cutting_option_blocks_squeezing_between_two_obstacles():
+    obstacles = np.zeros((3, 3), dtype=bool)
+    obstacles[0, 1] = obstacles[1, 0] = True  # (0,0) -> (1,1) passes between them
+    goal = np.array([[0, 0]])
+    dist_cut, _ = shortest_distances(obstacles[None], goal, corner_cutting=True)
+    dist_nocut, _ = shortest_distances(obstacles[None], goal, corner_cutting=False)
+    assert math.isclose(dist_cut[0, 1, 1], math.sqrt(2))
+    assert math.isinf(dist_nocut[0, 1, 1])
+
+
+@settings(max_examples=40, deadline=None)
+@given(small_maps(), st.booleans(), st.integers(0, 2**31))
+def test_expert_paths_are_legal_and_optimal(case, corner_cutting, seed):
+    obstacles, goal = case
+    best = brute_distances(obstacles.tolist(), goal, corner_cutting)
+    reachable = [cell for cell, (cost, _) in best.items() if math.isfinite(cost)]
+    rng = np.random.default_rng(seed)
+    starts = np.array([reachable[i] for i in rng.integers(0, len(reachable), 3)])
+    costs, cells, offsets = expert_paths(obstacles[None], goal[None], starts[None], corner_cutting)
+    for s, path in enumerate(unpack_paths(cells, offsets)):
+        assert tuple(path[0]) == tuple(starts[s]) and tuple(path[-1]) == tuple(goal)
+        for (r, c), (r2, c2) in zip(path[:-1], path[1:]):
+            a = [tuple(d) for d in ACTION_DELTAS.tolist()].index((r2 - r, c2 - c))
+            assert legal(obstacles.tolist(), r, c, a, corner_cutting)
+        assert math.isclose(costs[0, s], best[tuple(starts[s])][0], abs_tol=1e-9)
+        assert len(path) - 1 == best[tuple(starts[s])][1]
+    np.testing.assert_allclose(path_costs(cells, offsets), costs[0], atol=1e-9)
