@@ -1,0 +1,1 @@
+"""One-obstacle attacks: strategies that turn maps into (original, adversarial) map pairs."""
