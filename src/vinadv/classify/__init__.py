@@ -1,0 +1,43 @@
+"""Path pair classification: path features, the exact FP/DP rule, path images, classifiers, baselines.
+
+Input everywhere: packed path pairs (`PathPairBatch`, or the packed arrays of `vinadv.grid.paths`).
+"""
+
+from vinadv.classify.base import MODEL_FORMAT, PairClassifier, load_model, save_model
+from vinadv.classify.batch import PathPairBatch, concat_batches
+from vinadv.classify.features import LABELS, SUCCESS_LABELS, PathFeatures, path_features, reaches_goal, same_paths
+from vinadv.classify.hybrid import (
+    FP_DP_KINDS,
+    HybridClassifier,
+    RuleClassifier,
+    make_fp_classifier,
+)
+from vinadv.classify.images import (
+    AUGMENT_TRANSFORMS,
+    augmentation_plan,
+    balance_batch,
+    balance_images,
+    render_batch,
+    render_path_images,
+    transform_cells,
+    transform_images,
+)
+from vinadv.classify.metrics import binary_metrics
+from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
+from vinadv.classify.rule import PairLabels, default_threshold, is_fork, label_batch, label_pairs, path_distances
+from vinadv.classify.similarity import (
+    DistanceThresholdClassifier,
+    dtw_distances,
+    frechet_distances,
+    hausdorff_distances,
+)
+
+__all__ = [
+    "AUGMENT_TRANSFORMS", "CNNImageClassifier", "DistanceThresholdClassifier", "FP_DP_KINDS", "HybridClassifier",
+    "LABELS", "MLPImageClassifier", "MODEL_FORMAT", "PairClassifier", "PairLabels", "PathFeatures",
+    "PathPairBatch", "RuleClassifier", "SUCCESS_LABELS", "SVMImageClassifier", "augmentation_plan",
+    "balance_batch", "balance_images", "binary_metrics", "concat_batches", "default_threshold", "dtw_distances",
+    "frechet_distances", "hausdorff_distances", "is_fork", "label_batch", "label_pairs", "load_model",
+    "make_fp_classifier", "path_distances", "path_features", "reaches_goal", "render_batch",
+    "render_path_images", "same_paths", "save_model", "transform_cells", "transform_images",
+]

@@ -1,0 +1,150 @@
+"""The common base of the FP/DP classifiers, and the model file format.
+
+Every classifier follows the scikit-learn estimator API: `fit(X, y)`, `predict(X)`, `decision_function(X)`
+(positive = FP), `get_params()`. `X` is a `PathPairBatch`; image classifiers also take rendered path images
+`(n, N, N, 3)` uint8. `y` holds the label strings 'DP' / 'FP' (from the rule labeller or from people).
+
+Model files are `.npz` archives (read with `allow_pickle=False`, so loading never runs code) with entries
+`format` ("vinadv.classifier/1"), `kind`, `params` (JSON constructor arguments), `meta` (JSON fitted state and
+the training record) and the fitted arrays.
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from pathlib import Path
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+
+from vinadv.errors import InputError
+
+MODEL_FORMAT = "vinadv.classifier/1"
+#: The two classes of the image classifiers, in scikit-learn order (`decision_function > 0` means FP).
+FP_DP_CLASSES = np.array(["DP", "FP"])
+
+_REGISTRY: dict[str, type] = {}
+
+
+def register_kind(*kinds: str):
+    """Class decorator: the model kinds a class saves and loads."""
+
+    def wrap(cls):
+        for kind in kinds:
+            _REGISTRY[kind] = cls
+        return cls
+
+    return wrap
+
+
+class PairClassifier(ClassifierMixin, BaseEstimator):
+    """Base of the FP/DP classifiers. Subclasses define `kind`, `fit`, `decision_function`, `_state`,
+    `_from_state`."""
+
+    kind = "abstract"
+
+    def _check_y(self, X, y) -> np.ndarray:
+        y = np.asarray(y)
+        if y.ndim != 1 or len(y) != len(X):
+            raise InputError(f"{len(y)} labels for {len(X)} path pairs")
+        bad = set(np.unique(y).tolist()) - {"DP", "FP"}
+        if bad:
+            raise InputError(f"FP/DP classifiers take the labels 'DP' and 'FP' only, got {sorted(bad)}")
+        if len(np.unique(y)) < 2:
+            raise InputError("training needs pairs of both classes, FP and DP")
+        self.classes_ = FP_DP_CLASSES.copy()
+        return y
+
+    def _check_fitted(self, attribute: str) -> None:
+        if not hasattr(self, attribute):
+            raise InputError(f"this {type(self).__name__} is not fitted yet: call fit first")
+
+    def predict(self, X) -> np.ndarray:
+        """'FP' or 'DP' per pair, `(n,)` str."""
+        return np.where(self.decision_function(X) > 0, "FP", "DP")
+
+    # persistence ---------------------------------------------------------------------------------------
+    def _json_params(self) -> dict:
+        return self.get_params(deep=False)
+
+    def _state(self) -> tuple[dict, dict]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    @classmethod
+    def _from_state(cls, kind: str, params: dict, meta: dict, arrays: dict):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def save(self, path, record: dict | None = None, record_arrays: dict | None = None) -> None:
+        """Write the fitted model to `path` (`.npz` archive), with an optional training record."""
+        save_model(self, path, record, record_arrays)
+
+    @classmethod
+    def load(cls, path):
+        """Read a model written by `save`; refuses a file of another format version or of another kind."""
+        return load_model(path, expected=cls)
+
+
+def _pack_state(model) -> tuple[dict, dict]:
+    meta, arrays = model._state()
+    return {"kind": model.kind, "params": model._json_params(), "meta": meta}, arrays
+
+
+def save_model(model: PairClassifier, path, record: dict | None = None, record_arrays: dict | None = None) -> None:
+    """Save `model` (any registered kind) to `path`; `record`/`record_arrays` travel along (training facts)."""
+    header, arrays = _pack_state(model)
+    entries = {f"a.{k}": np.asarray(v) for k, v in arrays.items()}
+    entries.update({f"r.{k}": np.asarray(v) for k, v in (record_arrays or {}).items()})
+    with open(path, "wb") as handle:  # a file handle keeps the user's name (np.savez would append .npz)
+        np.savez_compressed(
+            handle,
+            format=np.array(MODEL_FORMAT),
+            kind=np.array(model.kind),
+            params=np.array(json.dumps(header["params"])),
+            meta=np.array(json.dumps(header["meta"])),
+            record=np.array(json.dumps(record or {})),
+            **entries,
+        )
+
+
+def load_model(path, expected: type | None = None) -> PairClassifier:
+    """Load a model file; `expected` (a class) refuses other kinds. Bad files raise InputError naming them.
+
+    The loaded model carries the training record as `record_` (dict) and `record_arrays_` (dict of arrays).
+    """
+    path = Path(path)
+    try:
+        archive = np.load(path, allow_pickle=False)
+    except FileNotFoundError:
+        raise
+    except (OSError, ValueError, zipfile.BadZipFile) as exc:
+        raise InputError(f"{path}: not a vinadv model file ({exc})") from None
+    with archive:
+        if "format" not in archive.files or "kind" not in archive.files:
+            raise InputError(f"{path}: not a vinadv model file (no 'format'/'kind' entries)")
+        fmt = str(archive["format"])
+        if fmt != MODEL_FORMAT:
+            raise InputError(f"{path}: model format {fmt!r}; this vinadv reads {MODEL_FORMAT!r} only")
+        kind = str(archive["kind"])
+        cls = _REGISTRY.get(kind)
+        if cls is None:
+            raise InputError(f"{path}: unknown model kind {kind!r}; known kinds: {sorted(_REGISTRY)}")
+        if expected is not None and not issubclass(cls, expected):
+            raise InputError(f"{path}: holds a {kind!r} model, not a {expected.__name__}")
+        params = json.loads(str(archive["params"]))
+        meta = json.loads(str(archive["meta"]))
+        arrays = {k[2:]: archive[k] for k in archive.files if k.startswith("a.")}
+        record = json.loads(str(archive["record"])) if "record" in archive.files else {}
+        record_arrays = {k[2:]: archive[k] for k in archive.files if k.startswith("r.")}
+    model = cls._from_state(kind, params, meta, arrays)
+    model.record_ = record
+    model.record_arrays_ = record_arrays
+    return model
+
+
+def model_from_state(header: dict, arrays: dict) -> PairClassifier:
+    """Rebuild a model from `_pack_state` output (used to nest one model inside another)."""
+    cls = _REGISTRY.get(header["kind"])
+    if cls is None:
+        raise InputError(f"unknown model kind {header['kind']!r}; known kinds: {sorted(_REGISTRY)}")
+    return cls._from_state(header["kind"], header["params"], header["meta"], arrays)

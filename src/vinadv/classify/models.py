@@ -1,0 +1,325 @@
+"""Path image classifiers for FP vs DP: SVM (scikit-learn SVC), CNN and MLP (PyTorch).
+
+Inputs are path images (`vinadv.classify.images`), rendered from a `PathPairBatch` in chunks or passed in
+directly as `(n, N, N, 3)` uint8. Pixel values are scaled to 0/1.
+
+SVM: fitted with `sklearn.svm.SVC` (RBF kernel) on the sparse flattened images; predictions use the fitted
+support vectors, dual coefficients and intercept directly (sparse image x dense support-vector products),
+which gives SVC's decision function far faster than libsvm's per-sample loop, and is what is saved.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import scipy.sparse
+from sklearn.svm import SVC
+
+from vinadv.classify.base import PairClassifier, register_kind
+from vinadv.classify.batch import PathPairBatch
+from vinadv.classify.images import render_batch
+from vinadv.errors import InputError
+
+CHUNK = 4096
+
+
+def _image_chunks(X, chunk: int = CHUNK):
+    """Yield `(start, images (m, N, N, 3) uint8)` chunks of X (a PathPairBatch or an image array)."""
+    if isinstance(X, PathPairBatch):
+        for start in range(0, len(X), chunk):
+            yield start, render_batch(X.subset(np.arange(start, min(start + chunk, len(X)))))
+    else:
+        images = np.asarray(X)
+        if images.ndim != 4 or images.shape[3] != 3 or images.shape[1] != images.shape[2]:
+            raise InputError(f"path images must be (n, N, N, 3), got shape {images.shape}")
+        for start in range(0, len(images), chunk):
+            yield start, images[start : start + chunk]
+
+
+def _image_size(X) -> int:
+    return X.size if isinstance(X, PathPairBatch) else int(np.asarray(X).shape[1])
+
+
+def _sparse_features(images: np.ndarray) -> scipy.sparse.csr_matrix:
+    """Flattened images as a 0/1 float32 CSR matrix `(m, N * N * 3)`."""
+    flat = images.reshape(len(images), -1)
+    rows, cols = np.nonzero(flat)
+    values = (flat[rows, cols] / 255.0).astype(np.float32)
+    return scipy.sparse.csr_matrix((values, (rows, cols)), shape=flat.shape, dtype=np.float32)
+
+
+@register_kind("svm")
+class SVMImageClassifier(PairClassifier):
+    """RBF-kernel SVM on flattened path images (paper section 4.3). `C`, `gamma` as in `sklearn.svm.SVC`."""
+
+    kind = "svm"
+
+    def __init__(self, C: float = 1.0, gamma: str | float = "scale"):
+        self.C = C
+        self.gamma = gamma
+
+    def fit(self, X, y) -> SVMImageClassifier:
+        y = self._check_y(X, y)
+        start = time.perf_counter()
+        features = scipy.sparse.vstack([_sparse_features(images) for _, images in _image_chunks(X)]).tocsr()
+        svc = SVC(C=self.C, kernel="rbf", gamma=self.gamma, cache_size=500)
+        svc.fit(features.astype(np.float64), y)
+        # binary SVC: dual_coef_ and intercept_ are signed so that a positive decision means classes_[1] (FP)
+        # a sparse fit gives sparse support vectors and dual coefficients
+        self.support_vectors_ = np.asarray(svc.support_vectors_.toarray(), dtype=np.float32)
+        dual = svc.dual_coef_
+        self.dual_coef_ = np.asarray(dual.toarray() if scipy.sparse.issparse(dual) else dual, dtype=np.float64).reshape(-1)
+        self.intercept_ = float(svc.intercept_[0])
+        self.gamma_ = float(svc._gamma)
+        self.size_ = _image_size(X)
+        self.training_time_s_ = time.perf_counter() - start
+        self._prepare()
+        return self
+
+    def _prepare(self) -> None:
+        self._sv_t = np.ascontiguousarray(self.support_vectors_.T)
+        self._sv_norms = (self.support_vectors_.astype(np.float64) ** 2).sum(axis=1)
+
+    def decision_function(self, X) -> np.ndarray:
+        """SVC decision value per pair, `(n,)` float64 (positive = FP)."""
+        self._check_fitted("support_vectors_")
+        if _image_size(X) != self.size_:
+            raise InputError(f"this SVM was trained on {self.size_}x{self.size_} maps, not {_image_size(X)}")
+        out = np.empty(len(X))
+        for start, images in _image_chunks(X):
+            features = _sparse_features(images)
+            dots = np.asarray(features @ self._sv_t, dtype=np.float64)
+            norms = np.asarray(features.multiply(features).sum(axis=1), dtype=np.float64)
+            squared = np.maximum(norms + self._sv_norms[None, :] - 2.0 * dots, 0.0)
+            out[start : start + len(images)] = np.exp(-self.gamma_ * squared) @ self.dual_coef_ + self.intercept_
+        return out
+
+    def _state(self):
+        self._check_fitted("support_vectors_")
+        meta = {"intercept": self.intercept_, "gamma": self.gamma_, "size": self.size_,
+                "training_time_s": self.training_time_s_}
+        return meta, {"support_vectors": self.support_vectors_.astype(bool), "dual_coef": self.dual_coef_}
+
+    @classmethod
+    def _from_state(cls, kind, params, meta, arrays):
+        model = cls(**params)
+        model.classes_ = np.array(["DP", "FP"])
+        model.support_vectors_ = arrays["support_vectors"].astype(np.float32)
+        model.dual_coef_ = arrays["dual_coef"].astype(np.float64)
+        model.intercept_ = float(meta["intercept"])
+        model.gamma_ = float(meta["gamma"])
+        model.size_ = int(meta["size"])
+        model.training_time_s_ = float(meta.get("training_time_s", 0.0))
+        model._prepare()
+        return model
+
+
+# --- PyTorch image classifiers ------------------------------------------------------------------------------
+
+
+def _torch():
+    import torch
+
+    # the machine is shared: never more than 2 threads
+    if torch.get_num_threads() > 2:
+        torch.set_num_threads(2)
+    return torch
+
+
+def _build_network(kind: str, architecture: str, size: int, width: int):
+    torch = _torch()
+    nn = torch.nn
+    if kind == "cnn" and architecture == "plain":
+        # the usual small image CNN (two 3x3 convolutions, max pooling, dropout, a dense layer)
+        return nn.Sequential(
+            nn.Conv2d(3, width, 3, padding=1), nn.ReLU(),
+            nn.Conv2d(width, 2 * width, 3, padding=1), nn.ReLU(),
+            nn.MaxPool2d(2), nn.Dropout(0.25), nn.Flatten(),
+            nn.Linear(2 * width * (size // 2) ** 2, 128), nn.ReLU(), nn.Dropout(0.5), nn.Linear(128, 2),
+        )
+    if kind == "cnn" and architecture == "rowcol":
+        return _RowColumnCNN(size, width)
+    if kind == "mlp" and architecture == "plain":
+        return nn.Sequential(
+            nn.Flatten(), nn.Linear(3 * size * size, width), nn.ReLU(), nn.Dropout(0.2),
+            nn.Linear(width, width), nn.ReLU(), nn.Dropout(0.2), nn.Linear(width, 2),
+        )
+    raise InputError(f"unknown {kind} architecture {architecture!r}")
+
+
+class _RowColumnCNN:  # built lazily so that importing vinadv.classify does not import torch
+    def __new__(cls, size: int, width: int):
+        torch = _torch()
+        nn = torch.nn
+
+        class RowColumnCNN(nn.Module):
+            """Local 3x3 features, then convolutions spanning a whole row and a whole column (the FP/DP rule
+            compares cells of one row or one column at any distance), global max pooling, two dense layers."""
+
+            def __init__(self):
+                super().__init__()
+                self.local = nn.Sequential(
+                    nn.Conv2d(3, width, 3, padding=1), nn.ReLU(), nn.Conv2d(width, width, 3, padding=1), nn.ReLU()
+                )
+                self.rows = nn.Conv2d(width, 2 * width, (1, 2 * size - 1), padding=(0, size - 1))
+                self.cols = nn.Conv2d(width, 2 * width, (2 * size - 1, 1), padding=(size - 1, 0))
+                self.head = nn.Sequential(nn.Linear(4 * width, 64), nn.ReLU(), nn.Linear(64, 2))
+
+            def forward(self, x):
+                f = self.local(x)
+                r = torch.relu(self.rows(f)).amax(dim=(2, 3))
+                c = torch.relu(self.cols(f)).amax(dim=(2, 3))
+                return self.head(torch.cat([r, c], dim=1))
+
+        return RowColumnCNN()
+
+
+class TorchImageClassifier(PairClassifier):
+    """A PyTorch network on path images, trained with cross-entropy.
+
+    `architecture`: CNN 'plain' or 'rowcol', MLP 'plain'. `width`: channels (CNN) or hidden units (MLP).
+    `optimizer`: 'adam' or 'adamw'; `schedule`: 'constant' or 'cosine' learning rate; `augment`: a random
+    flip/rotation of the square per training batch. `seed` fixes initialisation and batch order.
+    """
+
+    kind = "abstract"
+
+    def __init__(self, architecture: str = "plain", width: int = 32, epochs: int = 10, batch_size: int = 64,
+                 learning_rate: float = 1e-3, weight_decay: float = 0.0, optimizer: str = "adam",
+                 schedule: str = "constant", augment: bool = False, seed: int = 0, verbose: bool = False):
+        self.architecture = architecture
+        self.width = width
+        self.epochs = epochs
+        self.batch_size = batch_size
+        self.learning_rate = learning_rate
+        self.weight_decay = weight_decay
+        self.optimizer = optimizer
+        self.schedule = schedule
+        self.augment = augment
+        self.seed = seed
+        self.verbose = verbose
+
+    @staticmethod
+    def _tensor(images: np.ndarray):
+        torch = _torch()
+        return torch.from_numpy(np.ascontiguousarray(images.transpose(0, 3, 1, 2))).float().div_(255.0)
+
+    def fit(self, X, y) -> TorchImageClassifier:
+        y = self._check_y(X, y)
+        torch = _torch()
+        start = time.perf_counter()
+        torch.manual_seed(self.seed)
+        rng = np.random.default_rng(self.seed)
+        images = np.concatenate([chunk for _, chunk in _image_chunks(X)])
+        self.size_ = int(images.shape[1])
+        inputs = self._tensor(images)
+        targets = torch.from_numpy((y == "FP").astype(np.int64))
+        self.network_ = _build_network(self.kind, self.architecture, self.size_, self.width)
+        if self.optimizer == "adam":
+            opt = torch.optim.Adam(self.network_.parameters(), lr=self.learning_rate, weight_decay=self.weight_decay)
+        elif self.optimizer == "adamw":
+            opt = torch.optim.AdamW(self.network_.parameters(), lr=self.learning_rate, weight_decay=self.weight_decay)
+        else:
+            raise InputError(f"unknown optimizer {self.optimizer!r} (adam, adamw)")
+        steps = self.epochs * -(-len(y) // self.batch_size)
+        scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(steps, 1)) if self.schedule == "cosine" else None
+        loss_fn = torch.nn.CrossEntropyLoss()
+        from tqdm import tqdm
+
+        self.network_.train()
+        for _ in tqdm(range(self.epochs), desc=f"training {self.kind}", disable=not self.verbose, unit="epoch"):
+            order = torch.from_numpy(rng.permutation(len(y)))
+            for batch in order.split(self.batch_size):
+                xb, yb = inputs[batch], targets[batch]
+                if self.augment:
+                    xb = _dihedral(xb, int(rng.integers(8)))
+                opt.zero_grad()
+                loss = loss_fn(self.network_(xb), yb)
+                loss.backward()
+                opt.step()
+                if scheduler is not None:
+                    scheduler.step()
+        self.network_.eval()
+        self.training_time_s_ = time.perf_counter() - start
+        return self
+
+    def _logits(self, X) -> np.ndarray:
+        self._check_fitted("network_")
+        if _image_size(X) != self.size_:
+            raise InputError(f"this {self.kind} was trained on {self.size_}x{self.size_} maps, not {_image_size(X)}")
+        torch = _torch()
+        out = np.empty((len(X), 2), dtype=np.float32)
+        with torch.inference_mode():
+            for start, images in _image_chunks(X, 1024):
+                out[start : start + len(images)] = self.network_(self._tensor(images)).numpy()
+        return out
+
+    def decision_function(self, X) -> np.ndarray:
+        """Logit difference FP - DP per pair, `(n,)` float64 (positive = FP)."""
+        logits = self._logits(X).astype(np.float64)
+        return logits[:, 1] - logits[:, 0]
+
+    def predict_proba(self, X) -> np.ndarray:
+        """`(n, 2)` probabilities of DP and FP (softmax of the logits)."""
+        logits = self._logits(X).astype(np.float64)
+        logits -= logits.max(axis=1, keepdims=True)
+        e = np.exp(logits)
+        return e / e.sum(axis=1, keepdims=True)
+
+    def _state(self):
+        self._check_fitted("network_")
+        arrays = {f"net.{k}": v.detach().numpy().copy() for k, v in self.network_.state_dict().items()}
+        return {"size": self.size_, "training_time_s": self.training_time_s_}, arrays
+
+    @classmethod
+    def _from_state(cls, kind, params, meta, arrays):
+        torch = _torch()
+        model = cls(**params)
+        model.classes_ = np.array(["DP", "FP"])
+        model.size_ = int(meta["size"])
+        model.training_time_s_ = float(meta.get("training_time_s", 0.0))
+        model.network_ = _build_network(kind, model.architecture, model.size_, model.width)
+        state = {k[4:]: torch.from_numpy(np.array(v)) for k, v in arrays.items() if k.startswith("net.")}
+        try:
+            model.network_.load_state_dict(state)
+        except RuntimeError as exc:
+            raise InputError(f"model weights do not fit the {kind} architecture: {exc}") from None
+        model.network_.eval()
+        return model
+
+
+def _dihedral(x, transform: int):
+    """One of the 8 flips/rotations on a `(B, C, N, N)` tensor (ids as in `vinadv.classify.images`)."""
+    torch = _torch()
+    if transform in (1, 2, 3):
+        return torch.rot90(x, k=-transform, dims=(2, 3))
+    if transform == 4:
+        return x.flip(3)
+    if transform == 5:
+        return x.flip(2)
+    if transform == 6:
+        return x.transpose(2, 3)
+    if transform == 7:
+        return x.transpose(2, 3).flip(2).flip(3)
+    return x
+
+
+@register_kind("cnn")
+class CNNImageClassifier(TorchImageClassifier):
+    """Convolutional network on path images (see `TorchImageClassifier`)."""
+
+    kind = "cnn"
+
+
+@register_kind("mlp")
+class MLPImageClassifier(TorchImageClassifier):
+    """Multilayer perceptron on flattened path images (see `TorchImageClassifier`)."""
+
+    kind = "mlp"
+
+    def __init__(self, architecture: str = "plain", width: int = 512, epochs: int = 10, batch_size: int = 64,
+                 learning_rate: float = 1e-3, weight_decay: float = 0.0, optimizer: str = "adam",
+                 schedule: str = "constant", augment: bool = False, seed: int = 0, verbose: bool = False):
+        super().__init__(architecture, width, epochs, batch_size, learning_rate, weight_decay, optimizer,
+                         schedule, augment, seed, verbose)
