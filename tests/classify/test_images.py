@@ -1,0 +1,80 @@
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vinadv.classify.batch import PathPairBatch
+from vinadv.classify.images import (
+    augmentation_plan,
+    balance_batch,
+    balance_images,
+    render_batch,
+    transform_cells,
+    transform_images,
+)
+from vinadv.classify.rule import label_batch
+
+from .oracle import path_pairs
+
+
+def test_path_image_colours_red_on_top_of_blue():
+    o = np.array([[0, 0], [1, 1], [2, 2]])
+    a = np.array([[0, 0], [1, 0], [2, 1], [2, 2]])
+    image = render_batch(PathPairBatch.from_paths([o], [a], [(2, 2)], 4))[0]
+    assert image.dtype == np.uint8 and image.shape == (4, 4, 3)
+    red, blue, black = [255, 0, 0], [0, 0, 255], [0, 0, 0]
+    expected = np.zeros((4, 4, 3), dtype=np.uint8)
+    for r, c in a:
+        expected[r, c] = blue
+    for r, c in o:
+        expected[r, c] = red
+    assert np.array_equal(image, expected)
+    assert image[1, 0].tolist() == blue and image[0, 0].tolist() == red and image[3, 3].tolist() == black
+
+
+def test_transform_cells_match_numpy_image_ops():
+    size = 5
+    grid = np.arange(size * size).reshape(1, size, size)
+    cells = np.array([(r, c) for r in range(size) for c in range(size)])
+    reference = {
+        0: grid, 1: np.rot90(grid, -1, axes=(1, 2)), 2: np.rot90(grid, 2, axes=(1, 2)),
+        3: np.rot90(grid, 1, axes=(1, 2)), 4: grid[:, :, ::-1], 5: grid[:, ::-1, :],
+        6: grid.transpose(0, 2, 1), 7: np.rot90(grid, 2, axes=(1, 2)).transpose(0, 2, 1),
+    }
+    for k, ref in reference.items():
+        assert np.array_equal(transform_images(grid, k), ref)
+        moved = transform_cells(cells, size, k)
+        out = np.empty_like(grid)
+        out[0, moved[:, 0], moved[:, 1]] = grid[0, cells[:, 0], cells[:, 1]]
+        assert np.array_equal(out, ref), k
+
+
+@settings(max_examples=40, deadline=None)
+@given(path_pairs(), st.integers(0, 7))
+def test_rendering_commutes_with_transforms(batch, k):
+    assert np.array_equal(render_batch(batch.transformed(k)), transform_images(render_batch(batch), k))
+
+
+def test_augmentation_plan_balances_with_distinct_copies():
+    labels = np.array(["DP"] * 20 + ["FP"] * 3)
+    source, transform = augmentation_plan(labels, seed=1)
+    assert len(source) == 17
+    assert set(labels[source]) == {"FP"}
+    assert set(transform.tolist()) <= {1, 2, 3, 4, 5}
+    assert len(set(zip(source.tolist(), transform.tolist()))) == 15  # 3 x 5 distinct, then repeats
+    again = augmentation_plan(labels, seed=1)
+    assert np.array_equal(again[0], source) and np.array_equal(again[1], transform)
+
+
+@settings(max_examples=30, deadline=None)
+@given(path_pairs(max_pairs=8), st.integers(0, 100))
+def test_augmentation_keeps_labels(batch, seed):
+    labels = label_batch(batch).labels
+    balanced, new_labels = balance_batch(batch, labels, seed)
+    _, counts = np.unique(new_labels, return_counts=True)
+    assert len(set(counts.tolist())) == 1
+    # the rule gives each flipped/rotated copy the label of its source
+    assert label_batch(balanced).labels.tolist() == new_labels.tolist()
+    images, image_labels = balance_images(render_batch(batch), labels, seed)
+    assert sorted(image_labels.tolist()) == sorted(new_labels.tolist())
+    assert np.array_equal(np.sort(images.reshape(len(images), -1), axis=0),
+                          np.sort(render_batch(balanced).reshape(len(images), -1), axis=0))
