@@ -1,0 +1,90 @@
+"""SQL schema of a vinadv database (SQLAlchemy 2 Core), portable to SQLite, MySQL/MariaDB and PostgreSQL.
+
+Tables:
+- `vinadv_meta` (key, value): `schema_version`, so a database of another schema is refused, not misread.
+- `runs`: one row per job (config, seed, planner weights checksum, versions, timings, status).
+- `map_pairs`: the paper's Table 2 (`no, map_o, map_a, path_o, path_a, label, attack`) plus what makes a row
+  reproducible and queryable; `(run_id, pair_index)` is unique, so a resumed run never stores a pair twice.
+- `annotations`: human labels of stored pairs (the annotation tool writes them).
+
+Maps and paths are `Text` (an N=28 map is 811 characters, paths are unbounded; MySQL VARCHAR would cap both).
+"""
+
+from __future__ import annotations
+
+import sqlalchemy as sa
+
+#: bump when a table or column changes; a database with another version is refused with a clear error.
+SCHEMA_VERSION = "1"
+
+LABELS = ("invalid", "UrP", "UcP", "DP", "FP")
+
+metadata = sa.MetaData()
+
+# BIGINT autoincrement everywhere except SQLite, where only INTEGER PRIMARY KEY is the rowid alias.
+_BigId = sa.BigInteger().with_variant(sa.Integer(), "sqlite")
+
+meta_table = sa.Table(
+    "vinadv_meta",
+    metadata,
+    sa.Column("key", sa.String(64), primary_key=True),
+    sa.Column("value", sa.String(255), nullable=False),
+)
+
+runs = sa.Table(
+    "runs",
+    metadata,
+    sa.Column("id", _BigId, primary_key=True, autoincrement=True),
+    sa.Column("name", sa.String(255), nullable=True),
+    sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive (MySQL DATETIME has no zone)
+    sa.Column("config", sa.JSON(), nullable=True),
+    sa.Column("seed", sa.BigInteger(), nullable=True),
+    sa.Column("weights_checksum", sa.String(128), nullable=True),
+    sa.Column("attack", sa.String(64), nullable=True),
+    sa.Column("classifier", sa.String(255), nullable=True),
+    sa.Column("version", sa.String(64), nullable=False),
+    sa.Column("timings", sa.JSON(), nullable=True),
+    sa.Column("status", sa.String(32), nullable=False),
+    sa.Index("ix_runs_name", "name"),
+)
+
+map_pairs = sa.Table(
+    "map_pairs",
+    metadata,
+    sa.Column("no", _BigId, primary_key=True, autoincrement=True),  # the paper's incremented sequence number
+    sa.Column("run_id", _BigId, sa.ForeignKey("runs.id"), nullable=False),
+    sa.Column("pair_index", sa.BigInteger(), nullable=False),
+    sa.Column("map_o", sa.Text(), nullable=False),
+    sa.Column("map_a", sa.Text(), nullable=False),
+    sa.Column("path_o", sa.Text(), nullable=False),
+    sa.Column("path_a", sa.Text(), nullable=False),
+    sa.Column("label", sa.String(16), nullable=False),
+    sa.Column("attack", sa.Boolean(create_constraint=False), nullable=False),
+    sa.Column("start", sa.String(16), nullable=False),
+    sa.Column("goal", sa.String(16), nullable=False),
+    sa.Column("added_obstacle", sa.String(16), nullable=False),
+    sa.Column("label_source", sa.String(255), nullable=False),
+    sa.Column("score", sa.Double(), nullable=True),
+    sa.Column("term_o", sa.String(16), nullable=False),
+    sa.Column("term_a", sa.String(16), nullable=False),
+    sa.Column("dh", sa.Integer(), nullable=True),
+    sa.Column("dv", sa.Integer(), nullable=True),
+    sa.UniqueConstraint("run_id", "pair_index", name="uq_map_pairs_run_pair"),
+    sa.Index("ix_map_pairs_run_label", "run_id", "label"),
+    sa.Index("ix_map_pairs_run_attack", "run_id", "attack"),
+    sa.Index("ix_map_pairs_label", "label"),
+)
+
+annotations = sa.Table(
+    "annotations",
+    metadata,
+    sa.Column("id", _BigId, primary_key=True, autoincrement=True),
+    sa.Column("run_id", _BigId, sa.ForeignKey("runs.id"), nullable=False),
+    sa.Column("pair_index", sa.BigInteger(), nullable=False),
+    sa.Column("label", sa.String(16), nullable=False),
+    sa.Column("annotator", sa.String(255), nullable=False),
+    sa.Column("created", sa.DateTime(), nullable=False),
+    sa.Index("ix_annotations_run_pair", "run_id", "pair_index"),
+)
+
+TABLES = (meta_table, runs, map_pairs, annotations)

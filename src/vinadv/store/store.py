@@ -1,0 +1,477 @@
+"""`Store`: open a vinadv database by URL, record runs, bulk-write and read identified map pairs.
+
+URLs: `--db` or env `VINADV_DB`, else the SQLite file `vinadv.db`. A plain file path means SQLite. MySQL/MariaDB
+via PyMySQL (`mysql+pymysql://root@127.0.0.1:3306/test`), PostgreSQL via psycopg 3
+(`postgresql+psycopg://postgres@127.0.0.1:5432/test`).
+
+Writes: `write_pairs` inserts in batches, each batch in its own transaction (all-or-nothing). With
+`(run_id, pair_index)` unique and stored indices skipped on resume, a killed run that is resumed ends with
+every pair exactly once. SQLite runs with `journal_mode=WAL, synchronous=NORMAL`: a crash of the process
+never corrupts or half-writes a batch; a power loss may lose the last committed batches (they are then
+written again on resume). New SQLite files use 16 KiB pages.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+import sqlalchemy as sa
+from sqlalchemy import exc as sa_exc
+
+from vinadv import __version__
+from vinadv.errors import InputError
+from vinadv.store import codec
+from vinadv.store.records import PairRecords
+from vinadv.store.schema import LABELS, SCHEMA_VERSION, TABLES, annotations, map_pairs, meta_table, metadata, runs
+
+DEFAULT_DB = "vinadv.db"
+ENV_DB = "VINADV_DB"
+#: rows per INSERT transaction; large enough to amortise the round trip, small enough to keep memory flat.
+DEFAULT_BATCH = 20_000
+_CONNECT_TIMEOUT_S = 5
+
+_PAIR_TEXT_COLUMNS = ("map_o", "map_a", "path_o", "path_a", "start", "goal", "added_obstacle")
+
+
+def resolve_url(db: str | None = None) -> str:
+    """The database URL: `db`, else env `VINADV_DB`, else `vinadv.db`; a plain path becomes `sqlite:///PATH`."""
+    db = db or os.environ.get(ENV_DB) or DEFAULT_DB
+    if "://" in db:
+        return db
+    return "sqlite:///" + str(Path(db).expanduser().resolve())
+
+
+def safe_url(url: str | sa.URL) -> str:
+    """The URL with its password hidden, for messages."""
+    try:
+        return sa.make_url(url).render_as_string(hide_password=True)
+    except Exception:
+        return "<unparseable database URL>"
+
+
+def _utcnow() -> dt.datetime:
+    return dt.datetime.now(dt.timezone.utc).replace(tzinfo=None, microsecond=0)
+
+
+def _first_line(exc: BaseException) -> str:
+    orig = getattr(exc, "orig", None) or exc
+    return str(orig).strip().splitlines()[0] if str(orig).strip() else type(orig).__name__
+
+
+class Store:
+    """A vinadv database. Use `Store.open(url)`; close with `.close()` or a `with` block.
+
+    `create=True` creates the tables in an empty database; a database that holds other tables with the same
+    names, or another schema version, is refused with `InputError` (nothing is changed).
+    """
+
+    def __init__(self, engine: sa.Engine, url: str) -> None:
+        self.engine = engine
+        self.url = safe_url(url)
+        self._insert_sql = _driver_insert_sql(engine.dialect)
+
+    # ------------------------------------------------------------------------------------------ opening
+
+    @classmethod
+    def open(cls, url: str | None = None, *, create: bool = True) -> Store:
+        """Open (and with `create`, initialise) the database at `url` (see `resolve_url`)."""
+        url = resolve_url(url)
+        shown = safe_url(url)
+        try:
+            parsed = sa.make_url(url)
+        except sa_exc.ArgumentError as exc:
+            raise InputError(f"--db: not a database URL: {shown} ({exc})") from None
+        backend = parsed.get_backend_name()
+        connect_args: dict = {}
+        if backend == "sqlite":
+            path = parsed.database
+            if path and path != ":memory:" and not path.startswith("file:"):
+                if not create and not Path(path).exists():
+                    raise InputError(f"database {shown}: no such file")
+                if not Path(path).parent.exists():
+                    raise InputError(f"database {shown}: directory {Path(path).parent} does not exist")
+        elif backend in ("mysql", "mariadb"):
+            connect_args["connect_timeout"] = _CONNECT_TIMEOUT_S
+            if parsed.query.get("charset") is None:
+                parsed = parsed.update_query_dict({"charset": "utf8mb4"})
+        elif backend == "postgresql":
+            connect_args["connect_timeout"] = _CONNECT_TIMEOUT_S
+        try:
+            engine = sa.create_engine(parsed, connect_args=connect_args, pool_pre_ping=backend != "sqlite")
+        except (sa_exc.ArgumentError, sa_exc.NoSuchModuleError, ImportError) as exc:
+            raise InputError(f"database {shown}: cannot use this URL: {exc}") from None
+        if backend == "sqlite":
+            sa.event.listen(engine, "connect", _sqlite_pragmas)
+        store = cls(engine, url)
+        try:
+            store._check_schema(create)
+        except InputError:
+            engine.dispose()
+            raise
+        except sa_exc.DBAPIError as exc:
+            engine.dispose()
+            raise InputError(f"cannot connect to database {shown}: {_first_line(exc)}") from None
+        return store
+
+    def _check_schema(self, create: bool) -> None:
+        with self.engine.connect() as conn:
+            present = set(sa.inspect(conn).get_table_names())
+        ours = {t.name for t in TABLES}
+        if not present & ours:
+            if not create:
+                raise InputError(f"database {self.url}: no vinadv tables (nothing stored there yet)")
+            with self.engine.begin() as conn:
+                metadata.create_all(conn)
+                conn.execute(meta_table.insert(), [{"key": "schema_version", "value": SCHEMA_VERSION}])
+            return
+        if meta_table.name not in present:
+            raise InputError(
+                f"database {self.url}: has tables {sorted(present & ours)} but no {meta_table.name} table; "
+                "not a vinadv database (refusing to touch it)"
+            )
+        with self.engine.connect() as conn:
+            version = conn.execute(
+                sa.select(meta_table.c.value).where(meta_table.c.key == "schema_version")
+            ).scalar_one_or_none()
+            if version != SCHEMA_VERSION:
+                raise InputError(
+                    f"database {self.url}: schema version {version!r}, this vinadv needs {SCHEMA_VERSION!r}; "
+                    "use another database (refusing to touch it)"
+                )
+            inspector = sa.inspect(conn)
+            for table in TABLES:
+                if table.name not in present:
+                    raise InputError(f"database {self.url}: wrong schema: table {table.name} is missing")
+                have = {c["name"] for c in inspector.get_columns(table.name)}
+                missing = {c.name for c in table.columns} - have
+                if missing:
+                    raise InputError(
+                        f"database {self.url}: wrong schema: table {table.name} lacks columns {sorted(missing)}"
+                    )
+
+    def close(self) -> None:
+        self.engine.dispose()
+
+    def __enter__(self) -> Store:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # --------------------------------------------------------------------------------------------- runs
+
+    def create_run(
+        self,
+        name: str | None = None,
+        *,
+        config: dict | None = None,
+        seed: int | None = None,
+        weights_checksum: str | None = None,
+        attack: str | None = None,
+        classifier: str | None = None,
+        version: str = __version__,
+        status: str = "running",
+    ) -> int:
+        """Insert a run and return its id."""
+        with self.engine.begin() as conn:
+            result = conn.execute(
+                runs.insert().values(
+                    name=name, created=_utcnow(), config=config, seed=None if seed is None else int(seed),
+                    weights_checksum=weights_checksum, attack=attack, classifier=classifier,
+                    version=version, timings=None, status=status,
+                )
+            )
+            return int(result.inserted_primary_key[0])
+
+    def find_run(self, name: str) -> int | None:
+        """The id of the latest run called `name` (for `--resume`), or None."""
+        with self.engine.connect() as conn:
+            found = conn.execute(
+                sa.select(runs.c.id).where(runs.c.name == name).order_by(runs.c.id.desc()).limit(1)
+            ).scalar_one_or_none()
+        return None if found is None else int(found)
+
+    def run_info(self, run_id: int) -> dict:
+        """The run's row as a dict; `InputError` when there is no such run."""
+        with self.engine.connect() as conn:
+            row = conn.execute(sa.select(runs).where(runs.c.id == int(run_id))).mappings().one_or_none()
+        if row is None:
+            raise InputError(f"--run: no run {run_id} in database {self.url}")
+        return dict(row)
+
+    def list_runs(self) -> list[dict]:
+        """All runs, oldest first, each with its stored pair count (`n_pairs`)."""
+        counts = (
+            sa.select(map_pairs.c.run_id, sa.func.count().label("n_pairs"))
+            .group_by(map_pairs.c.run_id)
+            .subquery()
+        )
+        query = (
+            sa.select(runs, sa.func.coalesce(counts.c.n_pairs, 0).label("n_pairs"))
+            .select_from(runs.outerjoin(counts, counts.c.run_id == runs.c.id))
+            .order_by(runs.c.id)
+        )
+        with self.engine.connect() as conn:
+            return [dict(r) for r in conn.execute(query).mappings()]
+
+    def finish_run(self, run_id: int, timings: dict | None = None, status: str = "done") -> None:
+        """Record the run's timings (seconds per stage) and final status."""
+        with self.engine.begin() as conn:
+            updated = conn.execute(
+                runs.update().where(runs.c.id == int(run_id)).values(timings=timings, status=status)
+            ).rowcount
+        if updated != 1:
+            raise InputError(f"--run: no run {run_id} in database {self.url}")
+
+    # -------------------------------------------------------------------------------------------- pairs
+
+    def stored_indices(self, run_id: int) -> np.ndarray:
+        """Sorted pair indices already stored for the run, int64 (k,)."""
+        with self.engine.connect() as conn:
+            rows = conn.execute(
+                sa.select(map_pairs.c.pair_index).where(map_pairs.c.run_id == int(run_id))
+            ).scalars().all()
+        return np.sort(np.asarray(rows, dtype=np.int64))
+
+    def write_pairs(
+        self,
+        run_id: int,
+        records: PairRecords,
+        *,
+        batch_size: int = DEFAULT_BATCH,
+        skip_stored: bool = True,
+        progress=None,
+    ) -> int:
+        """Insert `records` for the run, `batch_size` rows per transaction; return how many were written.
+
+        With `skip_stored` (the resume path) pairs whose index is already stored are skipped. A batch is
+        all-or-nothing: a crash leaves whole batches only. `progress(n_rows)` is called after each batch.
+        """
+        run_id = int(run_id)
+        if len(np.unique(records.pair_index)) != len(records):
+            raise InputError("write_pairs: pair_index has duplicates")
+        if skip_stored:
+            stored = self.stored_indices(run_id)
+            if len(stored):
+                records = records.subset(~np.isin(records.pair_index, stored))
+        written = 0
+        for lo in range(0, len(records), batch_size):
+            batch = records.subset(np.arange(lo, min(lo + batch_size, len(records))))
+            rows = encode_rows(run_id, batch)
+            with self.engine.begin() as conn:
+                if self._insert_sql is not None:
+                    # straight to the driver's executemany: SQLAlchemy's per-row parameter processing would
+                    # cost more than encoding and inserting together (PyMySQL turns it into multi-row INSERTs)
+                    conn.exec_driver_sql(self._insert_sql, rows)
+                else:
+                    conn.execute(map_pairs.insert(), [dict(zip(INSERT_COLUMNS, row)) for row in rows])
+            written += len(batch)
+            if progress is not None:
+                progress(len(batch))
+        return written
+
+    def read_pairs(
+        self,
+        run_id: int,
+        *,
+        successful_only: bool = False,
+        labels: Sequence[str] | None = None,
+        pair_indices: np.ndarray | None = None,
+    ) -> PairRecords:
+        """The run's stored pairs, ordered by pair index, decoded back into arrays."""
+        query = self._pairs_query(run_id, successful_only=successful_only, labels=labels,
+                                  pair_indices=pair_indices)
+        with self.engine.connect() as conn:
+            rows = conn.execute(query).all()
+        return decode_rows(rows)
+
+    def iter_pair_rows(self, run_id: int, *, successful_only: bool = False,
+                       chunk: int = 10_000) -> Iterator[list[dict]]:
+        """The run's stored rows as text, ordered by pair index, in chunks of dicts (streamed; for export)."""
+        query = self._pairs_query(run_id, successful_only=successful_only)
+        with self.engine.connect() as conn:
+            result = conn.execution_options(stream_results=True, yield_per=chunk).execute(query)
+            for part in result.mappings().partitions(chunk):
+                yield [dict(r) for r in part]
+
+    def _pairs_query(self, run_id, *, successful_only=False, labels=None, pair_indices=None) -> sa.Select:
+        query = sa.select(*[map_pairs.c[name] for name in PAIR_COLUMNS]).where(map_pairs.c.run_id == int(run_id))
+        if successful_only:
+            query = query.where(map_pairs.c.attack == sa.true())
+        if labels is not None:
+            query = query.where(map_pairs.c.label.in_(list(labels)))
+        if pair_indices is not None:
+            query = query.where(map_pairs.c.pair_index.in_([int(i) for i in np.asarray(pair_indices).ravel()]))
+        return query.order_by(map_pairs.c.pair_index)
+
+    def count_pairs(self, run_id: int) -> int:
+        with self.engine.connect() as conn:
+            return int(conn.execute(
+                sa.select(sa.func.count()).select_from(map_pairs).where(map_pairs.c.run_id == int(run_id))
+            ).scalar_one())
+
+    def label_counts(self, run_id: int) -> dict[str, int]:
+        """Stored pairs per label, every label present (0 where none), in DESIGN.md order."""
+        with self.engine.connect() as conn:
+            rows = conn.execute(
+                sa.select(map_pairs.c.label, sa.func.count())
+                .where(map_pairs.c.run_id == int(run_id))
+                .group_by(map_pairs.c.label)
+            ).all()
+        counts = {label: 0 for label in LABELS}
+        counts.update({label: int(k) for label, k in rows})
+        return counts
+
+    def attack_counts(self, run_id: int) -> dict[bool, int]:
+        """Stored pairs per attack outcome: {True: successful, False: not}."""
+        with self.engine.connect() as conn:
+            rows = conn.execute(
+                sa.select(map_pairs.c.attack, sa.func.count())
+                .where(map_pairs.c.run_id == int(run_id))
+                .group_by(map_pairs.c.attack)
+            ).all()
+        counts = {True: 0, False: 0}
+        counts.update({bool(a): int(k) for a, k in rows})
+        return counts
+
+    # -------------------------------------------------------------------------------------- annotations
+
+    def add_annotations(self, run_id: int, pair_indices, labels, annotator: str) -> int:
+        """Store human labels for stored pairs (one row per (pair, label) given); return how many."""
+        pair_indices = np.asarray(pair_indices, dtype=np.int64).reshape(-1)
+        labels = np.broadcast_to(np.asarray(labels, dtype=object), pair_indices.shape)
+        bad = ~np.isin(labels, LABELS)
+        if bad.any():
+            raise InputError(f"annotation label {labels[bad][0]!r} is not one of {'|'.join(LABELS)}")
+        if not annotator:
+            raise InputError("annotator: must be a non-empty name")
+        if len(pair_indices) == 0:
+            return 0
+        now = _utcnow()
+        rows = [
+            {"run_id": int(run_id), "pair_index": int(i), "label": str(lab), "annotator": annotator, "created": now}
+            for i, lab in zip(pair_indices.tolist(), labels.tolist())
+        ]
+        with self.engine.begin() as conn:
+            conn.execute(annotations.insert(), rows)
+        return len(rows)
+
+    def read_annotations(self, run_id: int) -> list[dict]:
+        """The run's annotations, oldest first: dicts with id, pair_index, label, annotator, created."""
+        with self.engine.connect() as conn:
+            rows = conn.execute(
+                sa.select(annotations.c.id, annotations.c.pair_index, annotations.c.label,
+                          annotations.c.annotator, annotations.c.created)
+                .where(annotations.c.run_id == int(run_id))
+                .order_by(annotations.c.id)
+            ).mappings().all()
+        return [dict(r) for r in rows]
+
+
+def _sqlite_pragmas(dbapi_conn, _record) -> None:
+    cursor = dbapi_conn.cursor()
+    # 16 KiB pages hold several ~2.5 KB rows (maps + paths) each: ~30% smaller file and faster inserts than
+    # 4 KiB; takes effect only when the file is created (before WAL is switched on)
+    cursor.execute("PRAGMA page_size=16384")
+    cursor.execute("PRAGMA journal_mode=WAL")  # readers don't block the writer; a crash leaves whole commits
+    cursor.execute("PRAGMA synchronous=NORMAL")  # safe in WAL against process crashes; fsync at checkpoints
+    cursor.execute("PRAGMA foreign_keys=ON")
+    cursor.execute("PRAGMA busy_timeout=30000")
+    cursor.close()
+
+
+# ------------------------------------------------------------------------------------ row encoding
+
+#: columns read back, in order (`decode_rows` relies on it)
+PAIR_COLUMNS = (
+    "no", "pair_index", "map_o", "map_a", "path_o", "path_a", "label", "attack", "start", "goal",
+    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv",
+)
+
+
+#: columns written by `encode_rows`, in order
+INSERT_COLUMNS = (
+    "run_id", "pair_index", "map_o", "map_a", "path_o", "path_a", "label", "attack", "start", "goal",
+    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv",
+)
+
+
+def _driver_insert_sql(dialect: sa.Dialect) -> str | None:
+    """A plain `INSERT INTO map_pairs (...) VALUES (?, ...)` in the driver's positional paramstyle, or None."""
+    marker = {"qmark": "?", "format": "%s", "pyformat": "%s"}.get(dialect.paramstyle)
+    if marker is None:
+        return None
+    prep = dialect.identifier_preparer
+    names = ", ".join(prep.quote(name) for name in INSERT_COLUMNS)
+    return f"INSERT INTO {prep.format_table(map_pairs)} ({names}) VALUES ({', '.join([marker] * len(INSERT_COLUMNS))})"
+
+
+def encode_rows(run_id: int, records: PairRecords) -> list[tuple]:
+    """Records -> parameter tuples in `INSERT_COLUMNS` order (text columns encoded in bulk)."""
+    n = len(records)
+    if n == 0:
+        return []
+    score = records.score.astype(object)
+    score[np.isnan(records.score)] = None
+    dh = records.dh.astype(object)
+    dh[records.dh < 0] = None
+    dv = records.dv.astype(object)
+    dv[records.dv < 0] = None
+    columns = {
+        "run_id": [run_id] * n,
+        "pair_index": records.pair_index.tolist(),
+        "map_o": codec.encode_maps(records.obstacles_o),
+        "map_a": codec.encode_maps(records.obstacles_a),
+        "path_o": codec.encode_paths(records.path_o_cells, records.path_o_offsets),
+        "path_a": codec.encode_paths(records.path_a_cells, records.path_a_offsets),
+        "label": records.label.tolist(),
+        "attack": records.attack.tolist(),
+        "start": codec.encode_cells(records.starts),
+        "goal": codec.encode_cells(records.goals),
+        "added_obstacle": codec.encode_cells(records.added),
+        "label_source": records.label_source.tolist(),
+        "score": score.tolist(),
+        "term_o": records.term_o.tolist(),
+        "term_a": records.term_a.tolist(),
+        "dh": dh.tolist(),
+        "dv": dv.tolist(),
+    }
+    assert tuple(columns) == INSERT_COLUMNS
+    return list(zip(*columns.values()))
+
+
+def decode_rows(rows: Sequence) -> PairRecords:
+    """Rows of `PAIR_COLUMNS` -> PairRecords (text columns decoded in bulk)."""
+    cols = list(zip(*rows)) if rows else [()] * len(PAIR_COLUMNS)
+    col = dict(zip(PAIR_COLUMNS, cols))
+    path_o = codec.decode_paths(col["path_o"])
+    path_a = codec.decode_paths(col["path_a"])
+    map_o = codec.decode_maps(col["map_o"])
+    map_a = codec.decode_maps(col["map_a"], size=map_o.shape[-1] if len(rows) else None)
+
+    def nullable(values, fill, dtype):
+        return np.array([fill if v is None else v for v in values], dtype=dtype).reshape(-1)
+
+    return PairRecords(
+        no=np.array(col["no"], dtype=np.int64).reshape(-1),
+        pair_index=np.array(col["pair_index"], dtype=np.int64).reshape(-1),
+        obstacles_o=map_o,
+        obstacles_a=map_a,
+        starts=codec.decode_cells(col["start"]).reshape(-1, 2),
+        goals=codec.decode_cells(col["goal"]).reshape(-1, 2),
+        added=codec.decode_cells(col["added_obstacle"]).reshape(-1, 2),
+        path_o_cells=path_o[0], path_o_offsets=path_o[1],
+        path_a_cells=path_a[0], path_a_offsets=path_a[1],
+        label=np.array(col["label"], dtype=object),
+        attack=np.array([bool(a) for a in col["attack"]], dtype=bool),
+        term_o=np.array(col["term_o"], dtype=object),
+        term_a=np.array(col["term_a"], dtype=object),
+        label_source=np.array(col["label_source"], dtype=object),
+        score=nullable(col["score"], np.nan, np.float64),
+        dh=nullable(col["dh"], -1, np.int64),
+        dv=nullable(col["dv"], -1, np.int64),
+    )

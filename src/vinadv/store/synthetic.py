@@ -1,0 +1,41 @@
+"""Random `PairRecords` for tests and benchmarks of the store (no planner needed; the rows need not be
+consistent with each other, only well-formed)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vinadv.store.records import TERMINATIONS, PairRecords
+from vinadv.store.schema import LABELS
+
+
+def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, first_index: int = 0) -> PairRecords:
+    """n random pairs on `size` x `size` maps; paths of 0..max_path random cells; some NULL scores and dh/dv."""
+    rng = np.random.default_rng(seed)
+    obstacles_o = rng.random((n, size, size)) < 0.3
+    obstacles_a = obstacles_o.copy()
+    added = rng.integers(0, size, (n, 2))
+    obstacles_a[np.arange(n), added[:, 0], added[:, 1]] = True
+
+    def paths():
+        lengths = rng.integers(0, max_path + 1, n)
+        offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
+        return rng.integers(0, size, (offsets[-1], 2)).astype(np.int16), offsets
+
+    (co, oo), (ca, oa) = paths(), paths()
+    label = np.array(LABELS, dtype=object)[rng.integers(0, len(LABELS), n)]
+    score = rng.random(n)
+    score[rng.random(n) < 0.3] = np.nan
+    dh = rng.integers(-1, size, n)
+    dv = rng.integers(-1, size, n)
+    return PairRecords(
+        pair_index=first_index + np.arange(n),
+        obstacles_o=obstacles_o, obstacles_a=obstacles_a,
+        starts=rng.integers(0, size, (n, 2)), goals=rng.integers(0, size, (n, 2)), added=added,
+        path_o_cells=co, path_o_offsets=oo, path_a_cells=ca, path_a_offsets=oa,
+        label=label, attack=np.isin(label, ("UrP", "FP")),
+        term_o=np.array(TERMINATIONS, dtype=object)[rng.integers(0, 4, n)],
+        term_a=np.array(TERMINATIONS, dtype=object)[rng.integers(0, 4, n)],
+        label_source=np.array(["rule", "svm"], dtype=object)[rng.integers(0, 2, n)],
+        score=score, dh=dh, dv=dv,
+    )
