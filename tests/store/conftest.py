@@ -1,0 +1,83 @@
+"""Database fixtures: a fresh SQLite file, MariaDB database or PostgreSQL schema per test, dropped afterwards.
+
+Server URLs come from `VINADV_TEST_MYSQL_URL` / `VINADV_TEST_POSTGRES_URL` (defaults: the local servers).
+An unreachable server skips its tests, except under `CI=true`, where it fails them.
+"""
+
+from __future__ import annotations
+
+import os
+import uuid
+
+import pytest
+import sqlalchemy as sa
+
+MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"
+POSTGRES_DEFAULT = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
+BACKENDS = ("sqlite", "mysql", "postgres")
+
+
+def _server(env: str, default: str) -> sa.Engine:
+    url = os.environ.get(env) or default
+    engine = sa.create_engine(url, connect_args={"connect_timeout": 5}, poolclass=sa.pool.NullPool)
+    try:
+        with engine.connect() as conn:
+            conn.execute(sa.text("SELECT 1"))
+    except Exception as exc:  # any failure to reach the server
+        message = f"{env}: server {sa.make_url(url).render_as_string(hide_password=True)} unreachable: {exc}"
+        if os.environ.get("CI") == "true":
+            pytest.fail(message)
+        pytest.skip(message)
+    return engine
+
+
+@pytest.fixture(scope="session")
+def mysql_server() -> sa.Engine:
+    return _server("VINADV_TEST_MYSQL_URL", MYSQL_DEFAULT)
+
+
+@pytest.fixture(scope="session")
+def postgres_server() -> sa.Engine:
+    return _server("VINADV_TEST_POSTGRES_URL", POSTGRES_DEFAULT)
+
+
+def _fresh_name() -> str:
+    return f"vinadv_test_{uuid.uuid4().hex[:12]}"
+
+
+@pytest.fixture
+def mysql_url(mysql_server):
+    """URL of a fresh, empty MariaDB database (dropped after the test)."""
+    name = _fresh_name()
+    with mysql_server.begin() as conn:
+        conn.execute(sa.text(f"CREATE DATABASE `{name}` CHARACTER SET utf8mb4"))
+    try:
+        yield mysql_server.url.set(database=name).render_as_string(hide_password=False)
+    finally:
+        with mysql_server.begin() as conn:
+            conn.execute(sa.text(f"DROP DATABASE IF EXISTS `{name}`"))
+
+
+@pytest.fixture
+def postgres_url(postgres_server):
+    """URL of a fresh, empty PostgreSQL schema (first on the search path; dropped after the test)."""
+    name = _fresh_name()
+    with postgres_server.begin() as conn:
+        conn.execute(sa.text(f'CREATE SCHEMA "{name}"'))
+    try:
+        url = postgres_server.url.update_query_dict({"options": f"-csearch_path={name}"})
+        yield url.render_as_string(hide_password=False)
+    finally:
+        with postgres_server.begin() as conn:
+            conn.execute(sa.text(f'DROP SCHEMA IF EXISTS "{name}" CASCADE'))
+
+
+@pytest.fixture
+def sqlite_url(tmp_path):
+    return f"sqlite:///{tmp_path / 'vinadv.db'}"
+
+
+@pytest.fixture(params=BACKENDS)
+def db_url(request):
+    """A fresh empty database on each backend in turn."""
+    return request.getfixturevalue(f"{request.param}_url")

@@ -1,0 +1,87 @@
+"""Text formats of the store: vectorised codec against plain-Python oracles, round trips, malformed input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from vinadv.errors import InputError
+from vinadv.grid.paths import pack_paths, unpack_paths
+from vinadv.store import codec
+
+from tests.store.oracle import map_text, parse_map, parse_path, path_text
+
+maps_strategy = st.integers(0, 12).flatmap(
+    lambda size: hnp.arrays(bool, st.tuples(st.integers(0, 6), st.just(size), st.just(size)))
+)
+cell_value = st.one_of(st.integers(0, 30), st.integers(0, 32767))  # small grids mostly, all int16 widths too
+paths_strategy = st.lists(st.lists(st.tuples(cell_value, cell_value), max_size=25), max_size=12)
+
+
+def _pack(paths):
+    return pack_paths([np.array(p, dtype=np.int64).reshape(-1, 2) for p in paths])
+
+
+@settings(max_examples=150, deadline=None)
+@given(maps_strategy)
+def test_maps_match_oracle_and_round_trip(obstacles):
+    texts = codec.encode_maps(obstacles)
+    assert texts == [map_text(m) for m in obstacles]
+    back = codec.decode_maps(texts, size=obstacles.shape[1]) if len(obstacles) else None
+    if len(obstacles):
+        assert np.array_equal(back, obstacles)
+        if obstacles.shape[1]:
+            assert np.array_equal(codec.decode_maps(texts), obstacles)  # size inferred from the text
+            assert np.array_equal(np.array([parse_map(t) for t in texts]), obstacles)
+
+
+@settings(max_examples=200, deadline=None)
+@given(paths_strategy)
+def test_paths_match_oracle_and_round_trip(paths):
+    cells, offsets = _pack(paths)
+    texts = codec.encode_paths(cells, offsets)
+    assert texts == [path_text(p) for p in paths]
+    assert [parse_path(t) for t in texts] == [[tuple(c) for c in p] for p in paths]
+    back_cells, back_offsets = codec.decode_paths(texts)
+    assert np.array_equal(back_offsets, offsets)
+    assert np.array_equal(back_cells, cells)
+    assert [p.tolist() for p in unpack_paths(back_cells, back_offsets)] == [[list(c) for c in p] for p in paths]
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.tuples(cell_value, cell_value), max_size=20))
+def test_cells_match_oracle(cells):
+    arr = np.array(cells, dtype=np.int64).reshape(-1, 2)
+    texts = codec.encode_cells(arr)
+    assert texts == [f"{r},{c}" for r, c in cells]
+    assert np.array_equal(codec.decode_cells(texts), arr)
+
+
+def test_paper_examples():
+    assert codec.encode_maps(np.array([[[0, 1, 1, 0], [1, 0, 0, 1], [0] * 4, [1] * 4]], bool)) == [
+        "0110;1001;0000;1111"
+    ]
+    cells, offsets = codec.decode_paths(["3,4;3,5;4,6", "", "12,0"])
+    assert cells.tolist() == [[3, 4], [3, 5], [4, 6], [12, 0]]
+    assert offsets.tolist() == [0, 3, 3, 4]
+    assert codec.encode_paths(cells, offsets) == ["3,4;3,5;4,6", "", "12,0"]
+
+
+@pytest.mark.parametrize("text", ["1,2;3", "a,b", "1,,2", "1,2;", ";", "1;2", "1,2,3", "-1,2", "1 ,2", "123456,1"])
+def test_malformed_paths_are_refused(text):
+    with pytest.raises(InputError, match="path 1"):
+        codec.decode_paths(["0,0", text])
+
+
+@pytest.mark.parametrize("text", ["0110;1001;0000;111", "0110;1001;0000;1112", "0110,1001,0000,1111", "01101001;00001111;"])
+def test_malformed_maps_are_refused(text):
+    with pytest.raises(InputError, match="map 1"):
+        codec.decode_maps(["0110;1001;0000;1111", text])
+
+
+def test_negative_cells_are_refused():
+    with pytest.raises(InputError):
+        codec.encode_paths(np.array([[-1, 2]]), np.array([0, 1]))
