@@ -18,6 +18,7 @@ COMMAND_MODULES = [
     "vinadv.commands.maps",
     "vinadv.commands.plan",
     "vinadv.commands.classify",
+    "vinadv.commands.store",
 ]
 
 

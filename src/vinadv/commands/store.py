@@ -1,0 +1,135 @@
+"""`vinadv export`: stored map pairs of one run out of the database, as CSV, JSON lines or an npz file."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from vinadv.errors import InputError
+
+EXPORT_FORMAT = "vinadv.labelled_pairs/1"
+#: text columns of an exported row, in order (the paper's Table 2 first)
+EXPORT_COLUMNS = (
+    "no", "map_o", "map_a", "path_o", "path_a", "label", "attack",
+    "run_id", "pair_index", "start", "goal", "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv",
+)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "export",
+        help="export the stored pairs of a run (csv, jsonl or npz)",
+        description="Export the stored map pairs of one run. csv/jsonl keep the database's text formats "
+        "(maps as 0/1 rows joined by ';', paths as row,col cells joined by ';'); npz decodes them into "
+        f"arrays ({EXPORT_FORMAT}: the pairs-file fields plus labels).",
+    )
+    p.add_argument("--db", default=None, help="database URL or SQLite file (default: $VINADV_DB, else vinadv.db)")
+    p.add_argument("--run", required=True, help="run id, or run name (its latest run)")
+    p.add_argument("--format", choices=("csv", "jsonl", "npz"), default="csv")
+    p.add_argument("--successful-only", action="store_true", help="only successful attacks (UrP or FP)")
+    p.add_argument("--out", default=None, help="output file (default: stdout for csv/jsonl; required for npz)")
+    p.add_argument("--quiet", action="store_true", help="no progress or summary on stderr")
+    p.set_defaults(func=run_export)
+
+
+def _resolve_run(store, run: str) -> int:
+    if run.isdigit():
+        store.run_info(int(run))  # raises InputError naming the run when missing
+        return int(run)
+    found = store.find_run(run)
+    if found is None:
+        raise InputError(f"--run: no run named {run!r} in database {store.url}")
+    return found
+
+
+def run_export(args: argparse.Namespace) -> int:
+    from vinadv.store import Store  # imported here so `vinadv --help` stays fast
+
+    if args.format == "npz" and not args.out:
+        raise InputError("--out: required with --format npz")
+    if args.out and not Path(args.out).resolve().parent.is_dir():
+        raise InputError(f"--out: directory of {args.out} does not exist")
+    with Store.open(args.db, create=False) as store:
+        run_id = _resolve_run(store, args.run)
+        if args.format == "npz":
+            n = _export_npz(store, run_id, args.out, args.successful_only)
+        else:
+            n = _export_text(store, run_id, args.format, args.out, args.successful_only, args.quiet)
+    if not args.quiet:
+        print(f"exported {n} pairs of run {run_id} to {args.out or 'stdout'}", file=sys.stderr)
+    return 0
+
+
+def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
+    info = store.run_info(run_id)
+    records = store.read_pairs(run_id, successful_only=successful_only)
+    arrays = {
+        "format": np.array(EXPORT_FORMAT),
+        "run_id": np.array(run_id, dtype=np.int64),
+        "strategy": np.array(info.get("attack") or ""),
+        "size": np.array(records.size if len(records) else 0, dtype=np.int64),
+        "no": records.no,
+        "pair_index": records.pair_index,
+        "obstacles_o": records.obstacles_o,
+        "obstacles_a": records.obstacles_a,
+        "starts": records.starts,
+        "goals": records.goals,
+        "added": records.added,
+        "path_o_cells": records.path_o_cells,
+        "path_o_offsets": records.path_o_offsets,
+        "path_a_cells": records.path_a_cells,
+        "path_a_offsets": records.path_a_offsets,
+        "term_o": records.term_o.astype(str),
+        "term_a": records.term_a.astype(str),
+        "label": records.label.astype(str),
+        "attack": records.attack,
+        "label_source": records.label_source.astype(str),
+        "score": records.score,
+        "dh": records.dh,
+        "dv": records.dv,
+    }
+    # write next to the target, then rename: a failed export never leaves a half-written file behind
+    tmp = f"{out}.tmp-{os.getpid()}.npz"
+    try:
+        np.savez_compressed(tmp, **arrays)
+        os.replace(tmp, out)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return len(records)
+
+
+def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only: bool, quiet: bool) -> int:
+    from tqdm import tqdm
+
+    total = store.count_pairs(run_id)
+    stream = open(out, "w", newline="", encoding="utf-8") if out else sys.stdout
+    n = 0
+    try:
+        writer = csv.writer(stream) if fmt == "csv" else None
+        if writer is not None:
+            writer.writerow(EXPORT_COLUMNS)
+        with tqdm(total=total, unit="pair", disable=quiet or out is None, file=sys.stderr) as bar:
+            for chunk in store.iter_pair_rows(run_id, successful_only=successful_only):
+                for row in chunk:
+                    row["run_id"] = run_id
+                    row["attack"] = bool(row["attack"])
+                if writer is not None:
+                    writer.writerows(
+                        [["" if r[c] is None else int(r[c]) if c == "attack" else r[c] for c in EXPORT_COLUMNS]
+                         for r in chunk]
+                    )
+                else:
+                    stream.write("".join(json.dumps({c: r[c] for c in EXPORT_COLUMNS}) + "\n" for r in chunk))
+                n += len(chunk)
+                bar.update(len(chunk))
+    finally:
+        if out:
+            stream.close()
+    return n

@@ -1,0 +1,89 @@
+"""`vinadv export` (src/vinadv/commands/store.py): csv / jsonl / npz of a stored run, and exit status 2 on bad databases."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+import sqlalchemy as sa
+
+from vinadv.cli import main
+from vinadv.grid.paths import unpack_paths
+from vinadv.store import Store
+from vinadv.store.synthetic import random_records
+
+from tests.store.oracle import map_text, path_text
+
+
+@pytest.fixture
+def stored(db_url):
+    records = random_records(40, size=7, seed=11)
+    with Store.open(db_url) as store:
+        run_id = store.create_run("exported", attack="near-path")
+        store.write_pairs(run_id, records)
+    return db_url, run_id, records
+
+
+def test_export_csv_matches_oracle(stored, tmp_path):
+    url, run_id, records = stored
+    out = tmp_path / "pairs.csv"
+    assert main(["export", "--db", url, "--run", str(run_id), "--format", "csv", "--out", str(out), "--quiet"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert [int(r["pair_index"]) for r in rows] == list(range(40))
+    paths_a = unpack_paths(records.path_a_cells, records.path_a_offsets)
+    for i, row in enumerate(rows):
+        assert row["map_o"] == map_text(records.obstacles_o[i])
+        assert row["map_a"] == map_text(records.obstacles_a[i])
+        assert row["path_a"] == path_text(paths_a[i])
+        assert row["label"] == records.label[i] and row["attack"] == str(int(records.attack[i]))
+        assert row["score"] == ("" if np.isnan(records.score[i]) else repr(float(records.score[i])))
+
+
+def test_export_jsonl_successful_only_by_run_name(stored, capsys):
+    url, run_id, records = stored
+    assert main(["export", "--db", url, "--run", "exported", "--format", "jsonl", "--successful-only", "--quiet"]) == 0
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [d["pair_index"] for d in lines] == np.flatnonzero(records.attack).tolist()
+    assert all(d["attack"] is True and d["label"] in ("UrP", "FP") and d["run_id"] == run_id for d in lines)
+
+
+def test_export_npz_round_trips(stored, tmp_path):
+    url, run_id, records = stored
+    out = tmp_path / "pairs.npz"
+    assert main(["export", "--db", url, "--run", str(run_id), "--format", "npz", "--out", str(out), "--quiet"]) == 0
+    with np.load(out) as data:
+        assert str(data["format"]) == "vinadv.labelled_pairs/1" and str(data["strategy"]) == "near-path"
+        for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added", "path_o_cells", "path_o_offsets",
+                     "path_a_cells", "path_a_offsets", "attack", "dh", "dv", "pair_index"):
+            assert np.array_equal(data[name], getattr(records, name)), name
+        assert data["label"].tolist() == records.label.tolist()
+        assert np.array_equal(data["score"], records.score, equal_nan=True)
+
+
+def test_export_errors_exit_2(tmp_path, capsys, sqlite_url):
+    assert main(["export", "--db", str(tmp_path / "absent.db"), "--run", "1"]) == 2
+    assert "no such file" in capsys.readouterr().err
+    assert not (tmp_path / "absent.db").exists()
+    assert main(["export", "--db", "mysql+pymysql://root:pw@127.0.0.1:1/test", "--run", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "cannot connect" in err and "127.0.0.1:1" in err and ":pw@" not in err
+    with Store.open(sqlite_url):
+        pass
+    assert main(["export", "--db", sqlite_url, "--run", "5"]) == 2
+    assert "no run 5" in capsys.readouterr().err
+    assert main(["export", "--db", sqlite_url, "--run", "1", "--format", "npz"]) == 2
+
+
+def test_export_of_a_foreign_database_exit_2_untouched(db_url, capsys):
+    engine = sa.create_engine(db_url, poolclass=sa.pool.NullPool)
+    with engine.begin() as conn:
+        conn.execute(sa.text("CREATE TABLE runs (id INTEGER PRIMARY KEY, who VARCHAR(10))"))
+        conn.execute(sa.text("INSERT INTO runs VALUES (1, 'them')"))
+    assert main(["export", "--db", db_url, "--run", "1", "--quiet"]) == 2
+    assert "not a vinadv database" in capsys.readouterr().err
+    with engine.connect() as conn:
+        assert sa.inspect(conn).get_table_names() == ["runs"]
+        assert conn.execute(sa.text("SELECT * FROM runs")).all() == [(1, "them")]
+    engine.dispose()
