@@ -16,6 +16,7 @@ from vinadv.errors import InputError
 # Order is the order of `vinadv --help`; one module per stage of the pipeline.
 COMMAND_MODULES = [
     "vinadv.commands.maps",
+    "vinadv.commands.vin",
     "vinadv.commands.plan",
     "vinadv.commands.classify",
     "vinadv.commands.store",

@@ -1,0 +1,159 @@
+"""`vinadv vin train` and `vinadv vin eval`."""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import shlex
+import sys
+from pathlib import Path
+
+from vinadv.errors import InputError
+
+
+def register(subparsers) -> None:
+    vin = subparsers.add_parser("vin", help="train and evaluate the VIN planner")
+    sub = vin.add_subparsers(dest="vin_command", metavar="ACTION")
+    sub.required = True
+
+    train = sub.add_parser("train", help="train a VIN on a maps file (every free cell is supervised)")
+    train.add_argument("--data", required=True, help="maps file (.npz, from `vinadv maps generate`)")
+    train.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
+    train.add_argument("--lr", type=float, default=0.005, help="peak RMSprop learning rate, cosine-decayed (default 0.005)")
+    train.add_argument("--batch-size", type=int, default=32, help="maps per batch (default 32)")
+    train.add_argument("--val-fraction", type=float, default=0.05, help="maps held out for validation (default 0.05)")
+    train.add_argument("--seed", type=int, default=0, help="seed for initialisation, split and shuffling (default 0)")
+    train.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
+    train.add_argument("--k", type=int, default=None, help="value-iteration steps (default: 10/20/36 at 8/16/28)")
+    train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
+    train.add_argument("--time-limit", type=float, default=None, metavar="MIN",
+                       help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)")
+    train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    train.add_argument("--quiet", action="store_true", help="no progress bar or per-epoch lines")
+    train.add_argument("--json", action="store_true", help="print the training record as JSON")
+    train.set_defaults(func=cmd_train)
+
+    ev = sub.add_parser("eval", help="action accuracy and rollout figures of a VIN")
+    ev.add_argument("--weights", default=None, help="weights file (default: the shipped weights for the map size)")
+    src = ev.add_mutually_exclusive_group(required=True)
+    src.add_argument("--data", help="maps file (.npz)")
+    src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")
+    ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
+    ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
+    ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+    ev.add_argument("--k", type=int, default=None, help="value-iteration steps for a port-style weights file")
+    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
+    ev.add_argument("--quiet", action="store_true", help="no progress bar")
+    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
+    ev.set_defaults(func=cmd_eval)
+
+
+def _command_line() -> str:
+    return "vinadv " + shlex.join(sys.argv[1:])
+
+
+def _set_threads(n: int | None) -> None:
+    import torch
+
+    if n is not None:
+        if n < 1:
+            raise InputError(f"--threads must be >= 1, got {n}")
+        torch.set_num_threads(n)
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from vinadv import __version__
+    from vinadv.grid.mapset import MapSet
+    from vinadv.planners.training import TrainConfig, train_vin
+    from vinadv.planners.weights import save_vin, weights_checksum
+
+    _set_threads(args.threads)
+    config = TrainConfig(epochs=args.epochs, lr=args.lr, batch_size=args.batch_size, val_fraction=args.val_fraction,
+                         seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit)
+    config.validate()
+    maps = MapSet.load(args.data)
+    if len(maps) < 2:
+        raise InputError(f"{args.data}: {len(maps)} maps; training needs at least 2")
+    out = Path(args.out)
+    checkpoint = out.with_name(out.name + ".ckpt")
+    if checkpoint.exists() and not args.resume:
+        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
+    record = {
+        "command": _command_line(),
+        "vinadv": __version__,
+        "started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "data": {"path": str(args.data), "sha256": weights_checksum(args.data), "maps": len(maps), "size": maps.size,
+                 "seed": int(maps.seed), "corner_cutting": bool(maps.corner_cutting)},
+    }
+    log = None if args.quiet or args.json else (lambda line: print(line, flush=True))
+    model, record = train_vin(maps, config, checkpoint=checkpoint, resume=args.resume,
+                              progress=not (args.quiet or args.json), record=record, log=log)
+    record["finished"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    save_vin(model, out, record)
+    record_path = out.with_suffix(".json")
+    record_path.write_text(json.dumps(record, indent=2) + "\n")
+    checkpoint.unlink(missing_ok=True)
+    if args.json:
+        print(json.dumps(record))
+    elif not args.quiet:
+        last = record["epochs"][-1]
+        print(f"wrote {out} and {record_path}: {record['epochs_done']} epochs in {record['wall_time_s']:.0f} s, "
+              f"val action accuracy {last['val_action_accuracy']}")
+    return 0
+
+
+def cmd_eval(args: argparse.Namespace) -> int:
+    import time
+
+    from vinadv.grid.generator import generate_maps
+    from vinadv.grid.mapset import MapSet
+    from vinadv.planners.evaluation import evaluate_vin
+    from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
+
+    _set_threads(args.threads)
+    if args.data is not None:
+        maps = MapSet.load(args.data)
+        source = {"data": args.data}
+    else:
+        if args.n < 1:
+            raise InputError(f"--n must be >= 1, got {args.n}")
+        maps = generate_maps(args.n, args.size, args.seed, args.starts)
+        source = {"generated": {"n": args.n, "seed": args.seed, "size": args.size}}
+    model = load_vin(args.weights, size=maps.size, k=args.k)
+    trained = model.record.get("size")
+    if trained is not None and trained != maps.size:
+        raise InputError(f"{model.weights_path}: weights were trained on {trained}x{trained} maps, "
+                         f"the maps are {maps.size}x{maps.size}")
+    data_seed = model.record.get("data", {}).get("seed")
+    if data_seed is not None and data_seed == maps.seed and not args.quiet:
+        print(f"vinadv: warning: these maps use seed {maps.seed}, the seed of the training data", file=sys.stderr)
+    t0 = time.perf_counter()
+    metrics = evaluate_vin(model, maps, progress=not (args.quiet or args.json))
+    weights_path = args.weights or str(default_weights_path(maps.size))
+    metrics = {"weights": weights_path, "weights_sha256": weights_checksum(model.weights_path), **source, **metrics,
+               "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
+    if args.out:
+        Path(args.out).write_text(json.dumps(metrics, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(metrics))
+    else:
+        _print_metrics(metrics)
+    return 0
+
+
+def _pct(x: float) -> str:
+    return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{100 * x:.2f}%"
+
+
+def _print_metrics(m: dict) -> None:
+    terms = ", ".join(f"{k} {v}" for k, v in m["terminations"].items())
+    print(f"{m['maps']} maps of {m['size']}x{m['size']}, {m['rollouts']} rollouts ({m['weights']})")
+    print(f"  action accuracy   {_pct(m['action_accuracy'])} of {m['action_cells']} cells")
+    print(f"  rollout success   {_pct(m['success_rate'])}")
+    print(f"  optimal paths     {_pct(m['optimal_rate'])} (of reached: {_pct(m['optimal_rate_of_reached'])})")
+    print(f"  mean extra cost   {m['mean_extra_cost']:.4f} (relative {_pct(m['mean_extra_cost_relative'])})")
+    print(f"  terminations      {terms}")

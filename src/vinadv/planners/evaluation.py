@@ -1,0 +1,104 @@
+"""How good a VIN is on a set of maps: action accuracy and rollout metrics.
+
+- action accuracy: over every free, reachable, non-goal cell of every map, the fraction where the argmax action
+  (lowest index on ties) is one of the optimal actions (Dijkstra).
+- rollouts (DESIGN.md rule, by `vinadv.planners.engine`), from every start of every map:
+  success rate (goal reached), % optimal (path cost equals the expert cost within 1e-9; an unreached path is
+  not optimal), mean extra path cost of the reached paths (cost - expert cost), and the termination reasons.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import torch
+
+from vinadv.grid.mapset import MapSet
+from vinadv.grid.paths import path_costs
+from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
+from vinadv.planners.result import TERMINATIONS, PlanResult
+from vinadv.planners.vin import VIN, make_input
+
+#: planner(obstacles (B,N,N), goals (B,2), starts (B,S,2), model, corner_cutting) -> PlanResult, path b*S+s.
+MultiStartPlanner = Callable[[np.ndarray, np.ndarray, np.ndarray, VIN, bool], PlanResult]
+
+
+def action_accuracy_counts(model: VIN, obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True,
+                           batch_size: int = 256) -> tuple[int, int]:
+    """`(correct, cells)`: supervised cells (free, reachable, not the goal) whose argmax action is optimal."""
+    correct, cells = 0, 0
+    model.eval()
+    for i in range(0, len(obstacles), batch_size):
+        obs, g = obstacles[i : i + batch_size], goals[i : i + batch_size]
+        dist, _ = shortest_distances(obs, g, corner_cutting)
+        optimal = optimal_actions(dist, obs, corner_cutting)
+        with torch.no_grad():
+            logits = model.action_logits(make_input(obs, g)).numpy()
+        best = np.argmax(logits, axis=-1)  # lowest index on ties, as the rollout rule
+        supervised = optimal.any(axis=-1)
+        hit = np.take_along_axis(optimal, best[..., None], axis=-1)[..., 0]
+        correct += int((hit & supervised).sum())
+        cells += int(supervised.sum())
+    return correct, cells
+
+
+def _engine_planner(obstacles, goals, starts, model, corner_cutting) -> PlanResult:
+    from vinadv.planners import engine
+
+    if hasattr(engine, "plan_maps"):  # one value map per map, shared by its starts
+        return engine.plan_maps(obstacles, goals, starts, model, corner_cutting)
+    s = starts.shape[1]
+    idx = np.repeat(np.arange(len(obstacles)), s)
+    return engine.plan_batch(obstacles[idx], starts.reshape(-1, 2), goals[idx], model, corner_cutting)
+
+
+def rollout_metrics(result: PlanResult, expert_costs: np.ndarray) -> dict:
+    """Rollout figures from a `PlanResult` and the expert (optimal) cost of each path `(B,)`."""
+    expert_costs = np.asarray(expert_costs, dtype=np.float64).reshape(-1)
+    n = len(result)
+    costs = path_costs(result.path_cells, result.path_offsets)
+    reached = np.asarray(result.reached, dtype=bool)
+    optimal = reached & (np.abs(costs - expert_costs) <= COST_TOL)
+    extra = costs[reached] - expert_costs[reached]
+    names = result.termination_names
+    return {
+        "rollouts": int(n),
+        "success_rate": float(reached.mean()) if n else float("nan"),
+        "optimal_rate": float(optimal.mean()) if n else float("nan"),
+        "optimal_rate_of_reached": float(optimal[reached].mean()) if reached.any() else float("nan"),
+        "mean_extra_cost": float(extra.mean()) if len(extra) else float("nan"),
+        "mean_extra_cost_relative": float((extra / expert_costs[reached]).mean()) if len(extra) else float("nan"),
+        "terminations": {t: int((names == t).sum()) for t in TERMINATIONS},
+    }
+
+
+def evaluate_vin(model: VIN, maps: MapSet, planner: MultiStartPlanner | None = None, batch_size: int = 256,
+                 progress: bool = False) -> dict:
+    """All figures for `model` on `maps` (rollouts from every start). `planner` defaults to the engine."""
+    planner = planner or _engine_planner
+    obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
+    chunks = range(0, len(maps), batch_size)
+    if progress:
+        from tqdm import tqdm
+
+        chunks = tqdm(chunks, desc="evaluating", unit="batch")
+    correct, cells, parts = 0, 0, []
+    for i in chunks:
+        sl = slice(i, i + batch_size)
+        c, n = action_accuracy_counts(model, obstacles[sl], goals[sl], maps.corner_cutting, batch_size)
+        correct += c
+        cells += n
+        parts.append(planner(obstacles[sl], goals[sl], starts[sl], model, maps.corner_cutting))
+    result = PlanResult.concatenate(parts)
+    metrics = {
+        "maps": len(maps),
+        "size": maps.size,
+        "starts_per_map": maps.n_starts,
+        "seed": int(maps.seed),
+        "corner_cutting": bool(maps.corner_cutting),
+        "action_accuracy": correct / cells if cells else float("nan"),
+        "action_cells": cells,
+    }
+    metrics.update(rollout_metrics(result, maps.expert_costs))
+    return metrics

@@ -1,0 +1,332 @@
+"""Training a VIN on a maps file: every free cell of every map is a supervised state.
+
+The value map depends only on the map, so one forward pass per map gives the logits of all its cells at once.
+Dijkstra gives the set of optimal actions at every cell that can reach the goal; where several actions are
+optimal any is right, so the loss is the negative log of the probability mass on the optimal set,
+`-log sum_{a optimal} softmax(logits)_a`, averaged over the supervised cells (free, reachable, not the goal).
+
+Optimiser: RMSprop (as the original VIN and the common PyTorch ports, eps 1e-6) with a cosine learning-rate
+schedule, gradient-norm clipping (value iteration through max can spike the gradient). The last `val_fraction`
+of the maps (after a seeded shuffle) is held out. After each epoch a checkpoint (model, optimiser, record) is
+written, so a killed run resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import platform
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import torch
+
+from vinadv.errors import InputError
+from vinadv.grid.mapset import MapSet
+from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
+from vinadv.planners.vin import VIN, VINConfig, default_k, make_input
+
+CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
+_BITS = 1 << np.arange(8, dtype=np.uint16)
+
+
+@dataclass
+class TrainConfig:
+    """Training hyper-parameters. `lr` is the peak RMSprop rate, decayed by a cosine to `lr * lr_final_fraction`."""
+
+    epochs: int = 30
+    lr: float = 0.005
+    lr_final_fraction: float = 0.02
+    batch_size: int = 32
+    val_fraction: float = 0.05
+    seed: int = 0
+    device: str = "cpu"
+    k: int | None = None
+    l_h: int = 150
+    l_q: int = 10
+    clip_norm: float = 5.0
+    time_limit_min: float | None = None
+
+    def validate(self) -> None:
+        if self.epochs < 1:
+            raise InputError(f"--epochs must be >= 1, got {self.epochs}")
+        if not self.lr > 0:
+            raise InputError(f"--lr must be > 0, got {self.lr}")
+        if self.batch_size < 1:
+            raise InputError(f"--batch-size must be >= 1, got {self.batch_size}")
+        if not 0 <= self.val_fraction < 1:
+            raise InputError(f"--val-fraction must be in [0, 1), got {self.val_fraction}")
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def optimal_action_bits(maps: MapSet) -> np.ndarray:
+    """Optimal actions of every cell as a bit mask: `(n, N, N)` uint8, bit `a` set when action `a` is optimal.
+
+    Zero at obstacles, the goal and cells that cannot reach the goal (they are not supervised).
+    """
+    out = np.zeros(maps.obstacles.shape, dtype=np.uint8)
+    for i in range(0, len(maps), 1024):  # bounds the (chunk, N, N, 8) temporaries
+        obs, goals = maps.obstacles[i : i + 1024], maps.goals[i : i + 1024]
+        dist, _ = shortest_distances(obs, goals, maps.corner_cutting)
+        opt = optimal_actions(dist, obs, maps.corner_cutting)
+        out[i : i + 1024] = (opt.astype(np.uint16) * _BITS).sum(axis=-1).astype(np.uint8)
+    return out
+
+
+def bits_to_mask(bits: torch.Tensor, n_actions: int = 8) -> torch.Tensor:
+    """`(...,)` uint8 bit masks -> `(..., n_actions)` bool."""
+    shifts = torch.arange(n_actions, device=bits.device, dtype=torch.int32)
+    return ((bits.to(torch.int32).unsqueeze(-1) >> shifts) & 1).bool()
+
+
+def optimal_set_loss(logits: torch.Tensor, optimal: torch.Tensor) -> torch.Tensor:
+    """Mean of `-log sum_{a in optimal} softmax(logits)_a` over rows: `(M, A)` logits, `(M, A)` bool, each row
+    with at least one optimal action."""
+    masked = logits.masked_fill(~optimal, float("-inf"))
+    return (torch.logsumexp(logits, dim=-1) - torch.logsumexp(masked, dim=-1)).mean()
+
+
+def batch_loss(model: VIN, obstacles: np.ndarray, goals: np.ndarray, bits: np.ndarray, device: torch.device):
+    """Loss, number of supervised cells and number whose argmax is optimal, for one batch of maps."""
+    x = make_input(obstacles, goals).to(device)
+    logits = model.action_logits(x)
+    mask = bits_to_mask(torch.from_numpy(bits).to(device), logits.shape[-1])
+    supervised = mask.any(dim=-1)
+    logits, mask = logits[supervised], mask[supervised]
+    loss = optimal_set_loss(logits, mask)
+    correct = mask.gather(1, logits.argmax(dim=-1, keepdim=True)).sum()
+    return loss, int(supervised.sum()), int(correct)
+
+
+def split_indices(n: int, val_fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Seeded shuffle of `range(n)`, then `(train, val)`: the last `round(n * val_fraction)` (>= 1 if > 0) held out."""
+    order = np.random.default_rng([seed, 0x5EED]).permutation(n)
+    n_val = 0 if val_fraction <= 0 else max(1, int(round(n * val_fraction)))
+    if n - n_val < 1:
+        raise InputError(f"{n} maps are too few for a validation fraction of {val_fraction}")
+    return np.sort(order[: n - n_val]), np.sort(order[n - n_val :])
+
+
+def hardware_info(device: torch.device) -> dict:
+    info = {
+        "device": str(device),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpu_count": os.cpu_count(),
+        "torch_threads": torch.get_num_threads(),
+        "torch": torch.__version__,
+    }
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    info["cpu_model"] = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    if device.type == "cuda":
+        info["gpu"] = torch.cuda.get_device_name(device)
+    return info
+
+
+def resolve_device(name: str) -> torch.device:
+    try:
+        device = torch.device(name)
+    except RuntimeError as exc:
+        raise InputError(f"--device {name!r} is not a device ({exc})") from None
+    if device.type == "cuda" and not torch.cuda.is_available():
+        raise InputError(f"--device {name!r}: CUDA is not available on this machine")
+    if device.type not in ("cpu", "cuda", "mps"):
+        raise InputError(f"--device {name!r}: use cpu or cuda")
+    return device
+
+
+@dataclass
+class _State:
+    epoch: int = 0
+    step: int = 0
+    wall_s: float = 0.0
+    epochs: list = field(default_factory=list)
+
+
+def evaluate_loss(model: VIN, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int,
+                  device: torch.device) -> dict:
+    """Loss and action accuracy over the maps `idx` (cell-weighted), without gradients."""
+    total_loss, cells, correct = 0.0, 0, 0
+    model.eval()
+    with torch.no_grad():
+        for i in range(0, len(idx), batch_size):
+            b = idx[i : i + batch_size]
+            loss, n, c = batch_loss(model, maps.obstacles[b], maps.goals[b], bits[b], device)
+            total_loss += loss.item() * n
+            cells += n
+            correct += c
+    return {"loss": total_loss / max(cells, 1), "action_accuracy": correct / max(cells, 1), "cells": cells}
+
+
+def train_vin(
+    maps: MapSet,
+    config: TrainConfig,
+    checkpoint: str | os.PathLike | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    record: dict | None = None,
+    log: Callable[[str], None] | None = None,
+) -> tuple[VIN, dict]:
+    """Train a VIN on `maps`; returns the model (CPU, eval mode) and the training record.
+
+    Args:
+        maps: the training maps (their starts and expert paths are not needed: every cell is supervised).
+        config: hyper-parameters (`TrainConfig`).
+        checkpoint: file written after every epoch; with `resume`, training continues from it.
+        record: extra entries for the record (command, data checksum...), kept as given.
+        log: called with one line per epoch (None: silent).
+    """
+    config.validate()
+    device = resolve_device(config.device)
+    torch.manual_seed(config.seed)
+    size = maps.size
+    vin_config = VINConfig(k=config.k or default_k(size), l_h=config.l_h, l_q=config.l_q)
+    model = VIN(vin_config).to(device)
+    optimizer = torch.optim.RMSprop(model.parameters(), lr=config.lr, eps=1e-6)
+    train_idx, val_idx = split_indices(len(maps), config.val_fraction, config.seed)
+    steps_per_epoch = math.ceil(len(train_idx) / config.batch_size)
+    total_steps = steps_per_epoch * config.epochs
+    state = _State()
+    rec = dict(record or {})
+    rec.update(
+        format="vinadv.vin-training-record/1",
+        seed=config.seed,
+        train_config=config.to_dict(),
+        model=vin_config.to_dict(),
+        size=size,
+        n_maps=len(maps),
+        n_train=len(train_idx),
+        n_val=len(val_idx),
+        corner_cutting=bool(maps.corner_cutting),
+        hardware=hardware_info(device),
+        loss="-log sum_{a optimal} softmax(logits)_a, mean over free reachable non-goal cells",
+        optimizer="RMSprop(eps=1e-6), cosine lr schedule per step, grad-norm clipping",
+    )
+    if resume and checkpoint is not None and Path(checkpoint).exists():
+        state = _load_checkpoint(checkpoint, model, optimizer, config, rec)
+        if log:
+            log(f"resumed from {checkpoint} after epoch {state.epoch}")
+    bits = optimal_action_bits(maps)
+    started = time.time() - state.wall_s
+    stopped = None
+    for epoch in range(state.epoch, config.epochs):
+        model.train()
+        order = train_idx[np.random.default_rng([config.seed, epoch]).permutation(len(train_idx))]
+        batches = range(0, len(order), config.batch_size)
+        if progress:
+            from tqdm import tqdm
+
+            batches = tqdm(batches, desc=f"epoch {epoch + 1}/{config.epochs}", unit="batch", leave=False)
+        loss_sum, cell_sum, correct_sum = 0.0, 0, 0
+        epoch_start = time.time()
+        for i in batches:
+            b = order[i : i + config.batch_size]
+            lr = _lr_at(state.step, total_steps, config)
+            for group in optimizer.param_groups:
+                group["lr"] = lr
+            loss, n, c = batch_loss(model, maps.obstacles[b], maps.goals[b], bits[b], device)
+            optimizer.zero_grad(set_to_none=True)
+            loss.backward()
+            grad_norm = torch.nn.utils.clip_grad_norm_(model.parameters(), config.clip_norm)
+            if torch.isfinite(grad_norm):  # skip the rare non-finite step instead of poisoning the weights
+                optimizer.step()
+            state.step += 1
+            loss_sum += loss.item() * n
+            cell_sum += n
+            correct_sum += c
+            if progress:
+                batches.set_postfix(loss=f"{loss_sum / max(cell_sum, 1):.4f}", lr=f"{lr:.2g}")
+        val = evaluate_loss(model, maps, bits, val_idx, config.batch_size, device) if len(val_idx) else {}
+        state.epoch = epoch + 1
+        state.wall_s = time.time() - started
+        entry = {
+            "epoch": epoch + 1,
+            "train_loss": loss_sum / max(cell_sum, 1),
+            "train_action_accuracy": correct_sum / max(cell_sum, 1),
+            "val_loss": val.get("loss"),
+            "val_action_accuracy": val.get("action_accuracy"),
+            "lr_end": _lr_at(state.step - 1, total_steps, config),
+            "epoch_s": round(time.time() - epoch_start, 2),
+            "wall_s": round(state.wall_s, 2),
+        }
+        state.epochs.append(entry)
+        if log:
+            log(
+                f"epoch {entry['epoch']}/{config.epochs}: train loss {entry['train_loss']:.4f} "
+                f"acc {entry['train_action_accuracy']:.4f}"
+                + (f", val loss {entry['val_loss']:.4f} acc {entry['val_action_accuracy']:.4f}" if val else "")
+                + f" ({entry['epoch_s']:.0f} s)"
+            )
+        if checkpoint is not None:
+            _save_checkpoint(checkpoint, model, optimizer, config, state, rec)
+        if config.time_limit_min is not None and state.wall_s > 60 * config.time_limit_min and state.epoch < config.epochs:
+            stopped = f"time limit of {config.time_limit_min} min reached after epoch {state.epoch}"
+            if log:
+                log(stopped)
+            break
+    rec.update(epochs=state.epochs, epochs_done=state.epoch, wall_time_s=round(state.wall_s, 1), steps=state.step,
+               stopped_early=stopped)
+    model = model.to("cpu").eval()
+    return model, rec
+
+
+def _lr_at(step: int, total: int, config: TrainConfig) -> float:
+    f = config.lr_final_fraction
+    return config.lr * (f + (1 - f) * 0.5 * (1 + math.cos(math.pi * min(step, total) / max(total, 1))))
+
+
+def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    torch.save(
+        {
+            "format": CHECKPOINT_FORMAT,
+            "model": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+            "optimizer": optimizer.state_dict(),
+            "train_config": config.to_dict(),
+            "data_sha256": rec.get("data", {}).get("sha256"),
+            "epoch": state.epoch,
+            "step": state.step,
+            "wall_s": state.wall_s,
+            "epochs": state.epochs,
+        },
+        tmp,
+    )
+    os.replace(tmp, path)
+
+
+def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> _State:
+    try:
+        ck = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:
+        raise InputError(f"{path}: not a readable training checkpoint ({exc})") from None
+    if not isinstance(ck, dict) or ck.get("format") != CHECKPOINT_FORMAT:
+        raise InputError(f"{path}: not a vinadv training checkpoint")
+    # Resuming under other settings would silently mix two trainings; only the epoch count may grow.
+    saved = dict(ck.get("train_config", {}))
+    now = config.to_dict()
+    for key in ("lr", "lr_final_fraction", "batch_size", "val_fraction", "seed", "k", "l_h", "l_q", "epochs"):
+        if saved.get(key) != now.get(key):
+            raise InputError(f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {now.get(key)!r}; "
+                             f"use the same options to resume, or remove the checkpoint")
+    data_sha = rec.get("data", {}).get("sha256")
+    if data_sha is not None and ck.get("data_sha256") not in (None, data_sha):
+        raise InputError(f"{path}: checkpoint was made on other data (checksum differs); remove it to start over")
+    try:
+        model.load_state_dict(ck["model"])
+        optimizer.load_state_dict(ck["optimizer"])
+    except (RuntimeError, KeyError, ValueError) as exc:
+        raise InputError(f"{path}: checkpoint does not match the model ({exc})") from None
+    return _State(epoch=int(ck["epoch"]), step=int(ck["step"]), wall_s=float(ck["wall_s"]), epochs=list(ck["epochs"]))
