@@ -78,3 +78,19 @@ def test_augmentation_keeps_labels(batch, seed):
     assert sorted(image_labels.tolist()) == sorted(new_labels.tolist())
     assert np.array_equal(np.sort(images.reshape(len(images), -1), axis=0),
                           np.sort(render_batch(balanced).reshape(len(images), -1), axis=0))
+
+
+def test_split_encoding_marks_shared_cells_green():
+    o = np.array([[0, 0], [1, 1], [2, 2]])
+    a = np.array([[0, 0], [1, 0], [2, 1], [2, 2]])
+    image = render_batch(PathPairBatch.from_paths([o], [a], [(2, 2)], 4), encoding="split")[0]
+    assert image[0, 0].tolist() == [0, 255, 0] and image[2, 2].tolist() == [0, 255, 0]
+    assert image[1, 1].tolist() == [255, 0, 0] and image[1, 0].tolist() == [0, 0, 255]
+    assert image[3, 3].tolist() == [0, 0, 0]
+
+
+@settings(max_examples=20, deadline=None)
+@given(path_pairs(), st.integers(0, 7))
+def test_split_rendering_commutes_with_transforms(batch, k):
+    assert np.array_equal(render_batch(batch.transformed(k), "split"),
+                          transform_images(render_batch(batch, "split"), k))

@@ -18,6 +18,7 @@ from vinadv.errors import InputError
 
 BLUE = np.array([0, 0, 255], dtype=np.uint8)
 RED = np.array([255, 0, 0], dtype=np.uint8)
+GREEN = np.array([0, 255, 0], dtype=np.uint8)
 TRANSFORM_NAMES = ("identity", "rot90", "rot180", "rot270", "flip_h", "flip_v", "transpose", "antitranspose")
 #: The paper's augmentation: horizontal and vertical flips, 90/180/270 degree rotations.
 AUGMENT_TRANSFORMS = (1, 2, 3, 4, 5)
@@ -67,8 +68,18 @@ def transform_images(images: np.ndarray, transform: int) -> np.ndarray:
     return np.ascontiguousarray(out)
 
 
-def render_path_images(o_cells, o_offsets, a_cells, a_offsets, size: int) -> np.ndarray:
-    """Path images of `n` packed path pairs: `(n, size, size, 3)` uint8 (blue adversarial, red original on top)."""
+ENCODINGS = ("paper", "split")
+
+
+def render_path_images(o_cells, o_offsets, a_cells, a_offsets, size: int, encoding: str = "paper") -> np.ndarray:
+    """Path images of `n` packed path pairs: `(n, size, size, 3)` uint8.
+
+    encoding 'paper' (DESIGN.md): adversarial path blue, then the original path red on top.
+    encoding 'split' (vinadv's own, richer): as 'paper', but cells on both paths green `(0, 255, 0)`, so red
+    shows only the original path's cells off the adversarial path (the rule's `Do`) and blue its `Da`.
+    """
+    if encoding not in ENCODINGS:
+        raise InputError(f"unknown path image encoding {encoding!r}; choose from {list(ENCODINGS)}")
     o_offsets = np.asarray(o_offsets, dtype=np.int64)
     a_offsets = np.asarray(a_offsets, dtype=np.int64)
     n = len(o_offsets) - 1
@@ -76,13 +87,18 @@ def render_path_images(o_cells, o_offsets, a_cells, a_offsets, size: int) -> np.
     a_cells = np.asarray(a_cells, dtype=np.int64).reshape(-1, 2)
     o_cells = np.asarray(o_cells, dtype=np.int64).reshape(-1, 2)
     images[pair_ids(a_offsets), a_cells[:, 0], a_cells[:, 1]] = BLUE
-    images[pair_ids(o_offsets), o_cells[:, 0], o_cells[:, 1]] = RED
+    o_pairs = pair_ids(o_offsets)
+    if encoding == "split":
+        shared = images[o_pairs, o_cells[:, 0], o_cells[:, 1], 2] > 0  # original cells already drawn blue
+        images[o_pairs, o_cells[:, 0], o_cells[:, 1]] = np.where(shared[:, None], GREEN, RED)
+    else:
+        images[o_pairs, o_cells[:, 0], o_cells[:, 1]] = RED
     return images
 
 
-def render_batch(batch: PathPairBatch) -> np.ndarray:
+def render_batch(batch: PathPairBatch, encoding: str = "paper") -> np.ndarray:
     """`render_path_images` of a `PathPairBatch`: `(n, N, N, 3)` uint8."""
-    return render_path_images(batch.o_cells, batch.o_offsets, batch.a_cells, batch.a_offsets, batch.size)
+    return render_path_images(batch.o_cells, batch.o_offsets, batch.a_cells, batch.a_offsets, batch.size, encoding)
 
 
 def augmentation_plan(labels: np.ndarray, seed: int = 0, transforms=AUGMENT_TRANSFORMS):

@@ -24,11 +24,12 @@ from vinadv.errors import InputError
 CHUNK = 4096
 
 
-def _image_chunks(X, chunk: int = CHUNK):
-    """Yield `(start, images (m, N, N, 3) uint8)` chunks of X (a PathPairBatch or an image array)."""
+def _image_chunks(X, chunk: int = CHUNK, encoding: str = "paper"):
+    """Yield `(start, images (m, N, N, 3) uint8)` chunks of X (a PathPairBatch, rendered with `encoding`, or
+    an image array, used as it is)."""
     if isinstance(X, PathPairBatch):
         for start in range(0, len(X), chunk):
-            yield start, render_batch(X.subset(np.arange(start, min(start + chunk, len(X)))))
+            yield start, render_batch(X.subset(np.arange(start, min(start + chunk, len(X)))), encoding)
     else:
         images = np.asarray(X)
         if images.ndim != 4 or images.shape[3] != 3 or images.shape[1] != images.shape[2]:
@@ -51,18 +52,21 @@ def _sparse_features(images: np.ndarray) -> scipy.sparse.csr_matrix:
 
 @register_kind("svm")
 class SVMImageClassifier(PairClassifier):
-    """RBF-kernel SVM on flattened path images (paper section 4.3). `C`, `gamma` as in `sklearn.svm.SVC`."""
+    """RBF-kernel SVM on flattened path images (paper section 4.3). `C`, `gamma` as in `sklearn.svm.SVC`;
+    `encoding`: the path image encoding ('paper' or 'split', see `vinadv.classify.images`)."""
 
     kind = "svm"
 
-    def __init__(self, C: float = 1.0, gamma: str | float = "scale"):
+    def __init__(self, C: float = 1.0, gamma: str | float = "scale", encoding: str = "paper"):
         self.C = C
         self.gamma = gamma
+        self.encoding = encoding
 
     def fit(self, X, y) -> SVMImageClassifier:
         y = self._check_y(X, y)
         start = time.perf_counter()
-        features = scipy.sparse.vstack([_sparse_features(images) for _, images in _image_chunks(X)]).tocsr()
+        chunks = _image_chunks(X, CHUNK, self.encoding)
+        features = scipy.sparse.vstack([_sparse_features(images) for _, images in chunks]).tocsr()
         svc = SVC(C=self.C, kernel="rbf", gamma=self.gamma, cache_size=500)
         svc.fit(features.astype(np.float64), y)
         # binary SVC: dual_coef_ and intercept_ are signed so that a positive decision means classes_[1] (FP)
@@ -87,7 +91,7 @@ class SVMImageClassifier(PairClassifier):
         if _image_size(X) != self.size_:
             raise InputError(f"this SVM was trained on {self.size_}x{self.size_} maps, not {_image_size(X)}")
         out = np.empty(len(X))
-        for start, images in _image_chunks(X):
+        for start, images in _image_chunks(X, CHUNK, self.encoding):
             features = _sparse_features(images)
             dots = np.asarray(features @ self._sv_t, dtype=np.float64)
             norms = np.asarray(features.multiply(features).sum(axis=1), dtype=np.float64)
@@ -154,20 +158,19 @@ class _RowColumnCNN:  # built lazily so that importing vinadv.classify does not 
         nn = torch.nn
 
         class RowColumnCNN(nn.Module):
-            """Local 3x3 features, then convolutions spanning a whole row and a whole column (the FP/DP rule
-            compares cells of one row or one column at any distance), global max pooling, two dense layers."""
+            """The image and a few local 3x3 features, then convolutions spanning a whole row and a whole column
+            (the FP/DP rule compares cells of one row or one column at any distance), global max pooling, two
+            dense layers."""
 
             def __init__(self):
                 super().__init__()
-                self.local = nn.Sequential(
-                    nn.Conv2d(3, width, 3, padding=1), nn.ReLU(), nn.Conv2d(width, width, 3, padding=1), nn.ReLU()
-                )
-                self.rows = nn.Conv2d(width, 2 * width, (1, 2 * size - 1), padding=(0, size - 1))
-                self.cols = nn.Conv2d(width, 2 * width, (2 * size - 1, 1), padding=(size - 1, 0))
-                self.head = nn.Sequential(nn.Linear(4 * width, 64), nn.ReLU(), nn.Linear(64, 2))
+                self.local = nn.Sequential(nn.Conv2d(3, 4, 3, padding=1), nn.ReLU())
+                self.rows = nn.Conv2d(7, width, (1, 2 * size - 1), padding=(0, size - 1))
+                self.cols = nn.Conv2d(7, width, (2 * size - 1, 1), padding=(size - 1, 0))
+                self.head = nn.Sequential(nn.Linear(2 * width, 32), nn.ReLU(), nn.Linear(32, 2))
 
             def forward(self, x):
-                f = self.local(x)
+                f = torch.cat([x, self.local(x)], dim=1)
                 r = torch.relu(self.rows(f)).amax(dim=(2, 3))
                 c = torch.relu(self.cols(f)).amax(dim=(2, 3))
                 return self.head(torch.cat([r, c], dim=1))
@@ -180,14 +183,16 @@ class TorchImageClassifier(PairClassifier):
 
     `architecture`: CNN 'plain' or 'rowcol', MLP 'plain'. `width`: channels (CNN) or hidden units (MLP).
     `optimizer`: 'adam' or 'adamw'; `schedule`: 'constant' or 'cosine' learning rate; `augment`: a random
-    flip/rotation of the square per training batch. `seed` fixes initialisation and batch order.
+    flip/rotation of the square per training batch. `encoding`: the path image encoding ('paper' or 'split').
+    `seed` fixes initialisation and batch order.
     """
 
     kind = "abstract"
 
     def __init__(self, architecture: str = "plain", width: int = 32, epochs: int = 10, batch_size: int = 64,
                  learning_rate: float = 1e-3, weight_decay: float = 0.0, optimizer: str = "adam",
-                 schedule: str = "constant", augment: bool = False, seed: int = 0, verbose: bool = False):
+                 schedule: str = "constant", augment: bool = False, encoding: str = "paper", seed: int = 0,
+                 verbose: bool = False):
         self.architecture = architecture
         self.width = width
         self.epochs = epochs
@@ -197,6 +202,7 @@ class TorchImageClassifier(PairClassifier):
         self.optimizer = optimizer
         self.schedule = schedule
         self.augment = augment
+        self.encoding = encoding
         self.seed = seed
         self.verbose = verbose
 
@@ -211,7 +217,7 @@ class TorchImageClassifier(PairClassifier):
         start = time.perf_counter()
         torch.manual_seed(self.seed)
         rng = np.random.default_rng(self.seed)
-        images = np.concatenate([chunk for _, chunk in _image_chunks(X)])
+        images = np.concatenate([chunk for _, chunk in _image_chunks(X, CHUNK, self.encoding)])
         self.size_ = int(images.shape[1])
         inputs = self._tensor(images)
         targets = torch.from_numpy((y == "FP").astype(np.int64))
@@ -251,7 +257,7 @@ class TorchImageClassifier(PairClassifier):
         torch = _torch()
         out = np.empty((len(X), 2), dtype=np.float32)
         with torch.inference_mode():
-            for start, images in _image_chunks(X, 1024):
+            for start, images in _image_chunks(X, 1024, self.encoding):
                 out[start : start + len(images)] = self.network_(self._tensor(images)).numpy()
         return out
 
@@ -320,6 +326,7 @@ class MLPImageClassifier(TorchImageClassifier):
 
     def __init__(self, architecture: str = "plain", width: int = 512, epochs: int = 10, batch_size: int = 64,
                  learning_rate: float = 1e-3, weight_decay: float = 0.0, optimizer: str = "adam",
-                 schedule: str = "constant", augment: bool = False, seed: int = 0, verbose: bool = False):
+                 schedule: str = "constant", augment: bool = False, encoding: str = "paper", seed: int = 0,
+                 verbose: bool = False):
         super().__init__(architecture, width, epochs, batch_size, learning_rate, weight_decay, optimizer,
-                         schedule, augment, seed, verbose)
+                         schedule, augment, encoding, seed, verbose)

@@ -1,0 +1,77 @@
+import json
+import math
+
+import numpy as np
+import pytest
+
+from vinadv.attacks.pairs import PairSet
+from vinadv.classify import label_batch
+from vinadv.classify.synthetic import synthetic_pairs
+from vinadv.cli import main
+
+
+@pytest.fixture(scope="module")
+def pairs_file(tmp_path_factory):
+    """A pairs file holding synthetic path pairs (maps are placeholders: classify reads only the paths)."""
+    batch = synthetic_pairs(260, size=12, seed=2, mix=True)
+    n, size = len(batch), batch.size
+    obstacles = np.zeros((n, size, size), dtype=bool)
+    obstacles[:, 0, :] = True
+    obstacles_a = obstacles.copy()
+    obstacles_a[:, size - 1, size - 1] = True
+    last = lambda cells, off: cells[np.maximum(off[1:] - 1, 0)]  # noqa: E731
+    term = lambda cells, off: np.where(np.all(last(cells, off) == batch.goals, 1), "goal", "collision")  # noqa: E731
+    pairs = PairSet(
+        obstacles_o=obstacles, obstacles_a=obstacles_a, starts=batch.o_cells[batch.o_offsets[:-1]].astype(np.int64),
+        goals=batch.goals, added=np.tile([size - 1, size - 1], (n, 1)), map_index=np.arange(n),
+        path_o_cells=batch.o_cells, path_o_offsets=batch.o_offsets, path_a_cells=batch.a_cells,
+        path_a_offsets=batch.a_offsets, term_o=term(batch.o_cells, batch.o_offsets),
+        term_a=term(batch.a_cells, batch.a_offsets), strategy="synthetic",
+    )
+    path = tmp_path_factory.mktemp("classify") / "pairs.npz"
+    pairs.save(path)
+    return path, label_batch(batch).labels
+
+
+def test_train_and_eval_on_held_out_split(pairs_file, tmp_path, capsys):
+    path, labels = pairs_file
+    model = tmp_path / "svm.model"
+    assert main(["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model),
+                 "--balance", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    fp_dp = np.isin(labels, ("DP", "FP"))
+    assert sum(record["test_counts"].values()) == math.ceil(0.3 * fp_dp.sum())  # scikit-learn rounds the test part up
+    counts = record["train_counts_balanced"]
+    assert counts["DP"] == counts["FP"]
+    assert main(["classify", "eval", "--pairs", str(path), "--model", str(model), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["scope"].startswith("held-out")
+    assert result["fp_dp"]["n"] == sum(record["test_counts"].values())
+    assert sum(map(sum, result["fp_dp"]["confusion_matrix"])) == result["fp_dp"]["n"]
+    assert result["prediction_seconds_per_100_pairs"] >= 0
+    assert main(["classify", "eval", "--pairs", str(path), "--model", str(model), "--all"]) == 0
+    out = capsys.readouterr().out
+    assert f"FP/DP on {fp_dp.sum()} pairs" in out and "ROC AUC" in out
+
+
+def test_cli_errors_exit_2(pairs_file, tmp_path, capsys):
+    path, _ = pairs_file
+    model = tmp_path / "h.model"
+    assert main(["classify", "train", "--pairs", str(path), "--model", "hausdorff", "--out", str(model),
+                 "--quiet"]) == 0
+    with np.load(model, allow_pickle=False) as archive:
+        entries = {k: archive[k] for k in archive.files}
+    entries["format"] = np.array("vinadv.classifier/9")
+    bad = tmp_path / "bad.model"
+    with open(bad, "wb") as handle:
+        np.savez(handle, **entries)
+    capsys.readouterr()
+    assert main(["classify", "eval", "--pairs", str(path), "--model", str(bad)]) == 2
+    assert "vinadv.classifier/9" in capsys.readouterr().err
+    assert main(["classify", "eval", "--pairs", str(tmp_path / "missing.npz"), "--model", str(model)]) == 2
+    assert main(["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model),
+                 "--labels", "human"]) == 2
+    assert "--db" in capsys.readouterr().err
+    assert main(["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model),
+                 "--test-fraction", "1.5"]) == 2
+    assert main(["classify", "eval", "--pairs", str(path), "--model", str(path)]) == 2
