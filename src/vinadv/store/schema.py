@@ -7,12 +7,14 @@ Tables:
   reproducible and queryable; `(run_id, pair_index)` is unique, so a resumed run never stores a pair twice.
 - `annotations`: human labels of stored pairs (the annotation tool writes them).
 
-Maps and paths are `Text` (an N=28 map is 811 characters, paths are unbounded; MySQL VARCHAR would cap both).
+Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
+VARCHAR would cap both.
 """
 
 from __future__ import annotations
 
 import sqlalchemy as sa
+from sqlalchemy.dialects import mysql
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
 SCHEMA_VERSION = "1"
@@ -20,6 +22,9 @@ SCHEMA_VERSION = "1"
 LABELS = ("invalid", "UrP", "UcP", "DP", "FP")
 
 metadata = sa.MetaData()
+
+# MySQL TEXT stops at 64 KiB (a 256x256 map, or a ~10,000-cell path); MEDIUMTEXT holds 16 MiB.
+_LongText = sa.Text().with_variant(mysql.MEDIUMTEXT(), "mysql", "mariadb")
 
 # BIGINT autoincrement everywhere except SQLite, where only INTEGER PRIMARY KEY is the rowid alias.
 _BigId = sa.BigInteger().with_variant(sa.Integer(), "sqlite")
@@ -54,10 +59,10 @@ map_pairs = sa.Table(
     sa.Column("no", _BigId, primary_key=True, autoincrement=True),  # the paper's incremented sequence number
     sa.Column("run_id", _BigId, sa.ForeignKey("runs.id"), nullable=False),
     sa.Column("pair_index", sa.BigInteger(), nullable=False),
-    sa.Column("map_o", sa.Text(), nullable=False),
-    sa.Column("map_a", sa.Text(), nullable=False),
-    sa.Column("path_o", sa.Text(), nullable=False),
-    sa.Column("path_a", sa.Text(), nullable=False),
+    sa.Column("map_o", _LongText, nullable=False),
+    sa.Column("map_a", _LongText, nullable=False),
+    sa.Column("path_o", _LongText, nullable=False),
+    sa.Column("path_a", _LongText, nullable=False),
     sa.Column("label", sa.String(16), nullable=False),
     sa.Column("attack", sa.Boolean(create_constraint=False), nullable=False),
     sa.Column("start", sa.String(16), nullable=False),
