@@ -29,7 +29,7 @@ from vinadv.planners.result import (
     PlanResult,
     check_plan_inputs,
 )
-from vinadv.planners.vin import VIN, make_input
+from vinadv.planners.vin import GOAL_VALUE, VIN, make_input
 
 __all__ = ["PlanResult", "TERMINATIONS", "plan_batch", "action_maps"]
 
@@ -41,22 +41,177 @@ UNDECIDED = -1  # rollout code: stepped on an uncertain cell, to be re-done with
 
 
 def action_maps(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
-    """Action of every cell, `(B, N, N)` int8 in 0..7, or -1 where the two best logits are a near tie."""
-    with torch.no_grad():
-        q = model.q_values(make_input(obstacles, goals))  # (B, l_q, N, N)
-        logits = model.fc(q.permute(0, 2, 3, 1)).double().numpy()
-    fc = model.fc.weight.detach().double().numpy()
-    scale = q.abs().amax(dim=(1, 2, 3)).double().numpy() * np.abs(fc).sum(axis=1).max()
-    return _decide(logits, scale)
+    """Action of every cell, `(B, N, N)` int8 in 0..7, or -1 (uncertain) where the two best logits are a near tie.
 
-
-def _decide(logits: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """`logits (B, N, N, A)`, `scale (B,)` -> actions `(B, N, N)` int8 with -1 at near ties."""
-    actions = np.argmax(logits, axis=-1).astype(np.int8)
-    top2 = np.partition(logits, -2, axis=-1)[..., -2:]
-    gap = top2[..., 1] - top2[..., 0]
-    actions[gap <= (REL_MARGIN * scale + 1e-30)[:, None, None]] = UNDECIDED
+    Runs the compiled value iteration (`_action_maps_kernel`) in parallel over maps.
+    """
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    p = FoldedVIN.from_model(model)
+    n = obstacles.shape[1]
+    actions = np.empty(obstacles.shape, dtype=np.int8)
+    if len(obstacles):
+        _action_maps_kernel(obstacles, goals, p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k,
+                            _padded_width(n), REL_MARGIN, actions)
     return actions
+
+
+def _padded_width(n: int) -> int:
+    """Row length of the hot loop: N rounded up to whole 16-lane (AVX-512) vectors, so no scalar remainder."""
+    return -(-n // 16) * 16
+
+
+class FoldedVIN:
+    """A VIN's weights rearranged for the engine (float64 where computed once per map, float32 in the hot loop).
+
+    `h` (2 -> l_h, 3x3, bias) and `r` (l_h -> 1, 1x1) are linear with nothing between them, so they fold into one
+    3x3 reward convolution `reward_w (2, 3, 3)` plus `reward_b`. `q_w (l_q, 3, 3)` float64 gives the constant reward
+    term of every step, `w (l_q, 3, 3)` float32 the value term (the hot loop), `fc (A, l_q)` float64 the logits.
+    """
+
+    def __init__(self, reward_w, reward_b, q_w, w, fc, k, goal_value):
+        self.reward_w, self.reward_b, self.q_w, self.w, self.fc, self.k = reward_w, reward_b, q_w, w, fc, k
+        self.goal_value = goal_value
+
+    @classmethod
+    def from_model(cls, model: VIN) -> "FoldedVIN":
+        sd = {name: t.detach().to(torch.float64).cpu().numpy() for name, t in model.state_dict().items()}
+        r = sd["r.weight"][0, :, 0, 0]  # (l_h,)
+        return cls(
+            reward_w=np.ascontiguousarray(np.einsum("h,hcij->cij", r, sd["h.weight"])),
+            reward_b=float(r @ sd["h.bias"]),
+            q_w=np.ascontiguousarray(sd["q.weight"][:, 0]),
+            w=np.ascontiguousarray(sd["w"][:, 0], dtype=np.float32),
+            fc=np.ascontiguousarray(sd["fc.weight"]),
+            k=int(model.config.k),
+            goal_value=float(GOAL_VALUE),
+        )
+
+
+@numba.njit(cache=True, parallel=True)
+def _action_maps_kernel(obstacles, goals, reward_w, reward_b, goal_value, q_w, w, fc, k, wp, rel_margin, actions):
+    n, lq = obstacles.shape[1], q_w.shape[0]
+    for b in numba.prange(obstacles.shape[0]):
+        reward_q = np.empty((n, lq, wp), dtype=np.float32)
+        v = np.zeros((n + 2, wp + 2), dtype=np.float32)
+        v_next = np.zeros((n + 2, wp + 2), dtype=np.float32)
+        best = np.empty(wp, dtype=np.float32)
+        q = np.empty((n, lq, wp), dtype=np.float32)
+        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, v)
+        _value_iteration(reward_q, v, v_next, best, w, k, q)
+        _decide(q, fc, n, rel_margin, actions[b])
+
+
+@numba.njit(cache=True, nogil=True)
+def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v):
+    """reward_q[i, c, j] = (q_w[c] * r)(i, j), r = folded reward (zero outside the grid), in float64, stored
+    float32; v (padded) = max over c, the value after the first q layer."""
+    n, lq, wp = reward_q.shape[0], reward_q.shape[1], reward_q.shape[2]
+    r = np.zeros((n + 2, n + 2))
+    for i in range(n):
+        for j in range(n):
+            s = reward_b
+            for di in range(3):
+                for dj in range(3):
+                    ii, jj = i + di - 1, j + dj - 1
+                    if 0 <= ii < n and 0 <= jj < n:
+                        if obs[ii, jj]:
+                            s += reward_w[0, di, dj]
+                        if ii == gr and jj == gc:
+                            s += goal_value * reward_w[1, di, dj]
+            r[i + 1, j + 1] = s
+    for i in range(n):
+        for c in range(lq):
+            for j in range(n):
+                s = 0.0
+                for di in range(3):
+                    for dj in range(3):
+                        s += q_w[c, di, dj] * r[i + di, j + dj]
+                reward_q[i, c, j] = s
+            for j in range(n, wp):
+                reward_q[i, c, j] = 0.0
+    v[:, :] = 0.0
+    for i in range(n):
+        for j in range(n):
+            m = reward_q[i, 0, j]
+            for c in range(1, lq):
+                if reward_q[i, c, j] > m:
+                    m = reward_q[i, c, j]
+            v[i + 1, j + 1] = m
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+def _value_iteration(reward_q, v, v_next, best, w, k, q):
+    """The hot loop: k times q = reward_q + (w * v), v = max over channels; the last q goes to `q`.
+
+    Float32, rows of `wp` cells (whole 16-lane vectors; v is zero-padded, so columns >= N never leak in).
+    """
+    n, lq, wp = reward_q.shape[0], reward_q.shape[1], reward_q.shape[2]
+    for it in range(k):
+        last = it == k - 1
+        for i in range(n):
+            v0 = v[i]
+            v1 = v[i + 1]
+            v2 = v[i + 2]
+            for j in range(wp):
+                best[j] = np.float32(-np.inf)
+            for c in range(lq):
+                rq = reward_q[i, c]
+                qc = q[i, c]
+                w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
+                w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
+                w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
+                for j in range(wp):
+                    a = (rq[j] + w00 * v0[j] + w01 * v0[j + 1] + w02 * v0[j + 2]
+                         + w10 * v1[j] + w11 * v1[j + 1] + w12 * v1[j + 2]
+                         + w20 * v2[j] + w21 * v2[j + 1] + w22 * v2[j + 2])
+                    best[j] = a if a > best[j] else best[j]
+                if last:
+                    for j in range(wp):
+                        qc[j] = rq[j] + w00 * v0[j] + w01 * v0[j + 1] + w02 * v0[j + 2] + \
+                            w10 * v1[j] + w11 * v1[j + 1] + w12 * v1[j + 2] + \
+                            w20 * v2[j] + w21 * v2[j + 1] + w22 * v2[j + 2]
+            out = v_next[i + 1]
+            for j in range(n):
+                out[j + 1] = best[j]
+        v, v_next = v_next, v
+
+
+@numba.njit(cache=True, nogil=True)
+def _decide(q, fc, n, rel_margin, actions):
+    """Logits (float64) from the final q, argmax (lowest index on ties), -1 where the best two are within
+    rel_margin * scale, scale = max |q| over the map * max_a sum_c |fc[a, c]| (a bound on how far rounding moves
+    a logit, times the relative error of q)."""
+    n_act, lq = fc.shape[0], fc.shape[1]
+    qmax = 0.0
+    for i in range(n):
+        for c in range(lq):
+            for j in range(n):
+                qmax = max(qmax, abs(q[i, c, j]))
+    fmax = 0.0
+    for a in range(n_act):
+        s = 0.0
+        for c in range(lq):
+            s += abs(fc[a, c])
+        fmax = max(fmax, s)
+    margin = rel_margin * qmax * fmax
+    logits = np.empty(n_act)
+    for i in range(n):
+        for j in range(n):
+            for a in range(n_act):
+                s = 0.0
+                for c in range(lq):
+                    s += fc[a, c] * q[i, c, j]
+                logits[a] = s
+            top = 0
+            for a in range(1, n_act):
+                if logits[a] > logits[top]:
+                    top = a
+            second = -np.inf
+            for a in range(n_act):
+                if a != top and logits[a] > second:
+                    second = logits[a]
+            actions[i, j] = top if logits[top] - second > margin else UNDECIDED
 
 
 @numba.njit(cache=True, nogil=True)
