@@ -18,8 +18,11 @@ COMMAND_MODULES = [
     "vinadv.commands.maps",
     "vinadv.commands.vin",
     "vinadv.commands.plan",
+    "vinadv.commands.attack",
     "vinadv.commands.classify",
+    "vinadv.commands.run",
     "vinadv.commands.store",
+    "vinadv.commands.serve",
 ]
 
 

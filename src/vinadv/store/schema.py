@@ -75,8 +75,10 @@ map_pairs = sa.Table(
     sa.Column("dh", sa.Integer(), nullable=True),
     sa.Column("dv", sa.Integer(), nullable=True),
     sa.UniqueConstraint("run_id", "pair_index", name="uq_map_pairs_run_pair"),
-    sa.Index("ix_map_pairs_run_label", "run_id", "label"),
-    sa.Index("ix_map_pairs_run_attack", "run_id", "attack"),
+    # pair_index last: a filtered page of a run (`Store.page_pairs`, the viewer's grid) is one ordered index range
+    sa.Index("ix_map_pairs_run_label", "run_id", "label", "pair_index"),
+    sa.Index("ix_map_pairs_run_attack", "run_id", "attack", "pair_index"),
+    sa.Index("ix_map_pairs_run_source", "run_id", "label_source", "pair_index"),
     sa.Index("ix_map_pairs_label", "label"),
 )
 

@@ -360,16 +360,94 @@ class Store:
             conn.execute(annotations.insert(), rows)
         return len(rows)
 
-    def read_annotations(self, run_id: int) -> list[dict]:
-        """The run's annotations, oldest first: dicts with id, pair_index, label, annotator, created."""
+    def read_annotations(self, run_id: int, pair_indices=None) -> list[dict]:
+        """The run's annotations (of `pair_indices` only, if given), oldest first: dicts with id, pair_index,
+        label, annotator, created."""
+        query = (
+            sa.select(annotations.c.id, annotations.c.pair_index, annotations.c.label,
+                      annotations.c.annotator, annotations.c.created)
+            .where(annotations.c.run_id == int(run_id))
+            .order_by(annotations.c.id)
+        )
+        if pair_indices is not None:
+            query = query.where(annotations.c.pair_index.in_([int(i) for i in np.asarray(pair_indices).ravel()]))
+        with self.engine.connect() as conn:
+            rows = conn.execute(query).mappings().all()
+        return [dict(r) for r in rows]
+
+    # ----------------------------------------------------------------------------- paging (the viewer)
+
+    def ensure_indexes(self) -> list[str]:
+        """Create the indexes of the current schema that the database lacks (one made by an older vinadv);
+        return their names. Paging stays correct without them, only slower."""
+        created = []
+        with self.engine.begin() as conn:
+            present = {ix["name"] for ix in sa.inspect(conn).get_indexes(map_pairs.name)}
+            for index in sorted(map_pairs.indexes, key=lambda ix: ix.name):
+                if index.name not in present:
+                    index.create(conn)
+                    created.append(index.name)
+        return created
+
+    def page_pairs(
+        self,
+        run_id: int,
+        *,
+        label: str | None = None,
+        attack: bool | None = None,
+        label_source: str | None = None,
+        after: int | None = None,
+        before: int | None = None,
+        limit: int = 50,
+    ) -> list[dict]:
+        """One page of the run's pairs, without maps and paths, ordered by pair index (keyset paging).
+
+        `after`/`before`: only pairs with a larger/smaller index (`before` returns the `limit` pairs just before
+        it, still in ascending order). Filters are exact matches. Each dict: pair_index, label, attack,
+        label_source, score, dh, dv, term_o, term_a, added_obstacle. With the (run_id, <filter>, pair_index)
+        indexes every page is one index range read, however deep.
+        """
+        c = map_pairs.c
+        query = sa.select(c.pair_index, c.label, c.attack, c.label_source, c.score, c.dh, c.dv,
+                          c.term_o, c.term_a, c.added_obstacle).where(c.run_id == int(run_id))
+        if label is not None:
+            query = query.where(c.label == label)
+        if attack is not None:
+            query = query.where(c.attack == (sa.true() if attack else sa.false()))
+        if label_source is not None:
+            query = query.where(c.label_source == label_source)
+        if after is not None:
+            query = query.where(c.pair_index > int(after))
+        if before is not None:
+            query = query.where(c.pair_index < int(before))
+            query = query.order_by(c.pair_index.desc())
+        else:
+            query = query.order_by(c.pair_index)
+        with self.engine.connect() as conn:
+            rows = [dict(r) for r in conn.execute(query.limit(int(limit))).mappings()]
+        for row in rows:
+            row["attack"] = bool(row["attack"])
+        return rows[::-1] if before is not None else rows
+
+    def label_counts_by_run(self) -> dict[int, dict[str, int]]:
+        """Stored pairs per label of every run, in one query: {run_id: {label: n}} (every label present)."""
         with self.engine.connect() as conn:
             rows = conn.execute(
-                sa.select(annotations.c.id, annotations.c.pair_index, annotations.c.label,
-                          annotations.c.annotator, annotations.c.created)
-                .where(annotations.c.run_id == int(run_id))
-                .order_by(annotations.c.id)
-            ).mappings().all()
-        return [dict(r) for r in rows]
+                sa.select(map_pairs.c.run_id, map_pairs.c.label, sa.func.count())
+                .group_by(map_pairs.c.run_id, map_pairs.c.label)
+            ).all()
+        counts: dict[int, dict[str, int]] = {}
+        for run_id, label, k in rows:
+            counts.setdefault(int(run_id), {lab: 0 for lab in LABELS})[label] = int(k)
+        return counts
+
+    def label_sources(self, run_id: int) -> list[str]:
+        """The distinct label sources of the run's pairs, sorted."""
+        with self.engine.connect() as conn:
+            rows = conn.execute(
+                sa.select(map_pairs.c.label_source).where(map_pairs.c.run_id == int(run_id)).distinct()
+            ).scalars().all()
+        return sorted(rows)
 
 
 def _sqlite_pragmas(dbapi_conn, _record) -> None:

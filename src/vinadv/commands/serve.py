@@ -1,0 +1,74 @@
+"""`vinadv serve`: the browser viewer and annotation tool over a results database."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+from vinadv.errors import InputError
+
+
+def register(subparsers) -> None:
+    serve = subparsers.add_parser(
+        "serve",
+        help="browse runs and map pairs in a web browser, and label pairs by hand",
+        description="Serve the viewer: runs with their category counts, a filterable pair grid, pair pages "
+        "with both maps, paths and the path image, and labelling (keys f/d/u/c = FP/DP/UrP/UcP, n/p = "
+        "next/previous). Human labels go to the annotations table, beside the automatic ones. Binds to "
+        "127.0.0.1; there is no login, so serving other addresses needs --allow-remote.",
+    )
+    serve.add_argument("--db", default=None, help="database URL or SQLite file (default: env VINADV_DB, else vinadv.db)")
+    serve.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    serve.add_argument("--port", type=int, default=8000, help="port (default 8000)")
+    serve.add_argument("--allow-remote", action="store_true",
+                       help="allow binding a non-loopback address (anyone who can reach it can label pairs)")
+    serve.add_argument("--quiet", action="store_true", help="do not log requests")
+    serve.set_defaults(func=cmd_serve)
+
+
+def check_bind(host: str, port: int, allow_remote: bool) -> None:
+    """Refuse (InputError) a port out of range, or a non-loopback host without `allow_remote`."""
+    from vinadv.viewer.app import is_loopback
+
+    if not 1 <= port <= 65535:
+        raise InputError(f"--port: must be 1 to 65535, got {port}")
+    if not host:
+        raise InputError("--host: must not be empty")
+    if not allow_remote and not is_loopback(host):
+        raise InputError(
+            f"--host {host}: refusing to serve on a non-loopback address; the viewer has no login and anyone "
+            "who reaches it can label pairs. Pass --allow-remote to do it anyway."
+        )
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    check_bind(args.host, args.port, args.allow_remote)
+    try:
+        from werkzeug.serving import make_server
+
+        from vinadv.viewer.app import create_app
+    except ImportError as exc:  # Flask is the `viewer` extra
+        raise InputError(f"vinadv serve needs Flask: pip install 'vinadv[viewer]' ({exc})") from None
+    from vinadv.store import Store
+
+    store = Store.open(args.db, create=False)
+    created = store.ensure_indexes()
+    if created and not args.quiet:
+        print(f"created indexes {', '.join(created)} (once per database)", file=sys.stderr)
+    app = create_app(store, allow_remote=args.allow_remote)
+    try:
+        server = make_server(args.host, args.port, app, threaded=True)
+    except OSError as exc:
+        store.close()
+        raise InputError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    if args.quiet:
+        logging.getLogger("werkzeug").setLevel(logging.ERROR)
+    host = f"[{args.host}]" if ":" in args.host else args.host
+    print(f"vinadv viewer on http://{host}:{server.server_port}/ ({store.url}); Ctrl-C stops it", flush=True)
+    try:
+        server.serve_forever()
+    finally:
+        server.server_close()
+        store.close()
+    return 0

@@ -1,0 +1,115 @@
+"""PNG images of one stored pair, rendered on the server: the original map, the adversarial map and the path
+image, with an LRU cache so that paging back and forth never renders a pair twice.
+
+Maps are drawn with `vinadv.grid.draw.draw_map` on a bare `matplotlib.figure.Figure` (no pyplot state, so
+rendering is safe from the server's threads; a lock still serialises it, Agg is not fast enough in parallel on
+two cores to matter). The path image is the classifier's input (`render_path_images`, DESIGN.md colours),
+scaled up by whole pixels so every cell stays a crisp square.
+"""
+
+from __future__ import annotations
+
+import io
+import threading
+from collections import OrderedDict
+
+import numpy as np
+
+from vinadv.store.records import PairRecords
+
+#: the images of a pair, in page order
+KINDS = ("original", "adversarial", "pathimage")
+#: pixels per cell of the path image
+PATH_IMAGE_SCALE = 10
+_MAP_INCHES = 3.2
+_MAP_DPI = 100
+
+
+class PngCache:
+    """A thread-safe LRU cache of PNG bytes, keyed by any hashable key; `max_bytes` bounds its memory."""
+
+    def __init__(self, max_bytes: int = 64 * 2**20) -> None:
+        self.max_bytes = int(max_bytes)
+        self._items: OrderedDict = OrderedDict()
+        self._bytes = 0
+        self._lock = threading.Lock()
+        self.hits = 0
+        self.misses = 0
+
+    def get(self, key):
+        with self._lock:
+            png = self._items.get(key)
+            if png is None:
+                self.misses += 1
+                return None
+            self._items.move_to_end(key)
+            self.hits += 1
+            return png
+
+    def put(self, key, png: bytes) -> None:
+        with self._lock:
+            if key in self._items:
+                self._bytes -= len(self._items.pop(key))
+            self._items[key] = png
+            self._bytes += len(png)
+            while self._bytes > self.max_bytes and len(self._items) > 1:
+                _, old = self._items.popitem(last=False)
+                self._bytes -= len(old)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+
+_render_lock = threading.Lock()
+
+
+def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
+    """PNG bytes of image `kind` (one of KINDS) of pair `i` of `records`."""
+    if kind == "pathimage":
+        return _path_image_png(records, i)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from vinadv.grid.draw import draw_map
+
+    o = records.path_o_cells[records.path_o_offsets[i]:records.path_o_offsets[i + 1]]
+    a = records.path_a_cells[records.path_a_offsets[i]:records.path_a_offsets[i + 1]]
+    paths = []
+    if kind == "original":
+        obstacles, added, title = records.obstacles_o[i], None, "original map, original path"
+        if len(o):
+            paths.append(("original", o))
+    elif kind == "adversarial":
+        obstacles, added, title = records.obstacles_a[i], records.added[i], "adversarial map, both paths"
+        if len(o):
+            paths.append(("original", o))
+        if len(a):
+            paths.append(("adversarial", a))
+    else:
+        raise ValueError(f"unknown image kind {kind!r}")
+    with _render_lock:
+        fig = Figure(figsize=(_MAP_INCHES, _MAP_INCHES), dpi=_MAP_DPI)
+        FigureCanvasAgg(fig)
+        ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
+        draw_map(ax, obstacles, goal=records.goals[i], start=records.starts[i], paths=paths, added=added,
+                 title=title)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=_MAP_DPI)
+    return buf.getvalue()
+
+
+def _path_image_png(records: PairRecords, i: int) -> bytes:
+    from PIL import Image
+
+    from vinadv.classify.images import render_path_images
+
+    lo_o, hi_o = records.path_o_offsets[i], records.path_o_offsets[i + 1]
+    lo_a, hi_a = records.path_a_offsets[i], records.path_a_offsets[i + 1]
+    image = render_path_images(
+        records.path_o_cells[lo_o:hi_o], np.array([0, hi_o - lo_o]),
+        records.path_a_cells[lo_a:hi_a], np.array([0, hi_a - lo_a]), records.size,
+    )[0]
+    big = np.repeat(np.repeat(image, PATH_IMAGE_SCALE, axis=0), PATH_IMAGE_SCALE, axis=1)
+    buf = io.BytesIO()
+    Image.fromarray(big, mode="RGB").save(buf, format="PNG", optimize=False)
+    return buf.getvalue()
