@@ -119,7 +119,7 @@ def hardware_info(device: torch.device) -> dict:
         "processor": platform.processor() or platform.machine(),
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
-        "torch": torch.__version__,
+        "torch": str(torch.__version__),
     }
     try:
         with open("/proc/cpuinfo") as fh:

@@ -12,6 +12,7 @@ Files are always read with `torch.load(weights_only=True)`: a weights file canno
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 from pathlib import Path
 from typing import Any
@@ -47,12 +48,18 @@ def save_vin(model: VIN, path: str | os.PathLike, record: dict | None = None) ->
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    # Through JSON: the record must load under weights_only=True (plain types only; torch.__version__, for one,
+    # is a str subclass that the safe loader refuses).
+    try:
+        record = json.loads(json.dumps(dict(record or {})))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"record must hold only JSON values: {exc}") from None
     state = {k: v.detach().to("cpu", torch.float32).contiguous().clone() for k, v in model.state_dict().items()}
     payload = {
         "format": WEIGHTS_FORMAT,
         "config": model.config.to_dict(),
         "state_dict": state,
-        "record": dict(record or {}),
+        "record": record,
     }
     tmp = path.with_name(path.name + ".tmp")
     torch.save(payload, tmp)

@@ -1,0 +1,126 @@
+"""Training: the optimal-set loss against brute force, targets against the oracle, a tiny run, resume, the CLI."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from tests.grid.oracle import DELTAS, brute_distances, legal
+from vinadv.cli import main
+from vinadv.errors import InputError
+from vinadv.grid import generate_maps
+from vinadv.planners.training import (
+    TrainConfig,
+    bits_to_mask,
+    evaluate_loss,
+    optimal_action_bits,
+    optimal_set_loss,
+    split_indices,
+    train_vin,
+)
+from vinadv.planners.vin import VIN, VINConfig
+from vinadv.planners.weights import load_vin
+
+
+def test_optimal_set_loss_matches_brute_force():
+    rng = np.random.default_rng(0)
+    logits = rng.normal(scale=3.0, size=(50, 8))
+    mask = rng.random((50, 8)) < 0.3
+    mask[np.arange(50), rng.integers(0, 8, 50)] = True  # at least one optimal action per row
+    expected = []
+    for row, opt in zip(logits, mask):
+        total = sum(math.exp(v) for v in row)
+        expected.append(-math.log(sum(math.exp(v) for v, o in zip(row, opt) if o) / total))
+    got = optimal_set_loss(torch.tensor(logits), torch.tensor(mask))
+    assert float(got) == pytest.approx(np.mean(expected), rel=1e-9)
+    # one optimal action: plain cross-entropy
+    single = np.zeros((50, 8), dtype=bool)
+    single[np.arange(50), np.argmax(logits, axis=1)] = True
+    ce = torch.nn.functional.cross_entropy(torch.tensor(logits), torch.tensor(np.argmax(logits, axis=1)))
+    assert float(optimal_set_loss(torch.tensor(logits), torch.tensor(single))) == pytest.approx(float(ce))
+
+
+def test_optimal_action_bits_match_the_brute_force_oracle():
+    maps = generate_maps(4, 8, seed=2, n_starts=1)
+    bits = optimal_action_bits(maps)
+    mask = bits_to_mask(torch.from_numpy(bits)).numpy()
+    for i in range(len(maps)):
+        obs = maps.obstacles[i].tolist()
+        goal = tuple(maps.goals[i])
+        best = brute_distances(obs, goal)
+        for r in range(8):
+            for c in range(8):
+                want = np.zeros(8, dtype=bool)
+                cost = best[(r, c)][0]
+                if not obs[r][c] and (r, c) != goal and math.isfinite(cost):
+                    for a, (dr, dc) in enumerate(DELTAS):
+                        if legal(obs, r, c, a):
+                            step = math.sqrt(2) if dr and dc else 1.0
+                            want[a] = abs(best[(r + dr, c + dc)][0] + step - cost) < 1e-9
+                np.testing.assert_array_equal(mask[i, r, c], want, err_msg=f"map {i} cell {(r, c)}")
+
+
+def test_split_is_disjoint_and_seeded():
+    train, val = split_indices(100, 0.1, seed=3)
+    assert len(val) == 10 and len(train) == 90 and not set(train) & set(val)
+    assert set(train) | set(val) == set(range(100))
+    np.testing.assert_array_equal(split_indices(100, 0.1, seed=3)[1], val)
+    with pytest.raises(InputError):
+        split_indices(1, 0.5, seed=0)
+
+
+TINY = dict(epochs=2, lr=0.01, batch_size=8, val_fraction=0.25, seed=1, l_h=8, l_q=8)
+
+
+def test_tiny_training_lowers_the_loss():
+    maps = generate_maps(32, 8, seed=7, n_starts=1)
+    bits = optimal_action_bits(maps)
+    idx = np.arange(len(maps))
+    torch.manual_seed(1)  # train_vin seeds the same way before building its model
+    before = evaluate_loss(VIN(VINConfig(k=10, l_h=8, l_q=8)), maps, bits, idx, 16, torch.device("cpu"))
+    model, record = train_vin(maps, TrainConfig(**TINY), progress=False)
+    after = evaluate_loss(model, maps, bits, idx, 16, torch.device("cpu"))
+    assert after["loss"] < before["loss"] - 0.05
+    assert record["epochs_done"] == 2 and len(record["epochs"]) == 2
+    assert record["n_train"] == 24 and record["n_val"] == 8
+    assert record["epochs"][1]["val_loss"] is not None
+
+
+def test_killed_training_resumes_to_the_same_weights(tmp_path):
+    maps = generate_maps(16, 8, seed=8, n_starts=1)
+    full, _ = train_vin(maps, TrainConfig(**TINY), progress=False)
+    ckpt = tmp_path / "w.ckpt"
+    # time_limit 0 stops after the first epoch, as a kill after its checkpoint would
+    _, rec = train_vin(maps, TrainConfig(**TINY, time_limit_min=0.0), checkpoint=ckpt, progress=False)
+    assert rec["epochs_done"] == 1 and rec["stopped_early"]
+    resumed, rec = train_vin(maps, TrainConfig(**TINY), checkpoint=ckpt, resume=True, progress=False)
+    assert rec["epochs_done"] == 2 and [e["epoch"] for e in rec["epochs"]] == [1, 2]
+    for key, value in full.state_dict().items():
+        torch.testing.assert_close(resumed.state_dict()[key], value)
+    with pytest.raises(InputError, match="lr"):
+        train_vin(maps, TrainConfig(**{**TINY, "lr": 0.5}), checkpoint=ckpt, resume=True, progress=False)
+
+
+def test_cli_train_writes_weights_and_record(tmp_path, capsys):
+    maps = generate_maps(12, 8, seed=9, n_starts=2)
+    maps.save(tmp_path / "maps.npz")
+    out = tmp_path / "w.pt"
+    args = ["vin", "train", "--data", str(tmp_path / "maps.npz"), "--out", str(out), "--epochs", "1",
+            "--batch-size", "4", "--val-fraction", "0.25", "--seed", "2", "--quiet"]
+    assert main(args) == 0
+    record = json.loads(out.with_suffix(".json").read_text())
+    for key in ("command", "seed", "data", "epochs", "wall_time_s", "hardware", "train_config"):
+        assert key in record
+    assert record["command"].startswith("vinadv ") and len(record["data"]["sha256"]) == 64
+    model = load_vin(out, size=8)
+    assert model.record["epochs_done"] == 1 and model.config.k == 10
+    assert not out.with_name("w.pt.ckpt").exists()
+    # a leftover checkpoint without --resume is refused, with exit 2
+    out.with_name("w.pt.ckpt").write_bytes(b"x")
+    capsys.readouterr()
+    assert main(args) == 2
+    assert "--resume" in capsys.readouterr().err
+    assert main(["vin", "train", "--data", str(tmp_path / "nothing.npz"), "--out", str(out), "--quiet"]) == 2
+    assert main([*args[:-1], "--epochs", "0"]) == 2
