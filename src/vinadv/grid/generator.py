@@ -14,6 +14,7 @@ depend on n being larger, and chunks can be made anywhere (a cluster worker) wit
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -57,8 +58,8 @@ def _draw_obstacles(rng: np.random.Generator, n: int, size: int, goals: np.ndarr
     return obstacles
 
 
-def _generate_chunk(seed: int, chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int, max_size: int):
-    rng = np.random.default_rng([seed, chunk])
+def _generate_chunk(seed: tuple[int, ...], chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int, max_size: int):
+    rng = np.random.default_rng([*seed, chunk])
     goals = rng.integers(1, size - 1, (CHUNK, 2))
     obstacles = _draw_obstacles(rng, CHUNK, size, goals, max_obs, max_size)
     dist, moves = shortest_distances(obstacles, goals, corner_cutting)
@@ -74,7 +75,7 @@ def _generate_chunk(seed: int, chunk: int, size: int, n_starts: int, corner_cutt
 def generate_maps(
     n: int,
     size: int = 28,
-    seed: int = 0,
+    seed: int | Sequence[int] = 0,
     n_starts: int = 7,
     corner_cutting: bool = True,
     max_obs: int | None = None,
@@ -84,7 +85,9 @@ def generate_maps(
 
     Deterministic for `(seed, size, n_starts, corner_cutting, max_obs, max_size)`; maps where fewer than
     `n_starts` cells can reach the goal in at least 2 moves are dropped and replaced from the stream.
+    `seed` may be a sequence of ints (say `(seed, shard)`) for independent streams.
     """
+    seeds = (int(seed),) if np.isscalar(seed) else tuple(int(s) for s in seed)
     if n < 0:
         raise InputError(f"--n must be >= 0, got {n}")
     if size < MIN_SIZE:
@@ -100,7 +103,7 @@ def generate_maps(
     parts: list[tuple[np.ndarray, ...]] = []
     have, chunk = 0, 0
     while have < n:
-        part = _generate_chunk(seed, chunk, size, n_starts, corner_cutting, max_obs, max_size)
+        part = _generate_chunk(seeds, chunk, size, n_starts, corner_cutting, max_obs, max_size)
         parts.append(part)
         have += len(part[0])
         chunk += 1
@@ -122,7 +125,7 @@ def generate_maps(
         expert_cells=cells,
         expert_offsets=offsets,
         corner_cutting=corner_cutting,
-        seed=seed,
+        seed=seeds[0] if len(seeds) == 1 else -1,
     )
 
 
