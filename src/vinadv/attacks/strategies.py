@@ -1,0 +1,390 @@
+"""One-obstacle attack strategies, from random to exhaustive, all batched on the fast planner.
+
+Every strategy follows the same three steps, and differs only in the first:
+
+1. score the candidate cells of each map (`candidate_scores`, `(B, N, N)`, `-inf` = not a candidate); only
+   valid cells (see `validity.valid_cells`) are ever candidates;
+2. evaluate the `budget` best-scored candidates of each map: add the obstacle, plan on the adversarial map
+   (the original map is planned once per map);
+3. keep `per_map` pairs per map: for the ranking strategies, the strongest by `strength` (default: a
+   planner-only order; the command line passes the rule labeller's UrP > FP > DP > UcP), ties going to the
+   better-scored candidate; for `random` and `near-path`, every evaluated candidate.
+
+The strategies:
+- `random`: uniformly chosen valid cells.
+- `near-path`: uniformly chosen valid cells within Chebyshev distance `radius` (default 2) of the original VIN
+  path, path cells included (the paper's setting adds one obstacle "near the path"; its three rules are not
+  public, so this is ours).
+- `key-points`: rule-based ranking, in tiers: (1) cells where the original path turns (earlier turns first),
+  (2) cells beside a diagonal move of the path (the corners it cuts), (3) other cells next to the path, steepest
+  VIN value change to a neighbour first, (4) the remaining path cells. Evaluates the top `budget` (default 8).
+- `saliency`: white-box. The gradient, with respect to the obstacle channel, of the log-probability of the
+  VIN's chosen actions along the original path; the most negative gradient first (adding an obstacle there
+  lowers the planner's confidence in its own path the most, to first order). Evaluates the top `budget`.
+- `exhaustive`: every valid cell of every map; keeps the strongest per map, or all pairs with `per_map=0`.
+  This is the upper bound of what one obstacle can do.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from scipy.ndimage import maximum_filter
+
+from vinadv.attacks.pairs import PairSet
+from vinadv.attacks.validity import valid_cells
+from vinadv.errors import InputError
+from vinadv.grid.paths import take_paths
+from vinadv.planners.engine import plan_batch
+from vinadv.planners.result import PlanResult
+from vinadv.planners.vin import VIN, make_input
+
+#: candidates planned together; bounds memory (each holds an N x N map and a path)
+EVAL_CHUNK = 8192
+#: maps per torch forward in the white-box and value-map strategies
+TORCH_CHUNK = 128
+
+
+def planner_strength(pairs: PairSet) -> np.ndarray:
+    """A planner-only strength, used when no labeller is given: unreached 3, changed path 1, unchanged 0."""
+    changed = ~_same_paths(pairs)
+    return np.where(~pairs.reached_a & pairs.reached_o, 3, np.where(changed, 1, 0))
+
+
+def _same_paths(pairs: PairSet) -> np.ndarray:
+    lo, la = np.diff(pairs.path_o_offsets), np.diff(pairs.path_a_offsets)
+    same = lo == la
+    if not same.any():
+        return same
+    idx = np.flatnonzero(same)
+    co, _ = take_paths(pairs.path_o_cells, pairs.path_o_offsets, idx)
+    ca, offs = take_paths(pairs.path_a_cells, pairs.path_a_offsets, idx)
+    diff = np.any(co != ca, axis=1).astype(np.int64)
+    n_diff = np.add.reduceat(diff, offs[:-1]) if len(diff) else np.zeros(len(idx), dtype=np.int64)
+    same[idx] = n_diff == 0
+    return same
+
+
+@dataclass
+class AttackResult:
+    """What an attack made.
+
+    Attributes:
+        pairs: the map pairs, grouped by map in map order (`pairs.map_index`).
+        no_valid_cell: indices of the maps for which no valid candidate existed (no pair was made for them).
+        planner_calls: rollouts run, the original maps' included.
+    """
+
+    pairs: PairSet
+    no_valid_cell: np.ndarray
+    planner_calls: int
+
+
+@dataclass
+class AttackContext:
+    """What every strategy may use to score candidates: the maps, the valid cells and the original plans."""
+
+    obstacles: np.ndarray
+    starts: np.ndarray
+    goals: np.ndarray
+    valid: np.ndarray
+    originals: PlanResult
+    model: VIN
+    rng: np.random.Generator
+
+    def path_mask(self) -> np.ndarray:
+        """`(B, N, N)` bool: the cells of each map's original VIN path."""
+        mask = np.zeros_like(self.obstacles)
+        owner = np.repeat(np.arange(len(self.obstacles)), self.originals.lengths)
+        cells = self.originals.path_cells.astype(np.int64)
+        mask[owner, cells[:, 0], cells[:, 1]] = True
+        return mask
+
+
+class Attack:
+    """Base class: subclasses set `name` and implement `candidate_scores`."""
+
+    name = ""
+    ranked = True  # keep the strongest evaluated candidates; False: keep every evaluated candidate
+
+    def __init__(self, per_map: int = 1, budget: int | None = 8, seed: int = 0):
+        if per_map < 0:
+            raise InputError(f"--per-map must be >= 0, got {per_map}")
+        if budget is not None and budget < 1:
+            raise InputError(f"--budget must be >= 1, got {budget}")
+        self.per_map = per_map
+        self.budget = budget
+        self.seed = seed
+
+    def params(self) -> dict:
+        """The strategy's parameters, stored with its pairs."""
+        return {"per_map": self.per_map, "budget": self.budget, "seed": self.seed}
+
+    def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
+        raise NotImplementedError
+
+    def attack(
+        self,
+        obstacles: np.ndarray,
+        starts: np.ndarray,
+        goals: np.ndarray,
+        model: VIN,
+        corner_cutting: bool = True,
+        strength: Callable[[PairSet], np.ndarray] | None = None,
+        progress: bool = False,
+    ) -> AttackResult:
+        """Attack a batch of maps: obstacles `(B, N, N)` bool, starts and goals `(B, 2)`; see the module doc."""
+        obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+        starts = np.ascontiguousarray(starts, dtype=np.int64)
+        goals = np.ascontiguousarray(goals, dtype=np.int64)
+        originals = plan_batch(obstacles, starts, goals, model, corner_cutting)
+        valid = valid_cells(obstacles, starts, goals, corner_cutting)
+        ctx = AttackContext(obstacles, starts, goals, valid, originals, model, np.random.default_rng(self.seed))
+        scores = np.where(valid, self.candidate_scores(ctx), -np.inf)
+        map_idx, cells, rank = _top_candidates(scores, self._evaluated_per_map())
+        no_valid = np.flatnonzero(~np.isfinite(scores).any(axis=(1, 2)))
+        kept, calls = self._evaluate(ctx, map_idx, cells, rank, corner_cutting, strength or planner_strength,
+                                     progress)
+        return AttackResult(kept, no_valid, len(obstacles) + calls)
+
+    def _evaluated_per_map(self) -> int | None:
+        if not self.ranked:
+            return self.per_map or None
+        return self.budget
+
+    def _evaluate(self, ctx, map_idx, cells, rank, corner_cutting, strength, progress):
+        # chunks of about EVAL_CHUNK candidates, split at map boundaries so a map's candidates are judged together
+        first = np.searchsorted(map_idx, np.arange(len(ctx.obstacles) + 1))
+        chunk_of_map = first[:-1] // EVAL_CHUNK
+        bounds = np.append(first[np.searchsorted(chunk_of_map, np.unique(chunk_of_map))], len(map_idx))
+        spans = list(zip(bounds[:-1], bounds[1:]))
+        if progress:
+            from tqdm import tqdm
+
+            spans = tqdm(spans, desc=f"attack {self.name}", unit="chunk")
+        parts = []
+        for lo, hi in spans:
+            if hi > lo:
+                parts.append(self._evaluate_chunk(ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi],
+                                                  corner_cutting, strength))
+        pairs = _concat_pairs(parts, ctx, self.name, self.params(), corner_cutting)
+        return pairs, len(map_idx)
+
+    def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength) -> PairSet:
+        obstacles_a = ctx.obstacles[map_idx].copy()
+        obstacles_a[np.arange(len(map_idx)), cells[:, 0], cells[:, 1]] = True
+        planned = plan_batch(obstacles_a, ctx.starts[map_idx], ctx.goals[map_idx], ctx.model, corner_cutting)
+        pairs = _make_pairs(ctx, map_idx, cells, obstacles_a, planned, corner_cutting)
+        if not self.ranked or self.per_map == 0:
+            return pairs
+        # per map, the per_map strongest; ties to the better rank (lexsort: last key is the primary one)
+        order = np.lexsort((rank, -np.asarray(strength(pairs)), map_idx))
+        group_start = np.searchsorted(map_idx[order], map_idx[order], side="left")
+        keep = order[np.arange(len(order)) - group_start < self.per_map]
+        return pairs.subset(np.sort(keep))
+
+
+def _top_candidates(scores: np.ndarray, per_map: int | None):
+    """The best `per_map` candidates of each map (all with None), best first: (map_idx, cells, rank)."""
+    b, n, m = scores.shape
+    flat = scores.reshape(b, -1)
+    order = np.argsort(-flat, axis=1, kind="stable")
+    if per_map is not None:
+        order = order[:, :per_map]
+    picked = np.take_along_axis(flat, order, axis=1)
+    ok = np.isfinite(picked)
+    map_idx = np.repeat(np.arange(b), order.shape[1]).reshape(b, -1)[ok]
+    rank = np.tile(np.arange(order.shape[1]), (b, 1))[ok]
+    cells = np.stack(np.divmod(order[ok], m), axis=1)
+    return map_idx, cells, rank
+
+
+def _make_pairs(ctx: AttackContext, map_idx, cells, obstacles_a, planned: PlanResult, corner_cutting) -> PairSet:
+    o_cells, o_offsets = take_paths(ctx.originals.path_cells, ctx.originals.path_offsets, map_idx)
+    return PairSet(
+        obstacles_o=ctx.obstacles[map_idx], obstacles_a=obstacles_a, starts=ctx.starts[map_idx],
+        goals=ctx.goals[map_idx], added=cells.astype(np.int64), map_index=map_idx.astype(np.int64),
+        path_o_cells=o_cells, path_o_offsets=o_offsets,
+        path_a_cells=planned.path_cells, path_a_offsets=planned.path_offsets,
+        term_o=ctx.originals.termination_names[map_idx], term_a=planned.termination_names,
+        corner_cutting=corner_cutting,
+    )
+
+
+def _concat_pairs(parts: list[PairSet], ctx: AttackContext, name: str, params: dict, corner_cutting) -> PairSet:
+    n = ctx.obstacles.shape[1]
+    if not parts:
+        empty_paths = (np.zeros((0, 2), np.int16), np.zeros(1, np.int64))
+        return PairSet(
+            np.zeros((0, n, n), bool), np.zeros((0, n, n), bool), np.zeros((0, 2), np.int64),
+            np.zeros((0, 2), np.int64), np.zeros((0, 2), np.int64), np.zeros(0, np.int64), *empty_paths,
+            *empty_paths, np.zeros(0, "<U10"), np.zeros(0, "<U10"), name, params, corner_cutting,
+        )
+
+    def cat_paths(cells_name, offsets_name):
+        offsets = [getattr(p, offsets_name) for p in parts]
+        shift = np.cumsum([0] + [o[-1] for o in offsets[:-1]])
+        all_offsets = np.concatenate([offsets[0][:1]] + [o[1:] + s for o, s in zip(offsets, shift)])
+        return np.concatenate([getattr(p, cells_name) for p in parts]), all_offsets
+
+    po = cat_paths("path_o_cells", "path_o_offsets")
+    pa = cat_paths("path_a_cells", "path_a_offsets")
+    cat = lambda field: np.concatenate([getattr(p, field) for p in parts])  # noqa: E731
+    return PairSet(
+        cat("obstacles_o"), cat("obstacles_a"), cat("starts"), cat("goals"), cat("added"), cat("map_index"),
+        po[0], po[1], pa[0], pa[1], cat("term_o"), cat("term_a"), name, params, corner_cutting,
+    )
+
+
+class RandomAttack(Attack):
+    name = "random"
+    ranked = False
+
+    def params(self) -> dict:
+        return {"per_map": self.per_map, "seed": self.seed}
+
+    def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
+        return ctx.rng.random(ctx.obstacles.shape)
+
+
+class NearPathAttack(Attack):
+    name = "near-path"
+    ranked = False
+
+    def __init__(self, per_map: int = 1, radius: int = 2, seed: int = 0):
+        super().__init__(per_map=per_map, budget=None, seed=seed)
+        if radius < 0:
+            raise InputError(f"--radius must be >= 0, got {radius}")
+        self.radius = radius
+
+    def params(self) -> dict:
+        return {"per_map": self.per_map, "radius": self.radius, "seed": self.seed}
+
+    def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
+        near = maximum_filter(ctx.path_mask(), size=(1, 2 * self.radius + 1, 2 * self.radius + 1), mode="constant")
+        return np.where(near, ctx.rng.random(ctx.obstacles.shape), -np.inf)
+
+
+class KeyPointsAttack(Attack):
+    name = "key-points"
+
+    def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
+        b, n, _ = ctx.obstacles.shape
+        cells = ctx.originals.path_cells.astype(np.int64)
+        offsets = ctx.originals.path_offsets
+        lengths = np.diff(offsets)
+        owner = np.repeat(np.arange(b), lengths)
+        pos = np.arange(len(cells)) - np.repeat(offsets[:-1], lengths)  # index along its path
+        on_path = ctx.path_mask()
+        scores = np.full((b, n, n), -np.inf)
+
+        # tier 4 (lowest): any path cell
+        scores[on_path] = 0.0
+        # tier 3: other cells next to the path, by the steepest value change to a neighbour, in [1, 2)
+        value = _value_maps(ctx)
+        steep = _steepness(value, ctx.obstacles)
+        near = maximum_filter(on_path, size=(1, 3, 3), mode="constant") & ~on_path
+        scale = np.maximum(steep.reshape(b, -1).max(axis=1), 1e-12)[:, None, None]
+        scores = np.where(near, 1.0 + 0.999 * steep / scale, scores)
+        # moves of the path: move k goes from cell k to cell k + 1 of the same path
+        same = np.append(owner[1:] == owner[:-1], False)
+        move = np.zeros_like(cells)
+        move[:-1] = cells[1:] - cells[:-1]
+        # tier 2: the two cells beside each diagonal move (the corners it cuts), in [2, 3)
+        diag = same & (move[:, 0] != 0) & (move[:, 1] != 0)
+        frac = 1.0 - pos / np.maximum(lengths[owner], 1)
+        for corner in (np.stack([cells[:, 0] + move[:, 0], cells[:, 1]], 1),
+                       np.stack([cells[:, 0], cells[:, 1] + move[:, 1]], 1)):
+            sel = diag & ~on_path[owner, corner[:, 0].clip(0, n - 1), corner[:, 1].clip(0, n - 1)]
+            np.maximum.at(scores, (owner[sel], corner[sel, 0], corner[sel, 1]), 2.0 + 0.999 * frac[sel])
+        # tier 1 (highest): the cells where the path turns, earlier turns first, in [3, 4)
+        prev_same = np.insert(same[:-1], 0, False)
+        prev_move = np.zeros_like(move)
+        prev_move[1:] = move[:-1]
+        turn = same & prev_same & np.any(move != prev_move, axis=1)
+        np.maximum.at(scores, (owner[turn], cells[turn, 0], cells[turn, 1]), 3.0 + 0.999 * frac[turn])
+        return scores
+
+
+def _value_maps(ctx: AttackContext) -> np.ndarray:
+    """The VIN's value map `max_a q` of every map, `(B, N, N)` float32."""
+    out = []
+    with torch.no_grad():
+        for i in range(0, len(ctx.obstacles), TORCH_CHUNK):
+            x = make_input(ctx.obstacles[i : i + TORCH_CHUNK], ctx.goals[i : i + TORCH_CHUNK])
+            out.append(ctx.model.q_values(x).max(dim=1).values.numpy())
+    return np.concatenate(out) if out else np.zeros(ctx.obstacles.shape, np.float32)
+
+
+def _steepness(value: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
+    """Largest |value change| from each cell to a free 8-neighbour, `(B, N, N)`."""
+    b, n, m = value.shape
+    v = np.where(obstacles, np.nan, value.astype(np.float64))
+    padded = np.full((b, n + 2, m + 2), np.nan)
+    padded[:, 1:-1, 1:-1] = v
+    steep = np.zeros((b, n, m))
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            if dr or dc:
+                diff = np.abs(padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m] - v)
+                steep = np.fmax(steep, diff)
+    return np.nan_to_num(steep)
+
+
+class SaliencyAttack(Attack):
+    name = "saliency"
+
+    def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
+        model = ctx.model
+        b = len(ctx.obstacles)
+        lengths = ctx.originals.lengths
+        owner_all = np.repeat(np.arange(b), lengths)
+        cells_all = ctx.originals.path_cells.astype(np.int64)
+        # the decisions along the path: every path cell but the goal
+        at_goal = np.all(cells_all == ctx.goals[owner_all], axis=1)
+        out = np.empty(ctx.obstacles.shape)
+        for lo in range(0, b, TORCH_CHUNK):
+            hi = min(b, lo + TORCH_CHUNK)
+            sel = (owner_all >= lo) & (owner_all < hi) & ~at_goal
+            x = make_input(ctx.obstacles[lo:hi], ctx.goals[lo:hi]).requires_grad_(True)
+            logits = model.action_logits(x)
+            owner = torch.from_numpy(owner_all[sel] - lo)
+            rows, cols = torch.from_numpy(cells_all[sel, 0]), torch.from_numpy(cells_all[sel, 1])
+            picked = torch.log_softmax(logits[owner, rows, cols], dim=-1)
+            chosen = picked.detach().argmax(dim=-1)
+            objective = picked.gather(1, chosen[:, None]).sum()
+            (grad,) = torch.autograd.grad(objective, x)
+            out[lo:hi] = -grad[:, 0].numpy()
+        return out
+
+
+class ExhaustiveAttack(Attack):
+    name = "exhaustive"
+
+    def __init__(self, per_map: int = 1, seed: int = 0):
+        super().__init__(per_map=per_map, budget=None, seed=seed)
+
+    def params(self) -> dict:
+        return {"per_map": self.per_map}
+
+    def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
+        return np.zeros(ctx.obstacles.shape)  # every valid cell, in row-major order
+
+
+STRATEGIES: dict[str, type[Attack]] = {
+    cls.name: cls for cls in (RandomAttack, NearPathAttack, KeyPointsAttack, SaliencyAttack, ExhaustiveAttack)
+}
+
+
+def make_attack(name: str, per_map: int = 1, seed: int = 0, budget: int = 8, radius: int = 2) -> Attack:
+    """The strategy `name` with its parameters (those it does not use are ignored)."""
+    if name not in STRATEGIES:
+        raise InputError(f"unknown attack strategy '{name}'; choose one of {', '.join(STRATEGIES)}")
+    if name == "near-path":
+        return NearPathAttack(per_map=per_map, radius=radius, seed=seed)
+    if name in ("key-points", "saliency"):
+        return STRATEGIES[name](per_map=per_map, budget=budget, seed=seed)
+    return STRATEGIES[name](per_map=per_map, seed=seed)

@@ -1,0 +1,89 @@
+"""Which cells may take the one added obstacle (DESIGN.md): a free cell, not the start or the goal, and only
+where the goal stays reachable from the start.
+
+Only a cell on *every* start-goal path can disconnect them, so only the cells of one path (the expert path)
+need a reachability check; every other free cell is valid without one. Each check is a breadth-first search
+with that cell blocked, compiled with Numba and run in parallel over maps.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.shortest_paths import expert_paths
+
+
+@numba.njit(cache=True, nogil=True)
+def _reachable(obstacles, blocked_r, blocked_c, sr, sc, gr, gc, corner_cutting, deltas, seen, queue):
+    n, m = obstacles.shape
+    seen[:, :] = False
+    seen[sr, sc] = True
+    queue[0] = sr * m + sc
+    head, tail = 0, 1
+    while head < tail:
+        node = queue[head]
+        head += 1
+        r = node // m
+        c = node - r * m
+        if r == gr and c == gc:
+            return True
+        for a in range(deltas.shape[0]):
+            nr = r + deltas[a, 0]
+            nc = c + deltas[a, 1]
+            if nr < 0 or nr >= n or nc < 0 or nc >= m or seen[nr, nc] or obstacles[nr, nc]:
+                continue
+            if nr == blocked_r and nc == blocked_c:
+                continue
+            if not corner_cutting and deltas[a, 0] != 0 and deltas[a, 1] != 0:
+                if obstacles[nr, c] or obstacles[r, nc] or (nr == blocked_r and c == blocked_c) or (
+                    r == blocked_r and nc == blocked_c
+                ):
+                    continue
+            seen[nr, nc] = True
+            queue[tail] = nr * m + nc
+            tail += 1
+    return False
+
+
+@numba.njit(cache=True, parallel=True)
+def _mark_separators(obstacles, starts, goals, cells, offsets, corner_cutting, deltas, separator):
+    n, m = obstacles.shape[1], obstacles.shape[2]
+    for b in numba.prange(obstacles.shape[0]):
+        seen = np.empty((n, m), dtype=np.bool_)
+        queue = np.empty(n * m, dtype=np.int64)
+        # the path's first and last cells are the start and the goal, which are never candidates
+        for i in range(offsets[b] + 1, offsets[b + 1] - 1):
+            r, c = cells[i, 0], cells[i, 1]
+            if not _reachable(obstacles[b], r, c, starts[b, 0], starts[b, 1], goals[b, 0], goals[b, 1],
+                              corner_cutting, deltas, seen, queue):
+                separator[b, r, c] = True
+
+
+def valid_cells(
+    obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+) -> np.ndarray:
+    """Cells where one added obstacle makes a valid adversarial map: `(B, N, N)` bool.
+
+    Args:
+        obstacles: `(B, N, N)` bool. starts, goals: `(B, 2)`; the goal must be reachable from the start.
+    """
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    b = len(obstacles)
+    idx = np.arange(b)
+    valid = ~obstacles
+    valid[idx, starts[:, 0], starts[:, 1]] = False
+    valid[idx, goals[:, 0], goals[:, 1]] = False
+    if b == 0:
+        return valid
+    costs, cells, offsets = expert_paths(obstacles, goals, starts[:, None, :], corner_cutting)
+    separator = np.zeros_like(valid)
+    _mark_separators(obstacles, starts, goals, cells.astype(np.int64), offsets, bool(corner_cutting),
+                     ACTION_DELTAS, separator)
+    valid &= ~separator
+    # a start that cannot reach its goal has no valid cell at all (the map is not a solvable map)
+    valid[~np.isfinite(costs[:, 0])] = False
+    return valid

@@ -1,0 +1,146 @@
+import math
+
+import numpy as np
+import pytest
+
+from tests.grid.oracle import brute_distances
+from vinadv.attacks.pairs import PairSet
+from vinadv.attacks.strategies import STRATEGIES, make_attack
+from vinadv.attacks.validity import valid_cells
+from vinadv.classify import label_pairs
+from vinadv.errors import InputError
+from vinadv.grid import generate_maps
+from vinadv.identify import LABEL_STRENGTH, rule_strength
+from vinadv.planners.reference import plan_reference
+from vinadv.planners.testing import planning_vin
+
+SIZE = 10
+
+
+@pytest.fixture(scope="module")
+def model():
+    return planning_vin(SIZE, seed=1, noise=0.1)
+
+
+@pytest.fixture(scope="module")
+def maps():
+    return generate_maps(40, SIZE, seed=3, n_starts=1)
+
+
+def reachable(obstacles, start, goal) -> bool:
+    return math.isfinite(brute_distances(obstacles.tolist(), goal)[tuple(start)][0])
+
+
+def assert_valid(pairs: PairSet, maps):
+    src = pairs.map_index
+    np.testing.assert_array_equal(pairs.obstacles_o, maps.obstacles[src])
+    np.testing.assert_array_equal(pairs.starts, maps.starts[src, 0])
+    np.testing.assert_array_equal(pairs.goals, maps.goals[src])
+    for i in range(len(pairs)):
+        r, c = pairs.added[i]
+        diff = np.argwhere(pairs.obstacles_a[i] != pairs.obstacles_o[i])
+        assert diff.tolist() == [[r, c]] and pairs.obstacles_a[i, r, c]
+        assert (r, c) != tuple(pairs.starts[i]) and (r, c) != tuple(pairs.goals[i])
+        assert reachable(pairs.obstacles_a[i], pairs.starts[i], pairs.goals[i])
+
+
+@pytest.mark.parametrize("name", list(STRATEGIES))
+def test_every_pair_is_valid_and_seeds_reproduce(name, model, maps, tmp_path):
+    attack = make_attack(name, per_map=2, seed=7, budget=5)
+    first = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength)
+    assert len(first.pairs) > 0
+    assert_valid(first.pairs, maps)
+    assert np.all(np.bincount(first.pairs.map_index) <= 2)
+    second = make_attack(name, per_map=2, seed=7, budget=5).attack(
+        maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength)
+    np.testing.assert_array_equal(first.pairs.added, second.pairs.added)
+    np.testing.assert_array_equal(first.pairs.path_a_cells, second.pairs.path_a_cells)
+    # the pairs file round-trips
+    first.pairs.save(tmp_path / "p.npz")
+    back = PairSet.load(tmp_path / "p.npz")
+    np.testing.assert_array_equal(back.added, first.pairs.added)
+    assert back.strategy == name and back.params == attack.params()
+
+
+def test_paths_in_pairs_are_the_reference_planners(model, maps):
+    pairs = make_attack("random", seed=1).attack(maps.obstacles, maps.starts[:, 0], maps.goals, model).pairs
+    ref_o = plan_reference(pairs.obstacles_o, pairs.starts, pairs.goals, model)
+    ref_a = plan_reference(pairs.obstacles_a, pairs.starts, pairs.goals, model)
+    np.testing.assert_array_equal(ref_o.path_cells, pairs.path_o_cells)
+    np.testing.assert_array_equal(ref_a.path_cells, pairs.path_a_cells)
+    np.testing.assert_array_equal(ref_a.termination_names, pairs.term_a)
+
+
+def test_valid_cells_match_brute_force(maps):
+    valid = valid_cells(maps.obstacles, maps.starts[:, 0], maps.goals)
+    for i in range(10):
+        obstacles, start, goal = maps.obstacles[i], maps.starts[i, 0], maps.goals[i]
+        for r in range(SIZE):
+            for c in range(SIZE):
+                expected = not obstacles[r, c] and (r, c) not in (tuple(start), tuple(goal))
+                if expected:
+                    blocked = obstacles.copy()
+                    blocked[r, c] = True
+                    expected = reachable(blocked, start, goal)
+                assert valid[i, r, c] == expected, (i, r, c)
+
+
+def corridor_map():
+    """A 1-wide corridor from start to goal: every free cell but the two ends disconnects them."""
+    obstacles = np.ones((1, 8, 8), dtype=bool)
+    obstacles[0, 3, 1:7] = False
+    return obstacles, np.array([[3, 1]]), np.array([[3, 6]])
+
+
+@pytest.mark.parametrize("name", list(STRATEGIES))
+def test_no_valid_cell_gives_no_pair(name):
+    obstacles, starts, goals = corridor_map()
+    result = make_attack(name).attack(obstacles, starts, goals, planning_vin(8, noise=0.0))
+    assert len(result.pairs) == 0
+    assert result.no_valid_cell.tolist() == [0]
+
+
+def test_exhaustive_finds_the_strongest_cell_of_a_brute_force_search(model, maps):
+    result = make_attack("exhaustive").attack(maps.obstacles[:6], maps.starts[:6, 0], maps.goals[:6], model,
+                                              strength=rule_strength)
+    for i in range(6):
+        obstacles, start, goal = maps.obstacles[i], maps.starts[i, 0], maps.goals[i]
+        original = plan_reference(obstacles[None], start[None], goal[None], model)
+        best = None
+        for r in range(SIZE):  # every cell, the slow way: independent of the attack code
+            for c in range(SIZE):
+                if obstacles[r, c] or (r, c) in (tuple(start), tuple(goal)):
+                    continue
+                adv = obstacles.copy()
+                adv[r, c] = True
+                if not reachable(adv, start, goal):
+                    continue
+                planned = plan_reference(adv[None], start[None], goal[None], model)
+                label = label_pairs(original.path_cells, original.path_offsets, planned.path_cells,
+                                    planned.path_offsets, goal[None], SIZE).labels[0]
+                if best is None or LABEL_STRENGTH[label] > LABEL_STRENGTH[best[0]]:
+                    best = (label, (r, c))
+        got = np.flatnonzero(result.pairs.map_index == i)
+        assert len(got) == 1
+        assert tuple(result.pairs.added[got[0]]) == best[1]
+
+
+def test_exhaustive_keeps_every_valid_cell_with_per_map_zero(model, maps):
+    result = make_attack("exhaustive", per_map=0).attack(maps.obstacles[:3], maps.starts[:3, 0], maps.goals[:3], model)
+    valid = valid_cells(maps.obstacles[:3], maps.starts[:3, 0], maps.goals[:3])
+    assert len(result.pairs) == valid.sum()
+
+
+def test_key_points_and_saliency_try_budget_candidates(model, maps):
+    for name in ("key-points", "saliency"):
+        result = make_attack(name, budget=3).attack(maps.obstacles, maps.starts[:, 0], maps.goals, model)
+        assert result.planner_calls <= len(maps) * 4
+
+
+def test_bad_parameters():
+    with pytest.raises(InputError, match="unknown attack strategy 'nope'"):
+        make_attack("nope")
+    with pytest.raises(InputError, match="--per-map"):
+        make_attack("random", per_map=-1)
+    with pytest.raises(InputError, match="--budget"):
+        make_attack("saliency", budget=0)
