@@ -1,0 +1,119 @@
+"""`vinadv run` (the main job) and `vinadv identify` (label a pairs file and store it)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from vinadv.attacks.pairs import PairSet
+from vinadv.attacks.strategies import STRATEGIES
+from vinadv.commands.attack import attack_summary, print_counts
+from vinadv.identify import identify, load_classifier, replan
+from vinadv.pipeline import STAGES, RunConfig, run_pipeline
+
+
+def register(subparsers) -> None:
+    run = subparsers.add_parser("run", help="the main job: maps -> attack -> identify -> store (-> report)")
+    run.add_argument("--n", type=int, default=5000, help="maps (default 5000)")
+    run.add_argument("--size", type=int, default=28, help="map side N (default 28)")
+    run.add_argument("--attack", default="near-path", choices=list(STRATEGIES), help="attack strategy")
+    run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    run.add_argument("--per-map", type=int, default=1, help="pairs per map (default 1)")
+    run.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map")
+    run.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
+    run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
+    run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
+    run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
+    run.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
+    run.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    run.add_argument("--name", help="run name (needed to --resume)")
+    run.add_argument("--resume", action="store_true", help="continue the latest run called --name")
+    run.add_argument("--report", metavar="DIR", help="also write the HTML report of the run to DIR")
+    run.add_argument("--json", action="store_true", help="print the summary as JSON")
+    run.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+    run.set_defaults(func=cmd_run)
+
+    ident = subparsers.add_parser("identify", help="label the pairs of a pairs file and store them as a run")
+    ident.add_argument("--pairs", required=True, help="pairs file (.npz from `vinadv attack`)")
+    ident.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    ident.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
+    ident.add_argument("--weights", help="plan both maps again with these VIN weights (default: keep the file's paths)")
+    ident.add_argument("--name", help="run name")
+    ident.add_argument("--json", action="store_true", help="print the summary as JSON")
+    ident.add_argument("--quiet", action="store_true", help="print nothing")
+    ident.set_defaults(func=cmd_identify)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    config = RunConfig(
+        n=args.n, size=args.size, attack=args.attack, seed=args.seed, per_map=args.per_map, budget=args.budget,
+        radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
+        classifier=args.classifier, weights=args.weights,
+    )
+    summary = run_pipeline(config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet,
+                           **_cluster_options(args))
+    result = summary.to_dict()
+    if args.report:
+        from vinadv.report import write_report
+
+        t0 = time.perf_counter()
+        write_report(args.db, args.report, run_id=summary.run_id)
+        result["report"] = args.report
+        result["seconds"]["report"] = round(time.perf_counter() - t0, 3)
+    if args.json:
+        print(json.dumps(result))
+    elif not args.quiet:
+        _print_run(result)
+    return 0
+
+
+def _cluster_options(args) -> dict:
+    return {}
+
+
+def _print_run(result: dict) -> None:
+    print(f"run {result['run_id']} ({result['name'] or 'unnamed'}) in {result['db']}: {result['pairs']:,} pairs from "
+          f"{result['maps']:,} maps, {result['stored']:,} stored")
+    if result["skipped_shards"]:
+        print(f"resumed: {result['skipped_shards']} complete shards skipped")
+    if result["maps_without_valid_cell"]:
+        print(f"{result['maps_without_valid_cell']} maps had no valid cell for the added obstacle")
+    print_counts(result)
+    seconds = result["seconds"]
+    print("time per stage: " + ", ".join(f"{s} {seconds[s]:.2f} s" for s in (*STAGES, "report") if s in seconds)
+          + f"; wall {result['wall_seconds']:.2f} s")
+    if "report" in result:
+        print(f"report: {result['report']}/index.html")
+
+
+def cmd_identify(args: argparse.Namespace) -> int:
+    from vinadv.planners.weights import load_vin, weights_checksum
+    from vinadv.store import PairRecords, Store
+
+    pairs = PairSet.load(args.pairs)
+    t0 = time.perf_counter()
+    if args.weights:
+        pairs = replan(pairs, load_vin(args.weights, size=pairs.size))
+    classifier, classifier_name = load_classifier(args.classifier)
+    ident = identify(pairs, classifier, classifier_name)
+    elapsed = time.perf_counter() - t0
+    records = PairRecords.from_pairs(pairs, label=ident.labels, attack=ident.attack, label_source=classifier_name,
+                                     score=ident.score, dh=ident.dh, dv=ident.dv)
+    with Store.open(args.db) as store:
+        run_id = store.create_run(
+            args.name, config={"pairs": args.pairs, "strategy": pairs.strategy, "params": pairs.params,
+                               "classifier": args.classifier, "weights": args.weights},
+            weights_checksum=weights_checksum(args.weights) if args.weights else None,
+            attack=pairs.strategy, classifier=classifier_name)
+        store.write_pairs(run_id, records)
+        store.finish_run(run_id, timings={"identify": elapsed})
+    summary = attack_summary(ident.labels, len(pairs), 0, 0, elapsed)
+    summary.update(run_id=run_id, adversarial=int(ident.attack.sum()))
+    if args.json:
+        print(json.dumps(summary))
+    elif not args.quiet:
+        print(f"run {run_id}: {len(pairs):,} pairs identified in {elapsed:.2f} s; "
+              f"{summary['adversarial']:,} successful attacks (D_adversarial)")
+        print_counts(summary)
+    return 0

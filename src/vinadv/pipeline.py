@@ -1,0 +1,235 @@
+"""The main job, `vinadv run`: maps -> attack -> identify -> store, shard by shard.
+
+The work is split in shards of `shard_size` maps. Shard `k` generates its maps from the seed `(seed, k)`, attacks
+them with the seed `(seed, k)`, identifies and stores its pairs; nothing in a shard depends on another, so the
+stored run does not depend on how (or where) shards are computed. A pair's `pair_index` is fixed by its map and
+slot: `global_map * per_map + slot` (with `per_map = 0`, all pairs: `global_map * N*N + row*N + col`).
+
+A shard is written in batches inside transactions and `(run_id, pair_index)` is unique; a run killed part way
+resumes with `resume=True`: shards before the last stored one are complete (shards are stored in order) and are
+skipped, the rest are recomputed and only their missing pairs are written.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from vinadv import __version__
+from vinadv.attacks.strategies import make_attack
+from vinadv.errors import InputError
+from vinadv.grid.generator import generate_maps
+from vinadv.identify import LABEL_STRENGTH, Identification, identify, load_classifier, rule_strength
+from vinadv.planners.vin import VIN
+from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
+
+STAGES = ("generate", "attack", "identify", "store")
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """Everything that determines a run's pairs (stored with the run)."""
+
+    n: int = 5000
+    size: int = 28
+    attack: str = "near-path"
+    seed: int = 0
+    per_map: int = 1
+    budget: int = 8
+    radius: int = 2
+    corner_cutting: bool = True
+    shard_size: int = 1000
+    classifier: str | None = None
+    weights: str | None = None
+
+    def __post_init__(self):
+        if self.n < 1:
+            raise InputError(f"--n must be >= 1, got {self.n}")
+        if self.shard_size < 1:
+            raise InputError(f"--shard-size must be >= 1, got {self.shard_size}")
+
+    @property
+    def n_shards(self) -> int:
+        return -(-self.n // self.shard_size)
+
+    @property
+    def slots(self) -> int:
+        """Pair-index slots per map."""
+        return self.per_map if self.per_map > 0 else self.size * self.size
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class ShardResult:
+    """One shard's identified pairs and what making them cost."""
+
+    shard: int
+    identification: Identification
+    pair_index: np.ndarray
+    n_maps: int
+    no_valid_cell: int
+    planner_calls: int
+    seconds: dict = field(default_factory=dict)
+
+
+def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None, label_source: str = "rule") -> ShardResult:
+    """Generate, attack and identify shard `shard` of the run: deterministic for `(config, shard)`."""
+    first_map = shard * config.shard_size
+    n_maps = min(config.shard_size, config.n - first_map)
+    seconds = {}
+    t0 = time.perf_counter()
+    maps = generate_maps(n_maps, config.size, seed=(config.seed, shard), n_starts=1,
+                         corner_cutting=config.corner_cutting)
+    t1 = time.perf_counter()
+    attack = make_attack(config.attack, per_map=config.per_map, seed=(config.seed, shard), budget=config.budget,
+                         radius=config.radius)
+    result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, config.corner_cutting,
+                           strength=rule_strength)
+    t2 = time.perf_counter()
+    ident = identify(result.pairs, classifier, label_source)
+    t3 = time.perf_counter()
+    seconds.update(generate=t1 - t0, attack=t2 - t1, identify=t3 - t2)
+    pairs = result.pairs
+    global_map = first_map + pairs.map_index
+    if config.per_map > 0:
+        first_of_map = np.searchsorted(pairs.map_index, pairs.map_index, side="left")
+        slot = np.arange(len(pairs)) - first_of_map
+    else:
+        slot = pairs.added[:, 0] * config.size + pairs.added[:, 1]
+    return ShardResult(shard, ident, global_map * config.slots + slot, n_maps, len(result.no_valid_cell),
+                       result.planner_calls, seconds)
+
+
+def shard_records(result: ShardResult):
+    """The store's `PairRecords` of one shard."""
+    from vinadv.store import PairRecords
+
+    ident = result.identification
+    return PairRecords.from_pairs(
+        ident.pairs, label=ident.labels, attack=ident.attack, label_source=ident.label_source, score=ident.score,
+        dh=ident.dh, dv=ident.dv, pair_index=result.pair_index,
+    )
+
+
+@dataclass
+class RunSummary:
+    """What a run made: counts per category, success rate, time per stage."""
+
+    run_id: int
+    name: str | None
+    db: str
+    n_maps: int = 0
+    n_pairs: int = 0
+    stored: int = 0
+    skipped_shards: int = 0
+    no_valid_cell: int = 0
+    planner_calls: int = 0
+    counts: dict = field(default_factory=lambda: {label: 0 for label in LABEL_STRENGTH})
+    seconds: dict = field(default_factory=lambda: {stage: 0.0 for stage in STAGES})
+    wall_seconds: float = 0.0
+
+    def add(self, result: ShardResult, stored: int, store_seconds: float) -> None:
+        self.n_maps += result.n_maps
+        self.n_pairs += len(result.identification)
+        self.stored += stored
+        self.no_valid_cell += result.no_valid_cell
+        self.planner_calls += result.planner_calls
+        for label, count in result.identification.counts().items():
+            self.counts[label] += count
+        for stage, sec in result.seconds.items():
+            self.seconds[stage] += sec
+        self.seconds["store"] += store_seconds
+
+    def to_dict(self) -> dict:
+        valid = self.n_pairs - self.counts["invalid"]
+        success = self.counts["UrP"] + self.counts["FP"]
+        return {
+            "run_id": self.run_id, "name": self.name, "db": self.db, "maps": self.n_maps, "pairs": self.n_pairs,
+            "stored": self.stored, "skipped_shards": self.skipped_shards, "maps_without_valid_cell": self.no_valid_cell,
+            "counts": dict(self.counts), "valid_pairs": valid, "successful": success,
+            "success_rate": success / valid if valid else None,
+            "planner_calls": self.planner_calls,
+            "planner_calls_per_success": self.planner_calls / success if success else None,
+            "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
+            "wall_seconds": round(self.wall_seconds, 3),
+            "pairs_per_second": self.n_pairs / self.wall_seconds if self.wall_seconds else None,
+        }
+
+
+def resolve_weights(config: RunConfig) -> tuple[VIN, str]:
+    """The planner of a run and the checksum of its weights file."""
+    path = config.weights or default_weights_path(config.size)
+    model = load_vin(config.weights, size=config.size)
+    return model, weights_checksum(path)
+
+
+def open_run(store, config: RunConfig, name: str | None, resume: bool, checksum: str, classifier_name: str):
+    """The run to write into: a new one, or with `resume` the latest run called `name` (same config only)."""
+    if resume:
+        if not name:
+            raise InputError("--resume needs --name (the run to resume)")
+        run_id = store.find_run(name)
+        if run_id is None:
+            raise InputError(f"--resume: no run named '{name}' in {store.url}")
+        stored_config = store.run_info(run_id)["config"] or {}
+        if stored_config != config.to_dict():
+            diff = sorted(k for k in config.to_dict() if stored_config.get(k) != config.to_dict()[k])
+            raise InputError(f"--resume: run '{name}' was made with other settings ({', '.join(diff)}); "
+                             "use the same options or another --name")
+        return run_id
+    return store.create_run(name, config=config.to_dict(), seed=config.seed, weights_checksum=checksum,
+                            attack=config.attack, classifier=classifier_name, version=__version__)
+
+
+def run_pipeline(
+    config: RunConfig,
+    db: str | None = None,
+    name: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    shard_results: Callable | None = None,
+) -> RunSummary:
+    """Run the main job and store it; returns the summary. `shard_results(config, shards, model, classifier,
+    label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order."""
+    from vinadv.store import Store
+
+    t_start = time.perf_counter()
+    model, checksum = resolve_weights(config)
+    classifier, classifier_name = load_classifier(config.classifier)
+    with Store.open(db) as store:
+        run_id = open_run(store, config, name, resume, checksum, classifier_name)
+        summary = RunSummary(run_id, name, store.url)
+        shards = list(range(config.n_shards))
+        if resume:
+            stored = store.stored_indices(run_id)
+            if len(stored):
+                last = int(stored.max()) // (config.shard_size * config.slots)
+                summary.skipped_shards = last
+                shards = shards[last:]
+        compute = shard_results or _local_shards
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=config.n - summary.skipped_shards * config.shard_size, desc="maps", unit="map")
+        for result in compute(config, shards, model, classifier, classifier_name):
+            t0 = time.perf_counter()
+            written = store.write_pairs(run_id, shard_records(result), skip_stored=resume or shard_results is not None)
+            summary.add(result, written, time.perf_counter() - t0)
+            if bar is not None:
+                bar.update(result.n_maps)
+        if bar is not None:
+            bar.close()
+        summary.wall_seconds = time.perf_counter() - t_start
+        store.finish_run(run_id, timings={**summary.to_dict()["seconds"], "wall": summary.wall_seconds})
+    return summary
+
+
+def _local_shards(config, shards, model, classifier, label_source):
+    for shard in shards:
+        yield compute_shard(config, shard, model, classifier, label_source)

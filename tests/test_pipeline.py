@@ -1,0 +1,149 @@
+"""The main job end to end: maps -> attack -> identify -> store, on every database backend."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import sqlalchemy as sa
+
+from tests.classify.oracle import rule_oracle
+from vinadv.cli import main
+from vinadv.pipeline import RunConfig, run_pipeline
+from vinadv.planners.testing import planning_vin
+from vinadv.planners.weights import save_vin
+from vinadv.store import Store
+
+SIZE = 12
+
+
+@pytest.fixture(scope="module")
+def weights(tmp_path_factory):
+    path = tmp_path_factory.mktemp("w") / f"vin{SIZE}.pt"
+    save_vin(planning_vin(SIZE, seed=2, noise=0.1), path)
+    return str(path)
+
+
+def config(weights, **kw):
+    defaults = dict(n=60, size=SIZE, attack="near-path", seed=4, shard_size=25, weights=weights)
+    return RunConfig(**{**defaults, **kw})
+
+
+def test_same_run_reads_back_identical_on_every_backend(weights, sqlite_url, mysql_url, postgres_url):
+    stored = []
+    for url in (sqlite_url, mysql_url, postgres_url):
+        summary = run_pipeline(config(weights), db=url, name="x", progress=False)
+        assert summary.stored == summary.n_pairs > 0
+        with Store.open(url) as store:
+            stored.append(store.read_pairs(summary.run_id))
+            assert store.label_counts(summary.run_id) == summary.counts
+    assert stored[0].equals(stored[1]) and stored[0].equals(stored[2])
+
+
+def test_stored_labels_agree_with_an_independent_recomputation(weights, sqlite_url):
+    summary = run_pipeline(config(weights, attack="key-points"), db=sqlite_url, progress=False)
+    engine = sa.create_engine(sqlite_url)
+    with engine.connect() as conn:
+        rows = conn.execute(sa.text("SELECT path_o, path_a, goal, label, attack, dh, dv FROM map_pairs WHERE run_id = :r"),
+                            {"r": summary.run_id}).all()
+    assert len(rows) == summary.n_pairs
+    seen = set()
+    for path_o, path_a, goal, label, attack, dh, dv in rows:
+        parse = lambda text: [tuple(int(v) for v in cell.split(",")) for cell in text.split(";")]  # noqa: E731
+        expected, exp_dh, exp_dv = rule_oracle(parse(path_o), parse(path_a), parse(goal)[0], round(4 * SIZE / 28))
+        assert label == expected
+        if label in ("DP", "FP"):
+            assert (dh, dv) == (exp_dh, exp_dv)
+        else:
+            assert dh is None and dv is None
+        assert bool(attack) == (expected in ("UrP", "FP"))
+        seen.add(label)
+    assert len(seen) >= 3  # the run is not trivially one category
+
+
+def test_result_does_not_depend_on_shard_size(weights, sqlite_url, tmp_path):
+    a = run_pipeline(config(weights, shard_size=60), db=sqlite_url, progress=False)
+    b = run_pipeline(config(weights, shard_size=60), db=f"sqlite:///{tmp_path / 'other.db'}", progress=False)
+    with Store.open(sqlite_url) as s1, Store.open(f"sqlite:///{tmp_path / 'other.db'}") as s2:
+        assert s1.read_pairs(a.run_id).equals(s2.read_pairs(b.run_id))
+
+
+def test_killed_run_resumes_with_every_pair_exactly_once(weights, tmp_path):
+    db = f"sqlite:///{tmp_path / 'kill.db'}"
+    args = ["run", "--n", "400", "--size", str(SIZE), "--shard-size", "20", "--weights", weights, "--seed", "9",
+            "--db", db, "--name", "k", "--quiet"]
+    proc = subprocess.Popen([sys.executable, "-m", "vinadv.cli", *args], env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    engine = sa.create_engine(db)
+    deadline = time.time() + 120
+    count = 0
+    while time.time() < deadline and proc.poll() is None:
+        time.sleep(0.2)
+        try:
+            with engine.connect() as conn:
+                count = conn.execute(sa.text("SELECT COUNT(*) FROM map_pairs")).scalar()
+        except sa.exc.OperationalError:
+            continue
+        if count > 0:
+            break
+    assert proc.poll() is None, "the run finished before it could be killed; make it longer"
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    with engine.connect() as conn:
+        partial = conn.execute(sa.text("SELECT COUNT(*) FROM map_pairs")).scalar()
+    assert 0 < partial < 400
+    assert main([*args, "--resume"]) == 0
+    clean_db = f"sqlite:///{tmp_path / 'clean.db'}"
+    assert main([*args[:-5], "--db", clean_db, "--quiet"]) == 0
+    with Store.open(db) as resumed, Store.open(clean_db) as clean:
+        rid = resumed.find_run("k")
+        got = resumed.read_pairs(rid)
+        assert len(np.unique(got.pair_index)) == len(got.pair_index)
+        assert got.equals(clean.read_pairs(clean.list_runs()[0]["id"]))
+
+
+def test_resume_refuses_other_settings(weights, sqlite_url, capsys):
+    run_pipeline(config(weights), db=sqlite_url, name="r", progress=False)
+    args = ["run", "--n", "60", "--size", str(SIZE), "--weights", weights, "--db", sqlite_url, "--name", "r",
+            "--resume", "--quiet", "--seed", "5", "--shard-size", "25"]
+    assert main(args) == 2
+    assert "other settings (seed)" in capsys.readouterr().err
+
+
+def test_bad_inputs_exit_2_and_leave_data_untouched(weights, sqlite_url, tmp_path, capsys):
+    summary = run_pipeline(config(weights), db=sqlite_url, progress=False)
+    with Store.open(sqlite_url) as store:
+        before = store.read_pairs(summary.run_id)
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, format=np.array("vinadv.pairs/1"), obstacles_o=np.zeros((2, 5, 5), bool))
+    assert main(["identify", "--pairs", str(bad), "--db", sqlite_url, "--quiet"]) == 2
+    assert "bad.npz: field 'obstacles_a' is missing" in capsys.readouterr().err
+    assert main(["run", "--n", "5", "--db", "mysql+pymysql://root@127.0.0.1:1/none", "--weights", weights,
+                 "--size", str(SIZE), "--quiet"]) == 2
+    assert "cannot connect" in capsys.readouterr().err
+    other = tmp_path / "other.db"
+    sa_engine = sa.create_engine(f"sqlite:///{other}")
+    with sa_engine.begin() as conn:
+        conn.execute(sa.text("CREATE TABLE map_pairs (x INTEGER)"))
+    assert main(["run", "--n", "5", "--db", str(other), "--weights", weights, "--size", str(SIZE), "--quiet"]) == 2
+    with Store.open(sqlite_url) as store:
+        assert store.read_pairs(summary.run_id).equals(before)
+
+
+def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
+    maps = tmp_path / "maps.npz"
+    pairs = tmp_path / "pairs.npz"
+    assert main(["maps", "generate", "--n", "30", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
+                 "--quiet"]) == 0
+    assert main(["attack", "--maps", str(maps), "--strategy", "key-points", "--out", str(pairs),
+                 "--weights", weights, "--json"]) == 0
+    import json
+
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["pairs"] == sum(summary["counts"].values())
+    assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--json"]) == 0
+    ident = json.loads(capsys.readouterr().out)
+    assert ident["counts"] == summary["counts"]
+    assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--weights", weights, "--quiet"]) == 0
