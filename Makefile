@@ -19,11 +19,12 @@ test: venv
 
 demo: venv
 	mkdir -p $(DEMO_DIR)
-	$(VENV)/bin/vinadv maps generate --n 1000 --size 28 --seed 0 --out $(DEMO_DIR)/maps.npz
-	$(VENV)/bin/vinadv maps show $(DEMO_DIR)/maps.npz --index 0 --all-starts --out $(DEMO_DIR)/map0.png
+	rm -f $(DEMO_DIR)/vinadv.db
+	$(VENV)/bin/vinadv run --n 5000 --size 28 --attack near-path --seed 0 --db $(DEMO_DIR)/vinadv.db --name demo --report $(DEMO_DIR)/report
+	@echo "open $(DEMO_DIR)/report/index.html; look at the pairs with: $(VENV)/bin/vinadv serve --db $(DEMO_DIR)/vinadv.db"
 
 bench: venv
-	$(PY) benchmarks/grid.py
+	for b in grid planning attacks classify store; do $(PY) benchmarks/$$b.py || exit 1; done
 
 clean:
 	rm -rf $(VENV) $(DEMO_DIR) .pytest_cache .hypothesis
