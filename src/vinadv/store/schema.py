@@ -6,6 +6,9 @@ Tables:
 - `map_pairs`: the paper's Table 2 (`no, map_o, map_a, path_o, path_a, label, attack`) plus what makes a row
   reproducible and queryable; `(run_id, pair_index)` is unique, so a resumed run never stores a pair twice.
 - `annotations`: human labels of stored pairs (the annotation tool writes them).
+- `evaluations`: classifier comparisons on a run's FP/DP pairs (`vinadv evaluate` writes them, the report reads
+  them). Added after schema version 1 shipped; it is additive (no existing column changes), so `Store.open`
+  creates it in an older version-1 database instead of refusing it (`ADDITIVE_TABLES`).
 
 Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
 VARCHAR would cap both.
@@ -94,4 +97,25 @@ annotations = sa.Table(
     sa.Index("ix_annotations_run_pair", "run_id", "pair_index"),
 )
 
-TABLES = (meta_table, runs, map_pairs, annotations)
+evaluations = sa.Table(
+    "evaluations",
+    metadata,
+    sa.Column("id", _BigId, primary_key=True, autoincrement=True),
+    sa.Column("run_id", _BigId, sa.ForeignKey("runs.id"), nullable=False),
+    sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive
+    sa.Column("batch", sa.String(64), nullable=False),  # one `vinadv evaluate` call: its rows share this id
+    sa.Column("classifier", sa.String(32), nullable=False),  # svm|cnn|mlp|hausdorff|frechet|dtw|hybrid|rule
+    sa.Column("setting", sa.String(16), nullable=False),  # baseline|tuned
+    sa.Column("training", sa.String(16), nullable=False),  # balanced|imbalanced (the training set)
+    sa.Column("train_fraction", sa.Double(), nullable=False),  # of the 70% training split (fig. 8)
+    sa.Column("train_size", sa.Integer(), nullable=False),  # training pairs, augmented copies included
+    sa.Column("test_size", sa.Integer(), nullable=False),
+    sa.Column("seed", sa.BigInteger(), nullable=True),
+    sa.Column("metrics", sa.JSON(), nullable=False),  # accuracy, per-class P/R/F1, AUC, AP, confusion, timings
+    sa.Column("curves", sa.JSON(), nullable=True),  # {"roc": {"fpr", "tpr"}, "pr": {"precision", "recall"}}
+    sa.Index("ix_evaluations_run", "run_id", "id"),
+)
+
+TABLES = (meta_table, runs, map_pairs, annotations, evaluations)
+#: tables added to schema version 1 later: created when missing, never a reason to refuse a database
+ADDITIVE_TABLES = (evaluations,)

@@ -26,7 +26,18 @@ from vinadv import __version__
 from vinadv.errors import InputError
 from vinadv.store import codec
 from vinadv.store.records import PairRecords
-from vinadv.store.schema import LABELS, SCHEMA_VERSION, TABLES, annotations, map_pairs, meta_table, metadata, runs
+from vinadv.store.schema import (
+    ADDITIVE_TABLES,
+    LABELS,
+    SCHEMA_VERSION,
+    TABLES,
+    annotations,
+    evaluations,
+    map_pairs,
+    meta_table,
+    metadata,
+    runs,
+)
 
 DEFAULT_DB = "vinadv.db"
 ENV_DB = "VINADV_DB"
@@ -144,6 +155,8 @@ class Store:
                 )
             inspector = sa.inspect(conn)
             for table in TABLES:
+                if table.name not in present and table in ADDITIVE_TABLES:
+                    continue  # created below (or, read-only, treated as empty)
                 if table.name not in present:
                     raise InputError(f"database {self.url}: wrong schema: table {table.name} is missing")
                 have = {c["name"] for c in inspector.get_columns(table.name)}
@@ -152,6 +165,12 @@ class Store:
                     raise InputError(
                         f"database {self.url}: wrong schema: table {table.name} lacks columns {sorted(missing)}"
                     )
+        missing_additive = [t for t in ADDITIVE_TABLES if t.name not in present]
+        if missing_additive and create:
+            # an older version-1 database: add the new tables (nothing existing changes)
+            with self.engine.begin() as conn:
+                for table in missing_additive:
+                    table.create(conn, checkfirst=True)
 
     def close(self) -> None:
         self.engine.dispose()
@@ -374,6 +393,40 @@ class Store:
         with self.engine.connect() as conn:
             rows = conn.execute(query).mappings().all()
         return [dict(r) for r in rows]
+
+    # -------------------------------------------------------------------------------------- evaluations
+
+    def add_evaluations(self, run_id: int, rows: Sequence[dict]) -> int:
+        """Store classifier evaluations of a run (`vinadv evaluate`), all in one transaction; return how many.
+
+        Each row: classifier, setting, training ('balanced'|'imbalanced'), train_fraction, train_size,
+        test_size, seed, metrics (JSON dict), curves (JSON dict or None), batch (id shared by one call).
+        """
+        self.run_info(run_id)  # InputError for an unknown run
+        if not rows:
+            return 0
+        self._ensure_table(evaluations)
+        now = _utcnow()
+        keys = ("batch", "classifier", "setting", "training", "train_fraction", "train_size", "test_size", "seed",
+                "metrics", "curves")
+        values = [{"run_id": int(run_id), "created": now, **{k: row.get(k) for k in keys}} for row in rows]
+        with self.engine.begin() as conn:
+            conn.execute(evaluations.insert(), values)
+        return len(values)
+
+    def read_evaluations(self, run_id: int) -> list[dict]:
+        """The run's stored evaluations, oldest first (`[]` when none, or when the table does not exist yet)."""
+        with self.engine.connect() as conn:
+            if not sa.inspect(conn).has_table(evaluations.name):
+                return []
+            rows = conn.execute(
+                sa.select(evaluations).where(evaluations.c.run_id == int(run_id)).order_by(evaluations.c.id)
+            ).mappings().all()
+        return [dict(r) for r in rows]
+
+    def _ensure_table(self, table: sa.Table) -> None:
+        with self.engine.begin() as conn:
+            table.create(conn, checkfirst=True)
 
     # ----------------------------------------------------------------------------- paging (the viewer)
 
