@@ -7,6 +7,7 @@ import json
 import time
 
 from vinadv.attacks.strategies import STRATEGIES, make_attack
+from vinadv.cluster import add_cluster_arguments, open_cluster
 from vinadv.grid.mapset import MapSet
 from vinadv.identify import LABEL_STRENGTH, identify, rule_strength
 from vinadv.planners.weights import load_vin
@@ -26,6 +27,7 @@ def register(subparsers) -> None:
     p.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+    add_cluster_arguments(p, shard_size=True)
     p.set_defaults(func=cmd_attack)
 
 
@@ -55,8 +57,16 @@ def cmd_attack(args: argparse.Namespace) -> int:
     model = load_vin(args.weights, size=maps.size)
     attack = make_attack(args.strategy, per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
     t0 = time.perf_counter()
-    result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, maps.corner_cutting,
-                           strength=rule_strength, progress=not args.quiet)
+    if args.cluster is None and args.workers is None:
+        result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, maps.corner_cutting,
+                               strength=rule_strength, progress=not args.quiet)
+    else:
+        from vinadv.cluster import attack_on_cluster
+
+        options = dict(per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
+        with open_cluster(args.cluster, args.workers) as client:
+            result = attack_on_cluster(client, args.strategy, options, maps, args.weights,
+                                       shard_size=args.shard_size, progress=not args.quiet)
     elapsed = time.perf_counter() - t0
     result.pairs.save(args.out)
     summary = attack_summary(identify(result.pairs).labels, len(maps), len(result.no_valid_cell),

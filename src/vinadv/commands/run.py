@@ -8,6 +8,7 @@ import time
 
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES
+from vinadv.cluster import add_cluster_arguments, open_cluster
 from vinadv.commands.attack import attack_summary, print_counts
 from vinadv.identify import identify, load_classifier, replan
 from vinadv.pipeline import STAGES, RunConfig, run_pipeline
@@ -32,6 +33,7 @@ def register(subparsers) -> None:
     run.add_argument("--report", metavar="DIR", help="also write the HTML report of the run to DIR")
     run.add_argument("--json", action="store_true", help="print the summary as JSON")
     run.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+    add_cluster_arguments(run)
     run.set_defaults(func=cmd_run)
 
     ident = subparsers.add_parser("identify", help="label the pairs of a pairs file and store them as a run")
@@ -42,6 +44,7 @@ def register(subparsers) -> None:
     ident.add_argument("--name", help="run name")
     ident.add_argument("--json", action="store_true", help="print the summary as JSON")
     ident.add_argument("--quiet", action="store_true", help="print nothing")
+    add_cluster_arguments(ident, shard_size=True)
     ident.set_defaults(func=cmd_identify)
 
 
@@ -51,8 +54,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
         classifier=args.classifier, weights=args.weights,
     )
-    summary = run_pipeline(config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet,
-                           **_cluster_options(args))
+    with open_cluster(args.cluster, args.workers) as client:
+        summary = run_pipeline(config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet,
+                               **_cluster_options(client))
     result = summary.to_dict()
     if args.report:
         from vinadv.report import write_report
@@ -68,8 +72,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cluster_options(args) -> dict:
-    return {}
+def _cluster_options(client) -> dict:
+    """`run_pipeline`'s keyword arguments for computing on `client` (none: in this process)."""
+    if client is None:
+        return {}
+    from vinadv.cluster import ClusterShards
+
+    return {"shard_results": ClusterShards(client)}
 
 
 def _print_run(result: dict) -> None:
@@ -93,10 +102,21 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     pairs = PairSet.load(args.pairs)
     t0 = time.perf_counter()
-    if args.weights:
-        pairs = replan(pairs, load_vin(args.weights, size=pairs.size))
-    classifier, classifier_name = load_classifier(args.classifier)
-    ident = identify(pairs, classifier, classifier_name)
+    if args.cluster is None and args.workers is None:
+        if args.weights:
+            pairs = replan(pairs, load_vin(args.weights, size=pairs.size))
+        classifier, classifier_name = load_classifier(args.classifier)
+        ident = identify(pairs, classifier, classifier_name)
+    else:
+        from vinadv.cluster import identify_on_cluster
+
+        if args.weights:
+            load_vin(args.weights, size=pairs.size)  # a bad file is refused here, before any worker starts
+        classifier_name = load_classifier(args.classifier)[1]
+        with open_cluster(args.cluster, args.workers) as client:
+            ident = identify_on_cluster(client, pairs, args.weights, args.classifier, classifier_name,
+                                        shard_size=args.shard_size, progress=not args.quiet)
+        pairs = ident.pairs
     elapsed = time.perf_counter() - t0
     records = PairRecords.from_pairs(pairs, label=ident.labels, attack=ident.attack, label_source=classifier_name,
                                      score=ident.score, dh=ident.dh, dv=ident.dv)

@@ -1,0 +1,302 @@
+"""Scale out on a Dask cluster: `--cluster tcp://HOST:PORT` (an existing scheduler) or `--workers N` (a LocalCluster
+of N single-threaded worker processes) on `vinadv run`, `vinadv attack` and `vinadv identify`.
+
+Who computes and who writes:
+- `run`: shard `k` is `pipeline.compute_shard(config, k)` on a worker, from its own seed `(seed, k)`, so the stored
+  run does not depend on the number of workers or the order shards finish. Results come back to the client as they
+  complete (`distributed.as_completed`); the client writes them, in shard order, with the store's batched
+  transactional writes. Workers never touch the database: one writer needs no database credentials on the
+  workers, works the same for SQLite files and servers, and keeps `--resume` exact (it relies on shards being
+  stored in order: shards before the last stored one are complete). Shards that finish early wait in a bounded
+  buffer: at most `window` shards (4 per worker thread by default) are submitted or waiting at any time, which
+  also bounds the client's memory.
+- `attack` / `identify`: the maps (pairs) are split in shards of `--shard-size`, sent to the workers, and the
+  results gathered in order: the same pairs/labels as the local command.
+- A lost worker's shard is recomputed by Dask (the scheduler reschedules the tasks of a dead worker; tasks that
+  raise are retried `retries` times); a shard's future yields its result once, and the client writes with
+  `skip_stored` on the unique `(run_id, pair_index)`, so a shard is never stored twice.
+- Workers rebuild the planner (and a classifier model) from the file path, checked against the client's
+  checksum, once per worker process; they need the same files at the same paths (shared file system, or the
+  shipped default weights of the installed package).
+- Each worker process uses one thread for torch, Numba and the planner's pool; start external workers with
+  `dask worker tcp://HOST:PORT --nworkers <cores> --nthreads 1`.
+
+Dask is the optional extra `vinadv[cluster]`; nothing here imports it until a cluster is asked for.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+
+import numpy as np
+
+from vinadv.errors import InputError
+
+INSTALL_HINT = "pip install 'vinadv[cluster]'"
+#: how often a task that raised is run again (worker deaths are handled by the scheduler's allowed-failures)
+RETRIES = 3
+#: shards submitted or waiting per worker thread
+WINDOW_PER_THREAD = 4
+
+__all__ = [
+    "INSTALL_HINT", "add_cluster_arguments", "open_cluster", "start_local_cluster", "ClusterShards",
+    "attack_on_cluster", "identify_on_cluster", "concat_pairsets", "require_dask",
+]
+
+
+def require_dask():
+    """`distributed`, or InputError saying how to install it."""
+    try:
+        import distributed
+    except ImportError as exc:
+        raise InputError(f"--workers/--cluster need Dask's distributed scheduler ({exc}); install it with "
+                         f"{INSTALL_HINT}") from None
+    return distributed
+
+
+def add_cluster_arguments(parser, shard_size: bool = False) -> None:
+    """`--cluster`, `--workers` (and with `shard_size`, `--shard-size` for commands that have none yet)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--cluster", metavar="tcp://HOST:PORT", help="compute on this Dask scheduler's workers")
+    group.add_argument("--workers", type=int, metavar="N",
+                       help="compute on a local Dask cluster of N single-threaded worker processes")
+    if shard_size:
+        parser.add_argument("--shard-size", type=int, default=1000,
+                            help="with --cluster/--workers: items per task (default 1000)")
+
+
+def start_local_cluster(workers: int, **kwargs):
+    """A LocalCluster of `workers` processes, one thread each, numeric libraries single-threaded."""
+    if workers < 1:
+        raise InputError(f"--workers must be >= 1, got {workers}")
+    require_dask()
+    from distributed import LocalCluster
+
+    from vinadv.cluster.worker import SINGLE_THREAD_ENV
+
+    options = dict(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                   env=dict(SINGLE_THREAD_ENV))
+    return LocalCluster(**{**options, **kwargs})
+
+
+@contextlib.contextmanager
+def open_cluster(address: str | None = None, workers: int | None = None) -> Iterator:
+    """A connected `distributed.Client` (None when neither `address` nor `workers` is given); closes what it
+    started. Call it from the command (under `main()`), never at import: a LocalCluster spawns processes."""
+    if address is None and workers is None:
+        yield None
+        return
+    if address is not None and workers is not None:
+        raise InputError("give either --cluster or --workers, not both")
+    require_dask()
+    from distributed import Client
+
+    from vinadv.cluster.worker import _plugin_class
+
+    with contextlib.ExitStack() as stack:
+        if workers is not None:
+            cluster = stack.enter_context(start_local_cluster(workers))
+            client = stack.enter_context(Client(cluster))
+        else:
+            _check_reachable(address)
+            try:
+                client = stack.enter_context(Client(address, timeout="15s"))
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise InputError(f"--cluster {address}: cannot connect to a Dask scheduler ({exc})") from None
+        client.register_plugin(_plugin_class()())
+        yield client
+
+
+def _check_reachable(address: str) -> None:
+    """Fail fast (Dask's client keeps retrying a refused connection until its timeout)."""
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    if parts.scheme not in ("tcp", "tls"):
+        return  # other transports (inproc, ucx): let Dask judge
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or not port:
+        raise InputError(f"--cluster {address}: expected tcp://HOST:PORT")
+    try:
+        socket.create_connection((host, port), timeout=10).close()
+    except OSError as exc:
+        raise InputError(f"--cluster {address}: cannot connect to a Dask scheduler ({exc})") from None
+
+
+def _total_threads(client) -> int:
+    return max(1, sum(client.nthreads().values()))
+
+
+class ClusterShards:
+    """`run_pipeline`'s `shard_results` on a Dask cluster: yields each shard's `ShardResult`, in shard order.
+
+    Tasks are submitted `window` at a time (default 4 per worker thread, re-read as workers come and go), collected
+    with `as_completed`, and released to the caller in shard order, so the caller's writes keep `--resume` exact.
+    """
+
+    def __init__(self, client, retries: int = RETRIES, window: int | None = None, on_result=None):
+        self.client = client
+        self.retries = retries
+        self.window = window
+        self.on_result = on_result  # test hook: called with each ShardResult as it arrives
+
+    def __call__(self, config, shards, model, classifier, label_source):
+        from dask.base import tokenize
+        from distributed import as_completed
+
+        from vinadv.cluster.worker import file_checksum, run_shard_task
+        from vinadv.planners.weights import default_weights_path, weights_checksum
+
+        weights = str(config.weights or default_weights_path(config.size))
+        weights_sum = weights_checksum(weights)
+        classifier_sum = None if config.classifier in (None, "rule") else file_checksum(config.classifier)
+        token = tokenize(config.to_dict(), weights_sum, classifier_sum, label_source)
+        pending = list(shards)[::-1]  # pop() from the end = lowest shard first
+        order = list(shards)
+        arrived: dict = {}
+        in_flight = 0
+        futures = as_completed()
+
+        def submit():
+            nonlocal in_flight
+            window = self.window or WINDOW_PER_THREAD * _total_threads(self.client)
+            while pending and in_flight + len(arrived) < window:
+                shard = pending.pop()
+                futures.add(self.client.submit(
+                    run_shard_task, config, shard, weights, weights_sum, classifier_sum, label_source,
+                    key=f"vinadv-shard-{token}-{shard}", retries=self.retries, pure=False))
+                in_flight += 1
+
+        submit()
+        next_pos = 0
+        for future in futures:
+            result = future.result()  # a task that failed for good raises here (InputError included)
+            future.release()
+            in_flight -= 1
+            arrived[result.shard] = result
+            if self.on_result is not None:
+                self.on_result(result)
+            while next_pos < len(order) and order[next_pos] in arrived:
+                yield arrived.pop(order[next_pos])
+                next_pos += 1
+            submit()
+        if next_pos != len(order):  # pragma: no cover - as_completed ends only when every future is done
+            raise RuntimeError(f"cluster returned {next_pos} of {len(order)} shards")
+
+
+def _gather_in_order(client, futures, progress: bool, desc: str, unit_counts):
+    """Results of `futures` in submission order, a tqdm bar over items while they complete."""
+    from distributed import as_completed
+
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=int(sum(unit_counts)), desc=desc, unit="item")
+    position = {f.key: i for i, f in enumerate(futures)}
+    results = [None] * len(futures)
+    for future in as_completed(futures):
+        i = position[future.key]
+        results[i] = future.result()
+        future.release()
+        if bar is not None:
+            bar.update(unit_counts[i])
+    if bar is not None:
+        bar.close()
+    return results
+
+
+def _bounds(n: int, shard_size: int) -> list[tuple[int, int]]:
+    if shard_size < 1:
+        raise InputError(f"--shard-size must be >= 1, got {shard_size}")
+    return [(lo, min(n, lo + shard_size)) for lo in range(0, n, shard_size)]
+
+
+def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str | None, shard_size: int = 1000,
+                      progress: bool = False):
+    """`Attack.attack` of every map of `maps` (first start of each), `shard_size` maps per task: the same
+    `AttackResult` as the local command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...)."""
+    from vinadv.attacks.strategies import AttackResult, make_attack
+    from vinadv.cluster.worker import attack_shard_task
+    from vinadv.planners.weights import default_weights_path, weights_checksum
+
+    attack = make_attack(strategy, **options)  # validates the options here, before anything is sent
+    path = str(weights or default_weights_path(maps.size))
+    weights_sum = weights_checksum(path)
+    bounds = _bounds(len(maps), shard_size)
+    futures = [
+        client.submit(attack_shard_task, strategy, options, maps.obstacles[lo:hi], maps.starts[lo:hi, 0],
+                      maps.goals[lo:hi], lo, maps.corner_cutting, path, weights_sum, retries=RETRIES, pure=False)
+        for lo, hi in bounds
+    ]
+    parts = _gather_in_order(client, futures, progress, f"attack {strategy}", [hi - lo for lo, hi in bounds])
+    shifted = []
+    for (lo, _), part in zip(bounds, parts):
+        part.pairs.map_index = part.pairs.map_index + lo
+        shifted.append(part.pairs)
+    pairs = concat_pairsets(shifted, strategy, attack.params(), maps.corner_cutting, maps.size)
+    no_valid = np.concatenate([p.no_valid_cell + lo for (lo, _), p in zip(bounds, parts)]).astype(np.int64) \
+        if parts else np.zeros(0, np.int64)
+    return AttackResult(pairs, no_valid, int(sum(p.planner_calls for p in parts)))
+
+
+def identify_on_cluster(client, pairs, weights: str | None, classifier: str | None, label_source: str,
+                        shard_size: int = 1000, progress: bool = False):
+    """`identify` (after `replan` with `weights`) of `pairs`, `shard_size` pairs per task: the same
+    `Identification` as the local command."""
+    from vinadv.cluster.worker import file_checksum, identify_shard_task
+    from vinadv.identify import Identification
+    from vinadv.planners.weights import weights_checksum
+
+    weights_sum = weights_checksum(weights) if weights else None
+    classifier_sum = None if classifier in (None, "rule") else file_checksum(classifier)
+    bounds = _bounds(len(pairs), shard_size)
+    futures = [
+        client.submit(identify_shard_task, pairs.subset(np.arange(lo, hi)), weights, weights_sum, classifier,
+                      classifier_sum, label_source, retries=RETRIES, pure=False)
+        for lo, hi in bounds
+    ]
+    parts = _gather_in_order(client, futures, progress, "identify", [hi - lo for lo, hi in bounds])
+    if not parts:
+        from vinadv.identify import identify
+
+        return identify(pairs, None, label_source)
+    cat = lambda name: np.concatenate([getattr(p, name) for p in parts])  # noqa: E731
+    return Identification(
+        pairs=concat_pairsets([p.pairs for p in parts], pairs.strategy, dict(pairs.params), pairs.corner_cutting,
+                              pairs.size),
+        labels=cat("labels"), attack=cat("attack"), score=cat("score"), dh=cat("dh"), dv=cat("dv"),
+        label_source=label_source,
+    )
+
+
+def concat_pairsets(parts: list, strategy: str, params: dict, corner_cutting: bool, size: int):
+    """One `PairSet` of `parts` in order (paths re-packed)."""
+    from vinadv.attacks.pairs import PairSet
+
+    parts = [p for p in parts if len(p)]
+    if not parts:
+        empty_paths = (np.zeros((0, 2), np.int16), np.zeros(1, np.int64))
+        return PairSet(
+            np.zeros((0, size, size), bool), np.zeros((0, size, size), bool), np.zeros((0, 2), np.int64),
+            np.zeros((0, 2), np.int64), np.zeros((0, 2), np.int64), np.zeros(0, np.int64), *empty_paths,
+            *empty_paths, np.zeros(0, "<U10"), np.zeros(0, "<U10"), strategy, params, corner_cutting,
+        )
+
+    def paths(prefix):
+        offsets = [getattr(p, f"{prefix}_offsets") for p in parts]
+        shift = np.cumsum([0] + [int(o[-1]) for o in offsets[:-1]])
+        packed = np.concatenate([offsets[0][:1]] + [o[1:] + s for o, s in zip(offsets, shift)])
+        return np.concatenate([getattr(p, f"{prefix}_cells") for p in parts]), packed.astype(np.int64)
+
+    cat = lambda name: np.concatenate([np.asarray(getattr(p, name)) for p in parts])  # noqa: E731
+    po, pa = paths("path_o"), paths("path_a")
+    return PairSet(
+        cat("obstacles_o"), cat("obstacles_a"), cat("starts"), cat("goals"), cat("added"), cat("map_index"),
+        po[0], po[1], pa[0], pa[1], cat("term_o"), cat("term_a"), strategy, params, corner_cutting,
+    )

@@ -1,0 +1,168 @@
+"""What runs on a Dask worker: single-threaded numerics, planners and classifiers rebuilt from their files, and the
+shard tasks of `vinadv run`, `vinadv attack` and `vinadv identify`.
+
+Nothing here imports Dask at module level except the plugin class, so the tasks also run (and are tested) in
+plain Python. Models are never pickled: a task gets the path of the weights (or classifier) file and its checksum,
+loads it once per worker process (`_MODELS`), and refuses a file whose checksum differs from the client's (a
+worker on another machine with other weights would otherwise silently make other pairs).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import threading
+
+import numpy as np
+
+#: environment of a worker process: one thread for each numeric library (a worker process is one core)
+SINGLE_THREAD_ENV = {
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+    "NUMBA_NUM_THREADS": "1",
+}
+
+_MODELS: dict = {}
+_MODELS_LOCK = threading.Lock()
+_THREAD_STATE = threading.local()
+
+
+def single_threaded() -> None:
+    """Make this process and thread use one core: torch intra-op threads, Numba's thread layer, the engine's pool.
+
+    Torch's setting is per process; Numba's is per calling thread, so every task calls this (cheap after the first
+    time in a thread)."""
+    if getattr(_THREAD_STATE, "done", False):
+        return
+    for name, value in SINGLE_THREAD_ENV.items():
+        os.environ.setdefault(name, value)  # before numba/torch first import in this process
+    import numba
+    import torch
+
+    torch.set_num_threads(1)
+    numba.set_num_threads(1)
+    from vinadv.planners import engine
+
+    if hasattr(engine, "N_THREADS"):  # the engine's own thread pool over maps (sized from the CPU affinity)
+        engine.N_THREADS = 1
+    _THREAD_STATE.done = True
+
+
+def file_checksum(path: str | os.PathLike) -> str:
+    """sha256 of a file's bytes (hex)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _cached(key, load):
+    with _MODELS_LOCK:
+        if key not in _MODELS:
+            _MODELS[key] = load()
+        return _MODELS[key]
+
+
+def worker_vin(path: str, size: int, checksum: str):
+    """The VIN of weights file `path`, loaded once per worker process; InputError if the file differs."""
+    from vinadv.errors import InputError
+    from vinadv.planners.weights import load_vin, weights_checksum
+
+    def load():
+        found = weights_checksum(path)
+        if found != checksum:
+            raise InputError(f"weights file {path} on this worker has checksum {found}, the client's has {checksum}; "
+                             "workers need the same file at the same path")
+        return load_vin(path, size=size)
+
+    return _cached(("vin", path, size, checksum), load)
+
+
+def worker_classifier(spec: str | None, checksum: str | None):
+    """The classifier `spec` ('rule', None or a model file), loaded once per worker process."""
+    from vinadv.errors import InputError
+    from vinadv.identify import load_classifier
+
+    def load():
+        if checksum is not None:
+            found = file_checksum(spec)
+            if found != checksum:
+                raise InputError(f"classifier file {spec} on this worker differs from the client's "
+                                 f"(sha256 {found} != {checksum})")
+        return load_classifier(spec)[0]
+
+    return _cached(("classifier", spec, checksum), load)
+
+
+def run_shard_task(config, shard: int, weights: str, weights_sum: str, classifier_sum: str | None, label_source: str):
+    """`vinadv run`: shard `shard` of the run (`pipeline.compute_shard`), on a worker."""
+    from vinadv.pipeline import compute_shard
+
+    single_threaded()
+    model = worker_vin(weights, config.size, weights_sum)
+    classifier = worker_classifier(config.classifier, classifier_sum)
+    return compute_shard(config, shard, model, classifier, label_source)
+
+
+def attack_shard_task(strategy: str, options: dict, obstacles, starts, goals, first_map: int, corner_cutting: bool,
+                      weights: str, weights_sum: str):
+    """`vinadv attack` on maps `first_map .. first_map + len(obstacles)` of the file: the same pairs as attacking
+    the whole file at once (map indices local to the shard; the client shifts them)."""
+    from vinadv.attacks.strategies import make_attack
+    from vinadv.identify import rule_strength
+
+    single_threaded()
+    model = worker_vin(weights, obstacles.shape[1], weights_sum)
+    attack = make_attack(strategy, **options)
+    _continue_random_stream(attack, first_map)
+    return attack.attack(obstacles, starts, goals, model, corner_cutting, strength=rule_strength)
+
+
+def _continue_random_stream(attack, first_map: int) -> None:
+    """Give the shard the random numbers that the whole-file attack gives its maps.
+
+    A whole-file attack draws one `rng.random((B, N, N))` from `default_rng(seed)` (random, near-path); map `i`'s
+    block is the `N*N` doubles after the first `i*N*N`, and each double is one step of PCG64, so the shard's stream
+    is the seed's stream advanced by `first_map*N*N` steps. Strategies that draw no random numbers ignore it.
+    """
+    scores = attack.candidate_scores
+
+    def candidate_scores(ctx):
+        n_cells = ctx.obstacles.shape[1] * ctx.obstacles.shape[2]
+        rng = np.random.default_rng(attack.seed)
+        rng.bit_generator.advance(first_map * n_cells)
+        ctx.rng = rng
+        return scores(ctx)
+
+    attack.candidate_scores = candidate_scores
+
+
+def identify_shard_task(pairs, weights: str | None, weights_sum: str | None, classifier_spec: str | None,
+                        classifier_sum: str | None, label_source: str):
+    """`vinadv identify` on a shard of pairs: plan again (with weights) and label."""
+    from vinadv.identify import identify, replan
+
+    single_threaded()
+    if weights is not None:
+        pairs = replan(pairs, worker_vin(weights, pairs.size, weights_sum))
+    return identify(pairs, worker_classifier(classifier_spec, classifier_sum), label_source)
+
+
+def _plugin_class():
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    class SingleThreadWorker(WorkerPlugin):
+        """Run on every worker (and every worker that joins later): one thread per numeric library."""
+
+        name = "vinadv-single-thread"
+
+        def setup(self, worker):
+            for name, value in SINGLE_THREAD_ENV.items():
+                os.environ.setdefault(name, value)
+            import torch
+
+            torch.set_num_threads(1)
+
+    return SingleThreadWorker

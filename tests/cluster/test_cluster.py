@@ -1,0 +1,180 @@
+"""`--cluster` / `--workers`: a LocalCluster of 2 worker processes gives the same stored run, pairs file and labels
+as the local commands, pair by pair; a worker killed mid-run still leaves every pair stored exactly once.
+
+The oracle is the local, in-process computation (tests/test_pipeline.py pins that one against independent
+oracles); one module-scoped cluster serves every test (its start-up is the slow part on 2 cores).
+"""
+
+import builtins
+import os
+import signal
+
+import numpy as np
+import pytest
+
+pytest.importorskip("distributed")
+
+from vinadv.attacks.pairs import PairSet  # noqa: E402
+from vinadv.cli import main  # noqa: E402
+from vinadv.cluster import ClusterShards, start_local_cluster  # noqa: E402
+from vinadv.pipeline import RunConfig, compute_shard, run_pipeline  # noqa: E402
+from vinadv.planners.testing import planning_vin  # noqa: E402
+from vinadv.planners.weights import load_vin, save_vin  # noqa: E402
+from vinadv.store import Store  # noqa: E402
+
+SIZE = 12
+
+
+@pytest.fixture(scope="module")
+def weights(tmp_path_factory):
+    path = tmp_path_factory.mktemp("w") / f"vin{SIZE}.pt"
+    save_vin(planning_vin(SIZE, seed=2, noise=0.1), path)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    from distributed import Client
+
+    from vinadv.cluster.worker import _plugin_class
+
+    with start_local_cluster(2) as local, Client(local) as client:
+        client.register_plugin(_plugin_class()())
+        yield local, client
+
+
+def config(weights, **kw):
+    defaults = dict(n=200, size=SIZE, attack="near-path", seed=7, shard_size=20, weights=weights)
+    return RunConfig(**{**defaults, **kw})
+
+
+def stored(db, run_id):
+    with Store.open(db) as store:
+        return store.read_pairs(run_id)
+
+
+def test_run_on_the_cluster_stores_the_same_pairs_as_the_local_run(weights, cluster, tmp_path):
+    _, client = cluster
+    local_db, cluster_db = f"sqlite:///{tmp_path / 'local.db'}", f"sqlite:///{tmp_path / 'cluster.db'}"
+    local = run_pipeline(config(weights), db=local_db, name="x", progress=False)
+    on_cluster = run_pipeline(config(weights), db=cluster_db, name="x", progress=False,
+                              shard_results=ClusterShards(client))
+    assert on_cluster.stored == on_cluster.n_pairs == local.n_pairs > 150
+    a, b = stored(local_db, local.run_id), stored(cluster_db, on_cluster.run_id)
+    assert np.array_equal(a.pair_index, b.pair_index) and a.equals(b)
+    assert on_cluster.counts == local.counts
+    # both workers did some of the work (the run does not depend on who computed what)
+    assert len(client.nthreads()) == 2
+
+
+def test_cli_run_with_cluster_address_matches_the_local_cli_run(weights, cluster, tmp_path):
+    local, _ = cluster
+    common = ["run", "--n", "60", "--size", str(SIZE), "--shard-size", "20", "--weights", weights, "--seed", "3",
+              "--attack", "key-points", "--quiet"]
+    assert main([*common, "--db", str(tmp_path / "a.db")]) == 0
+    assert main([*common, "--db", str(tmp_path / "b.db"), "--cluster", local.scheduler_address]) == 0
+    with Store.open(str(tmp_path / "a.db")) as a, Store.open(str(tmp_path / "b.db")) as b:
+        assert a.read_pairs(a.list_runs()[0]["id"]).equals(b.read_pairs(b.list_runs()[0]["id"]))
+
+
+def test_a_killed_worker_still_leaves_every_pair_exactly_once(weights, cluster, tmp_path):
+    local, client = cluster
+    pids_before = set(client.run(os.getpid).values())
+    killed = []
+
+    def kill_one_worker(result):
+        # after the first shard arrives, SIGKILL a worker process while it holds queued and running shards;
+        # its nanny starts a new one and the scheduler gives the lost shards to the workers again
+        if not killed:
+            pid = sorted(pids_before)[0]
+            os.kill(pid, signal.SIGKILL)
+            killed.append(pid)
+
+    db = f"sqlite:///{tmp_path / 'kill.db'}"
+    cfg = config(weights, n=240, seed=11, shard_size=10)
+    summary = run_pipeline(cfg, db=db, name="k", progress=False,
+                           shard_results=ClusterShards(client, on_result=kill_one_worker))
+    assert killed
+    got = stored(db, summary.run_id)
+    assert len(np.unique(got.pair_index)) == len(got.pair_index) == summary.n_pairs == summary.stored
+    # the same pairs as computing every shard here, once
+    model = load_vin(weights, size=SIZE)
+    expected = [compute_shard(cfg, k, model) for k in range(cfg.n_shards)]
+    assert np.array_equal(np.sort(got.pair_index), np.concatenate([r.pair_index for r in expected]))
+    client.wait_for_workers(2, timeout=60)
+    assert killed[0] not in set(client.run(os.getpid).values())
+
+
+def test_a_shard_delivered_twice_is_stored_once(weights, tmp_path):
+    cfg = config(weights, n=40)
+    model = load_vin(weights, size=SIZE)
+
+    def twice(config, shards, model_, classifier, label_source):
+        for shard in shards:
+            result = compute_shard(config, shard, model, classifier, label_source)
+            yield result
+            yield result
+
+    db = f"sqlite:///{tmp_path / 'twice.db'}"
+    summary = run_pipeline(cfg, db=db, progress=False, shard_results=twice)
+    got = stored(db, summary.run_id)
+    assert summary.stored == len(got) == summary.n_pairs // 2
+    assert len(np.unique(got.pair_index)) == len(got)
+
+
+@pytest.mark.parametrize("strategy", ["near-path", "random", "key-points"])
+def test_attack_on_the_cluster_writes_the_same_pairs_file(weights, cluster, tmp_path, strategy):
+    local, _ = cluster
+    maps = tmp_path / "maps.npz"
+    assert main(["maps", "generate", "--n", "45", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
+                 "--seed", "5", "--quiet"]) == 0
+    args = ["attack", "--maps", str(maps), "--strategy", strategy, "--weights", weights, "--per-map", "2",
+            "--seed", "3", "--quiet"]
+    assert main([*args, "--out", str(tmp_path / "local.npz")]) == 0
+    # uneven shards (45 = 16 + 16 + 13): the random stream must continue across shard boundaries
+    assert main([*args, "--out", str(tmp_path / "cluster.npz"), "--cluster", local.scheduler_address,
+                 "--shard-size", "16"]) == 0
+    a, b = PairSet.load(tmp_path / "local.npz"), PairSet.load(tmp_path / "cluster.npz")
+    assert len(a) == len(b) > 40
+    for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added", "map_index", "path_o_cells",
+                 "path_o_offsets", "path_a_cells", "path_a_offsets", "term_o", "term_a"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert (a.strategy, a.params, a.corner_cutting) == (b.strategy, b.params, b.corner_cutting)
+
+
+def test_identify_on_the_cluster_stores_the_same_labels(weights, cluster, tmp_path):
+    local, _ = cluster
+    maps, pairs = tmp_path / "maps.npz", tmp_path / "pairs.npz"
+    assert main(["maps", "generate", "--n", "50", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
+                 "--quiet"]) == 0
+    assert main(["attack", "--maps", str(maps), "--strategy", "key-points", "--out", str(pairs),
+                 "--weights", weights, "--quiet"]) == 0
+    other = tmp_path / "other.pt"
+    save_vin(planning_vin(SIZE, seed=3, noise=0.3), other)  # re-plan with another planner on the workers
+    for db, extra in (("a.db", []), ("b.db", ["--cluster", local.scheduler_address, "--shard-size", "7"])):
+        assert main(["identify", "--pairs", str(pairs), "--db", str(tmp_path / db), "--weights", str(other),
+                     "--quiet", *extra]) == 0
+    with Store.open(str(tmp_path / "a.db")) as a, Store.open(str(tmp_path / "b.db")) as b:
+        assert a.read_pairs(a.list_runs()[0]["id"]).equals(b.read_pairs(b.list_runs()[0]["id"]))
+
+
+def test_workers_without_dask_says_how_to_install_it(weights, tmp_path, monkeypatch, capsys):
+    real_import = builtins.__import__
+
+    def no_distributed(name, *args, **kwargs):
+        if name == "distributed" or name.startswith("distributed."):
+            raise ImportError("No module named 'distributed'")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_distributed)
+    assert main(["run", "--n", "5", "--size", str(SIZE), "--weights", weights, "--db", str(tmp_path / "x.db"),
+                 "--workers", "2", "--quiet"]) == 2
+    assert "pip install 'vinadv[cluster]'" in capsys.readouterr().err
+
+
+def test_bad_cluster_options_exit_2(weights, tmp_path, capsys):
+    base = ["run", "--n", "5", "--size", str(SIZE), "--weights", weights, "--db", str(tmp_path / "x.db"), "--quiet"]
+    assert main([*base, "--workers", "0"]) == 2
+    assert "--workers must be >= 1, got 0" in capsys.readouterr().err
+    assert main([*base, "--cluster", "tcp://127.0.0.1:1"]) == 2
+    assert "cannot connect" in capsys.readouterr().err
