@@ -22,6 +22,7 @@ COMMAND_MODULES = [
     "vinadv.commands.classify",
     "vinadv.commands.run",
     "vinadv.commands.store",
+    "vinadv.commands.report",
     "vinadv.commands.serve",
 ]
 

@@ -1,0 +1,116 @@
+"""`vinadv evaluate` (classifier comparison on a stored run, stored) and `vinadv report` (the HTML report)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from vinadv.errors import InputError
+
+CLASSIFIER_NAMES = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw", "hybrid", "rule")
+
+
+def register(subparsers) -> None:
+    ev = subparsers.add_parser(
+        "evaluate",
+        help="compare FP/DP classifiers on a stored run's pairs and store the results (for `vinadv report`)",
+        description="The paper's classifier comparison on the FP/DP pairs of a stored run (truth: the exact rule "
+        "labeller): 7:3 stratified split; each classifier trained on the balanced training set (flipped/rotated "
+        "copies of the minority class) and on the imbalanced one, tested on the real mix; accuracy against "
+        "training set size; ROC and PR curves. Results go to the database's `evaluations` table.",
+    )
+    ev.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    ev.add_argument("--run", type=int, help="run id (default: the latest run)")
+    ev.add_argument("--classifiers", default=",".join(CLASSIFIER_NAMES),
+                    help=f"comma-separated, from {','.join(CLASSIFIER_NAMES)} (default: all)")
+    ev.add_argument("--setting", choices=("baseline", "tuned"), default="baseline",
+                    help="hyperparameters: baseline = the paper's (CNN/MLP 10 epochs, batch 64), or tuned")
+    ev.add_argument("--sizes", default=None,
+                    help="training set fractions for fig. 8, comma-separated in (0, 1] (default 0.1,0.2,0.4,0.6,0.8,1)")
+    ev.add_argument("--seed", type=int, default=0, help="seed of the split, augmentation and training (default 0)")
+    ev.add_argument("--json", action="store_true", help="print the stored rows' figures as JSON")
+    ev.add_argument("--quiet", action="store_true", help="no progress bar, no table")
+    ev.set_defaults(func=cmd_evaluate)
+
+    rep = subparsers.add_parser(
+        "report",
+        help="write the HTML evaluation report of a stored run (every table and figure of the paper)",
+        description="Write DIR/index.html (self-contained, relative links), PNG and SVG figures and CSV tables: "
+        "example pairs (figs. 1, 2, 5), the four categories (fig. 3), the category distribution (table 4, per run "
+        "with --runs), the stored classifier comparison (tables 5, 6, figs. 8, 9), processing time for 100 pairs "
+        "(table 7, measured now), the VIN's quality and the run's configuration; the paper's numbers beside ours.",
+    )
+    rep.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    rep.add_argument("--run", type=int, help="the run to report (default: the last of --runs, else the latest run)")
+    rep.add_argument("--runs", help="comma-separated run ids to compare in table 4 (say, one per attack strategy)")
+    rep.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    rep.add_argument("--json", action="store_true", help="print what was written and measured as JSON")
+    rep.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    rep.set_defaults(func=cmd_report)
+
+
+def _run_ids(text: str | None) -> list[int] | None:
+    if text is None:
+        return None
+    try:
+        ids = [int(s) for s in text.split(",") if s.strip()]
+    except ValueError:
+        raise InputError(f"--runs: expected comma-separated run ids like 1,2,3, got {text!r}") from None
+    if not ids:
+        raise InputError("--runs: no run id given")
+    return ids
+
+
+def _latest_run(store) -> int:
+    runs = store.list_runs()
+    if not runs:
+        raise InputError(f"database {store.url}: no runs stored yet (run `vinadv run` first)")
+    return int(runs[-1]["id"])
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from vinadv.report.evaluate import CLASSIFIERS, evaluate_run, parse_list, parse_sizes
+    from vinadv.store import Store
+
+    classifiers = parse_list(args.classifiers, CLASSIFIERS, "--classifiers")
+    sizes = parse_sizes(args.sizes)
+    with Store.open(args.db, create=False) as store:
+        run_id = args.run if args.run is not None else _latest_run(store)
+        store.run_info(run_id)
+        rows = evaluate_run(store, run_id, classifiers, args.setting, sizes, args.seed,
+                            progress=not (args.quiet or args.json))
+    if args.json:
+        print(json.dumps({"run_id": run_id, "rows": [{k: v for k, v in r.items() if k != "curves"} for r in rows]}))
+    elif not args.quiet:
+        print(f"run {run_id}: {len(rows)} evaluations stored (setting {args.setting}, seed {args.seed})")
+        print(f"{'classifier':<10} {'training':<10} {'pairs':>6} {'accuracy':>8} {'FP F1':>6} {'AUC':>6} "
+              f"{'AP':>6} {'train s':>8} {'s/100':>8}")
+        for r in rows:
+            if r["train_fraction"] < 1.0:
+                continue
+            m = r["metrics"]
+            print(f"{r['classifier']:<10} {r['training']:<10} {r['train_size']:>6} {_f(m.get('accuracy'))} "
+                  f"{_f(m['per_class']['FP']['f1'], 6)} {_f(m.get('roc_auc'), 6)} {_f(m.get('average_precision'), 6)} "
+                  f"{_f(m.get('training_s'), 8, 2)} {_f(m.get('prediction_s_per_100'), 8, 4)}")
+        print(f"write the report: vinadv report --db {store.url} --run {run_id} --out DIR")
+    return 0
+
+
+def _f(value, width: int = 8, digits: int = 3) -> str:
+    return f"{'n/a':>{width}}" if value is None else f"{value:>{width}.{digits}f}"
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from vinadv.report.html import build_report
+
+    result = build_report(args.db, args.out, run_id=args.run, runs=_run_ids(args.runs))
+    if args.json:
+        print(json.dumps(result.to_dict(), default=str))
+    elif not args.quiet:
+        timing = result.timing
+        print(f"report of run {result.run_id}: {result.index} ({len(set(result.files))} files)")
+        print(f"100 stored pairs: rule {timing['rule_s']:.4f} s"
+              + (f", hybrid+SVM {timing['hybrid_svm_s']:.4f} s" if timing.get("hybrid_svm_s") is not None else "")
+              + f" (paper 0.22 s; manual ~300 s); read from the database {timing['read_s']:.4f} s"
+              + ("" if result.evaluated else "; no classifier evaluation stored (see `vinadv evaluate`)"))
+    return 0
