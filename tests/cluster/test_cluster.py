@@ -63,8 +63,43 @@ def test_run_on_the_cluster_stores_the_same_pairs_as_the_local_run(weights, clus
     a, b = stored(local_db, local.run_id), stored(cluster_db, on_cluster.run_id)
     assert np.array_equal(a.pair_index, b.pair_index) and a.equals(b)
     assert on_cluster.counts == local.counts
-    # both workers did some of the work (the run does not depend on who computed what)
     assert len(client.nthreads()) == 2
+
+
+def test_workers_are_single_threaded(cluster):
+    _, client = cluster
+
+    def threads():
+        import torch
+
+        from vinadv.cluster.worker import single_threaded
+
+        single_threaded()
+        import numba
+
+        from vinadv.planners import engine
+
+        return (torch.get_num_threads(), numba.get_num_threads(), os.environ.get("NUMBA_NUM_THREADS"),
+                getattr(engine, "N_THREADS", 1))
+
+    assert set(client.run(threads).values()) == {(1, 1, "1", 1)}
+
+
+def test_a_worker_with_other_weights_refuses_them(weights):
+    from vinadv.cluster.worker import worker_vin
+    from vinadv.errors import InputError
+
+    with pytest.raises(InputError, match="workers need the same file"):
+        worker_vin(weights, SIZE, "0" * 64)
+
+
+@pytest.mark.slow  # starts (and stops) a LocalCluster of its own: the path users take with --workers
+def test_cli_run_with_a_local_cluster_of_its_own(weights, tmp_path):
+    common = ["run", "--n", "20", "--size", str(SIZE), "--shard-size", "10", "--weights", weights, "--quiet"]
+    assert main([*common, "--db", str(tmp_path / "a.db")]) == 0
+    assert main([*common, "--db", str(tmp_path / "b.db"), "--workers", "1"]) == 0
+    with Store.open(str(tmp_path / "a.db")) as a, Store.open(str(tmp_path / "b.db")) as b:
+        assert a.read_pairs(a.list_runs()[0]["id"]).equals(b.read_pairs(b.list_runs()[0]["id"]))
 
 
 def test_cli_run_with_cluster_address_matches_the_local_cli_run(weights, cluster, tmp_path):
