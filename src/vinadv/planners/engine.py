@@ -14,6 +14,10 @@ float32 PyTorch VIN at every step). The engine gets there differently:
 
 from __future__ import annotations
 
+import functools
+import os
+from concurrent.futures import ThreadPoolExecutor
+
 import numba
 import numpy as np
 import torch
@@ -36,7 +40,7 @@ __all__ = ["PlanResult", "TERMINATIONS", "plan_batch", "action_maps"]
 #: maps per chunk: bounds the memory of the action maps, paths and torch tensors.
 DEFAULT_CHUNK = 4096
 #: a cell is uncertain when its two best logits are closer than REL_MARGIN * (logit scale of its map).
-REL_MARGIN = 1e-4
+REL_MARGIN = 5e-6
 UNDECIDED = -1  # rollout code: stepped on an uncertain cell, to be re-done with torch's logits
 
 
@@ -50,10 +54,27 @@ def action_maps(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndar
     p = FoldedVIN.from_model(model)
     n = obstacles.shape[1]
     actions = np.empty(obstacles.shape, dtype=np.int8)
-    if len(obstacles):
-        _action_maps_kernel(obstacles, goals, p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k,
-                            _padded_width(n), REL_MARGIN, actions)
+
+    def work(lo: int, hi: int) -> None:
+        _action_maps_kernel(obstacles[lo:hi], goals[lo:hi], p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc,
+                            p.k, _padded_width(n), REL_MARGIN, actions[lo:hi])
+
+    # Plain threads over a nogil kernel rather than Numba's OpenMP layer: OpenMP workers left spinning slow down
+    # torch's own OpenMP pool, which the near-tie fallback uses right after.
+    bounds = np.linspace(0, len(obstacles), N_THREADS + 1).astype(int)
+    if len(obstacles) < 2 * N_THREADS:
+        work(0, len(obstacles))
+    else:
+        list(_pool().map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
     return actions
+
+
+N_THREADS = max(1, min(len(os.sched_getaffinity(0)), 8))
+
+
+@functools.cache
+def _pool() -> ThreadPoolExecutor:
+    return ThreadPoolExecutor(N_THREADS, thread_name_prefix="vinadv-plan")
 
 
 def _padded_width(n: int) -> int:
@@ -88,15 +109,16 @@ class FoldedVIN:
         )
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, nogil=True)
 def _action_maps_kernel(obstacles, goals, reward_w, reward_b, goal_value, q_w, w, fc, k, wp, rel_margin, actions):
     n, lq = obstacles.shape[1], q_w.shape[0]
-    for b in numba.prange(obstacles.shape[0]):
-        reward_q = np.empty((n, lq, wp), dtype=np.float32)
-        v = np.zeros((n + 2, wp + 2), dtype=np.float32)
-        v_next = np.zeros((n + 2, wp + 2), dtype=np.float32)
-        best = np.empty(wp, dtype=np.float32)
-        q = np.empty((n, lq, wp), dtype=np.float32)
+    reward_q = np.empty((n, lq, wp), dtype=np.float32)
+    v = np.zeros((n + 2, wp + 2), dtype=np.float32)
+    v_next = np.zeros((n + 2, wp + 2), dtype=np.float32)
+    best = np.empty(wp, dtype=np.float32)
+    q = np.empty((n, lq, wp), dtype=np.float32)
+    for b in range(obstacles.shape[0]):
+        v_next[:, :] = 0.0
         _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, v)
         _value_iteration(reward_q, v, v_next, best, w, k, q)
         _decide(q, fc, n, rel_margin, actions[b])
@@ -291,6 +313,7 @@ def plan_maps(
     corner_cutting: bool = True,
     chunk_size: int = DEFAULT_CHUNK,
     progress: bool = False,
+    stats: dict | None = None,
 ) -> PlanResult:
     """Plan from S starts per map: `starts (B, S, 2)`; path `i * S + s` is from start `s` of map `i`.
 
@@ -312,13 +335,13 @@ def plan_maps(
         chunks = tqdm(chunks, unit="chunk", desc="planning")
     parts = [
         _plan_chunk(obstacles[i : i + chunk_size], goals[i : i + chunk_size], starts[i : i + chunk_size], model,
-                    corner_cutting)
+                    corner_cutting, stats if stats is not None else {})
         for i in chunks
     ]
     return PlanResult.concatenate(parts)
 
 
-def _plan_chunk(obstacles, goals, starts, model, corner_cutting) -> PlanResult:
+def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanResult:
     b, s = starts.shape[0], starts.shape[1]
     n = obstacles.shape[1]
     actions = action_maps(model, obstacles, goals)
@@ -332,17 +355,22 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting) -> PlanResult:
     terms = np.empty(len(flat_starts), dtype=np.int8)
     _rollouts(actions, map_index, flat_starts, flat_goals, limits, obstacles, bool(corner_cutting),
               ACTION_DELTAS, cells, lengths, terms)
-    paths = [cells[t, : lengths[t]] for t in range(len(flat_starts))]
-    for t in np.flatnonzero(terms == UNDECIDED):
+    undecided = np.flatnonzero(terms == UNDECIDED)
+    stats["torch_rollouts"] = stats.get("torch_rollouts", 0) + len(undecided)
+    for t in undecided:  # rare: a rollout that stepped on a near tie is re-done with torch's own logits
         m = map_index[t]
         x = make_input(obstacles[m : m + 1], goals[m : m + 1])
         with torch.no_grad():
             q = model.q_values(x)
         path, term = rollout(torch_action_at(model, x, q), obstacles[m], flat_starts[t], flat_goals[t],
                              int(limits[t]), corner_cutting)
-        paths[t] = np.array(path, dtype=np.int16).reshape(-1, 2)
+        cells[t, : len(path)] = path
+        lengths[t] = len(path)
         terms[t] = term
-    return PlanResult.from_paths(paths, terms)
+    offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
+    np.cumsum(lengths, out=offsets[1:])
+    packed = cells[np.arange(cap)[None, :] < lengths[:, None]]
+    return PlanResult(packed, offsets, terms == GOAL, terms)
 
 
 def _limits_multi(obstacles, goals, starts, corner_cutting) -> np.ndarray:
