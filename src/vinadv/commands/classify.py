@@ -25,7 +25,7 @@ def register(subparsers) -> None:
         "classifier trained on the pairs of the file that the labels call FP or DP. The pairs are split "
         "train:test stratified by label; the test indices are kept in the model file for `classify eval`.",
     )
-    train.add_argument("--pairs", required=True, help="pairs file (.npz, vinadv.pairs/1)")
+    train.add_argument("--pairs", default=None, help="pairs file (.npz, vinadv.pairs/1); needed with --labels rule")
     train.add_argument("--model", required=True, choices=KINDS, help="FP/DP classifier")
     train.add_argument("--out", required=True, help="output model file")
     train.add_argument("--setting", choices=("baseline", "tuned"), default="baseline",
@@ -36,7 +36,10 @@ def register(subparsers) -> None:
                        help="fraction of the FP/DP pairs held out for testing (default 0.3; 0 = train on all)")
     train.add_argument("--seed", type=int, default=0, help="seed of the split, augmentation and training")
     train.add_argument("--labels", choices=("rule", "human"), default="rule",
-                       help="where training labels come from: the exact rule labeller (default) or people")
+                       help="where training labels come from: the exact rule labeller on --pairs (default), or "
+                       "people's annotations (`vinadv serve`) of the stored pairs of --db/--run")
+    train.add_argument("--db", default=None, help="with --labels human: the results database (URL or SQLite file)")
+    train.add_argument("--run", type=int, default=None, help="with --labels human: the run whose labelled pairs to use")
     train.add_argument("--threshold", type=int, default=None,
                        help="the rule's threshold t (default round(4 * N / 28), 4 at 28x28)")
     train.add_argument("--json", action="store_true", help="print a JSON summary")
@@ -63,6 +66,18 @@ def _load_pairs(path):
     return PathPairBatch.from_pairset(PairSet.load(path))
 
 
+def _human_labels(args):
+    """(batch, labels, description) of the human-labelled pairs of --db/--run (`vinadv.viewer.training`)."""
+    if args.run is None:
+        raise InputError("--labels human needs --run (and --db, or env VINADV_DB)")
+    from vinadv.store import Store
+    from vinadv.viewer.training import human_training_set
+
+    with Store.open(args.db, create=False) as store:
+        batch, labels, _ = human_training_set(store, args.run)
+        return batch, labels, f"{store.url} run {args.run} (human labels)"
+
+
 def _counts(labels) -> dict:
     values, counts = np.unique(np.asarray(labels), return_counts=True)
     return {str(v): int(c) for v, c in zip(values, counts)}
@@ -73,14 +88,17 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     from vinadv.classify import HybridClassifier, balance_batch, default_threshold, label_batch, make_fp_classifier
 
-    if args.labels == "human":
-        raise InputError("--labels human reads people's annotations from the results database (--db), "
-                         "which `classify train` cannot read yet; use --labels rule")
     if not 0.0 <= args.test_fraction < 1.0:
         raise InputError(f"--test-fraction must be in [0, 1), got {args.test_fraction}")
-    batch = _load_pairs(args.pairs)
-    t = default_threshold(batch.size) if args.threshold is None else args.threshold
-    labels = label_batch(batch, t).labels
+    if args.labels == "human":
+        batch, labels, args.pairs = _human_labels(args)
+        t = default_threshold(batch.size) if args.threshold is None else args.threshold
+    else:
+        if args.pairs is None:
+            raise InputError("--pairs is required with --labels rule")
+        batch = _load_pairs(args.pairs)
+        t = default_threshold(batch.size) if args.threshold is None else args.threshold
+        labels = label_batch(batch, t).labels
     fp_dp = np.flatnonzero(np.isin(labels, ("DP", "FP")))
     counts = _counts(labels[fp_dp])
     need = 2 if args.test_fraction > 0 else 1

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import socket
 import sys
 
 from vinadv.errors import InputError
@@ -57,11 +58,19 @@ def cmd_serve(args: argparse.Namespace) -> int:
     if created and not args.quiet:
         print(f"created indexes {', '.join(created)} (once per database)", file=sys.stderr)
     app = create_app(store, allow_remote=args.allow_remote)
+    # bind here rather than in werkzeug, which prints and calls sys.exit(1) when the port is taken
+    family = socket.AF_INET6 if ":" in args.host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
     try:
-        server = make_server(args.host, args.port, app, threaded=True)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((args.host.strip("[]"), args.port))
+        sock.listen(128)
+        server = make_server(args.host, args.port, app, threaded=True, fd=sock.fileno())
     except OSError as exc:
         store.close()
         raise InputError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    finally:
+        sock.close()  # the server holds its own duplicate of the socket
     if args.quiet:
         logging.getLogger("werkzeug").setLevel(logging.ERROR)
     host = f"[{args.host}]" if ":" in args.host else args.host

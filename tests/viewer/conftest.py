@@ -1,0 +1,83 @@
+"""A SQLite database in tmp_path with two runs: 'random' (random_records, 230 pairs) and 'crafted' (three
+hand-made pairs with gaps in their indices), and a Flask test client over it."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from vinadv.store import PairRecords, Store
+from vinadv.store.synthetic import random_records
+
+N_RANDOM = 230
+
+
+def crafted_records() -> PairRecords:
+    """Three 6x6 pairs at pair indices 10, 20, 30: FP (score 0.9, dh 3, dv 0), DP (no score), invalid (no dh/dv)."""
+    size = 6
+    border = np.zeros((size, size), bool)
+    border[0, :] = border[-1, :] = border[:, 0] = border[:, -1] = True
+    obstacles_o = np.stack([border] * 3)
+    obstacles_a = obstacles_o.copy()
+    added = np.array([[2, 3], [3, 2], [2, 2]])
+    obstacles_a[np.arange(3), added[:, 0], added[:, 1]] = True
+    path_o = [[(1, 1), (2, 2), (3, 3), (4, 4)], [(1, 1), (2, 2), (3, 3), (4, 4)], [(1, 1), (1, 2)]]
+    path_a = [[(1, 1), (1, 2), (1, 3), (1, 4), (2, 4), (3, 4), (4, 4)], [(1, 1), (2, 1), (3, 1), (4, 2), (4, 3), (4, 4)],
+              [(1, 1), (1, 2)]]
+
+    def pack(paths):
+        cells = np.concatenate([np.array(p) for p in paths]).astype(np.int16)
+        return cells, np.concatenate([[0], np.cumsum([len(p) for p in paths])])
+
+    (co, oo), (ca, oa) = pack(path_o), pack(path_a)
+    return PairRecords(
+        pair_index=[10, 20, 30], obstacles_o=obstacles_o, obstacles_a=obstacles_a,
+        starts=[[1, 1]] * 3, goals=[[4, 4]] * 3, added=added,
+        path_o_cells=co, path_o_offsets=oo, path_a_cells=ca, path_a_offsets=oa,
+        label=["FP", "DP", "invalid"], attack=[True, False, False],
+        term_o=["goal", "goal", "collision"], term_a=["goal", "goal", "collision"],
+        label_source=["svm", "svm", "rule"], score=[0.9, np.nan, np.nan], dh=[3, 1, -1], dv=[0, 2, -1],
+    )
+
+
+@pytest.fixture
+def db(tmp_path):
+    """(url, {"random": (run_id, records), "crafted": (run_id, records)})."""
+    url = f"sqlite:///{tmp_path / 'viewer.db'}"
+    with Store.open(url) as store:
+        runs = {}
+        for name, records in (("random", random_records(N_RANDOM, size=12, seed=3)), ("crafted", crafted_records())):
+            run_id = store.create_run(name, attack="random", seed=0)
+            store.write_pairs(run_id, records)
+            store.finish_run(run_id, {"total": 1.0})
+            runs[name] = (run_id, records)
+    return url, runs
+
+
+@pytest.fixture
+def store(db):
+    store = Store.open(db[0], create=False)
+    yield store
+    store.close()
+
+
+@pytest.fixture
+def app(store):
+    from vinadv.viewer.app import create_app
+
+    app = create_app(store, secret_key="test-secret")
+    app.config["TESTING"] = True
+    return app
+
+
+@pytest.fixture
+def client(app):
+    return app.test_client()
+
+
+def csrf_from(html: str) -> str:
+    found = re.search(r'name="csrf_token" value="([^"]+)"', html)
+    assert found, "no CSRF token in the page"
+    return found.group(1)
