@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 DEMO_DIR ?= demo-out
 
-.PHONY: venv test demo bench clean
+.PHONY: venv browser test demo bench clean
 
 venv: $(STAMP)
 
@@ -14,7 +14,12 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q --disable-pip-version-check -e '.[dev,cluster,viewer]'
 	touch $(STAMP)
 
-test: venv
+# headless Chromium for the viewer's browser test (tests/viewer/test_browser.py); quick when already installed
+browser:
+	@command -v chromium >/dev/null 2>&1 || (apt-get update -qq && apt-get install -y -qq chromium) \
+		|| echo "warning: could not install chromium; the browser test will be skipped (it fails when CI=true)"
+
+test: venv browser
 	$(PY) -m pytest
 
 demo: venv
