@@ -131,7 +131,7 @@ def _seconds(value) -> str:
     return f"{1e6 * value:.0f} µs"
 
 
-def _table(header: list[str], rows: list[list], caption: str | None = None, cls: str = "") -> str:
+def _table(header: list[str] | None, rows: list[list], caption: str | None = None, cls: str = "") -> str:
     """An HTML table; cells are escaped unless wrapped in `_Raw`."""
     def cell(v):
         return v.text if isinstance(v, _Raw) else _esc(v)
@@ -139,7 +139,9 @@ def _table(header: list[str], rows: list[list], caption: str | None = None, cls:
     parts = [f'<table class="{cls}">']
     if caption:
         parts.append(f"<caption>{_esc(caption)}</caption>")
-    parts.append("<thead><tr>" + "".join(f"<th>{_esc(h)}</th>" for h in header) + "</tr></thead><tbody>")
+    if header:
+        parts.append("<thead><tr>" + "".join(f"<th>{_esc(h)}</th>" for h in header) + "</tr></thead>")
+    parts.append("<tbody>")
     for row in rows:
         parts.append("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in row) + "</tr>")
     parts.append("</tbody></table>")
@@ -261,7 +263,7 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
         config_rows = [[k, json.dumps(v) if isinstance(v, (dict, list)) else v] for k, v in sorted(config.items())]
         timings = info.get("timings") or {}
         timing_rows = [[k, _seconds(v) if isinstance(v, (int, float)) else v] for k, v in timings.items()]
-        parts = [_table(["", ""], rows, "run", "kv")]
+        parts = [_table(None, rows, "run", "kv")]
         parts.append(_table(["option", "value"], config_rows, "configuration", "kv") if config_rows
                      else "<p>No configuration stored with this run.</p>")
         parts.append(_table(["stage", "seconds"], timing_rows, "timings (stored by the run)", "kv") if timing_rows
@@ -329,6 +331,9 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
         from vinadv.planners.weights import load_vin
 
         model = load_vin(path, size=size)
+        found = _find_metrics(getattr(model, "record", None) or {})
+        if found:
+            return found, f"the training record inside the weights file {path.name}"
         maps = generate_maps(QUICK_EVAL_MAPS, size, seed=QUICK_EVAL_SEED,
                              corner_cutting=bool(config.get("corner_cutting", True)))
         start = time.perf_counter()
@@ -448,6 +453,10 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
             if r is None:
                 continue
             paper = PAPER_TRAINING_S.get(kind)
+            if kind == "rule":  # nothing to train
+                t5.append([kind, "— (no training)", "—", "—"])
+                t5_csv.append([kind, 0, 0.0, None])
+                continue
             t5.append([kind, f"{r['train_size']:,}", _seconds(r["metrics"].get("training_s")),
                        _Raw(f'<span class="paper">{_seconds(paper)}</span>') if paper else "—"])
             t5_csv.append([kind, r["train_size"], r["metrics"].get("training_s"), paper])

@@ -1,0 +1,61 @@
+"""A small stored database for the report tests: two runs (saliency and near-path) on 12x12 maps, made once."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+
+from vinadv.pipeline import RunConfig, run_pipeline
+from vinadv.planners.testing import planning_vin
+from vinadv.planners.weights import save_vin
+
+SIZE = 12
+
+
+@pytest.fixture(scope="session")
+def report_weights(tmp_path_factory) -> str:
+    path = tmp_path_factory.mktemp("report_w") / f"vin{SIZE}.pt"
+    save_vin(planning_vin(SIZE, seed=2, noise=0.1), path)
+    return str(path)
+
+
+@pytest.fixture(scope="session")
+def base_db(tmp_path_factory, report_weights):
+    """(SQLite path, run ids): run 1 saliency (has FP and DP pairs), run 2 near-path. Copy before writing."""
+    path = tmp_path_factory.mktemp("report_db") / "base.db"
+    url = f"sqlite:///{path}"
+    ids = []
+    for attack in ("saliency", "near-path"):
+        config = RunConfig(n=80, size=SIZE, attack=attack, seed=4, shard_size=80, weights=report_weights)
+        ids.append(run_pipeline(config, db=url, name=attack, progress=False).run_id)
+    return path, ids
+
+
+@pytest.fixture
+def db_copy(base_db, tmp_path):
+    """A private copy of the base database: (URL, run ids)."""
+    path, ids = base_db
+    target = tmp_path / "copy.db"
+    shutil.copy(path, target)
+    for suffix in ("-wal", "-shm"):
+        if path.with_name(path.name + suffix).exists():
+            shutil.copy(path.with_name(path.name + suffix), target.with_name(target.name + suffix))
+    return f"sqlite:///{target}", ids
+
+
+@pytest.fixture(scope="session")
+def evaluated(base_db, tmp_path_factory):
+    """The base database after `vinadv evaluate` (svm, rule, hausdorff; fraction 0.5) and its report:
+    (URL, run ids, report folder)."""
+    from vinadv.cli import main
+
+    path, ids = base_db
+    folder = tmp_path_factory.mktemp("evaluated")
+    shutil.copy(path, folder / "e.db")
+    url = f"sqlite:///{folder / 'e.db'}"
+    assert main(["evaluate", "--db", url, "--run", str(ids[0]), "--classifiers", "svm,rule,hausdorff",
+                 "--sizes", "0.5", "--quiet"]) == 0
+    out = folder / "report"
+    assert main(["report", "--db", url, "--run", str(ids[0]), "--out", str(out), "--quiet"]) == 0
+    return url, ids, out

@@ -1,0 +1,193 @@
+"""`vinadv report` and `vinadv evaluate`: every section and file, numbers against direct SQL, one-go `run --report`."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+import sqlalchemy as sa
+
+from tests.report.conftest import SIZE
+from vinadv.cli import main
+from vinadv.report import write_report
+from vinadv.report.html import SECTIONS
+
+FIGURES = ("fig1_map_pair", "fig2_path_pair", "fig3_categories", "fig5_map_pairs", "fig_table4_categories")
+TABLES = ("run_config.csv", "vin_quality.csv", "table4_categories.csv", "table7_processing_time.csv")
+EVAL_FIGURES = ("fig8_accuracy_vs_size", "fig9_roc_pr")
+EVAL_TABLES = ("table5_training_time.csv", "table6_accuracy.csv", "classifier_metrics.csv", "fig8_accuracy_vs_size.csv")
+
+
+class _Links(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.links, self.ids = [], []
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag in ("img", "a", "link") and (attrs.get("src") or attrs.get("href")):
+            self.links.append(attrs.get("src") or attrs.get("href"))
+        if "id" in attrs:
+            self.ids.append(attrs["id"])
+
+
+def _parse(index: Path) -> _Links:
+    parser = _Links()
+    parser.feed(index.read_text(encoding="utf-8"))
+    return parser
+
+
+def _rows(path: Path) -> list[dict]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _sql(url: str, query: str, **params):
+    with sa.create_engine(url).connect() as conn:
+        return conn.execute(sa.text(query), params).all()
+
+
+def _check_complete(out: Path, evaluated: bool) -> str:
+    index = out / "index.html"
+    parsed = _parse(index)
+    assert [sid for sid, _ in SECTIONS] == [i for i in parsed.ids if i in dict(SECTIONS)]
+    for link in parsed.links:  # relative links only, every one to a file that exists
+        if link.startswith("#") or link.startswith("data:"):
+            continue
+        assert "://" not in link and not link.startswith("/"), link
+        assert (out / link).is_file(), f"missing {link}"
+    expected = [f"{f}.{ext}" for f in FIGURES for ext in ("png", "svg")] + list(TABLES)
+    if evaluated:
+        expected += [f"{f}.{ext}" for f in EVAL_FIGURES for ext in ("png", "svg")] + list(EVAL_TABLES)
+    for name in expected:
+        assert (out / name).is_file() and (out / name).stat().st_size > 0, name
+        assert name in parsed.links, f"{name} not linked from the page"
+    assert (out / "fig3_categories.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "fig3_categories.svg").read_text().lstrip().startswith("<?xml")
+    return index.read_text(encoding="utf-8")
+
+
+def test_report_of_two_runs_has_every_section_and_matches_the_database(db_copy, tmp_path):
+    url, (saliency, near_path) = db_copy
+    index = write_report(url, tmp_path / "rep", run_id=saliency, runs=[saliency, near_path])
+    out = index.parent
+    page = _check_complete(out, evaluated=False)
+    assert "No classifier evaluation is stored" in page and f"vinadv evaluate --db {url} --run {saliency}" in page
+    # table 4 against direct counts, per run (one row per attack strategy)
+    table4 = {row["run"]: row for row in _rows(out / "table4_categories.csv")}
+    for run_id, attack in ((saliency, "saliency"), (near_path, "near-path")):
+        counts = dict(_sql(url, "SELECT label, COUNT(*) FROM map_pairs WHERE run_id = :r GROUP BY label", r=run_id))
+        row = table4[str(run_id)]
+        assert row["attack"] == attack
+        for label in ("UrP", "FP", "DP", "UcP", "invalid"):
+            assert int(row[label]) == counts.get(label, 0)
+        assert int(row["pairs"]) == sum(counts.values())
+        assert int(row["successful"]) == _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND attack",
+                                               r=run_id)[0][0]
+        total = sum(counts.values())
+        assert f"{counts.get('DP', 0):,} ({100 * counts.get('DP', 0) / total:.1f}%)" in page
+    assert [table4["paper"][k] for k in ("UrP", "FP", "DP", "UcP")] == ["1632", "204", "1076", "2088"]
+    assert "1,632" in page and "2,088" in page and "300 s" in page and "0.22 s" in page
+    # VIN section: the run's original paths reaching the goal, against SQL
+    reached = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND term_o = 'goal'", r=saliency)[0][0]
+    total = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r", r=saliency)[0][0]
+    vin = {row["figure"]: row["value"] for row in _rows(out / "vin_quality.csv")}
+    assert vin["original paths of this run reaching the goal"].startswith(f"{reached:,} of {total:,}")
+    assert re.search(r"success rate \(goal reached\)</td><td>\d+\.\d%", page)  # a quick evaluation ran
+    # table 7: the paper's mix (40 FP/DP + 60 UrP/UcP, as many as the run has), sized from SQL
+    fd = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label IN ('FP','DP')", r=saliency)[0][0]
+    other = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label IN ('UrP','UcP')", r=saliency)[0][0]
+    n_other = min(100 - min(40, fd), other)
+    expected_pairs = min(100 - n_other, fd) + n_other
+    table7 = {row["method"]: row for row in _rows(out / "table7_processing_time.csv")}
+    assert int(table7["rule"]["pairs"]) == expected_pairs and float(table7["rule"]["seconds_measured"]) > 0
+    assert table7["hybrid_svm"]["seconds_measured"] == ""  # not evaluated: nothing to time
+    assert float(table7["manual"]["paper_seconds"]) == 300.0
+    # run configuration from the runs table
+    config = json.loads(_sql(url, "SELECT config FROM runs WHERE id = :r", r=saliency)[0][0])
+    conf = {row["key"]: row["value"] for row in _rows(out / "run_config.csv")}
+    assert conf["config.attack"] == "saliency" and int(conf["config.n"]) == config["n"] == 80
+
+
+def test_evaluate_stores_rows_that_the_report_shows(evaluated):
+    url, (saliency, _), out = evaluated
+    rows = _sql(url, "SELECT classifier, training, train_fraction, train_size, test_size, metrics, curves "
+                     "FROM evaluations WHERE run_id = :r ORDER BY id", r=saliency)
+    jobs = sorted((r[0], r[1], r[2]) for r in rows)
+    assert jobs == sorted([("svm", "balanced", 1.0), ("svm", "imbalanced", 1.0), ("svm", "balanced", 0.5),
+                           ("hausdorff", "balanced", 1.0), ("hausdorff", "imbalanced", 1.0),
+                           ("hausdorff", "balanced", 0.5), ("rule", "none", 1.0)])
+    n_fp = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label = 'FP'", r=saliency)[0][0]
+    n_dp = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label = 'DP'", r=saliency)[0][0]
+    # 7:3 stratified: scikit-learn puts ceil(0.3 n) pairs in the test split, classes in proportion
+    test_size = math.ceil(0.3 * (n_fp + n_dp))
+    for classifier, training, fraction, train_size, size, metrics, curves in rows:
+        metrics = json.loads(metrics) if isinstance(metrics, str) else metrics
+        assert size == test_size
+        cm = metrics["confusion_matrix"]
+        assert sum(map(sum, cm)) == test_size
+        assert metrics["accuracy"] == pytest.approx((cm[0][0] + cm[1][1]) / test_size)
+        counts = metrics["train_counts"]
+        if fraction == 1.0:
+            assert counts["FP"] + counts["DP"] == n_fp + n_dp - test_size
+            assert curves is not None
+        if training == "balanced":  # augmentation: both classes as large as the larger one
+            assert train_size == 2 * max(counts.values())
+        elif training == "imbalanced":
+            assert train_size == counts["FP"] + counts["DP"]
+        if classifier == "rule":  # the rule is the truth
+            assert metrics["accuracy"] == 1.0 and metrics["five_way"]["accuracy"] == 1.0
+            assert metrics["roc_auc"] == 1.0
+    page = _check_complete(out, evaluated=True)
+    assert "No classifier evaluation" not in page
+    stored = {(r[0], r[1]): json.loads(r[5]) if isinstance(r[5], str) else r[5] for r in rows if r[2] == 1.0}
+    table6 = {row["classifier"]: row for row in _rows(out / "table6_accuracy.csv")}
+    assert float(table6["svm"]["accuracy_balanced"]) == pytest.approx(stored[("svm", "balanced")]["accuracy"])
+    assert float(table6["svm"]["accuracy_imbalanced"]) == pytest.approx(stored[("svm", "imbalanced")]["accuracy"])
+    assert float(table6["svm"]["paper_accuracy"]) == 0.97
+    table5 = {row["classifier"]: row for row in _rows(out / "table5_training_time.csv")}
+    assert float(table5["svm"]["paper_s"]) == 46.0
+    assert float(table5["hausdorff"]["training_s"]) == pytest.approx(stored[("hausdorff", "balanced")]["training_s"])
+    fig8 = _rows(out / "fig8_accuracy_vs_size.csv")
+    assert sorted((r["classifier"], float(r["fraction"])) for r in fig8) == [
+        ("hausdorff", 0.5), ("hausdorff", 1.0), ("svm", 0.5), ("svm", 1.0)]
+    table7 = {row["method"]: row for row in _rows(out / "table7_processing_time.csv")}
+    assert float(table7["hybrid_svm"]["seconds_measured"]) > 0  # measured in the report run
+    assert f"{stored[('svm', 'balanced')]['roc_auc']:.3f}" in page
+
+
+def test_run_with_report_makes_it_in_one_go(report_weights, tmp_path, capsys):
+    db = f"sqlite:///{tmp_path / 'one.db'}"
+    out = tmp_path / "rep"
+    assert main(["run", "--n", "30", "--size", str(SIZE), "--attack", "key-points", "--weights", report_weights,
+                 "--db", db, "--report", str(out), "--json", "--quiet"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["report"] == str(out)
+    page = _check_complete(out, evaluated=False)
+    assert f"vinadv report: run {summary['run_id']}" in page
+    assert {row["run"]: int(row["pairs"]) for row in _rows(out / "table4_categories.csv")}[str(summary["run_id"])] \
+        == summary["pairs"]
+
+
+def test_bad_input_exits_2_with_a_message(db_copy, tmp_path, capsys):
+    url, (saliency, near_path) = db_copy
+    assert main(["report", "--db", url, "--run", "99", "--out", str(tmp_path / "r")]) == 2
+    assert "no run 99" in capsys.readouterr().err
+    assert main(["report", "--db", url, "--runs", "1,x", "--out", str(tmp_path / "r")]) == 2
+    assert "--runs" in capsys.readouterr().err
+    assert main(["evaluate", "--db", url, "--run", str(saliency), "--classifiers", "svm,knn"]) == 2
+    assert "knn" in capsys.readouterr().err
+    assert main(["evaluate", "--db", url, "--run", str(saliency), "--sizes", "0,1"]) == 2
+    assert "--sizes" in capsys.readouterr().err
+    fp = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label = 'FP'", r=near_path)[0][0]
+    if fp < 2:  # the near-path run has too few forks to split
+        assert main(["evaluate", "--db", url, "--run", str(near_path), "--classifiers", "rule", "--quiet"]) == 2
+        assert "at least 2" in capsys.readouterr().err
+    assert main(["report", "--db", str(tmp_path / "none.db"), "--out", str(tmp_path / "r")]) == 2
+    assert "no such file" in capsys.readouterr().err
+    assert _sql(url, "SELECT COUNT(*) FROM evaluations")[0][0] == 0
