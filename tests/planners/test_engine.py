@@ -130,3 +130,19 @@ def test_empty_batch_and_bad_inputs():
     with pytest.raises(InputError):
         plan_batch(np.zeros((1, 16, 15), bool), np.array([[1, 1]]), np.array([[2, 2]]), model)
     assert TERMINATIONS == ("goal", "collision", "loop", "step_limit")
+
+
+@pytest.mark.parametrize("corner_cutting", [True, False])
+def test_step_limits_match_dijkstra(corner_cutting):
+    from vinadv.planners.engine import _limits_multi
+
+    maps = generate_maps(60, 16, seed=8, n_starts=4, corner_cutting=corner_cutting)
+    obstacles = maps.obstacles.copy()
+    obstacles[:10, 8, :] = True  # some goals unreachable from some starts
+    starts = maps.starts.copy()
+    for b in range(10):
+        starts[b][obstacles[b, starts[b, :, 0], starts[b, :, 1]]] = maps.starts[b, 0]  # keep starts off the wall
+    _, moves = shortest_distances(obstacles, maps.goals, corner_cutting)
+    want = moves[np.arange(60)[:, None], starts[..., 0], starts[..., 1]].reshape(-1)
+    want = 2 * np.where(want < 0, 16 * 16, want)
+    np.testing.assert_array_equal(_limits_multi(obstacles, maps.goals, starts, corner_cutting), want)

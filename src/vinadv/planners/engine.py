@@ -374,10 +374,111 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
 
 
 def _limits_multi(obstacles, goals, starts, corner_cutting) -> np.ndarray:
-    from vinadv.grid.shortest_paths import shortest_distances
+    """`(B * S,)` int64 step limits 2 * L (L = optimal move count from the start; N * N when unreachable)."""
+    b, s = starts.shape[0], starts.shape[1]
+    out = np.empty(b * s, dtype=np.int64)
+    flat = starts.reshape(-1, 2)
+    map_index = np.repeat(np.arange(b), s)
 
-    _, moves = shortest_distances(obstacles, goals, corner_cutting)
+    def work(lo: int, hi: int) -> None:
+        _optimal_moves(obstacles, goals, flat[lo:hi], map_index[lo:hi], bool(corner_cutting), ACTION_DELTAS,
+                       out[lo:hi])
+
+    bounds = np.linspace(0, len(flat), N_THREADS + 1).astype(int)
+    list(_pool().map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
     n = obstacles.shape[1]
-    idx = np.arange(len(obstacles))[:, None]
-    lengths = moves[idx, starts[..., 0], starts[..., 1]].astype(np.int64).reshape(-1)
-    return 2 * np.where(lengths < 0, n * n, lengths)
+    return 2 * np.where(out < 0, n * n, out)
+
+
+@numba.njit(cache=True, nogil=True)
+def _optimal_moves(obstacles, goals, starts, map_index, corner_cutting, deltas, out):
+    """A* from each start to its goal (octile heuristic, consistent), stopping at the goal: the move count of an
+    optimal path, -1 when unreachable. Costs are kept as integer pairs (a orthogonal, b diagonal moves) and compared
+    as a + b * sqrt(2): an optimal cost fixes a and b, so the move count a + b is that of every optimal path."""
+    n = obstacles.shape[1]
+    sqrt2 = np.sqrt(2.0)
+    cap = 8 * n * n + 1
+    heap_key = np.empty(cap)
+    heap_cell = np.empty(cap, dtype=np.int64)
+    g_a = np.empty(n * n, dtype=np.int64)
+    g_b = np.empty(n * n, dtype=np.int64)
+    seen = np.zeros(n * n, dtype=np.int64)  # stamp: t + 1 once the cell has a tentative cost in this search
+    done = np.zeros(n * n, dtype=np.int64)
+    for t in range(len(starts)):
+        m = map_index[t]
+        sr, sc = starts[t, 0], starts[t, 1]
+        gr, gc = goals[m, 0], goals[m, 1]
+        stamp = t + 1
+        if obstacles[m, sr, sc] or obstacles[m, gr, gc]:  # as shortest_distances: obstacles are unreachable
+            out[t] = -1
+            continue
+        start = sr * n + sc
+        g_a[start] = 0
+        g_b[start] = 0
+        seen[start] = stamp
+        size = 0
+        heap_key[0] = 0.0
+        heap_cell[0] = start
+        size = 1
+        result = -1
+        while size > 0:
+            cell = heap_cell[0]
+            # pop the root
+            size -= 1
+            lk, lc = heap_key[size], heap_cell[size]
+            i = 0
+            while True:
+                child = 2 * i + 1
+                if child >= size:
+                    break
+                if child + 1 < size and heap_key[child + 1] < heap_key[child]:
+                    child += 1
+                if heap_key[child] < lk:
+                    heap_key[i] = heap_key[child]
+                    heap_cell[i] = heap_cell[child]
+                    i = child
+                else:
+                    break
+            heap_key[i] = lk
+            heap_cell[i] = lc
+            if done[cell] == stamp:
+                continue
+            done[cell] = stamp
+            r, c = cell // n, cell % n
+            if r == gr and c == gc:
+                result = g_a[cell] + g_b[cell]
+                break
+            for a in range(8):
+                dr, dc = deltas[a, 0], deltas[a, 1]
+                nr, nc = r + dr, c + dc
+                if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[m, nr, nc]:
+                    continue
+                diag = dr != 0 and dc != 0
+                if diag and not corner_cutting and (obstacles[m, nr, c] or obstacles[m, r, nc]):
+                    continue
+                nb = nr * n + nc
+                if done[nb] == stamp:
+                    continue
+                na = g_a[cell] + (0 if diag else 1)
+                nbb = g_b[cell] + (1 if diag else 0)
+                g = na + nbb * sqrt2
+                if seen[nb] == stamp and g_a[nb] + g_b[nb] * sqrt2 <= g:
+                    continue
+                seen[nb] = stamp
+                g_a[nb] = na
+                g_b[nb] = nbb
+                dy, dx = abs(nr - gr), abs(nc - gc)
+                key = g + (max(dy, dx) - min(dy, dx)) + min(dy, dx) * sqrt2
+                # push
+                i = size
+                size += 1
+                while i > 0:
+                    parent = (i - 1) // 2
+                    if heap_key[parent] <= key:
+                        break
+                    heap_key[i] = heap_key[parent]
+                    heap_cell[i] = heap_cell[parent]
+                    i = parent
+                heap_key[i] = key
+                heap_cell[i] = nb
+        out[t] = result
