@@ -27,6 +27,7 @@ Dask is the optional extra `vinadv[cluster]`; nothing here imports it until a cl
 from __future__ import annotations
 
 import contextlib
+import os
 from collections.abc import Iterator
 
 import numpy as np
@@ -128,6 +129,11 @@ def _check_reachable(address: str) -> None:
         raise InputError(f"--cluster {address}: cannot connect to a Dask scheduler ({exc})") from None
 
 
+def _absolute(path) -> str:
+    """Workers may run in another directory: they get absolute paths (same files at the same paths)."""
+    return os.path.abspath(os.fspath(path))
+
+
 def _total_threads(client) -> int:
     return max(1, sum(client.nthreads().values()))
 
@@ -152,9 +158,10 @@ class ClusterShards:
         from vinadv.cluster.worker import file_checksum, run_shard_task
         from vinadv.planners.weights import default_weights_path, weights_checksum
 
-        weights = str(config.weights or default_weights_path(config.size))
+        weights = _absolute(config.weights or default_weights_path(config.size))
         weights_sum = weights_checksum(weights)
-        classifier_sum = None if config.classifier in (None, "rule") else file_checksum(config.classifier)
+        classifier = config.classifier if config.classifier in (None, "rule") else _absolute(config.classifier)
+        classifier_sum = None if classifier in (None, "rule") else file_checksum(classifier)
         token = tokenize(config.to_dict(), weights_sum, classifier_sum, label_source)
         pending = list(shards)[::-1]  # pop() from the end = lowest shard first
         order = list(shards)
@@ -168,7 +175,7 @@ class ClusterShards:
             while pending and in_flight + len(arrived) < window:
                 shard = pending.pop()
                 futures.add(self.client.submit(
-                    run_shard_task, config, shard, weights, weights_sum, classifier_sum, label_source,
+                    run_shard_task, config, shard, weights, weights_sum, classifier, classifier_sum, label_source,
                     key=f"vinadv-shard-{token}-{shard}", retries=self.retries, pure=False))
                 in_flight += 1
 
@@ -226,7 +233,7 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
     from vinadv.planners.weights import default_weights_path, weights_checksum
 
     attack = make_attack(strategy, **options)  # validates the options here, before anything is sent
-    path = str(weights or default_weights_path(maps.size))
+    path = _absolute(weights or default_weights_path(maps.size))
     weights_sum = weights_checksum(path)
     bounds = _bounds(len(maps), shard_size)
     futures = [
@@ -253,7 +260,9 @@ def identify_on_cluster(client, pairs, weights: str | None, classifier: str | No
     from vinadv.identify import Identification
     from vinadv.planners.weights import weights_checksum
 
+    weights = _absolute(weights) if weights else None
     weights_sum = weights_checksum(weights) if weights else None
+    classifier = classifier if classifier in (None, "rule") else _absolute(classifier)
     classifier_sum = None if classifier in (None, "rule") else file_checksum(classifier)
     bounds = _bounds(len(pairs), shard_size)
     futures = [

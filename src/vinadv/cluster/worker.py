@@ -96,13 +96,15 @@ def worker_classifier(spec: str | None, checksum: str | None):
     return _cached(("classifier", spec, checksum), load)
 
 
-def run_shard_task(config, shard: int, weights: str, weights_sum: str, classifier_sum: str | None, label_source: str):
-    """`vinadv run`: shard `shard` of the run (`pipeline.compute_shard`), on a worker."""
+def run_shard_task(config, shard: int, weights: str, weights_sum: str, classifier_spec: str | None,
+                   classifier_sum: str | None, label_source: str):
+    """`vinadv run`: shard `shard` of the run (`pipeline.compute_shard`), on a worker. `weights` and
+    `classifier_spec` are the client's files as absolute paths."""
     from vinadv.pipeline import compute_shard
 
     single_threaded()
     model = worker_vin(weights, config.size, weights_sum)
-    classifier = worker_classifier(config.classifier, classifier_sum)
+    classifier = worker_classifier(classifier_spec, classifier_sum)
     return compute_shard(config, shard, model, classifier, label_source)
 
 
