@@ -140,7 +140,8 @@ def test_evaluate_stores_rows_that_the_report_shows(evaluated):
             assert train_size == 2 * max(counts.values())
         elif training == "imbalanced":
             assert train_size == counts["FP"] + counts["DP"]
-        if classifier == "rule":  # the rule is the truth
+        if classifier == "rule":  # the rule is the truth, and trains on nothing
+            assert train_size == 0
             assert metrics["accuracy"] == 1.0 and metrics["five_way"]["accuracy"] == 1.0
             assert metrics["roc_auc"] == 1.0
     page = _check_complete(out, evaluated=True)

@@ -298,8 +298,9 @@ def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, s
                                                      curves=fraction >= 1.0)
         if kind in ("hybrid", "rule"):
             metrics["five_way"] = five_way_check(model, data, subset, test, seed)
-        if kind == "rule":
+        if kind == "rule":  # nothing is trained
             metrics["training_s"] = 0.0
+            train_size = 0
         rows.append({
             "batch": batch_id, "classifier": kind, "setting": setting,
             "training": training, "train_fraction": float(fraction), "train_size": int(train_size),

@@ -423,14 +423,15 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
 
     # ------------------------------------------------------------------------------------- classifiers
     def latest_evaluation(self) -> tuple[list[dict], int]:
+        """The newest stored row of each (classifier, training, fraction), oldest first; and how many rows are
+        hidden by newer ones (`vinadv evaluate` may be run again, say for one more classifier)."""
         rows = self.store.read_evaluations(self.run_id)
-        if not rows:
-            return [], 0
-        batch = rows[-1]["batch"]
-        return [r for r in rows if r["batch"] == batch], len({r["batch"] for r in rows})
+        latest = {(r["classifier"], r["training"], r["train_fraction"]): r for r in rows}
+        shown = sorted(latest.values(), key=lambda r: r["id"])
+        return shown, len(rows) - len(shown)
 
     def section_classifiers(self) -> str:
-        rows, n_batches = self.latest_evaluation()
+        rows, hidden = self.latest_evaluation()
         self.evaluation = rows
         if not rows:
             return ('<p class="note">No classifier evaluation is stored for this run. Run '
@@ -438,13 +439,15 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
                     "report again to get tables 5 and 6 and figures 8 and 9.</p>")
         self.result.evaluated = True
         full = {(r["classifier"], r["training"]): r for r in rows if r["train_fraction"] >= 1.0}
-        first = rows[0]
-        m0 = first["metrics"]
-        intro = (f"<p>Latest evaluation (stored {_esc(first['created'])} UTC, setting <code>{_esc(first['setting'])}"
-                 f"</code>, seed {_esc(first['seed'])}{'; ' + str(n_batches - 1) + ' older ones not shown' if n_batches > 1 else ''}"
-                 f"): the run's FP/DP pairs labelled by the exact rule (t = {_esc(m0.get('threshold'))}), split 7:3 "
-                 f"stratified: training {_esc(m0.get('train_counts'))}, test {_esc(m0.get('test_counts'))} (the real "
-                 "mix). Balanced training adds flipped/rotated copies of the minority class, as the paper.</p>")
+        last = rows[-1]
+        m0 = last["metrics"]
+        runs_of = sorted({(str(r["created"]), r["setting"], r["seed"]) for r in rows})
+        stored = "; ".join(f"{created} UTC, setting {setting}, seed {seed}" for created, setting, seed in runs_of)
+        intro = (f"<p>Stored evaluations ({_esc(stored)}; the newest row of each classifier and training set"
+                 f"{', ' + str(hidden) + ' older rows not shown' if hidden else ''}): the run's FP/DP pairs labelled "
+                 f"by the exact rule (t = {_esc(m0.get('threshold'))}), split 7:3 stratified: training "
+                 f"{_esc(_counts_text(m0.get('train_counts')))}, test {_esc(_counts_text(m0.get('test_counts')))} (the real mix). Balanced "
+                 "training adds flipped/rotated copies of the minority class, as the paper.</p>")
         kinds = list(dict.fromkeys(r["classifier"] for r in rows))
         # table 5: training time
         t5, t5_csv = [], []
@@ -582,7 +585,7 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
                          _seconds(five["paper_mix_s"] * 100.0 / max(five["paper_mix_pairs"], 1)), "—"])
         machine = f"{platform.machine()}, {os.cpu_count()} CPUs, Python {platform.python_version()}"
         parts = [
-            f"<p>{len(records)} stored pairs of run {self.run_id} ({_esc(counts)}), chosen as the paper's: up to 40 "
+            f"<p>{len(records)} stored pairs of run {self.run_id} ({_esc(_counts_text(counts))}), chosen as the paper's: up to 40 "
             "FP/DP pairs and 60 UrP/UcP pairs; classification times are medians of "
             f"{TIMING_REPEATS} repeats measured while this report was written ({_esc(machine)}), with the paths "
             "in memory; training time is not included. Scaled to 100 pairs when the run has fewer.</p>",
@@ -647,6 +650,10 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
     def section_files(self) -> str:
         items = "".join(f'<li><a href="{_esc(n)}">{_esc(n)}</a></li>' for n in sorted(set(self.result.files)))
         return f"<p>Everything this page shows, as files in the same folder:</p><ul>{items}</ul>"
+
+
+def _counts_text(counts) -> str:
+    return ", ".join(f"{k} {v:,}" for k, v in sorted((counts or {}).items())) or "—"
 
 
 def _find_metrics(data) -> dict | None:
