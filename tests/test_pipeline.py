@@ -64,10 +64,17 @@ def test_stored_labels_agree_with_an_independent_recomputation(weights, sqlite_u
     assert len(seen) >= 3  # the run is not trivially one category
 
 
-def test_result_does_not_depend_on_shard_size(weights, sqlite_url, tmp_path):
-    a = run_pipeline(config(weights, shard_size=60), db=sqlite_url, progress=False)
-    b = run_pipeline(config(weights, shard_size=60), db=f"sqlite:///{tmp_path / 'other.db'}", progress=False)
-    with Store.open(sqlite_url) as s1, Store.open(f"sqlite:///{tmp_path / 'other.db'}") as s2:
+def test_result_does_not_depend_on_the_order_shards_finish(weights, sqlite_url, tmp_path):
+    from vinadv.pipeline import compute_shard
+
+    def reversed_shards(config, shards, model, classifier, label_source):
+        for shard in reversed(list(shards)):
+            yield compute_shard(config, shard, model, classifier, label_source)
+
+    other = f"sqlite:///{tmp_path / 'other.db'}"
+    a = run_pipeline(config(weights), db=sqlite_url, progress=False)
+    b = run_pipeline(config(weights), db=other, progress=False, shard_results=reversed_shards)
+    with Store.open(sqlite_url) as s1, Store.open(other) as s2:
         assert s1.read_pairs(a.run_id).equals(s2.read_pairs(b.run_id))
 
 

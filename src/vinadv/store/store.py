@@ -222,8 +222,12 @@ class Store:
             raise InputError(f"--run: no run {run_id} in database {self.url}")
         return dict(row)
 
-    def list_runs(self) -> list[dict]:
-        """All runs, oldest first, each with its stored pair count (`n_pairs`)."""
+    def list_runs(self, with_counts: bool = True) -> list[dict]:
+        """All runs, oldest first, each with its stored pair count (`n_pairs`) unless `with_counts` is False
+        (counting reads every pair's index entry: ~0.1 s per million pairs on SQLite)."""
+        if not with_counts:
+            with self.engine.connect() as conn:
+                return [dict(r) for r in conn.execute(sa.select(runs).order_by(runs.c.id)).mappings()]
         counts = (
             sa.select(map_pairs.c.run_id, sa.func.count().label("n_pairs"))
             .group_by(map_pairs.c.run_id)
@@ -248,12 +252,15 @@ class Store:
 
     # -------------------------------------------------------------------------------------------- pairs
 
-    def stored_indices(self, run_id: int) -> np.ndarray:
-        """Sorted pair indices already stored for the run, int64 (k,)."""
+    def stored_indices(self, run_id: int, lo: int | None = None, hi: int | None = None) -> np.ndarray:
+        """Sorted pair indices already stored for the run, int64 (k,); only those in `[lo, hi]` when given."""
+        query = sa.select(map_pairs.c.pair_index).where(map_pairs.c.run_id == int(run_id))
+        if lo is not None:
+            query = query.where(map_pairs.c.pair_index >= int(lo))
+        if hi is not None:
+            query = query.where(map_pairs.c.pair_index <= int(hi))
         with self.engine.connect() as conn:
-            rows = conn.execute(
-                sa.select(map_pairs.c.pair_index).where(map_pairs.c.run_id == int(run_id))
-            ).scalars().all()
+            rows = conn.execute(query).scalars().all()
         return np.sort(np.asarray(rows, dtype=np.int64))
 
     def write_pairs(
@@ -273,8 +280,9 @@ class Store:
         run_id = int(run_id)
         if len(np.unique(records.pair_index)) != len(records):
             raise InputError("write_pairs: pair_index has duplicates")
-        if skip_stored:
-            stored = self.stored_indices(run_id)
+        if skip_stored and len(records):
+            # only the records' own index range: a resumed shard must not read the whole run
+            stored = self.stored_indices(run_id, records.pair_index.min(), records.pair_index.max())
             if len(stored):
                 records = records.subset(~np.isin(records.pair_index, stored))
         written = 0
