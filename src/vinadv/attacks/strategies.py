@@ -135,14 +135,22 @@ class Attack:
         corner_cutting: bool = True,
         strength: Callable[[PairSet], np.ndarray] | None = None,
         progress: bool = False,
+        first_map: int = 0,
     ) -> AttackResult:
-        """Attack a batch of maps: obstacles `(B, N, N)` bool, starts and goals `(B, 2)`; see the module doc."""
+        """Attack a batch of maps: obstacles `(B, N, N)` bool, starts and goals `(B, 2)`; see the module doc.
+
+        `first_map`: these maps are maps `first_map..first_map+B-1` of a larger batch; the result is that
+        batch's result for them (so a batch can be attacked in shards). Randomised strategies draw one
+        `rng.random((B, N, N))`, one PCG64 step per number, so a shard starts `first_map * N * N` steps in.
+        """
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         starts = np.ascontiguousarray(starts, dtype=np.int64)
         goals = np.ascontiguousarray(goals, dtype=np.int64)
         originals = plan_batch(obstacles, starts, goals, model, corner_cutting)
         valid = valid_cells(obstacles, starts, goals, corner_cutting)
-        ctx = AttackContext(obstacles, starts, goals, valid, originals, model, np.random.default_rng(self.seed))
+        rng = np.random.default_rng(self.seed)
+        rng.bit_generator.advance(first_map * obstacles.shape[1] * obstacles.shape[2])
+        ctx = AttackContext(obstacles, starts, goals, valid, originals, model, rng)
         scores = np.where(valid, self.candidate_scores(ctx), -np.inf)
         map_idx, cells, rank = _top_candidates(scores, self._evaluated_per_map())
         no_valid = np.flatnonzero(~np.isfinite(scores).any(axis=(1, 2)))

@@ -13,7 +13,6 @@ import hashlib
 import os
 import threading
 
-import numpy as np
 
 #: environment of a worker process: one thread for each numeric library (a worker process is one core)
 SINGLE_THREAD_ENV = {
@@ -118,27 +117,7 @@ def attack_shard_task(strategy: str, options: dict, obstacles, starts, goals, fi
     single_threaded()
     model = worker_vin(weights, obstacles.shape[1], weights_sum)
     attack = make_attack(strategy, **options)
-    _continue_random_stream(attack, first_map)
-    return attack.attack(obstacles, starts, goals, model, corner_cutting, strength=rule_strength)
-
-
-def _continue_random_stream(attack, first_map: int) -> None:
-    """Give the shard the random numbers that the whole-file attack gives its maps.
-
-    A whole-file attack draws one `rng.random((B, N, N))` from `default_rng(seed)` (random, near-path); map `i`'s
-    block is the `N*N` doubles after the first `i*N*N`, and each double is one step of PCG64, so the shard's stream
-    is the seed's stream advanced by `first_map*N*N` steps. Strategies that draw no random numbers ignore it.
-    """
-    scores = attack.candidate_scores
-
-    def candidate_scores(ctx):
-        n_cells = ctx.obstacles.shape[1] * ctx.obstacles.shape[2]
-        rng = np.random.default_rng(attack.seed)
-        rng.bit_generator.advance(first_map * n_cells)
-        ctx.rng = rng
-        return scores(ctx)
-
-    attack.candidate_scores = candidate_scores
+    return attack.attack(obstacles, starts, goals, model, corner_cutting, strength=rule_strength, first_map=first_map)
 
 
 def identify_shard_task(pairs, weights: str | None, weights_sum: str | None, classifier_spec: str | None,
