@@ -133,7 +133,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         print(f"vinadv: warning: these maps use seed {maps.seed}, the seed of the training data", file=sys.stderr)
     t0 = time.perf_counter()
     metrics = evaluate_vin(model, maps, progress=not (args.quiet or args.json))
-    weights_path = args.weights or str(default_weights_path(maps.size))
+    weights_path = args.weights or f"shipped:{default_weights_path(maps.size).name}"
     metrics = {"weights": weights_path, "weights_sha256": weights_checksum(model.weights_path), **source, **metrics,
                "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
     if args.out:
