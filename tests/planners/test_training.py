@@ -103,6 +103,23 @@ def test_killed_training_resumes_to_the_same_weights(tmp_path):
         train_vin(maps, TrainConfig(**{**TINY, "lr": 0.5}), checkpoint=ckpt, resume=True, progress=False)
 
 
+def test_init_continues_from_given_weights(tmp_path):
+    from vinadv.planners.weights import save_vin, weights_checksum
+
+    maps = generate_maps(16, 8, seed=9, n_starts=1)
+    first, _ = train_vin(maps, TrainConfig(**TINY), progress=False)
+    save_vin(first, tmp_path / "first.pt")
+    # with a vanishing learning rate, continued training stays at the starting weights, whatever the seed
+    same, rec = train_vin(maps, TrainConfig(**{**TINY, "lr": 1e-12, "seed": 5}, init=str(tmp_path / "first.pt")),
+                          progress=False)
+    assert rec["init_sha256"] == weights_checksum(tmp_path / "first.pt")
+    for key, value in first.state_dict().items():
+        torch.testing.assert_close(same.state_dict()[key], value)
+    save_vin(VIN(VINConfig(k=10, l_h=12, l_q=8)), tmp_path / "other.pt")
+    with pytest.raises(InputError, match="--init"):
+        train_vin(maps, TrainConfig(**TINY, init=str(tmp_path / "other.pt")), progress=False)
+
+
 def test_cli_train_writes_weights_and_record(tmp_path, capsys):
     maps = generate_maps(12, 8, seed=9, n_starts=2)
     maps.save(tmp_path / "maps.npz")

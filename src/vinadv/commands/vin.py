@@ -31,6 +31,8 @@ def register(subparsers) -> None:
     train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
     train.add_argument("--time-limit", type=float, default=None, metavar="MIN",
                        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)")
+    train.add_argument("--init", metavar="WEIGHTS", help="start from these weights (continue a training) instead of "
+                       "a fresh initialisation")
     train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
     train.add_argument("--quiet", action="store_true", help="no progress bar or per-epoch lines")
     train.add_argument("--json", action="store_true", help="print the training record as JSON")
@@ -73,7 +75,8 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     _set_threads(args.threads)
     config = TrainConfig(epochs=args.epochs, lr=args.lr, batch_size=args.batch_size, val_fraction=args.val_fraction,
-                         seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit)
+                         seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit,
+                         init=args.init)
     config.validate()
     maps = MapSet.load(args.data)
     if len(maps) < 2:

@@ -49,6 +49,7 @@ class TrainConfig:
     l_q: int = 10
     clip_norm: float = 5.0
     time_limit_min: float | None = None
+    init: str | None = None  # start from these weights (continued training) instead of a fresh initialisation
 
     def validate(self) -> None:
         if self.epochs < 1:
@@ -192,7 +193,16 @@ def train_vin(
     torch.manual_seed(config.seed)
     size = maps.size
     vin_config = VINConfig(k=config.k or default_k(size), l_h=config.l_h, l_q=config.l_q)
-    model = VIN(vin_config).to(device)
+    model = VIN(vin_config)
+    if config.init:
+        from vinadv.planners.weights import load_vin, weights_checksum
+
+        start = load_vin(config.init, size=size, k=vin_config.k)
+        if start.config != vin_config:
+            raise InputError(f"--init {config.init}: its VIN ({start.config}) is not the one to train ({vin_config})")
+        model.load_state_dict(start.state_dict())
+        record = {**(record or {}), "init_sha256": weights_checksum(config.init)}
+    model = model.to(device)
     optimizer = torch.optim.RMSprop(model.parameters(), lr=config.lr, eps=1e-6)
     train_idx, val_idx = split_indices(len(maps), config.val_fraction, config.seed)
     steps_per_epoch = math.ceil(len(train_idx) / config.batch_size)
