@@ -70,17 +70,19 @@ def test_serve_runs_on_loopback(db, monkeypatch, capsys):
     thread = threading.Thread(target=main, args=(["serve", "--db", db[0], "--port", str(port), "--quiet"],),
                               daemon=True)
     thread.start()
-    for _ in range(200):
-        if "server" in made:
+    for _ in range(400):
+        if "server" in made or not thread.is_alive():
             break
         threading.Event().wait(0.05)
-    server = made["server"]
     try:
-        with urllib.request.urlopen(f"http://127.0.0.1:{server.server_port}/api/runs", timeout=10) as response:
+        assert "server" in made, "serve did not build its server"
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/runs", timeout=10) as response:
             assert response.status == 200 and b'"random"' in response.read()
     finally:
-        server.shutdown()
+        if thread.is_alive() and "server" in made:
+            made["server"].shutdown()
         thread.join(10)
+    assert not thread.is_alive()
     assert "vinadv viewer on http://127.0.0.1:" in capsys.readouterr().out
 
 

@@ -58,6 +58,9 @@ def cmd_serve(args: argparse.Namespace) -> int:
     if created and not args.quiet:
         print(f"created indexes {', '.join(created)} (once per database)", file=sys.stderr)
     app = create_app(store, allow_remote=args.allow_remote)
+    # import the image renderers now (matplotlib; torch behind vinadv.classify), not on the first pair page
+    import vinadv.classify.images  # noqa: F401
+    import vinadv.grid.draw  # noqa: F401
     # bind here rather than in werkzeug, which prints and calls sys.exit(1) when the port is taken
     family = socket.AF_INET6 if ":" in args.host else socket.AF_INET
     sock = socket.socket(family, socket.SOCK_STREAM)
@@ -66,6 +69,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         sock.bind((args.host.strip("[]"), args.port))
         sock.listen(128)
         server = make_server(args.host, args.port, app, threaded=True, fd=sock.fileno())
+        port = sock.getsockname()[1]
     except OSError as exc:
         store.close()
         raise InputError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
@@ -74,7 +78,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     if args.quiet:
         logging.getLogger("werkzeug").setLevel(logging.ERROR)
     host = f"[{args.host}]" if ":" in args.host else args.host
-    print(f"vinadv viewer on http://{host}:{server.server_port}/ ({store.url}); Ctrl-C stops it", flush=True)
+    print(f"vinadv viewer on http://{host}:{port}/ ({store.url}); Ctrl-C stops it", flush=True)
     try:
         server.serve_forever()
     finally:

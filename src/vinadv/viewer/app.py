@@ -222,7 +222,7 @@ class _ViewerState:
     def runs_summary(self) -> list[dict]:
         counts = self.counts()
         out = []
-        for run in self.store.list_runs():
+        for run in self.store.list_runs(with_counts=False):
             c = counts.get(int(run["id"]), {lab: 0 for lab in LABELS})
             n = sum(c.values())
             valid = n - c["invalid"]
