@@ -37,6 +37,46 @@ def valid_moves(obstacles: np.ndarray, corner_cutting: bool = True) -> np.ndarra
     return out
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def heap_push(keys, values, size, key, value):
+    """Push `(key, value)` on the binary min-heap held in `keys[:size]`, `values[:size]`; returns the new size."""
+    i = size
+    while i > 0:
+        parent = (i - 1) // 2
+        if keys[parent] <= key:
+            break
+        keys[i] = keys[parent]
+        values[i] = values[parent]
+        i = parent
+    keys[i] = key
+    values[i] = value
+    return size + 1
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def heap_pop(keys, values, size):
+    """Pop the smallest key of the heap `keys[:size]`; returns `(key, value, new size)`."""
+    top_key, top_value = keys[0], values[0]
+    size -= 1
+    last_key, last_value = keys[size], values[size]
+    i = 0
+    while True:
+        child = 2 * i + 1
+        if child >= size:
+            break
+        if child + 1 < size and keys[child + 1] < keys[child]:
+            child += 1
+        if keys[child] < last_key:
+            keys[i] = keys[child]
+            values[i] = values[child]
+            i = child
+        else:
+            break
+    keys[i] = last_key
+    values[i] = last_value
+    return top_key, top_value, size
+
+
 @numba.njit(cache=True, nogil=True)
 def _dijkstra_one(obstacles, gr, gc, corner_cutting, deltas, costs, dist, moves):
     n, m = obstacles.shape
@@ -50,36 +90,12 @@ def _dijkstra_one(obstacles, gr, gc, corner_cutting, deltas, costs, dist, moves)
     cap = 8 * n * m + 1
     heap_key = np.empty(cap, dtype=np.float64)
     heap_val = np.empty(cap, dtype=np.int64)
-    size = 0
     done = np.zeros((n, m), dtype=np.bool_)
     dist[gr, gc] = 0.0
     moves[gr, gc] = 0
-    heap_key[0] = 0.0
-    heap_val[0] = gr * m + gc
-    size = 1
+    size = heap_push(heap_key, heap_val, 0, 0.0, gr * m + gc)
     while size > 0:
-        key = heap_key[0]
-        node = heap_val[0]
-        # pop: move the last element to the root and sift it down
-        size -= 1
-        if size > 0:
-            lk = heap_key[size]
-            lv = heap_val[size]
-            i = 0
-            while True:
-                child = 2 * i + 1
-                if child >= size:
-                    break
-                if child + 1 < size and heap_key[child + 1] < heap_key[child]:
-                    child += 1
-                if heap_key[child] < lk:
-                    heap_key[i] = heap_key[child]
-                    heap_val[i] = heap_val[child]
-                    i = child
-                else:
-                    break
-            heap_key[i] = lk
-            heap_val[i] = lv
+        key, node, size = heap_pop(heap_key, heap_val, size)
         r = node // m
         c = node - r * m
         if done[r, c] or key > dist[r, c]:
@@ -97,19 +113,7 @@ def _dijkstra_one(obstacles, gr, gc, corner_cutting, deltas, costs, dist, moves)
             if nd < dist[nr, nc] - 1e-9:
                 dist[nr, nc] = nd
                 moves[nr, nc] = moves[r, c] + 1
-                # push and sift up
-                i = size
-                size += 1
-                while i > 0:
-                    parent = (i - 1) // 2
-                    if heap_key[parent] > nd:
-                        heap_key[i] = heap_key[parent]
-                        heap_val[i] = heap_val[parent]
-                        i = parent
-                    else:
-                        break
-                heap_key[i] = nd
-                heap_val[i] = nr * m + nc
+                size = heap_push(heap_key, heap_val, size, nd, nr * m + nc)
 
 
 @numba.njit(cache=True, parallel=True)

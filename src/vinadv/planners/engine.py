@@ -23,6 +23,7 @@ import numpy as np
 import torch
 
 from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.shortest_paths import heap_pop, heap_push
 from vinadv.planners.reference import rollout, torch_action_at
 from vinadv.planners.result import (
     COLLISION,
@@ -416,31 +417,10 @@ def _optimal_moves(obstacles, goals, starts, map_index, corner_cutting, deltas, 
         g_a[start] = 0
         g_b[start] = 0
         seen[start] = stamp
-        size = 0
-        heap_key[0] = 0.0
-        heap_cell[0] = start
-        size = 1
+        size = heap_push(heap_key, heap_cell, 0, 0.0, start)
         result = -1
         while size > 0:
-            cell = heap_cell[0]
-            # pop the root
-            size -= 1
-            lk, lc = heap_key[size], heap_cell[size]
-            i = 0
-            while True:
-                child = 2 * i + 1
-                if child >= size:
-                    break
-                if child + 1 < size and heap_key[child + 1] < heap_key[child]:
-                    child += 1
-                if heap_key[child] < lk:
-                    heap_key[i] = heap_key[child]
-                    heap_cell[i] = heap_cell[child]
-                    i = child
-                else:
-                    break
-            heap_key[i] = lk
-            heap_cell[i] = lc
+            _, cell, size = heap_pop(heap_key, heap_cell, size)
             if done[cell] == stamp:
                 continue
             done[cell] = stamp
@@ -469,16 +449,5 @@ def _optimal_moves(obstacles, goals, starts, map_index, corner_cutting, deltas, 
                 g_b[nb] = nbb
                 dy, dx = abs(nr - gr), abs(nc - gc)
                 key = g + (max(dy, dx) - min(dy, dx)) + min(dy, dx) * sqrt2
-                # push
-                i = size
-                size += 1
-                while i > 0:
-                    parent = (i - 1) // 2
-                    if heap_key[parent] <= key:
-                        break
-                    heap_key[i] = heap_key[parent]
-                    heap_cell[i] = heap_cell[parent]
-                    i = parent
-                heap_key[i] = key
-                heap_cell[i] = nb
+                size = heap_push(heap_key, heap_cell, size, key, nb)
         out[t] = result
