@@ -91,9 +91,7 @@ def test_loads_a_port_style_plain_state_dict(tmp_path):
 
 def test_shipped_default_weights_load():
     path = default_weights_path(28)
-    assert path.name == "vin28.pt"
-    if not path.exists():
-        pytest.skip("no shipped 28x28 weights in this checkout")
+    assert path.name == "vin28.pt" and path.exists()
     model = load_vin()
     assert model.config == VINConfig(k=36, l_i=2, l_h=150, l_q=10, n_actions=8)
     assert model.record["size"] == 28 and model.record["data"]["sha256"]
