@@ -155,13 +155,13 @@ class ClusterShards:
         from dask.base import tokenize
         from distributed import as_completed
 
-        from vinadv.cluster.worker import file_checksum, run_shard_task
+        from vinadv.cluster.worker import run_shard_task
         from vinadv.planners.weights import default_weights_path, weights_checksum
 
         weights = _absolute(config.weights or default_weights_path(config.size))
         weights_sum = weights_checksum(weights)
         classifier = config.classifier if config.classifier in (None, "rule") else _absolute(config.classifier)
-        classifier_sum = None if classifier in (None, "rule") else file_checksum(classifier)
+        classifier_sum = None if classifier in (None, "rule") else weights_checksum(classifier)
         token = tokenize(config.to_dict(), weights_sum, classifier_sum, label_source)
         pending = list(shards)[::-1]  # pop() from the end = lowest shard first
         order = list(shards)
@@ -256,14 +256,14 @@ def identify_on_cluster(client, pairs, weights: str | None, classifier: str | No
                         shard_size: int = 1000, progress: bool = False):
     """`identify` (after `replan` with `weights`) of `pairs`, `shard_size` pairs per task: the same
     `Identification` as the local command."""
-    from vinadv.cluster.worker import file_checksum, identify_shard_task
+    from vinadv.cluster.worker import identify_shard_task
     from vinadv.identify import Identification
     from vinadv.planners.weights import weights_checksum
 
     weights = _absolute(weights) if weights else None
     weights_sum = weights_checksum(weights) if weights else None
     classifier = classifier if classifier in (None, "rule") else _absolute(classifier)
-    classifier_sum = None if classifier in (None, "rule") else file_checksum(classifier)
+    classifier_sum = None if classifier in (None, "rule") else weights_checksum(classifier)
     bounds = _bounds(len(pairs), shard_size)
     futures = [
         client.submit(identify_shard_task, pairs.subset(np.arange(lo, hi)), weights, weights_sum, classifier,

@@ -9,7 +9,6 @@ worker on another machine with other weights would otherwise silently make other
 
 from __future__ import annotations
 
-import hashlib
 import os
 import threading
 
@@ -48,15 +47,6 @@ def single_threaded() -> None:
     _THREAD_STATE.done = True
 
 
-def file_checksum(path: str | os.PathLike) -> str:
-    """sha256 of a file's bytes (hex)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def _cached(key, load):
     with _MODELS_LOCK:
         if key not in _MODELS:
@@ -83,10 +73,11 @@ def worker_classifier(spec: str | None, checksum: str | None):
     """The classifier `spec` ('rule', None or a model file), loaded once per worker process."""
     from vinadv.errors import InputError
     from vinadv.identify import load_classifier
+    from vinadv.planners.weights import weights_checksum  # a file's SHA-256, for any model file
 
     def load():
         if checksum is not None:
-            found = file_checksum(spec)
+            found = weights_checksum(spec)
             if found != checksum:
                 raise InputError(f"classifier file {spec} on this worker differs from the client's "
                                  f"(sha256 {found} != {checksum})")

@@ -156,7 +156,8 @@ def _curve_points(positive: np.ndarray, scores: np.ndarray) -> dict | None:
     return {"roc": {"fpr": fpr, "tpr": tpr}, "pr": {"precision": precision, "recall": recall}}
 
 
-def _median_seconds(fn, repeats: int = TIMING_REPEATS) -> float:
+def median_seconds(fn, repeats: int = TIMING_REPEATS) -> float:
+    """Median wall time of `repeats` calls of `fn`, in seconds."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
@@ -223,7 +224,7 @@ def five_way_check(model, data: RunPairs, train: np.ndarray, test: np.ndarray, s
         "s_per_100": 100.0 * seconds / max(len(unseen), 1),
         "paper_mix_pairs": int(len(mix)),
         "paper_mix_counts": _counts(data.truth[mix]),
-        "paper_mix_s": _median_seconds(lambda: model.predict(mix_batch)),
+        "paper_mix_s": median_seconds(lambda: model.predict(mix_batch)),
     }
 
 

@@ -23,6 +23,7 @@ import sqlalchemy as sa
 
 from vinadv import __version__
 from vinadv.errors import InputError
+from vinadv.report.evaluate import TIMING_REPEATS, median_seconds
 
 #: the paper's numbers (Wang et al., tables 4-7 and section 5.2)
 PAPER_TABLE4 = {"UrP": 1632, "FP": 204, "DP": 1076, "UcP": 2088}
@@ -35,7 +36,6 @@ PAPER_ENV = "Intel i7-4510U, 8 GB, Windows 10, Python 2.7"
 CATEGORY_ORDER = ("UrP", "FP", "DP", "UcP")
 QUICK_EVAL_MAPS = 50
 QUICK_EVAL_SEED = 20_240_601
-TIMING_REPEATS = 5
 
 SECTIONS = (
     ("run", "Run and configuration"),
@@ -151,15 +151,6 @@ def _table(header: list[str] | None, rows: list[list], caption: str | None = Non
 @dataclass
 class _Raw:
     text: str
-
-
-def _median_seconds(fn, repeats: int = TIMING_REPEATS) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 class _Builder:
@@ -558,10 +549,10 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
         t0 = time.perf_counter()
         records = self.store.read_pairs(self.run_id, pair_indices=mix)
         read_s = time.perf_counter() - t0
-        read_s = min(read_s, _median_seconds(lambda: self.store.read_pairs(self.run_id, pair_indices=mix), 3))
+        read_s = min(read_s, median_seconds(lambda: self.store.read_pairs(self.run_id, pair_indices=mix), 3))
         batch = PathPairBatch.from_arrays(records.path_o_cells, records.path_o_offsets, records.path_a_cells,
                                           records.path_a_offsets, records.goals, records.size)
-        rule_s = _median_seconds(lambda: label_batch(batch))
+        rule_s = median_seconds(lambda: label_batch(batch))
         counts = {lab: int(np.sum(records.label == lab)) for lab in ("UrP", "FP", "DP", "UcP", "invalid")}
         timing = {"pairs": len(records), "counts": counts, "read_s": read_s, "rule_s": rule_s}
         hybrid_s, hybrid_note = self.hybrid_timing(batch)
@@ -642,7 +633,7 @@ written. Database: <code>{_esc(self.store.url)}</code>; vinadv {_esc(__version__
         train_batch, labels = balance_batch(data.batch.subset(train), data.truth[train], seed=seed)
         model = HybridClassifier(make_fp_classifier("svm", row["setting"], seed), t=data.t)
         model.fit(train_batch, labels)
-        seconds = _median_seconds(lambda: model.predict(batch))
+        seconds = median_seconds(lambda: model.predict(batch))
         return seconds, (f"Hybrid + SVM ({row['setting']}) trained again for this measurement on the stored "
                          f"evaluation's training split ({len(labels)} pairs, seed {seed}).")
 
