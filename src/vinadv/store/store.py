@@ -287,7 +287,8 @@ class Store:
                 records = records.subset(~np.isin(records.pair_index, stored))
         written = 0
         for lo in range(0, len(records), batch_size):
-            batch = records.subset(np.arange(lo, min(lo + batch_size, len(records))))
+            hi = min(lo + batch_size, len(records))
+            batch = records if (lo, hi) == (0, len(records)) else records.subset(np.arange(lo, hi))
             rows = encode_rows(run_id, batch)
             with self.engine.begin() as conn:
                 if self._insert_sql is not None:
