@@ -12,6 +12,8 @@ import uuid
 import pytest
 import sqlalchemy as sa
 
+from tests.needs import skip_or_fail
+
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"
 POSTGRES_DEFAULT = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 BACKENDS = ("sqlite", "mysql", "postgres")
@@ -24,10 +26,7 @@ def _server(env: str, default: str) -> sa.Engine:
         with engine.connect() as conn:
             conn.execute(sa.text("SELECT 1"))
     except Exception as exc:  # any failure to reach the server
-        message = f"{env}: server {sa.make_url(url).render_as_string(hide_password=True)} unreachable: {exc}"
-        if os.environ.get("CI") == "true":
-            pytest.fail(message)
-        pytest.skip(message)
+        skip_or_fail(f"{env}: server {sa.make_url(url).render_as_string(hide_password=True)} unreachable: {exc}")
     return engine
 
 

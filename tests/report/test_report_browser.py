@@ -8,32 +8,16 @@ from __future__ import annotations
 import functools
 import http.server
 import os
-import shutil
 import threading
 from pathlib import Path
 
 import pytest
 
-CHROMIUM = os.environ.get("VINADV_CHROMIUM", "/usr/bin/chromium")
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+from tests import needs
+from tests.needs import CHROMIUM_ARGS
+
 #: screenshots are kept here when set (say, as CI artefacts); else in the test's tmp_path
 SCREENSHOT_DIR = os.environ.get("VINADV_SCREENSHOT_DIR")
-
-
-def _need_browser():
-    problem = None
-    if not (Path(CHROMIUM).exists() or shutil.which(CHROMIUM)):
-        problem = f"Chromium not found at {CHROMIUM} (Debian: apt-get install chromium; or set VINADV_CHROMIUM)"
-    else:
-        try:
-            import playwright.sync_api  # noqa: F401
-        except ImportError:
-            problem = "Playwright is not installed (pip install -e '.[dev]')"
-    if problem:
-        if os.environ.get("CI") == "true":
-            pytest.fail(problem)
-        pytest.skip(problem)
 
 
 @pytest.fixture
@@ -56,12 +40,12 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
         pass
 
 
-def _open_and_check(url: str, screenshot: Path) -> dict:
+def _open_and_check(url: str, screenshot: Path, chromium: str) -> dict:
     from playwright.sync_api import sync_playwright
 
     errors, failed, bad_status = [], [], []
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
+        browser = pw.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS, headless=True)
         try:
             page = browser.new_page(viewport={"width": 1280, "height": 900})
             page.on("console", lambda msg: errors.append(msg.text) if msg.type == "error" else None)
@@ -82,7 +66,7 @@ def _open_and_check(url: str, screenshot: Path) -> dict:
 
 @pytest.mark.parametrize("via", ["http", "file"])
 def test_report_opens_in_headless_chromium_without_errors(served, tmp_path, via):
-    _need_browser()
+    chromium = needs.chromium()
     from vinadv.report.html import SECTIONS
 
     http_url, out = served
@@ -90,7 +74,7 @@ def test_report_opens_in_headless_chromium_without_errors(served, tmp_path, via)
     folder = Path(SCREENSHOT_DIR) if SCREENSHOT_DIR else tmp_path
     folder.mkdir(parents=True, exist_ok=True)
     screenshot = folder / f"report-{via}.png"
-    seen = _open_and_check(url, screenshot)
+    seen = _open_and_check(url, screenshot, chromium)
     assert seen["errors"] == [] and seen["failed"] == [] and seen["bad_status"] == []
     assert seen["sections"] == [sid for sid, _ in SECTIONS]
     assert len(seen["images"]) >= 7

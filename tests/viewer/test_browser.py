@@ -7,34 +7,13 @@ Skipped when Chromium or Playwright is missing, except with env CI=true, where t
 
 from __future__ import annotations
 
-import os
-import shutil
 import threading
 
 import pytest
 
+from tests import needs
+from tests.needs import CHROMIUM_ARGS
 from vinadv.store import Store
-
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-
-
-def _chromium() -> str:
-    found = shutil.which("chromium") or ("/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else None)
-    problem = None
-    if found is None:
-        problem = "Chromium not found (apt-get install -y chromium; `make test` does it)"
-    else:
-        try:
-            import playwright.sync_api  # noqa: F401
-        except ImportError:
-            problem = "Playwright's Python package is missing (pip install -e '.[dev]')"
-    if problem:
-        if os.environ.get("CI") == "true":
-            pytest.fail(f"CI=true and the browser test cannot run: {problem}")
-        pytest.skip(problem)
-    return found
-
 
 @pytest.fixture
 def served(db):
@@ -59,7 +38,7 @@ def served(db):
 
 @pytest.mark.slow
 def test_label_a_pair_with_the_keyboard(served):
-    chromium = _chromium()
+    chromium = needs.chromium()
     from playwright.sync_api import sync_playwright
 
     base, url, runs = served

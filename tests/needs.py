@@ -1,0 +1,37 @@
+"""What tests need from the machine (database servers, a browser): skip without it, but fail under CI=true."""
+
+from __future__ import annotations
+
+import os
+import shutil
+
+import pytest
+
+#: the flags Chromium needs here: headless as root, and no background connections to a closed network
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def skip_or_fail(problem: str) -> None:
+    """Skip the test for `problem`; under CI=true, fail it (CI must run every test)."""
+    if os.environ.get("CI") == "true":
+        pytest.fail(f"CI=true and this test cannot run: {problem}")
+    pytest.skip(problem)
+
+
+def chromium() -> str:
+    """Path of Debian's Chromium ($VINADV_CHROMIUM as given, else `chromium` on PATH or /usr/bin/chromium), with
+    Playwright's Python package importable; otherwise `skip_or_fail`."""
+    explicit = os.environ.get("VINADV_CHROMIUM")
+    if explicit:
+        found = shutil.which(explicit) or (explicit if os.path.exists(explicit) else None)
+    else:
+        found = shutil.which("chromium") or ("/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else None)
+    if found is None:
+        skip_or_fail(f"Chromium not found at {explicit or 'chromium'} (apt-get install -y chromium, which "
+                     "`make test` does; or set VINADV_CHROMIUM)")
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        skip_or_fail("Playwright's Python package is missing (pip install -e '.[dev]')")
+    return found
