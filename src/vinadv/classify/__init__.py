@@ -5,6 +5,7 @@ Input everywhere: packed path pairs (`PathPairBatch`, or the packed arrays of `v
 
 from vinadv.classify.base import MODEL_FORMAT, PairClassifier, load_model, save_model
 from vinadv.classify.batch import PathPairBatch, concat_batches
+from vinadv.classify.cooccurrence import FEATURES, cooccurrence, image_features, offset_cooccurrence
 from vinadv.classify.features import LABELS, SUCCESS_LABELS, PathFeatures, path_features, reaches_goal, same_paths
 from vinadv.classify.hybrid import (
     FP_DP_KINDS,
@@ -33,11 +34,12 @@ from vinadv.classify.similarity import (
 )
 
 __all__ = [
-    "AUGMENT_TRANSFORMS", "CNNImageClassifier", "DistanceThresholdClassifier", "FP_DP_KINDS", "HybridClassifier",
-    "LABELS", "MLPImageClassifier", "MODEL_FORMAT", "PairClassifier", "PairLabels", "PathFeatures",
-    "PathPairBatch", "RuleClassifier", "SUCCESS_LABELS", "SVMImageClassifier", "augmentation_plan",
-    "balance_batch", "balance_images", "binary_metrics", "concat_batches", "default_threshold", "dtw_distances",
-    "frechet_distances", "hausdorff_distances", "is_fork", "label_batch", "label_pairs", "load_model",
-    "make_fp_classifier", "path_distances", "path_features", "reaches_goal", "render_batch",
-    "render_path_images", "same_paths", "save_model", "transform_cells", "transform_images",
+    "AUGMENT_TRANSFORMS", "CNNImageClassifier", "DistanceThresholdClassifier", "FEATURES", "FP_DP_KINDS",
+    "HybridClassifier", "LABELS", "MLPImageClassifier", "MODEL_FORMAT", "PairClassifier", "PairLabels",
+    "PathFeatures", "PathPairBatch", "RuleClassifier", "SUCCESS_LABELS", "SVMImageClassifier", "augmentation_plan",
+    "balance_batch", "balance_images", "binary_metrics", "concat_batches", "cooccurrence", "default_threshold",
+    "dtw_distances", "frechet_distances", "hausdorff_distances", "image_features", "is_fork", "label_batch",
+    "label_pairs", "load_model", "make_fp_classifier", "offset_cooccurrence", "path_distances", "path_features",
+    "reaches_goal", "render_batch", "render_path_images", "same_paths", "save_model", "transform_cells",
+    "transform_images",
 ]

@@ -3,13 +3,19 @@
 Inputs are path images (`vinadv.classify.images`), rendered from a `PathPairBatch` in chunks or passed in
 directly as `(n, N, N, 3)` uint8. Pixel values are scaled to 0/1.
 
-SVM: fitted with `sklearn.svm.SVC` (RBF kernel) on the sparse flattened images; predictions use the fitted
-support vectors, dual coefficients and intercept directly (sparse image x dense support-vector products),
+Every classifier has a `features` parameter (`vinadv.classify.cooccurrence`): 'pixels' (the image itself, the
+paper's), 'cooccurrence' (red/blue cells of one row or one column, by their two positions) or 'offsets' (the
+same by their distance). The features are computed from the image (flipped/rotated first when the networks
+augment), so every classifier takes path images.
+
+SVM: fitted with `sklearn.svm.SVC` (RBF kernel) on the sparse features; predictions use the fitted
+support vectors, dual coefficients and intercept directly (sparse features x dense support-vector products),
 which gives SVC's decision function far faster than libsvm's per-sample loop, and is what is saved.
 """
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -18,6 +24,7 @@ from sklearn.svm import SVC
 
 from vinadv.classify.base import PairClassifier, register_kind
 from vinadv.classify.batch import PathPairBatch
+from vinadv.classify.cooccurrence import feature_shape, image_features, offset_matrix, torch_features
 from vinadv.classify.images import render_batch
 from vinadv.errors import InputError
 
@@ -50,23 +57,34 @@ def _sparse_features(images: np.ndarray) -> scipy.sparse.csr_matrix:
     return scipy.sparse.csr_matrix((values, (rows, cols)), shape=flat.shape, dtype=np.float32)
 
 
+def _svm_features(images: np.ndarray, features: str) -> scipy.sparse.csr_matrix:
+    """The SVM's 0/1 features of images `(m, N, N, 3)` as a float32 CSR matrix `(m, F)`."""
+    if features == "pixels":
+        return _sparse_features(images)
+    return scipy.sparse.csr_matrix(image_features(images, features))
+
+
 @register_kind("svm")
 class SVMImageClassifier(PairClassifier):
-    """RBF-kernel SVM on flattened path images (paper section 4.3). `C`, `gamma` as in `sklearn.svm.SVC`;
-    `encoding`: the path image encoding ('paper' or 'split', see `vinadv.classify.images`)."""
+    """RBF-kernel SVM on path images (paper section 4.3: on the flattened pixels). `C`, `gamma` as in
+    `sklearn.svm.SVC`; `encoding`: the path image encoding ('paper' or 'split', see `vinadv.classify.images`);
+    `features`: 'pixels' (the paper's), 'cooccurrence' or 'offsets' (see `vinadv.classify.cooccurrence`)."""
 
     kind = "svm"
 
-    def __init__(self, C: float = 1.0, gamma: str | float = "scale", encoding: str = "paper"):
+    def __init__(self, C: float = 1.0, gamma: str | float = "scale", encoding: str = "paper",
+                 features: str = "pixels"):
         self.C = C
         self.gamma = gamma
         self.encoding = encoding
+        self.features = features
 
     def fit(self, X, y) -> SVMImageClassifier:
         y = self._check_y(X, y)
         start = time.perf_counter()
+        feature_shape(self.features, _image_size(X))  # checks the name before any work
         chunks = _image_chunks(X, CHUNK, self.encoding)
-        features = scipy.sparse.vstack([_sparse_features(images) for _, images in chunks]).tocsr()
+        features = scipy.sparse.vstack([_svm_features(images, self.features) for _, images in chunks]).tocsr()
         svc = SVC(C=self.C, kernel="rbf", gamma=self.gamma, cache_size=500)
         svc.fit(features.astype(np.float64), y)
         # binary SVC: dual_coef_ and intercept_ are signed so that a positive decision means classes_[1] (FP)
@@ -92,7 +110,7 @@ class SVMImageClassifier(PairClassifier):
             raise InputError(f"this SVM was trained on {self.size_}x{self.size_} maps, not {_image_size(X)}")
         out = np.empty(len(X))
         for start, images in _image_chunks(X, CHUNK, self.encoding):
-            features = _sparse_features(images)
+            features = _svm_features(images, self.features)
             dots = np.asarray(features @ self._sv_t, dtype=np.float64)
             norms = np.asarray(features.multiply(features).sum(axis=1), dtype=np.float64)
             squared = np.maximum(norms + self._sv_norms[None, :] - 2.0 * dots, 0.0)
@@ -131,29 +149,35 @@ def _torch():
     return torch
 
 
-def _build_network(kind: str, architecture: str, size: int, width: int):
+def _build_network(kind: str, architecture: str, size: int, width: int, features: str = "pixels"):
+    """The network of `kind` and `architecture` for `size x size` maps, on inputs of `features`
+    (`feature_shape`: `(3, N, N)` pixels, `(2, N, N)` co-occurrence maps, `(2, 2N - 1)` offsets)."""
     torch = _torch()
     nn = torch.nn
+    shape = feature_shape(features, size)
+    if kind == "cnn" and len(shape) != 3:
+        raise InputError(f"a CNN needs image-shaped inputs (features 'pixels' or 'cooccurrence'), not {features!r}")
+    channels = shape[0]
     if kind == "cnn" and architecture == "plain":
         # the usual small image CNN (two 3x3 convolutions, max pooling, dropout, a dense layer)
         return nn.Sequential(
-            nn.Conv2d(3, width, 3, padding=1), nn.ReLU(),
+            nn.Conv2d(channels, width, 3, padding=1), nn.ReLU(),
             nn.Conv2d(width, 2 * width, 3, padding=1), nn.ReLU(),
             nn.MaxPool2d(2), nn.Dropout(0.25), nn.Flatten(),
             nn.Linear(2 * width * (size // 2) ** 2, 128), nn.ReLU(), nn.Dropout(0.5), nn.Linear(128, 2),
         )
     if kind == "cnn" and architecture == "rowcol":
-        return _RowColumnCNN(size, width)
+        return _RowColumnCNN(size, width, channels)
     if kind == "mlp" and architecture == "plain":
         return nn.Sequential(
-            nn.Flatten(), nn.Linear(3 * size * size, width), nn.ReLU(), nn.Dropout(0.2),
+            nn.Flatten(), nn.Linear(int(np.prod(shape)), width), nn.ReLU(), nn.Dropout(0.2),
             nn.Linear(width, width), nn.ReLU(), nn.Dropout(0.2), nn.Linear(width, 2),
         )
     raise InputError(f"unknown {kind} architecture {architecture!r}")
 
 
 class _RowColumnCNN:  # built lazily so that importing vinadv.classify does not import torch
-    def __new__(cls, size: int, width: int):
+    def __new__(cls, size: int, width: int, channels: int = 3):
         torch = _torch()
         nn = torch.nn
 
@@ -164,9 +188,9 @@ class _RowColumnCNN:  # built lazily so that importing vinadv.classify does not 
 
             def __init__(self):
                 super().__init__()
-                self.local = nn.Sequential(nn.Conv2d(3, 4, 3, padding=1), nn.ReLU())
-                self.rows = nn.Conv2d(7, width, (1, 2 * size - 1), padding=(0, size - 1))
-                self.cols = nn.Conv2d(7, width, (2 * size - 1, 1), padding=(size - 1, 0))
+                self.local = nn.Sequential(nn.Conv2d(channels, 4, 3, padding=1), nn.ReLU())
+                self.rows = nn.Conv2d(channels + 4, width, (1, 2 * size - 1), padding=(0, size - 1))
+                self.cols = nn.Conv2d(channels + 4, width, (2 * size - 1, 1), padding=(size - 1, 0))
                 self.head = nn.Sequential(nn.Linear(2 * width, 32), nn.ReLU(), nn.Linear(32, 2))
 
             def forward(self, x):
@@ -178,13 +202,21 @@ class _RowColumnCNN:  # built lazily so that importing vinadv.classify does not 
         return RowColumnCNN()
 
 
+@functools.lru_cache(maxsize=8)
+def _offset_tensor(size: int):
+    """`offset_matrix(size)` as a float32 tensor (kept: built once per map size)."""
+    return _torch().from_numpy(offset_matrix(size))
+
+
 class TorchImageClassifier(PairClassifier):
     """A PyTorch network on path images, trained with cross-entropy.
 
     `architecture`: CNN 'plain' or 'rowcol', MLP 'plain'. `width`: channels (CNN) or hidden units (MLP).
     `optimizer`: 'adam' or 'adamw'; `schedule`: 'constant' or 'cosine' learning rate; `augment`: a random
     flip/rotation of the square per training batch. `encoding`: the path image encoding ('paper' or 'split').
-    `seed` fixes initialisation and batch order.
+    `features`: what the network sees of each image, computed batch by batch after augmentation: 'pixels' (the
+    image, `(3, N, N)`), 'cooccurrence' (`(2, N, N)` maps) or 'offsets' (`(2, 2N - 1)`, MLP only); see
+    `vinadv.classify.cooccurrence`. `seed` fixes initialisation and batch order.
     """
 
     kind = "abstract"
@@ -192,7 +224,7 @@ class TorchImageClassifier(PairClassifier):
     def __init__(self, architecture: str = "plain", width: int = 32, epochs: int = 10, batch_size: int = 64,
                  learning_rate: float = 1e-3, weight_decay: float = 0.0, optimizer: str = "adam",
                  schedule: str = "constant", augment: bool = False, encoding: str = "paper", seed: int = 0,
-                 verbose: bool = False):
+                 verbose: bool = False, features: str = "pixels"):
         self.architecture = architecture
         self.width = width
         self.epochs = epochs
@@ -205,11 +237,17 @@ class TorchImageClassifier(PairClassifier):
         self.encoding = encoding
         self.seed = seed
         self.verbose = verbose
+        self.features = features
 
     @staticmethod
     def _tensor(images: np.ndarray):
         torch = _torch()
         return torch.from_numpy(np.ascontiguousarray(images.transpose(0, 3, 1, 2))).float().div_(255.0)
+
+    def _inputs(self, x):
+        """The network's inputs of a `(B, 3, N, N)` image tensor: `torch_features` of `features`."""
+        offsets = _offset_tensor(int(x.shape[-1])) if self.features == "offsets" else None
+        return torch_features(x, self.features, offsets)
 
     def fit(self, X, y) -> TorchImageClassifier:
         y = self._check_y(X, y)
@@ -217,11 +255,12 @@ class TorchImageClassifier(PairClassifier):
         start = time.perf_counter()
         torch.manual_seed(self.seed)
         rng = np.random.default_rng(self.seed)
+        feature_shape(self.features, _image_size(X))  # checks the name before any work
         images = np.concatenate([chunk for _, chunk in _image_chunks(X, CHUNK, self.encoding)])
         self.size_ = int(images.shape[1])
         inputs = self._tensor(images)
         targets = torch.from_numpy((y == "FP").astype(np.int64))
-        self.network_ = _build_network(self.kind, self.architecture, self.size_, self.width)
+        self.network_ = _build_network(self.kind, self.architecture, self.size_, self.width, self.features)
         if self.optimizer == "adam":
             opt = torch.optim.Adam(self.network_.parameters(), lr=self.learning_rate, weight_decay=self.weight_decay)
         elif self.optimizer == "adamw":
@@ -241,7 +280,7 @@ class TorchImageClassifier(PairClassifier):
                 if self.augment:
                     xb = _dihedral(xb, int(rng.integers(8)))
                 opt.zero_grad()
-                loss = loss_fn(self.network_(xb), yb)
+                loss = loss_fn(self.network_(self._inputs(xb)), yb)
                 loss.backward()
                 opt.step()
                 if scheduler is not None:
@@ -258,7 +297,7 @@ class TorchImageClassifier(PairClassifier):
         out = np.empty((len(X), 2), dtype=np.float32)
         with torch.inference_mode():
             for start, images in _image_chunks(X, 1024, self.encoding):
-                out[start : start + len(images)] = self.network_(self._tensor(images)).numpy()
+                out[start : start + len(images)] = self.network_(self._inputs(self._tensor(images))).numpy()
         return out
 
     def decision_function(self, X) -> np.ndarray:
@@ -285,7 +324,7 @@ class TorchImageClassifier(PairClassifier):
         model.classes_ = np.array(["DP", "FP"])
         model.size_ = int(meta["size"])
         model.training_time_s_ = float(meta.get("training_time_s", 0.0))
-        model.network_ = _build_network(kind, model.architecture, model.size_, model.width)
+        model.network_ = _build_network(kind, model.architecture, model.size_, model.width, model.features)
         state = {k[4:]: torch.from_numpy(np.array(v)) for k, v in arrays.items() if k.startswith("net.")}
         try:
             model.network_.load_state_dict(state)
@@ -320,13 +359,13 @@ class CNNImageClassifier(TorchImageClassifier):
 
 @register_kind("mlp")
 class MLPImageClassifier(TorchImageClassifier):
-    """Multilayer perceptron on flattened path images (see `TorchImageClassifier`)."""
+    """Multilayer perceptron on flattened path images or their features (see `TorchImageClassifier`)."""
 
     kind = "mlp"
 
     def __init__(self, architecture: str = "plain", width: int = 512, epochs: int = 10, batch_size: int = 64,
                  learning_rate: float = 1e-3, weight_decay: float = 0.0, optimizer: str = "adam",
                  schedule: str = "constant", augment: bool = False, encoding: str = "paper", seed: int = 0,
-                 verbose: bool = False):
+                 verbose: bool = False, features: str = "pixels"):
         super().__init__(architecture, width, epochs, batch_size, learning_rate, weight_decay, optimizer,
-                         schedule, augment, encoding, seed, verbose)
+                         schedule, augment, encoding, seed, verbose, features)

@@ -29,7 +29,8 @@ def register(subparsers) -> None:
     train.add_argument("--model", required=True, choices=KINDS, help="FP/DP classifier")
     train.add_argument("--out", required=True, help="output model file")
     train.add_argument("--setting", choices=("baseline", "tuned"), default="baseline",
-                       help="hyperparameters: baseline = the paper's (CNN/MLP 10 epochs, batch 64), or tuned")
+                       help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
+                       "64), or tuned (row/column co-occurrence features of 'split' path images)")
     train.add_argument("--balance", action="store_true",
                        help="balance the training set: flipped/rotated copies of minority-class pairs")
     train.add_argument("--test-fraction", type=float, default=0.3,

@@ -24,7 +24,8 @@ def register(subparsers) -> None:
     ev.add_argument("--classifiers", default=",".join(CLASSIFIER_NAMES),
                     help=f"comma-separated, from {','.join(CLASSIFIER_NAMES)} (default: all)")
     ev.add_argument("--setting", choices=("baseline", "tuned"), default="baseline",
-                    help="hyperparameters: baseline = the paper's (CNN/MLP 10 epochs, batch 64), or tuned")
+                    help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
+                    "64), or tuned (row/column co-occurrence features of 'split' path images)")
     ev.add_argument("--sizes", default=None,
                     help="training set fractions for fig. 8, comma-separated in (0, 1] (default 0.1,0.2,0.4,0.6,0.8,1)")
     ev.add_argument("--seed", type=int, default=0, help="seed of the split, augmentation and training (default 0)")
