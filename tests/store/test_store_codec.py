@@ -85,3 +85,31 @@ def test_malformed_maps_are_refused(text):
 def test_negative_cells_are_refused():
     with pytest.raises(InputError):
         codec.encode_paths(np.array([[-1, 2]]), np.array([0, 1]))
+
+
+@pytest.mark.parametrize("top", [0, 9, 31, 32, 63, 64, 127, 128, 255, 256, 32767])
+def test_every_table_side_and_the_fallback_match_oracle(top):
+    # cells up to `top` pick the smallest cached table above it, or (256 and more) the digit-by-digit fallback
+    rng = np.random.default_rng(top)
+    paths = [[(int(r), int(c)) for r, c in rng.integers(0, top + 1, (k, 2))] for k in (0, 1, 5, 0, 3)]
+    paths[2][0] = (top, top)
+    cells, offsets = _pack(paths)
+    assert codec.encode_paths(cells, offsets) == [path_text(p) for p in paths]
+    flat = np.array([c for p in paths for c in p], dtype=np.int64).reshape(-1, 2)
+    assert codec.encode_cells(flat) == [f"{r},{c}" for r, c in flat.tolist()]
+
+
+def test_chunked_encoding_matches_oracle(monkeypatch):
+    # a tiny chunk: maps and paths are encoded a few (or one) at a time, whatever the chunk boundaries cut
+    monkeypatch.setattr(codec, "_CHUNK_BYTES", 64)
+    rng = np.random.default_rng(0)
+    for size in (1, 5, 9):  # 1 and 2 maps per chunk, and maps larger than a chunk
+        obstacles = rng.random((11, size, size)) < 0.4
+        assert codec.encode_maps(obstacles) == [map_text(m) for m in obstacles]
+        assert codec.encode_maps(obstacles[:, ::-1, ::-1]) == [map_text(m) for m in obstacles[:, ::-1, ::-1]]
+    lengths = [0, 3, 0, 0, 20, 1, 8, 9, 0, 7, 30, 0]  # empty paths, paths longer than a chunk (8 cells)
+    for top in (27, 1000):
+        paths = [[(int(r), int(c)) for r, c in rng.integers(0, top + 1, (k, 2))] for k in lengths]
+        cells, offsets = _pack(paths)
+        assert codec.encode_paths(cells, offsets) == [path_text(p) for p in paths]
+        assert codec.encode_paths(cells, offsets)[1:4] == codec.encode_paths(*_pack(paths[1:4]))
