@@ -24,6 +24,9 @@ def register(subparsers) -> None:
     train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
     train.add_argument("--lr", type=float, default=0.005, help="peak RMSprop learning rate, cosine-decayed (default 0.005)")
     train.add_argument("--batch-size", type=int, default=32, help="maps per batch (default 32)")
+    train.add_argument("--warmup", type=int, default=None, metavar="STEPS",
+                       help="linear learning-rate warm-up over the first STEPS optimizer steps "
+                            "(default: 5%% of all steps, at most 200)")
     train.add_argument("--val-fraction", type=float, default=0.05, help="maps held out for validation (default 0.05)")
     train.add_argument("--seed", type=int, default=0, help="seed for initialisation, split and shuffling (default 0)")
     train.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
@@ -76,7 +79,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     _set_threads(args.threads)
     config = TrainConfig(epochs=args.epochs, lr=args.lr, batch_size=args.batch_size, val_fraction=args.val_fraction,
                          seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit,
-                         init=args.init)
+                         init=args.init, warmup_steps=args.warmup)
     config.validate()
     maps = MapSet.load(args.data)
     if len(maps) < 2:
