@@ -39,6 +39,22 @@ def test_identical_to_reference_28_all_endings():
     assert_same(fast, ref)
 
 
+@pytest.mark.parametrize("size", [9, 13])
+def test_identical_to_reference_odd_sizes(size):
+    # the value iteration runs two rows at a time: an odd N leaves one padding row that must stay 0
+    maps = generate_maps(30, size, seed=11, n_starts=2)
+    model = planning_vin(size, seed=4)
+    fast = plan_maps(maps.obstacles, maps.goals, maps.starts, model)
+    idx = np.repeat(np.arange(len(maps)), 2)
+    ref = plan_reference(maps.obstacles[idx], maps.starts.reshape(-1, 2), maps.goals[idx], model)
+    assert_same(fast, ref)
+    actions = action_maps(model, maps.obstacles, maps.goals)
+    with torch.no_grad():
+        logits = model.action_logits(make_input(maps.obstacles, maps.goals)).numpy()
+    decided = actions >= 0
+    np.testing.assert_array_equal(actions[decided], np.argmax(logits, axis=-1)[decided])
+
+
 def test_action_maps_match_torch_argmax_where_decided():
     maps = generate_maps(50, 16, seed=5, n_starts=1)
     model = planning_vin(16, seed=2)

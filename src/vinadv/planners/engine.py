@@ -1,15 +1,17 @@
-"""The fast batched planning engine: one value map per map, one action per cell, all rollouts advanced together.
+"""The fast batched planning engine: one value map per map, shared by its rollouts, all in one compiled kernel.
 
 Paths and termination reasons are those of `vinadv.planners.reference.plan_reference` (the ports' way: re-run the
-float32 PyTorch VIN at every step). The engine gets there differently:
+float32 PyTorch VIN at every step). The engine gets there differently, map by map, in parallel over maps:
 
-1. Action maps. The value map does not depend on the agent's cell, so each map's VIN runs once, and every cell
-   gets its action (argmax of the logits, the lowest index on ties).
-2. Near ties. The engine's arithmetic is not torch's, so logits differ by rounding; where the two best logits of a
-   cell are closer than a margin that bounds that difference, the cell is marked uncertain (-1).
-3. Rollouts: one compiled loop follows the action maps (DESIGN.md's rule). A rollout that steps on an uncertain
-   cell is re-done with torch's own logits for that map (one batch-1 `q_values`, then `fc` at each visited cell,
+1. Value map. It does not depend on the agent's cell, so each map's VIN runs once (`_value_iteration`).
+2. Rollouts (DESIGN.md's rule) right after, while the map's q is in cache; the action of a cell (argmax of the
+   logits, the lowest index on ties) is computed only when a rollout stands on it, about 15 cells of 784.
+3. Near ties. The engine's arithmetic is not torch's, so logits differ by rounding; where the two best logits of a
+   cell are closer than a margin that bounds that difference, the cell is uncertain, and a rollout that steps on
+   one is re-done with torch's own logits for that map (one batch-1 `q_values`, then `fc` at each visited cell,
    the very numbers the reference computes), so a near tie is decided as the reference decides it.
+
+`action_maps` gives the action of every cell (uncertain: -1), for inspection and benchmarks.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import functools
 import os
 from concurrent.futures import ThreadPoolExecutor
+from typing import Callable
 
 import numba
 import numpy as np
@@ -56,17 +59,9 @@ def action_maps(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndar
     n = obstacles.shape[1]
     actions = np.empty(obstacles.shape, dtype=np.int8)
 
-    def work(lo: int, hi: int) -> None:
-        _action_maps_kernel(obstacles[lo:hi], goals[lo:hi], p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc,
-                            p.k, _padded_width(n), REL_MARGIN, actions[lo:hi])
-
-    # Plain threads over a nogil kernel rather than Numba's OpenMP layer: OpenMP workers left spinning slow down
-    # torch's own OpenMP pool, which the near-tie fallback uses right after.
-    bounds = np.linspace(0, len(obstacles), N_THREADS + 1).astype(int)
-    if len(obstacles) < 2 * N_THREADS:
-        work(0, len(obstacles))
-    else:
-        list(_pool().map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
+    _over_maps(len(obstacles), lambda lo, hi: _action_maps_kernel(
+        obstacles[lo:hi], goals[lo:hi], p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k,
+        _padded_width(n), REL_MARGIN, actions[lo:hi]))
     return actions
 
 
@@ -76,6 +71,19 @@ N_THREADS = max(1, min(len(os.sched_getaffinity(0)), 8))
 @functools.cache
 def _pool() -> ThreadPoolExecutor:
     return ThreadPoolExecutor(N_THREADS, thread_name_prefix="vinadv-plan")
+
+
+def _over_maps(b: int, work: Callable[[int, int], None]) -> None:
+    """`work(lo, hi)` over `range(b)` split between N_THREADS threads.
+
+    Plain threads over nogil kernels rather than Numba's OpenMP layer: OpenMP workers left spinning slow down
+    torch's own OpenMP pool, which the near-tie fallback uses right after.
+    """
+    if b < 2 * N_THREADS:
+        work(0, b)
+        return
+    bounds = np.linspace(0, b, N_THREADS + 1).astype(int)
+    list(_pool().map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
 
 
 def _padded_width(n: int) -> int:
@@ -113,23 +121,20 @@ class FoldedVIN:
 @numba.njit(cache=True, nogil=True)
 def _action_maps_kernel(obstacles, goals, reward_w, reward_b, goal_value, q_w, w, fc, k, wp, rel_margin, actions):
     n, lq = obstacles.shape[1], q_w.shape[0]
-    reward_q = np.empty((n, lq, wp), dtype=np.float32)
-    v = np.zeros((n + 2, wp + 2), dtype=np.float32)
-    v_next = np.zeros((n + 2, wp + 2), dtype=np.float32)
-    best = np.empty(wp, dtype=np.float32)
-    q = np.empty((n, lq, wp), dtype=np.float32)
+    reward_q, v, v_next, best, q = _scratch(n, lq, wp)
     for b in range(obstacles.shape[0]):
         v_next[:, :] = 0.0
         _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, v)
-        _value_iteration(reward_q, v, v_next, best, w, k, q)
+        _value_iteration(reward_q, v, v_next, best, w, k, q, n)
         _decide(q, fc, n, rel_margin, actions[b])
 
 
 @numba.njit(cache=True, nogil=True)
 def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v):
     """reward_q[i, c, j] = (q_w[c] * r)(i, j), r = folded reward (zero outside the grid), in float64, stored
-    float32; v (padded) = max over c, the value after the first q layer."""
-    n, lq, wp = reward_q.shape[0], reward_q.shape[1], reward_q.shape[2]
+    float32; v (padded) = max over c, the value after the first q layer. Rows >= N of reward_q are left as they
+    are (0, from `_scratch`)."""
+    n, lq, wp = obs.shape[0], reward_q.shape[1], reward_q.shape[2]
     r = np.zeros((n + 2, n + 2))
     for i in range(n):
         for j in range(n):
@@ -164,47 +169,60 @@ def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v)
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
-def _value_iteration(reward_q, v, v_next, best, w, k, q):
-    """The hot loop: k times q = reward_q + (w * v), v = max over channels; the last q goes to `q`.
+def _value_iteration(reward_q, v, v_next, best, w, k, q, n):
+    """The hot loop: k times q = reward_q + (w * v), v = max over channels; the last q goes to `q`. N x N map.
 
-    Float32, rows of `wp` cells (whole 16-lane vectors; v is zero-padded, so columns >= N never leak in).
+    Float32, two rows at a time (they share two of their three input rows, and two independent sums keep both
+    FMA units busy), each sum in three partial sums (a chain of nine dependent FMAs would wait on latency), rows
+    of `wp` cells (whole vectors; v is zero-padded, so columns >= N never leak in). Arrays from `_scratch`.
     """
-    n, lq, wp = reward_q.shape[0], reward_q.shape[1], reward_q.shape[2]
+    n_even, lq, wp = reward_q.shape[0], reward_q.shape[1], reward_q.shape[2]
+    best2 = best[wp:]
     for it in range(k):
         last = it == k - 1
-        for i in range(n):
-            v0 = v[i]
-            v1 = v[i + 1]
-            v2 = v[i + 2]
+        for i in range(0, n_even, 2):
+            va, vb, vc, vd = v[i], v[i + 1], v[i + 2], v[i + 3]
             for j in range(wp):
                 best[j] = np.float32(-np.inf)
+                best2[j] = np.float32(-np.inf)
             for c in range(lq):
-                rq = reward_q[i, c]
-                qc = q[i, c]
+                rq, rq2 = reward_q[i, c], reward_q[i + 1, c]
                 w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
                 w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
                 w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
-                for j in range(wp):
-                    a = (rq[j] + w00 * v0[j] + w01 * v0[j + 1] + w02 * v0[j + 2]
-                         + w10 * v1[j] + w11 * v1[j + 1] + w12 * v1[j + 2]
-                         + w20 * v2[j] + w21 * v2[j + 1] + w22 * v2[j + 2])
-                    best[j] = a if a > best[j] else best[j]
-                if last:
+                if not last:
                     for j in range(wp):
-                        qc[j] = rq[j] + w00 * v0[j] + w01 * v0[j + 1] + w02 * v0[j + 2] + \
-                            w10 * v1[j] + w11 * v1[j + 1] + w12 * v1[j + 2] + \
-                            w20 * v2[j] + w21 * v2[j + 1] + w22 * v2[j + 2]
-            out = v_next[i + 1]
-            for j in range(n):
-                out[j + 1] = best[j]
+                        b0, b1, b2 = vb[j], vb[j + 1], vb[j + 2]
+                        c0, c1, c2 = vc[j], vc[j + 1], vc[j + 2]
+                        a = ((rq[j] + w00 * va[j] + w01 * va[j + 1] + w02 * va[j + 2])
+                             + (w10 * b0 + w11 * b1 + w12 * b2) + (w20 * c0 + w21 * c1 + w22 * c2))
+                        a2 = ((rq2[j] + w00 * b0 + w01 * b1 + w02 * b2)
+                              + (w10 * c0 + w11 * c1 + w12 * c2) + (w20 * vd[j] + w21 * vd[j + 1] + w22 * vd[j + 2]))
+                        best[j] = a if a > best[j] else best[j]
+                        best2[j] = a2 if a2 > best2[j] else best2[j]
+                else:  # the same sums, kept: the final q
+                    qc, qc2 = q[i, c], q[i + 1, c]
+                    for j in range(wp):
+                        b0, b1, b2 = vb[j], vb[j + 1], vb[j + 2]
+                        c0, c1, c2 = vc[j], vc[j + 1], vc[j + 2]
+                        qc[j] = ((rq[j] + w00 * va[j] + w01 * va[j + 1] + w02 * va[j + 2])
+                                 + (w10 * b0 + w11 * b1 + w12 * b2) + (w20 * c0 + w21 * c1 + w22 * c2))
+                        qc2[j] = ((rq2[j] + w00 * b0 + w01 * b1 + w02 * b2)
+                                  + (w10 * c0 + w11 * c1 + w12 * c2) + (w20 * vd[j] + w21 * vd[j + 1] + w22 * vd[j + 2]))
+            if not last:
+                out, out2 = v_next[i + 1], v_next[i + 2]
+                for j in range(n):
+                    out[j + 1] = best[j]
+                if i + 1 < n:  # an odd N's extra row stays 0, as the padding it is
+                    for j in range(n):
+                        out2[j + 1] = best2[j]
         v, v_next = v_next, v
 
 
 @numba.njit(cache=True, nogil=True)
-def _decide(q, fc, n, rel_margin, actions):
-    """Logits (float64) from the final q, argmax (lowest index on ties), -1 where the best two are within
-    rel_margin * scale, scale = max |q| over the map * max_a sum_c |fc[a, c]| (a bound on how far rounding moves
-    a logit, times the relative error of q)."""
+def _margin(q, fc, n, rel_margin):
+    """Near-tie margin of a map: rel_margin * max |q| over the map * max_a sum_c |fc[a, c]| (a bound on how far
+    rounding moves a logit, times the relative error of q)."""
     n_act, lq = fc.shape[0], fc.shape[1]
     qmax = 0.0
     for i in range(n):
@@ -217,69 +235,104 @@ def _decide(q, fc, n, rel_margin, actions):
         for c in range(lq):
             s += abs(fc[a, c])
         fmax = max(fmax, s)
-    margin = rel_margin * qmax * fmax
-    logits = np.empty(n_act)
-    for i in range(n):
-        for j in range(n):
-            for a in range(n_act):
-                s = 0.0
-                for c in range(lq):
-                    s += fc[a, c] * q[i, c, j]
-                logits[a] = s
-            top = 0
-            for a in range(1, n_act):
-                if logits[a] > logits[top]:
-                    top = a
-            second = -np.inf
-            for a in range(n_act):
-                if a != top and logits[a] > second:
-                    second = logits[a]
-            actions[i, j] = top if logits[top] - second > margin else UNDECIDED
+    return rel_margin * qmax * fmax
 
 
 @numba.njit(cache=True, nogil=True)
-def _rollouts(actions, map_index, starts, goals, limits, obstacles, corner_cutting, deltas, cells, lengths, terms):
-    """Follow action maps from each start. cells: `(R, cap, 2)` scratch; writes lengths `(R,)` and terms `(R,)`."""
-    n = actions.shape[1]
-    stamp = np.zeros((actions.shape[0], n, n), dtype=np.int32)
-    for t in range(len(starts)):
-        b = map_index[t]
-        r, c = starts[t, 0], starts[t, 1]
-        gr, gc = goals[t, 0], goals[t, 1]
-        cells[t, 0, 0] = r
-        cells[t, 0, 1] = c
-        length = 1
-        stamp[b, r, c] = t + 1
-        term = GOAL
-        while True:
-            if r == gr and c == gc:
-                term = GOAL
-                break
-            if length - 1 >= limits[t]:
-                term = STEP_LIMIT
-                break
-            a = actions[b, r, c]
-            if a < 0:
-                term = UNDECIDED
-                break
-            dr, dc = deltas[a, 0], deltas[a, 1]
-            nr, nc = r + dr, c + dc
-            if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[b, nr, nc]:
-                term = COLLISION
-                break
-            if not corner_cutting and dr != 0 and dc != 0 and (obstacles[b, nr, c] or obstacles[b, r, nc]):
-                term = COLLISION
-                break
-            if stamp[b, nr, nc] == t + 1:
-                term = LOOP
-                break
-            r, c = nr, nc
-            stamp[b, r, c] = t + 1
-            cells[t, length, 0] = r
-            cells[t, length, 1] = c
-            length += 1
-        lengths[t] = length
-        terms[t] = term
+def _action_at(q, fc, i, j, margin, logits):
+    """Action of cell (i, j): argmax of the float64 logits (lowest index on ties), UNDECIDED where the best two
+    are within `margin`. `logits` is scratch of length A."""
+    n_act, lq = fc.shape[0], fc.shape[1]
+    for a in range(n_act):
+        s = 0.0
+        for c in range(lq):
+            s += fc[a, c] * q[i, c, j]
+        logits[a] = s
+    top = 0
+    for a in range(1, n_act):
+        if logits[a] > logits[top]:
+            top = a
+    second = -np.inf
+    for a in range(n_act):
+        if a != top and logits[a] > second:
+            second = logits[a]
+    return top if logits[top] - second > margin else UNDECIDED
+
+
+@numba.njit(cache=True, nogil=True)
+def _decide(q, fc, n, rel_margin, actions):
+    """Action of every cell (`_action_at`) into `actions (N, N)`."""
+    margin = _margin(q, fc, n, rel_margin)
+    logits = np.empty(fc.shape[0])
+    for i in range(n):
+        for j in range(n):
+            actions[i, j] = _action_at(q, fc, i, j, margin, logits)
+
+
+@numba.njit(cache=True, nogil=True)
+def _plan_kernel(lo, hi, obstacles, goals, starts, limits, reward_w, reward_b, goal_value, q_w, w, fc, k, wp,
+                 rel_margin, corner_cutting, deltas, cells, lengths, terms):
+    """Maps lo..hi-1: value map, then the rollouts of the map's S starts (rollout b * S + s), deciding the action
+    of a cell only when a rollout stands on it. cells: `(B * S, cap, 2)`; writes lengths and terms `(B * S,)`."""
+    n, lq, n_starts = obstacles.shape[1], q_w.shape[0], starts.shape[1]
+    reward_q, v, v_next, best, q = _scratch(n, lq, wp)
+    logits = np.empty(fc.shape[0])
+    stamp = np.zeros((n, n), dtype=np.int64)  # t + 1 on the cells rollout t has visited
+    for b in range(lo, hi):
+        v_next[:, :] = 0.0
+        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, v)
+        _value_iteration(reward_q, v, v_next, best, w, k, q, n)
+        margin = _margin(q, fc, n, rel_margin)
+        gr, gc = goals[b, 0], goals[b, 1]
+        for s in range(n_starts):
+            t = b * n_starts + s
+            r, c = starts[b, s, 0], starts[b, s, 1]
+            cells[t, 0, 0] = r
+            cells[t, 0, 1] = c
+            length = 1
+            stamp[r, c] = t + 1
+            while True:
+                if r == gr and c == gc:
+                    term = GOAL
+                    break
+                if length - 1 >= limits[t]:
+                    term = STEP_LIMIT
+                    break
+                a = _action_at(q, fc, r, c, margin, logits)
+                if a < 0:
+                    term = UNDECIDED
+                    break
+                dr, dc = deltas[a, 0], deltas[a, 1]
+                nr, nc = r + dr, c + dc
+                if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[b, nr, nc]:
+                    term = COLLISION
+                    break
+                if not corner_cutting and dr != 0 and dc != 0 and (obstacles[b, nr, c] or obstacles[b, r, nc]):
+                    term = COLLISION
+                    break
+                if stamp[nr, nc] == t + 1:
+                    term = LOOP
+                    break
+                r, c = nr, nc
+                stamp[r, c] = t + 1
+                cells[t, length, 0] = r
+                cells[t, length, 1] = c
+                length += 1
+            lengths[t] = length
+            terms[t] = term
+
+
+@numba.njit(cache=True, nogil=True)
+def _scratch(n, lq, wp):
+    """Per-thread arrays of the value iteration: reward_q and q `(N_even, l_q, wp)`, v and v_next
+    `(N_even + 2, wp + 2)` zero-padded, best `(2 * wp,)` (N_even: N rounded up to even, for the 2-row loop)."""
+    n_even = n + n % 2
+    reward_q = np.zeros((n_even, lq, wp), dtype=np.float32)
+    v = np.zeros((n_even + 2, wp + 2), dtype=np.float32)
+    v_next = np.zeros((n_even + 2, wp + 2), dtype=np.float32)
+    best = np.empty(2 * wp, dtype=np.float32)
+    q = np.empty((n_even, lq, wp), dtype=np.float32)
+    return reward_q, v, v_next, best, q
 
 
 def plan_batch(
@@ -345,7 +398,7 @@ def plan_maps(
 def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanResult:
     b, s = starts.shape[0], starts.shape[1]
     n = obstacles.shape[1]
-    actions = action_maps(model, obstacles, goals)
+    p = FoldedVIN.from_model(model)
     map_index = np.repeat(np.arange(b), s)
     flat_starts = starts.reshape(-1, 2)
     flat_goals = goals[map_index]
@@ -354,8 +407,9 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
     cells = np.empty((len(flat_starts), cap, 2), dtype=np.int16)
     lengths = np.empty(len(flat_starts), dtype=np.int64)
     terms = np.empty(len(flat_starts), dtype=np.int8)
-    _rollouts(actions, map_index, flat_starts, flat_goals, limits, obstacles, bool(corner_cutting),
-              ACTION_DELTAS, cells, lengths, terms)
+    _over_maps(b, lambda lo, hi: _plan_kernel(
+        lo, hi, obstacles, goals, starts, limits, p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k,
+        _padded_width(n), REL_MARGIN, bool(corner_cutting), ACTION_DELTAS, cells, lengths, terms))
     undecided = np.flatnonzero(terms == UNDECIDED)
     stats["torch_rollouts"] = stats.get("torch_rollouts", 0) + len(undecided)
     for t in undecided:  # rare: a rollout that stepped on a near tie is re-done with torch's own logits
@@ -381,12 +435,8 @@ def _limits_multi(obstacles, goals, starts, corner_cutting) -> np.ndarray:
     flat = starts.reshape(-1, 2)
     map_index = np.repeat(np.arange(b), s)
 
-    def work(lo: int, hi: int) -> None:
-        _optimal_moves(obstacles, goals, flat[lo:hi], map_index[lo:hi], bool(corner_cutting), ACTION_DELTAS,
-                       out[lo:hi])
-
-    bounds = np.linspace(0, len(flat), N_THREADS + 1).astype(int)
-    list(_pool().map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
+    _over_maps(len(flat), lambda lo, hi: _optimal_moves(
+        obstacles, goals, flat[lo:hi], map_index[lo:hi], bool(corner_cutting), ACTION_DELTAS, out[lo:hi]))
     n = obstacles.shape[1]
     return 2 * np.where(out < 0, n * n, out)
 
