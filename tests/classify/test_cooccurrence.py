@@ -160,3 +160,24 @@ def test_feature_models_round_trip(rule_pairs, make, tmp_path):
     assert np.array_equal(loaded.predict(Xt), model.predict(Xt))
     # images in, same answer as pairs in
     assert np.array_equal(model.decision_function(render_batch(Xt, "split")), model.decision_function(Xt))
+
+
+def test_model_files_from_before_features_load_as_pixels(rule_pairs, tmp_path):
+    """Files written before the `features` parameter existed have no such entry: they are pixel models."""
+    import json
+
+    X, y, Xt, _ = rule_pairs
+    X, y = X.subset(np.arange(0, len(X), 8)), y[::8]
+    model = SVMImageClassifier().fit(X, y)
+    path = tmp_path / "old.npz"
+    model.save(path)
+    with np.load(path, allow_pickle=False) as archive:
+        entries = {k: archive[k] for k in archive.files}
+    params = json.loads(str(entries["params"]))
+    del params["features"]
+    entries["params"] = np.array(json.dumps(params))
+    with open(path, "wb") as handle:
+        np.savez(handle, **entries)
+    loaded = SVMImageClassifier.load(path)
+    assert loaded.features == "pixels"
+    assert np.array_equal(loaded.decision_function(Xt), model.decision_function(Xt))
