@@ -120,6 +120,21 @@ def test_hand_built_endings(west, start, goal, term, moves):
         assert result.reached[0] == (term == "goal")
 
 
+def test_step_limit_past_the_straight_line_bound():
+    # a wall between start and goal: L (around it) exceeds the straight-line distance 2, so the engine's first
+    # bound (2 * 2 moves) must give way to the exact 2L
+    obs = empty_map()
+    obs[9, 1:4] = True
+    start, goal = (8, 1), (10, 1)
+    _, moves = shortest_distances(obs[None], np.array([goal]), True)
+    limit = 2 * int(moves[0, 8, 1])
+    assert 4 < limit < 13  # hits the limit before the east wall
+    for planner in (plan_batch, plan_reference):
+        result = planner(obs[None], np.array([start]), np.array([goal]), hand_vin(False))
+        assert result.termination_names[0] == "step_limit"
+        assert len(result.path(0)) == limit + 1
+
+
 def test_collision_into_obstacle():
     obs = empty_map()
     obs[8, 5] = True  # stops the eastward walk at column 4
@@ -150,7 +165,7 @@ def test_empty_batch_and_bad_inputs():
 
 @pytest.mark.parametrize("corner_cutting", [True, False])
 def test_step_limits_match_dijkstra(corner_cutting):
-    from vinadv.planners.engine import _limits_multi
+    from vinadv.planners.engine import _limits
 
     maps = generate_maps(60, 16, seed=8, n_starts=4, corner_cutting=corner_cutting)
     obstacles = maps.obstacles.copy()
@@ -161,4 +176,5 @@ def test_step_limits_match_dijkstra(corner_cutting):
     _, moves = shortest_distances(obstacles, maps.goals, corner_cutting)
     want = moves[np.arange(60)[:, None], starts[..., 0], starts[..., 1]].reshape(-1)
     want = 2 * np.where(want < 0, 16 * 16, want)
-    np.testing.assert_array_equal(_limits_multi(obstacles, maps.goals, starts, corner_cutting), want)
+    got = _limits(obstacles, maps.goals, starts.reshape(-1, 2), np.repeat(np.arange(60), 4), corner_cutting)
+    np.testing.assert_array_equal(got, want)

@@ -56,12 +56,10 @@ def action_maps(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndar
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
     p = FoldedVIN.from_model(model)
-    n = obstacles.shape[1]
     actions = np.empty(obstacles.shape, dtype=np.int8)
-
     _over_maps(len(obstacles), lambda lo, hi: _action_maps_kernel(
-        obstacles[lo:hi], goals[lo:hi], p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k,
-        _padded_width(n), REL_MARGIN, actions[lo:hi]))
+        obstacles[lo:hi], goals[lo:hi], p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k, REL_MARGIN,
+        actions[lo:hi]))
     return actions
 
 
@@ -84,11 +82,6 @@ def _over_maps(b: int, work: Callable[[int, int], None]) -> None:
         return
     bounds = np.linspace(0, b, N_THREADS + 1).astype(int)
     list(_pool().map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
-
-
-def _padded_width(n: int) -> int:
-    """Row length of the hot loop: N rounded up to whole 16-lane (AVX-512) vectors, so no scalar remainder."""
-    return -(-n // 16) * 16
 
 
 class FoldedVIN:
@@ -118,23 +111,39 @@ class FoldedVIN:
         )
 
 
+# Layout of the compiled kernels. A map's value map lives in a flat zero-padded array of (N + 2) x W cells,
+# W = N + 2, cell (i, j) at index (i + 1) * W + j + 1: the 3x3 neighbours of every cell are then the same nine
+# offsets, and one loop of (N - 1) * W + N cells covers the map (the few padding cells between rows are computed
+# and thrown away), so the vector loops run long, not 28 cells at a time.
+
+
 @numba.njit(cache=True, nogil=True)
-def _action_maps_kernel(obstacles, goals, reward_w, reward_b, goal_value, q_w, w, fc, k, wp, rel_margin, actions):
+def _action_maps_kernel(obstacles, goals, reward_w, reward_b, goal_value, q_w, w, fc, k, rel_margin, actions):
     n, lq = obstacles.shape[1], q_w.shape[0]
-    reward_q, v, v_next, best, q = _scratch(n, lq, wp)
+    reward_q, v, v_next, best, q = _scratch(n, lq)
     for b in range(obstacles.shape[0]):
-        v_next[:, :] = 0.0
         _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, v)
         _value_iteration(reward_q, v, v_next, best, w, k, q, n)
         _decide(q, fc, n, rel_margin, actions[b])
 
 
 @numba.njit(cache=True, nogil=True)
+def _scratch(n, lq):
+    """Per-thread arrays, flat and zero-padded (layout above): reward_q and q `(l_q, (N + 2) * W)`, v, v_next and
+    best `((N + 2) * W,)`."""
+    size = (n + 2) * (n + 2)
+    reward_q = np.zeros((lq, size), dtype=np.float32)
+    q = np.zeros((lq, size), dtype=np.float32)
+    return reward_q, np.zeros(size, dtype=np.float32), np.zeros(size, dtype=np.float32), \
+        np.zeros(size, dtype=np.float32), q
+
+
+@numba.njit(cache=True, nogil=True)
 def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v):
-    """reward_q[i, c, j] = (q_w[c] * r)(i, j), r = folded reward (zero outside the grid), in float64, stored
-    float32; v (padded) = max over c, the value after the first q layer. Rows >= N of reward_q are left as they
-    are (0, from `_scratch`)."""
-    n, lq, wp = obs.shape[0], reward_q.shape[1], reward_q.shape[2]
+    """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32;
+    v = max over c, the value after the first q layer (padding left 0)."""
+    n, lq = obs.shape[0], reward_q.shape[0]
+    width = n + 2
     r = np.zeros((n + 2, n + 2))
     for i in range(n):
         for j in range(n):
@@ -148,75 +157,82 @@ def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v)
                         if ii == gr and jj == gc:
                             s += goal_value * reward_w[1, di, dj]
             r[i + 1, j + 1] = s
-    for i in range(n):
-        for c in range(lq):
+    acc = np.empty(n)
+    v[:] = -np.inf
+    for c in range(lq):
+        for i in range(n):
+            acc[:] = 0.0
+            for di in range(3):  # taps outside, cells inside: the inner loop runs over a row (vectorised)
+                for dj in range(3):
+                    wt, row = q_w[c, di, dj], r[i + di]
+                    for j in range(n):
+                        acc[j] += wt * row[j + dj]
+            out = reward_q[c, (i + 1) * width + 1 : (i + 1) * width + 1 + n]
+            vi = v[(i + 1) * width + 1 : (i + 1) * width + 1 + n]
             for j in range(n):
-                s = 0.0
-                for di in range(3):
-                    for dj in range(3):
-                        s += q_w[c, di, dj] * r[i + di, j + dj]
-                reward_q[i, c, j] = s
-            for j in range(n, wp):
-                reward_q[i, c, j] = 0.0
-    v[:, :] = 0.0
-    for i in range(n):
-        for j in range(n):
-            m = reward_q[i, 0, j]
-            for c in range(1, lq):
-                if reward_q[i, c, j] > m:
-                    m = reward_q[i, c, j]
-            v[i + 1, j + 1] = m
+                out[j] = acc[j]
+                vi[j] = max(vi[j], out[j])
+    for i in range(n + 2):  # padding back to 0
+        for j in range(n + 2):
+            if i == 0 or i == n + 1 or j == 0 or j == n + 1:
+                v[i * width + j] = 0.0
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
 def _value_iteration(reward_q, v, v_next, best, w, k, q, n):
     """The hot loop: k times q = reward_q + (w * v), v = max over channels; the last q goes to `q`. N x N map.
 
-    Float32, two rows at a time (they share two of their three input rows, and two independent sums keep both
-    FMA units busy), each sum in three partial sums (a chain of nine dependent FMAs would wait on latency), rows
-    of `wp` cells (whole vectors; v is zero-padded, so columns >= N never leak in). Arrays from `_scratch`.
+    Float32 over the flat layout, two channels per pass (they share the nine loads of v), each sum in three
+    partial sums (a chain of nine dependent FMAs would wait on latency). Each neighbour is read through a view
+    starting at its offset, so every index is a loop counter (no negative-index handling to stop vectorising).
+    Overwrites v and v_next.
     """
-    n_even, lq, wp = reward_q.shape[0], reward_q.shape[1], reward_q.shape[2]
-    best2 = best[wp:]
+    lq = reward_q.shape[0]
+    width = n + 2
+    p0, length = width + 1, (n - 1) * width + n
     for it in range(k):
         last = it == k - 1
-        for i in range(0, n_even, 2):
-            va, vb, vc, vd = v[i], v[i + 1], v[i + 2], v[i + 3]
-            for j in range(wp):
-                best[j] = np.float32(-np.inf)
-                best2[j] = np.float32(-np.inf)
-            for c in range(lq):
-                rq, rq2 = reward_q[i, c], reward_q[i + 1, c]
-                w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
-                w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
-                w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
-                if not last:
-                    for j in range(wp):
-                        b0, b1, b2 = vb[j], vb[j + 1], vb[j + 2]
-                        c0, c1, c2 = vc[j], vc[j + 1], vc[j + 2]
-                        a = ((rq[j] + w00 * va[j] + w01 * va[j + 1] + w02 * va[j + 2])
-                             + (w10 * b0 + w11 * b1 + w12 * b2) + (w20 * c0 + w21 * c1 + w22 * c2))
-                        a2 = ((rq2[j] + w00 * b0 + w01 * b1 + w02 * b2)
-                              + (w10 * c0 + w11 * c1 + w12 * c2) + (w20 * vd[j] + w21 * vd[j + 1] + w22 * vd[j + 2]))
-                        best[j] = a if a > best[j] else best[j]
-                        best2[j] = a2 if a2 > best2[j] else best2[j]
-                else:  # the same sums, kept: the final q
-                    qc, qc2 = q[i, c], q[i + 1, c]
-                    for j in range(wp):
-                        b0, b1, b2 = vb[j], vb[j + 1], vb[j + 2]
-                        c0, c1, c2 = vc[j], vc[j + 1], vc[j + 2]
-                        qc[j] = ((rq[j] + w00 * va[j] + w01 * va[j + 1] + w02 * va[j + 2])
-                                 + (w10 * b0 + w11 * b1 + w12 * b2) + (w20 * c0 + w21 * c1 + w22 * c2))
-                        qc2[j] = ((rq2[j] + w00 * b0 + w01 * b1 + w02 * b2)
-                                  + (w10 * c0 + w11 * c1 + w12 * c2) + (w20 * vd[j] + w21 * vd[j + 1] + w22 * vd[j + 2]))
+        bst = best[p0 : p0 + length]
+        bst[:] = np.float32(-np.inf)
+        u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]  # rows above, same, below
+        for c in range(0, lq, 2):
+            d = c + 1 if c + 1 < lq else c  # odd l_q: the last channel twice
+            ra, rb = reward_q[c, p0 : p0 + length], reward_q[d, p0 : p0 + length]
+            a00 = w[c, 0, 0]; a01 = w[c, 0, 1]; a02 = w[c, 0, 2]  # noqa: E702
+            a10 = w[c, 1, 0]; a11 = w[c, 1, 1]; a12 = w[c, 1, 2]  # noqa: E702
+            a20 = w[c, 2, 0]; a21 = w[c, 2, 1]; a22 = w[c, 2, 2]  # noqa: E702
+            b00 = w[d, 0, 0]; b01 = w[d, 0, 1]; b02 = w[d, 0, 2]  # noqa: E702
+            b10 = w[d, 1, 0]; b11 = w[d, 1, 1]; b12 = w[d, 1, 2]  # noqa: E702
+            b20 = w[d, 2, 0]; b21 = w[d, 2, 1]; b22 = w[d, 2, 2]  # noqa: E702
             if not last:
-                out, out2 = v_next[i + 1], v_next[i + 2]
-                for j in range(n):
-                    out[j + 1] = best[j]
-                if i + 1 < n:  # an odd N's extra row stays 0, as the padding it is
-                    for j in range(n):
-                        out2[j + 1] = best2[j]
-        v, v_next = v_next, v
+                for t in range(length):
+                    x00, x01, x02 = u0[t], u0[t + 1], u0[t + 2]
+                    x10, x11, x12 = u1[t], u1[t + 1], u1[t + 2]
+                    x20, x21, x22 = u2[t], u2[t + 1], u2[t + 2]
+                    a = ((ra[t] + a00 * x00 + a01 * x01 + a02 * x02) + (a10 * x10 + a11 * x11 + a12 * x12)
+                         + (a20 * x20 + a21 * x21 + a22 * x22))
+                    b = ((rb[t] + b00 * x00 + b01 * x01 + b02 * x02) + (b10 * x10 + b11 * x11 + b12 * x12)
+                         + (b20 * x20 + b21 * x21 + b22 * x22))
+                    # np.maximum compiles to compare-and-blend; `max` or `if` to a masked store (slow on Zen)
+                    bst[t] = np.maximum(bst[t], np.maximum(a, b))
+            else:  # the same sums, kept: the final q (a branch inside the loop would stop it vectorising)
+                qa, qb = q[c, p0 : p0 + length], q[d, p0 : p0 + length]
+                for t in range(length):
+                    x00, x01, x02 = u0[t], u0[t + 1], u0[t + 2]
+                    x10, x11, x12 = u1[t], u1[t + 1], u1[t + 2]
+                    x20, x21, x22 = u2[t], u2[t + 1], u2[t + 2]
+                    qa[t] = ((ra[t] + a00 * x00 + a01 * x01 + a02 * x02) + (a10 * x10 + a11 * x11 + a12 * x12)
+                             + (a20 * x20 + a21 * x21 + a22 * x22))
+                    qb[t] = ((rb[t] + b00 * x00 + b01 * x01 + b02 * x02) + (b10 * x10 + b11 * x11 + b12 * x12)
+                             + (b20 * x20 + b21 * x21 + b22 * x22))
+        if not last:
+            out = v_next[p0 : p0 + length]
+            for t in range(length):
+                out[t] = bst[t]
+            for i in range(1, n):  # the padding between rows back to 0
+                v_next[i * width + n + 1] = 0.0
+                v_next[(i + 1) * width] = 0.0
+            v, v_next = v_next, v
 
 
 @numba.njit(cache=True, nogil=True)
@@ -224,11 +240,12 @@ def _margin(q, fc, n, rel_margin):
     """Near-tie margin of a map: rel_margin * max |q| over the map * max_a sum_c |fc[a, c]| (a bound on how far
     rounding moves a logit, times the relative error of q)."""
     n_act, lq = fc.shape[0], fc.shape[1]
+    width = n + 2
     qmax = 0.0
-    for i in range(n):
-        for c in range(lq):
+    for c in range(lq):
+        for i in range(n):
             for j in range(n):
-                qmax = max(qmax, abs(q[i, c, j]))
+                qmax = max(qmax, abs(q[c, (i + 1) * width + j + 1]))
     fmax = 0.0
     for a in range(n_act):
         s = 0.0
@@ -239,14 +256,14 @@ def _margin(q, fc, n, rel_margin):
 
 
 @numba.njit(cache=True, nogil=True)
-def _action_at(q, fc, i, j, margin, logits):
-    """Action of cell (i, j): argmax of the float64 logits (lowest index on ties), UNDECIDED where the best two
-    are within `margin`. `logits` is scratch of length A."""
+def _action_at(q, fc, cell, margin, logits):
+    """Action of the cell at flat index `cell`: argmax of the float64 logits (lowest index on ties), UNDECIDED
+    where the best two are within `margin`. `logits` is scratch of length A."""
     n_act, lq = fc.shape[0], fc.shape[1]
     for a in range(n_act):
         s = 0.0
         for c in range(lq):
-            s += fc[a, c] * q[i, c, j]
+            s += fc[a, c] * q[c, cell]
         logits[a] = s
     top = 0
     for a in range(1, n_act):
@@ -266,20 +283,24 @@ def _decide(q, fc, n, rel_margin, actions):
     logits = np.empty(fc.shape[0])
     for i in range(n):
         for j in range(n):
-            actions[i, j] = _action_at(q, fc, i, j, margin, logits)
+            actions[i, j] = _action_at(q, fc, (i + 1) * (n + 2) + j + 1, margin, logits)
 
 
 @numba.njit(cache=True, nogil=True)
-def _plan_kernel(lo, hi, obstacles, goals, starts, limits, reward_w, reward_b, goal_value, q_w, w, fc, k, wp,
-                 rel_margin, corner_cutting, deltas, cells, lengths, terms):
+def _plan_kernel(lo, hi, obstacles, goals, starts, reward_w, reward_b, goal_value, q_w, w, fc, k, rel_margin,
+                 corner_cutting, deltas, cells, lengths, terms):
     """Maps lo..hi-1: value map, then the rollouts of the map's S starts (rollout b * S + s), deciding the action
-    of a cell only when a rollout stands on it. cells: `(B * S, cap, 2)`; writes lengths and terms `(B * S,)`."""
+    of a cell only when a rollout stands on it. cells: `(B * S, N * N, 2)`; writes lengths and terms `(B * S,)`.
+
+    The step limit 2L needs L, the optimal move count (an A* search); a rollout needs it only once it has made
+    2 * max(|dr|, |dc|) moves (a lower bound of 2L), which few do, so L is searched for then.
+    """
     n, lq, n_starts = obstacles.shape[1], q_w.shape[0], starts.shape[1]
-    reward_q, v, v_next, best, q = _scratch(n, lq, wp)
+    reward_q, v, v_next, best, q = _scratch(n, lq)
     logits = np.empty(fc.shape[0])
     stamp = np.zeros((n, n), dtype=np.int64)  # t + 1 on the cells rollout t has visited
+    one_start, one_map, one_moves = np.empty((1, 2), dtype=np.int64), np.empty(1, dtype=np.int64), np.empty(1, np.int64)
     for b in range(lo, hi):
-        v_next[:, :] = 0.0
         _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, v)
         _value_iteration(reward_q, v, v_next, best, w, k, q, n)
         margin = _margin(q, fc, n, rel_margin)
@@ -291,14 +312,19 @@ def _plan_kernel(lo, hi, obstacles, goals, starts, limits, reward_w, reward_b, g
             cells[t, 0, 1] = c
             length = 1
             stamp[r, c] = t + 1
+            limit, exact = 2 * max(abs(r - gr), abs(c - gc)), False
             while True:
                 if r == gr and c == gc:
                     term = GOAL
                     break
-                if length - 1 >= limits[t]:
+                if length - 1 >= limit and not exact:
+                    one_start[0, 0], one_start[0, 1], one_map[0] = starts[b, s, 0], starts[b, s, 1], b
+                    _optimal_moves(obstacles, goals, one_start, one_map, corner_cutting, deltas, one_moves)
+                    limit, exact = 2 * (one_moves[0] if one_moves[0] >= 0 else n * n), True
+                if length - 1 >= limit:
                     term = STEP_LIMIT
                     break
-                a = _action_at(q, fc, r, c, margin, logits)
+                a = _action_at(q, fc, (r + 1) * (n + 2) + c + 1, margin, logits)
                 if a < 0:
                     term = UNDECIDED
                     break
@@ -320,19 +346,6 @@ def _plan_kernel(lo, hi, obstacles, goals, starts, limits, reward_w, reward_b, g
                 length += 1
             lengths[t] = length
             terms[t] = term
-
-
-@numba.njit(cache=True, nogil=True)
-def _scratch(n, lq, wp):
-    """Per-thread arrays of the value iteration: reward_q and q `(N_even, l_q, wp)`, v and v_next
-    `(N_even + 2, wp + 2)` zero-padded, best `(2 * wp,)` (N_even: N rounded up to even, for the 2-row loop)."""
-    n_even = n + n % 2
-    reward_q = np.zeros((n_even, lq, wp), dtype=np.float32)
-    v = np.zeros((n_even + 2, wp + 2), dtype=np.float32)
-    v_next = np.zeros((n_even + 2, wp + 2), dtype=np.float32)
-    best = np.empty(2 * wp, dtype=np.float32)
-    q = np.empty((n_even, lq, wp), dtype=np.float32)
-    return reward_q, v, v_next, best, q
 
 
 def plan_batch(
@@ -399,44 +412,41 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
     b, s = starts.shape[0], starts.shape[1]
     n = obstacles.shape[1]
     p = FoldedVIN.from_model(model)
-    map_index = np.repeat(np.arange(b), s)
-    flat_starts = starts.reshape(-1, 2)
-    flat_goals = goals[map_index]
-    limits = _limits_multi(obstacles, goals, starts, corner_cutting)
-    cap = int(min(limits.max(initial=0) + 1, n * n))
-    cells = np.empty((len(flat_starts), cap, 2), dtype=np.int16)
-    lengths = np.empty(len(flat_starts), dtype=np.int64)
-    terms = np.empty(len(flat_starts), dtype=np.int8)
+    # a rollout never visits a cell twice, so N * N cells bound its length (np.empty: untouched pages cost nothing)
+    cells = np.empty((b * s, n * n, 2), dtype=np.int16)
+    lengths = np.empty(b * s, dtype=np.int64)
+    terms = np.empty(b * s, dtype=np.int8)
     _over_maps(b, lambda lo, hi: _plan_kernel(
-        lo, hi, obstacles, goals, starts, limits, p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k,
-        _padded_width(n), REL_MARGIN, bool(corner_cutting), ACTION_DELTAS, cells, lengths, terms))
+        lo, hi, obstacles, goals, starts, p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k, REL_MARGIN,
+        bool(corner_cutting), ACTION_DELTAS, cells, lengths, terms))
     undecided = np.flatnonzero(terms == UNDECIDED)
     stats["torch_rollouts"] = stats.get("torch_rollouts", 0) + len(undecided)
-    for t in undecided:  # rare: a rollout that stepped on a near tie is re-done with torch's own logits
-        m = map_index[t]
-        x = make_input(obstacles[m : m + 1], goals[m : m + 1])
-        with torch.no_grad():
-            q = model.q_values(x)
-        path, term = rollout(torch_action_at(model, x, q), obstacles[m], flat_starts[t], flat_goals[t],
-                             int(limits[t]), corner_cutting)
-        cells[t, : len(path)] = path
-        lengths[t] = len(path)
-        terms[t] = term
+    if len(undecided):  # rare: a rollout that stepped on a near tie is re-done with torch's own logits
+        map_index = undecided // s
+        flat_starts = starts.reshape(-1, 2)[undecided]
+        limits = _limits(obstacles, goals, flat_starts, map_index, corner_cutting)
+        for t, m, start, limit in zip(undecided, map_index, flat_starts, limits):
+            x = make_input(obstacles[m : m + 1], goals[m : m + 1])
+            with torch.no_grad():
+                q = model.q_values(x)
+            path, term = rollout(torch_action_at(model, x, q), obstacles[m], start, goals[m], int(limit),
+                                 corner_cutting)
+            cells[t, : len(path)] = path
+            lengths[t] = len(path)
+            terms[t] = term
     offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
     np.cumsum(lengths, out=offsets[1:])
-    packed = cells[np.arange(cap)[None, :] < lengths[:, None]]
+    longest = int(lengths.max(initial=0))
+    packed = cells[:, :longest][np.arange(longest)[None, :] < lengths[:, None]]
     return PlanResult(packed, offsets, terms == GOAL, terms)
 
 
-def _limits_multi(obstacles, goals, starts, corner_cutting) -> np.ndarray:
-    """`(B * S,)` int64 step limits 2 * L (L = optimal move count from the start; N * N when unreachable)."""
-    b, s = starts.shape[0], starts.shape[1]
-    out = np.empty(b * s, dtype=np.int64)
-    flat = starts.reshape(-1, 2)
-    map_index = np.repeat(np.arange(b), s)
-
-    _over_maps(len(flat), lambda lo, hi: _optimal_moves(
-        obstacles, goals, flat[lo:hi], map_index[lo:hi], bool(corner_cutting), ACTION_DELTAS, out[lo:hi]))
+def _limits(obstacles, goals, starts, map_index, corner_cutting) -> np.ndarray:
+    """Step limits 2L of rollouts from `starts (R, 2)` on maps `map_index (R,)` (L = optimal move count; N * N
+    when the goal is unreachable), `(R,)` int64."""
+    out = np.empty(len(starts), dtype=np.int64)
+    _optimal_moves(obstacles, goals, np.ascontiguousarray(starts, dtype=np.int64),
+                   np.ascontiguousarray(map_index, dtype=np.int64), bool(corner_cutting), ACTION_DELTAS, out)
     n = obstacles.shape[1]
     return 2 * np.where(out < 0, n * n, out)
 
