@@ -141,51 +141,57 @@ def _scratch(n, lq):
 @numba.njit(cache=True, nogil=True)
 def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v):
     """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32;
-    v = max over c, the value after the first q layer (padding left 0)."""
+    v = max over c, the value after the first q layer (padding left 0). Flat layout, as `_value_iteration`."""
     n, lq = obs.shape[0], reward_q.shape[0]
     width = n + 2
-    r = np.zeros((n + 2, n + 2))
+    size, p0, length = width * width, width + 1, (n - 1) * width + n
+    padded = np.zeros(size)
     for i in range(n):
         for j in range(n):
-            s = reward_b
-            for di in range(3):
-                for dj in range(3):
-                    ii, jj = i + di - 1, j + dj - 1
-                    if 0 <= ii < n and 0 <= jj < n:
-                        if obs[ii, jj]:
-                            s += reward_w[0, di, dj]
-                        if ii == gr and jj == gc:
-                            s += goal_value * reward_w[1, di, dj]
-            r[i + 1, j + 1] = s
-    acc = np.empty(n)
+            padded[(i + 1) * width + j + 1] = obs[i, j]
+    r = np.zeros(size)
+    _conv3x3(padded, reward_w[0], reward_b, r, width, p0, length)
+    for i in range(1, n):  # padding between rows back to 0
+        r[i * width + n + 1] = 0.0
+        r[(i + 1) * width] = 0.0
+    for di in range(3):  # the goal image is 0 but at the goal: it reaches only the goal's 3x3 neighbourhood
+        for dj in range(3):
+            i, j = gr - di + 1, gc - dj + 1
+            if 0 <= i < n and 0 <= j < n:
+                r[(i + 1) * width + j + 1] += goal_value * reward_w[1, di, dj]
+    acc = np.empty(size)
     v[:] = -np.inf
     for c in range(lq):
-        for i in range(n):
-            acc[:] = 0.0
-            for di in range(3):  # taps outside, cells inside: the inner loop runs over a row (vectorised)
-                for dj in range(3):
-                    wt, row = q_w[c, di, dj], r[i + di]
-                    for j in range(n):
-                        acc[j] += wt * row[j + dj]
-            out = reward_q[c, (i + 1) * width + 1 : (i + 1) * width + 1 + n]
-            vi = v[(i + 1) * width + 1 : (i + 1) * width + 1 + n]
-            for j in range(n):
-                out[j] = acc[j]
-                vi[j] = max(vi[j], out[j])
+        _conv3x3(r, q_w[c], 0.0, acc, width, p0, length)
+        out, vc = reward_q[c, p0 : p0 + length], v[p0 : p0 + length]
+        for t in range(length):
+            out[t] = acc[p0 + t]
+            vc[t] = max(vc[t], out[t])
     for i in range(n + 2):  # padding back to 0
         for j in range(n + 2):
             if i == 0 or i == n + 1 or j == 0 or j == n + 1:
                 v[i * width + j] = 0.0
 
 
+@numba.njit(cache=True, nogil=True)
+def _conv3x3(x, w, bias, out, width, p0, length):
+    """out[p] = bias + sum of w * the 3x3 neighbourhood of p, for p in p0 .. p0 + length - 1 (flat layout)."""
+    u0, u1, u2 = x[p0 - width - 1 :], x[p0 - 1 :], x[p0 + width - 1 :]
+    o = out[p0 : p0 + length]
+    for t in range(length):
+        o[t] = (bias + w[0, 0] * u0[t] + w[0, 1] * u0[t + 1] + w[0, 2] * u0[t + 2]
+                + w[1, 0] * u1[t] + w[1, 1] * u1[t + 1] + w[1, 2] * u1[t + 2]
+                + w[2, 0] * u2[t] + w[2, 1] * u2[t + 1] + w[2, 2] * u2[t + 2])
+
+
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
 def _value_iteration(reward_q, v, v_next, best, w, k, q, n):
     """The hot loop: k times q = reward_q + (w * v), v = max over channels; the last q goes to `q`. N x N map.
 
-    Float32 over the flat layout, two channels per pass (they share the nine loads of v), each sum in three
-    partial sums (a chain of nine dependent FMAs would wait on latency). Each neighbour is read through a view
-    starting at its offset, so every index is a loop counter (no negative-index handling to stop vectorising).
-    Overwrites v and v_next.
+    Float32 over the flat layout, one channel per pass (its nine weights stay in registers; two channels per pass
+    share the loads of v but spill weights, measured slower), each sum in three partial sums (a chain of nine
+    dependent FMAs would wait on latency). Each neighbour is read through a view starting at its offset, so every
+    index is a loop counter (negative-index handling would stop the loop vectorising). Overwrites v and v_next.
     """
     lq = reward_q.shape[0]
     width = n + 2
@@ -195,36 +201,24 @@ def _value_iteration(reward_q, v, v_next, best, w, k, q, n):
         bst = best[p0 : p0 + length]
         bst[:] = np.float32(-np.inf)
         u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]  # rows above, same, below
-        for c in range(0, lq, 2):
-            d = c + 1 if c + 1 < lq else c  # odd l_q: the last channel twice
-            ra, rb = reward_q[c, p0 : p0 + length], reward_q[d, p0 : p0 + length]
-            a00 = w[c, 0, 0]; a01 = w[c, 0, 1]; a02 = w[c, 0, 2]  # noqa: E702
-            a10 = w[c, 1, 0]; a11 = w[c, 1, 1]; a12 = w[c, 1, 2]  # noqa: E702
-            a20 = w[c, 2, 0]; a21 = w[c, 2, 1]; a22 = w[c, 2, 2]  # noqa: E702
-            b00 = w[d, 0, 0]; b01 = w[d, 0, 1]; b02 = w[d, 0, 2]  # noqa: E702
-            b10 = w[d, 1, 0]; b11 = w[d, 1, 1]; b12 = w[d, 1, 2]  # noqa: E702
-            b20 = w[d, 2, 0]; b21 = w[d, 2, 1]; b22 = w[d, 2, 2]  # noqa: E702
+        for c in range(lq):
+            rq = reward_q[c, p0 : p0 + length]
+            w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
+            w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
+            w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
             if not last:
                 for t in range(length):
-                    x00, x01, x02 = u0[t], u0[t + 1], u0[t + 2]
-                    x10, x11, x12 = u1[t], u1[t + 1], u1[t + 2]
-                    x20, x21, x22 = u2[t], u2[t + 1], u2[t + 2]
-                    a = ((ra[t] + a00 * x00 + a01 * x01 + a02 * x02) + (a10 * x10 + a11 * x11 + a12 * x12)
-                         + (a20 * x20 + a21 * x21 + a22 * x22))
-                    b = ((rb[t] + b00 * x00 + b01 * x01 + b02 * x02) + (b10 * x10 + b11 * x11 + b12 * x12)
-                         + (b20 * x20 + b21 * x21 + b22 * x22))
+                    a = ((rq[t] + w00 * u0[t] + w01 * u0[t + 1] + w02 * u0[t + 2])
+                         + (w10 * u1[t] + w11 * u1[t + 1] + w12 * u1[t + 2])
+                         + (w20 * u2[t] + w21 * u2[t + 1] + w22 * u2[t + 2]))
                     # np.maximum compiles to compare-and-blend; `max` or `if` to a masked store (slow on Zen)
-                    bst[t] = np.maximum(bst[t], np.maximum(a, b))
+                    bst[t] = np.maximum(bst[t], a)
             else:  # the same sums, kept: the final q (a branch inside the loop would stop it vectorising)
-                qa, qb = q[c, p0 : p0 + length], q[d, p0 : p0 + length]
+                qc = q[c, p0 : p0 + length]
                 for t in range(length):
-                    x00, x01, x02 = u0[t], u0[t + 1], u0[t + 2]
-                    x10, x11, x12 = u1[t], u1[t + 1], u1[t + 2]
-                    x20, x21, x22 = u2[t], u2[t + 1], u2[t + 2]
-                    qa[t] = ((ra[t] + a00 * x00 + a01 * x01 + a02 * x02) + (a10 * x10 + a11 * x11 + a12 * x12)
-                             + (a20 * x20 + a21 * x21 + a22 * x22))
-                    qb[t] = ((rb[t] + b00 * x00 + b01 * x01 + b02 * x02) + (b10 * x10 + b11 * x11 + b12 * x12)
-                             + (b20 * x20 + b21 * x21 + b22 * x22))
+                    qc[t] = ((rq[t] + w00 * u0[t] + w01 * u0[t + 1] + w02 * u0[t + 2])
+                             + (w10 * u1[t] + w11 * u1[t + 1] + w12 * u1[t + 2])
+                             + (w20 * u2[t] + w21 * u2[t + 1] + w22 * u2[t + 2]))
         if not last:
             out = v_next[p0 : p0 + length]
             for t in range(length):
