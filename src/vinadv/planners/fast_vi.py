@@ -31,11 +31,13 @@ def _pool() -> ThreadPoolExecutor:
 
 
 def _over_maps(kernel, b: int, *arrays) -> None:
-    """Run `kernel(lo, hi, *arrays)` over map ranges split between the threads (the kernels release the GIL)."""
-    if b < 2 * N_THREADS:
+    """Run `kernel(lo, hi, *arrays)` over map ranges split between threads (the kernels release the GIL), as
+    many as torch may use (`vin train --threads`), at most N_THREADS."""
+    threads = max(1, min(N_THREADS, torch.get_num_threads()))
+    if b < 2 * threads:
         kernel(0, b, *arrays)
         return
-    bounds = np.linspace(0, b, N_THREADS + 1).astype(int)
+    bounds = np.linspace(0, b, threads + 1).astype(int)
     list(_pool().map(lambda lh: kernel(lh[0], lh[1], *arrays), zip(bounds[:-1], bounds[1:])))
 
 
