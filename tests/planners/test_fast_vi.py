@@ -31,7 +31,7 @@ def test_values_and_gradients_equal_torch_float64(size, k):
     want = _grads(model, q_ref, upstream)
     q = fast_vi.q_values(model, x)
     got = _grads(model, q, upstream)
-    torch.testing.assert_close(q, q_ref, rtol=1e-12, atol=1e-12)
+    torch.testing.assert_close(q, q_ref, rtol=1e-10, atol=1e-10)  # float64: only the order of the sums differs
     assert set(got) == set(want) == {"h.weight", "h.bias", "r.weight", "q.weight", "w"}
     for name in want:
         torch.testing.assert_close(got[name], want[name], rtol=1e-10, atol=1e-12, msg=name)

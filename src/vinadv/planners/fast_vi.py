@@ -44,51 +44,81 @@ def _over_maps(kernel, b: int, *arrays) -> None:
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
 def _forward(lo, hi, q_r, w, k, q_out, v_saved, arg_saved):
     """Maps lo..hi-1. q_r (B, L, N, N), w (L, 3, 3) -> q_out (B, L, N, N) = q after k steps;
-    v_saved (B, k, N+2, N+2) = zero-padded v_0..v_{k-1}; arg_saved (B, k, N, N) uint8 = argmax channel of q_t."""
+    v_saved (B, k, N+2, N+2) = zero-padded v_0..v_{k-1}; arg_saved (B, k, N, N) uint8 = argmax channel of q_t.
+
+    The loop runs as the planning engine's (`vinadv.planners.engine._value_iteration`): each padded value map
+    seen as one flat array, one long vector loop per channel over the whole map, the nine neighbours read through
+    views at their offsets. The argmax is kept as a float channel number, updated by arithmetic (a conditional
+    store would stop the loop vectorising); ties keep the lowest channel.
+    """
     lq, n = q_r.shape[1], q_r.shape[2]
-    best = np.empty(n, dtype=q_r.dtype)
-    arg = np.zeros(n, dtype=np.uint8)
+    width = n + 2
+    size, p0, length = width * width, width + 1, (n - 1) * width + n
+    rq = np.zeros((lq, size), dtype=q_r.dtype)
+    best = np.empty(length, dtype=q_r.dtype)
+    arg = np.empty(length, dtype=q_r.dtype)
     for b in range(lo, hi):
-        qr = q_r[b]
-        vs = v_saved[b]
-        vs[:, :, :] = 0.0
-        for i in range(n):  # v_0 = max_c q_r
-            for j in range(n):
-                m, a = qr[0, i, j], 0
-                for c in range(1, lq):
-                    if qr[c, i, j] > m:
-                        m, a = qr[c, i, j], c
-                vs[0, i + 1, j + 1] = m
-                arg_saved[b, 0, i, j] = a
+        for c in range(lq):
+            for i in range(n):
+                for j in range(n):
+                    rq[c, (i + 1) * width + j + 1] = q_r[b, c, i, j]
+        vs = v_saved[b].reshape((k, size))
+        vs[:, :] = 0.0
+        best[:] = rq[0, p0 : p0 + length]
+        arg[:] = 0.0
+        for c in range(1, lq):  # v_0 = max_c q_r
+            _max_update(rq[c, p0 : p0 + length], c, best, arg)
+        _store_step(best, arg, vs[0], arg_saved[b, 0], n)
         for t in range(1, k + 1):
             vp = vs[t - 1]
-            for i in range(n):
-                v0, v1, v2 = vp[i], vp[i + 1], vp[i + 2]
-                for j in range(n):
-                    best[j] = -np.inf
-                for c in range(lq):
-                    w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
-                    w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
-                    w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
-                    rq = qr[c, i]
-                    if t == k:
-                        out = q_out[b, c, i]
+            u0, u1, u2 = vp[p0 - width - 1 :], vp[p0 - 1 :], vp[p0 + width - 1 :]
+            best[:] = -np.inf
+            arg[:] = 0.0
+            for c in range(lq):
+                r = rq[c, p0 : p0 + length]
+                w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
+                w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
+                w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
+                if t == k:
+                    out = q_out[b, c]
+                    for i in range(n):
                         for j in range(n):
-                            out[j] = (rq[j] + (w00 * v0[j] + w01 * v0[j + 1] + w02 * v0[j + 2])
-                                      + (w10 * v1[j] + w11 * v1[j + 1] + w12 * v1[j + 2])
-                                      + (w20 * v2[j] + w21 * v2[j + 1] + w22 * v2[j + 2]))
-                    else:
-                        for j in range(n):
-                            s = (rq[j] + (w00 * v0[j] + w01 * v0[j + 1] + w02 * v0[j + 2])
-                                 + (w10 * v1[j] + w11 * v1[j + 1] + w12 * v1[j + 2])
-                                 + (w20 * v2[j] + w21 * v2[j + 1] + w22 * v2[j + 2]))
-                            if s > best[j]:
-                                best[j] = s
-                                arg[j] = c
-                if t < k:
-                    for j in range(n):
-                        vs[t, i + 1, j + 1] = best[j]
-                        arg_saved[b, t, i, j] = arg[j]
+                            x = i * width + j
+                            out[i, j] = ((r[x] + w00 * u0[x] + w01 * u0[x + 1] + w02 * u0[x + 2])
+                                         + (w10 * u1[x] + w11 * u1[x + 1] + w12 * u1[x + 2])
+                                         + (w20 * u2[x] + w21 * u2[x + 1] + w22 * u2[x + 2]))
+                else:
+                    cf = q_r.dtype.type(c)
+                    for x in range(length):
+                        a = ((r[x] + w00 * u0[x] + w01 * u0[x + 1] + w02 * u0[x + 2])
+                             + (w10 * u1[x] + w11 * u1[x + 1] + w12 * u1[x + 2])
+                             + (w20 * u2[x] + w21 * u2[x + 1] + w22 * u2[x + 2]))
+                        greater = a > best[x]
+                        arg[x] += (cf - arg[x]) * greater
+                        best[x] = np.maximum(best[x], a)
+            if t < k:
+                _store_step(best, arg, vs[t], arg_saved[b, t], n)
+
+
+@numba.njit(cache=True, nogil=True)
+def _max_update(values, c, best, arg):
+    """best = max(best, values), arg = c where values is strictly greater (flat, same length)."""
+    cf = best.dtype.type(c)
+    for x in range(len(values)):
+        greater = values[x] > best[x]
+        arg[x] += (cf - arg[x]) * greater
+        best[x] = np.maximum(best[x], values[x])
+
+
+@numba.njit(cache=True, nogil=True)
+def _store_step(best, arg, v_flat, arg_out, n):
+    """The step's value map into the padded flat `v_flat` (padding stays 0) and its argmax into `arg_out (N, N)`."""
+    width = n + 2
+    for i in range(n):
+        for j in range(n):
+            x = i * width + j
+            v_flat[(i + 1) * width + j + 1] = best[x]
+            arg_out[i, j] = np.uint8(arg[x])
 
 
 @numba.njit(cache=True, nogil=True)
