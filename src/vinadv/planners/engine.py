@@ -419,12 +419,13 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
         map_index = undecided // s
         flat_starts = starts.reshape(-1, 2)[undecided]
         limits = _limits(obstacles, goals, flat_starts, map_index, corner_cutting)
+        policies = {}  # one torch value map per map, shared by that map's re-done rollouts
         for t, m, start, limit in zip(undecided, map_index, flat_starts, limits):
-            x = make_input(obstacles[m : m + 1], goals[m : m + 1])
-            with torch.no_grad():
-                q = model.q_values(x)
-            path, term = rollout(torch_action_at(model, x, q), obstacles[m], start, goals[m], int(limit),
-                                 corner_cutting)
+            if m not in policies:
+                x = make_input(obstacles[m : m + 1], goals[m : m + 1])
+                with torch.no_grad():
+                    policies[m] = torch_action_at(model, x, model.q_values(x))
+            path, term = rollout(policies[m], obstacles[m], start, goals[m], int(limit), corner_cutting)
             cells[t, : len(path)] = path
             lengths[t] = len(path)
             terms[t] = term
