@@ -57,7 +57,7 @@ def action_maps(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndar
     goals = np.ascontiguousarray(goals, dtype=np.int64)
     p = FoldedVIN.from_model(model)
     actions = np.empty(obstacles.shape, dtype=np.int8)
-    _over_maps(len(obstacles), lambda lo, hi: _action_maps_kernel(
+    over_maps(len(obstacles), lambda lo, hi: _action_maps_kernel(
         obstacles[lo:hi], goals[lo:hi], p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k, REL_MARGIN,
         actions[lo:hi]))
     return actions
@@ -71,16 +71,17 @@ def _pool() -> ThreadPoolExecutor:
     return ThreadPoolExecutor(N_THREADS, thread_name_prefix="vinadv-plan")
 
 
-def _over_maps(b: int, work: Callable[[int, int], None]) -> None:
-    """`work(lo, hi)` over `range(b)` split between N_THREADS threads.
+def over_maps(b: int, work: Callable[[int, int], None], threads: int = N_THREADS) -> None:
+    """`work(lo, hi)` over `range(b)` split between `threads` threads (at most N_THREADS), for nogil kernels.
 
     Plain threads over nogil kernels rather than Numba's OpenMP layer: OpenMP workers left spinning slow down
     torch's own OpenMP pool, which the near-tie fallback uses right after.
     """
-    if b < 2 * N_THREADS:
+    threads = max(1, min(threads, N_THREADS))
+    if threads == 1 or b < 2 * threads:
         work(0, b)
         return
-    bounds = np.linspace(0, b, N_THREADS + 1).astype(int)
+    bounds = np.linspace(0, b, threads + 1).astype(int)
     list(_pool().map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
 
 
@@ -410,7 +411,7 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
     cells = np.empty((b * s, n * n, 2), dtype=np.int16)
     lengths = np.empty(b * s, dtype=np.int64)
     terms = np.empty(b * s, dtype=np.int8)
-    _over_maps(b, lambda lo, hi: _plan_kernel(
+    over_maps(b, lambda lo, hi: _plan_kernel(
         lo, hi, obstacles, goals, starts, p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k, REL_MARGIN,
         bool(corner_cutting), ACTION_DELTAS, cells, lengths, terms))
     undecided = np.flatnonzero(terms == UNDECIDED)

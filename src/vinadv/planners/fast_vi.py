@@ -13,32 +13,18 @@ lowest channel, as any subgradient would do).
 
 from __future__ import annotations
 
-import functools
-import os
-from concurrent.futures import ThreadPoolExecutor
-
 import numba
 import numpy as np
 import torch
 import torch.nn.functional as F
 
-N_THREADS = max(1, min(len(os.sched_getaffinity(0)), 8))
-
-
-@functools.cache
-def _pool() -> ThreadPoolExecutor:
-    return ThreadPoolExecutor(N_THREADS, thread_name_prefix="vinadv-vi")
+from vinadv.planners.engine import over_maps
 
 
 def _over_maps(kernel, b: int, *arrays) -> None:
-    """Run `kernel(lo, hi, *arrays)` over map ranges split between threads (the kernels release the GIL), as
-    many as torch may use (`vin train --threads`), at most N_THREADS."""
-    threads = max(1, min(N_THREADS, torch.get_num_threads()))
-    if b < 2 * threads:
-        kernel(0, b, *arrays)
-        return
-    bounds = np.linspace(0, b, threads + 1).astype(int)
-    list(_pool().map(lambda lh: kernel(lh[0], lh[1], *arrays), zip(bounds[:-1], bounds[1:])))
+    """Run `kernel(lo, hi, *arrays)` over map ranges split between as many threads as torch may use
+    (`vin train --threads`)."""
+    over_maps(b, lambda lo, hi: kernel(lo, hi, *arrays), threads=torch.get_num_threads())
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
