@@ -41,7 +41,7 @@ from vinadv.planners.vin import GOAL_VALUE, VIN, make_input
 
 __all__ = ["PlanResult", "TERMINATIONS", "plan_batch", "action_maps"]
 
-#: maps per chunk: bounds the memory of the action maps, paths and torch tensors.
+#: maps per chunk: bounds the memory of the path buffers (N * N cells per rollout, touched only as far as used).
 DEFAULT_CHUNK = 4096
 #: a cell is uncertain when its two best logits are closer than REL_MARGIN * (logit scale of its map).
 REL_MARGIN = 5e-6
