@@ -152,26 +152,32 @@ def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v)
             padded[(i + 1) * width + j + 1] = obs[i, j]
     r = np.zeros(size)
     _conv3x3(padded, reward_w[0], reward_b, r, width, p0, length)
-    for i in range(1, n):  # padding between rows back to 0
-        r[i * width + n + 1] = 0.0
-        r[(i + 1) * width] = 0.0
+    _zero_row_gaps(r, n)
     for di in range(3):  # the goal image is 0 but at the goal: it reaches only the goal's 3x3 neighbourhood
         for dj in range(3):
             i, j = gr - di + 1, gc - dj + 1
             if 0 <= i < n and 0 <= j < n:
                 r[(i + 1) * width + j + 1] += goal_value * reward_w[1, di, dj]
     acc = np.empty(size)
-    v[:] = -np.inf
+    v[:] = 0.0
+    vc = v[p0 : p0 + length]
+    vc[:] = -np.inf
     for c in range(lq):
         _conv3x3(r, q_w[c], 0.0, acc, width, p0, length)
-        out, vc = reward_q[c, p0 : p0 + length], v[p0 : p0 + length]
+        out = reward_q[c, p0 : p0 + length]
         for t in range(length):
             out[t] = acc[p0 + t]
             vc[t] = max(vc[t], out[t])
-    for i in range(n + 2):  # padding back to 0
-        for j in range(n + 2):
-            if i == 0 or i == n + 1 or j == 0 or j == n + 1:
-                v[i * width + j] = 0.0
+    _zero_row_gaps(v, n)
+
+
+@numba.njit(cache=True, nogil=True)
+def _zero_row_gaps(flat, n):
+    """Set the padding cells between rows of a flat map (computed and thrown away by the long loops) back to 0."""
+    width = n + 2
+    for i in range(1, n):
+        flat[i * width + n + 1] = 0.0
+        flat[(i + 1) * width] = 0.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -224,9 +230,7 @@ def _value_iteration(reward_q, v, v_next, best, w, k, q, n):
             out = v_next[p0 : p0 + length]
             for t in range(length):
                 out[t] = bst[t]
-            for i in range(1, n):  # the padding between rows back to 0
-                v_next[i * width + n + 1] = 0.0
-                v_next[(i + 1) * width] = 0.0
+            _zero_row_gaps(v_next, n)
             v, v_next = v_next, v
 
 
