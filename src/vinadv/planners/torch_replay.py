@@ -1,0 +1,240 @@
+"""PyTorch's own value map for one map, bit for bit, in a fraction of PyTorch's time: how the engine settles near ties.
+
+Where two logits of a cell are within rounding of each other, the engine must take the reference's decision, which is
+made by PyTorch's float32 arithmetic: a batch-1 `VIN.q_values`, then `fc` at the cell. That call costs ~3 ms at
+28x28, nearly all of it the overhead of the 3k small ops of the loop, each cheap and simple:
+
+- the 1 -> l_q 3x3 convolution of v goes through ATen's `slow_conv2d`: im2col (exact copies, zero padding), then a
+  BLAS sgemm with K = 9, which builds each output as a chain over the nine taps in kernel order, starting from 0;
+  per output channel the chain is either fused multiply-adds or multiply-then-add, depending on the BLAS kernel
+  (with MKL on 2 threads: blocks of 8 channels fused, the rest not; on 1 thread: all fused);
+- `q_r + conv` is one float32 add and the max over channels is exact.
+
+`replay_q_values` runs h, r and the first q layer through PyTorch (the same batch-1 calls as `q_values`), then replays
+the k steps in a compiled loop that rounds exactly as above. Which channels are fused is measured, never assumed:
+`conv_modes` runs PyTorch's convolution once on random data for each (map size, l_q, PyTorch threads) and keeps, per
+channel, the chain that reproduces it bit for bit; the first `VERIFY_MAPS` maps of each setting are also compared
+whole with `VIN.q_values`. If either check fails, that setting uses `VIN.q_values` itself (slow, but exact).
+
+`exact_policy` then decides each cell from that value map: in float64 where the two best logits are further apart
+than any float32 evaluation of `fc` could move them (a rigorous bound), else with PyTorch's `fc` at the cell.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numba
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from vinadv.planners.reference import torch_action_at
+from vinadv.planners.vin import VIN, make_input
+
+__all__ = ["conv_modes", "exact_policy", "replay_q_values"]
+
+#: maps per setting whose replayed value map is compared with `VIN.q_values` before the replay is trusted alone
+VERIFY_MAPS = 2
+#: random convolutions `conv_modes` compares
+PROBES = 16
+_FLOAT32_UNIT_ROUNDOFF = 2.0**-24
+
+# (N, l_q, torch threads) -> per-channel fused flags, or None where the replay does not reproduce PyTorch
+_modes: dict[tuple[int, int, int], np.ndarray | None] = {}
+_verified: dict[tuple[int, int, int], int] = {}
+
+
+def _setting(n: int, l_q: int) -> tuple[int, int, int]:
+    return n, l_q, torch.get_num_threads()
+
+
+def conv_modes(n: int, l_q: int) -> np.ndarray | None:
+    """Per output channel, whether PyTorch's `conv2d((1, 1, N, N), (l_q, 1, 3, 3), padding=1)` chains its nine taps
+    with fused multiply-adds (True) or multiply-then-add (False), `(l_q,)` bool; None if neither chain reproduces
+    some channel bit for bit. Measured once per (N, l_q, PyTorch threads) on random data, then cached.
+
+    Several probes at scales from 1e-2 to 1e2: a BLAS may treat a few cells apart (seen: MKL on 2 threads at 9x9 and
+    13x13 rounds two cells of the unfused channels otherwise), and one probe can round them alike by chance."""
+    key = _setting(n, l_q)
+    if key not in _modes:
+        rng = np.random.default_rng(0)
+        fused_ok, plain_ok = np.ones(l_q, bool), np.ones(l_q, bool)
+        for scale in np.logspace(-2, 2, PROBES):
+            v = (scale * rng.standard_normal((n, n))).astype(np.float32)
+            w = rng.standard_normal((l_q, 3, 3)).astype(np.float32)
+            with torch.no_grad():
+                want = F.conv2d(torch.from_numpy(v)[None, None], torch.from_numpy(w)[:, None], padding=1)[0].numpy()
+            flat_v = _to_flat(v[None])[0]
+            fused, plain = np.empty((l_q, flat_v.size), np.float32), np.empty((l_q, flat_v.size), np.float32)
+            _conv_fused(flat_v, w, n, fused)
+            _conv_plain(flat_v, w, n, plain)
+            fused_ok &= (_from_flat(fused, n) == want).reshape(l_q, -1).all(axis=1)
+            plain_ok &= (_from_flat(plain, n) == want).reshape(l_q, -1).all(axis=1)
+        # a channel that both chains reproduce would leave its mode unknown; random data makes that vanishingly rare
+        _modes[key] = fused_ok if np.all(fused_ok ^ plain_ok) else None
+    return _modes[key]
+
+
+def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
+    """`model.q_values(x)[0]` for one map `x (1, 2, N, N)`, bit for bit: `(l_q, N, N)` float32."""
+    n, l_q = x.shape[-1], model.config.l_q
+    modes = conv_modes(n, l_q)
+    if modes is None:
+        return _torch_q_values(model, x)
+    with torch.no_grad():
+        q_r = model.q(model.r(model.h(x)))[0].numpy()
+    w = np.ascontiguousarray(model.w.detach()[:, 0].numpy())
+    flat_q = _to_flat(q_r)
+    _replay_kernel(flat_q, w, int(model.config.k), n, modes)
+    q = _from_flat(flat_q, n)
+    key = _setting(n, l_q)
+    if _verified.get(key, 0) < VERIFY_MAPS:
+        want = _torch_q_values(model, x)
+        if not np.array_equal(q.view(np.int32), want.view(np.int32)):
+            _modes[key] = None
+            return want
+        _verified[key] = _verified.get(key, 0) + 1
+    return q
+
+
+def exact_policy(model: VIN, obstacles: np.ndarray, goal: np.ndarray) -> Callable[[int, int], int]:
+    """The reference's policy on one map (`torch_action_at`: argmax of PyTorch's logits, lowest index on ties),
+    without re-running PyTorch: obstacles `(N, N)` bool, goal `(2,)`; returns `action_at(row, col)`."""
+    x = make_input(obstacles[None], np.asarray(goal)[None])
+    q = replay_q_values(model, x)
+    fc = model.fc.weight.detach().to(torch.float64).numpy()
+    actions = np.empty(obstacles.shape, dtype=np.int8)
+    _certain_actions(q, fc, len(fc) * _FLOAT32_UNIT_ROUNDOFF, actions)
+    torch_at = torch_action_at(model, x, torch.from_numpy(q[None]))
+
+    def action_at(row: int, col: int) -> int:
+        a = int(actions[row, col])
+        return a if a >= 0 else torch_at(row, col)
+
+    return action_at
+
+
+def _torch_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
+    with torch.no_grad():
+        return model.q_values(x)[0].numpy()
+
+
+def _to_flat(maps: np.ndarray) -> np.ndarray:
+    """`(C, N, N)` -> `(C, (N + 2)^2)` float32, zero-padded flat layout (the engine's): cell (i, j) at
+    (i + 1) * (N + 2) + j + 1, so the 3x3 neighbours of every cell sit at the same nine offsets."""
+    c, n = maps.shape[0], maps.shape[1]
+    out = np.zeros((c, n + 2, n + 2), dtype=np.float32)
+    out[:, 1:-1, 1:-1] = maps
+    return out.reshape(c, -1)
+
+
+def _from_flat(flat: np.ndarray, n: int) -> np.ndarray:
+    return np.ascontiguousarray(flat.reshape(-1, n + 2, n + 2)[:, 1:-1, 1:-1])
+
+
+# Both chains run over the flat layout: one long loop over (N - 1) * W + N cells (the padding cells between rows
+# computed and thrown away), the nine taps read through views at their offsets; a real cell reads zeros where it
+# leaves the grid, as im2col does. Each chain starts from 0, as the BLAS kernels do.
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+def _conv_fused(v, w, n, out):
+    """out[c] = the nine taps of w[c] chained in kernel order, acc = fma(w[c, tap], v[cell + tap], acc)."""
+    width = n + 2
+    p0, length = width + 1, (n - 1) * width + n
+    u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]  # rows above, same, below
+    zero = np.float32(0.0)
+    for c in range(w.shape[0]):
+        w00, w01, w02, w10, w11, w12, w20, w21, w22 = w[c].ravel()
+        o = out[c, p0 : p0 + length]
+        for t in range(length):
+            acc = w00 * u0[t] + zero  # from 0, so that each add has one product to fuse with, the chain's own
+            acc = w01 * u0[t + 1] + acc
+            acc = w02 * u0[t + 2] + acc
+            acc = w10 * u1[t] + acc
+            acc = w11 * u1[t + 1] + acc
+            acc = w12 * u1[t + 2] + acc
+            acc = w20 * u2[t] + acc
+            acc = w21 * u2[t + 1] + acc
+            o[t] = w22 * u2[t + 2] + acc
+
+
+@numba.njit(cache=True, nogil=True)
+def _conv_plain(v, w, n, out):
+    """As `_conv_fused`, each product rounded before it is added (compiled without `contract`: never fused)."""
+    width = n + 2
+    p0, length = width + 1, (n - 1) * width + n
+    u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]
+    zero = np.float32(0.0)
+    for c in range(w.shape[0]):
+        w00, w01, w02, w10, w11, w12, w20, w21, w22 = w[c].ravel()
+        o = out[c, p0 : p0 + length]
+        for t in range(length):
+            acc = w00 * u0[t] + zero
+            acc = w01 * u0[t + 1] + acc
+            acc = w02 * u0[t + 2] + acc
+            acc = w10 * u1[t] + acc
+            acc = w11 * u1[t + 1] + acc
+            acc = w12 * u1[t + 2] + acc
+            acc = w20 * u2[t] + acc
+            acc = w21 * u2[t + 1] + acc
+            o[t] = w22 * u2[t + 2] + acc
+
+
+@numba.njit(cache=True, nogil=True)
+def _replay_kernel(q, w, k, n, fused):
+    """In place: q `(l_q, (N + 2)^2)` holds q_r on entry and the k-th step's q on exit (flat layout); each step
+    v = max over channels, q = q_r + conv(v), every channel's chain as `fused` says."""
+    lq = q.shape[0]
+    width = n + 2
+    p0, length = width + 1, (n - 1) * width + n
+    q_r = q.copy()
+    v = np.zeros(q.shape[1], dtype=np.float32)
+    vc = v[p0 : p0 + length]
+    for _ in range(k):
+        vc[:] = q[0, p0 : p0 + length]
+        for c in range(1, lq):
+            qc = q[c, p0 : p0 + length]
+            for t in range(length):
+                vc[t] = np.maximum(vc[t], qc[t])
+        for i in range(1, n):  # padding cells between rows back to 0
+            v[i * width + n + 1] = 0.0
+            v[(i + 1) * width] = 0.0
+        for c in range(lq):
+            if fused[c]:
+                _conv_fused(v, w[c : c + 1], n, q[c : c + 1])
+            else:
+                _conv_plain(v, w[c : c + 1], n, q[c : c + 1])
+            qc, rc = q[c, p0 : p0 + length], q_r[c, p0 : p0 + length]
+            for t in range(length):
+                qc[t] = rc[t] + qc[t]
+
+
+@numba.njit(cache=True, nogil=True)
+def _certain_actions(q, fc, gamma, actions):
+    """actions[i, j] = argmax of the float64 logits fc @ q[:, i, j] where no float32 evaluation of them can change
+    it, else -1. A float32 dot product of K terms, in any order, fused or not, is within gamma = K * u (times
+    1 + O(Ku), covered by the factor 2) of sum |fc[a, c] q[c]|; so the argmax is certain when the two best logits are
+    more than twice the largest such bound apart."""
+    n_act, lq, n = fc.shape[0], fc.shape[1], q.shape[1]
+    logits = np.empty(n_act)
+    for i in range(n):
+        for j in range(n):
+            bound = 0.0
+            for a in range(n_act):
+                s, m = 0.0, 0.0
+                for c in range(lq):
+                    s += fc[a, c] * q[c, i, j]
+                    m += abs(fc[a, c] * q[c, i, j])
+                logits[a] = s
+                bound = max(bound, m)
+            top = 0
+            for a in range(1, n_act):
+                if logits[a] > logits[top]:
+                    top = a
+            second = -np.inf
+            for a in range(n_act):
+                if a != top and logits[a] > second:
+                    second = logits[a]
+            actions[i, j] = top if logits[top] - second > 4.0 * gamma * bound else -1

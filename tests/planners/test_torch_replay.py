@@ -1,0 +1,133 @@
+"""PyTorch's value map replayed: bit for bit against `VIN.q_values` and `conv2d`, and the policy against the ports'."""
+
+import numpy as np
+import pytest
+import torch
+import torch.nn.functional as F
+
+from vinadv.grid import generate_maps
+from vinadv.planners import torch_replay
+from vinadv.planners.reference import torch_action_at
+from vinadv.planners.testing import planning_vin, random_vin
+from vinadv.planners.torch_replay import conv_modes, exact_policy, replay_q_values
+from vinadv.planners.vin import make_input
+
+
+@pytest.fixture(params=[1, 2], ids=["1-thread", "2-threads"])
+def torch_threads(request):
+    before = torch.get_num_threads()
+    torch.set_num_threads(request.param)
+    yield request.param
+    torch.set_num_threads(before)
+
+
+@pytest.fixture
+def fresh_settings(monkeypatch):
+    monkeypatch.setattr(torch_replay, "_modes", {})
+    monkeypatch.setattr(torch_replay, "_verified", {})
+
+
+def bits(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float32).view(np.int32)
+
+
+def torch_q(model, x):
+    with torch.no_grad():
+        return model.q_values(x)[0].numpy()
+
+
+@pytest.mark.parametrize("size", [9, 16, 28])
+def test_modes_reproduce_conv2d_on_other_data(size, torch_threads):
+    # the modes come from one random probe; the BLAS kernel depends on shapes only, so they must hold for any data
+    modes = conv_modes(size, 10)
+    if modes is None:
+        pytest.skip("this BLAS chains the taps in neither order: the engine uses VIN.q_values itself")
+    rng = np.random.default_rng(size)
+    for _ in range(5):
+        v = rng.standard_normal((size, size)).astype(np.float32) * rng.uniform(0.1, 100)
+        w = rng.standard_normal((10, 3, 3)).astype(np.float32)
+        with torch.no_grad():
+            want = F.conv2d(torch.from_numpy(v)[None, None], torch.from_numpy(w)[:, None], padding=1)[0].numpy()
+        flat = torch_replay._to_flat(v[None])[0]
+        fused, plain = np.zeros((10, flat.size), np.float32), np.zeros((10, flat.size), np.float32)
+        torch_replay._conv_fused(flat, w, size, fused)
+        torch_replay._conv_plain(flat, w, size, plain)
+        got = np.where(modes[:, None, None], torch_replay._from_flat(fused, size), torch_replay._from_flat(plain, size))
+        np.testing.assert_array_equal(bits(got), bits(want))
+
+
+@pytest.mark.parametrize("size, make", [(9, planning_vin), (16, planning_vin), (16, random_vin), (28, planning_vin)])
+def test_replay_kernel_is_q_values_bit_for_bit(size, make, torch_threads):
+    modes = conv_modes(size, 10)
+    if modes is None:
+        pytest.skip("no replay on this BLAS")
+    model = make(size, seed=3).eval()
+    maps = generate_maps(12, size, seed=8, n_starts=1)
+    w = np.ascontiguousarray(model.w.detach()[:, 0].numpy())
+    for i in range(len(maps)):
+        x = make_input(maps.obstacles[i : i + 1], maps.goals[i : i + 1])
+        with torch.no_grad():
+            flat = torch_replay._to_flat(model.q(model.r(model.h(x)))[0].numpy())
+        torch_replay._replay_kernel(flat, w, model.config.k, size, modes)
+        np.testing.assert_array_equal(bits(torch_replay._from_flat(flat, size)), bits(torch_q(model, x)))
+
+
+def test_shipped_weights_replay_bit_for_bit(torch_threads):
+    from vinadv.planners.weights import load_vin
+
+    model = load_vin(None, size=28).eval()
+    maps = generate_maps(20, 28, seed=9, n_starts=1)
+    for i in range(len(maps)):
+        x = make_input(maps.obstacles[i : i + 1], maps.goals[i : i + 1])
+        np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))
+
+
+def test_unknown_modes_use_q_values(fresh_settings, monkeypatch):
+    model = planning_vin(16, seed=1).eval()
+    maps = generate_maps(3, 16, seed=2, n_starts=1)
+    x = make_input(maps.obstacles[:1], maps.goals[:1])
+    torch_replay._modes[(16, 10, torch.get_num_threads())] = None
+
+    def must_not_run(*args):
+        raise AssertionError("replayed although the modes are unknown")
+
+    monkeypatch.setattr(torch_replay, "_replay_kernel", must_not_run)
+    np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))
+
+
+def test_failed_verification_turns_the_replay_off(fresh_settings, monkeypatch):
+    model = planning_vin(16, seed=1).eval()
+    maps = generate_maps(3, 16, seed=2, n_starts=1)
+    x = make_input(maps.obstacles[:1], maps.goals[:1])
+    real_kernel = torch_replay._replay_kernel
+
+    def off_by_one_ulp(q, *args):
+        real_kernel(q, *args)
+        q.view(np.int32)[0, 5 * 18 + 5] += 1
+
+    monkeypatch.setattr(torch_replay, "_replay_kernel", off_by_one_ulp)
+    np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))
+    assert torch_replay._modes[(16, 10, torch.get_num_threads())] is None
+
+
+@pytest.mark.parametrize("make", [planning_vin, random_vin])
+def test_exact_policy_is_the_ports_policy_on_every_cell(make):
+    model = make(16, seed=5).eval()
+    maps = generate_maps(6, 16, seed=4, n_starts=1)
+    for i in range(len(maps)):
+        x = make_input(maps.obstacles[i : i + 1], maps.goals[i : i + 1])
+        fast, ports = exact_policy(model, maps.obstacles[i], maps.goals[i]), torch_action_at(model, x)
+        for r in range(16):
+            for c in range(16):
+                assert fast(r, c) == ports(r, c), (i, r, c)
+
+
+def test_exact_policy_breaks_exact_ties_as_the_ports_do():
+    # all eight rows of fc alike: every cell is an exact tie, which PyTorch's argmax settles on the lowest index
+    model = planning_vin(16, seed=6).eval()
+    with torch.no_grad():
+        model.fc.weight[:] = model.fc.weight[3].clone()
+    maps = generate_maps(2, 16, seed=1, n_starts=1)
+    x = make_input(maps.obstacles[:1], maps.goals[:1])
+    fast, ports = exact_policy(model, maps.obstacles[0], maps.goals[0]), torch_action_at(model, x)
+    assert all(fast(r, c) == ports(r, c) == 0 for r in range(16) for c in range(16))
