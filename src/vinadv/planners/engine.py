@@ -114,44 +114,62 @@ class FoldedVIN:
         )
 
 
-# Layout of the compiled kernels. A map's value map lives in a flat zero-padded array of (N + 2) x W cells,
-# W = N + 2, cell (i, j) at index (i + 1) * W + j + 1: the 3x3 neighbours of every cell are then the same nine
-# offsets, and one loop of (N - 1) * W + N cells covers the map (the few padding cells between rows are computed
-# and thrown away), so the vector loops run long, not 28 cells at a time.
+# Layout of the compiled kernels. A map lives in a flat zero-padded array: row stride W, the smallest multiple of 8
+# above N (so every row starts on a vector boundary), cell (i, j) at p0 + i * W + j with p0 = 2 * W, zeros around
+# (two rows above, the W - N cells after each row, two rows below). The 3x3 neighbours of every cell are then the
+# same nine offsets, and one loop of (N - 1) * W + N cells covers the map (the padding cells between rows are
+# computed and thrown away), so the vector loops run long, not N cells at a time. The value iteration also keeps
+# the value map shifted by one cell either way (vm[i] = v[i - 1], vp[i] = v[i + 1]): with those, every one of its
+# loads starts on a vector boundary (a 32-byte load that straddles two cache lines costs two).
+
+
+@numba.njit(cache=True, nogil=True)
+def _layout(n):
+    """(W, p0, length, size) of the flat layout of an N x N map: row stride, index of cell (0, 0), cells one loop
+    covers, array length."""
+    width = (n + 8) // 8 * 8
+    return width, 2 * width, (n - 1) * width + n, (n + 4) * width
 
 
 @numba.njit(cache=True, nogil=True)
 def _action_maps_kernel(obstacles, goals, reward_w, reward_b, goal_value, q_w, w, fc, k, rel_margin, actions):
     n, lq = obstacles.shape[1], q_w.shape[0]
-    reward_q, v, v_next, best, q = _scratch(n, lq)
+    reward_q, q, v, vm, vp, best, best2 = _scratch(n, lq)
     for b in range(obstacles.shape[0]):
-        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, v)
-        _value_iteration(reward_q, v, v_next, best, w, k, q, n)
+        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, best)
+        _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n)
         _decide(q, fc, n, rel_margin, actions[b])
 
 
 @numba.njit(cache=True, nogil=True)
 def _scratch(n, lq):
-    """Per-thread arrays, flat and zero-padded (layout above): reward_q and q `(l_q, (N + 2) * W)`, v, v_next and
-    best `((N + 2) * W,)`."""
-    size = (n + 2) * (n + 2)
-    reward_q = np.zeros((lq, size), dtype=np.float32)
-    q = np.zeros((lq, size), dtype=np.float32)
-    return reward_q, np.zeros(size, dtype=np.float32), np.zeros(size, dtype=np.float32), \
-        np.zeros(size, dtype=np.float32), q
+    """Per-thread arrays in the flat layout: reward_q and q `(l_q, S)`; v, vm, vp, best and best2 `(S,)`.
+
+    S is the layout's size rounded up to 4 KiB, and what the value iteration's loops store (best, best2, q) sits
+    1 KiB below what they load (value maps, reward_q), modulo 4 KiB: a load whose address matches a store still in
+    flight in its low 12 bits waits for it (4K aliasing), which made the loop 25-40% slower when these arrays lay
+    back to back. Starts on a 64-byte boundary.
+    """
+    stride = (_layout(n)[3] + 1023) // 1024 * 1024
+    rows = lq + 3
+    buf = np.zeros(2 * rows * stride + 256 + 16, dtype=np.float32)
+    start = (-buf.ctypes.data % 64) // 4
+    stores = buf[start : start + rows * stride].reshape(rows, stride)
+    start += rows * stride + 256
+    loads = buf[start : start + rows * stride].reshape(rows, stride)
+    return loads[:lq], stores[:lq], loads[lq], loads[lq + 1], loads[lq + 2], stores[lq], stores[lq + 1]
 
 
 @numba.njit(cache=True, nogil=True)
-def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v):
+def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, best):
     """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32;
-    v = max over c, the value after the first q layer (padding left 0). Flat layout, as `_value_iteration`."""
+    best = max over c, the value after the first q layer. Flat layout (above)."""
     n, lq = obs.shape[0], reward_q.shape[0]
-    width = n + 2
-    size, p0, length = width * width, width + 1, (n - 1) * width + n
+    width, p0, length, size = _layout(n)
     padded = np.zeros(size)
     for i in range(n):
         for j in range(n):
-            padded[(i + 1) * width + j + 1] = obs[i, j]
+            padded[p0 + i * width + j] = obs[i, j]
     r = np.zeros(size)
     _conv3x3(padded, reward_w[0], reward_b, r, width, p0, length)
     _zero_row_gaps(r, n)
@@ -159,27 +177,25 @@ def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, v)
         for dj in range(3):
             i, j = gr - di + 1, gc - dj + 1
             if 0 <= i < n and 0 <= j < n:
-                r[(i + 1) * width + j + 1] += goal_value * reward_w[1, di, dj]
+                r[p0 + i * width + j] += goal_value * reward_w[1, di, dj]
     acc = np.empty(size)
-    v[:] = 0.0
-    vc = v[p0 : p0 + length]
-    vc[:] = -np.inf
+    bst = best[p0 : p0 + length]
+    bst[:] = -np.inf
     for c in range(lq):
         _conv3x3(r, q_w[c], 0.0, acc, width, p0, length)
         out = reward_q[c, p0 : p0 + length]
         for t in range(length):
             out[t] = acc[p0 + t]
-            vc[t] = max(vc[t], out[t])
-    _zero_row_gaps(v, n)
+            bst[t] = max(bst[t], out[t])
 
 
 @numba.njit(cache=True, nogil=True)
 def _zero_row_gaps(flat, n):
     """Set the padding cells between rows of a flat map (computed and thrown away by the long loops) back to 0."""
-    width = n + 2
-    for i in range(1, n):
-        flat[i * width + n + 1] = 0.0
-        flat[(i + 1) * width] = 0.0
+    width, p0 = _layout(n)[:2]
+    for i in range(n - 1):
+        for j in range(n, width):  # (a slice assignment per row costs more than the whole row of stores)
+            flat[p0 + i * width + j] = 0.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -193,47 +209,60 @@ def _conv3x3(x, w, bias, out, width, p0, length):
                 + w[2, 0] * u2[t] + w[2, 1] * u2[t + 1] + w[2, 2] * u2[t + 2])
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"contract"})
-def _value_iteration(reward_q, v, v_next, best, w, k, q, n):
-    """The hot loop: k times q = reward_q + (w * v), v = max over channels; the last q goes to `q`. N x N map.
+@numba.njit(cache=True, nogil=True)
+def _publish(best, v, vm, vp, n):
+    """v = best with its row gaps zeroed, and its shifted copies vm[i] = v[i - 1], vp[i] = v[i + 1]."""
+    _zero_row_gaps(best, n)
+    p0, length = _layout(n)[1:3]
+    src = best[p0 : p0 + length]
+    for dst in (v[p0 : p0 + length], vm[p0 + 1 : p0 + 1 + length], vp[p0 - 1 : p0 - 1 + length]):
+        for t in range(length):  # one loop per copy: three stores in one loop would not vectorise
+            dst[t] = src[t]
 
-    Float32 over the flat layout, one channel per pass (its nine weights stay in registers; two channels per pass
-    share the loads of v but spill weights, measured slower), each sum in three partial sums (a chain of nine
-    dependent FMAs would wait on latency). Each neighbour is read through a view starting at its offset, so every
-    index is a loop counter (negative-index handling would stop the loop vectorising). Overwrites v and v_next.
+
+@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+def _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n):
+    """The hot loop: value map from `best` (the first q layer's max), then k times q = reward_q + (w * v),
+    v = max over channels; the last q goes to `q`. N x N map, flat layout. Overwrites v, vm, vp, best, best2.
+
+    Float32, one channel per pass (its nine weights stay in registers; two channels per pass share the loads of v
+    but spill weights, measured slower), each sum in three partial sums (a chain of nine dependent FMAs would wait
+    on latency). The max is `a if a > b else b` into the other of two buffers: that compiles to one vmaxps, where
+    `np.maximum` adds NaN handling (six instructions) and a max stored back into its own input a masked store.
     """
     lq = reward_q.shape[0]
-    width = n + 2
-    p0, length = width + 1, (n - 1) * width + n
+    width, p0, length = _layout(n)[:3]
+    _publish(best, v, vm, vp, n)
+    x0, x1, x2 = vm[p0 - width :], vm[p0:], vm[p0 + width :]  # left neighbours: rows above, same, below
+    y0, y1, y2 = v[p0 - width :], v[p0:], v[p0 + width :]
+    z0, z1, z2 = vp[p0 - width :], vp[p0:], vp[p0 + width :]  # right neighbours
     for it in range(k):
         last = it == k - 1
-        bst = best[p0 : p0 + length]
-        bst[:] = np.float32(-np.inf)
-        u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]  # rows above, same, below
+        src = best2[p0 : p0 + length]
+        src[:] = np.float32(-np.inf)
         for c in range(lq):
+            out = best if c % 2 == 0 else best2
+            dst = out[p0 : p0 + length]
             rq = reward_q[c, p0 : p0 + length]
             w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
             w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
             w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
             if not last:
                 for t in range(length):
-                    a = ((rq[t] + w00 * u0[t] + w01 * u0[t + 1] + w02 * u0[t + 2])
-                         + (w10 * u1[t] + w11 * u1[t + 1] + w12 * u1[t + 2])
-                         + (w20 * u2[t] + w21 * u2[t + 1] + w22 * u2[t + 2]))
-                    # np.maximum compiles to compare-and-blend; `max` or `if` to a masked store (slow on Zen)
-                    bst[t] = np.maximum(bst[t], a)
+                    a = ((rq[t] + w00 * x0[t] + w01 * y0[t] + w02 * z0[t])
+                         + (w10 * x1[t] + w11 * y1[t] + w12 * z1[t])
+                         + (w20 * x2[t] + w21 * y2[t] + w22 * z2[t]))
+                    b = src[t]
+                    dst[t] = a if a > b else b
             else:  # the same sums, kept: the final q (a branch inside the loop would stop it vectorising)
                 qc = q[c, p0 : p0 + length]
                 for t in range(length):
-                    qc[t] = ((rq[t] + w00 * u0[t] + w01 * u0[t + 1] + w02 * u0[t + 2])
-                             + (w10 * u1[t] + w11 * u1[t + 1] + w12 * u1[t + 2])
-                             + (w20 * u2[t] + w21 * u2[t + 1] + w22 * u2[t + 2]))
+                    qc[t] = ((rq[t] + w00 * x0[t] + w01 * y0[t] + w02 * z0[t])
+                             + (w10 * x1[t] + w11 * y1[t] + w12 * z1[t])
+                             + (w20 * x2[t] + w21 * y2[t] + w22 * z2[t]))
+            src = dst
         if not last:
-            out = v_next[p0 : p0 + length]
-            for t in range(length):
-                out[t] = bst[t]
-            _zero_row_gaps(v_next, n)
-            v, v_next = v_next, v
+            _publish(out, v, vm, vp, n)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -241,12 +270,12 @@ def _margin(q, fc, n, rel_margin):
     """Near-tie margin of a map: rel_margin * max |q| over the map * max_a sum_c |fc[a, c]| (a bound on how far
     rounding moves a logit, times the relative error of q)."""
     n_act, lq = fc.shape[0], fc.shape[1]
-    width = n + 2
+    width, p0 = _layout(n)[:2]
     qmax = 0.0
     for c in range(lq):
         for i in range(n):
             for j in range(n):
-                qmax = max(qmax, abs(q[c, (i + 1) * width + j + 1]))
+                qmax = max(qmax, abs(q[c, p0 + i * width + j]))
     fmax = 0.0
     for a in range(n_act):
         s = 0.0
@@ -282,9 +311,10 @@ def _decide(q, fc, n, rel_margin, actions):
     """Action of every cell (`_action_at`) into `actions (N, N)`."""
     margin = _margin(q, fc, n, rel_margin)
     logits = np.empty(fc.shape[0])
+    width, p0 = _layout(n)[:2]
     for i in range(n):
         for j in range(n):
-            actions[i, j] = _action_at(q, fc, (i + 1) * (n + 2) + j + 1, margin, logits)
+            actions[i, j] = _action_at(q, fc, p0 + i * width + j, margin, logits)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -297,13 +327,14 @@ def _plan_kernel(lo, hi, obstacles, goals, starts, reward_w, reward_b, goal_valu
     2 * max(|dr|, |dc|) moves (a lower bound of 2L), which few do, so L is searched for then.
     """
     n, lq, n_starts = obstacles.shape[1], q_w.shape[0], starts.shape[1]
-    reward_q, v, v_next, best, q = _scratch(n, lq)
+    width, p0 = _layout(n)[:2]
+    reward_q, q, v, vm, vp, best, best2 = _scratch(n, lq)
     logits = np.empty(fc.shape[0])
     stamp = np.zeros((n, n), dtype=np.int64)  # t + 1 on the cells rollout t has visited
     one_start, one_map, one_moves = np.empty((1, 2), dtype=np.int64), np.empty(1, dtype=np.int64), np.empty(1, np.int64)
     for b in range(lo, hi):
-        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, v)
-        _value_iteration(reward_q, v, v_next, best, w, k, q, n)
+        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, best)
+        _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n)
         margin = _margin(q, fc, n, rel_margin)
         gr, gc = goals[b, 0], goals[b, 1]
         for s in range(n_starts):
@@ -325,7 +356,7 @@ def _plan_kernel(lo, hi, obstacles, goals, starts, reward_w, reward_b, goal_valu
                 if length - 1 >= limit:
                     term = STEP_LIMIT
                     break
-                a = _action_at(q, fc, (r + 1) * (n + 2) + c + 1, margin, logits)
+                a = _action_at(q, fc, p0 + r * width + c, margin, logits)
                 if a < 0:
                     term = UNDECIDED
                     break
