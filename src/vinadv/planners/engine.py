@@ -134,16 +134,17 @@ def _layout(n):
 @numba.njit(cache=True, nogil=True)
 def _action_maps_kernel(obstacles, goals, reward_w, reward_b, goal_value, q_w, w, fc, k, rel_margin, actions):
     n, lq = obstacles.shape[1], q_w.shape[0]
-    reward_q, q, v, vm, vp, best, best2 = _scratch(n, lq)
+    reward_q, q, v, vm, vp, best, best2, work = _scratch(n, lq)
     for b in range(obstacles.shape[0]):
-        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, best)
+        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, work)
         _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n)
         _decide(q, fc, n, rel_margin, actions[b])
 
 
 @numba.njit(cache=True, nogil=True)
 def _scratch(n, lq):
-    """Per-thread arrays in the flat layout: reward_q and q `(l_q, S)`; v, vm, vp, best and best2 `(S,)`.
+    """Per-thread arrays in the flat layout: reward_q and q `(l_q, S)`; v, vm, vp, best and best2 `(S,)`; work
+    `(2, S)` float64 for the reward terms.
 
     S is the layout's size rounded up to 4 KiB, and what the value iteration's loops store (best, best2, q) sits
     1 KiB below what they load (value maps, reward_q), modulo 4 KiB: a load whose address matches a store still in
@@ -157,20 +158,20 @@ def _scratch(n, lq):
     stores = buf[start : start + rows * stride].reshape(rows, stride)
     start += rows * stride + 256
     loads = buf[start : start + rows * stride].reshape(rows, stride)
-    return loads[:lq], stores[:lq], loads[lq], loads[lq + 1], loads[lq + 2], stores[lq], stores[lq + 1]
+    work = np.zeros((2, stride))
+    return loads[:lq], stores[:lq], loads[lq], loads[lq + 1], loads[lq + 2], stores[lq], stores[lq + 1], work
 
 
 @numba.njit(cache=True, nogil=True)
-def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, best):
-    """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32;
-    best = max over c, the value after the first q layer. Flat layout (above)."""
+def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, work):
+    """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32. Flat layout
+    (above); `work` is float64 scratch `(2, size)`, zero outside the map's cells."""
     n, lq = obs.shape[0], reward_q.shape[0]
-    width, p0, length, size = _layout(n)
-    padded = np.zeros(size)
+    width, p0, length = _layout(n)[:3]
+    padded, r = work[0], work[1]
     for i in range(n):
         for j in range(n):
             padded[p0 + i * width + j] = obs[i, j]
-    r = np.zeros(size)
     _conv3x3(padded, reward_w[0], reward_b, r, width, p0, length)
     _zero_row_gaps(r, n)
     for di in range(3):  # the goal image is 0 but at the goal: it reaches only the goal's 3x3 neighbourhood
@@ -178,15 +179,8 @@ def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, be
             i, j = gr - di + 1, gc - dj + 1
             if 0 <= i < n and 0 <= j < n:
                 r[p0 + i * width + j] += goal_value * reward_w[1, di, dj]
-    acc = np.empty(size)
-    bst = best[p0 : p0 + length]
-    bst[:] = -np.inf
     for c in range(lq):
-        _conv3x3(r, q_w[c], 0.0, acc, width, p0, length)
-        out = reward_q[c, p0 : p0 + length]
-        for t in range(length):
-            out[t] = acc[p0 + t]
-            bst[t] = max(bst[t], out[t])
+        _conv3x3(r, q_w[c], 0.0, reward_q[c], width, p0, length)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -222,7 +216,7 @@ def _publish(best, v, vm, vp, n):
 
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
 def _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n):
-    """The hot loop: value map from `best` (the first q layer's max), then k times q = reward_q + (w * v),
+    """The hot loop: v = max over channels of reward_q (the first q layer), then k times q = reward_q + (w * v),
     v = max over channels; the last q goes to `q`. N x N map, flat layout. Overwrites v, vm, vp, best, best2.
 
     Float32, one channel per pass (its nine weights stay in registers; two channels per pass share the loads of v
@@ -232,7 +226,16 @@ def _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n):
     """
     lq = reward_q.shape[0]
     width, p0, length = _layout(n)[:3]
-    _publish(best, v, vm, vp, n)
+    src = best2[p0 : p0 + length]
+    src[:] = np.float32(-np.inf)
+    for c in range(lq):  # v of the first q layer: the max of reward_q over channels
+        out = best if c % 2 == 0 else best2
+        dst, rq = out[p0 : p0 + length], reward_q[c, p0 : p0 + length]
+        for t in range(length):
+            a, b = rq[t], src[t]
+            dst[t] = a if a > b else b
+        src = dst
+    _publish(out, v, vm, vp, n)
     x0, x1, x2 = vm[p0 - width :], vm[p0:], vm[p0 + width :]  # left neighbours: rows above, same, below
     y0, y1, y2 = v[p0 - width :], v[p0:], v[p0 + width :]
     z0, z1, z2 = vp[p0 - width :], vp[p0:], vp[p0 + width :]  # right neighbours
@@ -328,12 +331,12 @@ def _plan_kernel(lo, hi, obstacles, goals, starts, reward_w, reward_b, goal_valu
     """
     n, lq, n_starts = obstacles.shape[1], q_w.shape[0], starts.shape[1]
     width, p0 = _layout(n)[:2]
-    reward_q, q, v, vm, vp, best, best2 = _scratch(n, lq)
+    reward_q, q, v, vm, vp, best, best2, work = _scratch(n, lq)
     logits = np.empty(fc.shape[0])
     stamp = np.zeros((n, n), dtype=np.int64)  # t + 1 on the cells rollout t has visited
     one_start, one_map, one_moves = np.empty((1, 2), dtype=np.int64), np.empty(1, dtype=np.int64), np.empty(1, np.int64)
     for b in range(lo, hi):
-        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, best)
+        _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, work)
         _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n)
         margin = _margin(q, fc, n, rel_margin)
         gr, gc = goals[b, 0], goals[b, 1]
