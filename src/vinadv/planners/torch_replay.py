@@ -104,12 +104,11 @@ def exact_policy(model: VIN, obstacles: np.ndarray, goal: np.ndarray) -> Callabl
     x = make_input(obstacles[None], np.asarray(goal)[None])
     q = replay_q_values(model, x)
     fc = model.fc.weight.detach().to(torch.float64).numpy()
-    actions = np.empty(obstacles.shape, dtype=np.int8)
-    _certain_actions(q, fc, len(fc) * _FLOAT32_UNIT_ROUNDOFF, actions)
+    gamma = fc.shape[1] * _FLOAT32_UNIT_ROUNDOFF
     torch_at = torch_action_at(model, x, torch.from_numpy(q[None]))
 
     def action_at(row: int, col: int) -> int:
-        a = int(actions[row, col])
+        a = _certain_action(q, fc, gamma, row, col)  # per cell: a rollout visits ~15 of them
         return a if a >= 0 else torch_at(row, col)
 
     return action_at
@@ -212,29 +211,27 @@ def _replay_kernel(q, w, k, n, fused):
 
 
 @numba.njit(cache=True, nogil=True)
-def _certain_actions(q, fc, gamma, actions):
-    """actions[i, j] = argmax of the float64 logits fc @ q[:, i, j] where no float32 evaluation of them can change
-    it, else -1. A float32 dot product of K terms, in any order, fused or not, is within gamma = K * u (times
-    1 + O(Ku), covered by the factor 2) of sum |fc[a, c] q[c]|; so the argmax is certain when the two best logits are
-    more than twice the largest such bound apart."""
-    n_act, lq, n = fc.shape[0], fc.shape[1], q.shape[1]
+def _certain_action(q, fc, gamma, i, j):
+    """argmax of the float64 logits fc @ q[:, i, j] where no float32 evaluation of them can change it, else -1.
+    A float32 dot product of K terms, in any order, fused or not, is within gamma = K * u (times 1 + O(Ku), covered
+    by the factor 2) of sum |fc[a, c] q[c]|; so the argmax is certain when the two best logits are more than twice
+    the largest such bound apart."""
+    n_act, lq = fc.shape[0], fc.shape[1]
     logits = np.empty(n_act)
-    for i in range(n):
-        for j in range(n):
-            bound = 0.0
-            for a in range(n_act):
-                s, m = 0.0, 0.0
-                for c in range(lq):
-                    s += fc[a, c] * q[c, i, j]
-                    m += abs(fc[a, c] * q[c, i, j])
-                logits[a] = s
-                bound = max(bound, m)
-            top = 0
-            for a in range(1, n_act):
-                if logits[a] > logits[top]:
-                    top = a
-            second = -np.inf
-            for a in range(n_act):
-                if a != top and logits[a] > second:
-                    second = logits[a]
-            actions[i, j] = top if logits[top] - second > 4.0 * gamma * bound else -1
+    bound = 0.0
+    for a in range(n_act):
+        s, m = 0.0, 0.0
+        for c in range(lq):
+            s += fc[a, c] * q[c, i, j]
+            m += abs(fc[a, c] * q[c, i, j])
+        logits[a] = s
+        bound = max(bound, m)
+    top = 0
+    for a in range(1, n_act):
+        if logits[a] > logits[top]:
+            top = a
+    second = -np.inf
+    for a in range(n_act):
+        if a != top and logits[a] > second:
+            second = logits[a]
+    return top if logits[top] - second > 4.0 * gamma * bound else -1
