@@ -4,17 +4,20 @@ Where two logits of a cell are within rounding of each other, the engine must ta
 made by PyTorch's float32 arithmetic: a batch-1 `VIN.q_values`, then `fc` at the cell. That call costs ~3 ms at
 28x28, nearly all of it the overhead of the 3k small ops of the loop, each cheap and simple:
 
-- the 1 -> l_q 3x3 convolution of v goes through ATen's `slow_conv2d`: im2col (exact copies, zero padding), then a
-  BLAS sgemm with K = 9, which builds each output as a chain over the nine taps in kernel order, starting from 0;
-  per output channel the chain is either fused multiply-adds or multiply-then-add, depending on the BLAS kernel
-  (with MKL on 2 threads: blocks of 8 channels fused, the rest not; on 1 thread: all fused);
+- the 1 -> l_q 3x3 convolutions (the first q layer on r, then w on v at every step) go through ATen's
+  `slow_conv2d`: im2col (exact copies, zero padding), then a BLAS sgemm with K = 9, which builds each output as a
+  chain over the nine taps in kernel order, starting from 0; per output channel the chain is either fused
+  multiply-adds or multiply-then-add, depending on the BLAS kernel (with MKL on 2 threads: blocks of 8 channels
+  fused, the rest not; on 1 thread: all fused);
+- r, the 1x1 convolution l_h -> 1, is an sgemm with M = 1: one or two chains over the l_h channels (MKL on 2
+  threads: fused, split at 128; on 1 thread: one unfused chain);
 - `q_r + conv` is one float32 add and the max over channels is exact.
 
-`replay_q_values` runs h, r and the first q layer through PyTorch (the same batch-1 calls as `q_values`), then replays
-the k steps in a compiled loop that rounds exactly as above. Which channels are fused is measured, never assumed:
-`conv_modes` runs PyTorch's convolution once on random data for each (map size, l_q, PyTorch threads) and keeps, per
-channel, the chain that reproduces it bit for bit; the first `VERIFY_MAPS` maps of each setting are also compared
-whole with `VIN.q_values`. If either check fails, that setting uses `VIN.q_values` itself (slow, but exact).
+`replay_q_values` runs h through PyTorch (oneDNN; the same batch-1 call as `q_values`), then replays r, the first q
+layer and the k steps in compiled loops that round exactly as above. Which chains is measured, never assumed:
+`conv_modes` and `sum_order` run PyTorch's convolutions on random data once for each (map size, widths, PyTorch
+threads) and keep the chains that reproduce them bit for bit; the first `VERIFY_MAPS` maps of each setting are also
+compared whole with `VIN.q_values`. If a check fails, that setting uses `VIN.q_values` itself (slow, but exact).
 
 `exact_policy` then decides each cell from that value map: in float64 where the two best logits are further apart
 than any float32 evaluation of `fc` could move them (a rigorous bound), else with PyTorch's `fc` at the cell.
@@ -32,7 +35,7 @@ import torch.nn.functional as F
 from vinadv.planners.reference import torch_action_at
 from vinadv.planners.vin import VIN, make_input
 
-__all__ = ["conv_modes", "exact_policy", "replay_q_values"]
+__all__ = ["conv_modes", "exact_policy", "replay_q_values", "sum_order"]
 
 #: maps per setting whose replayed value map is compared with `VIN.q_values` before the replay is trusted alone
 VERIFY_MAPS = 2
@@ -40,13 +43,13 @@ VERIFY_MAPS = 2
 PROBES = 16
 _FLOAT32_UNIT_ROUNDOFF = 2.0**-24
 
-# (N, l_q, torch threads) -> per-channel fused flags, or None where the replay does not reproduce PyTorch
+# (N, l_q, torch threads) -> per-channel fused flags; (N, l_h, torch threads) -> (fused, split); None where no
+# replay reproduces PyTorch
 _modes: dict[tuple[int, int, int], np.ndarray | None] = {}
-_verified: dict[tuple[int, int, int], int] = {}
-
-
-def _setting(n: int, l_q: int) -> tuple[int, int, int]:
-    return n, l_q, torch.get_num_threads()
+_orders: dict[tuple[int, int, int], tuple[bool, int] | None] = {}
+# (N, l_h, l_q, torch threads): maps checked whole against VIN.q_values; settings where one differed
+_verified: dict[tuple[int, int, int, int], int] = {}
+_failed: set[tuple[int, int, int, int]] = set()
 
 
 def conv_modes(n: int, l_q: int) -> np.ndarray | None:
@@ -56,7 +59,7 @@ def conv_modes(n: int, l_q: int) -> np.ndarray | None:
 
     Several probes at scales from 1e-2 to 1e2: a BLAS may treat a few cells apart (seen: MKL on 2 threads at 9x9 and
     13x13 rounds two cells of the unfused channels otherwise), and one probe can round them alike by chance."""
-    key = _setting(n, l_q)
+    key = (n, l_q, torch.get_num_threads())
     if key not in _modes:
         rng = np.random.default_rng(0)
         fused_ok, plain_ok = np.ones(l_q, bool), np.ones(l_q, bool)
@@ -76,25 +79,49 @@ def conv_modes(n: int, l_q: int) -> np.ndarray | None:
     return _modes[key]
 
 
+def sum_order(n: int, l_h: int) -> tuple[bool, int] | None:
+    """How PyTorch's 1x1 convolution `(1, l_h, N, N) -> (1, 1, N, N)` (the r layer; a BLAS sgemm with M = 1 and
+    K = l_h) sums its l_h products: `(fused, split)`, a chain over k = 0 .. split - 1 and one over split .. l_h - 1
+    (split 0: a single chain), added; None if no such order reproduces it bit for bit. Seen: MKL on 1 thread, one
+    unfused chain; on 2 threads, fused chains split at 128. Measured once per (N, l_h, PyTorch threads)."""
+    key = (n, l_h, torch.get_num_threads())
+    if key not in _orders:
+        candidates = [(fused, split) for fused in (True, False) for split in (0, 64, 128, 256, 512) if split < l_h]
+        rng = np.random.default_rng(1)
+        for scale in np.logspace(-2, 2, PROBES // 4):
+            h = (scale * rng.standard_normal((l_h, n, n))).astype(np.float32)
+            w = rng.standard_normal(l_h).astype(np.float32)
+            with torch.no_grad():
+                want = F.conv2d(torch.from_numpy(h)[None], torch.from_numpy(w)[None, :, None, None])[0, 0].numpy()
+            candidates = [(fused, split) for fused, split in candidates
+                          if np.array_equal(_sum_channels(h, w, fused, split), want)]
+        _orders[key] = candidates[0] if len(candidates) == 1 else None
+    return _orders[key]
+
+
 def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
-    """`model.q_values(x)[0]` for one map `x (1, 2, N, N)`, bit for bit: `(l_q, N, N)` float32."""
-    n, l_q = x.shape[-1], model.config.l_q
-    modes = conv_modes(n, l_q)
-    if modes is None:
+    """`model.q_values(x)[0]` for one map `x (1, 2, N, N)`, bit for bit: `(l_q, N, N)` float32.
+
+    PyTorch runs h (oneDNN); r, the first q layer and the k steps are replayed (`sum_order`, `conv_modes`)."""
+    n, l_h, l_q = x.shape[-1], model.config.l_h, model.config.l_q
+    modes, order = conv_modes(n, l_q), sum_order(n, l_h)
+    setting = (n, l_h, l_q, torch.get_num_threads())
+    if modes is None or order is None or setting in _failed:
         return _torch_q_values(model, x)
     with torch.no_grad():
-        q_r = model.q(model.r(model.h(x)))[0].numpy()
-    w = np.ascontiguousarray(model.w.detach()[:, 0].numpy())
-    flat_q = _to_flat(q_r)
-    _replay_kernel(flat_q, w, int(model.config.k), n, modes)
-    q = _from_flat(flat_q, n)
-    key = _setting(n, l_q)
-    if _verified.get(key, 0) < VERIFY_MAPS:
+        h = model.h(x)[0].numpy()
+    r = _sum_channels(h, model.r.weight.detach()[0, :, 0, 0].numpy(), *order)
+    flat_r = _to_flat(r[None])[0]
+    q = np.zeros((l_q, flat_r.size), dtype=np.float32)
+    _conv_chains(flat_r, np.ascontiguousarray(model.q.weight.detach()[:, 0].numpy()), n, modes, q)
+    _replay_kernel(q, np.ascontiguousarray(model.w.detach()[:, 0].numpy()), int(model.config.k), n, modes)
+    q = _from_flat(q, n)
+    if _verified.get(setting, 0) < VERIFY_MAPS:
         want = _torch_q_values(model, x)
         if not np.array_equal(q.view(np.int32), want.view(np.int32)):
-            _modes[key] = None
+            _failed.add(setting)
             return want
-        _verified[key] = _verified.get(key, 0) + 1
+        _verified[setting] = _verified.get(setting, 0) + 1
     return q
 
 
@@ -182,6 +209,45 @@ def _conv_plain(v, w, n, out):
 
 
 @numba.njit(cache=True, nogil=True)
+def _conv_chains(v, w, n, fused, out):
+    """out[c] = channel c of the convolution of v (flat) with w[c], chained as `fused[c]` says."""
+    for c in range(w.shape[0]):
+        if fused[c]:
+            _conv_fused(v, w[c : c + 1], n, out[c : c + 1])
+        else:
+            _conv_plain(v, w[c : c + 1], n, out[c : c + 1])
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+def _fused_chain(h, w, lo, hi, acc):
+    for k in range(lo, hi):
+        wk, hk = w[k], h[k]
+        for p in range(acc.size):
+            acc[p] = wk * hk[p] + acc[p]
+
+
+@numba.njit(cache=True, nogil=True)
+def _plain_chain(h, w, lo, hi, acc):
+    for k in range(lo, hi):
+        wk, hk = w[k], h[k]
+        for p in range(acc.size):
+            acc[p] = acc[p] + wk * hk[p]
+
+
+def _sum_channels(h: np.ndarray, w: np.ndarray, fused: bool, split: int) -> np.ndarray:
+    """sum_k w[k] * h[k] for h `(K, N, N)` float32 in the order (fused, split) of `sum_order`: `(N, N)` float32."""
+    chain = _fused_chain if fused else _plain_chain
+    flat = np.ascontiguousarray(h, dtype=np.float32).reshape(len(h), -1)
+    w = np.ascontiguousarray(w, dtype=np.float32)
+    first, second = np.zeros(flat.shape[1], np.float32), np.zeros(flat.shape[1], np.float32)
+    chain(flat, w, 0, split or len(w), first)
+    if split:
+        chain(flat, w, split, len(w), second)
+        first += second
+    return first.reshape(h.shape[1:])
+
+
+@numba.njit(cache=True, nogil=True)
 def _replay_kernel(q, w, k, n, fused):
     """In place: q `(l_q, (N + 2)^2)` holds q_r on entry and the k-th step's q on exit (flat layout); each step
     v = max over channels, q = q_r + conv(v), every channel's chain as `fused` says."""
@@ -200,11 +266,8 @@ def _replay_kernel(q, w, k, n, fused):
         for i in range(1, n):  # padding cells between rows back to 0
             v[i * width + n + 1] = 0.0
             v[(i + 1) * width] = 0.0
+        _conv_chains(v, w, n, fused, q)
         for c in range(lq):
-            if fused[c]:
-                _conv_fused(v, w[c : c + 1], n, q[c : c + 1])
-            else:
-                _conv_plain(v, w[c : c + 1], n, q[c : c + 1])
             qc, rc = q[c, p0 : p0 + length], q_r[c, p0 : p0 + length]
             for t in range(length):
                 qc[t] = rc[t] + qc[t]
