@@ -9,7 +9,6 @@ import time
 from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.cluster import add_cluster_arguments, open_cluster
 from vinadv.grid.mapset import MapSet
-from vinadv.identify import LABEL_STRENGTH, identify, rule_strength
 from vinadv.planners.weights import load_vin
 
 
@@ -32,6 +31,8 @@ def register(subparsers) -> None:
 
 
 def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float) -> dict:
+    from vinadv.identify import LABEL_STRENGTH
+
     counts = {label: int((labels == label).sum()) for label in LABEL_STRENGTH}
     valid = len(labels) - counts["invalid"]
     success = counts["UrP"] + counts["FP"]
@@ -53,6 +54,8 @@ def print_counts(summary: dict) -> None:
 
 
 def cmd_attack(args: argparse.Namespace) -> int:
+    from vinadv.identify import identify, rule_strength  # scikit-learn behind it: imported for this command only
+
     maps = MapSet.load(args.maps)
     model = load_vin(args.weights, size=maps.size)
     attack = make_attack(args.strategy, per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)

@@ -10,8 +10,6 @@ from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.cluster import add_cluster_arguments, open_cluster
 from vinadv.commands.attack import attack_summary, print_counts
-from vinadv.identify import identify, load_classifier, replan
-from vinadv.pipeline import STAGES, RunConfig, run_pipeline
 
 
 def register(subparsers) -> None:
@@ -49,6 +47,8 @@ def register(subparsers) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    from vinadv.pipeline import RunConfig, run_pipeline  # scikit-learn behind it: imported for this command only
+
     config = RunConfig(
         n=args.n, size=args.size, attack=args.attack, seed=args.seed, per_map=args.per_map, budget=args.budget,
         radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
@@ -82,6 +82,8 @@ def _cluster_options(client) -> dict:
 
 
 def _print_run(result: dict) -> None:
+    from vinadv.pipeline import STAGES
+
     print(f"run {result['run_id']} ({result['name'] or 'unnamed'}) in {result['db']}: {result['pairs']:,} pairs from "
           f"{result['maps']:,} maps, {result['stored']:,} stored")
     if result["skipped_shards"]:
@@ -97,6 +99,7 @@ def _print_run(result: dict) -> None:
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
+    from vinadv.identify import identify, load_classifier, replan
     from vinadv.planners.weights import load_vin, weights_checksum
     from vinadv.store import PairRecords, Store
 
