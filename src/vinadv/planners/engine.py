@@ -38,7 +38,7 @@ from vinadv.planners.result import (
     PlanResult,
     check_plan_inputs,
 )
-from vinadv.planners.torch_replay import exact_policy
+from vinadv.planners.torch_replay import best_and_gap, exact_policy
 from vinadv.planners.vin import GOAL_VALUE, VIN
 
 __all__ = ["PlanResult", "TERMINATIONS", "plan_batch", "action_maps"]
@@ -298,15 +298,8 @@ def _action_at(q, fc, cell, margin, logits):
         for c in range(lq):
             s += fc[a, c] * q[c, cell]
         logits[a] = s
-    top = 0
-    for a in range(1, n_act):
-        if logits[a] > logits[top]:
-            top = a
-    second = -np.inf
-    for a in range(n_act):
-        if a != top and logits[a] > second:
-            second = logits[a]
-    return top if logits[top] - second > margin else UNDECIDED
+    top, gap = best_and_gap(logits)
+    return top if gap > margin else UNDECIDED
 
 
 @numba.njit(cache=True, nogil=True)

@@ -289,12 +289,19 @@ def _certain_action(q, fc, gamma, i, j):
             m += abs(fc[a, c] * q[c, i, j])
         logits[a] = s
         bound = max(bound, m)
+    top, gap = best_and_gap(logits)
+    return top if gap > 4.0 * gamma * bound else -1
+
+
+@numba.njit(cache=True, nogil=True)
+def best_and_gap(logits):
+    """The index of the largest logit (the lowest index on ties) and how far it lies above the second largest."""
     top = 0
-    for a in range(1, n_act):
+    for a in range(1, len(logits)):
         if logits[a] > logits[top]:
             top = a
     second = -np.inf
-    for a in range(n_act):
+    for a in range(len(logits)):
         if a != top and logits[a] > second:
             second = logits[a]
-    return top if logits[top] - second > 4.0 * gamma * bound else -1
+    return top, logits[top] - second
