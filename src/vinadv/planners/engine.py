@@ -9,7 +9,7 @@ float32 PyTorch VIN at every step). The engine gets there differently, map by ma
 3. Near ties. The engine's arithmetic is not torch's, so logits differ by rounding; where the two best logits of a
    cell are closer than a margin that bounds that difference, the cell is uncertain, and a rollout that steps on
    one is re-done with torch's own value map for that map, the very numbers the reference computes (replayed bit for
-   bit by `vinadv.planners.torch_replay`, ~1 ms instead of the ~3 ms of a batch-1 `q_values`), so a near tie is
+   bit by `vinadv.planners.torch_replay`, ~0.5 ms instead of the ~3 ms of a batch-1 `q_values`), so a near tie is
    decided as the reference decides it.
 
 `action_maps` gives the action of every cell (uncertain: -1), for inspection and benchmarks.
