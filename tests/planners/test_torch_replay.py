@@ -7,6 +7,7 @@ import torch.nn.functional as F
 
 from vinadv.grid import generate_maps
 from vinadv.planners import torch_replay
+from vinadv.planners.flat import from_flat, layout, to_flat
 from vinadv.planners.reference import torch_action_at
 from vinadv.planners.testing import planning_vin, random_vin
 from vinadv.planners.torch_replay import conv_modes, exact_policy, replay_q_values, sum_order
@@ -48,11 +49,11 @@ def test_modes_reproduce_conv2d_on_other_data(size, torch_threads):
         w = rng.standard_normal((10, 3, 3)).astype(np.float32)
         with torch.no_grad():
             want = F.conv2d(torch.from_numpy(v)[None, None], torch.from_numpy(w)[:, None], padding=1)[0].numpy()
-        flat = torch_replay._to_flat(v[None])[0]
+        flat = to_flat(v[None])[0]
         fused, plain = np.zeros((10, flat.size), np.float32), np.zeros((10, flat.size), np.float32)
         torch_replay._conv_fused(flat, w, size, fused)
         torch_replay._conv_plain(flat, w, size, plain)
-        got = np.where(modes[:, None, None], torch_replay._from_flat(fused, size), torch_replay._from_flat(plain, size))
+        got = np.where(modes[:, None, None], from_flat(fused, size), from_flat(plain, size))
         np.testing.assert_array_equal(bits(got), bits(want))
 
 
@@ -81,9 +82,9 @@ def test_replay_kernel_is_q_values_bit_for_bit(size, make, torch_threads):
     for i in range(len(maps)):
         x = make_input(maps.obstacles[i : i + 1], maps.goals[i : i + 1])
         with torch.no_grad():
-            flat = torch_replay._to_flat(model.q(model.r(model.h(x)))[0].numpy())
+            flat = to_flat(model.q(model.r(model.h(x)))[0].numpy())
         torch_replay._replay_kernel(flat, w, model.config.k, size, modes)
-        np.testing.assert_array_equal(bits(torch_replay._from_flat(flat, size)), bits(torch_q(model, x)))
+        np.testing.assert_array_equal(bits(from_flat(flat, size)), bits(torch_q(model, x)))
 
 
 def test_shipped_weights_replay_bit_for_bit(torch_threads):
@@ -117,7 +118,8 @@ def test_failed_verification_turns_the_replay_off(fresh_settings, monkeypatch):
 
     def off_by_one_ulp(q, *args):
         real_kernel(q, *args)
-        q.view(np.int32)[0, 5 * 18 + 5] += 1
+        width, p0 = layout(16)[:2]
+        q.view(np.int32)[0, p0 + 5 * width + 5] += 1  # cell (5, 5)
 
     monkeypatch.setattr(torch_replay, "_replay_kernel", off_by_one_ulp)
     np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))

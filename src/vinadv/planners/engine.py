@@ -28,6 +28,7 @@ import torch
 
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.shortest_paths import heap_pop, heap_push
+from vinadv.planners.flat import layout, zero_row_gaps
 from vinadv.planners.reference import rollout
 from vinadv.planners.result import (
     COLLISION,
@@ -114,21 +115,9 @@ class FoldedVIN:
         )
 
 
-# Layout of the compiled kernels. A map lives in a flat zero-padded array: row stride W, the smallest multiple of 8
-# above N (so every row starts on a vector boundary), cell (i, j) at p0 + i * W + j with p0 = 2 * W, zeros around
-# (two rows above, the W - N cells after each row, two rows below). The 3x3 neighbours of every cell are then the
-# same nine offsets, and one loop of (N - 1) * W + N cells covers the map (the padding cells between rows are
-# computed and thrown away), so the vector loops run long, not N cells at a time. The value iteration also keeps
-# the value map shifted by one cell either way (vm[i] = v[i - 1], vp[i] = v[i + 1]): with those, every one of its
-# loads starts on a vector boundary (a 32-byte load that straddles two cache lines costs two).
-
-
-@numba.njit(cache=True, nogil=True)
-def _layout(n):
-    """(W, p0, length, size) of the flat layout of an N x N map: row stride, index of cell (0, 0), cells one loop
-    covers, array length."""
-    width = (n + 8) // 8 * 8
-    return width, 2 * width, (n - 1) * width + n, (n + 4) * width
+# The kernels work on the flat layout of `vinadv.planners.flat`. The value iteration also keeps the value map shifted
+# by one cell either way (vm[i] = v[i - 1], vp[i] = v[i + 1]): with those, every one of its loads starts on a vector
+# boundary (a 32-byte load that straddles two cache lines costs two).
 
 
 @numba.njit(cache=True, nogil=True)
@@ -151,7 +140,7 @@ def _scratch(n, lq):
     flight in its low 12 bits waits for it (4K aliasing), which made the loop 25-40% slower when these arrays lay
     back to back. Starts on a 64-byte boundary.
     """
-    stride = (_layout(n)[3] + 1023) // 1024 * 1024
+    stride = (layout(n)[3] + 1023) // 1024 * 1024
     rows = lq + 3
     buf = np.zeros(2 * rows * stride + 256 + 16, dtype=np.float32)
     start = (-buf.ctypes.data % 64) // 4
@@ -164,16 +153,15 @@ def _scratch(n, lq):
 
 @numba.njit(cache=True, nogil=True)
 def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, work):
-    """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32. Flat layout
-    (above); `work` is float64 scratch `(2, size)`, zero outside the map's cells."""
+    """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32. Flat layout; `work` is float64 scratch `(2, size)`, zero outside the map's cells."""
     n, lq = obs.shape[0], reward_q.shape[0]
-    width, p0, length = _layout(n)[:3]
+    width, p0, length = layout(n)[:3]
     padded, r = work[0], work[1]
     for i in range(n):
         for j in range(n):
             padded[p0 + i * width + j] = obs[i, j]
     _conv3x3(padded, reward_w[0], reward_b, r, width, p0, length)
-    _zero_row_gaps(r, n)
+    zero_row_gaps(r, n)
     for di in range(3):  # the goal image is 0 but at the goal: it reaches only the goal's 3x3 neighbourhood
         for dj in range(3):
             i, j = gr - di + 1, gc - dj + 1
@@ -181,15 +169,6 @@ def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, wo
                 r[p0 + i * width + j] += goal_value * reward_w[1, di, dj]
     for c in range(lq):
         _conv3x3(r, q_w[c], 0.0, reward_q[c], width, p0, length)
-
-
-@numba.njit(cache=True, nogil=True)
-def _zero_row_gaps(flat, n):
-    """Set the padding cells between rows of a flat map (computed and thrown away by the long loops) back to 0."""
-    width, p0 = _layout(n)[:2]
-    for i in range(n - 1):
-        for j in range(n, width):  # (a slice assignment per row costs more than the whole row of stores)
-            flat[p0 + i * width + j] = 0.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -206,8 +185,8 @@ def _conv3x3(x, w, bias, out, width, p0, length):
 @numba.njit(cache=True, nogil=True)
 def _publish(best, v, vm, vp, n):
     """v = best with its row gaps zeroed, and its shifted copies vm[i] = v[i - 1], vp[i] = v[i + 1]."""
-    _zero_row_gaps(best, n)
-    p0, length = _layout(n)[1:3]
+    zero_row_gaps(best, n)
+    p0, length = layout(n)[1:3]
     src = best[p0 : p0 + length]
     for dst in (v[p0 : p0 + length], vm[p0 + 1 : p0 + 1 + length], vp[p0 - 1 : p0 - 1 + length]):
         for t in range(length):  # one loop per copy: three stores in one loop would not vectorise
@@ -225,7 +204,7 @@ def _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n):
     `np.maximum` adds NaN handling (six instructions) and a max stored back into its own input a masked store.
     """
     lq = reward_q.shape[0]
-    width, p0, length = _layout(n)[:3]
+    width, p0, length = layout(n)[:3]
     src = best2[p0 : p0 + length]
     src[:] = np.float32(-np.inf)
     for c in range(lq):  # v of the first q layer: the max of reward_q over channels
@@ -273,7 +252,7 @@ def _margin(q, fc, n, rel_margin):
     """Near-tie margin of a map: rel_margin * max |q| over the map * max_a sum_c |fc[a, c]| (a bound on how far
     rounding moves a logit, times the relative error of q)."""
     n_act, lq = fc.shape[0], fc.shape[1]
-    width, p0 = _layout(n)[:2]
+    width, p0 = layout(n)[:2]
     qmax = 0.0
     for c in range(lq):
         for i in range(n):
@@ -307,7 +286,7 @@ def _decide(q, fc, n, rel_margin, actions):
     """Action of every cell (`_action_at`) into `actions (N, N)`."""
     margin = _margin(q, fc, n, rel_margin)
     logits = np.empty(fc.shape[0])
-    width, p0 = _layout(n)[:2]
+    width, p0 = layout(n)[:2]
     for i in range(n):
         for j in range(n):
             actions[i, j] = _action_at(q, fc, p0 + i * width + j, margin, logits)
@@ -323,7 +302,7 @@ def _plan_kernel(lo, hi, obstacles, goals, starts, reward_w, reward_b, goal_valu
     2 * max(|dr|, |dc|) moves (a lower bound of 2L), which few do, so L is searched for then.
     """
     n, lq, n_starts = obstacles.shape[1], q_w.shape[0], starts.shape[1]
-    width, p0 = _layout(n)[:2]
+    width, p0 = layout(n)[:2]
     reward_q, q, v, vm, vp, best, best2, work = _scratch(n, lq)
     logits = np.empty(fc.shape[0])
     stamp = np.zeros((n, n), dtype=np.int64)  # t + 1 on the cells rollout t has visited

@@ -32,6 +32,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from vinadv.planners.flat import from_flat, layout, to_flat, zero_row_gaps
 from vinadv.planners.reference import torch_action_at
 from vinadv.planners.vin import VIN, make_input
 
@@ -68,12 +69,12 @@ def conv_modes(n: int, l_q: int) -> np.ndarray | None:
             w = rng.standard_normal((l_q, 3, 3)).astype(np.float32)
             with torch.no_grad():
                 want = F.conv2d(torch.from_numpy(v)[None, None], torch.from_numpy(w)[:, None], padding=1)[0].numpy()
-            flat_v = _to_flat(v[None])[0]
+            flat_v = to_flat(v[None])[0]
             fused, plain = np.empty((l_q, flat_v.size), np.float32), np.empty((l_q, flat_v.size), np.float32)
             _conv_fused(flat_v, w, n, fused)
             _conv_plain(flat_v, w, n, plain)
-            fused_ok &= (_from_flat(fused, n) == want).reshape(l_q, -1).all(axis=1)
-            plain_ok &= (_from_flat(plain, n) == want).reshape(l_q, -1).all(axis=1)
+            fused_ok &= (from_flat(fused, n) == want).reshape(l_q, -1).all(axis=1)
+            plain_ok &= (from_flat(plain, n) == want).reshape(l_q, -1).all(axis=1)
         # a channel that both chains reproduce would leave its mode unknown; random data makes that vanishingly rare
         _modes[key] = fused_ok if np.all(fused_ok ^ plain_ok) else None
     return _modes[key]
@@ -111,11 +112,11 @@ def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
     with torch.no_grad():
         h = model.h(x)[0].numpy()
     r = _sum_channels(h, model.r.weight.detach()[0, :, 0, 0].numpy(), *order)
-    flat_r = _to_flat(r[None])[0]
+    flat_r = to_flat(r[None])[0]
     q = np.zeros((l_q, flat_r.size), dtype=np.float32)
     _conv_chains(flat_r, np.ascontiguousarray(model.q.weight.detach()[:, 0].numpy()), n, modes, q)
     _replay_kernel(q, np.ascontiguousarray(model.w.detach()[:, 0].numpy()), int(model.config.k), n, modes)
-    q = _from_flat(q, n)
+    q = from_flat(q, n)
     if _verified.get(setting, 0) < VERIFY_MAPS:
         want = _torch_q_values(model, x)
         if not np.array_equal(q.view(np.int32), want.view(np.int32)):
@@ -146,29 +147,14 @@ def _torch_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
         return model.q_values(x)[0].numpy()
 
 
-def _to_flat(maps: np.ndarray) -> np.ndarray:
-    """`(C, N, N)` -> `(C, (N + 2)^2)` float32, zero-padded flat layout (the engine's): cell (i, j) at
-    (i + 1) * (N + 2) + j + 1, so the 3x3 neighbours of every cell sit at the same nine offsets."""
-    c, n = maps.shape[0], maps.shape[1]
-    out = np.zeros((c, n + 2, n + 2), dtype=np.float32)
-    out[:, 1:-1, 1:-1] = maps
-    return out.reshape(c, -1)
-
-
-def _from_flat(flat: np.ndarray, n: int) -> np.ndarray:
-    return np.ascontiguousarray(flat.reshape(-1, n + 2, n + 2)[:, 1:-1, 1:-1])
-
-
-# Both chains run over the flat layout: one long loop over (N - 1) * W + N cells (the padding cells between rows
-# computed and thrown away), the nine taps read through views at their offsets; a real cell reads zeros where it
+# Both chains run over the flat layout (`vinadv.planners.flat`), the nine taps read through views at their offsets; a real cell reads zeros where it
 # leaves the grid, as im2col does. Each chain starts from 0, as the BLAS kernels do.
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
 def _conv_fused(v, w, n, out):
     """out[c] = the nine taps of w[c] chained in kernel order, acc = fma(w[c, tap], v[cell + tap], acc)."""
-    width = n + 2
-    p0, length = width + 1, (n - 1) * width + n
+    width, p0, length = layout(n)[:3]
     u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]  # rows above, same, below
     zero = np.float32(0.0)
     for c in range(w.shape[0]):
@@ -189,8 +175,7 @@ def _conv_fused(v, w, n, out):
 @numba.njit(cache=True, nogil=True)
 def _conv_plain(v, w, n, out):
     """As `_conv_fused`, each product rounded before it is added (compiled without `contract`: never fused)."""
-    width = n + 2
-    p0, length = width + 1, (n - 1) * width + n
+    width, p0, length = layout(n)[:3]
     u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]
     zero = np.float32(0.0)
     for c in range(w.shape[0]):
@@ -249,11 +234,10 @@ def _sum_channels(h: np.ndarray, w: np.ndarray, fused: bool, split: int) -> np.n
 
 @numba.njit(cache=True, nogil=True)
 def _replay_kernel(q, w, k, n, fused):
-    """In place: q `(l_q, (N + 2)^2)` holds q_r on entry and the k-th step's q on exit (flat layout); each step
+    """In place: q `(l_q, size)` holds q_r on entry and the k-th step's q on exit (flat layout); each step
     v = max over channels, q = q_r + conv(v), every channel's chain as `fused` says."""
     lq = q.shape[0]
-    width = n + 2
-    p0, length = width + 1, (n - 1) * width + n
+    p0, length = layout(n)[1:3]
     q_r = q.copy()
     v = np.zeros(q.shape[1], dtype=np.float32)
     vc = v[p0 : p0 + length]
@@ -263,9 +247,7 @@ def _replay_kernel(q, w, k, n, fused):
             qc = q[c, p0 : p0 + length]
             for t in range(length):
                 vc[t] = np.maximum(vc[t], qc[t])
-        for i in range(1, n):  # padding cells between rows back to 0
-            v[i * width + n + 1] = 0.0
-            v[(i + 1) * width] = 0.0
+        zero_row_gaps(v, n)
         _conv_chains(v, w, n, fused, q)
         for c in range(lq):
             qc, rc = q[c, p0 : p0 + length], q_r[c, p0 : p0 + length]
