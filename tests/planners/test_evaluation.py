@@ -54,8 +54,9 @@ def make_maps(size, cases):
             obstacles[i, r, c] = True
     goals = np.array([g for _, g, _ in cases], dtype=np.int64)
     starts = np.array([[s] for _, _, s in cases], dtype=np.int64)
-    costs, cells, offsets = expert_paths(obstacles, goals, starts)
-    return MapSet(obstacles, goals, starts, costs, cells, offsets, corner_cutting=True, seed=-1)
+    costs, paths = expert_paths(obstacles, goals, starts)
+    return MapSet(obstacles=obstacles, goals=goals, starts=starts, expert_costs=costs, expert=paths,
+                  corner_cutting=True, seed=-1)
 
 
 def test_rollout_metrics_on_hand_built_paths():

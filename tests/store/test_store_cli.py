@@ -10,7 +10,6 @@ import pytest
 import sqlalchemy as sa
 
 from vinadv.cli import main
-from vinadv.grid.paths import unpack_paths
 from vinadv.store import Store
 from vinadv.store.synthetic import random_records
 
@@ -32,7 +31,7 @@ def test_export_csv_matches_oracle(stored, tmp_path):
     assert main(["export", "--db", url, "--run", str(run_id), "--format", "csv", "--out", str(out), "--quiet"]) == 0
     rows = list(csv.DictReader(out.open()))
     assert [int(r["pair_index"]) for r in rows] == list(range(40))
-    paths_a = unpack_paths(records.path_a_cells, records.path_a_offsets)
+    paths_a = records.path_a.unpack()
     for i, row in enumerate(rows):
         assert row["map_o"] == map_text(records.obstacles_o[i])
         assert row["map_a"] == map_text(records.obstacles_a[i])

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from vinadv.errors import InputError
-from vinadv.grid.paths import pack_paths, unpack_paths
+from vinadv.grid.paths import PackedPaths
 from vinadv.store import codec
 
 from tests.store.oracle import map_text, parse_map, parse_path, path_text
@@ -22,7 +22,8 @@ paths_strategy = st.lists(st.lists(st.tuples(cell_value, cell_value), max_size=2
 
 
 def _pack(paths):
-    return pack_paths([np.array(p, dtype=np.int64).reshape(-1, 2) for p in paths])
+    packed = PackedPaths.pack(paths)
+    return packed.cells, packed.offsets
 
 
 @settings(max_examples=150, deadline=None)
@@ -48,7 +49,7 @@ def test_paths_match_oracle_and_round_trip(paths):
     back_cells, back_offsets = codec.decode_paths(texts)
     assert np.array_equal(back_offsets, offsets)
     assert np.array_equal(back_cells, cells)
-    assert [p.tolist() for p in unpack_paths(back_cells, back_offsets)] == [[list(c) for c in p] for p in paths]
+    assert [p.tolist() for p in PackedPaths(back_cells, back_offsets).unpack()] == [[list(c) for c in p] for p in paths]
 
 
 @settings(max_examples=100, deadline=None)

@@ -143,7 +143,7 @@ def test_pair_json_matches_records(client, db):
         row = int(np.flatnonzero(records.pair_index == i)[0])
         assert np.array_equal(np.array([[c == "1" for c in line] for line in body["map_o"]]), records.obstacles_o[row])
         assert np.array_equal(np.array([[c == "1" for c in line] for line in body["map_a"]]), records.obstacles_a[row])
-        o = records.path_o_cells[records.path_o_offsets[row]:records.path_o_offsets[row + 1]]
+        o = records.path_o[row]
         a = records.path_a_cells[records.path_a_offsets[row]:records.path_a_offsets[row + 1]]
         assert body["path_o"] == o.tolist() and body["path_a"] == a.tolist()
         assert body["added"] == records.added[row].tolist() and body["goal"] == records.goals[row].tolist()

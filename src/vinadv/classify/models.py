@@ -27,6 +27,7 @@ from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.cooccurrence import feature_shape, image_features, offset_matrix, torch_features
 from vinadv.classify.images import render_batch
 from vinadv.errors import InputError
+from vinadv.grid.dihedral import transform_grids
 
 CHUNK = 4096
 
@@ -36,7 +37,7 @@ def _image_chunks(X, chunk: int = CHUNK, encoding: str = "paper"):
     an image array, used as it is)."""
     if isinstance(X, PathPairBatch):
         for start in range(0, len(X), chunk):
-            yield start, render_batch(X.subset(np.arange(start, min(start + chunk, len(X)))), encoding)
+            yield start, render_batch(X.take(np.arange(start, min(start + chunk, len(X)))), encoding)
     else:
         images = np.asarray(X)
         if images.ndim != 4 or images.shape[3] != 3 or images.shape[1] != images.shape[2]:
@@ -278,7 +279,7 @@ class TorchImageClassifier(PairClassifier):
             for batch in order.split(self.batch_size):
                 xb, yb = inputs[batch], targets[batch]
                 if self.augment:
-                    xb = _dihedral(xb, int(rng.integers(8)))
+                    xb = transform_grids(xb, int(rng.integers(8)), axes=(2, 3))
                 opt.zero_grad()
                 loss = loss_fn(self.network_(self._inputs(xb)), yb)
                 loss.backward()
@@ -332,22 +333,6 @@ class TorchImageClassifier(PairClassifier):
             raise InputError(f"model weights do not fit the {kind} architecture: {exc}") from None
         model.network_.eval()
         return model
-
-
-def _dihedral(x, transform: int):
-    """One of the 8 flips/rotations on a `(B, C, N, N)` tensor (ids as in `vinadv.classify.images`)."""
-    torch = _torch()
-    if transform in (1, 2, 3):
-        return torch.rot90(x, k=-transform, dims=(2, 3))
-    if transform == 4:
-        return x.flip(3)
-    if transform == 5:
-        return x.flip(2)
-    if transform == 6:
-        return x.transpose(2, 3)
-    if transform == 7:
-        return x.transpose(2, 3).flip(2).flip(3)
-    return x
 
 
 @register_kind("cnn")

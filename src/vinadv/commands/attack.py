@@ -31,11 +31,11 @@ def register(subparsers) -> None:
 
 
 def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float) -> dict:
-    from vinadv.identify import LABEL_STRENGTH
+    from vinadv.vocabulary import label_counts, success_count
 
-    counts = {label: int((labels == label).sum()) for label in LABEL_STRENGTH}
+    counts = label_counts(labels)
     valid = len(labels) - counts["invalid"]
-    success = counts["UrP"] + counts["FP"]
+    success = success_count(counts)
     return {
         "maps": n_maps, "pairs": len(labels), "maps_without_valid_cell": no_valid, "counts": counts,
         "success_rate": success / valid if valid else None, "planner_calls": planner_calls,

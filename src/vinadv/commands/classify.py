@@ -64,7 +64,7 @@ def _load_pairs(path):
     from vinadv.attacks.pairs import PairSet
     from vinadv.classify import PathPairBatch
 
-    return PathPairBatch.from_pairset(PairSet.load(path))
+    return PathPairBatch.from_pairs(PairSet.load(path))
 
 
 def _human_labels(args):
@@ -113,7 +113,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         train_index, test_index = np.sort(train_index), np.sort(test_index)
     else:
         train_index, test_index = fp_dp, np.zeros(0, dtype=np.int64)
-    train_batch, train_labels = batch.subset(train_index), labels[train_index]
+    train_batch, train_labels = batch.take(train_index), labels[train_index]
     if args.balance:
         train_batch, train_labels = balance_batch(train_batch, train_labels, seed=args.seed)
     model = HybridClassifier(make_fp_classifier(args.model, args.setting, args.seed, verbose=not args.quiet), t=t)
@@ -161,7 +161,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     if len(eval_index) == 0:
         raise InputError(f"{args.pairs}: no FP/DP pairs to evaluate on ({scope})")
 
-    subset = batch.subset(eval_index)
+    subset = batch.take(eval_index)
     start = time.perf_counter()
     predicted = model.predict(subset)
     predict_seconds = time.perf_counter() - start
@@ -171,7 +171,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     # the five-way labels of every pair the model did not train on (features + classifier, against the rule)
     unseen = np.setdiff1d(np.arange(len(batch)), train_index)
     start = time.perf_counter()
-    five_way = model.predict(batch.subset(unseen))
+    five_way = model.predict(batch.take(unseen))
     five_way_seconds = time.perf_counter() - start
     result = {
         "pairs": str(args.pairs), "model": str(args.model), "kind": record.get("model", model.kind),

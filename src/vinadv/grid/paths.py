@@ -114,11 +114,21 @@ class PackedPaths:
     def take(self, index) -> PackedPaths:
         """The paths at `index` (int array, bool mask or slice), in that order, repacked."""
         idx = np.arange(len(self))[index]
-        lengths = self.lengths[idx]
-        offsets = np.zeros(len(idx) + 1, dtype=np.int64)
+        return self._segments(self.offsets[:-1][idx], self.lengths[idx])
+
+    def prefixes(self, lengths) -> PackedPaths:
+        """The first `lengths[i]` cells of each path i (`(n,)` ints, each at most that path's length)."""
+        lengths = np.asarray(lengths, dtype=np.int64)
+        if lengths.shape != (len(self),) or np.any((lengths < 0) | (lengths > self.lengths)):
+            raise InputError(f"lengths: expected {len(self)} values between 0 and each path's length")
+        return self._segments(self.offsets[:-1], lengths)
+
+    def _segments(self, starts: np.ndarray, lengths: np.ndarray) -> PackedPaths:
+        """New paths `cells[starts[p]:starts[p] + lengths[p]]`, packed without a loop over paths."""
+        offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
         np.cumsum(lengths, out=offsets[1:])
-        # output position j takes cell offsets[idx[p]] + (j - new offsets[p]) for the path p holding j
-        gather = np.repeat(self.offsets[:-1][idx] - offsets[:-1], lengths) + np.arange(offsets[-1])
+        # output position j takes cell starts[p] + (j - offsets[p]) for the path p holding j
+        gather = np.repeat(starts - offsets[:-1], lengths) + np.arange(offsets[-1])
         return PackedPaths(self.cells[gather], offsets)
 
     # --- figures ----------------------------------------------------------------------------------------------------
@@ -173,21 +183,3 @@ class PackedPaths:
         check_offsets(reader, f"{prefix}_offsets", offsets, n, len(cells))
         return cls(cells, offsets)
 
-
-# TEMPORARY (removed once every user holds PackedPaths): the old function API, delegating.
-def pack_paths(paths):
-    p = PackedPaths.pack(paths)
-    return p.cells, p.offsets
-
-
-def unpack_paths(cells, offsets):
-    return PackedPaths(cells, offsets).unpack()
-
-
-def path_costs(cells, offsets):
-    return PackedPaths(cells, offsets).costs()
-
-
-def take_paths(cells, offsets, idx):
-    p = PackedPaths(cells, offsets).take(idx)
-    return p.cells, p.offsets
