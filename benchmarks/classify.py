@@ -75,7 +75,6 @@ def main(argv=None) -> int:
 
     if args.pairs:
         from vinadv.attacks.pairs import PairSet
-        from vinadv.classify import PathPairBatch
 
         batch = PathPairBatch.from_pairs(PairSet.load(args.pairs))
         source = f"real pairs from {args.pairs}"
@@ -135,8 +134,8 @@ def main(argv=None) -> int:
     results["predict_pairs_per_s"] = predict
 
     # scikit-learn's own SVC.predict on the same model, side by side with our decision function
-    from sklearn.svm import SVC
     import scipy.sparse
+    from sklearn.svm import SVC
 
     svc = SVC(kernel="rbf", gamma="scale").fit(
         scipy.sparse.csr_matrix(render_batch(train_batch).reshape(len(train_batch), -1) / 255.0), train_y

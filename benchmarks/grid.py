@@ -10,8 +10,6 @@ from __future__ import annotations
 import argparse
 import time
 
-import numpy as np
-
 from vinadv.grid import expert_paths, generate_maps, shortest_distances
 
 

@@ -22,7 +22,8 @@ def test_the_words_of_design_md():
     assert TERMINATIONS == ("goal", "collision", "loop", "step_limit")
     assert set(SUCCESS_LABELS) == {"UrP", "FP"}
     # UrP > FP > DP > UcP > invalid
-    assert sorted(LABELS, key=LABEL_STRENGTH.get, reverse=True) == list(STRENGTH_ORDER) == ["UrP", "FP", "DP", "UcP", "invalid"]
+    strongest_first = sorted(LABELS, key=LABEL_STRENGTH.get, reverse=True)
+    assert strongest_first == list(STRENGTH_ORDER) == ["UrP", "FP", "DP", "UcP", "invalid"]
     assert RESULT_NAMES == {"UrP": "Success-UrP", "FP": "Success-FP", "DP": "Unsuccess-DP", "UcP": "Unsuccess-UcP"}
 
 

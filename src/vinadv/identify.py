@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -137,31 +138,28 @@ class StoredIdentification:
 
 
 def identify_and_store(pairs_path: str | os.PathLike, db: str | None = None, *, classifier: str | None = None,
-                       weights: str | None = None, name: str | None = None, cluster: str | None = None,
-                       workers: int | None = None, shard_size: int = 1000,
-                       progress: bool = False) -> StoredIdentification:
+                       weights: str | None = None, name: str | None = None,
+                       remote: Callable[[PairSet, str | None, str | None, str], Identification] | None = None,
+                       ) -> StoredIdentification:
     """`vinadv identify`: label the pairs of a pairs file (after planning both maps again with `weights`, if
-    given) and store them as a new run in `db`. With `cluster` (a Dask scheduler address) or `workers` (a local
-    Dask cluster of that many workers), `shard_size` pairs per task; else in this process."""
+    given) and store them as a new run in `db`.
+
+    `remote(pairs, weights, classifier, label_source)` computes the identification elsewhere (say
+    `vinadv.cluster.ClusterIdentify`); it is called after the inputs are checked, so a bad file is refused before
+    any worker starts. Without it, everything runs in this process."""
     from vinadv.planners.weights import load_vin, weights_checksum
     from vinadv.store import Store
 
     pairs = PairSet.load(pairs_path)
     t0 = time.perf_counter()
-    if cluster is None and workers is None:
-        if weights:
-            pairs = replan(pairs, load_vin(weights, size=pairs.size))
-        model, classifier_name = load_classifier(classifier)
-        ident = identify(pairs, model, classifier_name)
+    model = load_vin(weights, size=pairs.size) if weights else None
+    classifier_model, classifier_name = load_classifier(classifier)
+    if remote is None:
+        if model is not None:
+            pairs = replan(pairs, model)
+        ident = identify(pairs, classifier_model, classifier_name)
     else:
-        from vinadv.cluster import identify_on_cluster, open_cluster
-
-        if weights:
-            load_vin(weights, size=pairs.size)  # a bad file is refused here, before any worker starts
-        classifier_name = load_classifier(classifier)[1]
-        with open_cluster(cluster, workers) as client:
-            ident = identify_on_cluster(client, pairs, weights, classifier, classifier_name, shard_size=shard_size,
-                                        progress=progress)
+        ident = remote(pairs, weights, classifier, classifier_name)
     elapsed = time.perf_counter() - t0
     with Store.open(db) as store:
         run_id = store.create_run(

@@ -78,7 +78,8 @@ class ShardResult:
     seconds: dict = field(default_factory=dict)
 
 
-def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None, label_source: str = "rule") -> ShardResult:
+def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None,
+                  label_source: str = "rule") -> ShardResult:
     """Generate, attack and identify shard `shard` of the run: deterministic for `(config, shard)`."""
     first_map = shard * config.shard_size
     n_maps = min(config.shard_size, config.n - first_map)

@@ -11,9 +11,9 @@ from vinadv.classify import label_pairs
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.identify import rule_strength
-from vinadv.vocabulary import LABEL_STRENGTH
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.testing import planning_vin
+from vinadv.vocabulary import LABEL_STRENGTH
 
 SIZE = 10
 

@@ -6,7 +6,6 @@ import pytest
 from sklearn.metrics import balanced_accuracy_score, roc_auc_score
 
 from vinadv.classify import balance_batch, label_batch, make_fp_classifier, render_batch
-from vinadv.grid.dihedral import transform_grids
 from vinadv.classify.cooccurrence import (
     FEATURES,
     cooccurrence,
@@ -18,6 +17,7 @@ from vinadv.classify.cooccurrence import (
 from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
 from vinadv.classify.synthetic import synthetic_pairs
 from vinadv.errors import InputError
+from vinadv.grid.dihedral import transform_grids
 
 
 def _random_images(n: int, size: int, seed: int) -> np.ndarray:

@@ -8,7 +8,7 @@ from vinadv.classify.rule import default_threshold, label_batch, label_pairs, pa
 from vinadv.errors import InputError
 from vinadv.grid.paths import PackedPaths
 
-from .oracle import path_pairs, pairs_as_lists, rule_oracle
+from .oracle import pairs_as_lists, path_pairs, rule_oracle
 
 
 def one(o, a, goal=None, size=28, t=None):

@@ -61,7 +61,7 @@ def test_empty_and_concat_of_nothing():
     empty = PathPairs.empty(SIZE)
     assert len(empty) == 0 and empty.size == SIZE and len(empty.path_o) == 0
     assert PathPairs.concat([], size=SIZE).obstacles_o.shape == (0, SIZE, SIZE)
-    with pytest.raises(TypeError):
+    with pytest.raises(InputError, match="pass size="):
         PathPairs.concat([])  # the empty form needs the map side
 
 
@@ -99,7 +99,7 @@ class Tagged(PathPairs):
     tag: str = "x"
 
     @classmethod
-    def empty(cls, size: int, **settings):
+    def empty(cls, size: int | None = None, **settings):
         return super().empty(size, score=np.zeros(0), **settings)
 
 

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import torch
 
-from tests.grid.oracle import DELTAS, brute_distances, legal
+from tests.grid.oracle import brute_distances, legal
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths
 from vinadv.planners.evaluation import action_accuracy_counts, evaluate_vin, rollout_metrics
-from vinadv.planners.result import COLLISION, GOAL, LOOP, STEP_LIMIT, PlanResult
+from vinadv.planners.result import COLLISION, GOAL, LOOP, PlanResult
 from vinadv.planners.vin import VIN, VINConfig
 
 N_, S_, E_, W_ = 0, 1, 2, 3

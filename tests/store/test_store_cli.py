@@ -1,4 +1,5 @@
-"""`vinadv export` (src/vinadv/commands/store.py): csv / jsonl / npz of a stored run, and exit status 2 on bad databases."""
+"""`vinadv export` (src/vinadv/commands/store.py): csv / jsonl / npz of a stored run, and exit status 2 on bad
+databases."""
 
 from __future__ import annotations
 
@@ -9,11 +10,10 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
+from tests.store.oracle import map_text, path_text
 from vinadv.cli import main
 from vinadv.store import Store
 from vinadv.store.synthetic import random_records
-
-from tests.store.oracle import map_text, path_text
 
 
 @pytest.fixture

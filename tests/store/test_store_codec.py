@@ -8,11 +8,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
+from tests.store.oracle import map_text, parse_map, parse_path, path_text
 from vinadv.errors import InputError
 from vinadv.grid.paths import PackedPaths
 from vinadv.store import codec
-
-from tests.store.oracle import map_text, parse_map, parse_path, path_text
 
 maps_strategy = st.integers(0, 12).flatmap(
     lambda size: hnp.arrays(bool, st.tuples(st.integers(0, 6), st.just(size), st.just(size)))
@@ -77,7 +76,9 @@ def test_malformed_paths_are_refused(text):
         codec.decode_paths(["0,0", text])
 
 
-@pytest.mark.parametrize("text", ["0110;1001;0000;111", "0110;1001;0000;1112", "0110,1001,0000,1111", "01101001;00001111;"])
+@pytest.mark.parametrize(
+    "text", ["0110;1001;0000;111", "0110;1001;0000;1112", "0110,1001,0000,1111", "01101001;00001111;"]
+)
 def test_malformed_maps_are_refused(text):
     with pytest.raises(InputError, match="map 1"):
         codec.decode_maps(["0110;1001;0000;1111", text])

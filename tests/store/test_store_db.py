@@ -13,11 +13,10 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
+from tests.store.oracle import map_text, path_text
 from vinadv.errors import InputError
 from vinadv.store import LABELS, PairRecords, Store, schema
 from vinadv.store.synthetic import random_records
-
-from tests.store.oracle import map_text, path_text
 
 
 def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
@@ -30,7 +29,7 @@ def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
         rows.append((
             run_id, int(records.pair_index[i]), map_text(records.obstacles_o[i]), map_text(records.obstacles_a[i]),
             path_text(paths_o[i]), path_text(paths_a[i]), str(records.label[i]), bool(records.attack[i]),
-            "%d,%d" % tuple(records.starts[i]), "%d,%d" % tuple(records.goals[i]), "%d,%d" % tuple(records.added[i]),
+            "{},{}".format(*records.starts[i]), "{},{}".format(*records.goals[i]), "{},{}".format(*records.added[i]),
             str(records.label_source[i]), None if np.isnan(score) else score,
             str(records.term_o[i]), str(records.term_a[i]),
             None if records.dh[i] < 0 else int(records.dh[i]), None if records.dv[i] < 0 else int(records.dv[i]),
@@ -188,7 +187,8 @@ def test_other_schema_version_is_refused_and_left_untouched(db_url):
         store.write_pairs(run_id, records)
     engine = sa.create_engine(db_url, poolclass=sa.pool.NullPool)
     with engine.begin() as conn:
-        conn.execute(sa.text("UPDATE vinadv_meta SET value = '999' WHERE " + engine.dialect.identifier_preparer.quote("key") + " = 'schema_version'"))
+        key = engine.dialect.identifier_preparer.quote("key")
+        conn.execute(sa.text(f"UPDATE vinadv_meta SET value = '999' WHERE {key} = 'schema_version'"))
     engine.dispose()
     before = _tables_and_rows(db_url)
     with pytest.raises(InputError, match="schema version '999'"):

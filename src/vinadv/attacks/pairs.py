@@ -38,7 +38,7 @@ class PairSet(PathPairs):
         self.map_index = int_column(self.map_index, "PairSet.map_index", (len(self.starts),))
 
     @classmethod
-    def empty(cls, size: int, **settings) -> PairSet:
+    def empty(cls, size: int | None = None, **settings) -> PairSet:
         return super().empty(size, map_index=np.zeros(0, np.int64), **settings)
 
     def save(self, path: str | os.PathLike) -> None:

@@ -305,7 +305,6 @@ class SaliencyAttack(Attack):
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         model = ctx.model
         b = len(ctx.obstacles)
-        lengths = ctx.originals.paths.lengths
         owner_all = ctx.originals.paths.owners()
         cells_all = ctx.originals.paths.cells.astype(np.int64)
         # the decisions along the path: every path cell but the goal

@@ -92,7 +92,8 @@ class SVMImageClassifier(PairClassifier):
         # a sparse fit gives sparse support vectors and dual coefficients
         self.support_vectors_ = np.asarray(svc.support_vectors_.toarray(), dtype=np.float32)
         dual = svc.dual_coef_
-        self.dual_coef_ = np.asarray(dual.toarray() if scipy.sparse.issparse(dual) else dual, dtype=np.float64).reshape(-1)
+        dual = dual.toarray() if scipy.sparse.issparse(dual) else dual
+        self.dual_coef_ = np.asarray(dual, dtype=np.float64).reshape(-1)
         self.intercept_ = float(svc.intercept_[0])
         self.gamma_ = float(svc._gamma)
         self.size_ = _image_size(X)
@@ -269,7 +270,8 @@ class TorchImageClassifier(PairClassifier):
         else:
             raise InputError(f"unknown optimizer {self.optimizer!r} (adam, adamw)")
         steps = self.epochs * -(-len(y) // self.batch_size)
-        scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(steps, 1)) if self.schedule == "cosine" else None
+        cosine = self.schedule == "cosine"
+        scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(steps, 1)) if cosine else None
         loss_fn = torch.nn.CrossEntropyLoss()
         from tqdm import tqdm
 

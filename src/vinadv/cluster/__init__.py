@@ -42,7 +42,7 @@ WINDOW_PER_THREAD = 4
 
 __all__ = [
     "INSTALL_HINT", "add_cluster_arguments", "open_cluster", "start_local_cluster", "ClusterShards",
-    "attack_on_cluster", "identify_on_cluster", "require_dask",
+    "ClusterIdentify", "attack_on_cluster", "identify_on_cluster", "require_dask",
 ]
 
 
@@ -253,6 +253,20 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
     no_valid = np.concatenate([p.no_valid_cell + lo for (lo, _), p in zip(bounds, parts)]).astype(np.int64) \
         if parts else np.zeros(0, np.int64)
     return AttackResult(pairs, no_valid, int(sum(p.planner_calls for p in parts)))
+
+
+class ClusterIdentify:
+    """`identify.identify_and_store`'s `remote`: `identify_on_cluster` on the Dask scheduler at `address`, or on a
+    local cluster of `workers`, opened when called (after the caller has checked its inputs) and closed after."""
+
+    def __init__(self, address: str | None = None, workers: int | None = None, shard_size: int = 1000,
+                 progress: bool = False):
+        self.address, self.workers, self.shard_size, self.progress = address, workers, shard_size, progress
+
+    def __call__(self, pairs, weights: str | None, classifier: str | None, label_source: str):
+        with open_cluster(self.address, self.workers) as client:
+            return identify_on_cluster(client, pairs, weights, classifier, label_source, shard_size=self.shard_size,
+                                       progress=self.progress)
 
 
 def identify_on_cluster(client, pairs, weights: str | None, classifier: str | None, label_source: str,

@@ -20,5 +20,5 @@ def cli_message(exc: InputError) -> str:
     message = str(exc)
     for parameter in getattr(exc, "parameters", ()):
         pattern = rf"(?<![\w-]){re.escape(parameter)}(?![\w-])"
-        message = re.sub(pattern, lambda _: flag(parameter), message, count=1)
+        message = re.sub(pattern, flag(parameter).replace("\\", "\\\\"), message, count=1)
     return message

@@ -6,8 +6,6 @@ import argparse
 import json
 import time
 
-import numpy as np
-
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps, obstacle_fraction
 

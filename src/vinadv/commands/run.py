@@ -98,11 +98,14 @@ def _print_run(result: dict) -> None:
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
+    from vinadv.cluster import ClusterIdentify
     from vinadv.identify import identify_and_store
 
+    remote = None
+    if args.cluster is not None or args.workers is not None:
+        remote = ClusterIdentify(args.cluster, args.workers, shard_size=args.shard_size, progress=not args.quiet)
     done = identify_and_store(args.pairs, args.db, classifier=args.classifier, weights=args.weights, name=args.name,
-                              cluster=args.cluster, workers=args.workers, shard_size=args.shard_size,
-                              progress=not args.quiet)
+                              remote=remote)
     ident = done.identification
     summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds)
     summary.update(run_id=done.run_id, adversarial=int(ident.attack.sum()))

@@ -32,7 +32,8 @@ _STEPS = np.array(STEPS, dtype=bool)  # (8, 3)
 def _check(transform) -> np.ndarray:
     transform = np.asarray(transform, dtype=np.int64)
     if np.any((transform < 0) | (transform >= len(STEPS))):
-        raise InputError(f"transform: dihedral transform ids are 0-7, got {transform[(transform < 0) | (transform > 7)].reshape(-1)[0]}")
+        bad = transform[(transform < 0) | (transform >= len(STEPS))].reshape(-1)[0]
+        raise InputError(f"transform: dihedral transform ids are 0-7, got {bad}", "transform")
     return transform
 
 

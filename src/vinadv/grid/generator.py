@@ -46,9 +46,9 @@ def _draw_obstacles(rng: np.random.Generator, n: int, size: int, goals: np.ndarr
 
     rows = np.arange(size)[None, None, :, None]
     cols = np.arange(size)[None, None, None, :]
-    t, l = top[..., None, None], left[..., None, None]
-    rect = (rows >= t) & (rows < t + height[..., None, None]) & (cols >= l) & (cols < l + width[..., None, None])
-    disc = (rows - t) ** 2 + (cols - l) ** 2 <= radius[..., None, None] ** 2
+    t, lft = top[..., None, None], left[..., None, None]
+    rect = (rows >= t) & (rows < t + height[..., None, None]) & (cols >= lft) & (cols < lft + width[..., None, None])
+    disc = (rows - t) ** 2 + (cols - lft) ** 2 <= radius[..., None, None] ** 2
     shapes = np.where(is_disc[..., None, None], disc, rect)
     shapes &= (np.arange(max_obs)[None, :] < attempts[:, None])[..., None, None]
     covers_goal = shapes[np.arange(n), :, goals[:, 0], goals[:, 1]]
@@ -58,7 +58,8 @@ def _draw_obstacles(rng: np.random.Generator, n: int, size: int, goals: np.ndarr
     return obstacles
 
 
-def _generate_chunk(seed: tuple[int, ...], chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int, max_size: int):
+def _generate_chunk(seed: tuple[int, ...], chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int,
+                    max_size: int):
     rng = np.random.default_rng([*seed, chunk])
     goals = rng.integers(1, size - 1, (CHUNK, 2))
     obstacles = _draw_obstacles(rng, CHUNK, size, goals, max_obs, max_size)

@@ -67,7 +67,7 @@ class MapSet:
         )
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "MapSet":
+    def load(cls, path: str | os.PathLike) -> MapSet:
         """Read and validate a maps file; any problem raises InputError naming the file and field."""
         r = NpzReader(path, MAPS_FORMAT)
         obstacles = r.array("obstacles", "b", 3)

@@ -63,8 +63,11 @@ class PathPairs(Columns):
             setattr(self, field, term)
 
     @classmethod
-    def empty(cls, size: int, **settings):
+    def empty(cls, size: int | None = None, **settings):
         """No pairs, on `size x size` maps; `settings`: the other fields of a subclass."""
+        if size is None:
+            raise InputError(f"{cls.__name__}.concat: no parts; pass size= (the map side) for an empty result",
+                             "size")
         return cls(
             obstacles_o=np.zeros((0, size, size), bool), obstacles_a=np.zeros((0, size, size), bool),
             starts=np.zeros((0, 2), np.int64), goals=np.zeros((0, 2), np.int64), added=np.zeros((0, 2), np.int64),

@@ -56,7 +56,8 @@ class PairRecords(PathPairs):
             raise InputError(f"PairRecords.score: expected shape ({n},), got {self.score.shape}")
         for name in ("dh", "dv"):
             value = getattr(self, name)
-            setattr(self, name, np.full(n, -1, np.int64) if value is None else int_column(value, f"PairRecords.{name}", (n,)))
+            column = np.full(n, -1, np.int64) if value is None else int_column(value, f"PairRecords.{name}", (n,))
+            setattr(self, name, column)
         if self.no is not None:
             self.no = int_column(self.no, "PairRecords.no", (n,))
 

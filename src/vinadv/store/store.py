@@ -26,8 +26,8 @@ from sqlalchemy import exc as sa_exc
 
 from vinadv import __version__
 from vinadv.errors import InputError
-from vinadv.store import codec
 from vinadv.grid.paths import PackedPaths
+from vinadv.store import codec
 from vinadv.store.records import PairRecords
 from vinadv.store.schema import (
     ADDITIVE_TABLES,
