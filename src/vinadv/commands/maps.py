@@ -6,8 +6,6 @@ import argparse
 import json
 import time
 
-import numpy as np
-
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps, obstacle_fraction
 
@@ -45,7 +43,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
     summary = {
         "out": args.out, "maps": len(maps), "size": maps.size, "starts": maps.n_starts, "seed": args.seed,
         "corner_cutting": maps.corner_cutting, "obstacle_fraction": round(obstacle_fraction(maps.obstacles), 4),
-        "mean_expert_moves": round(float(np.diff(maps.expert_offsets).mean() - 1), 3) if len(maps) else None,
+        "mean_expert_moves": round(float(maps.expert.lengths.mean() - 1), 3) if len(maps) else None,
         "seconds": round(elapsed, 3),
     }
     if args.json:

@@ -7,12 +7,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vinadv.npzfile import NpzReader, check_cells_in_grid, check_offsets, save_npz
+from vinadv.grid.paths import PackedPaths
+from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 
 MAPS_FORMAT = "vinadv.maps/1"
 
 
-@dataclass
+@dataclass(kw_only=True, eq=False)
 class MapSet:
     """n maps of N x N cells with S starts each.
 
@@ -21,7 +22,8 @@ class MapSet:
         goals: `(n, 2)` int64 `(row, col)`.
         starts: `(n, S, 2)` int64.
         expert_costs: `(n, S)` float64, optimal cost from each start (1 per orthogonal, sqrt 2 per diagonal move).
-        expert_cells, expert_offsets: optimal paths packed flat, path `i * S + s` from start `s` of map `i`.
+        expert: `PackedPaths` of n * S optimal paths, path `i * S + s` from start `s` of map `i` (file fields
+            `expert_cells`, `expert_offsets`).
         corner_cutting: whether a diagonal move may pass between two obstacles on these maps.
         seed: the generator seed (-1 when unknown).
     """
@@ -30,8 +32,7 @@ class MapSet:
     goals: np.ndarray
     starts: np.ndarray
     expert_costs: np.ndarray
-    expert_cells: np.ndarray
-    expert_offsets: np.ndarray
+    expert: PackedPaths
     corner_cutting: bool = True
     seed: int = -1
 
@@ -47,8 +48,8 @@ class MapSet:
         return int(self.starts.shape[1])
 
     def expert_path(self, i: int, s: int = 0) -> np.ndarray:
-        k = i * self.n_starts + s
-        return self.expert_cells[self.expert_offsets[k] : self.expert_offsets[k + 1]]
+        """The optimal path from start `s` of map `i`, `(L, 2)` int16."""
+        return self.expert[i * self.n_starts + s]
 
     def save(self, path: str | os.PathLike) -> None:
         save_npz(
@@ -59,15 +60,14 @@ class MapSet:
                 "goals": self.goals.astype(np.int64),
                 "starts": self.starts.astype(np.int64),
                 "expert_costs": self.expert_costs.astype(np.float64),
-                "expert_cells": self.expert_cells.astype(np.int16),
-                "expert_offsets": self.expert_offsets.astype(np.int64),
+                **self.expert.to_fields("expert"),
                 "corner_cutting": np.array(bool(self.corner_cutting)),
                 "seed": np.array(int(self.seed)),
             },
         )
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "MapSet":
+    def load(cls, path: str | os.PathLike) -> MapSet:
         """Read and validate a maps file; any problem raises InputError naming the file and field."""
         r = NpzReader(path, MAPS_FORMAT)
         obstacles = r.array("obstacles", "b", 3)
@@ -78,12 +78,9 @@ class MapSet:
         starts = r.array("starts", "i", 3, (n, None, 2)).astype(np.int64)
         s = starts.shape[1]
         costs = r.array("expert_costs", "f", 2, (n, s)).astype(np.float64)
-        cells = r.array("expert_cells", "i", 2, (None, 2)).astype(np.int16)
-        offsets = r.array("expert_offsets", "i", 1).astype(np.int64)
         check_cells_in_grid(r, "goals", goals, size)
         check_cells_in_grid(r, "starts", starts, size)
-        check_cells_in_grid(r, "expert_cells", cells, size)
-        check_offsets(r, "expert_offsets", offsets, n * s, len(cells))
+        expert = PackedPaths.read(r, "expert", n * s, size)
         idx = np.arange(n)
         if n and obstacles[idx, goals[:, 0], goals[:, 1]].any():
             raise r.fail("goals", "has a goal on an obstacle")
@@ -96,8 +93,7 @@ class MapSet:
             goals=goals,
             starts=starts,
             expert_costs=costs,
-            expert_cells=cells,
-            expert_offsets=offsets,
+            expert=expert,
             corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
             seed=int(r.scalar("seed", "i", default=-1)),
         )

@@ -9,16 +9,16 @@
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 import torch
 
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.paths import path_costs
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
-from vinadv.planners.result import TERMINATIONS, PlanResult
+from vinadv.planners.result import PlanResult
 from vinadv.planners.vin import VIN, make_input
+from vinadv.vocabulary import TERMINATIONS
 
 #: planner(obstacles (B,N,N), goals (B,2), starts (B,S,2), model, corner_cutting) -> PlanResult, path b*S+s.
 MultiStartPlanner = Callable[[np.ndarray, np.ndarray, np.ndarray, VIN, bool], PlanResult]
@@ -57,7 +57,7 @@ def rollout_metrics(result: PlanResult, expert_costs: np.ndarray) -> dict:
     """Rollout figures from a `PlanResult` and the expert (optimal) cost of each path `(B,)`."""
     expert_costs = np.asarray(expert_costs, dtype=np.float64).reshape(-1)
     n = len(result)
-    costs = path_costs(result.path_cells, result.path_offsets)
+    costs = result.paths.costs()
     reached = np.asarray(result.reached, dtype=bool)
     optimal = reached & (np.abs(costs - expert_costs) <= COST_TOL)
     extra = costs[reached] - expert_costs[reached]
@@ -90,7 +90,7 @@ def evaluate_vin(model: VIN, maps: MapSet, planner: MultiStartPlanner | None = N
         correct += c
         cells += n
         parts.append(planner(obstacles[sl], goals[sl], starts[sl], model, maps.corner_cutting))
-    result = PlanResult.concatenate(parts)
+    result = PlanResult.concat(parts)
     metrics = {
         "maps": len(maps),
         "size": maps.size,

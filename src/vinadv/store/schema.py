@@ -19,10 +19,10 @@ from __future__ import annotations
 import sqlalchemy as sa
 from sqlalchemy.dialects import mysql
 
+from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
+
 #: bump when a table or column changes; a database with another version is refused with a clear error.
 SCHEMA_VERSION = "1"
-
-LABELS = ("invalid", "UrP", "UcP", "DP", "FP")
 
 metadata = sa.MetaData()
 
