@@ -56,6 +56,14 @@ def register(subparsers) -> None:
     ev.add_argument("--json", action="store_true", help="print the figures as JSON")
     ev.set_defaults(func=cmd_eval)
 
+    exw = sub.add_parser("export-weights", help="write VIN weights as a plain state dict for the PyTorch ports")
+    exw.add_argument("weights", metavar="W", help="weights file (.pt)")
+    exw.add_argument("--format", required=True, choices=("state-dict",),
+                     help="state-dict: exactly the keys h.weight h.bias r.weight q.weight w fc.weight")
+    exw.add_argument("--out", required=True, help="output file (.pth)")
+    exw.add_argument("--json", action="store_true", help="print the keys and shapes as JSON")
+    exw.set_defaults(func=cmd_export_weights)
+
 
 def _command_line() -> str:
     return "vinadv " + shlex.join(sys.argv[1:])
@@ -163,3 +171,31 @@ def _print_metrics(m: dict) -> None:
     print(f"  optimal paths     {_pct(m['optimal_rate'])} (of reached: {_pct(m['optimal_rate_of_reached'])})")
     print(f"  mean extra cost   {m['mean_extra_cost']:.4f} (relative {_pct(m['mean_extra_cost_relative'])})")
     print(f"  terminations      {terms}")
+
+
+def cmd_export_weights(args: argparse.Namespace) -> int:
+    import torch
+
+    from vinadv.interop.checkpoints import export_state_dict, gppn_vin_gaps, read_checkpoint
+    from vinadv.planners.weights import load_vin
+
+    try:
+        model = load_vin(args.weights)
+    except InputError:
+        try:  # a GPPN checkpoint: say what vinadv's VIN cannot represent
+            state, _ = read_checkpoint(args.weights)
+        except InputError:
+            state = None
+        if state is None:
+            raise
+        raise InputError(f"{args.weights}: a GPPN-style checkpoint; vinadv's VIN cannot represent it: "
+                         + "; ".join(gppn_vin_gaps(state))) from None
+    shapes = export_state_dict(model, args.out)
+    summary = {"out": args.out, "format": args.format, "k": model.config.k,
+               "keys": {k: list(v) for k, v in shapes.items()}, "torch": torch.__version__}
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"wrote {args.out}: plain state dict {', '.join(shapes)} (k = {model.config.k} is not stored: "
+              f"the ports take it as an option)")
+    return 0
