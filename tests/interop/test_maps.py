@@ -357,3 +357,21 @@ def test_padded_maps_survive_export_and_import(tmp_path, small_maps):
         back = import_maps(tmp_path / name, fmt)
         np.testing.assert_array_equal(back.start_counts, padded.start_counts)
         assert_same_maps(back, padded, counts=padded.start_counts)
+
+
+def test_evaluation_leaves_padded_starts_out(tmp_path, small_maps):
+    from vinadv.planners.evaluation import evaluate_vin
+    from vinadv.planners.reference import plan_reference
+    from vinadv.planners.testing import planning_vin
+
+    keep = {1: 1, 4: 2, 9: 1}
+    write_kentsommer(tmp_path / "k.npz", small_maps, [], trajectories(small_maps, lambda i, s: s < keep.get(i, 3)))
+    padded = import_maps(tmp_path / "k.npz", "kentsommer")
+    model = planning_vin(10, seed=2)
+    metrics = evaluate_vin(model, padded)
+    real = [(i, s) for i in range(len(padded)) for s in range(keep.get(i, 3))]
+    assert metrics["rollouts"] == len(real) == sum(metrics["terminations"].values())
+    idx = np.array([i for i, _ in real])
+    ref = plan_reference(padded.obstacles[idx], np.array([padded.starts[i, s] for i, s in real]), padded.goals[idx],
+                         model)
+    assert metrics["success_rate"] == pytest.approx(ref.reached.mean())
