@@ -375,3 +375,24 @@ def test_evaluation_leaves_padded_starts_out(tmp_path, small_maps):
     ref = plan_reference(padded.obstacles[idx], np.array([padded.starts[i, s] for i, s in real]), padded.goals[idx],
                          model)
     assert metrics["success_rate"] == pytest.approx(ref.reached.mean())
+
+
+def test_the_files_optimal_paths_are_kept_and_others_replaced(tmp_path):
+    # 5x5 rooms, from (3, 1) to the goal (1, 3). Map 0: the file's N,N,E,E costs 4, not optimal (NE,NE costs
+    # 2 sqrt 2): replaced. Map 1, centre blocked: the file's E,NE,N is optimal (2 + sqrt 2), and vinadv's tie-break
+    # (lowest action index first) would take N,NE,E instead: kept as the file has it.
+    obstacles = np.zeros((2, 5, 5), bool)
+    obstacles[:, [0, -1], :] = obstacles[:, :, [0, -1]] = True
+    obstacles[1, 2, 2] = True  # the diagonal is blocked on map 1: the optimal paths cost 2 + sqrt 2
+    goals = np.array([[1, 3], [1, 3]])
+    maps = MapSet(obstacles=obstacles, goals=goals, starts=np.zeros((2, 0, 2), int), expert_costs=np.zeros((2, 0)),
+                  expert_cells=np.zeros((0, 2), np.int16), expert_offsets=np.zeros(1, np.int64))
+    detour = [(3, 1), (2, 1), (1, 1), (1, 2), (1, 3)]
+    optimal_1 = [(3, 1), (3, 2), (2, 3), (1, 3)]  # E, NE, N on map 1: 2 + sqrt 2
+    write_kentsommer(tmp_path / "k.npz", maps, [], [(0, detour), (1, optimal_1)])
+    got, info = read_maps(tmp_path / "k.npz", "kentsommer")
+    assert info["file_paths_optimal"] == 1
+    np.testing.assert_array_equal(got.expert_path(0), [(3, 1), (2, 2), (1, 3)])  # replaced by vinadv's
+    np.testing.assert_array_equal(got.expert_path(1), optimal_1)  # kept
+    assert got.expert_costs[0, 0] == pytest.approx(2 * math.sqrt(2))
+    assert got.expert_costs[1, 0] == pytest.approx(2 + math.sqrt(2))

@@ -19,9 +19,9 @@ code"):
 
 Samples are regrouped into maps (a new map starts where the image or goal changes from the previous sample/row)
 and trajectories (a new one starts where a state is not the previous state plus its labelled move). A map's
-starts are the first cells of its trajectories; expert paths and costs are always vinadv's own (Dijkstra,
-diagonal cost sqrt 2, corner cutting allowed as in all three codebases); how many of the file's paths are optimal
-under that model is reported. Maps with fewer trajectories than others are padded explicitly
+starts are the first cells of its trajectories; expert costs are vinadv's (Dijkstra, diagonal cost sqrt 2, corner
+cutting allowed as in all three codebases) and the expert paths the file's own where they are optimal under that
+model (so their labels are kept), vinadv's where not; how many were optimal is reported. Maps with fewer trajectories than others are padded explicitly
 (`MapSet.start_counts`).
 """
 
@@ -38,7 +38,7 @@ from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.generator import MIN_START_MOVES
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.paths import path_costs
+from vinadv.grid.paths import path_costs, take_paths
 from vinadv.grid.shortest_paths import (
     COST_TOL,
     _dijkstra_batch,
@@ -235,15 +235,21 @@ def _from_trajectories(f: _Arrays, cells_name: str, obstacles: np.ndarray, goals
     starts = np.repeat(goals[:, None, :], s, axis=1)  # padding: the goal, marked by start_counts
     starts[traj_map, rank] = cells[offsets[:-1]]
     dist, _ = shortest_distances(obstacles, goals)
-    costs, e_cells, e_offsets = expert_paths_from(dist, obstacles, goals, starts)
-    file_costs = path_costs(cells, offsets)
-    optimal = np.abs(file_costs - costs[traj_map, rank]) <= COST_TOL
+    costs, own_cells, own_offsets = expert_paths_from(dist, obstacles, goals, starts)
+    optimal = np.abs(path_costs(cells, offsets) - costs[traj_map, rank]) <= COST_TOL
+    # The file's own path where it is optimal under vinadv's model (its labels kept), vinadv's where not.
+    source = np.arange(n * s)
+    slot = traj_map * s + rank
+    source[slot[optimal]] = n * s + np.flatnonzero(optimal)
+    e_cells, e_offsets = take_paths(np.concatenate([own_cells, cells.astype(np.int16)]),
+                                    np.r_[own_offsets[:-1], offsets + own_offsets[-1]], source)
     maps = MapSet(obstacles=obstacles, goals=goals, starts=starts, expert_costs=costs, expert_cells=e_cells,
                   expert_offsets=e_offsets, corner_cutting=True, seed=-1,
                   start_counts=counts.astype(np.int64) if n and counts.min() < s else None)
     info = {"maps": n, "size": size, "trajectories": t, "starts_per_map": s,
             "maps_padded": int((counts < s).sum()), "file_paths_optimal": int(optimal.sum()),
-            "expert_paths": "vinadv's own (Dijkstra, diagonal cost sqrt 2), from the file's starts"}
+            "expert_paths": "the file's own where optimal under vinadv's model (diagonal cost sqrt 2), "
+                            "vinadv's Dijkstra for the others"}
     return maps, info
 
 
