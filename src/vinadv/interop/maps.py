@@ -423,7 +423,7 @@ def _read_gppn(f: _Arrays, split: str, starts: int | None, seed: int) -> tuple[M
 # ---------------------------------------------------------------------------------------------------------- export
 
 
-def _expert_steps(maps: MapSet) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def expert_steps(maps: MapSet) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Every step of the real starts' expert paths: `(map (k,), states (k, 2), labels (k,), traj_of_map)`.
 
     `traj_of_map` `(T,)` is the map index of each real path, in order.
@@ -449,15 +449,23 @@ def _goal_images(maps: MapSet, idx: np.ndarray, background: float, goal: float, 
     return out
 
 
-def _unit_cost_policies(maps: MapSet) -> np.ndarray:
-    """GPPN's optimal policies `(n, 8, 1, M, M)` float32 one-hot: Moore moves all of cost 1, corner cutting
-    allowed, the lowest GPPN action index among the optimal ones; none at the goal, walls and unreachable cells."""
-    obstacles = np.ascontiguousarray(maps.obstacles, dtype=bool)
+def unit_cost_distances(obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+    """Moves to the goal when every Moore move costs 1 (GPPN's model), corner cutting allowed: `(n, M, M)`
+    float64, inf where the goal cannot be reached."""
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     dist = np.empty(obstacles.shape)
     moves = np.empty(obstacles.shape, dtype=np.int32)
     if len(obstacles):
-        _dijkstra_batch(obstacles, np.ascontiguousarray(maps.goals, np.int64), True, ACTION_DELTAS,
+        _dijkstra_batch(obstacles, np.ascontiguousarray(goals, np.int64), True, ACTION_DELTAS,
                         np.ones(len(ACTION_DELTAS)), dist, moves)
+    return dist
+
+
+def _unit_cost_policies(maps: MapSet) -> np.ndarray:
+    """GPPN's optimal policies `(n, 8, 1, M, M)` float32 one-hot: Moore moves all of cost 1, corner cutting
+    allowed, the lowest GPPN action index among the optimal ones; none at the goal, walls and unreachable cells."""
+    obstacles = maps.obstacles
+    dist = unit_cost_distances(obstacles, maps.goals)
     n, m = maps.size, maps.size
     padded = np.full((len(dist), n + 2, m + 2), np.inf)
     padded[:, 1:-1, 1:-1] = dist
@@ -500,7 +508,7 @@ def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str |
         with open(path, "wb") as fh:
             np.savez_compressed(fh, *arrays)
         return {"format": format, "out": str(path), "split": split, "maps": len(maps)}
-    map_of_step, states, labels, traj_map = _expert_steps(maps)
+    map_of_step, states, labels, traj_map = expert_steps(maps)
     if format == "kentsommer":
         x = np.zeros((len(states), 2, s, s), np.float32)
         x[:, 0] = maps.obstacles[map_of_step]
