@@ -396,3 +396,13 @@ def test_the_files_optimal_paths_are_kept_and_others_replaced(tmp_path):
     np.testing.assert_array_equal(got.expert_path(1), optimal_1)  # kept
     assert got.expert_costs[0, 0] == pytest.approx(2 * math.sqrt(2))
     assert got.expert_costs[1, 0] == pytest.approx(2 + math.sqrt(2))
+
+
+def test_empty_splits(tmp_path, small_maps):
+    write_kentsommer(tmp_path / "k.npz", small_maps, [], trajectories(small_maps))
+    assert len(import_maps(tmp_path / "k.npz", "kentsommer", split="train")) == 0
+    assert_same_maps(import_maps(tmp_path / "k.npz", "kentsommer", split="all"), small_maps)
+    write_gppn(tmp_path / "g.npz", small_maps.obstacles, small_maps.goals, split="valid")
+    assert len(import_maps(tmp_path / "g.npz", "gppn", split="test")) == 0
+    got = import_maps(tmp_path / "g.npz", "gppn", split="all", starts=2)
+    np.testing.assert_array_equal(got.obstacles, small_maps.obstacles)

@@ -161,7 +161,7 @@ def _no_starts_option(f: _Arrays, starts: int | None) -> None:
 
 def _new_rows(rows: np.ndarray) -> np.ndarray:
     """`(m,)` bool: row i differs from row i - 1 (row 0 counts as new); compared in chunks to bound memory."""
-    flat = rows.reshape(len(rows), -1)
+    flat = rows.reshape(len(rows), int(np.prod(rows.shape[1:])))
     new = np.ones(len(flat), dtype=bool)
     for i in range(1, len(flat), _CHUNK):
         j = min(i + _CHUNK, len(flat))
@@ -175,14 +175,15 @@ def _decode_images(f: _Arrays, image_name: str, image: np.ndarray, value_name: s
     if image.size and not np.isin(image, (0, 1)).all():
         raise f.fail(image_name, "has values other than 0 and 1")
     is_goal = value == goal_value
-    per_map = is_goal.reshape(len(value), -1).sum(axis=1)
+    is_goal_flat = is_goal.reshape(len(value), value.shape[-2] * value.shape[-1])
+    per_map = is_goal_flat.sum(axis=1)
     if np.any(per_map != 1):
         i = int(np.flatnonzero(per_map != 1)[0])
         raise f.fail(value_name, f"has {per_map[i]} cells equal to {goal_value:g} in map {i}, expected one goal")
     if not np.isin(value[~is_goal], background).all():
         raise f.fail(value_name, f"has values other than {goal_value:g} (goal) and {background} elsewhere")
     obstacles = image == 0 if one_is_free else image == 1
-    flat_goal = np.argmax(is_goal.reshape(len(value), -1), axis=1)
+    flat_goal = np.argmax(is_goal_flat, axis=1)
     goals = np.stack(np.divmod(flat_goal, value.shape[-1]), axis=-1).astype(np.int64)
     if len(goals) and obstacles[np.arange(len(goals)), goals[:, 0], goals[:, 1]].any():
         meaning = "1 = free" if one_is_free else "1 = obstacle"
@@ -197,6 +198,8 @@ def _regroup(states: np.ndarray, labels: np.ndarray, new_map: np.ndarray):
     its last cell is the last sample's state plus its move (the goal, checked later).
     """
     m = len(states)
+    if m == 0:
+        return np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros(1, np.int64)
     after = states + ACTION_DELTAS[labels]
     cont = (after[:-1] == states[1:]).all(axis=1) & ~new_map[1:]
     first = np.flatnonzero(np.r_[True, ~cont])
@@ -259,7 +262,7 @@ def _with_drawn_starts(obstacles: np.ndarray, goals: np.ndarray, k: int, seed: i
     left out and counted."""
     n, size = obstacles.shape[0], obstacles.shape[1]
     dist, moves = shortest_distances(obstacles, goals)
-    eligible = (moves >= MIN_START_MOVES).reshape(n, -1)
+    eligible = (moves >= MIN_START_MOVES).reshape(n, size * size)
     keys = np.where(eligible, np.random.default_rng(seed).random(eligible.shape), np.inf)
     picks = np.argsort(keys, axis=1, kind="stable")[:, :k]
     counts = np.minimum(eligible.sum(axis=1), k)

@@ -54,12 +54,12 @@ def _moves(obstacles: np.ndarray, actions: np.ndarray, clamp: bool = False) -> n
     """
     n, size = obstacles.shape[0], obstacles.shape[1]
     rows, cols = np.divmod(np.arange(size * size), size)
-    flat = actions.reshape(n, -1)
+    flat = actions.reshape(n, size * size)
     nr, nc = rows + ACTION_DELTAS[flat, 0], cols + ACTION_DELTAS[flat, 1]
     if clamp:
         nr, nc = np.clip(nr, 0, size - 1), np.clip(nc, 0, size - 1)
     inside = (nr >= 0) & (nr < size) & (nc >= 0) & (nc < size)
-    ok = inside & ~obstacles.reshape(n, -1)[np.arange(n)[:, None], np.where(inside, nr * size + nc, 0)]
+    ok = inside & ~obstacles.reshape(n, size * size)[np.arange(n)[:, None], np.where(inside, nr * size + nc, 0)]
     return np.where(ok, nr * size + nc, np.arange(size * size))
 
 
@@ -98,8 +98,8 @@ def gppn_protocol(model: VIN, maps: MapSet) -> dict:
         length = length + length[rows, succ]
         succ = succ[rows, succ]
     reached = succ == goal[:, None]
-    free = ~maps.obstacles.reshape(n, -1)
-    opt = unit_cost_distances(maps.obstacles, maps.goals).reshape(n, -1)
+    free = ~maps.obstacles.reshape(n, size * size)
+    opt = unit_cost_distances(maps.obstacles, maps.goals).reshape(n, size * size)
     optimal = free & (~np.isfinite(opt) | (reached & (length == opt)))
     open_cells = free.sum(axis=1)
     return {"protocol": "gppn", "maps": n, "size": size, "cells": int(open_cells.sum()),
