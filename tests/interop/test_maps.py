@@ -406,3 +406,21 @@ def test_empty_splits(tmp_path, small_maps):
     assert len(import_maps(tmp_path / "g.npz", "gppn", split="test")) == 0
     got = import_maps(tmp_path / "g.npz", "gppn", split="all", starts=2)
     np.testing.assert_array_equal(got.obstacles, small_maps.obstacles)
+
+
+def test_gppn_policy_taking_illegal_moves_is_refused(tmp_path, small_maps):
+    arrays = gppn_arrays(small_maps.obstacles, small_maps.goals)
+    empty = [a[:0] for a in arrays]
+    # walls and walled-off cells may hold anything: a one-hot at a wall cell is accepted
+    wall = np.argwhere(small_maps.obstacles[0])[0]
+    arrays[2][0, :, 0, wall[0], wall[1]] = 0
+    arrays[2][0, 0, 0, wall[0], wall[1]] = 1
+    np.savez(tmp_path / "ok.npz", *empty, *empty, *arrays)
+    assert len(import_maps(tmp_path / "ok.npz", "gppn")) == len(small_maps)
+    # a start-able cell next to the border wall whose policy points north, into the wall, is refused
+    r, c = 1, int(np.flatnonzero(~small_maps.obstacles[0, 1])[0])
+    arrays[2][0, :, 0, r, c] = 0
+    arrays[2][0, 0, 0, r, c] = 1  # GPPN index 0 = N
+    np.savez(tmp_path / "bad.npz", *empty, *empty, *arrays)
+    with pytest.raises(InputError, match="'arr_8' takes an action into a wall"):
+        import_maps(tmp_path / "bad.npz", "gppn")

@@ -410,9 +410,11 @@ def _read_gppn(f: _Arrays, split: str, starts: int | None, seed: int) -> tuple[M
                                           goal_value=1, background=(0,))
         if not np.isin(policies, (0, 1)).all():
             raise f.fail(names[2], "has values other than 0 and 1 (one-hot optimal actions)")
-        # GPPN's policy, in vinadv's action order: every action it takes must be a legal move.
+        # GPPN's policy, in vinadv's action order: every action it takes at a cell that can reach the goal must be
+        # a legal move (what it holds at walls and walled-off cells is not defined, so not checked).
         ours = np.moveaxis(policies[:, :, 0], 1, -1)[..., np.argsort(GPPN_TO_VINADV)].astype(bool)
-        if np.any(ours & ~valid_moves(obstacles)):
+        reachable = np.isfinite(shortest_distances(obstacles, goals)[0])
+        if np.any(ours & ~valid_moves(obstacles) & reachable[..., None]):
             raise f.fail(names[2], "takes an action into a wall or off the grid (is the action order or the "
                                    "maze polarity different?)")
         obstacles_l.append(obstacles)
