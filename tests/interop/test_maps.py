@@ -424,3 +424,15 @@ def test_gppn_policy_taking_illegal_moves_is_refused(tmp_path, small_maps):
     np.savez(tmp_path / "bad.npz", *empty, *empty, *arrays)
     with pytest.raises(InputError, match="'arr_8' takes an action into a wall"):
         import_maps(tmp_path / "bad.npz", "gppn")
+
+
+def test_start_counts_field_is_validated(tmp_path, small_maps):
+    maps = MapSet(**{**small_maps.__dict__, "start_counts": np.full(len(small_maps), 4)})
+    maps.save(tmp_path / "m.npz")
+    with pytest.raises(InputError, match=r"field 'start_counts' has a count outside 1\.\.3"):
+        MapSet.load(tmp_path / "m.npz")
+    data = dict(np.load(tmp_path / "m.npz"))
+    data["start_counts"] = data["start_counts"][:3]
+    np.savez(tmp_path / "short.npz", **data)
+    with pytest.raises(InputError, match="field 'start_counts' has shape"):
+        MapSet.load(tmp_path / "short.npz")
