@@ -124,3 +124,17 @@ def test_gppn_vin_weights_are_refused_with_what_is_missing(tmp_path, f, capsys):
     assert code == 2 and "cannot represent it" in err and "input polarity" in err
     assert ("kernel size f = 11" in err) == (f == 11)
     assert not (tmp_path / "o.pth").exists()
+
+
+def test_numpy_1_names_in_old_checkpoints(tmp_path):
+    # GPPN's checkpoints were pickled under numpy 1, whose reconstructors live in numpy.core.multiarray
+    import io
+
+    buf = io.BytesIO()
+    torch.save({"model": {"w": np.ones((2, 3))}, "acc": np.float64(0.5)}, buf, _use_new_zipfile_serialization=False)
+    data = buf.getvalue()
+    assert b"numpy._core.multiarray" in data
+    (tmp_path / "old.pth").write_bytes(data.replace(b"numpy._core.multiarray", b"numpy.core.multiarray"))
+    state, meta = read_checkpoint(tmp_path / "old.pth")
+    np.testing.assert_array_equal(state["w"].numpy(), np.ones((2, 3)))
+    assert meta == {"entry": "model", "acc": 0.5}

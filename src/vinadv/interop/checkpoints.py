@@ -41,7 +41,7 @@ def export_state_dict(model: VIN, path: str | os.PathLike) -> dict[str, tuple[in
 
 def _allowed_globals() -> list:
     """numpy's pickling helpers under both the numpy 2 (`numpy._core`) and numpy 1 (`numpy.core`) names."""
-    core = np._core.multiarray
+    core = np._core.multiarray if hasattr(np, "_core") else np.core.multiarray  # numpy 2 / numpy 1.26
     allowed: list = [argparse.Namespace, np.dtype, np.ndarray]
     for name in ("scalar", "_reconstruct"):
         fn = getattr(core, name)
