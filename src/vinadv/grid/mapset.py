@@ -26,6 +26,9 @@ class MapSet:
             `expert_cells`, `expert_offsets`).
         corner_cutting: whether a diagonal move may pass between two obstacles on these maps.
         seed: the generator seed (-1 when unknown).
+        start_counts: `(n,)` int64 or None. Maps imported from other codebases may have fewer starts than others:
+            map `i` then has `start_counts[i]` real starts and its slots `s >= start_counts[i]` are explicit padding
+            (start = the goal, cost 0, a one-cell path), to be skipped through `start_mask`. None: all S are real.
     """
 
     obstacles: np.ndarray
@@ -35,6 +38,14 @@ class MapSet:
     expert: PackedPaths
     corner_cutting: bool = True
     seed: int = -1
+    start_counts: np.ndarray | None = None
+
+    @property
+    def start_mask(self) -> np.ndarray:
+        """`(n, S)` bool: which start slots are real starts (all True unless `start_counts` pads some)."""
+        if self.start_counts is None:
+            return np.ones(self.starts.shape[:2], dtype=bool)
+        return np.arange(self.n_starts)[None, :] < np.asarray(self.start_counts)[:, None]
 
     def __len__(self) -> int:
         return len(self.obstacles)
@@ -63,6 +74,7 @@ class MapSet:
                 **self.expert.to_fields("expert"),
                 "corner_cutting": np.array(bool(self.corner_cutting)),
                 "seed": np.array(int(self.seed)),
+                **({} if self.start_counts is None else {"start_counts": np.asarray(self.start_counts, np.int64)}),
             },
         )
 
@@ -88,6 +100,9 @@ class MapSet:
             raise r.fail("starts", "has a start on an obstacle")
         if np.any(~np.isfinite(costs)) or np.any(costs < 0):
             raise r.fail("expert_costs", "has a negative or non-finite cost")
+        counts = r.array("start_counts", "i", 1, (n,)).astype(np.int64) if r.has("start_counts") else None
+        if counts is not None and n and (counts.min() < 1 or counts.max() > s):
+            raise r.fail("start_counts", f"has a count outside 1..{s} (the starts per map)")
         return cls(
             obstacles=obstacles.astype(bool),
             goals=goals,
@@ -96,4 +111,5 @@ class MapSet:
             expert=expert,
             corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
             seed=int(r.scalar("seed", "i", default=-1)),
+            start_counts=counts,
         )
