@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from vinadv.errors import InputError
-from vinadv.store.schema import LABELS
+from vinadv.store.schema import HARM_COLUMNS, HARM_FLOAT_COLUMNS, HARMS, LABELS
 
 TERMINATIONS = ("goal", "collision", "loop", "step_limit")
 
@@ -27,6 +27,10 @@ class PairRecords:
       label_source (n,) str — who labelled it ('rule', a classifier name, ...); a single str is broadcast
       score (n,) float64 — classifier score, NaN = none (NULL)
       dh, dv (n,) int64 — horizontal / vertical path distance, -1 = not applicable (NULL)
+      opt_cost_o, opt_cost_a, cost_o, cost_a, regret_o, regret_a (n,) float64 — harm costs in move units
+        (DESIGN.md "Harm"), NaN = none (NULL)
+      expert_label (n,) object, 'invalid|UrP|UcP|DP|FP' or None; harm (n,) object, 'harmful|harmless|invalid' or
+        None (None = not computed, NULL)
       no (n,) int64 or None — the table's global sequence number; filled when read back, ignored on write
     """
 
@@ -48,6 +52,14 @@ class PairRecords:
     score: np.ndarray | None = None
     dh: np.ndarray | None = None
     dv: np.ndarray | None = None
+    opt_cost_o: np.ndarray | None = None
+    opt_cost_a: np.ndarray | None = None
+    cost_o: np.ndarray | None = None
+    cost_a: np.ndarray | None = None
+    regret_o: np.ndarray | None = None
+    regret_a: np.ndarray | None = None
+    expert_label: np.ndarray | None = None
+    harm: np.ndarray | None = None
     no: np.ndarray | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
@@ -86,6 +98,13 @@ class PairRecords:
         for name in ("dh", "dv"):
             value = getattr(self, name)
             setattr(self, name, np.full(n, -1, np.int64) if value is None else _ints(value, name, (n,)))
+        for name in HARM_FLOAT_COLUMNS:
+            value = np.full(n, np.nan) if getattr(self, name) is None else np.asarray(getattr(self, name), np.float64)
+            if value.shape != (n,):
+                raise InputError(f"PairRecords.{name}: expected shape ({n},), got {value.shape}")
+            setattr(self, name, value)
+        self.expert_label = _optional_strings(self.expert_label, "expert_label", n, LABELS)
+        self.harm = _optional_strings(self.harm, "harm", n, HARMS)
         if self.no is not None:
             self.no = _ints(self.no, "no", (n,))
 
@@ -125,10 +144,11 @@ class PairRecords:
 
     @classmethod
     def from_pairs(cls, pairs, *, label, attack, label_source="rule", score=None, dh=None, dv=None,
-                   pair_index=None) -> PairRecords:
+                   pair_index=None, harm=None) -> PairRecords:
         """Records from a `vinadv.attacks.pairs.PairSet`-like object (read by field name) plus its labels.
 
-        `pair_index` defaults to `0..n-1`.
+        `pair_index` defaults to `0..n-1`. `harm`: a `vinadv.classify.harm.PairHarm`-like object (read by field
+        name), or None (the harm columns stay NULL).
         """
         n = len(pairs.starts)
         return cls(
@@ -139,6 +159,7 @@ class PairRecords:
             path_a_cells=pairs.path_a_cells, path_a_offsets=pairs.path_a_offsets,
             label=label, attack=attack, term_o=pairs.term_o, term_a=pairs.term_a,
             label_source=label_source, score=score, dh=dh, dv=dv,
+            **({} if harm is None else {name: getattr(harm, name) for name in HARM_COLUMNS}),
         )
 
     def equals(self, other: PairRecords) -> bool:
@@ -149,7 +170,7 @@ class PairRecords:
             a, b = getattr(self, f.name), getattr(other, f.name)
             if a.shape != b.shape:
                 return False
-            if f.name == "score":
+            if a.dtype.kind == "f":
                 if not np.array_equal(a, b, equal_nan=True):
                     return False
             elif not np.array_equal(a, b):
@@ -183,6 +204,22 @@ def _ints(value, name: str, shape: tuple) -> np.ndarray:
     if arr.size and not np.issubdtype(arr.dtype, np.integer):
         raise InputError(f"PairRecords.{name}: expected integers, got {arr.dtype}")
     return arr.astype(np.int64)
+
+
+def _optional_strings(value, name: str, n: int, allowed: tuple[str, ...]) -> np.ndarray:
+    """`(n,)` object array of str or None (NULL); None for the whole column when `value` is None."""
+    if value is None:
+        return np.full(n, None, dtype=object)
+    arr = np.asarray(value, dtype=object)
+    if arr.shape != (n,):
+        raise InputError(f"PairRecords.{name}: expected shape ({n},), got {arr.shape}")
+    null = np.equal(arr, None)
+    values = arr[~null].astype(str)
+    bad = ~np.isin(values, allowed)
+    if bad.any():
+        raise InputError(f"PairRecords.{name}: '{values[bad][0]}' is not one of {'|'.join(allowed)}")
+    arr[~null] = values.astype(object)
+    return arr
 
 
 def _strings(value, name: str, n: int) -> np.ndarray:
