@@ -23,6 +23,7 @@ from vinadv.classify import (
     load_model,
     path_distances,
 )
+from vinadv.classify.harm import DEFAULT_TOL, PairHarm, cross_table, pairset_harm
 from vinadv.errors import InputError
 from vinadv.planners.engine import plan_batch
 from vinadv.planners.vin import VIN
@@ -58,6 +59,7 @@ class Identification:
         score: `(n,)` float64, the classifier's FP score for pairs it decided, NaN elsewhere.
         dh, dv: `(n,)` int64, the rule's horizontal/vertical distances for DP/FP pairs, -1 elsewhere.
         label_source: the classifier's name.
+        harm: the pairs' harm (costs, regrets, expert label, harmful/harmless/invalid; `vinadv.classify.harm`).
     """
 
     pairs: PairSet
@@ -67,6 +69,7 @@ class Identification:
     dh: np.ndarray
     dv: np.ndarray
     label_source: str
+    harm: PairHarm
 
     def __len__(self) -> int:
         return len(self.labels)
@@ -77,6 +80,10 @@ class Identification:
 
     def counts(self) -> dict[str, int]:
         return {label: int(np.sum(self.labels == label)) for label in LABEL_STRENGTH}
+
+    def harm_table(self) -> dict[str, dict[str, int]]:
+        """Pairs per (label, harm): `{label: {harm: count}}`."""
+        return cross_table(self.labels, self.harm.harm)
 
 
 def replan(pairs: PairSet, model: VIN) -> PairSet:
@@ -90,8 +97,11 @@ def replan(pairs: PairSet, model: VIN) -> PairSet:
     )
 
 
-def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_source: str = "rule") -> Identification:
-    """Label every pair of `pairs` with `classifier` (default: the exact rule labeller)."""
+def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_source: str = "rule", *,
+             harm_tol: float = DEFAULT_TOL, harm_rtol: float = 0.0, expert_o=None) -> Identification:
+    """Label every pair of `pairs` with `classifier` (default: the exact rule labeller) and compute its harm
+    (tolerances `harm_tol`, `harm_rtol`; `expert_o`: the original maps' expert data if already computed, see
+    `vinadv.classify.harm.pair_harm`)."""
     classifier = classifier or RuleClassifier()
     batch = PathPairBatch.from_pairset(pairs)
     if isinstance(classifier, RuleClassifier):
@@ -110,12 +120,14 @@ def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_sou
         dh=np.where(fork_or_detour, dh, -1).astype(np.int64),
         dv=np.where(fork_or_detour, dv, -1).astype(np.int64),
         label_source=label_source,
+        harm=pairset_harm(pairs, labels, tol=harm_tol, rtol=harm_rtol, t=getattr(classifier, "t", None),
+                          expert_o=expert_o),
     )
 
 
 def rule_strength(pairs: PairSet) -> np.ndarray:
     """Attack strength by the rule labeller (UrP > FP > DP > UcP > invalid), for the ranking attacks."""
-    return label_strength(identify(pairs).labels)
+    return label_strength(label_batch(PathPairBatch.from_pairset(pairs)).labels)  # no harm needed here
 
 
 def label_strength(labels: np.ndarray) -> np.ndarray:

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from vinadv.classify.features import reaches_goal
+from vinadv.classify.features import LABELS, reaches_goal
 from vinadv.classify.rule import _distances_kernel, default_threshold, is_fork
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
@@ -78,6 +78,40 @@ class PairHarm:
     def counts(self) -> dict[str, int]:
         """Pairs per harm value, every value present."""
         return {value: int(np.sum(self.harm == value)) for value in HARMS}
+
+    @classmethod
+    def concatenate(cls, parts: list[PairHarm]) -> PairHarm:
+        """The pairs of `parts` in order (all computed with the same tolerances)."""
+        if not parts:
+            raise InputError("PairHarm.concatenate: nothing to concatenate")
+        if len({(p.tol, p.rtol) for p in parts}) != 1:
+            raise InputError("PairHarm.concatenate: parts computed with different tolerances")
+        arrays = {name: np.concatenate([getattr(p, name) for p in parts]) for name in HARM_FIELDS}
+        return cls(**arrays, tol=parts[0].tol, rtol=parts[0].rtol)
+
+
+#: the per-pair fields of `PairHarm`, in the order of the store's columns
+HARM_FIELDS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a", "expert_label", "harm")
+
+
+def harm_summary(table: dict[str, dict[str, int]]) -> dict:
+    """The harm figures of a summary from a `cross_table`: pairs per harm value, harmful pairs, the harmful rate
+    (harmful over valid pairs, as the paper's success rate) and the table itself."""
+    counts = {value: sum(row[value] for row in table.values()) for value in HARMS}
+    valid = counts["harmful"] + counts["harmless"]
+    return {
+        "harm_counts": counts, "harmful": counts["harmful"],
+        "harmful_rate": counts["harmful"] / valid if valid else None,
+        "label_x_harm": {label: dict(row) for label, row in table.items()},
+    }
+
+
+def cross_table(labels, harm) -> dict[str, dict[str, int]]:
+    """Pairs per (paper label, harm): `{label: {harm: count}}`, every label and harm value present."""
+    labels = np.asarray(labels)
+    harm = np.asarray(harm)
+    return {label: {value: int(np.sum((labels == label) & (harm == value))) for value in HARMS}
+            for label in LABELS}
 
 
 def harm_decision(labels, regret_o, regret_a, opt_cost_a, tol: float = DEFAULT_TOL, rtol: float = 0.0) -> np.ndarray:
@@ -134,9 +168,7 @@ def pair_harm(
     labels = np.asarray(labels).astype(str)
     if labels.shape != (n,):
         raise InputError(f"labels: expected shape ({n},), got {labels.shape}")
-    for name, value in (("tol", tol), ("rtol", rtol)):
-        if not np.isfinite(value) or value < 0:
-            raise InputError(f"{name}: must be a finite number >= 0, got {value}")
+    check_tolerances(tol, rtol, ("tol", "rtol"))
     t = default_threshold(size) if t is None else int(t)
     if t < 0:
         raise InputError(f"threshold t must be >= 0, got {t}")
@@ -175,6 +207,13 @@ def pair_harm(
         expert_label=expert_label, harm=harm_decision(labels, regret_o, regret_a, opt_a, tol, rtol),
         tol=float(tol), rtol=float(rtol),
     )
+
+
+def check_tolerances(tol: float, rtol: float, names=("--harm-tolerance", "--harm-rtol")) -> None:
+    """InputError naming the bad one unless both tolerances are finite numbers >= 0."""
+    for name, value in zip(names, (tol, rtol)):
+        if not np.isfinite(value) or value < 0:
+            raise InputError(f"{name}: must be a finite number >= 0, got {value}")
 
 
 def pairset_harm(pairs, labels: np.ndarray, *, tol: float = DEFAULT_TOL, rtol: float = 0.0, t: int | None = None,

@@ -253,10 +253,12 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
 
 
 def identify_on_cluster(client, pairs, weights: str | None, classifier: str | None, label_source: str,
-                        shard_size: int = 1000, progress: bool = False):
+                        shard_size: int = 1000, progress: bool = False, *, harm_tol: float,
+                        harm_rtol: float):
     """`identify` (after `replan` with `weights`) of `pairs`, `shard_size` pairs per task: the same
-    `Identification` as the local command."""
+    `Identification` as the local command (harm with the tolerances `harm_tol`, `harm_rtol`)."""
     from vinadv.cluster.worker import identify_shard_task
+    from vinadv.classify.harm import PairHarm
     from vinadv.identify import Identification
     from vinadv.planners.weights import weights_checksum
 
@@ -267,20 +269,20 @@ def identify_on_cluster(client, pairs, weights: str | None, classifier: str | No
     bounds = _bounds(len(pairs), shard_size)
     futures = [
         client.submit(identify_shard_task, pairs.subset(np.arange(lo, hi)), weights, weights_sum, classifier,
-                      classifier_sum, label_source, retries=RETRIES, pure=False)
+                      classifier_sum, label_source, harm_tol, harm_rtol, retries=RETRIES, pure=False)
         for lo, hi in bounds
     ]
     parts = _gather_in_order(client, futures, progress, "identify", [hi - lo for lo, hi in bounds])
     if not parts:
         from vinadv.identify import identify
 
-        return identify(pairs, None, label_source)
+        return identify(pairs, None, label_source, harm_tol=harm_tol, harm_rtol=harm_rtol)
     cat = lambda name: np.concatenate([getattr(p, name) for p in parts])  # noqa: E731
     return Identification(
         pairs=concat_pairsets([p.pairs for p in parts], pairs.strategy, dict(pairs.params), pairs.corner_cutting,
                               pairs.size),
         labels=cat("labels"), attack=cat("attack"), score=cat("score"), dh=cat("dh"), dv=cat("dv"),
-        label_source=label_source,
+        label_source=label_source, harm=PairHarm.concatenate([p.harm for p in parts]),
     )
 
 

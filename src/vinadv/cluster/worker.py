@@ -112,14 +112,16 @@ def attack_shard_task(strategy: str, options: dict, obstacles, starts, goals, fi
 
 
 def identify_shard_task(pairs, weights: str | None, weights_sum: str | None, classifier_spec: str | None,
-                        classifier_sum: str | None, label_source: str):
-    """`vinadv identify` on a shard of pairs: plan again (with weights) and label."""
+                        classifier_sum: str | None, label_source: str, harm_tol: float,
+                        harm_rtol: float):
+    """`vinadv identify` on a shard of pairs: plan again (with weights), label, and compute the harm."""
     from vinadv.identify import identify, replan
 
     single_threaded()
     if weights is not None:
         pairs = replan(pairs, worker_vin(weights, pairs.size, weights_sum))
-    return identify(pairs, worker_classifier(classifier_spec, classifier_sum), label_source)
+    return identify(pairs, worker_classifier(classifier_spec, classifier_sum), label_source, harm_tol=harm_tol,
+                    harm_rtol=harm_rtol)
 
 
 def _plugin_class():

@@ -9,7 +9,7 @@ import time
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands.attack import attack_summary, print_counts
+from vinadv.commands.attack import add_harm_arguments, attack_summary, print_counts
 
 
 def register(subparsers) -> None:
@@ -25,6 +25,7 @@ def register(subparsers) -> None:
     run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
     run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     run.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
+    add_harm_arguments(run)
     run.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     run.add_argument("--name", help="run name (needed to --resume)")
     run.add_argument("--resume", action="store_true", help="continue the latest run called --name")
@@ -39,6 +40,7 @@ def register(subparsers) -> None:
     ident.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     ident.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     ident.add_argument("--weights", help="plan both maps again with these VIN weights (default: keep the file's paths)")
+    add_harm_arguments(ident)
     ident.add_argument("--name", help="run name")
     ident.add_argument("--json", action="store_true", help="print the summary as JSON")
     ident.add_argument("--quiet", action="store_true", help="print nothing")
@@ -52,7 +54,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     config = RunConfig(
         n=args.n, size=args.size, attack=args.attack, seed=args.seed, per_map=args.per_map, budget=args.budget,
         radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
-        classifier=args.classifier, weights=args.weights,
+        classifier=args.classifier, weights=args.weights, harm_tolerance=args.harm_tolerance, harm_rtol=args.harm_rtol,
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet,
@@ -99,17 +101,20 @@ def _print_run(result: dict) -> None:
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
+    from vinadv.classify.harm import check_tolerances
     from vinadv.identify import identify, load_classifier, replan
     from vinadv.planners.weights import load_vin, weights_checksum
     from vinadv.store import PairRecords, Store
 
+    check_tolerances(args.harm_tolerance, args.harm_rtol)
     pairs = PairSet.load(args.pairs)
     t0 = time.perf_counter()
+    harm = dict(harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol)
     if args.cluster is None and args.workers is None:
         if args.weights:
             pairs = replan(pairs, load_vin(args.weights, size=pairs.size))
         classifier, classifier_name = load_classifier(args.classifier)
-        ident = identify(pairs, classifier, classifier_name)
+        ident = identify(pairs, classifier, classifier_name, **harm)
     else:
         from vinadv.cluster import identify_on_cluster
 
@@ -118,20 +123,21 @@ def cmd_identify(args: argparse.Namespace) -> int:
         classifier_name = load_classifier(args.classifier)[1]
         with open_cluster(args.cluster, args.workers) as client:
             ident = identify_on_cluster(client, pairs, args.weights, args.classifier, classifier_name,
-                                        shard_size=args.shard_size, progress=not args.quiet)
+                                        shard_size=args.shard_size, progress=not args.quiet, **harm)
         pairs = ident.pairs
     elapsed = time.perf_counter() - t0
     records = PairRecords.from_pairs(pairs, label=ident.labels, attack=ident.attack, label_source=classifier_name,
-                                     score=ident.score, dh=ident.dh, dv=ident.dv)
+                                     score=ident.score, dh=ident.dh, dv=ident.dv, harm=ident.harm)
     with Store.open(args.db) as store:
         run_id = store.create_run(
             args.name, config={"pairs": args.pairs, "strategy": pairs.strategy, "params": pairs.params,
-                               "classifier": args.classifier, "weights": args.weights},
+                               "classifier": args.classifier, "weights": args.weights,
+                               "harm_tolerance": args.harm_tolerance, "harm_rtol": args.harm_rtol},
             weights_checksum=weights_checksum(args.weights) if args.weights else None,
             attack=pairs.strategy, classifier=classifier_name)
         store.write_pairs(run_id, records)
         store.finish_run(run_id, timings={"identify": elapsed})
-    summary = attack_summary(ident.labels, len(pairs), 0, 0, elapsed)
+    summary = attack_summary(ident.labels, len(pairs), 0, 0, elapsed, harm_table=ident.harm_table())
     summary.update(run_id=run_id, adversarial=int(ident.attack.sum()))
     if args.json:
         print(json.dumps(summary))
