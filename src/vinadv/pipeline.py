@@ -20,9 +20,9 @@ import numpy as np
 
 from vinadv import __version__
 from vinadv.attacks.strategies import make_attack
+from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
-from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.grid.paths import take_paths
 from vinadv.identify import LABEL_STRENGTH, Identification, identify, load_classifier, rule_strength
 from vinadv.planners.vin import VIN

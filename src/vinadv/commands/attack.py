@@ -78,9 +78,8 @@ def print_counts(summary: dict) -> None:
 
 
 def cmd_attack(args: argparse.Namespace) -> int:
-    from vinadv.identify import identify, rule_strength  # scikit-learn behind it: imported for this command only
-
     from vinadv.classify.harm import check_tolerances
+    from vinadv.identify import identify, rule_strength  # scikit-learn behind it: imported for this command only
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
     maps = MapSet.load(args.maps)
