@@ -4,7 +4,7 @@
 
 Without --pairs it makes real pairs: `--maps` generated 28x28 maps attacked by `--attack` with the shipped VIN
 (one pair per map), tiled to `--n` pairs (tiled whole, so no two neighbouring pairs share an original map and
-harm gains nothing from sharing a search). Timed side by side in this run, best of repeats:
+harm gains nothing from sharing a search). Timed side by side in this run, taking turns, best of `--rounds`:
 - `rule`: the rule labeller (`label_batch`) of all pairs;
 - `rule + harm, from scratch`: plus `pair_harm` searching every original map (what `vinadv identify` does);
 - `rule + harm, generator's expert paths`: plus `pair_harm` given the original maps' expert paths the generator
@@ -22,15 +22,17 @@ import numba
 import numpy as np
 
 
-def timed(fn, min_seconds=1.0):
-    """Best time of repeated calls (at least two, until min_seconds have passed)."""
-    best, total, count, result = np.inf, 0.0, 0, None
-    while total < min_seconds or count < 2:
-        start = time.perf_counter()
-        result = fn()
-        elapsed = time.perf_counter() - start
-        best, total, count = min(best, elapsed), total + elapsed, count + 1
-    return best, result
+def timed_side_by_side(fns, rounds: int):
+    """Best time of each of `fns` over `rounds` rounds, the functions taking turns within a round, so that load
+    from other work (this machine is shared) hits them alike; and each one's last result."""
+    best = [np.inf] * len(fns)
+    results = [None] * len(fns)
+    for _ in range(rounds):
+        for k, fn in enumerate(fns):
+            start = time.perf_counter()
+            results[k] = fn()
+            best[k] = min(best[k], time.perf_counter() - start)
+    return best, results
 
 
 def make_pairs(n_maps: int, attack: str, seed: int = 0):
@@ -62,6 +64,7 @@ def main(argv=None) -> int:
     parser.add_argument("--n", type=int, default=100_000, help="pairs to time (default 100000)")
     parser.add_argument("--maps", type=int, default=10_000, help="maps generated and attacked (default 10000)")
     parser.add_argument("--attack", default="near-path", help="attack strategy for generated pairs")
+    parser.add_argument("--rounds", type=int, default=5, help="rounds of timing, best kept (default 5)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
 
@@ -91,9 +94,8 @@ def main(argv=None) -> int:
 
     for fn in (rule, rule_harm_scratch, rule_harm_given):  # compile and warm up
         fn()
-    t_rule, labels = timed(rule)
-    t_scratch, scratch = timed(rule_harm_scratch)
-    t_given, given = timed(rule_harm_given)
+    (t_rule, t_scratch, t_given), (labels, scratch, given) = timed_side_by_side(
+        (rule, rule_harm_scratch, rule_harm_given), args.rounds)
     same = all(np.array_equal(getattr(scratch, f), getattr(given, f)) for f in ("harm", "expert_label"))
     blocked = float(np.mean(given.expert_label != "UcP"))
     out = {

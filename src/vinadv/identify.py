@@ -130,6 +130,26 @@ def rule_strength(pairs: PairSet) -> np.ndarray:
     return label_strength(label_batch(PathPairBatch.from_pairset(pairs)).labels)  # no harm needed here
 
 
+def harm_strength(pairs: PairSet) -> np.ndarray:
+    """Attack strength by harm, for the ranking attacks: UrP strongest, then the largest `regret_a` (the adversarial
+    path's excess over the optimum; a map's candidates share the original path, so this ranks the harm), invalid
+    pairs weakest. `(n,)` float64."""
+    labels = label_batch(PathPairBatch.from_pairset(pairs)).labels
+    regret_a = pairset_harm(pairs, labels).regret_a
+    return np.where(labels == "UrP", np.inf, np.where(labels == "invalid", -np.inf, np.nan_to_num(regret_a)))
+
+
+#: what "strongest" means for the ranking attacks (`--objective`): the paper's label order, or harm
+OBJECTIVES = {"paper": rule_strength, "harm": harm_strength}
+
+
+def objective_strength(objective: str):
+    """The strength function of `objective` ('paper' or 'harm')."""
+    if objective not in OBJECTIVES:
+        raise InputError(f"--objective: {objective!r} is not one of {'|'.join(OBJECTIVES)}")
+    return OBJECTIVES[objective]
+
+
 def label_strength(labels: np.ndarray) -> np.ndarray:
     """`LABEL_STRENGTH` of each label, `(n,)` int64."""
     names = np.array(sorted(LABEL_STRENGTH))

@@ -24,7 +24,7 @@ from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, har
 from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
 from vinadv.grid.paths import take_paths
-from vinadv.identify import LABEL_STRENGTH, Identification, identify, load_classifier, rule_strength
+from vinadv.identify import LABEL_STRENGTH, Identification, identify, load_classifier, objective_strength
 from vinadv.planners.vin import VIN
 from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
 
@@ -48,6 +48,7 @@ class RunConfig:
     weights: str | None = None
     harm_tolerance: float = DEFAULT_TOL
     harm_rtol: float = 0.0
+    objective: str = "paper"
 
     def __post_init__(self):
         if self.n < 1:
@@ -55,6 +56,7 @@ class RunConfig:
         if self.shard_size < 1:
             raise InputError(f"--shard-size must be >= 1, got {self.shard_size}")
         check_tolerances(self.harm_tolerance, self.harm_rtol)
+        objective_strength(self.objective)  # InputError for an unknown objective
 
     @property
     def n_shards(self) -> int:
@@ -94,7 +96,7 @@ def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None, la
     attack = make_attack(config.attack, per_map=config.per_map, seed=(config.seed, shard), budget=config.budget,
                          radius=config.radius)
     result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, config.corner_cutting,
-                           strength=rule_strength)
+                           strength=objective_strength(config.objective))
     t2 = time.perf_counter()
     # the generator's expert paths of the original maps: harm then searches only adversarial maps (and few of them)
     pairs = result.pairs

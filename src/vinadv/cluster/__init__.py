@@ -225,9 +225,10 @@ def _bounds(n: int, shard_size: int) -> list[tuple[int, int]]:
 
 
 def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str | None, shard_size: int = 1000,
-                      progress: bool = False):
+                      progress: bool = False, objective: str = "paper"):
     """`Attack.attack` of every map of `maps` (first start of each), `shard_size` maps per task: the same
-    `AttackResult` as the local command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...)."""
+    `AttackResult` as the local command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...);
+    `objective`: what the ranking strategies keep ('paper' | 'harm', `vinadv.identify.OBJECTIVES`)."""
     from vinadv.attacks.strategies import AttackResult, make_attack
     from vinadv.cluster.worker import attack_shard_task
     from vinadv.planners.weights import default_weights_path, weights_checksum
@@ -238,7 +239,8 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
     bounds = _bounds(len(maps), shard_size)
     futures = [
         client.submit(attack_shard_task, strategy, options, maps.obstacles[lo:hi], maps.starts[lo:hi, 0],
-                      maps.goals[lo:hi], lo, maps.corner_cutting, path, weights_sum, retries=RETRIES, pure=False)
+                      maps.goals[lo:hi], lo, maps.corner_cutting, path, weights_sum, objective, retries=RETRIES,
+                      pure=False)
         for lo, hi in bounds
     ]
     parts = _gather_in_order(client, futures, progress, f"attack {strategy}", [hi - lo for lo, hi in bounds])

@@ -25,6 +25,7 @@ def register(subparsers) -> None:
     p.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
     p.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
     add_harm_arguments(p)
+    add_objective_argument(p)
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
     add_cluster_arguments(p, shard_size=True)
@@ -38,6 +39,14 @@ def add_harm_arguments(parser) -> None:
                         help="harmful when regret_a > regret_o + ABS + REL * opt_cost_a (default 1e-6, cost units)")
     parser.add_argument("--harm-rtol", type=float, default=0.0, metavar="REL",
                         help="relative harm tolerance, times the adversarial map's optimal cost (default 0)")
+
+
+def add_objective_argument(parser) -> None:
+    """`--objective paper|harm`: what the ranking attacks keep as the strongest candidates of a map."""
+    parser.add_argument("--objective", choices=("paper", "harm"), default="paper",
+                        help="ranking strategies (key-points, saliency, exhaustive with --per-map >= 1): keep the "
+                             "strongest by the paper's label (UrP > FP > DP > UcP, default) or by harm (UrP, then "
+                             "the largest regret_a)")
 
 
 def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float,
@@ -79,7 +88,7 @@ def print_counts(summary: dict) -> None:
 
 def cmd_attack(args: argparse.Namespace) -> int:
     from vinadv.classify.harm import check_tolerances
-    from vinadv.identify import identify, rule_strength  # scikit-learn behind it: imported for this command only
+    from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
     maps = MapSet.load(args.maps)
@@ -88,20 +97,21 @@ def cmd_attack(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     if args.cluster is None and args.workers is None:
         result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, maps.corner_cutting,
-                               strength=rule_strength, progress=not args.quiet)
+                               strength=objective_strength(args.objective), progress=not args.quiet)
     else:
         from vinadv.cluster import attack_on_cluster
 
         options = dict(per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
         with open_cluster(args.cluster, args.workers) as client:
             result = attack_on_cluster(client, args.strategy, options, maps, args.weights,
-                                       shard_size=args.shard_size, progress=not args.quiet)
+                                       shard_size=args.shard_size, progress=not args.quiet,
+                                       objective=args.objective)
     elapsed = time.perf_counter() - t0
     result.pairs.save(args.out)
     ident = identify(result.pairs, harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol)
     summary = attack_summary(ident.labels, len(maps), len(result.no_valid_cell), result.planner_calls, elapsed,
                              harm_table=ident.harm_table())
-    summary.update(strategy=args.strategy, params=attack.params(), out=args.out)
+    summary.update(strategy=args.strategy, params=attack.params(), out=args.out, objective=args.objective)
     if args.json:
         print(json.dumps(summary))
     elif not args.quiet:

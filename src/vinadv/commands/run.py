@@ -9,7 +9,7 @@ import time
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands.attack import add_harm_arguments, attack_summary, print_counts
+from vinadv.commands.attack import add_harm_arguments, add_objective_argument, attack_summary, print_counts
 
 
 def register(subparsers) -> None:
@@ -26,6 +26,7 @@ def register(subparsers) -> None:
     run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     run.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
     add_harm_arguments(run)
+    add_objective_argument(run)
     run.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     run.add_argument("--name", help="run name (needed to --resume)")
     run.add_argument("--resume", action="store_true", help="continue the latest run called --name")
@@ -55,6 +56,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         n=args.n, size=args.size, attack=args.attack, seed=args.seed, per_map=args.per_map, budget=args.budget,
         radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
         classifier=args.classifier, weights=args.weights, harm_tolerance=args.harm_tolerance, harm_rtol=args.harm_rtol,
+        objective=args.objective,
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet,
