@@ -64,6 +64,46 @@ def test_stored_labels_agree_with_an_independent_recomputation(weights, sqlite_u
     assert len(seen) >= 3  # the run is not trivially one category
 
 
+def test_stored_harm_agrees_with_an_independent_recomputation(weights, sqlite_url):
+    from tests.classify.test_harm import optimal_path, path_cost
+
+    summary = run_pipeline(config(weights, attack="key-points", per_map=2), db=sqlite_url, progress=False).to_dict()
+    engine = sa.create_engine(sqlite_url)
+    with engine.connect() as conn:
+        rows = conn.execute(sa.text(
+            "SELECT map_o, map_a, start, goal, path_o, path_a, label, opt_cost_o, opt_cost_a, cost_o, cost_a, "
+            "regret_o, regret_a, expert_label, harm FROM map_pairs WHERE run_id = :r"), {"r": summary["run_id"]}).all()
+    engine.dispose()
+    parse = lambda text: [tuple(int(v) for v in cell.split(",")) for cell in text.split(";")]  # noqa: E731
+    grid = lambda text: [[ch == "1" for ch in row] for row in text.split(";")]  # noqa: E731
+    close = lambda a, b: (a is None and b is None) or (a is not None and b is not None and abs(a - b) < 1e-9)  # noqa: E731
+    table = {}
+    for map_o, map_a, start, goal, path_o, path_a, label, *stored in rows:
+        start, goal, path_o, path_a = parse(start)[0], parse(goal)[0], parse(path_o), parse(path_a)
+        expert_o, expert_a = optimal_path(grid(map_o), start, goal, True), optimal_path(grid(map_a), start, goal, True)
+        opt_o, opt_a = path_cost(expert_o), path_cost(expert_a)
+        cost_o = path_cost(path_o) if path_o[-1] == goal else None
+        cost_a = path_cost(path_a) if path_a[-1] == goal else None
+        regret_o = None if cost_o is None else cost_o - opt_o
+        regret_a = None if cost_a is None else cost_a - opt_a
+        for got, want in zip(stored[:6], (opt_o, opt_a, cost_o, cost_a, regret_o, regret_a)):
+            assert close(got, want)
+        assert stored[6] == rule_oracle(expert_o, expert_a, goal, round(4 * SIZE / 28))[0]
+        if label == "invalid":
+            harm = "invalid"
+        else:
+            harm = "harmful" if label == "UrP" or regret_a > regret_o + 1e-6 else "harmless"
+        assert stored[7] == harm
+        table.setdefault(label, {}).setdefault(harm, 0)
+        table[label][harm] += 1
+    assert {k: {h: n for h, n in row.items() if n} for k, row in summary["label_x_harm"].items() if any(row.values())} \
+        == table
+    valid = sum(n for label, row in table.items() if label != "invalid" for n in row.values())
+    harmful = sum(row.get("harmful", 0) for row in table.values())
+    assert summary["harmful"] == harmful and summary["harmful_rate"] == pytest.approx(harmful / valid)
+    assert {h for row in table.values() for h in row} >= {"harmful", "harmless"}
+
+
 def test_result_does_not_depend_on_the_order_shards_finish(weights, sqlite_url, tmp_path):
     from vinadv.pipeline import compute_shard
 
@@ -153,4 +193,12 @@ def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--json"]) == 0
     ident = json.loads(capsys.readouterr().out)
     assert ident["counts"] == summary["counts"]
+    assert ident["label_x_harm"] == summary["label_x_harm"] and ident["harmful_rate"] == summary["harmful_rate"]
+    assert sum(ident["harm_counts"].values()) == ident["pairs"]
+    assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--harm-tolerance", "-1"]) == 2
+    assert "--harm-tolerance" in capsys.readouterr().err
+    # a tolerance above every regret: no pair is harmful but for UrP
+    assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--harm-tolerance", "1000", "--json"]) == 0
+    loose = json.loads(capsys.readouterr().out)
+    assert loose["harmful"] == summary["counts"]["UrP"]
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--weights", weights, "--quiet"]) == 0

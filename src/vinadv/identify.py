@@ -24,6 +24,7 @@ from vinadv.classify import (
     load_model,
     path_distances,
 )
+from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_table, pairset_harm
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
 from vinadv.planners.engine import plan_batch
@@ -59,6 +60,7 @@ class Identification(Columns):
         score: `(n,)` float64, the classifier's FP score for pairs it decided, NaN elsewhere.
         dh, dv: `(n,)` int64, the rule's horizontal/vertical distances for DP/FP pairs, -1 elsewhere.
         label_source: the classifier's name.
+        harm: the pairs' harm (costs, regrets, expert label, harmful/harmless/invalid; `vinadv.classify.harm`).
     """
 
     META = ("label_source",)
@@ -70,6 +72,7 @@ class Identification(Columns):
     dh: np.ndarray
     dv: np.ndarray
     label_source: str
+    harm: PairHarm
 
     def adversarial(self) -> np.ndarray:
         """Indices of `D_adversarial`: the successful attacks."""
@@ -85,7 +88,11 @@ class Identification(Columns):
 
         return PairRecords.from_pairs(self.pairs, label=self.labels, attack=self.attack,
                                       label_source=self.label_source, score=self.score, dh=self.dh, dv=self.dv,
-                                      pair_index=pair_index)
+                                      pair_index=pair_index, harm=self.harm)
+
+    def harm_table(self) -> dict[str, dict[str, int]]:
+        """Pairs per (label, harm): `{label: {harm: count}}`."""
+        return cross_table(self.labels, self.harm.harm)
 
 
 def replan(pairs: PairSet, model: VIN) -> PairSet:
@@ -100,8 +107,11 @@ def replan(pairs: PairSet, model: VIN) -> PairSet:
     )
 
 
-def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_source: str = "rule") -> Identification:
-    """Label every pair of `pairs` with `classifier` (default: the exact rule labeller)."""
+def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_source: str = "rule", *,
+             harm_tol: float = DEFAULT_TOL, harm_rtol: float = 0.0, expert_o=None) -> Identification:
+    """Label every pair of `pairs` with `classifier` (default: the exact rule labeller) and compute its harm
+    (tolerances `harm_tol`, `harm_rtol`; `expert_o`: the original maps' expert data if already computed, see
+    `vinadv.classify.harm.pair_harm`)."""
     classifier = classifier or RuleClassifier()
     batch = PathPairBatch.from_pairs(pairs)
     if isinstance(classifier, RuleClassifier):
@@ -120,12 +130,34 @@ def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_sou
         dh=np.where(fork_or_detour, dh, -1).astype(np.int64),
         dv=np.where(fork_or_detour, dv, -1).astype(np.int64),
         label_source=label_source,
+        harm=pairset_harm(pairs, labels, tol=harm_tol, rtol=harm_rtol, t=getattr(classifier, "t", None),
+                          expert_o=expert_o),
     )
 
 
 def rule_strength(pairs: PairSet) -> np.ndarray:
     """Attack strength by the rule labeller (UrP > FP > DP > UcP > invalid), for the ranking attacks."""
-    return label_strength(identify(pairs).labels)
+    return label_strength(label_batch(PathPairBatch.from_pairs(pairs)).labels)  # no harm needed here
+
+
+def harm_strength(pairs: PairSet) -> np.ndarray:
+    """Attack strength by harm, for the ranking attacks: UrP strongest, then the largest `regret_a` (the adversarial
+    path's excess over the optimum; a map's candidates share the original path, so this ranks the harm), invalid
+    pairs weakest. `(n,)` float64."""
+    labels = label_batch(PathPairBatch.from_pairs(pairs)).labels
+    regret_a = pairset_harm(pairs, labels).regret_a
+    return np.where(labels == "UrP", np.inf, np.where(labels == "invalid", -np.inf, np.nan_to_num(regret_a)))
+
+
+#: what "strongest" means for the ranking attacks (`--objective`): the paper's label order, or harm
+OBJECTIVES = {"paper": rule_strength, "harm": harm_strength}
+
+
+def objective_strength(objective: str):
+    """The strength function of `objective` ('paper' or 'harm')."""
+    if objective not in OBJECTIVES:
+        raise InputError(f"objective: {objective!r} is not one of {'|'.join(OBJECTIVES)}", "objective")
+    return OBJECTIVES[objective]
 
 
 @dataclass
@@ -138,18 +170,19 @@ class StoredIdentification:
 
 
 def identify_and_store(pairs_path: str | os.PathLike, db: str | None = None, *, classifier: str | None = None,
-                       weights: str | None = None, name: str | None = None,
-                       remote: Callable[[PairSet, str | None, str | None, str], Identification] | None = None,
+                       weights: str | None = None, name: str | None = None, harm_tol: float = DEFAULT_TOL,
+                       harm_rtol: float = 0.0, remote: Callable[..., Identification] | None = None,
                        ) -> StoredIdentification:
     """`vinadv identify`: label the pairs of a pairs file (after planning both maps again with `weights`, if
-    given) and store them as a new run in `db`.
+    given) and store them as a new run in `db`, with their harm (tolerances `harm_tol`, `harm_rtol`).
 
-    `remote(pairs, weights, classifier, label_source)` computes the identification elsewhere (say
+    `remote(pairs, weights, classifier, label_source, harm_tol=, harm_rtol=)` computes the identification elsewhere (say
     `vinadv.cluster.ClusterIdentify`); it is called after the inputs are checked, so a bad file is refused before
     any worker starts. Without it, everything runs in this process."""
     from vinadv.planners.weights import load_vin, weights_checksum
     from vinadv.store import Store
 
+    check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
     pairs = PairSet.load(pairs_path)
     t0 = time.perf_counter()
     model = load_vin(weights, size=pairs.size) if weights else None
@@ -157,14 +190,15 @@ def identify_and_store(pairs_path: str | os.PathLike, db: str | None = None, *, 
     if remote is None:
         if model is not None:
             pairs = replan(pairs, model)
-        ident = identify(pairs, classifier_model, classifier_name)
+        ident = identify(pairs, classifier_model, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
     else:
-        ident = remote(pairs, weights, classifier, classifier_name)
+        ident = remote(pairs, weights, classifier, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
     elapsed = time.perf_counter() - t0
     with Store.open(db) as store:
         run_id = store.create_run(
             name, config={"pairs": str(pairs_path), "strategy": pairs.strategy, "params": pairs.params,
-                          "classifier": classifier, "weights": weights},
+                          "classifier": classifier, "weights": weights, "harm_tolerance": harm_tol,
+                          "harm_rtol": harm_rtol},
             weights_checksum=weights_checksum(weights) if weights else None,
             attack=pairs.strategy, classifier=classifier_name)
         store.write_pairs(run_id, ident.records())

@@ -20,9 +20,10 @@ import numpy as np
 
 from vinadv import __version__
 from vinadv.attacks.strategies import make_attack
+from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
-from vinadv.identify import Identification, identify, load_classifier, rule_strength
+from vinadv.identify import Identification, identify, load_classifier, objective_strength
 from vinadv.planners.vin import VIN
 from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
 from vinadv.vocabulary import LABEL_STRENGTH, success_count
@@ -45,12 +46,17 @@ class RunConfig:
     shard_size: int = 1000
     classifier: str | None = None
     weights: str | None = None
+    harm_tolerance: float = DEFAULT_TOL
+    harm_rtol: float = 0.0
+    objective: str = "paper"
 
     def __post_init__(self):
         if self.n < 1:
             raise InputError(f"n must be >= 1, got {self.n}", "n")
         if self.shard_size < 1:
             raise InputError(f"shard_size must be >= 1, got {self.shard_size}", "shard_size")
+        check_tolerances(self.harm_tolerance, self.harm_rtol)
+        objective_strength(self.objective)  # InputError for an unknown objective
 
     @property
     def n_shards(self) -> int:
@@ -91,12 +97,15 @@ def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None,
     attack = make_attack(config.attack, per_map=config.per_map, seed=(config.seed, shard), budget=config.budget,
                          radius=config.radius)
     result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, config.corner_cutting,
-                           strength=rule_strength)
+                           strength=objective_strength(config.objective))
     t2 = time.perf_counter()
-    ident = identify(result.pairs, classifier, label_source)
+    # the generator's expert paths of the original maps: harm then searches only adversarial maps (and few of them)
+    pairs = result.pairs
+    expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
+    ident = identify(pairs, classifier, label_source, harm_tol=config.harm_tolerance, harm_rtol=config.harm_rtol,
+                     expert_o=expert_o)
     t3 = time.perf_counter()
     seconds.update(generate=t1 - t0, attack=t2 - t1, identify=t3 - t2)
-    pairs = result.pairs
     global_map = first_map + pairs.map_index
     if config.per_map > 0:
         first_of_map = np.searchsorted(pairs.map_index, pairs.map_index, side="left")
@@ -126,6 +135,7 @@ class RunSummary:
     no_valid_cell: int = 0
     planner_calls: int = 0
     counts: dict = field(default_factory=lambda: {label: 0 for label in LABEL_STRENGTH})
+    harm_table: dict = field(default_factory=lambda: cross_table([], []))
     seconds: dict = field(default_factory=lambda: {stage: 0.0 for stage in STAGES})
     wall_seconds: float = 0.0
 
@@ -137,6 +147,9 @@ class RunSummary:
         self.planner_calls += result.planner_calls
         for label, count in result.identification.counts().items():
             self.counts[label] += count
+        for label, row in result.identification.harm_table().items():
+            for value, count in row.items():
+                self.harm_table[label][value] += count
         for stage, sec in result.seconds.items():
             self.seconds[stage] += sec
         self.seconds["store"] += store_seconds
@@ -148,7 +161,7 @@ class RunSummary:
             "run_id": self.run_id, "name": self.name, "db": self.db, "maps": self.n_maps, "pairs": self.n_pairs,
             "stored": self.stored, "skipped_shards": self.skipped_shards, "maps_without_valid_cell": self.no_valid_cell,
             "counts": dict(self.counts), "valid_pairs": valid, "successful": success,
-            "success_rate": success / valid if valid else None,
+            "success_rate": success / valid if valid else None, **harm_summary(self.harm_table),
             "planner_calls": self.planner_calls,
             "planner_calls_per_success": self.planner_calls / success if success else None,
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},

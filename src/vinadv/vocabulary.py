@@ -25,6 +25,13 @@ RESULT_NAMES = {"UrP": "Success-UrP", "FP": "Success-FP", "DP": "Unsuccess-DP", 
 TERMINATIONS = ("goal", "collision", "loop", "step_limit")
 GOAL, COLLISION, LOOP, STEP_LIMIT = range(len(TERMINATIONS))
 
+#: The harm verdicts of a pair (DESIGN.md "Harm"), beside the paper's label.
+HARMS = ("harmful", "harmless", "invalid")
+#: A pair's harm figures: the costs (move-cost units) and regrets, then the expert label and the harm verdict; the
+#: same names are the `map_pairs` columns and the export fields.
+HARM_FLOAT_FIELDS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a")
+HARM_FIELDS = (*HARM_FLOAT_FIELDS, "expert_label", "harm")
+
 
 def is_success(labels) -> np.ndarray:
     """`(n,)` bool: which labels are successful attacks (`SUCCESS_LABELS`)."""

@@ -11,6 +11,7 @@ import pytest
 import sqlalchemy as sa
 
 from tests.store.oracle import map_text, path_text
+from tests.store.test_store_db import HARM_FLOATS
 from vinadv.cli import main
 from vinadv.store import Store
 from vinadv.store.synthetic import random_records
@@ -38,6 +39,10 @@ def test_export_csv_matches_oracle(stored, tmp_path):
         assert row["path_a"] == path_text(paths_a[i])
         assert row["label"] == records.label[i] and row["attack"] == str(int(records.attack[i]))
         assert row["score"] == ("" if np.isnan(records.score[i]) else repr(float(records.score[i])))
+        for name in HARM_FLOATS:
+            value = getattr(records, name)[i]
+            assert row[name] == ("" if np.isnan(value) else repr(float(value))), name
+        assert row["harm"] == (records.harm[i] or "") and row["expert_label"] == (records.expert_label[i] or "")
 
 
 def test_export_jsonl_successful_only_by_run_name(stored, capsys):
@@ -46,6 +51,9 @@ def test_export_jsonl_successful_only_by_run_name(stored, capsys):
     lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [d["pair_index"] for d in lines] == np.flatnonzero(records.attack).tolist()
     assert all(d["attack"] is True and d["label"] in ("UrP", "FP") and d["run_id"] == run_id for d in lines)
+    chosen = records.subset(records.attack)
+    assert [d["harm"] for d in lines] == chosen.harm.tolist()  # None = null
+    assert [d["regret_a"] for d in lines] == [None if np.isnan(v) else v for v in chosen.regret_a.tolist()]
 
 
 def test_export_npz_round_trips(stored, tmp_path):
@@ -59,6 +67,10 @@ def test_export_npz_round_trips(stored, tmp_path):
             assert np.array_equal(data[name], getattr(records, name)), name
         assert data["label"].tolist() == records.label.tolist()
         assert np.array_equal(data["score"], records.score, equal_nan=True)
+        for name in HARM_FLOATS:
+            assert np.array_equal(data[name], getattr(records, name), equal_nan=True), name
+        assert data["harm"].tolist() == [h or "" for h in records.harm]
+        assert data["expert_label"].tolist() == [h or "" for h in records.expert_label]
 
 
 def test_export_errors_exit_2(tmp_path, capsys, sqlite_url):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import signal
 import subprocess
@@ -18,6 +19,8 @@ from vinadv.errors import InputError
 from vinadv.store import LABELS, PairRecords, Store, schema
 from vinadv.store.synthetic import random_records
 
+HARM_FLOATS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a")
+
 
 def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
     """What the map_pairs rows must hold, built one cell at a time in plain Python."""
@@ -33,6 +36,8 @@ def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
             str(records.label_source[i]), None if np.isnan(score) else score,
             str(records.term_o[i]), str(records.term_a[i]),
             None if records.dh[i] < 0 else int(records.dh[i]), None if records.dv[i] < 0 else int(records.dv[i]),
+            *[None if math.isnan(getattr(records, c)[i]) else float(getattr(records, c)[i]) for c in HARM_FLOATS],
+            records.expert_label[i], records.harm[i],
         ))
     return sorted(rows, key=lambda r: r[1])
 
@@ -40,7 +45,7 @@ def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
 def _raw_rows(url: str) -> list[tuple]:
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     cols = ("run_id pair_index map_o map_a path_o path_a label attack start goal added_obstacle label_source "
-            "score term_o term_a dh dv").split()
+            "score term_o term_a dh dv").split() + [*HARM_FLOATS, "expert_label", "harm"]
     with engine.connect() as conn:
         table = schema.map_pairs  # not reflected: a reflected MySQL DOUBLE reads back as a 10-digit Decimal
         rows = conn.execute(sa.select(*[table.c[c] for c in cols]).order_by(table.c.pair_index)).all()

@@ -4,7 +4,7 @@ import pytest
 import sqlalchemy as sa
 
 from vinadv.errors import InputError
-from vinadv.store import Store
+from vinadv.store import SCHEMA_VERSION, Store
 
 ROW = dict(batch="b1", classifier="svm", setting="baseline", training="balanced", train_fraction=1.0,
            train_size=12, test_size=6, seed=3, metrics={"accuracy": 0.75, "per_class": {"FP": {"f1": 0.5}}},
@@ -38,4 +38,5 @@ def test_database_made_before_the_table_existed_is_upgraded_not_refused(sqlite_u
         assert store.add_evaluations(run, [ROW]) == 1
     with engine.connect() as conn:
         assert sa.inspect(conn).has_table("evaluations")
-        assert conn.execute(sa.text("SELECT value FROM vinadv_meta WHERE key='schema_version'")).scalar() == "1"
+        version = conn.execute(sa.text("SELECT value FROM vinadv_meta WHERE key='schema_version'")).scalar()
+        assert version == SCHEMA_VERSION

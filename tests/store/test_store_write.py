@@ -9,7 +9,7 @@ import sqlite3
 import numpy as np
 import pytest
 
-from tests.store.test_store_db import _oracle_rows, _raw_rows
+from tests.store.test_store_db import HARM_FLOATS, _oracle_rows, _raw_rows
 from vinadv.store import Store
 from vinadv.store import store as store_module
 from vinadv.store.store import INSERT_COLUMNS, encode_rows
@@ -22,12 +22,14 @@ def _comparable(row: tuple) -> tuple:
 
 
 def _sqlite_form(row: tuple) -> tuple:
-    """An oracle row in SQLite's native form: attack 0/1, NULL score NaN, NULL dh/dv -1."""
+    """An oracle row in SQLite's native form: attack 0/1, NULL score and harm costs NaN, NULL dh/dv -1."""
     col = dict(zip(INSERT_COLUMNS, row))
     col["attack"] = int(col["attack"])
     col["score"] = math.nan if col["score"] is None else col["score"]
     col["dh"] = -1 if col["dh"] is None else col["dh"]
     col["dv"] = -1 if col["dv"] is None else col["dv"]
+    for name in HARM_FLOATS:
+        col[name] = math.nan if col[name] is None else col[name]
     return tuple(col.values())
 
 

@@ -225,9 +225,10 @@ def _bounds(n: int, shard_size: int) -> list[tuple[int, int]]:
 
 
 def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str | None, shard_size: int = 1000,
-                      progress: bool = False):
+                      progress: bool = False, objective: str = "paper"):
     """`Attack.attack` of every map of `maps` (first start of each), `shard_size` maps per task: the same
-    `AttackResult` as the local command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...)."""
+    `AttackResult` as the local command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...);
+    `objective`: what the ranking strategies keep ('paper' | 'harm', `vinadv.identify.OBJECTIVES`)."""
     from vinadv.attacks.strategies import AttackResult, make_attack
     from vinadv.cluster.worker import attack_shard_task
     from vinadv.planners.weights import default_weights_path, weights_checksum
@@ -238,7 +239,8 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
     bounds = _bounds(len(maps), shard_size)
     futures = [
         client.submit(attack_shard_task, strategy, options, maps.obstacles[lo:hi], maps.starts[lo:hi, 0],
-                      maps.goals[lo:hi], lo, maps.corner_cutting, path, weights_sum, retries=RETRIES, pure=False)
+                      maps.goals[lo:hi], lo, maps.corner_cutting, path, weights_sum, objective, retries=RETRIES,
+                      pure=False)
         for lo, hi in bounds
     ]
     parts = _gather_in_order(client, futures, progress, f"attack {strategy}", [hi - lo for lo, hi in bounds])
@@ -263,16 +265,18 @@ class ClusterIdentify:
                  progress: bool = False):
         self.address, self.workers, self.shard_size, self.progress = address, workers, shard_size, progress
 
-    def __call__(self, pairs, weights: str | None, classifier: str | None, label_source: str):
+    def __call__(self, pairs, weights: str | None, classifier: str | None, label_source: str, *, harm_tol: float,
+                 harm_rtol: float):
         with open_cluster(self.address, self.workers) as client:
             return identify_on_cluster(client, pairs, weights, classifier, label_source, shard_size=self.shard_size,
-                                       progress=self.progress)
+                                       progress=self.progress, harm_tol=harm_tol, harm_rtol=harm_rtol)
 
 
 def identify_on_cluster(client, pairs, weights: str | None, classifier: str | None, label_source: str,
-                        shard_size: int = 1000, progress: bool = False):
+                        shard_size: int = 1000, progress: bool = False, *, harm_tol: float,
+                        harm_rtol: float):
     """`identify` (after `replan` with `weights`) of `pairs`, `shard_size` pairs per task: the same
-    `Identification` as the local command."""
+    `Identification` as the local command (harm with the tolerances `harm_tol`, `harm_rtol`)."""
     from vinadv.cluster.worker import identify_shard_task
     from vinadv.identify import Identification
     from vinadv.planners.weights import weights_checksum
@@ -284,12 +288,12 @@ def identify_on_cluster(client, pairs, weights: str | None, classifier: str | No
     bounds = _bounds(len(pairs), shard_size)
     futures = [
         client.submit(identify_shard_task, pairs.take(np.arange(lo, hi)), weights, weights_sum, classifier,
-                      classifier_sum, label_source, retries=RETRIES, pure=False)
+                      classifier_sum, label_source, harm_tol, harm_rtol, retries=RETRIES, pure=False)
         for lo, hi in bounds
     ]
     parts = _gather_in_order(client, futures, progress, "identify", [hi - lo for lo, hi in bounds])
     if not parts:
         from vinadv.identify import identify
 
-        return identify(pairs, None, label_source)
+        return identify(pairs, None, label_source, harm_tol=harm_tol, harm_rtol=harm_rtol)
     return Identification.concat(parts, label_source=label_source)

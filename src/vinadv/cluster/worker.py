@@ -98,27 +98,30 @@ def run_shard_task(config, shard: int, weights: str, weights_sum: str, classifie
 
 
 def attack_shard_task(strategy: str, options: dict, obstacles, starts, goals, first_map: int, corner_cutting: bool,
-                      weights: str, weights_sum: str):
+                      weights: str, weights_sum: str, objective: str = "paper"):
     """`vinadv attack` on maps `first_map .. first_map + len(obstacles)` of the file: the same pairs as attacking
     the whole file at once (map indices local to the shard; the client shifts them)."""
     from vinadv.attacks.strategies import make_attack
-    from vinadv.identify import rule_strength
+    from vinadv.identify import objective_strength
 
     single_threaded()
     model = worker_vin(weights, obstacles.shape[1], weights_sum)
     attack = make_attack(strategy, **options)
-    return attack.attack(obstacles, starts, goals, model, corner_cutting, strength=rule_strength, first_map=first_map)
+    return attack.attack(obstacles, starts, goals, model, corner_cutting, strength=objective_strength(objective),
+                         first_map=first_map)
 
 
 def identify_shard_task(pairs, weights: str | None, weights_sum: str | None, classifier_spec: str | None,
-                        classifier_sum: str | None, label_source: str):
-    """`vinadv identify` on a shard of pairs: plan again (with weights) and label."""
+                        classifier_sum: str | None, label_source: str, harm_tol: float,
+                        harm_rtol: float):
+    """`vinadv identify` on a shard of pairs: plan again (with weights), label, and compute the harm."""
     from vinadv.identify import identify, replan
 
     single_threaded()
     if weights is not None:
         pairs = replan(pairs, worker_vin(weights, pairs.size, weights_sum))
-    return identify(pairs, worker_classifier(classifier_spec, classifier_sum), label_source)
+    return identify(pairs, worker_classifier(classifier_spec, classifier_sum), label_source, harm_tol=harm_tol,
+                    harm_rtol=harm_rtol)
 
 
 def _plugin_class():

@@ -7,7 +7,7 @@ import re
 from vinadv.errors import InputError
 
 #: library parameters whose flag is not `--` plus the name with dashes
-FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run"}
+FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tolerance"}
 
 
 def flag(parameter: str) -> str:

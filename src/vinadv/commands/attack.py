@@ -24,13 +24,36 @@ def register(subparsers) -> None:
                    help="key-points and saliency: candidates evaluated per map (default 8)")
     p.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
     p.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
+    add_harm_arguments(p)
+    add_objective_argument(p)
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
     add_cluster_arguments(p, shard_size=True)
     p.set_defaults(func=cmd_attack)
 
 
-def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float) -> dict:
+def add_harm_arguments(parser) -> None:
+    """`--harm-tolerance`, `--harm-rtol`: the tolerances of the harm test (DESIGN.md "Harm")."""
+    # 1e-6 is vinadv.classify.harm.DEFAULT_TOL, not imported: building the parser stays light (no scikit-learn)
+    parser.add_argument("--harm-tolerance", type=float, default=1e-6, metavar="ABS",
+                        help="harmful when regret_a > regret_o + ABS + REL * opt_cost_a (default 1e-6, cost units)")
+    parser.add_argument("--harm-rtol", type=float, default=0.0, metavar="REL",
+                        help="relative harm tolerance, times the adversarial map's optimal cost (default 0)")
+
+
+def add_objective_argument(parser) -> None:
+    """`--objective paper|harm`: what the ranking attacks keep as the strongest candidates of a map."""
+    parser.add_argument("--objective", choices=("paper", "harm"), default="paper",
+                        help="ranking strategies (key-points, saliency, exhaustive with --per-map >= 1): keep the "
+                             "strongest by the paper's label (UrP > FP > DP > UcP, default) or by harm (UrP, then "
+                             "the largest regret_a)")
+
+
+def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float,
+                   harm_table: dict | None = None) -> dict:
+    """The summary of labelled pairs: counts, the paper's success rate, and with `harm_table` (a
+    `vinadv.classify.harm.cross_table`) the harm counts, the harmful rate and the label x harm table."""
+    from vinadv.classify.harm import harm_summary
     from vinadv.vocabulary import label_counts, success_count
 
     counts = label_counts(labels)
@@ -40,6 +63,7 @@ def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, secon
         "maps": n_maps, "pairs": len(labels), "maps_without_valid_cell": no_valid, "counts": counts,
         "success_rate": success / valid if valid else None, "planner_calls": planner_calls,
         "planner_calls_per_success": planner_calls / success if success else None, "seconds": round(seconds, 3),
+        **({} if harm_table is None else harm_summary(harm_table)),
     }
 
 
@@ -51,30 +75,43 @@ def print_counts(summary: dict) -> None:
         print(f"{label:<10}{count:>9,}{count / total:>9.1%}")
     rate = summary["success_rate"]
     print(f"attack success rate (UrP + FP over valid pairs): {'n/a' if rate is None else f'{rate:.1%}'}")
+    if "label_x_harm" in summary:
+        table = summary["label_x_harm"]
+        values = list(summary["harm_counts"])
+        print(f"{'label x harm':<14}" + "".join(f"{v:>10}" for v in values))
+        for label, row in table.items():
+            print(f"{label:<14}" + "".join(f"{row[v]:>10,}" for v in values))
+        rate = summary["harmful_rate"]
+        print(f"harmful rate (UrP, or a path that got worse than optimal by more than on the original map, over valid "
+              f"pairs): {'n/a' if rate is None else f'{rate:.1%}'}")
 
 
 def cmd_attack(args: argparse.Namespace) -> int:
-    from vinadv.identify import identify, rule_strength  # scikit-learn behind it: imported for this command only
+    from vinadv.classify.harm import check_tolerances
+    from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
 
+    check_tolerances(args.harm_tolerance, args.harm_rtol)
     maps = MapSet.load(args.maps)
     model = load_vin(args.weights, size=maps.size)
     attack = make_attack(args.strategy, per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
     t0 = time.perf_counter()
     if args.cluster is None and args.workers is None:
         result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, maps.corner_cutting,
-                               strength=rule_strength, progress=not args.quiet)
+                               strength=objective_strength(args.objective), progress=not args.quiet)
     else:
         from vinadv.cluster import attack_on_cluster
 
         options = dict(per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
         with open_cluster(args.cluster, args.workers) as client:
             result = attack_on_cluster(client, args.strategy, options, maps, args.weights,
-                                       shard_size=args.shard_size, progress=not args.quiet)
+                                       shard_size=args.shard_size, progress=not args.quiet,
+                                       objective=args.objective)
     elapsed = time.perf_counter() - t0
     result.pairs.save(args.out)
-    summary = attack_summary(identify(result.pairs).labels, len(maps), len(result.no_valid_cell),
-                             result.planner_calls, elapsed)
-    summary.update(strategy=args.strategy, params=attack.params(), out=args.out)
+    ident = identify(result.pairs, harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol)
+    summary = attack_summary(ident.labels, len(maps), len(result.no_valid_cell), result.planner_calls, elapsed,
+                             harm_table=ident.harm_table())
+    summary.update(strategy=args.strategy, params=attack.params(), out=args.out, objective=args.objective)
     if args.json:
         print(json.dumps(summary))
     elif not args.quiet:

@@ -8,7 +8,7 @@ import time
 
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands.attack import attack_summary, print_counts
+from vinadv.commands.attack import add_harm_arguments, add_objective_argument, attack_summary, print_counts
 
 
 def register(subparsers) -> None:
@@ -24,6 +24,8 @@ def register(subparsers) -> None:
     run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
     run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     run.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
+    add_harm_arguments(run)
+    add_objective_argument(run)
     run.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     run.add_argument("--name", help="run name (needed to --resume)")
     run.add_argument("--resume", action="store_true", help="continue the latest run called --name")
@@ -38,6 +40,7 @@ def register(subparsers) -> None:
     ident.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     ident.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     ident.add_argument("--weights", help="plan both maps again with these VIN weights (default: keep the file's paths)")
+    add_harm_arguments(ident)
     ident.add_argument("--name", help="run name")
     ident.add_argument("--json", action="store_true", help="print the summary as JSON")
     ident.add_argument("--quiet", action="store_true", help="print nothing")
@@ -51,7 +54,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     config = RunConfig(
         n=args.n, size=args.size, attack=args.attack, seed=args.seed, per_map=args.per_map, budget=args.budget,
         radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
-        classifier=args.classifier, weights=args.weights,
+        classifier=args.classifier, weights=args.weights, harm_tolerance=args.harm_tolerance, harm_rtol=args.harm_rtol,
+        objective=args.objective,
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet,
@@ -105,9 +109,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.cluster is not None or args.workers is not None:
         remote = ClusterIdentify(args.cluster, args.workers, shard_size=args.shard_size, progress=not args.quiet)
     done = identify_and_store(args.pairs, args.db, classifier=args.classifier, weights=args.weights, name=args.name,
-                              remote=remote)
+                              harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol, remote=remote)
     ident = done.identification
-    summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds)
+    summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds, harm_table=ident.harm_table())
     summary.update(run_id=done.run_id, adversarial=int(ident.attack.sum()))
     if args.json:
         print(json.dumps(summary))

@@ -18,6 +18,7 @@ EXPORT_FORMAT = "vinadv.labelled_pairs/1"
 EXPORT_COLUMNS = (
     "no", "map_o", "map_a", "path_o", "path_a", "label", "attack",
     "run_id", "pair_index", "start", "goal", "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv",
+    "opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a", "expert_label", "harm",
 )
 
 
@@ -67,6 +68,8 @@ def run_export(args: argparse.Namespace) -> int:
 
 
 def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
+    from vinadv.store.schema import HARM_FLOAT_COLUMNS
+
     info = store.run_info(run_id)
     records = store.read_pairs(run_id, successful_only=successful_only)
     arrays = {
@@ -91,6 +94,10 @@ def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
         "score": records.score,
         "dh": records.dh,
         "dv": records.dv,
+        # harm: NaN = NULL for the costs, "" = NULL for the two labels (an npz holds no None)
+        **{name: getattr(records, name) for name in HARM_FLOAT_COLUMNS},
+        "expert_label": np.where(np.equal(records.expert_label, None), "", records.expert_label).astype(str),
+        "harm": np.where(np.equal(records.harm, None), "", records.harm).astype(str),
     }
     # write next to the target, then rename: a failed export never leaves a half-written file behind
     tmp = f"{out}.tmp-{os.getpid()}.npz"

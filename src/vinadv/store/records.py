@@ -9,7 +9,8 @@ import numpy as np
 from vinadv.errors import InputError
 from vinadv.grid.pairs import PathPairs, int_column
 from vinadv.grid.paths import PackedPaths
-from vinadv.vocabulary import LABELS
+from vinadv.store.schema import HARM_COLUMNS, HARM_FLOAT_COLUMNS
+from vinadv.vocabulary import HARMS, LABELS
 
 
 @dataclass(kw_only=True, eq=False)
@@ -23,6 +24,10 @@ class PairRecords(PathPairs):
       label_source (n,) str — who labelled it ('rule', a classifier name, ...); a single str is broadcast
       score (n,) float64 — classifier score, NaN = none (NULL)
       dh, dv (n,) int64 — horizontal / vertical path distance, -1 = not applicable (NULL)
+      opt_cost_o, opt_cost_a, cost_o, cost_a, regret_o, regret_a (n,) float64 — harm costs in move units
+        (DESIGN.md "Harm"), NaN = none (NULL)
+      expert_label (n,) object, 'invalid|UrP|UcP|DP|FP' or None; harm (n,) object, 'harmful|harmless|invalid' or
+        None (None = not computed, NULL)
       no (n,) int64 or None — the table's global sequence number; filled when read back, ignored on write
     String columns are object arrays.
     """
@@ -34,6 +39,14 @@ class PairRecords(PathPairs):
     score: np.ndarray | None = None
     dh: np.ndarray | None = None
     dv: np.ndarray | None = None
+    opt_cost_o: np.ndarray | None = None
+    opt_cost_a: np.ndarray | None = None
+    cost_o: np.ndarray | None = None
+    cost_a: np.ndarray | None = None
+    regret_o: np.ndarray | None = None
+    regret_a: np.ndarray | None = None
+    expert_label: np.ndarray | None = None
+    harm: np.ndarray | None = None
     no: np.ndarray | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
@@ -58,23 +71,35 @@ class PairRecords(PathPairs):
             value = getattr(self, name)
             column = np.full(n, -1, np.int64) if value is None else int_column(value, f"PairRecords.{name}", (n,))
             setattr(self, name, column)
+        for name in HARM_FLOAT_COLUMNS:
+            value = np.full(n, np.nan) if getattr(self, name) is None else np.asarray(getattr(self, name), np.float64)
+            if value.shape != (n,):
+                raise InputError(f"PairRecords.{name}: expected shape ({n},), got {value.shape}")
+            setattr(self, name, value)
+        self.expert_label = _optional_strings(self.expert_label, "expert_label", n, LABELS)
+        self.harm = _optional_strings(self.harm, "harm", n, HARMS)
         if self.no is not None:
             self.no = int_column(self.no, "PairRecords.no", (n,))
 
     @classmethod
     def from_pairs(cls, pairs: PathPairs, *, label, attack, label_source="rule", score=None, dh=None, dv=None,
-                   pair_index=None) -> PairRecords:
-        """Records of `pairs` (a `PairSet`, any `PathPairs`) plus their labels; `pair_index` defaults to `0..n-1`."""
+                   pair_index=None, harm=None) -> PairRecords:
+        """Records of `pairs` (a `PairSet`, any `PathPairs`) plus their labels; `pair_index` defaults to `0..n-1`.
+
+        `harm`: a `vinadv.classify.harm.PairHarm`-like object (read by field name), or None (the harm columns stay
+        NULL).
+        """
         return cls(
             pair_index=np.arange(len(pairs)) if pair_index is None else pair_index,
             obstacles_o=pairs.obstacles_o, obstacles_a=pairs.obstacles_a,
             starts=pairs.starts, goals=pairs.goals, added=pairs.added, path_o=pairs.path_o, path_a=pairs.path_a,
             label=label, attack=attack, term_o=pairs.term_o, term_a=pairs.term_a,
             label_source=label_source, score=score, dh=dh, dv=dv,
+            **({} if harm is None else {name: getattr(harm, name) for name in HARM_COLUMNS}),
         )
 
     def equals(self, other: PairRecords) -> bool:
-        """Same rows, field by field (NaN scores compare equal; `no` is ignored)."""
+        """Same rows, field by field (NaN floats compare equal; `no` is ignored)."""
         for f in fields(self):
             if f.name == "no":
                 continue
@@ -82,7 +107,7 @@ class PairRecords(PathPairs):
             if isinstance(a, PackedPaths):
                 if a != b:
                     return False
-            elif a.shape != b.shape or not np.array_equal(a, b, equal_nan=f.name == "score"):
+            elif a.shape != b.shape or not np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):
                 return False
         return True
 
@@ -94,3 +119,19 @@ def _strings(value, name: str, n: int) -> np.ndarray:
     if arr.shape != (n,):
         raise InputError(f"PairRecords.{name}: expected shape ({n},), got {arr.shape}")
     return arr.astype(str).astype(object)
+
+
+def _optional_strings(value, name: str, n: int, allowed: tuple[str, ...]) -> np.ndarray:
+    """`(n,)` object array of str or None (NULL); None for the whole column when `value` is None."""
+    if value is None:
+        return np.full(n, None, dtype=object)
+    arr = np.asarray(value, dtype=object)
+    if arr.shape != (n,):
+        raise InputError(f"PairRecords.{name}: expected shape ({n},), got {arr.shape}")
+    null = np.equal(arr, None)
+    values = arr[~null].astype(str)
+    bad = ~np.isin(values, allowed)
+    if bad.any():
+        raise InputError(f"PairRecords.{name}: '{values[bad][0]}' is not one of {'|'.join(allowed)}")
+    arr[~null] = values.astype(object)
+    return arr

@@ -10,6 +10,10 @@ Tables:
   them). Added after schema version 1 shipped; it is additive (no existing column changes), so `Store.open`
   creates it in an older version-1 database instead of refusing it (`ADDITIVE_TABLES`).
 
+Version 2 adds the harm columns of `map_pairs` (`HARM_COLUMNS`, all nullable: DESIGN.md "Harm"). A version-1
+database gains them on open (`ALTER TABLE ... ADD COLUMN`, see `Store`), opened read-only it reads them as NULL;
+any other version is refused untouched.
+
 Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
 VARCHAR would cap both.
 """
@@ -19,10 +23,14 @@ from __future__ import annotations
 import sqlalchemy as sa
 from sqlalchemy.dialects import mysql
 
+from vinadv.vocabulary import HARM_FIELDS, HARM_FLOAT_FIELDS
+from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exported for the store's users
 from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
-SCHEMA_VERSION = "1"
+SCHEMA_VERSION = "2"
+#: the version before: upgraded on open by adding `HARM_COLUMNS` (nothing existing changes)
+PREVIOUS_SCHEMA_VERSION = "1"
 
 metadata = sa.MetaData()
 
@@ -77,6 +85,15 @@ map_pairs = sa.Table(
     sa.Column("term_a", sa.String(16), nullable=False),
     sa.Column("dh", sa.Integer(), nullable=True),
     sa.Column("dv", sa.Integer(), nullable=True),
+    # harm (schema version 2): costs in move units (orthogonal 1, diagonal sqrt 2); NULL = none / not computed
+    sa.Column("opt_cost_o", sa.Double(), nullable=True),
+    sa.Column("opt_cost_a", sa.Double(), nullable=True),
+    sa.Column("cost_o", sa.Double(), nullable=True),
+    sa.Column("cost_a", sa.Double(), nullable=True),
+    sa.Column("regret_o", sa.Double(), nullable=True),
+    sa.Column("regret_a", sa.Double(), nullable=True),
+    sa.Column("expert_label", sa.String(16), nullable=True),
+    sa.Column("harm", sa.String(16), nullable=True),
     sa.UniqueConstraint("run_id", "pair_index", name="uq_map_pairs_run_pair"),
     # pair_index last: a filtered page of a run (`Store.page_pairs`, the viewer's grid) is one ordered index range
     sa.Index("ix_map_pairs_run_label", "run_id", "label", "pair_index"),
@@ -115,6 +132,10 @@ evaluations = sa.Table(
     sa.Column("curves", sa.JSON(), nullable=True),  # {"roc": {"fpr", "tpr"}, "pr": {"precision", "recall"}}
     sa.Index("ix_evaluations_run", "run_id", "id"),
 )
+
+#: `map_pairs` columns added by schema version 2 (numbers first, then the two labels)
+HARM_FLOAT_COLUMNS = HARM_FLOAT_FIELDS
+HARM_COLUMNS = HARM_FIELDS
 
 TABLES = (meta_table, runs, map_pairs, annotations, evaluations)
 #: tables added to schema version 1 later: created when missing, never a reason to refuse a database

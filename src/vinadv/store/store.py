@@ -31,7 +31,10 @@ from vinadv.store import codec
 from vinadv.store.records import PairRecords
 from vinadv.store.schema import (
     ADDITIVE_TABLES,
+    HARM_COLUMNS,
+    HARM_FLOAT_COLUMNS,
     LABELS,
+    PREVIOUS_SCHEMA_VERSION,
     SCHEMA_VERSION,
     TABLES,
     annotations,
@@ -93,6 +96,7 @@ class Store:
         self._insert_sql = _driver_insert_sql(engine.dialect)
         self._sqlite = engine.dialect.name == "sqlite"  # rows in SQLite's native form (see `encode_rows`)
         self._multi_insert: tuple[int, str] | None = None  # (rows per statement, SQL), see `_insert_sqlite`
+        self._absent_columns: frozenset[str] = frozenset()  # harm columns of a version-1 database opened read-only
 
     # ------------------------------------------------------------------------------------------ opening
 
@@ -157,7 +161,7 @@ class Store:
             version = conn.execute(
                 sa.select(meta_table.c.value).where(meta_table.c.key == "schema_version")
             ).scalar_one_or_none()
-            if version != SCHEMA_VERSION:
+            if version not in (SCHEMA_VERSION, PREVIOUS_SCHEMA_VERSION):
                 raise InputError(
                     f"database {self.url}: schema version {version!r}, this vinadv needs {SCHEMA_VERSION!r}; "
                     "use another database (refusing to touch it)"
@@ -170,16 +174,38 @@ class Store:
                     raise InputError(f"database {self.url}: wrong schema: table {table.name} is missing")
                 have = {c["name"] for c in inspector.get_columns(table.name)}
                 missing = {c.name for c in table.columns} - have
+                if version == PREVIOUS_SCHEMA_VERSION and table is map_pairs:
+                    missing -= set(HARM_COLUMNS)  # added by `_upgrade_from_previous`
                 if missing:
                     raise InputError(
                         f"database {self.url}: wrong schema: table {table.name} lacks columns {sorted(missing)}"
                     )
+        if version == PREVIOUS_SCHEMA_VERSION:
+            if create:
+                self._upgrade_from_previous()
+            else:  # read-only use: nothing changes, the harm columns read as NULL
+                self._absent_columns = frozenset(HARM_COLUMNS) - {
+                    c["name"] for c in sa.inspect(self.engine).get_columns(map_pairs.name)}
         missing_additive = [t for t in ADDITIVE_TABLES if t.name not in present]
         if missing_additive and create:
             # an older version-1 database: add the new tables (nothing existing changes)
             with self.engine.begin() as conn:
                 for table in missing_additive:
                     table.create(conn, checkfirst=True)
+
+    def _upgrade_from_previous(self) -> None:
+        """Schema version 1 -> 2: add the harm columns (nullable; existing rows read them as NULL), then record the
+        new version. Only the missing columns are added, so an upgrade cut short (MySQL commits each ALTER on its
+        own) is finished by the next open."""
+        prep = self.engine.dialect.identifier_preparer
+        with self.engine.begin() as conn:
+            have = {c["name"] for c in sa.inspect(conn).get_columns(map_pairs.name)}
+            for name in HARM_COLUMNS:
+                if name not in have:
+                    kind = map_pairs.c[name].type.compile(dialect=self.engine.dialect)
+                    table, column = prep.format_table(map_pairs), prep.quote(name)
+                    conn.execute(sa.text(f"ALTER TABLE {table} ADD COLUMN {column} {kind}"))
+            conn.execute(meta_table.update().where(meta_table.c.key == "schema_version").values(value=SCHEMA_VERSION))
 
     def close(self) -> None:
         self.engine.dispose()
@@ -367,7 +393,9 @@ class Store:
                 yield [dict(r) for r in part]
 
     def _pairs_query(self, run_id, *, successful_only=False, labels=None, pair_indices=None) -> sa.Select:
-        query = sa.select(*[map_pairs.c[name] for name in PAIR_COLUMNS]).where(map_pairs.c.run_id == int(run_id))
+        query = sa.select(
+            *[sa.null().label(name) if name in self._absent_columns else map_pairs.c[name] for name in PAIR_COLUMNS]
+        ).where(map_pairs.c.run_id == int(run_id))
         if successful_only:
             query = query.where(map_pairs.c.attack == sa.true())
         if labels is not None:
@@ -570,14 +598,14 @@ def _sqlite_pragmas(dbapi_conn, _record) -> None:
 #: columns read back, in order (`decode_rows` relies on it)
 PAIR_COLUMNS = (
     "no", "pair_index", "map_o", "map_a", "path_o", "path_a", "label", "attack", "start", "goal",
-    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv",
+    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv", *HARM_COLUMNS,
 )
 
 
 #: columns written by `encode_rows`, in order
 INSERT_COLUMNS = (
     "run_id", "pair_index", "map_o", "map_a", "path_o", "path_a", "label", "attack", "start", "goal",
-    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv",
+    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv", *HARM_COLUMNS,
 )
 
 
@@ -607,7 +635,7 @@ def encode_rows(
     NULLs are None and `attack` a bool, unless `sqlite`: then rows take SQLite's native form, holding only ints,
     floats and strs, which the sqlite3 module binds without looking for an adapter (it does for any other value,
     bool and None included: ~0.5 us each): `attack` 0/1, a NULL score a NaN (SQLite stores a NaN as NULL), a NULL
-    dh/dv -1 (`_driver_insert_sql` wraps them in `NULLIF(?, -1)`).
+    dh/dv -1 (`_driver_insert_sql` wraps them in `NULLIF(?, -1)`), a NULL harm cost a NaN.
     """
     return list(zip(*_encode_columns(run_id, records, lo, hi, sqlite)))
 
@@ -654,6 +682,10 @@ def _encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, 
         "term_a": records.term_a[rows].tolist(),
         "dh": nullable(dh, dh < 0),
         "dv": nullable(dv, dv < 0),
+        **{name: nullable(getattr(records, name)[rows], np.isnan(getattr(records, name)[rows]))
+           for name in HARM_FLOAT_COLUMNS},
+        "expert_label": records.expert_label[rows].tolist(),  # None = NULL
+        "harm": records.harm[rows].tolist(),
     }
     assert tuple(columns) == INSERT_COLUMNS
     return list(columns.values())
@@ -689,4 +721,7 @@ def decode_rows(rows: Sequence) -> PairRecords:
         score=nullable(col["score"], np.nan, np.float64),
         dh=nullable(col["dh"], -1, np.int64),
         dv=nullable(col["dv"], -1, np.int64),
+        **{name: nullable(col[name], np.nan, np.float64) for name in HARM_FLOAT_COLUMNS},
+        expert_label=np.array(col["expert_label"], dtype=object),
+        harm=np.array(col["harm"], dtype=object),
     )

@@ -7,7 +7,8 @@ import numpy as np
 
 from vinadv.grid.paths import PackedPaths
 from vinadv.store.records import PairRecords
-from vinadv.vocabulary import LABELS, TERMINATIONS, is_success
+from vinadv.store.schema import HARM_FLOAT_COLUMNS
+from vinadv.vocabulary import HARMS, LABELS, TERMINATIONS, is_success
 
 
 def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, first_index: int = 0) -> PairRecords:
@@ -29,6 +30,10 @@ def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, fi
     score[rng.random(n) < 0.3] = np.nan
     dh = rng.integers(-1, size, n)
     dv = rng.integers(-1, size, n)
+    # harm: costs with NULLs (NaN), labels with NULLs (None), like rows written before the harm columns existed
+    costs = {name: np.where(rng.random(n) < 0.2, np.nan, rng.random(n) * 4 * size) for name in HARM_FLOAT_COLUMNS}
+    expert_label = np.array([None, *LABELS], dtype=object)[rng.integers(0, len(LABELS) + 1, n)]
+    harm = np.array([None, *HARMS], dtype=object)[rng.integers(0, len(HARMS) + 1, n)]
     return PairRecords(
         pair_index=first_index + np.arange(n),
         obstacles_o=obstacles_o, obstacles_a=obstacles_a,
@@ -37,5 +42,5 @@ def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, fi
         term_o=np.array(TERMINATIONS, dtype=object)[rng.integers(0, 4, n)],
         term_a=np.array(TERMINATIONS, dtype=object)[rng.integers(0, 4, n)],
         label_source=np.array(["rule", "svm"], dtype=object)[rng.integers(0, 2, n)],
-        score=score, dh=dh, dv=dv,
+        score=score, dh=dh, dv=dv, **costs, expert_label=expert_label, harm=harm,
     )

@@ -1,0 +1,109 @@
+"""The harm columns of `map_pairs` (schema version 2): round trip, and the upgrade of a version-1 database on
+open, on SQLite, MariaDB and PostgreSQL."""
+
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+import pytest
+import sqlalchemy as sa
+
+from vinadv.errors import InputError
+from vinadv.store import SCHEMA_VERSION, Store
+from vinadv.store.synthetic import random_records
+
+HARM_COLUMNS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a", "expert_label", "harm")
+
+
+def _make_version_1(url: str) -> int:
+    """A database as vinadv with schema version 1 left it: 30 pairs, no harm columns."""
+    with Store.open(url) as store:
+        run_id = store.create_run("old")
+        store.write_pairs(run_id, random_records(30, size=7, seed=3))
+    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
+    quote = engine.dialect.identifier_preparer.quote
+    with engine.begin() as conn:
+        for name in HARM_COLUMNS:
+            conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote(name)}"))
+        conn.execute(sa.text(f"UPDATE vinadv_meta SET value = '1' WHERE {quote('key')} = 'schema_version'"))
+    engine.dispose()
+    return run_id
+
+
+def _columns_and_version(url: str) -> tuple[set, str]:
+    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
+    with engine.connect() as conn:
+        columns = {c["name"] for c in sa.inspect(conn).get_columns("map_pairs")}
+        version = conn.execute(sa.text("SELECT value FROM vinadv_meta")).scalar()
+    engine.dispose()
+    return columns, version
+
+
+def test_harm_columns_round_trip_with_nulls(db_url):
+    records = random_records(120, size=9, seed=8)
+    assert np.isnan(records.regret_a).any() and (records.harm == None).any()  # noqa: E711 - NULLs are written too
+    with Store.open(db_url) as store:
+        run_id = store.create_run("h")
+        store.write_pairs(run_id, records)
+        back = store.read_pairs(run_id)
+    assert back.equals(records)
+    for name in HARM_COLUMNS[:6]:
+        assert np.allclose(getattr(back, name), getattr(records, name), equal_nan=True, rtol=0, atol=0)
+    assert back.harm.tolist() == records.harm.tolist() and back.expert_label.tolist() == records.expert_label.tolist()
+
+
+def test_version_1_database_is_upgraded_on_open(db_url):
+    run_id = _make_version_1(db_url)
+    columns, version = _columns_and_version(db_url)
+    assert version == "1" and not columns & set(HARM_COLUMNS)
+    with Store.open(db_url, create=False) as store:  # read-only use: nothing changes, harm reads as NULL
+        old = store.read_pairs(run_id)
+        assert len(old) == 30 and all(h is None for h in old.harm) and np.isnan(old.opt_cost_o).all()
+    assert _columns_and_version(db_url) == (columns, "1")
+    with Store.open(db_url) as store:
+        assert store.read_pairs(run_id).equals(old)  # the old rows: same values, harm NULL
+        new = random_records(10, size=7, seed=4, first_index=100)
+        store.write_pairs(run_id, new)
+        assert store.read_pairs(run_id, pair_indices=new.pair_index).equals(new)
+    columns, version = _columns_and_version(db_url)
+    assert version == SCHEMA_VERSION == "2" and set(HARM_COLUMNS) <= columns
+    with Store.open(db_url) as store:  # opening again changes nothing
+        assert store.count_pairs(run_id) == 40
+
+
+def test_version_1_database_with_a_missing_column_is_refused_untouched(sqlite_url):
+    _make_version_1(sqlite_url)
+    engine = sa.create_engine(sqlite_url, poolclass=sa.pool.NullPool)
+    with engine.begin() as conn:
+        conn.execute(sa.text("ALTER TABLE map_pairs DROP COLUMN dv"))
+    engine.dispose()
+    before = _columns_and_version(sqlite_url)
+    with pytest.raises(InputError, match=r"lacks columns \['dv'\]"):
+        Store.open(sqlite_url)
+    assert _columns_and_version(sqlite_url) == before
+
+
+@pytest.mark.parametrize("version", ["0", "3", "1.5"])
+def test_unknown_version_is_refused_and_the_file_stays_byte_identical(tmp_path, version):
+    path = tmp_path / "v.db"
+    url = f"sqlite:///{path}"
+    _make_version_1(url)
+    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
+    with engine.begin() as conn:
+        conn.execute(sa.text(f"UPDATE vinadv_meta SET value = '{version}'"))
+    engine.dispose()
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    with pytest.raises(InputError, match=f"schema version '{version}'"):
+        Store.open(url)
+    assert hashlib.sha256(path.read_bytes()).hexdigest() == digest
+
+
+def test_records_refuse_unknown_harm_values():
+    records = random_records(3, size=5, seed=1)
+    with pytest.raises(InputError, match="harm: 'bad'"):
+        fields = {f: getattr(records, f) for f in records.__dataclass_fields__}
+        records.__class__(**{**fields, "harm": ["bad", None, None]})
+    part = records.subset([2, 0])
+    assert part.harm.tolist() == [records.harm[2], records.harm[0]]
+    assert np.array_equal(part.regret_a, records.regret_a[[2, 0]], equal_nan=True)
