@@ -22,7 +22,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import sqlalchemy as sa
 
 from vinadv.classify import (
     FP_DP_KINDS,
@@ -76,16 +75,10 @@ def _batch_of(records) -> PathPairBatch:
 def load_run_pairs(store, run_id: int, seed: int = 0, max_other: int = MAX_OTHER_PAIRS) -> RunPairs:
     """Read the run's FP/DP pairs and up to `max_other` other pairs (a seeded sample) with their rule labels."""
     from vinadv.store import PairRecords
-    from vinadv.store.schema import map_pairs
 
-    with store.engine.connect() as conn:
-        rows = conn.execute(
-            sa.select(map_pairs.c.pair_index, map_pairs.c.label).where(map_pairs.c.run_id == int(run_id))
-        ).all()
-    if not rows:
+    index, labels = store.pair_labels(run_id)
+    if not len(index):
         raise InputError(f"run {run_id} has no stored pairs to evaluate on")
-    index = np.array([r[0] for r in rows], dtype=np.int64)
-    labels = np.array([r[1] for r in rows], dtype=object)
     # the feature stage is exact whatever labelled the run, so the stored FP/DP set is the rule's FP/DP set
     fp_dp = np.sort(index[np.isin(labels, ("DP", "FP"))])
     others = np.sort(index[~np.isin(labels, ("DP", "FP"))])
@@ -228,12 +221,15 @@ def five_way_check(model, data: RunPairs, train: np.ndarray, test: np.ndarray, s
     }
 
 
-def _make(kind: str, setting: str, seed: int, t: int):
+def _make(kind: str, setting: str, seed: int, t: int, max_epochs: int | None = None):
     if kind == "hybrid":
         return HybridClassifier(make_fp_classifier("svm", setting, seed), t=t)
     if kind == "rule":
         return RuleClassifier(t=t)
-    return make_fp_classifier(kind, setting, seed)
+    model = make_fp_classifier(kind, setting, seed)
+    if max_epochs is not None and hasattr(model, "epochs"):
+        model.epochs = min(model.epochs, int(max_epochs))  # a quicker comparison (the demo's), said on the page
+    return model
 
 
 def parse_list(text: str | Sequence[str] | None, allowed: Sequence[str], option: str) -> list[str]:
@@ -263,13 +259,16 @@ def parse_sizes(text: str | Sequence[float] | None) -> list[float]:
 
 def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, setting: str = "baseline",
                  sizes: Sequence[float] = DEFAULT_SIZES, seed: int = 0, progress: bool = False,
-                 write: bool = True) -> list[dict]:
+                 write: bool = True, max_epochs: int | None = None) -> list[dict]:
     """Run the comparison on the stored run `run_id` of `store` and (with `write`) store its rows.
 
-    Returns the rows (dicts with the `evaluations` columns, `metrics` and `curves` as dicts).
+    `max_epochs` caps the CNN's and MLP's epochs (None: the setting's, 10 or 20); each row's metrics record the
+    epochs used. Returns the rows (dicts with the `evaluations` columns, `metrics` and `curves` as dicts).
     """
     if setting not in SETTINGS:
         raise InputError(f"--setting: {setting!r} not in {','.join(SETTINGS)}")
+    if max_epochs is not None and int(max_epochs) < 1:
+        raise InputError(f"max_epochs: must be >= 1, got {max_epochs}")
     classifiers = parse_list(list(classifiers), CLASSIFIERS, "--classifiers")
     sizes = parse_sizes(list(sizes))
     store.run_info(run_id)
@@ -294,9 +293,11 @@ def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, s
         if bar is not None:
             bar.set_postfix_str(f"{kind} {training} {fraction:g}")
         subset = train if fraction >= 1.0 else nested_fraction(train, data.truth, fraction, seed)
-        model = _make(kind, setting, seed, data.t)
+        model = _make(kind, setting, seed, data.t, max_epochs)
         metrics, curves, train_size = evaluate_model(model, data, subset, test, training == "balanced", seed,
                                                      curves=fraction >= 1.0)
+        if hasattr(model, "epochs"):
+            metrics["epochs"] = int(model.epochs)
         if kind in ("hybrid", "rule"):
             metrics["five_way"] = five_way_check(model, data, subset, test, seed)
         if kind == "rule":  # nothing is trained
@@ -327,3 +328,93 @@ def _jsonable(value):
     if isinstance(value, (float, np.floating)):
         return None if not np.isfinite(value) else float(value)
     return value
+
+
+#: the comparison `vinadv run --report` (and so `make demo`) runs: every classifier in both settings, on fewer
+#: training-set fractions and with the networks' epochs capped, to keep the demo short on 2 cores (the page says so)
+QUICK_SIZES = (0.25, 0.5, 1.0)
+QUICK_MAX_EPOCHS = 3
+
+
+def compare_for_report(store, run_id: int, settings: Sequence[str] = SETTINGS, sizes: Sequence[float] = QUICK_SIZES,
+                       max_epochs: int | None = QUICK_MAX_EPOCHS, seed: int = 0,
+                       progress: bool = False) -> tuple[list[dict], str | None]:
+    """The classifier comparison of `run_id` in each of `settings`, stored; `(rows, None)`, or `([], reason)` when
+    the run cannot be compared (fewer than 2 FP or DP pairs: nothing to split)."""
+    rows: list[dict] = []
+    for setting in settings:
+        try:
+            rows += evaluate_run(store, run_id, CLASSIFIERS, setting, sizes, seed, progress=progress,
+                                 max_epochs=max_epochs)
+        except InputError as exc:
+            if "at least 2" not in str(exc):
+                raise
+            return rows, str(exc)
+    return rows, None
+
+
+# -------------------------------------------------------------------------------------- the VIN's quality
+
+QUICK_EVAL_MAPS = 50
+QUICK_EVAL_SEED = 20_240_601
+
+
+def vin_quality(config: dict, checksum: str | None, size: int) -> tuple[dict, str]:
+    """The quality of the VIN a run used: `(metrics, source)`; metrics as `vinadv.planners.evaluation.evaluate_vin`
+    (success_rate, optimal_rate, action_accuracy, ...), `{}` when the weights are not on this machine.
+
+    From a metrics JSON shipped next to the weights, else the training record inside the weights file, else a quick
+    evaluation now (`QUICK_EVAL_MAPS` fresh maps)."""
+    import json
+    from pathlib import Path
+
+    from vinadv.planners.weights import default_weights_path, weights_checksum
+
+    path = Path(config["weights"]) if config.get("weights") else default_weights_path(size)
+    if not path.exists():
+        return {}, f"not available: the run's weights file {path} is not on this machine"
+    if checksum and weights_checksum(path) != checksum:
+        return {}, f"not available: {path} is not the file the run used (its checksum differs)"
+    for candidate in (path.with_suffix(".metrics.json"), path.with_name(path.stem + "_metrics.json"),
+                      path.with_name(path.stem + "-metrics.json"), path.with_name(path.name + ".metrics.json"),
+                      path.with_suffix(".json")):
+        if candidate.exists():
+            try:
+                data = json.loads(candidate.read_text())
+            except (OSError, ValueError):
+                continue
+            found = _find_metrics(data)
+            if found:
+                return found, f"metrics file {candidate.name} shipped with the weights {path.name}"
+    from vinadv.grid.generator import generate_maps
+    from vinadv.planners.evaluation import evaluate_vin
+    from vinadv.planners.weights import load_vin
+
+    model = load_vin(path, size=size)
+    found = _find_metrics(getattr(model, "record", None) or {})
+    if found:
+        return found, f"the training record inside the weights file {path.name}"
+    maps = generate_maps(QUICK_EVAL_MAPS, size, seed=QUICK_EVAL_SEED,
+                         corner_cutting=bool(config.get("corner_cutting", True)))
+    start = time.perf_counter()
+    metrics = evaluate_vin(model, maps)
+    seconds = time.perf_counter() - start
+    return metrics, (f"quick evaluation while writing this report: {QUICK_EVAL_MAPS} fresh {size}x{size} maps "
+                     f"(seed {QUICK_EVAL_SEED}), {maps.n_starts} starts each, weights {path.name}, {seconds:.1f} s")
+
+
+def _find_metrics(data) -> dict | None:
+    """A dict holding `success_rate` and `optimal_rate` inside a metrics/record JSON (top level or nested)."""
+    if isinstance(data, dict):
+        if "success_rate" in data and "optimal_rate" in data:
+            return data
+        for value in data.values():
+            found = _find_metrics(value)
+            if found:
+                return found
+    elif isinstance(data, list):
+        for value in reversed(data):  # the last epoch / latest evaluation first
+            found = _find_metrics(value)
+            if found:
+                return found
+    return None
