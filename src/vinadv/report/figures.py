@@ -86,10 +86,11 @@ def example_pairs(records, stem: Path, columns: int = 4, distances=None) -> list
         axes[r + 1, c].axis("on")
         draw_map(axes[r, c], records.obstacles_o[i], records.goals[i], records.starts[i], paths=[("original", o)],
                  title=f"pair {records.pair_index[i]}: original")
-        extra = _distances(distances[i]) if distances is not None else ""
         draw_map(axes[r + 1, c], records.obstacles_a[i], records.goals[i], records.starts[i],
                  paths=[("original", o), ("adversarial", a)], added=records.added[i],
-                 title=f"adversarial ({records.label[i]})" + (f"\n{extra}" if extra else ""))
+                 title=f"adversarial ({records.label[i]})")
+        if distances is not None:  # below the map: a second title line would run into the map above
+            axes[r + 1, c].set_xlabel(_distances(distances[i]), fontsize=8)
     map_legend(fig, axes)
     return save(fig, stem)
 
@@ -167,7 +168,7 @@ def roc_pr_curves(curves: dict, stem: Path) -> list[str]:
     legend. `curves`: {training: {classifier: (curve points dict, roc_auc, ap)}}."""
     from sklearn.metrics import PrecisionRecallDisplay, RocCurveDisplay
 
-    fig, axes = plt.subplots(2, 2, figsize=(10, 9))
+    fig, axes = plt.subplots(2, 2, figsize=(10, 9), layout="constrained")  # titles clear of the x labels above
     axes = axes.ravel()
     panels = [("pr", "imbalanced", "(a) PR curve, imbalanced training"),
               ("pr", "balanced", "(b) PR curve, balanced training"),

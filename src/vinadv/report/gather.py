@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from vinadv.report import paper
-from vinadv.report.evaluate import TIMING_REPEATS, median_seconds
+from vinadv.report.evaluate import TIMING_REPEATS, batch_of, median_seconds
 
 CATEGORY_ORDER = ("UrP", "FP", "DP", "UcP")
 ALL_LABELS = (*CATEGORY_ORDER, "invalid")
@@ -179,7 +179,7 @@ class CategoriesData:
 def _examples(ctx: Context):
     """Up to two stored pairs per category of the main run (the first by pair index), read with their rule
     distances: `(records, chosen {label: pair indices}, ExamplePairs in records order)`."""
-    from vinadv.classify import PathPairBatch, label_batch
+    from vinadv.classify import label_batch
 
     chosen = {label: np.array([r["pair_index"] for r in ctx.store.page_pairs(ctx.run_id, label=label, limit=2)],
                               dtype=np.int64) for label in CATEGORY_ORDER}
@@ -188,9 +188,7 @@ def _examples(ctx: Context):
         indices = np.array([r["pair_index"] for r in ctx.store.page_pairs(ctx.run_id, label="invalid", limit=4)],
                            dtype=np.int64)
     records = ctx.store.read_pairs(ctx.run_id, pair_indices=indices)
-    batch = PathPairBatch.from_arrays(records.path_o_cells, records.path_o_offsets, records.path_a_cells,
-                                      records.path_a_offsets, records.goals, records.size)
-    rule = label_batch(batch)  # the exact distances, whatever labelled the run
+    rule = label_batch(batch_of(records))  # the exact distances, whatever labelled the run
     pairs = [ExamplePair(pair_index=int(p), label=str(lab), dh=int(dh), dv=int(dv), t=int(rule.t))
              for p, lab, dh, dv in zip(records.pair_index, records.label, rule.dh, rule.dv)]
     return records, chosen, pairs
@@ -328,12 +326,6 @@ class RunEvaluation:
     def tables(self) -> list[Table]:
         return [t for t in (self.table5, self.table6, self.detail, self.fig8_table) if t is not None]
 
-    def result(self, classifier: str, setting: str, training: str) -> dict | None:
-        for s in self.settings:
-            if s.setting == setting:
-                return s.full.get((classifier, training))
-        return None
-
 
 @dataclass
 class ClassifiersData:
@@ -467,24 +459,19 @@ class TimingData:
 def timing_pairs(index: np.ndarray, labels: np.ndarray, seed: int = 0) -> np.ndarray:
     """The paper's 100-pair mix of a run, from all its stored pairs (`index`, `labels`): up to 40 FP/DP pairs and
     60 UrP/UcP pairs (the rest from the other group when one is short), sorted pair indices."""
-    rng = np.random.default_rng(seed)
-    fd = rng.permutation(index[np.isin(labels, ("FP", "DP"))])
-    other = rng.permutation(index[np.isin(labels, ("UrP", "UcP"))])
-    n_fd = min(40, len(fd))
-    n_other = min(100 - n_fd, len(other))
-    n_fd = min(100 - n_other, len(fd))
-    chosen = np.concatenate([fd[:n_fd], other[:n_other]])
-    return np.sort(chosen) if len(chosen) else index[:100]
+    from vinadv.report.evaluate import paper_mix
+
+    chosen = paper_mix(labels, np.flatnonzero(np.isin(labels, ("FP", "DP"))), seed)
+    return np.sort(index[chosen]) if len(chosen) else index[:100]
 
 
 def gather_timing(ctx: Context) -> TimingData:
-    from vinadv.classify import PathPairBatch, label_batch
+    from vinadv.classify import label_batch
 
     mix = timing_pairs(*ctx.store.pair_labels(ctx.run_id))
     read_s = median_seconds(lambda: ctx.store.read_pairs(ctx.run_id, pair_indices=mix), 3)
     records = ctx.store.read_pairs(ctx.run_id, pair_indices=mix)
-    batch = PathPairBatch.from_arrays(records.path_o_cells, records.path_o_offsets, records.path_a_cells,
-                                      records.path_a_offsets, records.goals, records.size)
+    batch = batch_of(records)
     rule_s = median_seconds(lambda: label_batch(batch))
     counts = {lab: int(np.sum(records.label == lab)) for lab in ALL_LABELS}
     latest = {r["setting"]: r for r in ctx.store.read_evaluations(ctx.run_id)
