@@ -4,6 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 DEMO_DIR ?= demo-out
+DEMO_FLAGS ?=
 
 .PHONY: venv browser test test-fast demo bench clean
 
@@ -26,10 +27,11 @@ test: venv browser
 test-fast: venv
 	$(PY) -m pytest -m "not slow"
 
+# the whole paper: run, classifier comparison (quick profile; DEMO_FLAGS=--no-evaluate skips it), report
 demo: venv
 	mkdir -p $(DEMO_DIR)
 	rm -f $(DEMO_DIR)/vinadv.db
-	$(VENV)/bin/vinadv run --n 5000 --size 28 --attack near-path --seed 0 --db $(DEMO_DIR)/vinadv.db --name demo --report $(DEMO_DIR)/report
+	$(VENV)/bin/vinadv run --n 5000 --size 28 --attack near-path --seed 0 --db $(DEMO_DIR)/vinadv.db --name demo --report $(DEMO_DIR)/report $(DEMO_FLAGS)
 	@echo "open $(DEMO_DIR)/report/index.html; look at the pairs with: $(VENV)/bin/vinadv serve --db $(DEMO_DIR)/vinadv.db"
 
 bench: venv

@@ -46,7 +46,7 @@ def db_copy(base_db, tmp_path):
 
 @pytest.fixture(scope="session")
 def evaluated(base_db, tmp_path_factory):
-    """The base database after `vinadv evaluate` (svm, rule, hausdorff; fraction 0.5) and its report:
+    """The base database after `vinadv evaluate` (svm, rule, hausdorff, hybrid; fraction 0.5) and its report:
     (URL, run ids, report folder)."""
     from vinadv.cli import main
 
@@ -54,7 +54,7 @@ def evaluated(base_db, tmp_path_factory):
     folder = tmp_path_factory.mktemp("evaluated")
     shutil.copy(path, folder / "e.db")
     url = f"sqlite:///{folder / 'e.db'}"
-    assert main(["evaluate", "--db", url, "--run", str(ids[0]), "--classifiers", "svm,rule,hausdorff",
+    assert main(["evaluate", "--db", url, "--run", str(ids[0]), "--classifiers", "svm,rule,hausdorff,hybrid",
                  "--sizes", "0.5", "--quiet"]) == 0
     out = folder / "report"
     assert main(["report", "--db", url, "--run", str(ids[0]), "--out", str(out), "--quiet"]) == 0

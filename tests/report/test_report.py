@@ -1,4 +1,5 @@
-"""`vinadv report` and `vinadv evaluate`: every section and file, numbers against direct SQL, one-go `run --report`."""
+"""`vinadv report` and `vinadv evaluate`: every section and file, numbers against direct SQL, one-go `run --report`
+(with its classifier comparison), the main run of `--runs`, runs labelled by a classifier."""
 
 from __future__ import annotations
 
@@ -15,11 +16,11 @@ import sqlalchemy as sa
 from tests.report.conftest import SIZE
 from vinadv.cli import main
 from vinadv.report import write_report
-from vinadv.report.html import SECTIONS
+from vinadv.report.render import PAGE_SECTIONS
 
 FIGURES = ("fig1_map_pair", "fig2_path_pair", "fig3_categories", "fig5_map_pairs", "fig_table4_categories")
-TABLES = ("run_config.csv", "vin_quality.csv", "table4_categories.csv", "table7_processing_time.csv")
-EVAL_FIGURES = ("fig8_accuracy_vs_size", "fig9_roc_pr")
+TABLES = ("run_config.csv", "vin_quality.csv", "table4_categories.csv", "table7_processing_time.csv", "style.css")
+EVAL_FIGURES = ("fig8_accuracy_vs_size", "fig9_roc_pr_baseline")
 EVAL_TABLES = ("table5_training_time.csv", "table6_accuracy.csv", "classifier_metrics.csv", "fig8_accuracy_vs_size.csv")
 
 
@@ -55,7 +56,7 @@ def _sql(url: str, query: str, **params):
 def _check_complete(out: Path, evaluated: bool) -> str:
     index = out / "index.html"
     parsed = _parse(index)
-    assert [sid for sid, _ in SECTIONS] == [i for i in parsed.ids if i in dict(SECTIONS)]
+    assert [sid for sid, _ in PAGE_SECTIONS] == [i for i in parsed.ids if i in dict(PAGE_SECTIONS)]
     for link in parsed.links:  # relative links only, every one to a file that exists
         if link.startswith("#") or link.startswith("data:"):
             continue
@@ -77,13 +78,14 @@ def test_report_of_two_runs_has_every_section_and_matches_the_database(db_copy, 
     index = write_report(url, tmp_path / "rep", run_id=saliency, runs=[saliency, near_path])
     out = index.parent
     page = _check_complete(out, evaluated=False)
-    assert "No classifier evaluation is stored" in page and f"vinadv evaluate --db {url} --run {saliency}" in page
+    assert f"Run {saliency}: no classifier evaluation is stored" in page
+    assert f"vinadv evaluate --db {url} --run {saliency}" in page
     # table 4 against direct counts, per run (one row per attack strategy)
     table4 = {row["run"]: row for row in _rows(out / "table4_categories.csv")}
     for run_id, attack in ((saliency, "saliency"), (near_path, "near-path")):
         counts = dict(_sql(url, "SELECT label, COUNT(*) FROM map_pairs WHERE run_id = :r GROUP BY label", r=run_id))
         row = table4[str(run_id)]
-        assert row["attack"] == attack
+        assert row["attack"] == attack and row["labelled_by"] == "rule"
         for label in ("UrP", "FP", "DP", "UcP", "invalid"):
             assert int(row[label]) == counts.get(label, 0)
         assert int(row["pairs"]) == sum(counts.values())
@@ -97,7 +99,8 @@ def test_report_of_two_runs_has_every_section_and_matches_the_database(db_copy, 
     reached = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND term_o = 'goal'", r=saliency)[0][0]
     total = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r", r=saliency)[0][0]
     vin = {row["figure"]: row["value"] for row in _rows(out / "vin_quality.csv")}
-    assert vin["original paths of this run reaching the goal"].startswith(f"{reached:,} of {total:,}")
+    assert (int(vin["run_original_paths_reaching_goal"]), int(vin["run_original_paths"])) == (reached, total)
+    assert f"{reached:,} of {total:,}" in page
     assert re.search(r"success rate \(goal reached\)</td><td>\d+\.\d%", page)  # a quick evaluation ran
     # table 7: the paper's mix (40 FP/DP + 60 UrP/UcP, as many as the run has), sized from SQL
     fd = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label IN ('FP','DP')", r=saliency)[0][0]
@@ -106,7 +109,8 @@ def test_report_of_two_runs_has_every_section_and_matches_the_database(db_copy, 
     expected_pairs = min(100 - n_other, fd) + n_other
     table7 = {row["method"]: row for row in _rows(out / "table7_processing_time.csv")}
     assert int(table7["rule"]["pairs"]) == expected_pairs and float(table7["rule"]["seconds_measured"]) > 0
-    assert table7["hybrid_svm"]["seconds_measured"] == ""  # not evaluated: nothing to time
+    assert not any(m.startswith("hybrid") for m in table7)  # not evaluated: nothing to time
+    assert "not evaluated (no stored hybrid evaluation)" in page
     assert float(table7["manual"]["paper_seconds"]) == 300.0
     # run configuration from the runs table
     config = json.loads(_sql(url, "SELECT config FROM runs WHERE id = :r", r=saliency)[0][0])
@@ -121,7 +125,8 @@ def test_evaluate_stores_rows_that_the_report_shows(evaluated):
     jobs = sorted((r[0], r[1], r[2]) for r in rows)
     assert jobs == sorted([("svm", "balanced", 1.0), ("svm", "imbalanced", 1.0), ("svm", "balanced", 0.5),
                            ("hausdorff", "balanced", 1.0), ("hausdorff", "imbalanced", 1.0),
-                           ("hausdorff", "balanced", 0.5), ("rule", "none", 1.0)])
+                           ("hausdorff", "balanced", 0.5), ("rule", "none", 1.0), ("hybrid", "balanced", 1.0),
+                           ("hybrid", "imbalanced", 1.0)])
     n_fp = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label = 'FP'", r=saliency)[0][0]
     n_dp = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label = 'DP'", r=saliency)[0][0]
     # 7:3 stratified: scikit-learn puts ceil(0.3 n) pairs in the test split, classes in proportion
@@ -147,32 +152,115 @@ def test_evaluate_stores_rows_that_the_report_shows(evaluated):
     page = _check_complete(out, evaluated=True)
     assert "No classifier evaluation" not in page
     stored = {(r[0], r[1]): json.loads(r[5]) if isinstance(r[5], str) else r[5] for r in rows if r[2] == 1.0}
-    table6 = {row["classifier"]: row for row in _rows(out / "table6_accuracy.csv")}
-    assert float(table6["svm"]["accuracy_balanced"]) == pytest.approx(stored[("svm", "balanced")]["accuracy"])
-    assert float(table6["svm"]["accuracy_imbalanced"]) == pytest.approx(stored[("svm", "imbalanced")]["accuracy"])
-    assert float(table6["svm"]["paper_accuracy"]) == 0.97
-    table5 = {row["classifier"]: row for row in _rows(out / "table5_training_time.csv")}
-    assert float(table5["svm"]["paper_s"]) == 46.0
-    assert float(table5["hausdorff"]["training_s"]) == pytest.approx(stored[("hausdorff", "balanced")]["training_s"])
+    table6 = {(row["classifier"], row["setting"]): row for row in _rows(out / "table6_accuracy.csv")}
+    svm = table6[("svm", "baseline")]
+    assert float(svm["accuracy_balanced"]) == pytest.approx(stored[("svm", "balanced")]["accuracy"])
+    assert float(svm["accuracy_imbalanced"]) == pytest.approx(stored[("svm", "imbalanced")]["accuracy"])
+    assert float(svm["paper_accuracy"]) == 0.97
+    table5 = {(row["classifier"], row["setting"]): row for row in _rows(out / "table5_training_time.csv")}
+    assert float(table5[("svm", "baseline")]["paper_s"]) == 46.0
+    assert float(table5[("hausdorff", "baseline")]["training_s"]) == pytest.approx(
+        stored[("hausdorff", "balanced")]["training_s"])
     fig8 = _rows(out / "fig8_accuracy_vs_size.csv")
-    assert sorted((r["classifier"], float(r["fraction"])) for r in fig8) == [
-        ("hausdorff", 0.5), ("hausdorff", 1.0), ("svm", 0.5), ("svm", 1.0)]
+    assert sorted((r["classifier"], r["setting"], float(r["fraction"])) for r in fig8) == [
+        ("hausdorff", "baseline", 0.5), ("hausdorff", "baseline", 1.0), ("svm", "baseline", 0.5),
+        ("svm", "baseline", 1.0)]
     table7 = {row["method"]: row for row in _rows(out / "table7_processing_time.csv")}
-    assert float(table7["hybrid_svm"]["seconds_measured"]) > 0  # measured in the report run
+    # the hybrid's time for 100 pairs: the stored evaluation's measurement on the paper's mix
+    five = stored[("hybrid", "balanced")]["five_way"]
+    assert float(table7["hybrid_svm_baseline"]["seconds_measured"]) == pytest.approx(five["paper_mix_s"])
+    assert int(table7["hybrid_svm_baseline"]["pairs"]) == five["paper_mix_pairs"]
+    assert float(table7["hybrid_svm_baseline"]["paper_seconds"]) == 0.22
     assert f"{stored[('svm', 'balanced')]['roc_auc']:.3f}" in page
 
 
-def test_run_with_report_makes_it_in_one_go(report_weights, tmp_path, capsys):
+def test_run_with_report_runs_the_comparison_in_both_settings(report_weights, tmp_path, capsys):
     db = f"sqlite:///{tmp_path / 'one.db'}"
     out = tmp_path / "rep"
-    assert main(["run", "--n", "30", "--size", str(SIZE), "--attack", "key-points", "--weights", report_weights,
-                 "--db", db, "--report", str(out), "--json", "--quiet"]) == 0
+    assert main(["run", "--n", "80", "--size", str(SIZE), "--attack", "saliency", "--seed", "4", "--shard-size", "80",
+                 "--weights", report_weights, "--db", db, "--report", str(out), "--json", "--quiet"]) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["report"] == str(out)
-    page = _check_complete(out, evaluated=False)
+    assert summary["report"] == str(out) and summary["comparison"] == "stored"
+    page = _check_complete(out, evaluated=True)
     assert f"vinadv report: run {summary['run_id']}" in page
     assert {row["run"]: int(row["pairs"]) for row in _rows(out / "table4_categories.csv")}[str(summary["run_id"])] \
         == summary["pairs"]
+    # every classifier in the paper's setting and ours, the networks with their epochs capped (the page says so)
+    stored = _sql(db, "SELECT DISTINCT classifier, setting FROM evaluations WHERE run_id = :r", r=summary["run_id"])
+    # (the distances and the rule have no setting: compared once)
+    expected = {(k, "baseline") for k in ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw", "hybrid", "rule")}
+    expected |= {(k, "tuned") for k in ("svm", "cnn", "mlp", "hybrid")}
+    assert set(stored) == expected and len(stored) == len(expected)
+    assert {(row["classifier"], row["setting"]) for row in _rows(out / "table6_accuracy.csv")} == expected
+    for setting in ("baseline", "tuned"):
+        assert (out / f"fig9_roc_pr_{setting}.png").is_file()
+    epochs = {row["classifier"]: int(row["epochs"]) for row in _rows(out / "classifier_metrics.csv") if row["epochs"]}
+    assert set(epochs) == {"cnn", "mlp"} and max(epochs.values()) < 10
+    assert "fewer epochs than the paper" in page
+
+
+def test_run_with_report_and_no_evaluate_skips_the_comparison(report_weights, tmp_path, capsys):
+    db = f"sqlite:///{tmp_path / 'two.db'}"
+    out = tmp_path / "rep"
+    assert main(["run", "--n", "30", "--size", str(SIZE), "--attack", "key-points", "--weights", report_weights,
+                 "--db", db, "--report", str(out), "--no-evaluate", "--json", "--quiet"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["comparison"] == "skipped"
+    _check_complete(out, evaluated=False)
+    assert _sql(db, "SELECT COUNT(*) FROM evaluations")[0][0] == 0
+    assert main(["run", "--n", "30", "--size", str(SIZE), "--db", db, "--no-evaluate"]) == 2
+    assert "--no-evaluate" in capsys.readouterr().err
+
+
+def test_main_run_is_the_first_of_runs_and_each_runs_evaluation_is_shown(evaluated, tmp_path):
+    url, (saliency, near_path), _ = evaluated
+    out = tmp_path / "cmp"
+    assert main(["report", "--db", url, "--runs", f"{near_path},{saliency}", "--out", str(out), "--quiet"]) == 0
+    page = _check_complete(out, evaluated=False)
+    assert f"vinadv report: run {near_path} (near-path)" in page
+    # the main run has no comparison; the other's stored one is shown, its files prefixed with its id
+    prefix = f"run{saliency}_"
+    links = _parse(out / "index.html").links
+    for name in ("table5_training_time.csv", "table6_accuracy.csv", "classifier_metrics.csv",
+                 "fig9_roc_pr_baseline.png", "fig8_accuracy_vs_size.png"):
+        assert prefix + name in links and (out / (prefix + name)).is_file()
+    assert not (out / "table6_accuracy.csv").exists()
+    stored = _sql(url, "SELECT metrics FROM evaluations WHERE run_id = :r AND classifier = 'svm' AND training = "
+                       "'balanced' AND train_fraction = 1.0", r=saliency)[0][0]
+    stored = json.loads(stored) if isinstance(stored, str) else stored
+    table6 = {(row["classifier"], row["setting"]): row for row in _rows(out / f"{prefix}table6_accuracy.csv")}
+    assert float(table6[("svm", "baseline")]["accuracy_balanced"]) == pytest.approx(stored["accuracy"])
+    assert f"Run {saliency}</h3>" in page and f"Run {near_path}:" in page
+    # table 4: the main run first
+    assert [row["run"] for row in _rows(out / "table4_categories.csv")] == [str(near_path), str(saliency), "paper"]
+    # --run names the main run whatever the order of --runs
+    out2 = tmp_path / "cmp2"
+    assert main(["report", "--db", url, "--run", str(saliency), "--runs", f"{near_path},{saliency}", "--out",
+                 str(out2), "--quiet"]) == 0
+    assert f"vinadv report: run {saliency} (saliency)" in (out2 / "index.html").read_text()
+    assert (out2 / "table6_accuracy.csv").is_file()
+    assert [row["run"] for row in _rows(out2 / "table4_categories.csv")] == [str(saliency), str(near_path), "paper"]
+
+
+def test_a_run_labelled_by_a_classifier_is_marked_in_table4(db_copy, tmp_path):
+    from vinadv.store import Store
+
+    url, (saliency, near_path) = db_copy
+    with Store.open(url) as store:
+        records = store.read_pairs(saliency)
+        records.label_source[:] = "svm-model"
+        model_run = store.create_run("by-model", attack="saliency", classifier="svm-model")
+        store.write_pairs(model_run, records)
+    index = write_report(url, tmp_path / "rep", runs=[saliency, model_run])
+    table4 = {row["run"]: row for row in _rows(index.parent / "table4_categories.csv")}
+    assert table4[str(saliency)]["labelled_by"] == "rule"
+    assert table4[str(model_run)]["labelled_by"] == "svm-model"
+    page = index.read_text()
+    table = page[page.index("Table 4: the distribution"):]
+    table = table[: table.index("</table>")]
+    marked = {int(row.split(" ", 1)[0]) for row in table.split("<tr><td>")[2:] if "†" in row}
+    assert marked == {model_run}
+    assert "labelled by a trained classifier, not the exact rule" in page
 
 
 def test_bad_input_exits_2_with_a_message(db_copy, tmp_path, capsys):

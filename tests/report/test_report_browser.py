@@ -1,4 +1,5 @@
-"""The report opens in headless Chromium: every image loads, no console error, no failed request; a screenshot.
+"""The report opens in headless Chromium: every image loads, no console error, no failed request, nothing wider than
+the window (no table needs its scroll box at 1280 px); a screenshot.
 
 Skipped with a message where Chromium or Playwright is missing, except under CI=true, where that fails.
 """
@@ -58,16 +59,23 @@ def _open_and_check(url: str, screenshot: Path, chromium: str) -> dict:
                 " width: i.naturalWidth}))"
             )
             sections = page.evaluate("() => Array.from(document.querySelectorAll('section')).map(s => s.id)")
+            widths = page.evaluate(
+                "() => ({page: document.documentElement.scrollWidth, window: window.innerWidth,"
+                " overflowing: Array.from(document.querySelectorAll('table')).filter("
+                "t => t.getBoundingClientRect().right > document.body.getBoundingClientRect().right + 1)"
+                ".map(t => t.querySelector('caption') ? t.querySelector('caption').textContent : '?')})"
+            )
             page.screenshot(path=str(screenshot), full_page=True)
         finally:
             browser.close()
-    return {"errors": errors, "failed": failed, "bad_status": bad_status, "images": images, "sections": sections}
+    return {"errors": errors, "failed": failed, "bad_status": bad_status, "images": images, "sections": sections,
+            "widths": widths}
 
 
 @pytest.mark.parametrize("via", ["http", "file"])
 def test_report_opens_in_headless_chromium_without_errors(served, tmp_path, via):
     chromium = needs.chromium()
-    from vinadv.report.html import SECTIONS
+    from vinadv.report.render import PAGE_SECTIONS
 
     http_url, out = served
     url = http_url if via == "http" else out.joinpath("index.html").resolve().as_uri()
@@ -76,7 +84,9 @@ def test_report_opens_in_headless_chromium_without_errors(served, tmp_path, via)
     screenshot = folder / f"report-{via}.png"
     seen = _open_and_check(url, screenshot, chromium)
     assert seen["errors"] == [] and seen["failed"] == [] and seen["bad_status"] == []
-    assert seen["sections"] == [sid for sid, _ in SECTIONS]
+    assert seen["sections"] == [sid for sid, _ in PAGE_SECTIONS]
+    assert seen["widths"]["page"] <= seen["widths"]["window"], seen["widths"]
+    assert seen["widths"]["overflowing"] == []
     assert len(seen["images"]) >= 7
     missing = [img["src"] for img in seen["images"] if not img["complete"] or img["width"] == 0]
     assert missing == []

@@ -51,7 +51,7 @@ def test_export_jsonl_successful_only_by_run_name(stored, capsys):
     lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [d["pair_index"] for d in lines] == np.flatnonzero(records.attack).tolist()
     assert all(d["attack"] is True and d["label"] in ("UrP", "FP") and d["run_id"] == run_id for d in lines)
-    chosen = records.subset(records.attack)
+    chosen = records.take(records.attack)
     assert [d["harm"] for d in lines] == chosen.harm.tolist()  # None = null
     assert [d["regret_a"] for d in lines] == [None if np.isnan(v) else v for v in chosen.regret_a.tolist()]
 

@@ -104,6 +104,6 @@ def test_records_refuse_unknown_harm_values():
     with pytest.raises(InputError, match="harm: 'bad'"):
         fields = {f: getattr(records, f) for f in records.__dataclass_fields__}
         records.__class__(**{**fields, "harm": ["bad", None, None]})
-    part = records.subset([2, 0])
+    part = records.take([2, 0])
     assert part.harm.tolist() == [records.harm[2], records.harm[0]]
     assert np.array_equal(part.regret_a, records.regret_a[[2, 0]], equal_nan=True)

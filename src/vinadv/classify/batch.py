@@ -60,12 +60,6 @@ class PathPairBatch(Columns):
         return cls(path_o=PackedPaths.empty(), path_a=PackedPaths.empty(), goals=np.zeros((0, 2)), size=size)
 
     @classmethod
-    def from_arrays(cls, o_cells, o_offsets, a_cells, a_offsets, goals, size: int) -> PathPairBatch:
-        """From the packed arrays of both sides."""
-        return cls(path_o=PackedPaths(o_cells, o_offsets), path_a=PackedPaths(a_cells, a_offsets), goals=goals,
-                   size=size)
-
-    @classmethod
     def from_paths(cls, originals: Sequence, adversarials: Sequence, goals, size: int) -> PathPairBatch:
         """From two lists of `(L_i, 2)` cell arrays."""
         return cls(path_o=PackedPaths.pack(originals), path_a=PackedPaths.pack(adversarials), goals=goals, size=size)

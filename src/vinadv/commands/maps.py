@@ -56,18 +56,21 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    from vinadv.grid.draw import draw_map, save_figure
+    from vinadv.grid.draw import draw_map, map_legend, save_figure
     import matplotlib.pyplot as plt
 
     maps = MapSet.load(args.maps)
     if not 0 <= args.index < len(maps):
         raise InputError(f"--index {args.index} is out of range: {args.maps} has {len(maps)} maps")
-    starts = range(maps.n_starts) if args.all_starts else [0]
+    starts = list(range(maps.n_starts)) if args.all_starts else [0]
     paths = [("expert", maps.expert_path(args.index, s)) for s in starts]
-    fig, ax = plt.subplots(figsize=(4, 4))
-    cost = maps.expert_costs[args.index, 0]
-    draw_map(ax, maps.obstacles[args.index], maps.goals[args.index], maps.starts[args.index, 0], paths,
-             title=f"map {args.index}: expert cost {cost:.2f}")
+    costs = maps.expert_costs[args.index, starts]
+    title = (f"map {args.index}: expert cost {costs[0]:.2f}" if len(starts) == 1 else
+             f"map {args.index}: {len(starts)} starts, expert costs {costs.min():.2f}-{costs.max():.2f}")
+    fig, ax = plt.subplots(figsize=(4, 4.4))
+    draw_map(ax, maps.obstacles[args.index], maps.goals[args.index], maps.starts[args.index, starts], paths,
+             title=title)
+    map_legend(fig, ax)
     save_figure(fig, args.out)
     print(f"wrote {args.out}")
     return 0

@@ -42,8 +42,10 @@ def register(subparsers) -> None:
         "(table 7, measured now), the VIN's quality and the run's configuration; the paper's numbers beside ours.",
     )
     rep.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
-    rep.add_argument("--run", type=int, help="the run to report (default: the last of --runs, else the latest run)")
-    rep.add_argument("--runs", help="comma-separated run ids to compare in table 4 (say, one per attack strategy)")
+    rep.add_argument("--run", type=int,
+                     help="the main run to report (default: the first of --runs, else the latest run)")
+    rep.add_argument("--runs", help="comma-separated run ids to compare in table 4 and the classifier section (say, "
+                     "one per attack strategy); the first is the main run unless --run names one")
     rep.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     rep.add_argument("--json", action="store_true", help="print what was written and measured as JSON")
     rep.add_argument("--quiet", action="store_true", help="print nothing but errors")
@@ -102,7 +104,7 @@ def _f(value, width: int = 8, digits: int = 3) -> str:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from vinadv.report.html import build_report
+    from vinadv.report import build_report
 
     result = build_report(args.db, args.out, run_id=args.run, runs=_run_ids(args.runs))
     if args.json:
@@ -110,8 +112,9 @@ def cmd_report(args: argparse.Namespace) -> int:
     elif not args.quiet:
         timing = result.timing
         print(f"report of run {result.run_id}: {result.index} ({len(set(result.files))} files)")
-        print(f"100 stored pairs: rule {timing['rule_s']:.4f} s"
-              + (f", hybrid+SVM {timing['hybrid_svm_s']:.4f} s" if timing.get("hybrid_svm_s") is not None else "")
+        hybrid = timing["hybrid_svm_s"]
+        print(f"{timing['pairs']} stored pairs: rule {timing['rule_s']:.4f} s"
+              + "".join(f", hybrid+SVM ({setting}, from the evaluation) {s:.4f} s" for setting, s in hybrid.items())
               + f" (paper 0.22 s; manual ~300 s); read from the database {timing['read_s']:.4f} s"
               + ("" if result.evaluated else "; no classifier evaluation stored (see `vinadv evaluate`)"))
     return 0

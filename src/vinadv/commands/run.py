@@ -9,6 +9,7 @@ import time
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.cluster import add_cluster_arguments, open_cluster
 from vinadv.commands.attack import add_harm_arguments, add_objective_argument, attack_summary, print_counts
+from vinadv.errors import InputError
 
 
 def register(subparsers) -> None:
@@ -29,7 +30,11 @@ def register(subparsers) -> None:
     run.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     run.add_argument("--name", help="run name (needed to --resume)")
     run.add_argument("--resume", action="store_true", help="continue the latest run called --name")
-    run.add_argument("--report", metavar="DIR", help="also write the HTML report of the run to DIR")
+    run.add_argument("--report", metavar="DIR", help="also write the HTML report of the run to DIR, with the "
+                     "classifier comparison (tables 5, 6, figs. 8, 9; both settings, a quick profile) run first")
+    run.add_argument("--no-evaluate", action="store_true",
+                     help="with --report: skip the classifier comparison (a shorter report, without tables 5, 6 and "
+                     "figs. 8, 9)")
     run.add_argument("--json", action="store_true", help="print the summary as JSON")
     run.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
     add_cluster_arguments(run)
@@ -51,6 +56,8 @@ def register(subparsers) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     from vinadv.pipeline import RunConfig, run_pipeline  # scikit-learn behind it: imported for this command only
 
+    if args.no_evaluate and not args.report:
+        raise InputError("--no-evaluate: only with --report DIR")
     config = RunConfig(
         n=args.n, size=args.size, attack=args.attack, seed=args.seed, per_map=args.per_map, budget=args.budget,
         radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
@@ -62,11 +69,13 @@ def cmd_run(args: argparse.Namespace) -> int:
                                **_cluster_options(client))
     result = summary.to_dict()
     if args.report:
-        from vinadv.report import write_report
+        from vinadv.report import report_run
 
         t0 = time.perf_counter()
-        write_report(args.db, args.report, run_id=summary.run_id)
+        report = report_run(args.db, args.report, summary.run_id, evaluate=not args.no_evaluate,
+                            progress=not (args.quiet or args.json))
         result["report"] = args.report
+        result["comparison"] = report.comparison or "stored"
         result["seconds"]["report"] = round(time.perf_counter() - t0, 3)
     if args.json:
         print(json.dumps(result))
@@ -98,7 +107,9 @@ def _print_run(result: dict) -> None:
     print("time per stage: " + ", ".join(f"{s} {seconds[s]:.2f} s" for s in (*STAGES, "report") if s in seconds)
           + f"; wall {result['wall_seconds']:.2f} s")
     if "report" in result:
-        print(f"report: {result['report']}/index.html")
+        print(f"report: {result['report']}/index.html"
+              + ("" if result["comparison"] in ("stored", "skipped") else f" (no classifier comparison: "
+                 f"{result['comparison']})"))
 
 
 def cmd_identify(args: argparse.Namespace) -> int:

@@ -56,9 +56,6 @@ class Columns:
                 values[f.name] = value.take(idx)
         return type(self)(**values)
 
-    #: the old name of `take`, still called by the report and viewer code (owned elsewhere); new code uses `take`
-    subset = take
-
     @classmethod
     def concat(cls, parts: Sequence, **meta):
         """The rows of `parts` (objects of this type), in order. `meta`: values for `META` fields, which then

@@ -25,8 +25,9 @@ def draw_map(
 ) -> None:
     """Draw one N x N map on `ax`: obstacles black, start green circle, goal red star, paths as lines.
 
-    `paths` is a sequence of `(label, cells (L, 2))`; a label in PATH_STYLES gets its colour. `added` marks the
-    adversarial obstacle with an orange square.
+    `start` is one cell `(2,)` or several `(k, 2)` (each gets a marker). `paths` is a sequence of
+    `(label, cells (L, 2))`; a label in PATH_STYLES gets its colour. `added` marks the adversarial obstacle with an
+    orange square. Every artist carries its label, for `map_legend`.
     """
     n = obstacles.shape[0]
     ax.imshow(~np.asarray(obstacles, dtype=bool), cmap="gray", vmin=0, vmax=1, interpolation="nearest")
@@ -37,7 +38,9 @@ def draw_map(
     if added is not None:
         ax.add_patch(plt.Rectangle((added[1] - 0.5, added[0] - 0.5), 1, 1, color="#ff7f0e", label="added obstacle"))
     if start is not None:
-        ax.plot(start[1], start[0], "o", color="#2ca02c", ms=8, mec="k", label="start")
+        starts = np.asarray(start).reshape(-1, 2)
+        ax.plot(starts[:, 1], starts[:, 0], "o", color="#2ca02c", ms=8, mec="k", ls="none",
+                label="start" if len(starts) == 1 else "starts")
     if goal is not None:
         ax.plot(goal[1], goal[0], "*", color="#d62728", ms=13, mec="k", label="goal")
     ax.set_xlim(-0.5, n - 0.5)
@@ -46,6 +49,19 @@ def draw_map(
     ax.set_yticks([])
     if title:
         ax.set_title(title, fontsize=9)
+
+
+def map_legend(fig, axes, **kwargs) -> None:
+    """One legend for the maps of `fig` (the start and goal markers, the added obstacle, the paths), below them:
+    every labelled artist of `axes`, each label once."""
+    handles: dict = {}
+    for ax in np.asarray(axes).ravel():
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label, handle)
+    if handles:
+        options = {"loc": "lower center", "ncol": min(len(handles), 5), "fontsize": 8, "frameon": False,
+                   "bbox_to_anchor": (0.5, -0.02), **kwargs}
+        fig.legend(list(handles.values()), list(handles), **options)
 
 
 def save_figure(fig, path: str | os.PathLike) -> None:

@@ -22,7 +22,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import sqlalchemy as sa
 
 from vinadv.classify import (
     FP_DP_KINDS,
@@ -68,24 +67,18 @@ class RunPairs:
         return np.arange(self.n_fp_dp)
 
 
-def _batch_of(records) -> PathPairBatch:
-    return PathPairBatch.from_arrays(records.path_o_cells, records.path_o_offsets, records.path_a_cells,
-                                     records.path_a_offsets, records.goals, records.size)
+def batch_of(records) -> PathPairBatch:
+    """The path pairs of stored `PairRecords`, as the classifiers take them."""
+    return PathPairBatch.from_pairs(records)
 
 
 def load_run_pairs(store, run_id: int, seed: int = 0, max_other: int = MAX_OTHER_PAIRS) -> RunPairs:
     """Read the run's FP/DP pairs and up to `max_other` other pairs (a seeded sample) with their rule labels."""
     from vinadv.store import PairRecords
-    from vinadv.store.schema import map_pairs
 
-    with store.engine.connect() as conn:
-        rows = conn.execute(
-            sa.select(map_pairs.c.pair_index, map_pairs.c.label).where(map_pairs.c.run_id == int(run_id))
-        ).all()
-    if not rows:
+    index, labels = store.pair_labels(run_id)
+    if not len(index):
         raise InputError(f"run {run_id} has no stored pairs to evaluate on")
-    index = np.array([r[0] for r in rows], dtype=np.int64)
-    labels = np.array([r[1] for r in rows], dtype=object)
     # the feature stage is exact whatever labelled the run, so the stored FP/DP set is the rule's FP/DP set
     fp_dp = np.sort(index[np.isin(labels, ("DP", "FP"))])
     others = np.sort(index[~np.isin(labels, ("DP", "FP"))])
@@ -93,7 +86,7 @@ def load_run_pairs(store, run_id: int, seed: int = 0, max_other: int = MAX_OTHER
         others = np.sort(np.random.default_rng(seed).choice(others, max_other, replace=False))
     parts = [store.read_pairs(run_id, pair_indices=part) for part in (fp_dp, others) if len(part)]
     records = PairRecords.concat(parts)
-    batch = _batch_of(records)
+    batch = batch_of(records)
     t = default_threshold(batch.size)
     truth = label_batch(batch, t).labels
     return RunPairs(batch, truth, records.pair_index, len(fp_dp), t)
@@ -183,13 +176,13 @@ def evaluate_model(model, data: RunPairs, train: np.ndarray, test: np.ndarray, b
 
     Returns `(metrics, curves or None, training set size)`.
     """
-    train_batch, train_labels = data.batch.subset(train), data.truth[train]
+    train_batch, train_labels = data.batch.take(train), data.truth[train]
     if balanced:
         train_batch, train_labels = balance_batch(train_batch, train_labels, seed=seed)
     start = time.perf_counter()
     model.fit(train_batch, train_labels)
     training_s = time.perf_counter() - start
-    test_batch, truth = data.batch.subset(test), data.truth[test]
+    test_batch, truth = data.batch.take(test), data.truth[test]
     start = time.perf_counter()
     predicted = model.predict(test_batch)
     predict_s = time.perf_counter() - start
@@ -210,12 +203,12 @@ def five_way_check(model, data: RunPairs, train: np.ndarray, test: np.ndarray, s
     """Five-way labels of every read pair not used in training, against the rule; and the time for the paper's
     100-pair mix (median of a few repeats, classification only: the paths are in memory)."""
     unseen = np.setdiff1d(np.arange(len(data.truth)), train)
-    batch = data.batch.subset(unseen)
+    batch = data.batch.take(unseen)
     start = time.perf_counter()
     labels = model.predict(batch)
     seconds = time.perf_counter() - start
     mix = paper_mix(data.truth, test, seed)
-    mix_batch = data.batch.subset(mix)
+    mix_batch = data.batch.take(mix)
     return {
         "n": int(len(unseen)),
         "accuracy": float(np.mean(labels == data.truth[unseen])) if len(unseen) else None,
@@ -228,12 +221,15 @@ def five_way_check(model, data: RunPairs, train: np.ndarray, test: np.ndarray, s
     }
 
 
-def _make(kind: str, setting: str, seed: int, t: int):
+def _make(kind: str, setting: str, seed: int, t: int, max_epochs: int | None = None):
     if kind == "hybrid":
         return HybridClassifier(make_fp_classifier("svm", setting, seed), t=t)
     if kind == "rule":
         return RuleClassifier(t=t)
-    return make_fp_classifier(kind, setting, seed)
+    model = make_fp_classifier(kind, setting, seed)
+    if max_epochs is not None and hasattr(model, "epochs"):
+        model.epochs = min(model.epochs, int(max_epochs))  # a quicker comparison (the demo's), said on the page
+    return model
 
 
 def parse_list(text: str | Sequence[str] | None, allowed: Sequence[str], option: str) -> list[str]:
@@ -263,13 +259,16 @@ def parse_sizes(text: str | Sequence[float] | None) -> list[float]:
 
 def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, setting: str = "baseline",
                  sizes: Sequence[float] = DEFAULT_SIZES, seed: int = 0, progress: bool = False,
-                 write: bool = True) -> list[dict]:
+                 write: bool = True, max_epochs: int | None = None) -> list[dict]:
     """Run the comparison on the stored run `run_id` of `store` and (with `write`) store its rows.
 
-    Returns the rows (dicts with the `evaluations` columns, `metrics` and `curves` as dicts).
+    `max_epochs` caps the CNN's and MLP's epochs (None: the setting's, 10 or 20); each row's metrics record the
+    epochs used. Returns the rows (dicts with the `evaluations` columns, `metrics` and `curves` as dicts).
     """
     if setting not in SETTINGS:
         raise InputError(f"--setting: {setting!r} not in {','.join(SETTINGS)}")
+    if max_epochs is not None and int(max_epochs) < 1:
+        raise InputError(f"max_epochs: must be >= 1, got {max_epochs}")
     classifiers = parse_list(list(classifiers), CLASSIFIERS, "--classifiers")
     sizes = parse_sizes(list(sizes))
     store.run_info(run_id)
@@ -294,9 +293,11 @@ def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, s
         if bar is not None:
             bar.set_postfix_str(f"{kind} {training} {fraction:g}")
         subset = train if fraction >= 1.0 else nested_fraction(train, data.truth, fraction, seed)
-        model = _make(kind, setting, seed, data.t)
+        model = _make(kind, setting, seed, data.t, max_epochs)
         metrics, curves, train_size = evaluate_model(model, data, subset, test, training == "balanced", seed,
                                                      curves=fraction >= 1.0)
+        if hasattr(model, "epochs"):
+            metrics["epochs"] = int(model.epochs)
         if kind in ("hybrid", "rule"):
             metrics["five_way"] = five_way_check(model, data, subset, test, seed)
         if kind == "rule":  # nothing is trained
@@ -327,3 +328,98 @@ def _jsonable(value):
     if isinstance(value, (float, np.floating)):
         return None if not np.isfinite(value) else float(value)
     return value
+
+
+#: the comparison `vinadv run --report` (and so `make demo`) runs: every classifier, those with hyperparameters in
+#: both settings, on fewer training-set fractions and with the networks' epochs capped, to keep the demo short on
+#: 2 cores (the CNN is most of its time; the page and the README say so)
+QUICK_SIZES = (0.25, 0.5, 1.0)
+QUICK_MAX_EPOCHS = 2
+#: classifiers without a setting (the same model in both): compared once, in the baseline setting
+SETTINGLESS = ("hausdorff", "frechet", "dtw", "rule")
+
+
+def compare_for_report(store, run_id: int, settings: Sequence[str] = SETTINGS, sizes: Sequence[float] = QUICK_SIZES,
+                       max_epochs: int | None = QUICK_MAX_EPOCHS, seed: int = 0,
+                       progress: bool = False) -> tuple[list[dict], str | None]:
+    """The classifier comparison of `run_id` in each of `settings` (the settingless classifiers in the first only),
+    stored; `(rows, None)`, or `(rows so far, reason)` when the run cannot be compared (fewer than 2 FP or DP
+    pairs: nothing to split)."""
+    rows: list[dict] = []
+    for k, setting in enumerate(settings):
+        kinds = [c for c in CLASSIFIERS if k == 0 or c not in SETTINGLESS]
+        try:
+            rows += evaluate_run(store, run_id, kinds, setting, sizes, seed, progress=progress,
+                                 max_epochs=max_epochs)
+        except InputError as exc:
+            if "at least 2" not in str(exc):
+                raise
+            return rows, str(exc)
+    return rows, None
+
+
+# -------------------------------------------------------------------------------------- the VIN's quality
+
+QUICK_EVAL_MAPS = 50
+QUICK_EVAL_SEED = 20_240_601
+
+
+def vin_quality(config: dict, checksum: str | None, size: int) -> tuple[dict, str]:
+    """The quality of the VIN a run used: `(metrics, source)`; metrics as `vinadv.planners.evaluation.evaluate_vin`
+    (success_rate, optimal_rate, action_accuracy, ...), `{}` when the weights are not on this machine.
+
+    From a metrics JSON shipped next to the weights, else the training record inside the weights file, else a quick
+    evaluation now (`QUICK_EVAL_MAPS` fresh maps)."""
+    import json
+    from pathlib import Path
+
+    from vinadv.planners.weights import default_weights_path, weights_checksum
+
+    path = Path(config["weights"]) if config.get("weights") else default_weights_path(size)
+    if not path.exists():
+        return {}, f"not available: the run's weights file {path} is not on this machine"
+    if checksum and weights_checksum(path) != checksum:
+        return {}, f"not available: {path} is not the file the run used (its checksum differs)"
+    for candidate in (path.with_suffix(".metrics.json"), path.with_name(path.stem + "_metrics.json"),
+                      path.with_name(path.stem + "-metrics.json"), path.with_name(path.name + ".metrics.json"),
+                      path.with_suffix(".json")):
+        if candidate.exists():
+            try:
+                data = json.loads(candidate.read_text())
+            except (OSError, ValueError):
+                continue
+            found = _find_metrics(data)
+            if found:
+                return found, f"metrics file {candidate.name} shipped with the weights {path.name}"
+    from vinadv.grid.generator import generate_maps
+    from vinadv.planners.evaluation import evaluate_vin
+    from vinadv.planners.weights import load_vin
+
+    model = load_vin(path, size=size)
+    found = _find_metrics(getattr(model, "record", None) or {})
+    if found:
+        return found, f"the training record inside the weights file {path.name}"
+    maps = generate_maps(QUICK_EVAL_MAPS, size, seed=QUICK_EVAL_SEED,
+                         corner_cutting=bool(config.get("corner_cutting", True)))
+    start = time.perf_counter()
+    metrics = evaluate_vin(model, maps)
+    seconds = time.perf_counter() - start
+    return metrics, (f"quick evaluation while writing this report: {QUICK_EVAL_MAPS} fresh {size}x{size} maps "
+                     f"(seed {QUICK_EVAL_SEED}), {maps.n_starts} starts each, weights {path.name}, {seconds:.1f} s")
+
+
+def _find_metrics(data) -> dict | None:
+    """A dict holding `success_rate` and `optimal_rate` inside a metrics/record JSON (top level or nested)."""
+    if isinstance(data, dict):
+        if "success_rate" in data and "optimal_rate" in data:
+            return data
+        for value in data.values():
+            found = _find_metrics(value)
+            if found:
+                return found
+    elif isinstance(data, list):
+        for value in reversed(data):  # the last epoch / latest evaluation first
+            found = _find_metrics(value)
+            if found:
+                return found
+    return None

@@ -1,7 +1,9 @@
 """The report's figures (matplotlib, Agg backend), each saved as PNG and SVG.
 
 Every function takes plain data (arrays, dicts read from the database) and a path stem; it writes `stem.png`
-and `stem.svg` and returns their file names. Curves use scikit-learn's display helpers from stored points.
+and `stem.svg` and returns their file names. Curves use scikit-learn's display helpers from stored points. Map
+figures carry one legend for the start/goal markers, the added obstacle and the paths; SVG text stays text
+(searchable, selectable).
 """
 
 from __future__ import annotations
@@ -16,9 +18,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from vinadv.classify import render_path_images  # noqa: E402
-from vinadv.grid.draw import draw_map  # noqa: E402
+from vinadv.grid.draw import draw_map, map_legend  # noqa: E402
+from vinadv.vocabulary import STRENGTH_ORDER  # noqa: E402
 
-CATEGORY_ORDER = ("UrP", "FP", "DP", "UcP")  # the paper's fig. 3 and table 4 order
+CATEGORY_ORDER = STRENGTH_ORDER[:-1]  # UrP, FP, DP, UcP: the paper's fig. 3 and table 4 order (invalid last)
 CATEGORY_NAMES = {"UrP": "Unreached Path", "FP": "Fork Path", "DP": "Detour Path", "UcP": "Unchanged Path",
                   "invalid": "invalid (original path fails)"}
 FORMATS = ("png", "svg")
@@ -29,20 +32,29 @@ def save(fig, stem: Path) -> list[str]:
     names = []
     for fmt in FORMATS:
         path = stem.with_suffix(f".{fmt}")
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        with plt.rc_context({"svg.fonttype": "none"}):
+            fig.savefig(path, dpi=120, bbox_inches="tight")
         names.append(path.name)
     plt.close(fig)
     return names
 
 
 def _paths(records, i: int) -> tuple[np.ndarray, np.ndarray]:
-    o = records.path_o_cells[records.path_o_offsets[i] : records.path_o_offsets[i + 1]]
-    a = records.path_a_cells[records.path_a_offsets[i] : records.path_a_offsets[i + 1]]
+    o, a = records.path_o[i], records.path_a[i]
     return o, a
 
 
-def map_pair(records, i: int, stem: Path, with_paths: bool) -> list[str]:
-    """Figs. 1 and 2: pair `i` of `records`, original map next to adversarial map (with the planned paths)."""
+def _distances(pair) -> str:
+    """`dh 6, dv 2 (t 4)` of an `ExamplePair` (with 'FP by dh' when a distance over t makes it a fork)."""
+    if pair is None or pair.label not in ("FP", "DP"):
+        return ""
+    text = f"dh {pair.dh}, dv {pair.dv}, t {pair.t}"
+    return f"{text}: FP by {pair.deciding}" if pair.deciding else text
+
+
+def map_pair(records, i: int, stem: Path, with_paths: bool, distances=None) -> list[str]:
+    """Figs. 1 and 2: pair `i` of `records`, original map next to adversarial map (with the planned paths);
+    `distances`: the pair's `ExamplePair` (its dh/dv in the title)."""
     fig, axes = plt.subplots(1, 2, figsize=(7, 3.6))
     o, a = _paths(records, i)
     label = records.label[i]
@@ -52,12 +64,15 @@ def map_pair(records, i: int, stem: Path, with_paths: bool) -> list[str]:
     draw_map(axes[1], records.obstacles_a[i], records.goals[i], records.starts[i],
              paths=[("adversarial", a)] if with_paths else (), added=records.added[i],
              title="(b) adversarial path" if with_paths else "(b) the adversarial map (+1 obstacle, orange)")
-    fig.suptitle(f"pair {records.pair_index[i]} ({label})", fontsize=9)
+    extra = _distances(distances) if with_paths else ""
+    fig.suptitle(f"pair {records.pair_index[i]} ({label}{'; ' + extra if extra else ''})", fontsize=9)
+    map_legend(fig, axes)
     return save(fig, stem)
 
 
-def example_pairs(records, stem: Path, columns: int = 4) -> list[str]:
-    """Fig. 5: example map pairs, original (top) and adversarial (bottom) with both paths."""
+def example_pairs(records, stem: Path, columns: int = 4, distances=None) -> list[str]:
+    """Fig. 5: example map pairs, original (top) and adversarial (bottom) with both paths; `distances`: one
+    `ExamplePair` per record (FP/DP panels show dh/dv)."""
     n = len(records)
     columns = max(1, min(columns, n))
     rows = -(-n // columns)
@@ -74,13 +89,16 @@ def example_pairs(records, stem: Path, columns: int = 4) -> list[str]:
         draw_map(axes[r + 1, c], records.obstacles_a[i], records.goals[i], records.starts[i],
                  paths=[("original", o), ("adversarial", a)], added=records.added[i],
                  title=f"adversarial ({records.label[i]})")
+        if distances is not None:  # below the map: a second title line would run into the map above
+            axes[r + 1, c].set_xlabel(_distances(distances[i]), fontsize=8)
+    map_legend(fig, axes)
     return save(fig, stem)
 
 
-def categories(examples: dict, stem: Path) -> list[str]:
+def categories(examples: dict, stem: Path, distances: dict | None = None) -> list[str]:
     """Fig. 3: one pair per category (columns UrP, FP, DP, UcP): original map, adversarial map, path image.
 
-    `examples`: {label: (records, i)} for the categories the run has."""
+    `examples`: {label: (records, i)} for the categories the run has; `distances`: {label: ExamplePair}."""
     fig, axes = plt.subplots(3, len(CATEGORY_ORDER), figsize=(2.4 * len(CATEGORY_ORDER), 7.4), squeeze=False)
     for c, label in enumerate(CATEGORY_ORDER):
         column = axes[:, c]
@@ -95,14 +113,16 @@ def categories(examples: dict, stem: Path) -> list[str]:
         draw_map(column[0], records.obstacles_o[i], records.goals[i], records.starts[i], paths=[("original", o)],
                  title=f"({'abcd'[c]}) the {label}")
         draw_map(column[1], records.obstacles_a[i], records.goals[i], records.starts[i],
-                 paths=[("adversarial", a)], added=records.added[i])
-        image = render_path_images(o, np.array([0, len(o)]), a, np.array([0, len(a)]), records.size)[0]
+                 paths=[("adversarial", a)], added=records.added[i],
+                 title=_distances((distances or {}).get(label)) or None)
+        image = render_path_images(records.path_o.take([i]), records.path_a.take([i]), records.size)[0]
         column[2].imshow(image, interpolation="nearest")
         column[2].set_xticks([])
         column[2].set_yticks([])
     for r, name in enumerate(("original map", "adversarial map", "path image")):
         axes[r, 0].set_ylabel(name, fontsize=9)
         axes[r, 0].axis("on")
+    map_legend(fig, axes[:2])
     return save(fig, stem)
 
 
@@ -126,16 +146,19 @@ def category_bars(table: Sequence[tuple[str, dict]], paper: dict | None, stem: P
 def accuracy_vs_size(points: dict, stem: Path) -> list[str]:
     """Fig. 8: test accuracy against the training-set fraction, one line per classifier.
 
-    `points`: {classifier: [(fraction, train_size, accuracy), ...]}."""
-    fig, ax = plt.subplots(figsize=(5.2, 3.6))
-    for name, values in sorted(points.items()):
+    `points`: {(classifier, setting): [(fraction, train_size, accuracy), ...]}; one colour per classifier, solid
+    for the baseline setting, dashed for the tuned one."""
+    fig, ax = plt.subplots(figsize=(5.8, 3.8))
+    colours = {kind: f"C{k}" for k, kind in enumerate(sorted({kind for kind, _ in points}))}
+    for (kind, setting), values in sorted(points.items()):
         values = sorted(values)
-        ax.plot([100 * v[0] for v in values], [v[2] for v in values], "o-", label=name)
+        ax.plot([100 * v[0] for v in values], [v[2] for v in values], "o-" if setting == "baseline" else "s--",
+                color=colours[kind], label=f"{kind} ({setting})")
     ax.set_xlabel("training set used (% of the 70% split, balanced)")
     ax.set_ylabel("test accuracy")
     ax.set_ylim(0, 1.02)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     ax.set_title("accuracy vs training set size (fig. 8)", fontsize=9)
     return save(fig, stem)
 
@@ -145,7 +168,7 @@ def roc_pr_curves(curves: dict, stem: Path) -> list[str]:
     legend. `curves`: {training: {classifier: (curve points dict, roc_auc, ap)}}."""
     from sklearn.metrics import PrecisionRecallDisplay, RocCurveDisplay
 
-    fig, axes = plt.subplots(2, 2, figsize=(10, 9))
+    fig, axes = plt.subplots(2, 2, figsize=(10, 9), layout="constrained")  # titles clear of the x labels above
     axes = axes.ravel()
     panels = [("pr", "imbalanced", "(a) PR curve, imbalanced training"),
               ("pr", "balanced", "(b) PR curve, balanced training"),

@@ -321,7 +321,7 @@ class Store:
             # only the records' own index range: a resumed shard must not read the whole run
             stored = self.stored_indices(run_id, records.pair_index.min(), records.pair_index.max())
             if len(stored):
-                records = records.subset(~np.isin(records.pair_index, stored))
+                records = records.take(~np.isin(records.pair_index, stored))
         written = 0
         for lo in range(0, len(records), batch_size):
             hi = min(lo + batch_size, len(records))
@@ -578,6 +578,34 @@ class Store:
                 sa.select(map_pairs.c.label_source).where(map_pairs.c.run_id == int(run_id)).distinct()
             ).scalars().all()
         return sorted(rows)
+
+    # ------------------------------------------------------------------------------- reads for the report
+
+    def pair_labels(self, run_id: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every stored pair of the run without maps and paths: `(pair_index int64 (n,), label object (n,))`,
+        ordered by pair index (the report's and the evaluation's pair selection)."""
+        with self.engine.connect() as conn:
+            rows = conn.execute(
+                sa.select(map_pairs.c.pair_index, map_pairs.c.label)
+                .where(map_pairs.c.run_id == int(run_id))
+                .order_by(map_pairs.c.pair_index)
+            ).all()
+        index = np.fromiter((r[0] for r in rows), dtype=np.int64, count=len(rows))
+        labels = np.empty(len(rows), dtype=object)
+        labels[:] = [r[1] for r in rows]
+        return index, labels
+
+    def termination_counts(self, run_id: int, side: str = "o") -> dict[str, int]:
+        """Stored pairs per termination of the original (`side='o'`) or adversarial (`'a'`) path:
+        {termination: n}, only those present, sorted by name."""
+        if side not in ("o", "a"):
+            raise InputError(f"side: {side!r} is not 'o' or 'a'")
+        column = map_pairs.c[f"term_{side}"]
+        with self.engine.connect() as conn:
+            rows = conn.execute(
+                sa.select(column, sa.func.count()).where(map_pairs.c.run_id == int(run_id)).group_by(column)
+            ).all()
+        return {str(term): int(k) for term, k in sorted(rows)}
 
 
 def _sqlite_pragmas(dbapi_conn, _record) -> None:

@@ -316,8 +316,7 @@ class _ViewerState:
 
     def pair_json(self, run_id: int, pair_index: int) -> dict:
         r = self.require_pair(run_id, pair_index)
-        o = r.path_o_cells[r.path_o_offsets[0]:r.path_o_offsets[1]]
-        a = r.path_a_cells[r.path_a_offsets[0]:r.path_a_offsets[1]]
+        o, a = r.path_o[0], r.path_a[0]
         return {
             "run_id": run_id, "pair_index": pair_index, "no": int(r.no[0]), "size": r.size,
             "label": r.label[0], "attack": bool(r.attack[0]), "label_source": r.label_source[0],

@@ -1,0 +1,102 @@
+"""`vinadv report`: the paper's evaluation of a stored run as one self-contained HTML page, figures and CSV tables.
+
+`build_report(db, out_dir, run_id=None, runs=None)` gathers every section (`vinadv.report.gather`: the database
+through `Store`, computations through `vinadv.report.evaluate`) and renders it (`vinadv.report.render`: Jinja2
+templates, one stylesheet, CSV files) into `out_dir`: `index.html` (relative links only, no script, no external
+resource), PNG + SVG figures and CSV tables. `report_run` first runs the classifier comparison of a fresh run (what
+`vinadv run --report` does). The paper's numbers are shown beside ours wherever the paper has one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from vinadv.errors import InputError
+from vinadv.report.gather import SECTIONS, Context, gather_report
+from vinadv.report.render import render_report
+
+__all__ = ["SECTIONS", "ReportResult", "build_report", "report_run", "write_report"]
+
+
+@dataclass
+class ReportResult:
+    """What `build_report` wrote and measured."""
+
+    index: Path
+    run_id: int
+    runs: list[int]
+    files: list[str] = field(default_factory=list)
+    timing: dict = field(default_factory=dict)
+    vin: dict = field(default_factory=dict)
+    evaluated: bool = False
+    comparison: str | None = None  # why `report_run` ran no comparison, if it did not
+
+    def to_dict(self) -> dict:
+        return {"index": str(self.index), "run_id": self.run_id, "runs": self.runs, "files": self.files,
+                "timing": self.timing, "vin": self.vin, "evaluated": self.evaluated, "comparison": self.comparison}
+
+
+def write_report(db: str | None, out_dir, run_id: int | None = None, runs: list[int] | None = None) -> Path:
+    """Write the report to `out_dir` (see `build_report`); return the path of `index.html`."""
+    return build_report(db, out_dir, run_id=run_id, runs=runs).index
+
+
+def build_report(db: str | None, out_dir, run_id: int | None = None, runs: list[int] | None = None) -> ReportResult:
+    """Write the report of the main run to `out_dir` and return what was written and measured.
+
+    The main run is `run_id`, else the first of `runs`, else the latest run. Table 4 and the classifier section
+    show every run of `runs` (the main run first; default: just the main run), each with its stored evaluation.
+    """
+    from vinadv.store import Store
+
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"out_dir {out}: exists and is not a directory")
+    with Store.open(db, create=False) as store:
+        ctx = _context(store, out, run_id, runs)
+        out.mkdir(parents=True, exist_ok=True)
+        data = gather_report(ctx)
+    index = render_report(data, out)
+    vin, timing = data.sections["vin"], data.sections["timing"]
+    return ReportResult(
+        index=index, run_id=ctx.run_id, runs=ctx.compare, files=[*data.files(), "style.css"],
+        timing={"pairs": timing.pairs, "counts": timing.counts, "read_s": timing.read_s, "rule_s": timing.rule_s,
+                "hybrid_svm_s": {setting: s for setting, _, s in timing.hybrid}},
+        vin={"source": vin.source, **{k: vin.metrics.get(k) for k in ("success_rate", "optimal_rate",
+                                                                       "action_accuracy")},
+             "run_original_reached": vin.reached / vin.total if vin.total else None},
+        evaluated=any(ev.main for ev in data.sections["classifiers"].evaluations),
+    )
+
+
+def report_run(db: str | None, out_dir, run_id: int, *, evaluate: bool = True, progress: bool = False) -> ReportResult:
+    """The report of a fresh run, with its classifier comparison (`evaluate.compare_for_report`: both settings,
+    the quick profile) run and stored first unless `evaluate` is False or the run has a stored evaluation."""
+    from vinadv.report.evaluate import compare_for_report
+    from vinadv.store import Store
+
+    reason = None
+    if evaluate:
+        with Store.open(db, create=False) as store:
+            if not store.read_evaluations(run_id):
+                _, reason = compare_for_report(store, run_id, progress=progress)
+    result = build_report(db, out_dir, run_id=run_id)
+    result.comparison = reason if evaluate else "skipped"
+    return result
+
+
+def _context(store, out: Path, run_id: int | None, runs: list[int] | None) -> Context:
+    listed = store.list_runs()
+    if not listed:
+        raise InputError(f"database {store.url}: no runs stored yet (run `vinadv run` first)")
+    known = {int(r["id"]): r for r in listed}
+    for rid in [*(runs or []), *([run_id] if run_id is not None else [])]:
+        if int(rid) not in known:
+            raise InputError(f"run_id: no run {rid} in database {store.url} (runs: "
+                             f"{', '.join(str(k) for k in sorted(known))})")
+    main = int(run_id) if run_id is not None else int(runs[0]) if runs else max(known)
+    compare = [main, *(int(r) for r in dict.fromkeys(runs or []) if int(r) != main)]
+    if known[main]["n_pairs"] == 0:
+        raise InputError(f"run {main} has no stored pairs")
+    return Context(store=store, out=out, run_id=main, compare=compare, runs=known)

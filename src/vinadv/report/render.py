@@ -1,0 +1,94 @@
+"""Render: the gathered `ReportData` as files. `index.html` from the Jinja2 templates in `templates/` (autoescaped),
+the one stylesheet `style.css` copied beside it, and every `Table` as a CSV file. Formatting of numbers lives in
+the filters below, so the gathered data stays numbers."""
+
+from __future__ import annotations
+
+import csv
+import math
+import numbers
+import shutil
+from importlib import resources
+from pathlib import Path
+
+import jinja2
+
+from vinadv.report import paper
+from vinadv.report.gather import ALL_LABELS, CATEGORY_ORDER, SECTIONS, ReportData
+
+STYLESHEET = "style.css"
+#: the page's sections in order, `(id, heading)`: the gathered ones and the list of files
+PAGE_SECTIONS = (*((sid, title) for sid, title, _ in SECTIONS), ("files", "Files"))
+
+
+def num(value, digits: int = 3) -> str:
+    """`1,234` for integers, `0.913` for floats, an em dash for None/NaN."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "—"
+    if isinstance(value, numbers.Integral):
+        return f"{int(value):,}"
+    return f"{float(value):.{digits}f}"
+
+
+def pct(value) -> str:
+    return "—" if value is None else f"{100.0 * float(value):.1f}%"
+
+
+def share(part, total) -> str:
+    """`12.3%` of `total` (an em dash when it is 0)."""
+    return pct(part / total) if total else "—"
+
+
+def seconds(value) -> str:
+    """A duration in the unit that reads best: `12 s`, `0.25 s`, `3.1 ms`, `40 µs`."""
+    if value is None:
+        return "—"
+    value = float(value)
+    if value >= 10:
+        return f"{value:,.0f} s"
+    if value >= 0.1:
+        return f"{value:.2f} s"
+    if value >= 1e-3:
+        return f"{1e3 * value:.1f} ms"
+    return f"{1e6 * value:.0f} µs"
+
+
+def counts(values) -> str:
+    """`DP 12, FP 3` of a {label: n} dict."""
+    return ", ".join(f"{k} {v:,}" for k, v in sorted((values or {}).items())) or "—"
+
+
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(loader=jinja2.PackageLoader("vinadv.report", "templates"),
+                             autoescape=jinja2.select_autoescape(default=True), undefined=jinja2.StrictUndefined,
+                             trim_blocks=True, lstrip_blocks=True)
+    env.filters.update(num=num, pct=pct, seconds=seconds, counts=counts)
+    env.globals.update(share=share, fmt_seconds=seconds, paper=paper, CATEGORY_ORDER=CATEGORY_ORDER,
+                       ALL_LABELS=ALL_LABELS)
+    return env
+
+
+def render_page(data: ReportData) -> str:
+    """The HTML of `index.html` for `data`."""
+    sections = [(sid, title) for sid, title in PAGE_SECTIONS if sid in data.sections or sid == "files"]
+    return _environment().get_template("report.html").render(
+        data=data, s=data.sections, sections=sections, files=data.files(), stylesheet=STYLESHEET)
+
+
+def write_tables(data: ReportData, out: Path) -> None:
+    for table in data.tables():
+        with open(out / table.name, "w", newline="") as fh:
+            writer = csv.writer(fh)
+            writer.writerow(table.header)
+            writer.writerows([["" if v is None else v for v in row] for row in table.rows])
+
+
+def render_report(data: ReportData, out: Path) -> Path:
+    """Write the CSV tables, the stylesheet and `index.html` of `data` into `out`; return the page's path."""
+    out = Path(out)
+    write_tables(data, out)
+    with resources.as_file(resources.files("vinadv.report") / "templates" / STYLESHEET) as css:
+        shutil.copyfile(css, out / STYLESHEET)
+    index = out / "index.html"
+    index.write_text(render_page(data), encoding="utf-8")
+    return index
