@@ -15,16 +15,13 @@ from typing import Any
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.outfile import atomic_output
 
 
 def save_npz(path: str | os.PathLike, fmt: str, arrays: Mapping[str, Any]) -> None:
     """Write `arrays` plus `format=fmt` to `path`, atomically (a crash never leaves half a file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as fh:
+    with atomic_output(path, "wb", mkdir=True) as fh:
         np.savez(fh, format=np.array(fmt), **{k: np.asarray(v) for k, v in arrays.items()})
-    os.replace(tmp, path)
 
 
 class NpzReader:

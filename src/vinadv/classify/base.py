@@ -19,6 +19,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 
 from vinadv.errors import InputError
+from vinadv.outfile import atomic_output
 
 MODEL_FORMAT = "vinadv.classifier/1"
 #: The two classes of the image classifiers, in scikit-learn order (`decision_function > 0` means FP).
@@ -95,7 +96,7 @@ def save_model(model: PairClassifier, path, record: dict | None = None, record_a
     header, arrays = _pack_state(model)
     entries = {f"a.{k}": np.asarray(v) for k, v in arrays.items()}
     entries.update({f"r.{k}": np.asarray(v) for k, v in (record_arrays or {}).items()})
-    with open(path, "wb") as handle:  # a file handle keeps the user's name (np.savez would append .npz)
+    with atomic_output(path, "wb") as handle:  # a file handle keeps the user's name (np.savez would append .npz)
         np.savez_compressed(
             handle,
             format=np.array(MODEL_FORMAT),

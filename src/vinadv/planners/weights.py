@@ -20,6 +20,7 @@ from typing import Any
 import torch
 
 from vinadv.errors import InputError
+from vinadv.outfile import atomic_output
 from vinadv.planners.vin import VIN, VINConfig, default_k
 
 WEIGHTS_FORMAT = "vinadv.vin/1"
@@ -46,8 +47,6 @@ def save_vin(model: VIN, path: str | os.PathLike, record: dict | None = None) ->
 
     `record` must hold only JSON-like values (dict, list, str, int, float, bool, None).
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     # Through JSON: the record must load under weights_only=True (plain types only; torch.__version__, for one,
     # is a str subclass that the safe loader refuses).
     try:
@@ -61,9 +60,8 @@ def save_vin(model: VIN, path: str | os.PathLike, record: dict | None = None) ->
         "state_dict": state,
         "record": record,
     }
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save(payload, tmp)
-    os.replace(tmp, path)
+    with atomic_output(path, "wb", mkdir=True) as fh:
+        torch.save(payload, fh)
 
 
 def read_weights(path: str | os.PathLike, size: int = 28, k: int | None = None) -> tuple[VIN, dict]:

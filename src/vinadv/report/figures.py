@@ -17,6 +17,7 @@ import numpy as np  # noqa: E402
 
 from vinadv.classify import render_path_images  # noqa: E402
 from vinadv.grid.draw import draw_map  # noqa: E402
+from vinadv.outfile import atomic_output  # noqa: E402
 
 CATEGORY_ORDER = ("UrP", "FP", "DP", "UcP")  # the paper's fig. 3 and table 4 order
 CATEGORY_NAMES = {"UrP": "Unreached Path", "FP": "Fork Path", "DP": "Detour Path", "UcP": "Unchanged Path",
@@ -29,7 +30,8 @@ def save(fig, stem: Path) -> list[str]:
     names = []
     for fmt in FORMATS:
         path = stem.with_suffix(f".{fmt}")
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        with atomic_output(path, "wb") as fh:
+            fig.savefig(fh, format=fmt, dpi=120, bbox_inches="tight")
         names.append(path.name)
     plt.close(fig)
     return names

@@ -23,6 +23,7 @@ import sqlalchemy as sa
 
 from vinadv import __version__
 from vinadv.errors import InputError
+from vinadv.outfile import atomic_output
 from vinadv.report.evaluate import TIMING_REPEATS, median_seconds
 
 #: the paper's numbers (Wang et al., tables 4-7 and section 5.2)
@@ -72,22 +73,21 @@ def write_report(db: str | None, out_dir, run_id: int | None = None, runs: list[
     return build_report(db, out_dir, run_id=run_id, runs=runs).index
 
 
-def build_report(db: str | None, out_dir, run_id: int | None = None, runs: list[int] | None = None) -> ReportResult:
-    """`write_report`, returning what was written and measured."""
+def build_report(db: str | None, out_dir, run_id: int | str | None = None,
+                 runs: list[int | str] | None = None) -> ReportResult:
+    """`write_report`, returning what was written and measured. Runs are ids or names (`Store.resolve_run`)."""
     from vinadv.store import Store
 
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out}: exists and is not a directory")
-    with Store.open(db, create=False) as store:
+    with Store.open(db, readonly=True) as store:
         listed = store.list_runs()
         if not listed:
             raise InputError(f"database {store.url}: no runs stored yet (run `vinadv run` first)")
         known = {int(r["id"]): r for r in listed}
-        for rid in [*(runs or []), *([run_id] if run_id is not None else [])]:
-            if int(rid) not in known:
-                raise InputError(f"--run/--runs: no run {rid} in database {store.url} (runs: "
-                                 f"{', '.join(str(k) for k in sorted(known))})")
+        runs = None if runs is None else [store.resolve_run(r, "--runs") for r in runs]
+        run_id = None if run_id is None else store.resolve_run(run_id)
         primary = int(run_id) if run_id is not None else int(runs[-1]) if runs else max(known)
         compare = [int(r) for r in runs] if runs else [primary]
         if primary not in compare:
@@ -175,7 +175,7 @@ class _Builder:
                 f"<figcaption>{_esc(caption)}{link}</figcaption></figure>")
 
     def csv(self, name: str, header: list[str], rows: list[list]) -> str:
-        with open(self.out / name, "w", newline="") as fh:
+        with atomic_output(self.out / name, "w", newline="") as fh:
             writer = csv.writer(fh)
             writer.writerow(header)
             writer.writerows([["" if v is None else v for v in row] for row in rows])
@@ -195,7 +195,8 @@ class _Builder:
         self.sections["classifiers"] = self.section_classifiers()
         self.sections["timing"] = self.section_timing()
         self.sections["files"] = self.section_files()
-        self.result.index.write_text(self.page(), encoding="utf-8")
+        with atomic_output(self.result.index, "w", encoding="utf-8") as fh:
+            fh.write(self.page())
 
     def page(self) -> str:
         title = f"vinadv report: run {self.run_id}" + (f" ({self.info['name']})" if self.info.get("name") else "")
