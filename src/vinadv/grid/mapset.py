@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vinadv.grid.checks import check_maps
 from vinadv.npzfile import NpzReader, check_cells_in_grid, check_offsets, save_npz
 
 MAPS_FORMAT = "vinadv.maps/1"
@@ -91,6 +92,7 @@ class MapSet:
             raise r.fail("starts", "has a start on an obstacle")
         if np.any(~np.isfinite(costs)) or np.any(costs < 0):
             raise r.fail("expert_costs", "has a negative or non-finite cost")
+        check_maps(r.path, obstacles, goals, starts, cells, offsets, bool(r.scalar("corner_cutting", "b", default=True)))
         return cls(
             obstacles=obstacles.astype(bool),
             goals=goals,

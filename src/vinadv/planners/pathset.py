@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vinadv.grid.checks import check_paths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, check_offsets, save_npz
 from vinadv.planners.result import TERMINATIONS, PlanResult
 
@@ -85,6 +86,7 @@ class PathSet:
             raise r.fail("termination", f"has '{termination[bad][0]}', expected one of {', '.join(TERMINATIONS)}")
         if not np.array_equal(reached, termination == "goal"):
             raise r.fail("reached", "disagrees with 'termination' (reached means termination == 'goal')")
+        check_paths(r.path, "path_cells", cells, offsets, size)
         cells = cells.astype(np.int16)
         if len(cells) > 1:
             step = np.abs(np.diff(cells.astype(np.int64), axis=0)).max(axis=1)
