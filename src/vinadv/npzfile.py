@@ -35,8 +35,8 @@ class NpzReader:
             raise InputError(f"{self.path}: not an .npz file (not a zip archive)")
         try:
             self._data = dict(np.load(self.path, allow_pickle=False))
-        except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
-            raise InputError(f"{self.path}: not a readable .npz file ({exc})") from None
+        except Exception as exc:  # noqa: BLE001 - zipfile and numpy raise a dozen types for a damaged archive
+            raise InputError(f"{self.path}: not a readable .npz file ({_first_line(exc)})") from None
         found = self._data.get("format")
         found = str(found) if found is not None and found.ndim == 0 else None
         if found != fmt:
@@ -90,6 +90,11 @@ class NpzReader:
 
 
 _KIND_NAMES = {"b": "bool", "i": "integer", "f": "float", "U": "string"}
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
 
 
 def check_cells_in_grid(reader: NpzReader, name: str, cells: np.ndarray, size: int) -> None:
