@@ -3,10 +3,13 @@ the bad-input tests (tests/grid/test_checks.py, tests/test_fuzz_loaders.py)."""
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import subprocess
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 SIZE = 10
 
@@ -99,3 +102,18 @@ def rewrite_npz(src: Path, dst: Path, **changes) -> Path:
     with open(dst, "wb") as fh:
         np.savez(fh, **arrays)
     return dst
+
+
+@contextlib.contextmanager
+def tmpfs(path: Path, size: str = "4M", options: str = ""):
+    """A small tmpfs mounted at `path` (`options` like ",ro"): a full or read-only file system for a test. Root
+    only; the test is skipped where mounting is not allowed."""
+    path.mkdir(parents=True, exist_ok=True)
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}{options}", "tmpfs", str(path)],
+                          capture_output=True)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
+    try:
+        yield path
+    finally:
+        subprocess.run(["umount", "-l", str(path)], check=False)

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import os
 import signal
 import subprocess
@@ -15,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.fault_files import tmpfs
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.pipeline import RunConfig, run_pipeline
@@ -38,19 +38,6 @@ def _args(weights, db, *extra, n=60, shard=20):
             "--db", db, "--quiet", *extra]
 
 
-@contextlib.contextmanager
-def _tmpfs(path: Path, size: str, options: str = ""):
-    path.mkdir(parents=True, exist_ok=True)
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}{options}", "tmpfs", str(path)],
-                          capture_output=True)
-    if done.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
-    try:
-        yield path
-    finally:
-        subprocess.run(["umount", "-l", str(path)], check=False)
-
-
 def _one_line(err: str) -> str:
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("vinadv: error: "), err
@@ -72,7 +59,7 @@ def test_run_name_taken_is_refused_without_resume(weights, tmp_path, capsys):
 
 
 def test_full_disk_during_a_run_is_one_line_with_the_resume_hint(weights, tmp_path):
-    with _tmpfs(tmp_path / "full", "2M") as folder:
+    with tmpfs(tmp_path / "full", "2M") as folder:
         db = str(folder / "full.db")
         done = subprocess.run([sys.executable, "-m", "vinadv.cli", *_args(weights, db, "--name", "big", n=3000,
                                                                             shard=500)],
@@ -171,7 +158,7 @@ def test_a_directory_as_out_is_one_line(tmp_path, capsys):
 
 
 def test_read_only_target_is_one_line_and_leaves_nothing(tmp_path, capsys):
-    with _tmpfs(tmp_path / "ro", "1M", ",ro") as folder:
+    with tmpfs(tmp_path / "ro", "1M", ",ro") as folder:
         assert main(_maps(str(folder / "m.npz"))) == 2
         line = _one_line(capsys.readouterr().err)
         assert "m.npz" in line and "read-only" in line
@@ -179,7 +166,7 @@ def test_read_only_target_is_one_line_and_leaves_nothing(tmp_path, capsys):
 
 
 def test_full_disk_output_is_one_line_and_leaves_no_temp_file(tmp_path, capsys):
-    with _tmpfs(tmp_path / "full", "64k") as folder:
+    with tmpfs(tmp_path / "full", "64k") as folder:
         (folder / "m.npz").write_bytes(b"old")
         assert main(["maps", "generate", "--n", "200", "--size", "16", "--out", str(folder / "m.npz"),
                      "--quiet"]) == 2

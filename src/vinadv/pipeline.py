@@ -206,7 +206,7 @@ def run_pipeline(
     with Store.open(db) as store:
         run_id = open_run(store, config, name, resume, checksum, classifier_name)
         summary = RunSummary(run_id, name, store.url)
-        shards = list(range(config.n_shards))
+        shards = range(config.n_shards)  # a range, not a list: a huge --n streams shard by shard
         if resume:
             summary.skipped_shards = _complete_shards(store, run_id, config)
             shards = shards[summary.skipped_shards:]

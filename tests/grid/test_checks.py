@@ -43,26 +43,15 @@ def test_valid_files_load(files):
 
 # ---------------------------------------------------------------------------------------------------- pairs
 
-def test_pairs_added_obstacle_on_the_start(files, tmp_path):
+@pytest.mark.parametrize("k, onto", [(3, "start"), (1, "goal")])
+def test_pairs_added_obstacle_on_the_start_or_goal(files, tmp_path, k, onto):
     a = read_npz(files["pairs"])
-    k = 3
     added, obs_a = a["added"].copy(), a["obstacles_a"].copy()
-    added[k] = a["starts"][k]
+    added[k] = a[f"{onto}s"][k]
     obs_a[k] = a["obstacles_o"][k]
     obs_a[k, added[k, 0], added[k, 1]] = True  # consistent with obstacles_o + added: only the place is wrong
     bad = rewrite_npz(files["pairs"], tmp_path / "bad.npz", added=added, obstacles_a=obs_a)
-    assert "is on the start" in _refused(PairSet.load, bad, "added", f"pair {k}")
-
-
-def test_pairs_added_obstacle_on_the_goal(files, tmp_path):
-    a = read_npz(files["pairs"])
-    k = 1
-    added, obs_a = a["added"].copy(), a["obstacles_a"].copy()
-    added[k] = a["goals"][k]
-    obs_a[k] = a["obstacles_o"][k]
-    obs_a[k, added[k, 0], added[k, 1]] = True
-    bad = rewrite_npz(files["pairs"], tmp_path / "bad.npz", added=added, obstacles_a=obs_a)
-    assert "is on the goal" in _refused(PairSet.load, bad, "added", f"pair {k}")
+    assert f"is on the {onto}" in _refused(PairSet.load, bad, "added", f"pair {k}")
 
 
 def _longest(a: dict, side: str) -> int:

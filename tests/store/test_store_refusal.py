@@ -6,7 +6,6 @@ SQLAlchemy's traceback with the SQL parameters.)
 
 from __future__ import annotations
 
-import contextlib
 import os
 import sqlite3
 import subprocess
@@ -17,6 +16,7 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
+from tests.fault_files import tmpfs
 from vinadv.cli import main
 from vinadv.errors import InputError, OutputError
 from vinadv.store import Store
@@ -86,25 +86,12 @@ def test_refused_database_cli_exit_2_and_untouched(tmp_path, capsys):
     assert _snapshot(folder) == before
 
 
-@contextlib.contextmanager
-def _tmpfs(path: Path, size: str = "4M"):
-    """A small tmpfs at `path` (root only; the test is skipped where mounting is not allowed)."""
-    path.mkdir(parents=True, exist_ok=True)
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)], capture_output=True)
-    if done.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
-    try:
-        yield path
-    finally:
-        subprocess.run(["umount", "-l", str(path)], check=False)
-
-
 def _remount_readonly(path: Path) -> None:
     subprocess.run(["mount", "-o", "remount,ro", str(path)], check=True)
 
 
 def test_read_only_database_can_be_read(tmp_path):
-    with _tmpfs(tmp_path / "ro") as folder:
+    with tmpfs(tmp_path / "ro") as folder:
         url = str(folder / "runs.db")
         records = random_records(30, size=7, seed=2)
         with Store.open(url) as store:
@@ -127,7 +114,7 @@ def test_read_only_database_can_be_read(tmp_path):
 
 def test_read_only_database_report(tmp_path):
     """`report` opens the database read-only too (a file on a read-only file system)."""
-    with _tmpfs(tmp_path / "ro") as folder:
+    with tmpfs(tmp_path / "ro") as folder:
         url = str(folder / "runs.db")
         with Store.open(url) as store:
             store.write_pairs(store.create_run("kept", attack="random"), random_records(12, size=7, seed=2))
@@ -141,7 +128,7 @@ def test_read_only_database_report(tmp_path):
 
 
 def test_full_disk_while_writing_is_one_line_naming_the_database(tmp_path):
-    with _tmpfs(tmp_path / "full", size="3M") as folder:
+    with tmpfs(tmp_path / "full", size="3M") as folder:
         url = str(folder / "full.db")
         with Store.open(url) as store:
             run_id = store.create_run("big")

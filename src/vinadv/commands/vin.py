@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from vinadv.errors import InputError
-from vinadv.outfile import atomic_output
+from vinadv.outfile import atomic_output, check_output_path
 
 
 def register(subparsers) -> None:
@@ -82,6 +82,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                          seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit,
                          init=args.init, warmup_steps=args.warmup)
     config.validate()
+    check_output_path(args.out, mkdir=True)  # before hours of training: a folder in the way
     maps = MapSet.load(args.data)
     if len(maps) < 2:
         raise InputError(f"{args.data}: {len(maps)} maps; training needs at least 2")

@@ -12,7 +12,7 @@ Generation is vectorised over maps and runs in chunks of `chunk_maps(size)` maps
 not depend on n being larger, and chunks can be made anywhere (a cluster worker) without a shared RNG.
 
 Limits (InputError naming them, before any work): a size where one map's working memory (placement attempts x
-cells, ~`WORK_BYTES_PER_CELL` bytes each) exceeds half the available memory (about 250x250 on a 16 GiB machine),
+cells, ~`WORK_BYTES_PER_CELL` bytes each) exceeds half the available memory (about 390x390 with 16 GiB available),
 and an `n` whose maps would take more than half the available memory (the output is held in memory).
 """
 

@@ -20,7 +20,6 @@ server) is raised as `OutputError` (an InputError) naming the database in one li
 
 from __future__ import annotations
 
-import contextlib
 import datetime as dt
 import os
 import sqlite3
@@ -263,8 +262,11 @@ class Store:
         when there is no such run."""
         text = str(ref).strip()
         if text.isdigit():
-            if not self.list_runs(with_counts=False) or int(text) not in {
-                    int(r["id"]) for r in self.list_runs(with_counts=False)}:
+            found = None
+            if int(text) < 2**63:  # a larger number is no id (and no SQL integer)
+                with self.engine.connect() as conn:
+                    found = conn.execute(sa.select(runs.c.id).where(runs.c.id == int(text))).scalar_one_or_none()
+            if found is None:
                 raise InputError(f"{flag}: no run {text} in database {self.url}")
             return int(text)
         found = self.find_run(text) if text else None
