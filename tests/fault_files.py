@@ -14,14 +14,14 @@ import pytest
 SIZE = 10
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _maps(n_starts: int):
     from vinadv.grid import generate_maps
 
     return generate_maps(12, SIZE, seed=3, n_starts=n_starts)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _model():
     from vinadv.planners.testing import planning_vin
 
@@ -109,7 +109,7 @@ def tmpfs(path: Path, size: str = "4M", options: str = ""):
     """A small tmpfs mounted at `path` (`options` like ",ro"): a full or read-only file system for a test. Root
     only; the test is skipped where mounting is not allowed."""
     path.mkdir(parents=True, exist_ok=True)
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}{options}", "tmpfs", str(path)],
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}{options}", "tmpfs", str(path)], check=False,
                           capture_output=True)
     if done.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")

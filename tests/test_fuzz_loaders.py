@@ -16,7 +16,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.fault_files import (
-    read_npz, write_classifier, write_database, write_maps, write_pairs, write_paths, write_weights,
+    read_npz,
+    write_classifier,
+    write_database,
+    write_maps,
+    write_pairs,
+    write_paths,
+    write_weights,
 )
 from vinadv.errors import InputError
 

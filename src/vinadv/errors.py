@@ -32,6 +32,12 @@ _HINTS = {
 }
 
 
+def first_line(exc: BaseException) -> str:
+    """The first line of an exception's message (its type name when it has none): for one-line errors."""
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
 def os_error_message(exc: OSError, path: str | os.PathLike | None = None) -> str:
     """One line for an OSError: the path it concerns (`path`, else the error's own) and what went wrong."""
     where = path if path is not None else exc.filename

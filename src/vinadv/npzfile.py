@@ -9,12 +9,11 @@ import json
 import os
 import zipfile
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vinadv.errors import InputError
+from vinadv.errors import InputError, first_line
 from vinadv.outfile import atomic_output
 
 
@@ -36,7 +35,7 @@ class NpzReader:
         try:
             self._data = dict(np.load(self.path, allow_pickle=False))
         except Exception as exc:  # noqa: BLE001 - zipfile and numpy raise a dozen types for a damaged archive
-            raise InputError(f"{self.path}: not a readable .npz file ({_first_line(exc)})") from None
+            raise InputError(f"{self.path}: not a readable .npz file ({first_line(exc)})") from None
         found = self._data.get("format")
         found = str(found) if found is not None and found.ndim == 0 else None
         if found != fmt:
@@ -90,11 +89,6 @@ class NpzReader:
 
 
 _KIND_NAMES = {"b": "bool", "i": "integer", "f": "float", "U": "string"}
-
-
-def _first_line(exc: BaseException) -> str:
-    text = str(exc).strip()
-    return text.splitlines()[0] if text else type(exc).__name__
 
 
 def check_cells_in_grid(reader: NpzReader, name: str, cells: np.ndarray, size: int) -> None:

@@ -6,7 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.fault_files import read_npz, rewrite_npz, write_maps, write_pairs, write_paths
+from tests.fault_files import (
+    read_npz,
+    rewrite_npz,
+    write_maps,
+    write_pairs,
+    write_paths,
+)
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.errors import InputError

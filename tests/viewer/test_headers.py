@@ -24,9 +24,8 @@ def test_security_headers_on_every_kind_of_response(client, db):
 
 
 def test_read_only_store_is_browsed_and_labelling_refused(db):
-    from vinadv.viewer.app import create_app
-
     from tests.viewer.conftest import csrf_from
+    from vinadv.viewer.app import create_app
 
     url, runs = db
     run_id = runs["random"][0]

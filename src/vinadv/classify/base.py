@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 
-from vinadv.errors import InputError
+from vinadv.errors import InputError, first_line
 from vinadv.outfile import atomic_output
 
 MODEL_FORMAT = "vinadv.classifier/1"
@@ -118,8 +118,7 @@ def load_model(path, expected: type | None = None) -> PairClassifier:
     except FileNotFoundError:
         raise
     except Exception as exc:  # noqa: BLE001 - zipfile and numpy raise a dozen types for a damaged archive
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{path}: not a vinadv model file ({first})") from None
+        raise InputError(f"{path}: not a vinadv model file ({first_line(exc)})") from None
     try:
         model = _model_from_archive(path, archive, expected)
     except InputError:
