@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 from vinadv import __version__
-from vinadv.errors import InputError
+from vinadv.errors import InputError, os_error_message
 
 # Order is the order of `vinadv --help`; one module per stage of the pipeline.
 COMMAND_MODULES = [
@@ -52,6 +53,14 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except FileNotFoundError as exc:
         print(f"vinadv: error: no such file: {exc.filename}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:
+        # the reader went away (`vinadv export | head`): stop quietly, as a program killed by SIGPIPE would;
+        # stdout goes to /dev/null so the interpreter's final flush cannot raise again
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+    except OSError as exc:  # a file the command reads or writes: permissions, full disk, a folder in the way
+        print(f"vinadv: error: {os_error_message(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("vinadv: interrupted", file=sys.stderr)

@@ -9,22 +9,18 @@ import json
 import os
 import zipfile
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vinadv.errors import InputError
+from vinadv.errors import InputError, first_line
+from vinadv.outfile import atomic_output
 
 
 def save_npz(path: str | os.PathLike, fmt: str, arrays: Mapping[str, Any]) -> None:
     """Write `arrays` plus `format=fmt` to `path`, atomically (a crash never leaves half a file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as fh:
+    with atomic_output(path, "wb", mkdir=True) as fh:
         np.savez(fh, format=np.array(fmt), **{k: np.asarray(v) for k, v in arrays.items()})
-    os.replace(tmp, path)
 
 
 class NpzReader:
@@ -38,8 +34,8 @@ class NpzReader:
             raise InputError(f"{self.path}: not an .npz file (not a zip archive)")
         try:
             self._data = dict(np.load(self.path, allow_pickle=False))
-        except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
-            raise InputError(f"{self.path}: not a readable .npz file ({exc})") from None
+        except Exception as exc:  # noqa: BLE001 - zipfile and numpy raise a dozen types for a damaged archive
+            raise InputError(f"{self.path}: not a readable .npz file ({first_line(exc)})") from None
         found = self._data.get("format")
         found = str(found) if found is not None and found.ndim == 0 else None
         if found != fmt:

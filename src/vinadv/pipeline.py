@@ -6,8 +6,10 @@ stored run does not depend on how (or where) shards are computed. A pair's `pair
 slot: `global_map * per_map + slot` (with `per_map = 0`, all pairs: `global_map * N*N + row*N + col`).
 
 A shard is written in batches inside transactions and `(run_id, pair_index)` is unique; a run killed part way
-resumes with `resume=True`: shards before the last stored one are complete (shards are stored in order) and are
-skipped, the rest are recomputed and only their missing pairs are written.
+resumes with `resume=True`: shards are stored in order and each completely stored shard is recorded
+(`Store.set_shards_done`), so the recorded ones are skipped (and, for a run stored by an older vinadv, the shards
+before the last one holding a pair); the rest are recomputed and only their missing pairs are written. A
+database fault while storing (a full disk) stops the run with one line naming the database and how to resume.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import numpy as np
 from vinadv import __version__
 from vinadv.attacks.strategies import make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
-from vinadv.errors import InputError
+from vinadv.errors import InputError, OutputError
 from vinadv.grid.generator import generate_maps
 from vinadv.identify import Identification, identify, load_classifier, objective_strength
 from vinadv.planners.vin import VIN
@@ -213,30 +215,48 @@ def run_pipeline(
     with Store.open(db) as store:
         run_id = open_run(store, config, name, resume, checksum, classifier_name)
         summary = RunSummary(run_id, name, store.url)
-        shards = list(range(config.n_shards))
+        shards = range(config.n_shards)  # a range, not a list: a huge --n streams shard by shard
         if resume:
-            stored = store.stored_indices(run_id)
-            if len(stored):
-                last = int(stored.max()) // (config.shard_size * config.slots)
-                summary.skipped_shards = last
-                shards = shards[last:]
+            summary.skipped_shards = _complete_shards(store, run_id, config)
+            shards = shards[summary.skipped_shards:]
         compute = shard_results or _local_shards
         bar = None
         if progress:
             from tqdm import tqdm
 
-            bar = tqdm(total=config.n - summary.skipped_shards * config.shard_size, desc="maps", unit="map")
-        for result in compute(config, shards, model, classifier, classifier_name):
-            t0 = time.perf_counter()
-            written = store.write_pairs(run_id, shard_records(result), skip_stored=resume or shard_results is not None)
-            summary.add(result, written, time.perf_counter() - t0)
+            bar = tqdm(total=max(0, config.n - summary.skipped_shards * config.shard_size), desc="maps", unit="map")
+        done = summary.skipped_shards
+        try:
+            for result in compute(config, shards, model, classifier, classifier_name):
+                t0 = time.perf_counter()
+                written = store.write_pairs(run_id, shard_records(result),
+                                            skip_stored=resume or shard_results is not None)
+                if result.shard == done:  # shards arrive in order: 0 .. done-1 are all stored
+                    done += 1
+                    store.set_shards_done(run_id, done)
+                summary.add(result, written, time.perf_counter() - t0)
+                if bar is not None:
+                    bar.update(result.n_maps)
+        except OutputError as exc:
+            how = (f"resume it with the same options and --name {name} --resume" if name else
+                   "it has no --name, so it cannot be resumed (give runs a --name)")
+            raise OutputError(f"{exc}; run {run_id} stopped with {summary.stored:,} "
+                              f"pairs stored this time: {how}") from None
+        finally:
             if bar is not None:
-                bar.update(result.n_maps)
-        if bar is not None:
-            bar.close()
+                bar.close()
         summary.wall_seconds = time.perf_counter() - t_start
         store.finish_run(run_id, timings={**summary.to_dict()["seconds"], "wall": summary.wall_seconds})
     return summary
+
+
+def _complete_shards(store, run_id: int, config: RunConfig) -> int:
+    """How many shards of the run, from shard 0 on, are completely stored (`--resume` skips them): the count the
+    run recorded, or, for a run that recorded none, the shards before the last one holding a pair."""
+    recorded = store.shards_done(run_id)
+    stored = store.stored_indices(run_id, lo=recorded * config.shard_size * config.slots)
+    before_last = int(stored.max()) // (config.shard_size * config.slots) if len(stored) else 0
+    return min(config.n_shards, max(recorded, before_last))
 
 
 def _local_shards(config, shards, model, classifier, label_source):

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vinadv.grid.checks import check_pairs
 from vinadv.grid.pairs import PathPairs, int_column
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
@@ -91,6 +92,7 @@ class PairSet(PathPairs):
             raise r.fail("obstacles_a", "must differ from obstacles_o in exactly the cell 'added', made an obstacle")
         if n and obs_o[idx, added[:, 0], added[:, 1]].any():
             raise r.fail("added", "has a cell that is already an obstacle on the original map")
+        check_pairs(r.path, obs_o, obs_a, starts, goals, added, paths, terms, r.scalar("corner_cutting", "b", True))
         params = r.json("params")
         if not isinstance(params, dict):
             raise r.fail("params", "must be a JSON object")

@@ -12,13 +12,13 @@ the training record) and the fitted arrays.
 from __future__ import annotations
 
 import json
-import zipfile
 from pathlib import Path
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 
-from vinadv.errors import InputError
+from vinadv.errors import InputError, first_line
+from vinadv.outfile import atomic_output
 
 MODEL_FORMAT = "vinadv.classifier/1"
 #: The two classes of the image classifiers, in scikit-learn order (`decision_function > 0` means FP).
@@ -95,7 +95,7 @@ def save_model(model: PairClassifier, path, record: dict | None = None, record_a
     header, arrays = _pack_state(model)
     entries = {f"a.{k}": np.asarray(v) for k, v in arrays.items()}
     entries.update({f"r.{k}": np.asarray(v) for k, v in (record_arrays or {}).items()})
-    with open(path, "wb") as handle:  # a file handle keeps the user's name (np.savez would append .npz)
+    with atomic_output(path, "wb") as handle:  # a file handle keeps the user's name (np.savez would append .npz)
         np.savez_compressed(
             handle,
             format=np.array(MODEL_FORMAT),
@@ -114,31 +114,42 @@ def load_model(path, expected: type | None = None) -> PairClassifier:
     """
     path = Path(path)
     try:
-        archive = np.load(path, allow_pickle=False)
+        archive = dict(np.load(path, allow_pickle=False))
     except FileNotFoundError:
         raise
-    except (OSError, ValueError, zipfile.BadZipFile) as exc:
-        raise InputError(f"{path}: not a vinadv model file ({exc})") from None
-    with archive:
-        if "format" not in archive.files or "kind" not in archive.files:
-            raise InputError(f"{path}: not a vinadv model file (no 'format'/'kind' entries)")
-        fmt = str(archive["format"])
-        if fmt != MODEL_FORMAT:
-            raise InputError(f"{path}: model format {fmt!r}; this vinadv reads {MODEL_FORMAT!r} only")
-        kind = str(archive["kind"])
-        cls = _REGISTRY.get(kind)
-        if cls is None:
-            raise InputError(f"{path}: unknown model kind {kind!r}; known kinds: {sorted(_REGISTRY)}")
-        if expected is not None and not issubclass(cls, expected):
-            raise InputError(f"{path}: holds a {kind!r} model, not a {expected.__name__}")
-        params = json.loads(str(archive["params"]))
-        meta = json.loads(str(archive["meta"]))
-        arrays = {k[2:]: archive[k] for k in archive.files if k.startswith("a.")}
-        record = json.loads(str(archive["record"])) if "record" in archive.files else {}
-        record_arrays = {k[2:]: archive[k] for k in archive.files if k.startswith("r.")}
+    except Exception as exc:  # noqa: BLE001 - zipfile and numpy raise a dozen types for a damaged archive
+        raise InputError(f"{path}: not a vinadv model file ({first_line(exc)})") from None
+    try:
+        model = _model_from_archive(path, archive, expected)
+    except InputError:
+        raise
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+        # a field missing or of the wrong type or shape inside an otherwise readable archive
+        raise InputError(f"{path}: damaged vinadv model file ({type(exc).__name__}: {exc})") from None
+    return model
+
+
+def _model_from_archive(path: Path, archive: dict, expected: type | None) -> PairClassifier:
+    if "format" not in archive or "kind" not in archive:
+        raise InputError(f"{path}: not a vinadv model file (no 'format'/'kind' entries)")
+    fmt = str(archive["format"])
+    if fmt != MODEL_FORMAT:
+        raise InputError(f"{path}: model format {fmt!r}; this vinadv reads {MODEL_FORMAT!r} only")
+    kind = str(archive["kind"])
+    cls = _REGISTRY.get(kind)
+    if cls is None:
+        raise InputError(f"{path}: unknown model kind {kind!r}; known kinds: {sorted(_REGISTRY)}")
+    if expected is not None and not issubclass(cls, expected):
+        raise InputError(f"{path}: holds a {kind!r} model, not a {expected.__name__}")
+    params, meta = json.loads(str(archive["params"])), json.loads(str(archive["meta"]))
+    record = json.loads(str(archive["record"])) if "record" in archive else {}
+    for name, value in (("params", params), ("meta", meta), ("record", record)):
+        if not isinstance(value, dict):
+            raise InputError(f"{path}: field '{name}' is not a JSON object")
+    arrays = {k[2:]: archive[k] for k in archive if k.startswith("a.")}
     model = cls._from_state(kind, params, meta, arrays)
     model.record_ = record
-    model.record_arrays_ = record_arrays
+    model.record_arrays_ = {k[2:]: archive[k] for k in archive if k.startswith("r.")}
     return model
 
 

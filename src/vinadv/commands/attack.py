@@ -9,6 +9,7 @@ import time
 from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.cluster import add_cluster_arguments, open_cluster
 from vinadv.grid.mapset import MapSet
+from vinadv.outfile import check_output_path
 from vinadv.planners.weights import load_vin
 
 
@@ -91,6 +92,7 @@ def cmd_attack(args: argparse.Namespace) -> int:
     from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
+    check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
     model = load_vin(args.weights, size=maps.size)
     attack = make_attack(args.strategy, per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)

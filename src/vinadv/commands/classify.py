@@ -37,7 +37,8 @@ def register(subparsers) -> None:
                        help="where training labels come from: the exact rule labeller on --pairs (default), or "
                        "people's annotations (`vinadv serve`) of the stored pairs of --db/--run")
     train.add_argument("--db", default=None, help="with --labels human: the results database (URL or SQLite file)")
-    train.add_argument("--run", type=int, default=None, help="with --labels human: the run whose labelled pairs to use")
+    train.add_argument("--run", default=None,
+                       help="with --labels human: the run (id or name) whose labelled pairs to use")
     train.add_argument("--threshold", type=int, default=None,
                        help="the rule's threshold t (default round(4 * N / 28), 4 at 28x28)")
     train.add_argument("--json", action="store_true", help="print a JSON summary")
@@ -71,9 +72,10 @@ def _human_labels(args):
     from vinadv.store import Store
     from vinadv.viewer.training import human_training_set
 
-    with Store.open(args.db, create=False) as store:
-        batch, labels, _ = human_training_set(store, args.run)
-        return batch, labels, f"{store.url} run {args.run} (human labels)"
+    with Store.open(args.db, readonly=True) as store:
+        run_id = store.resolve_run(args.run)
+        batch, labels, _ = human_training_set(store, run_id)
+        return batch, labels, f"{store.url} run {run_id} (human labels)"
 
 
 def cmd_train(args: argparse.Namespace) -> int:

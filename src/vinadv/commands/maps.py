@@ -8,6 +8,7 @@ import time
 
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps, obstacle_fraction
+from vinadv.outfile import check_output_path
 
 
 def register(subparsers) -> None:
@@ -37,8 +38,13 @@ def register(subparsers) -> None:
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     t0 = time.perf_counter()
-    maps = generate_maps(args.n, args.size, args.seed, args.starts, corner_cutting=not args.no_corner_cutting)
+    with tqdm(total=max(args.n, 0), unit="map", desc="maps", disable=args.quiet or args.json) as bar:
+        maps = generate_maps(args.n, args.size, args.seed, args.starts, corner_cutting=not args.no_corner_cutting,
+                             progress=bar.update)
     elapsed = time.perf_counter() - t0
     maps.save(args.out)
     summary = {

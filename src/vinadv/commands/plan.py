@@ -10,6 +10,7 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid import MapSet
+from vinadv.outfile import check_output_path
 from vinadv.planners.engine import DEFAULT_CHUNK, plan_maps
 from vinadv.planners.pathset import PathSet
 
@@ -31,6 +32,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
     if args.chunk_size < 1:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")
+    check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
     model = load_vin(args.weights, size=maps.size)
     weights_file = args.weights if args.weights is not None else default_weights_path(maps.size)

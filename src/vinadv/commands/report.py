@@ -20,7 +20,7 @@ def register(subparsers) -> None:
         "training set size; ROC and PR curves. Results go to the database's `evaluations` table.",
     )
     ev.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
-    ev.add_argument("--run", type=int, help="run id (default: the latest run)")
+    ev.add_argument("--run", help="run id, or run name (its latest run); default: the latest run")
     ev.add_argument("--classifiers", default=",".join(CLASSIFIER_NAMES),
                     help=f"comma-separated, from {','.join(CLASSIFIER_NAMES)} (default: all)")
     ev.add_argument("--setting", choices=("baseline", "tuned"), default="baseline",
@@ -42,26 +42,24 @@ def register(subparsers) -> None:
         "(table 7, measured now), the VIN's quality and the run's configuration; the paper's numbers beside ours.",
     )
     rep.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
-    rep.add_argument("--run", type=int,
-                     help="the main run to report (default: the first of --runs, else the latest run)")
-    rep.add_argument("--runs", help="comma-separated run ids to compare in table 4 and the classifier section (say, "
-                     "one per attack strategy); the first is the main run unless --run names one")
+    rep.add_argument("--run", help="the main run to report, id or name (default: the first of --runs, else the "
+                     "latest run)")
+    rep.add_argument("--runs", help="comma-separated run ids or names to compare in table 4 and the classifier "
+                     "section (say, one per attack strategy); the first is the main run unless --run names one")
     rep.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     rep.add_argument("--json", action="store_true", help="print what was written and measured as JSON")
     rep.add_argument("--quiet", action="store_true", help="print nothing but errors")
     rep.set_defaults(func=cmd_report)
 
 
-def _run_ids(text: str | None) -> list[int] | None:
+def _run_refs(text: str | None) -> list[str] | None:
+    """--runs: comma-separated run ids or names (resolved by `Store.resolve_run`)."""
     if text is None:
         return None
-    try:
-        ids = [int(s) for s in text.split(",") if s.strip()]
-    except ValueError:
-        raise InputError(f"--runs: expected comma-separated run ids like 1,2,3, got {text!r}") from None
-    if not ids:
-        raise InputError("--runs: no run id given")
-    return ids
+    refs = [s.strip() for s in text.split(",") if s.strip()]
+    if not refs:
+        raise InputError("--runs: no run given (comma-separated run ids or names like 1,2,3)")
+    return refs
 
 
 def _latest_run(store) -> int:
@@ -78,8 +76,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     classifiers = parse_list(args.classifiers, CLASSIFIERS, "--classifiers")
     sizes = parse_sizes(args.sizes)
     with Store.open(args.db, create=False) as store:
-        run_id = args.run if args.run is not None else _latest_run(store)
-        store.run_info(run_id)
+        run_id = store.resolve_run(args.run) if args.run is not None else _latest_run(store)
         rows = evaluate_run(store, run_id, classifiers, args.setting, sizes, args.seed,
                             progress=not (args.quiet or args.json))
     if args.json:
@@ -106,7 +103,7 @@ def _f(value, width: int = 8, digits: int = 3) -> str:
 def cmd_report(args: argparse.Namespace) -> int:
     from vinadv.report import build_report
 
-    result = build_report(args.db, args.out, run_id=args.run, runs=_run_ids(args.runs))
+    result = build_report(args.db, args.out, run_id=args.run, runs=_run_refs(args.runs))
     if args.json:
         print(json.dumps(result.to_dict(), default=str))
     elif not args.quiet:

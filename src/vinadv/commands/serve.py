@@ -7,7 +7,7 @@ import logging
 import socket
 import sys
 
-from vinadv.errors import InputError
+from vinadv.errors import InputError, OutputError
 
 
 def register(subparsers) -> None:
@@ -53,8 +53,17 @@ def cmd_serve(args: argparse.Namespace) -> int:
         raise InputError(f"vinadv serve needs Flask: pip install 'vinadv[viewer]' ({exc})") from None
     from vinadv.store import Store
 
-    store = Store.open(args.db, create=False)
-    created = store.ensure_indexes()
+    try:
+        store = Store.open(args.db, create=False)
+        try:
+            created = store.ensure_indexes()
+        except OutputError:
+            store.close()
+            raise
+    except OutputError:  # a database the user may only read: browse it, labelling is off
+        store, created = Store.open(args.db, readonly=True), []
+        if not args.quiet:
+            print(f"database {store.url} is read-only: browsing only, labels cannot be stored", file=sys.stderr)
     if created and not args.quiet:
         print(f"created indexes {', '.join(created)} (once per database)", file=sys.stderr)
     app = create_app(store, allow_remote=args.allow_remote)

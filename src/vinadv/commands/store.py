@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import json
-import os
 import sys
-from pathlib import Path
 
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.outfile import atomic_output, check_output_path
 
 EXPORT_FORMAT = "vinadv.labelled_pairs/1"
 #: text columns of an exported row, in order (the paper's Table 2 first)
@@ -39,25 +39,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run_export)
 
 
-def _resolve_run(store, run: str) -> int:
-    if run.isdigit():
-        store.run_info(int(run))  # raises InputError naming the run when missing
-        return int(run)
-    found = store.find_run(run)
-    if found is None:
-        raise InputError(f"--run: no run named {run!r} in database {store.url}")
-    return found
-
-
 def run_export(args: argparse.Namespace) -> int:
     from vinadv.store import Store  # imported here so `vinadv --help` stays fast
 
     if args.format == "npz" and not args.out:
         raise InputError("--out: required with --format npz")
-    if args.out and not Path(args.out).resolve().parent.is_dir():
-        raise InputError(f"--out: directory of {args.out} does not exist")
-    with Store.open(args.db, create=False) as store:
-        run_id = _resolve_run(store, args.run)
+    if args.out:
+        check_output_path(args.out)  # a directory or a missing folder is refused before the database is read
+    with Store.open(args.db, readonly=True) as store:
+        run_id = store.resolve_run(args.run)
         if args.format == "npz":
             n = _export_npz(store, run_id, args.out, args.successful_only)
         else:
@@ -99,14 +89,8 @@ def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
         "expert_label": np.where(np.equal(records.expert_label, None), "", records.expert_label).astype(str),
         "harm": np.where(np.equal(records.harm, None), "", records.harm).astype(str),
     }
-    # write next to the target, then rename: a failed export never leaves a half-written file behind
-    tmp = f"{out}.tmp-{os.getpid()}.npz"
-    try:
-        np.savez_compressed(tmp, **arrays)
-        os.replace(tmp, out)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    with atomic_output(out, "wb") as fh:  # a failed export never leaves a half-written file behind
+        np.savez_compressed(fh, **arrays)
     return len(records)
 
 
@@ -114,9 +98,9 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
     from tqdm import tqdm
 
     total = store.count_pairs(run_id)
-    stream = open(out, "w", newline="", encoding="utf-8") if out else sys.stdout
     n = 0
-    try:
+    target = atomic_output(out, "w", newline="", encoding="utf-8") if out else contextlib.nullcontext(sys.stdout)
+    with target as stream:
         writer = csv.writer(stream) if fmt == "csv" else None
         if writer is not None:
             writer.writerow(EXPORT_COLUMNS)
@@ -134,7 +118,4 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
                     stream.write("".join(json.dumps({c: r[c] for c in EXPORT_COLUMNS}) + "\n" for r in chunk))
                 n += len(chunk)
                 bar.update(len(chunk))
-    finally:
-        if out:
-            stream.close()
     return n

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from vinadv.errors import InputError
+from vinadv.outfile import atomic_output, check_output_path
 
 
 def register(subparsers) -> None:
@@ -94,6 +95,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                          seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit,
                          init=args.init, warmup_steps=args.warmup)
     config.validate()
+    check_output_path(args.out, mkdir=True)  # before hours of training: a folder in the way
     maps = MapSet.load(args.data)
     if len(maps) < 2:
         raise InputError(f"{args.data}: {len(maps)} maps; training needs at least 2")
@@ -114,7 +116,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     record["finished"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     save_vin(model, out, record)
     record_path = out.with_suffix(".json")
-    record_path.write_text(json.dumps(record, indent=2) + "\n")
+    with atomic_output(record_path, "w") as fh:
+        fh.write(json.dumps(record, indent=2) + "\n")
     checkpoint.unlink(missing_ok=True)
     if args.json:
         print(json.dumps(record))
@@ -158,7 +161,8 @@ def cmd_eval(args: argparse.Namespace) -> int:
     metrics = {"weights": weights_path, "weights_sha256": weights_checksum(model.weights_path), **source, **metrics,
                "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
     if args.out:
-        Path(args.out).write_text(json.dumps(metrics, indent=2) + "\n")
+        with atomic_output(args.out, "w") as fh:
+            fh.write(json.dumps(metrics, indent=2) + "\n")
     if args.json:
         print(json.dumps(metrics))
     elif args.protocol == "vinadv":

@@ -11,6 +11,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from vinadv.outfile import atomic_output  # noqa: E402
+
 PATH_STYLES = {"expert": ("#2ca02c", "-"), "original": ("#d62728", "-"), "adversarial": ("#1f77b4", "--")}
 
 
@@ -66,5 +68,9 @@ def map_legend(fig, axes, **kwargs) -> None:
 
 def save_figure(fig, path: str | os.PathLike) -> None:
     """Save and close `fig`; the format follows the file extension (png, svg, pdf)."""
-    fig.savefig(path, dpi=150, bbox_inches="tight")
-    plt.close(fig)
+    fmt = os.path.splitext(os.fspath(path))[1].lstrip(".").lower() or None
+    try:
+        with atomic_output(path, "wb") as fh:
+            fig.savefig(fh, format=fmt, dpi=150, bbox_inches="tight")
+    finally:
+        plt.close(fig)

@@ -6,25 +6,87 @@ would cover the goal is skipped. A one-cell border is always an obstacle. At 28x
 about 30% of the cells are obstacles, border included. Other sizes scale `max_obs` with the area and
 `max_size` with the side (see `default_obstacle_params`).
 
-Generation is vectorised over maps and runs in chunks of `CHUNK` maps, each from its own seed
-`(seed, chunk)`: a dataset of n maps is the first n maps of the infinite stream for that seed, so it does not
-depend on n being larger, and chunks can be made anywhere (a cluster worker) without a shared RNG.
+Generation is vectorised over maps and runs in chunks of `chunk_maps(size)` maps (`CHUNK` = 512 up to about
+30x30, fewer on larger maps, so that one chunk's working memory stays near `CHUNK_BYTES`), each from its own seed
+`(seed, chunk)`: a dataset of n maps is the first n maps of the infinite stream for that seed and size, so it does
+not depend on n being larger, and chunks can be made anywhere (a cluster worker) without a shared RNG.
+
+Limits (InputError naming them, before any work): a size where one map's working memory (placement attempts x
+cells, ~`WORK_BYTES_PER_CELL` bytes each) exceeds half the available memory (about 390x390 with 16 GiB available),
+and an `n` whose maps would take more than half the available memory (the output is held in memory).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
+from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
 
 CHUNK = 512
+#: a chunk's working memory target: `CHUNK` maps up to ~30x30, then fewer maps per chunk
+CHUNK_BYTES = 256 << 20
+#: bytes of working memory per (map, placement attempt, cell) in `_draw_obstacles` (measured peak: ~6)
+WORK_BYTES_PER_CELL = 6
 MIN_SIZE = 8
 MIN_START_MOVES = 2
+
+
+def available_memory() -> int:
+    """Bytes of memory available to this process now (MemAvailable; physical memory where that is unknown)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def chunk_maps(size: int, max_obs: int | None = None) -> int:
+    """Maps per generator chunk on `size x size` maps: `CHUNK`, or fewer so a chunk stays within `CHUNK_BYTES`."""
+    max_obs = default_obstacle_params(size)[0] if max_obs is None else max_obs
+    return int(max(1, min(CHUNK, CHUNK_BYTES // (WORK_BYTES_PER_CELL * max_obs * size * size))))
+
+
+def map_bytes(size: int, n_starts: int) -> int:
+    """Bytes one generated map holds in memory (obstacles, goal, starts, costs, expert paths of ~2N cells), twice:
+    the chunks and their concatenation exist together for a moment."""
+    return 2 * (size * size + 16 + n_starts * (16 + 8 + 8 + 2 * size * 4))
+
+
+def check_limits(n: int, size: int, n_starts: int, max_obs: int) -> None:
+    """Refuse (InputError) a size whose single map, or an `n` whose maps, would not fit half the available memory."""
+    avail = available_memory()
+
+    def placing(side: int, attempts: int) -> int:  # the obstacle placement's working memory for one map
+        return WORK_BYTES_PER_CELL * attempts * side * side
+
+    work = placing(size, max_obs)
+    if work > avail // 2:
+        largest = size
+        while largest > MIN_SIZE and placing(largest, default_obstacle_params(largest)[0]) > avail // 2:
+            largest -= 1 + largest // 16
+        raise InputError(f"size {size}: placing the obstacles of one {size}x{size} map needs {_gib(work)} of memory "
+                         f"({max_obs} attempts x {size * size:,} cells), more than half the {_gib(avail)} available; "
+                         f"the limit here is about size {largest}", "size", "size")
+    need = n * map_bytes(size, n_starts)
+    if need > avail // 2:
+        fits = avail // 2 // map_bytes(size, n_starts)
+        raise InputError(f"n {n:,}: {n:,} maps of {size}x{size} need about {_gib(need)} of memory, more than half "
+                         f"the {_gib(avail)} available; the limit here is about n {fits:,} per file (make several "
+                         "files with different seed)", "n", "n", "seed")
+
+
+def _gib(n_bytes: int) -> str:
+    return f"{n_bytes / 2**30:,.1f} GiB" if n_bytes >= 2**30 / 10 else f"{n_bytes / 2**20:,.0f} MiB"
 
 
 def default_obstacle_params(size: int) -> tuple[int, int]:
@@ -44,11 +106,12 @@ def _draw_obstacles(rng: np.random.Generator, n: int, size: int, goals: np.ndarr
     width = np.maximum(1, np.ceil(rng.random((n, max_obs)) * max_size)).astype(np.int64)
     radius = np.maximum(1, np.ceil(rng.random((n, max_obs)) * max_size)).astype(np.int64)
 
-    rows = np.arange(size)[None, None, :, None]
-    cols = np.arange(size)[None, None, None, :]
-    t, lft = top[..., None, None], left[..., None, None]
+    # int32 (not int64) differences: the (n, max_obs, N, N) disc test is the largest array of the generator
+    rows = np.arange(size, dtype=np.int32)[None, None, :, None]
+    cols = np.arange(size, dtype=np.int32)[None, None, None, :]
+    t, lft = top.astype(np.int32)[..., None, None], left.astype(np.int32)[..., None, None]
     rect = (rows >= t) & (rows < t + height[..., None, None]) & (cols >= lft) & (cols < lft + width[..., None, None])
-    disc = (rows - t) ** 2 + (cols - lft) ** 2 <= radius[..., None, None] ** 2
+    disc = (rows - t) ** 2 + (cols - lft) ** 2 <= radius.astype(np.int32)[..., None, None] ** 2
     shapes = np.where(is_disc[..., None, None], disc, rect)
     shapes &= (np.arange(max_obs)[None, :] < attempts[:, None])[..., None, None]
     covers_goal = shapes[np.arange(n), :, goals[:, 0], goals[:, 1]]
@@ -59,18 +122,22 @@ def _draw_obstacles(rng: np.random.Generator, n: int, size: int, goals: np.ndarr
 
 
 def _generate_chunk(seed: tuple[int, ...], chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int,
-                    max_size: int):
+                    max_size: int, count: int):
+    """Chunk `chunk` of the stream: its `count` maps, less those without `n_starts` eligible starts, with their
+    expert paths (computed here, so that no chunk's distance maps outlive it)."""
     rng = np.random.default_rng([*seed, chunk])
-    goals = rng.integers(1, size - 1, (CHUNK, 2))
-    obstacles = _draw_obstacles(rng, CHUNK, size, goals, max_obs, max_size)
+    goals = rng.integers(1, size - 1, (count, 2))
+    obstacles = _draw_obstacles(rng, count, size, goals, max_obs, max_size)
     dist, moves = shortest_distances(obstacles, goals, corner_cutting)
-    eligible = (moves >= MIN_START_MOVES).reshape(CHUNK, -1)
+    eligible = (moves >= MIN_START_MOVES).reshape(count, -1)
     # n_starts distinct eligible cells, uniformly: the smallest random keys among eligible cells.
     keys = np.where(eligible, rng.random(eligible.shape), np.inf)
     picks = np.argsort(keys, axis=1)[:, :n_starts]
     ok = eligible.sum(axis=1) >= n_starts
     starts = np.stack(np.divmod(picks, size), axis=-1)
-    return obstacles[ok], goals[ok], starts[ok], dist[ok]
+    obstacles, goals, starts = obstacles[ok], goals[ok].astype(np.int64), starts[ok].astype(np.int64)
+    costs, expert = expert_paths_from(dist[ok], obstacles, goals, starts, corner_cutting)
+    return obstacles, goals, starts, costs, expert
 
 
 def generate_maps(
@@ -81,12 +148,14 @@ def generate_maps(
     corner_cutting: bool = True,
     max_obs: int | None = None,
     max_size: int | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> MapSet:
     """Generate `n` maps of `size x size` with `n_starts` starts each and their expert (optimal) paths.
 
     Deterministic for `(seed, size, n_starts, corner_cutting, max_obs, max_size)`; maps where fewer than
     `n_starts` cells can reach the goal in at least 2 moves are dropped and replaced from the stream.
-    `seed` may be a sequence of ints (say `(seed, shard)`) for independent streams.
+    `seed` may be a sequence of ints (say `(seed, shard)`) for independent streams. `progress(k)` is called with
+    the number of maps each chunk added. A size or `n` that cannot fit in memory is refused (`check_limits`).
     """
     seeds = (int(seed),) if np.isscalar(seed) else tuple(int(s) for s in seed)
     if n < 0:
@@ -100,25 +169,31 @@ def generate_maps(
     max_size = default_size if max_size is None else max_size
     if max_obs < 1 or max_size < 1:
         raise InputError(f"max_obs and max_size must be >= 1, got {max_obs} and {max_size}")
+    if n_starts >= size * size:
+        raise InputError(f"--starts {n_starts}: a {size}x{size} map has fewer free cells than that")
+    check_limits(n, size, n_starts, max_obs)
+    count = chunk_maps(size, max_obs)
 
     parts: list[tuple[np.ndarray, ...]] = []
     have, chunk = 0, 0
     while have < n:
-        part = _generate_chunk(seeds, chunk, size, n_starts, corner_cutting, max_obs, max_size)
+        part = _generate_chunk(seeds, chunk, size, n_starts, corner_cutting, max_obs, max_size, count)
         parts.append(part)
         have += len(part[0])
         chunk += 1
-        if chunk > 64 and have == 0:
+        if progress is not None and len(part[0]):
+            progress(min(len(part[0]), n - (have - len(part[0]))))
+        if chunk * count > 64 * CHUNK and have == 0:
             raise InputError(f"could not place {n_starts} starts on any {size}x{size} map; use fewer (n_starts)",
                              "n_starts")
     if parts:
-        obstacles, goals, starts, dist = (np.concatenate(x)[:n] for x in zip(*parts))
+        obstacles, goals, starts, costs = (np.concatenate(x)[:n] for x in zip(*(p[:4] for p in parts)))
+        expert = PackedPaths.concat([p[4] for p in parts]).take(slice(0, n * n_starts))
     else:
         obstacles = np.zeros((0, size, size), dtype=bool)
         goals = np.zeros((0, 2), dtype=np.int64)
         starts = np.zeros((0, n_starts, 2), dtype=np.int64)
-        dist = np.zeros((0, size, size))
-    costs, expert = expert_paths_from(dist, obstacles, goals, starts, corner_cutting)
+        costs, expert = np.zeros((0, n_starts)), PackedPaths.empty()
     return MapSet(
         obstacles=obstacles,
         goals=goals.astype(np.int64),

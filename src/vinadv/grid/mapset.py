@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vinadv.grid.checks import check_maps
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 
@@ -93,16 +94,13 @@ class MapSet:
         check_cells_in_grid(r, "goals", goals, size)
         check_cells_in_grid(r, "starts", starts, size)
         expert = PackedPaths.read(r, "expert", n * s, size)
-        idx = np.arange(n)
-        if n and obstacles[idx, goals[:, 0], goals[:, 1]].any():
-            raise r.fail("goals", "has a goal on an obstacle")
-        if n and s and obstacles[idx[:, None], starts[..., 0], starts[..., 1]].any():
-            raise r.fail("starts", "has a start on an obstacle")
         if np.any(~np.isfinite(costs)) or np.any(costs < 0):
             raise r.fail("expert_costs", "has a negative or non-finite cost")
         counts = r.array("start_counts", "i", 1, (n,)).astype(np.int64) if r.has("start_counts") else None
         if counts is not None and n and (counts.min() < 1 or counts.max() > s):
             raise r.fail("start_counts", f"has a count outside 1..{s} (the starts per map)")
+        check_maps(r.path, obstacles, goals, starts, expert, bool(r.scalar("corner_cutting", "b", default=True)),
+                   counts)
         return cls(
             obstacles=obstacles.astype(bool),
             goals=goals,

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vinadv.grid.checks import check_paths
 from vinadv.grid.columns import Columns
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, save_npz
@@ -85,13 +86,7 @@ class PathSet(Columns):
             raise r.fail("termination", f"has '{termination[bad][0]}', expected one of {', '.join(TERMINATIONS)}")
         if not np.array_equal(reached, termination == "goal"):
             raise r.fail("reached", "disagrees with 'termination' (reached means termination == 'goal')")
-        cells, offsets = paths.cells, paths.offsets
-        if len(cells) > 1:
-            step = np.abs(np.diff(cells.astype(np.int64), axis=0)).max(axis=1)
-            inside = np.ones(len(step), dtype=bool)
-            inside[offsets[1:-1] - 1] = False  # the last cell of a path is not followed by a move
-            if np.any(inside & (step != 1)):
-                raise r.fail("path_cells", "has two consecutive cells of a path that are not neighbours")
+        check_paths(r.path, "path_cells", paths, size)
         return cls(paths=paths, termination=termination.astype(str), n_starts=n_starts, size=size,
                    corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
                    model=str(r.scalar("model", "U", default="")))

@@ -27,6 +27,7 @@ import torch
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
+from vinadv.outfile import atomic_output
 from vinadv.planners import fast_vi
 from vinadv.planners.vin import VIN, VINConfig, default_k, make_input
 
@@ -310,10 +311,8 @@ def _lr_at(step: int, total: int, config: TrainConfig) -> float:
 
 
 def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save(
+    with atomic_output(path, "wb", mkdir=True) as fh:
+        torch.save(
         {
             "format": CHECKPOINT_FORMAT,
             "model": {k: v.detach().cpu() for k, v in model.state_dict().items()},
@@ -325,9 +324,8 @@ def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -
             "wall_s": state.wall_s,
             "epochs": state.epochs,
         },
-        tmp,
+        fh,
     )
-    os.replace(tmp, path)
 
 
 def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> _State:

@@ -14,12 +14,15 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import zipfile
 from pathlib import Path
 from typing import Any
 
 import torch
 
 from vinadv.errors import InputError
+from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.outfile import atomic_output
 from vinadv.planners.vin import VIN, VINConfig, default_k
 
 WEIGHTS_FORMAT = "vinadv.vin/1"
@@ -46,8 +49,6 @@ def save_vin(model: VIN, path: str | os.PathLike, record: dict | None = None) ->
 
     `record` must hold only JSON-like values (dict, list, str, int, float, bool, None).
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     # Through JSON: the record must load under weights_only=True (plain types only; torch.__version__, for one,
     # is a str subclass that the safe loader refuses).
     try:
@@ -61,9 +62,8 @@ def save_vin(model: VIN, path: str | os.PathLike, record: dict | None = None) ->
         "state_dict": state,
         "record": record,
     }
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save(payload, tmp)
-    os.replace(tmp, path)
+    with atomic_output(path, "wb", mkdir=True) as fh:
+        torch.save(payload, fh)
 
 
 def read_weights(path: str | os.PathLike, size: int = 28, k: int | None = None) -> tuple[VIN, dict]:
@@ -77,8 +77,7 @@ def read_weights(path: str | os.PathLike, size: int = 28, k: int | None = None) 
     try:
         data = torch.load(name, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises many types for a bad file (pickle, zip, EOF, unsafe global)
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{name}: not a readable weights file ({first})") from None
+        raise InputError(_unreadable(name, exc)) from None
     if not isinstance(data, dict):
         raise InputError(f"{name}: expected a dict of weights, found {type(data).__name__}")
     if "format" in data:
@@ -99,6 +98,7 @@ def read_weights(path: str | os.PathLike, size: int = 28, k: int | None = None) 
         record = {}
     if k is not None and k != config.k:
         config = VINConfig(**{**config.to_dict(), "k": int(k)})
+    _check_planner_shapes(name, state, config)
     model = VIN(config)
     _check_state(name, state, model)
     model.load_state_dict({key: state[key].to(torch.float32) for key in STATE_KEYS})
@@ -122,6 +122,34 @@ def load_vin(path: str | os.PathLike | None = None, size: int = 28, k: int | Non
     model.record = record
     model.weights_path = str(path)
     return model
+
+
+def _unreadable(name: str, exc: Exception) -> str:
+    """Why torch could not load `name`, in vinadv's words (torch's own message advises `weights_only=False`,
+    which would let the file run code: never repeated)."""
+    text = str(exc)
+    if "Unsupported global" in text or "Unsupported class" in text or "GLOBAL" in text:
+        return (f"{name}: holds Python objects, not only tensors and plain values; refused (weights files are "
+                "loaded without running code)")
+    kind = "a zip archive, but not one torch wrote" if zipfile.is_zipfile(name) else "damaged or another kind of file"
+    return f"{name}: not a vinadv/PyTorch weights file ({kind})"
+
+
+def _check_planner_shapes(name: str, state: dict, config: VINConfig) -> None:
+    """Refuse weights whose input or output size the planner cannot feed: 2 input channels (obstacles, goal),
+    one logit per move of `ACTION_DELTAS`. Other shapes are checked against the config by `_check_state`."""
+    for key, axis, want in (("h.weight", 1, VINConfig.l_i), ("fc.weight", 0, len(ACTION_DELTAS))):
+        got = state.get(key)
+        if not isinstance(got, torch.Tensor) or got.ndim <= axis:
+            continue  # reported by `_check_state`
+        if got.shape[axis] != want:
+            expected = list(got.shape)
+            expected[axis] = want
+            raise InputError(f"{name}: '{key}' has shape {tuple(got.shape)}, expected {tuple(expected)} "
+                             f"(the planner has {want} {'input channels' if axis else 'actions'})")
+    if config.l_i != VINConfig.l_i or config.n_actions != len(ACTION_DELTAS):
+        raise InputError(f"{name}: config has l_i={config.l_i}, n_actions={config.n_actions}; the planner needs "
+                         f"l_i={VINConfig.l_i}, n_actions={len(ACTION_DELTAS)}")
 
 
 def _config_from_dict(name: str, raw: dict[str, Any]) -> VINConfig:

@@ -37,15 +37,18 @@ class ReportResult:
                 "timing": self.timing, "vin": self.vin, "evaluated": self.evaluated, "comparison": self.comparison}
 
 
-def write_report(db: str | None, out_dir, run_id: int | None = None, runs: list[int] | None = None) -> Path:
+def write_report(db: str | None, out_dir, run_id: int | str | None = None,
+                 runs: list[int | str] | None = None) -> Path:
     """Write the report to `out_dir` (see `build_report`); return the path of `index.html`."""
     return build_report(db, out_dir, run_id=run_id, runs=runs).index
 
 
-def build_report(db: str | None, out_dir, run_id: int | None = None, runs: list[int] | None = None) -> ReportResult:
+def build_report(db: str | None, out_dir, run_id: int | str | None = None,
+                 runs: list[int | str] | None = None) -> ReportResult:
     """Write the report of the main run to `out_dir` and return what was written and measured.
 
-    The main run is `run_id`, else the first of `runs`, else the latest run. Table 4 and the classifier section
+    Runs are ids or names (`Store.resolve_run`). The main run is `run_id`, else the first of `runs`, else the
+    latest run. Table 4 and the classifier section
     show every run of `runs` (the main run first; default: just the main run), each with its stored evaluation.
     """
     from vinadv.store import Store
@@ -53,7 +56,7 @@ def build_report(db: str | None, out_dir, run_id: int | None = None, runs: list[
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(f"out_dir {out}: exists and is not a directory")
-    with Store.open(db, create=False) as store:
+    with Store.open(db, readonly=True) as store:
         ctx = _context(store, out, run_id, runs)
         out.mkdir(parents=True, exist_ok=True)
         data = gather_report(ctx)
@@ -86,15 +89,13 @@ def report_run(db: str | None, out_dir, run_id: int, *, evaluate: bool = True, p
     return result
 
 
-def _context(store, out: Path, run_id: int | None, runs: list[int] | None) -> Context:
+def _context(store, out: Path, run_id: int | str | None, runs: list[int | str] | None) -> Context:
     listed = store.list_runs()
     if not listed:
         raise InputError(f"database {store.url}: no runs stored yet (run `vinadv run` first)")
     known = {int(r["id"]): r for r in listed}
-    for rid in [*(runs or []), *([run_id] if run_id is not None else [])]:
-        if int(rid) not in known:
-            raise InputError(f"run_id: no run {rid} in database {store.url} (runs: "
-                             f"{', '.join(str(k) for k in sorted(known))})")
+    runs = None if runs is None else [store.resolve_run(r, "runs") for r in runs]
+    run_id = None if run_id is None else store.resolve_run(run_id)
     main = int(run_id) if run_id is not None else int(runs[0]) if runs else max(known)
     compare = [main, *(int(r) for r in dict.fromkeys(runs or []) if int(r) != main)]
     if known[main]["n_pairs"] == 0:

@@ -19,6 +19,7 @@ import numpy as np  # noqa: E402
 
 from vinadv.classify import render_path_images  # noqa: E402
 from vinadv.grid.draw import draw_map, map_legend  # noqa: E402
+from vinadv.outfile import atomic_output  # noqa: E402
 from vinadv.vocabulary import STRENGTH_ORDER  # noqa: E402
 
 CATEGORY_ORDER = STRENGTH_ORDER[:-1]  # UrP, FP, DP, UcP: the paper's fig. 3 and table 4 order (invalid last)
@@ -32,8 +33,8 @@ def save(fig, stem: Path) -> list[str]:
     names = []
     for fmt in FORMATS:
         path = stem.with_suffix(f".{fmt}")
-        with plt.rc_context({"svg.fonttype": "none"}):
-            fig.savefig(path, dpi=120, bbox_inches="tight")
+        with plt.rc_context({"svg.fonttype": "none"}), atomic_output(path, "wb") as fh:
+            fig.savefig(fh, format=fmt, dpi=120, bbox_inches="tight")
         names.append(path.name)
     plt.close(fig)
     return names

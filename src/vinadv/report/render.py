@@ -7,12 +7,12 @@ from __future__ import annotations
 import csv
 import math
 import numbers
-import shutil
 from importlib import resources
 from pathlib import Path
 
 import jinja2
 
+from vinadv.outfile import atomic_output
 from vinadv.report import paper
 from vinadv.report.gather import ALL_LABELS, CATEGORY_ORDER, SECTIONS, ReportData
 
@@ -77,7 +77,7 @@ def render_page(data: ReportData) -> str:
 
 def write_tables(data: ReportData, out: Path) -> None:
     for table in data.tables():
-        with open(out / table.name, "w", newline="") as fh:
+        with atomic_output(out / table.name, "w", newline="") as fh:
             writer = csv.writer(fh)
             writer.writerow(table.header)
             writer.writerows([["" if v is None else v for v in row] for row in table.rows])
@@ -87,8 +87,10 @@ def render_report(data: ReportData, out: Path) -> Path:
     """Write the CSV tables, the stylesheet and `index.html` of `data` into `out`; return the page's path."""
     out = Path(out)
     write_tables(data, out)
-    with resources.as_file(resources.files("vinadv.report") / "templates" / STYLESHEET) as css:
-        shutil.copyfile(css, out / STYLESHEET)
+    css = (resources.files("vinadv.report") / "templates" / STYLESHEET).read_text(encoding="utf-8")
+    with atomic_output(out / STYLESHEET, "w", encoding="utf-8") as fh:
+        fh.write(css)
     index = out / "index.html"
-    index.write_text(render_page(data), encoding="utf-8")
+    with atomic_output(index, "w", encoding="utf-8") as fh:
+        fh.write(render_page(data))
     return index

@@ -10,6 +10,12 @@ encoded and inserted a chunk at a time, into SQLite by multi-row INSERT statemen
 every pair exactly once. SQLite runs with `journal_mode=WAL, synchronous=NORMAL`: a crash of the process
 never corrupts or half-writes a batch; a power loss may lose the last committed batches (they are then
 written again on resume). New SQLite files use 32 KiB pages.
+
+Refusal: a database is checked before anything is written to it (WAL is switched on, tables are created only once
+the check passed), so a refused database (foreign tables, another schema version, not a database) is left
+byte-identical. `readonly=True` opens it without any write (SQLite `mode=ro`; a WAL file on a read-only file system
+as `immutable`). A database error while reading or writing (full disk, read-only file, corrupted file, lost
+server) is raised as `OutputError` (an InputError) naming the database in one line.
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ from __future__ import annotations
 import datetime as dt
 import os
 import sqlite3
+import urllib.parse
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
@@ -25,7 +32,7 @@ import sqlalchemy as sa
 from sqlalchemy import exc as sa_exc
 
 from vinadv import __version__
-from vinadv.errors import InputError
+from vinadv.errors import InputError, OutputError
 from vinadv.grid.paths import PackedPaths
 from vinadv.store import codec
 from vinadv.store.records import PairRecords
@@ -90,9 +97,10 @@ class Store:
     names, or another schema version, is refused with `InputError` (nothing is changed).
     """
 
-    def __init__(self, engine: sa.Engine, url: str) -> None:
+    def __init__(self, engine: sa.Engine, url: str, readonly: bool = False) -> None:
         self.engine = engine
         self.url = safe_url(url)
+        self.readonly = readonly
         self._insert_sql = _driver_insert_sql(engine.dialect)
         self._sqlite = engine.dialect.name == "sqlite"  # rows in SQLite's native form (see `encode_rows`)
         self._multi_insert: tuple[int, str] | None = None  # (rows per statement, SQL), see `_insert_sqlite`
@@ -101,8 +109,13 @@ class Store:
     # ------------------------------------------------------------------------------------------ opening
 
     @classmethod
-    def open(cls, url: str | None = None, *, create: bool = True) -> Store:
-        """Open (and with `create`, initialise) the database at `url` (see `resolve_url`)."""
+    def open(cls, url: str | None = None, *, create: bool = True, readonly: bool = False) -> Store:
+        """Open (and with `create`, initialise) the database at `url` (see `resolve_url`).
+
+        `readonly`: never write (implies `create=False`); a SQLite file is opened with `mode=ro`, so a file the
+        user may only read can still be exported, reported and browsed.
+        """
+        create = create and not readonly
         url = resolve_url(url)
         shown = safe_url(url)
         try:
@@ -124,13 +137,17 @@ class Store:
                 parsed = parsed.update_query_dict({"charset": "utf8mb4"})
         elif backend == "postgresql":
             connect_args["connect_timeout"] = _CONNECT_TIMEOUT_S
+        options: dict = {}
+        if backend == "sqlite" and readonly and parsed.database not in (None, "", ":memory:"):
+            options["creator"] = _sqlite_reader(parsed.database)
         try:
-            engine = sa.create_engine(parsed, connect_args=connect_args, pool_pre_ping=backend != "sqlite")
+            engine = sa.create_engine(parsed, connect_args=connect_args, pool_pre_ping=backend != "sqlite", **options)
         except (sa_exc.ArgumentError, sa_exc.NoSuchModuleError, ImportError) as exc:
             raise InputError(f"database {shown}: cannot use this URL: {exc}") from None
         if backend == "sqlite":
             sa.event.listen(engine, "connect", _sqlite_pragmas)
-        store = cls(engine, url)
+        sa.event.listen(engine, "handle_error", _one_line_error(shown))
+        store = cls(engine, url, readonly=readonly)
         try:
             store._check_schema(create)
         except InputError:
@@ -149,6 +166,10 @@ class Store:
             if not create:
                 raise InputError(f"database {self.url}: no vinadv tables (nothing stored there yet)")
             with self.engine.begin() as conn:
+                if self._sqlite:
+                    # page size first: it takes effect only before the first table is written, and not in WAL mode
+                    conn.exec_driver_sql("PRAGMA page_size=32768")
+                    conn.exec_driver_sql("PRAGMA journal_mode=WAL")
                 metadata.create_all(conn)
                 conn.execute(meta_table.insert(), [{"key": "schema_version", "value": SCHEMA_VERSION}])
             return
@@ -186,6 +207,11 @@ class Store:
             else:  # read-only use: nothing changes, the harm columns read as NULL
                 self._absent_columns = frozenset(HARM_COLUMNS) - {
                     c["name"] for c in sa.inspect(self.engine).get_columns(map_pairs.name)}
+        if self.readonly:
+            return
+        with self.engine.connect() as conn:
+            if self._sqlite and conn.exec_driver_sql("PRAGMA journal_mode").scalar() != "wal":
+                conn.exec_driver_sql("PRAGMA journal_mode=WAL")  # a vinadv file written by another tool
         missing_additive = [t for t in ADDITIVE_TABLES if t.name not in present]
         if missing_additive and create:
             # an older version-1 database: add the new tables (nothing existing changes)
@@ -230,7 +256,15 @@ class Store:
         version: str = __version__,
         status: str = "running",
     ) -> int:
-        """Insert a run and return its id."""
+        """Insert a run and return its id. A `name` is unique in a database (`--resume` finds a run by it) and
+        not a number (`resolve_run` reads a number as a run id): InputError otherwise."""
+        if name is not None:
+            if not name.strip() or name.strip().isdigit():
+                raise InputError(f"--name: {name!r} cannot be a run name (a name needs a letter; numbers are run ids)")
+            found = self.find_run(name)
+            if found is not None:
+                raise InputError(f"--name: run {found} in database {self.url} is already called {name!r}; "
+                                 "continue it with --resume, or choose another --name")
         with self.engine.begin() as conn:
             result = conn.execute(
                 runs.insert().values(
@@ -248,6 +282,42 @@ class Store:
                 sa.select(runs.c.id).where(runs.c.name == name).order_by(runs.c.id.desc()).limit(1)
             ).scalar_one_or_none()
         return None if found is None else int(found)
+
+    def resolve_run(self, ref: str | int, param: str = "run_id") -> int:
+        """The id of the run `ref` names: the one rule for every run reference. A number is a run id (a run name is
+        never a number, see `create_run`), anything else a run name (its latest run). InputError (naming the
+        parameter `param`) when there is no such run."""
+        text = str(ref).strip()
+        if text.isdigit():
+            found = None
+            if int(text) < 2**63:  # a larger number is no id (and no SQL integer)
+                with self.engine.connect() as conn:
+                    found = conn.execute(sa.select(runs.c.id).where(runs.c.id == int(text))).scalar_one_or_none()
+            if found is None:
+                raise InputError(f"{param}: no run {text} in database {self.url}", param)
+            return int(text)
+        found = self.find_run(text) if text else None
+        if found is None:
+            raise InputError(f"{param}: no run named {text!r} in database {self.url} (give a run id or name)", param)
+        return found
+
+    def shards_done(self, run_id: int) -> int:
+        """How many shards of the run are completely stored, from shard 0 on (0 when none recorded)."""
+        with self.engine.connect() as conn:
+            value = conn.execute(
+                sa.select(meta_table.c.value).where(meta_table.c.key == _shards_key(run_id))
+            ).scalar_one_or_none()
+        return int(value) if value is not None else 0
+
+    def set_shards_done(self, run_id: int, shards: int) -> None:
+        """Record that shards `0 .. shards-1` of the run are completely stored (`--resume` skips them)."""
+        key = _shards_key(run_id)
+        with self.engine.begin() as conn:
+            updated = conn.execute(
+                meta_table.update().where(meta_table.c.key == key).values(value=str(int(shards)))
+            ).rowcount
+            if not updated:
+                conn.execute(meta_table.insert().values(key=key, value=str(int(shards))))
 
     def run_info(self, run_id: int) -> dict:
         """The run's row as a dict; `InputError` when there is no such run."""
@@ -609,16 +679,60 @@ class Store:
 
 
 def _sqlite_pragmas(dbapi_conn, _record) -> None:
+    """Per-connection settings only: nothing here writes to the file (a database is checked before any write).
+
+    The file's own settings are made once, by `_check_schema` when it creates the tables: 32 KiB pages (large
+    pages hold many ~2 KB rows (maps + paths) each: 16 KiB gave a ~30% smaller file and faster inserts than 4 KiB,
+    32 KiB another ~10% less CPU per inserted row than 16 KiB, 64 KiB no better) and journal_mode=WAL (readers
+    don't block the writer; a crash leaves whole commits)."""
     cursor = dbapi_conn.cursor()
-    # Large pages hold many ~2 KB rows (maps + paths) each: 16 KiB gave a ~30% smaller file and faster inserts
-    # than 4 KiB, 32 KiB another ~10% less CPU per inserted row than 16 KiB (64 KiB no better). Takes effect
-    # only when the file is created (before WAL is switched on).
-    cursor.execute("PRAGMA page_size=32768")
-    cursor.execute("PRAGMA journal_mode=WAL")  # readers don't block the writer; a crash leaves whole commits
     cursor.execute("PRAGMA synchronous=NORMAL")  # safe in WAL against process crashes; fsync at checkpoints
     cursor.execute("PRAGMA foreign_keys=ON")
     cursor.execute("PRAGMA busy_timeout=30000")
     cursor.close()
+
+
+def _shards_key(run_id: int) -> str:
+    """The `vinadv_meta` key of a run's stored-shard count (in the meta table: no schema change)."""
+    return f"run:{int(run_id)}:shards_done"
+
+
+def _sqlite_reader(path: str):
+    """A connect function opening the SQLite file `path` read-only (`mode=ro`): never a write, no file created.
+
+    A WAL database needs its `-shm` file, which SQLite cannot create in a read-only folder or file system; there
+    the file is opened `immutable` (nobody can write it then)."""
+    uri = "file:" + urllib.parse.quote(str(Path(path).expanduser().resolve())) + "?mode=ro"
+
+    def connect() -> sqlite3.Connection:
+        try:
+            conn = sqlite3.connect(uri, uri=True, check_same_thread=False)
+            conn.execute("SELECT count(*) FROM sqlite_master").fetchone()
+            return conn
+        except sqlite3.OperationalError:
+            if os.access(Path(path).parent, os.W_OK):
+                raise
+        return sqlite3.connect(uri + "&immutable=1", uri=True, check_same_thread=False)
+
+    return connect
+
+
+#: DBAPI errors that come from the database's state or its file (full disk, read-only or corrupted file, lost
+#: server, lock timeout), not from vinadv's statements: raised as one-line `OutputError`s naming the database
+_FAULTS = (sa_exc.OperationalError, sa_exc.InternalError)
+
+
+def _one_line_error(shown: str):
+    """A `handle_error` listener: a fault of the database (see `_FAULTS`) becomes an `OutputError` naming it,
+    without SQLAlchemy's multi-line text (the statement and its parameters: maps and paths)."""
+
+    def handle(context) -> Exception | None:
+        exc = context.sqlalchemy_exception
+        if context.connection is None or not (isinstance(exc, _FAULTS) or type(exc) is sa_exc.DatabaseError):
+            return None  # connect errors: `Store.open` words them; integrity/programming errors are bugs
+        return OutputError(f"database {shown}: {_first_line(exc)}")
+
+    return handle
 
 
 # ------------------------------------------------------------------------------------ row encoding

@@ -57,6 +57,10 @@ DEFAULT_PAGE_SIZE = 50
 MAX_PAGE_SIZE = 500
 ANNOTATOR_COOKIE = "vinadv_annotator"
 DEFAULT_ANNOTATOR = "anonymous"
+#: the pages use their own scripts, styles and images only (the templates hold no inline script or style)
+CONTENT_SECURITY_POLICY = ("default-src 'self'; img-src 'self' data:; style-src 'self'; "
+                           "script-src 'self'; object-src 'none'; base-uri 'none'; form-action 'self'; "
+                           "frame-ancestors 'none'")
 _ANNOTATOR_RE = re.compile(r"^[\w .@+\-]{1,64}$")
 _MAX_ID = 2**63 - 1
 _COUNTS_TTL_S = 10.0
@@ -91,6 +95,14 @@ def create_app(store: Store, *, secret_key: bytes | str | None = None, allow_rem
             abort(400, description=f"Host {request.host!r} refused: this server only answers on loopback "
                                    "addresses (start it with --allow-remote to serve other hosts)")
         return None
+
+    @app.after_request
+    def _security_headers(response):
+        # every response: no framing (clickjacking of the label buttons), scripts and styles from this server only
+        response.headers.setdefault("Content-Security-Policy", CONTENT_SECURITY_POLICY)
+        response.headers.setdefault("X-Frame-Options", "DENY")
+        response.headers.setdefault("X-Content-Type-Options", "nosniff")
+        return response
 
     @app.errorhandler(HTTPException)
     def _error(exc: HTTPException):
@@ -135,6 +147,8 @@ def create_app(store: Store, *, secret_key: bytes | str | None = None, allow_rem
         _only_params(set(_FILTER_PARAMS))
         state.require_run(run_id)
         state.require_pair(run_id, pair_index)
+        if state.store.readonly:
+            abort(403, description=f"database {state.store.url} is opened read-only: labels cannot be stored")
         for name in request.form:
             if name not in ("csrf_token", "label", "annotator"):
                 raise BadRequest(f"unknown form field {name!r}")

@@ -1,0 +1,119 @@
+"""Small valid vinadv files (maps, paths, pairs, weights, classifier model, database) and ways to rewrite them, for
+the bad-input tests (tests/grid/test_checks.py, tests/test_fuzz_loaders.py)."""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SIZE = 10
+
+
+@functools.cache
+def _maps(n_starts: int):
+    from vinadv.grid import generate_maps
+
+    return generate_maps(12, SIZE, seed=3, n_starts=n_starts)
+
+
+@functools.cache
+def _model():
+    from vinadv.planners.testing import planning_vin
+
+    return planning_vin(SIZE, seed=1, noise=0.1)
+
+
+def write_maps(path: Path) -> Path:
+    _maps(3).save(path)
+    return path
+
+
+def write_paths(path: Path) -> Path:
+    from vinadv.planners.engine import plan_maps
+    from vinadv.planners.pathset import PathSet
+
+    maps = _maps(3)
+    result = plan_maps(maps.obstacles, maps.goals, maps.starts, _model(), maps.corner_cutting)
+    PathSet.from_result(result, maps.n_starts, maps.size, maps.corner_cutting, model="test").save(path)
+    return path
+
+
+def write_pairs(path: Path) -> Path:
+    from vinadv.attacks.strategies import make_attack
+
+    maps = _maps(1)
+    result = make_attack("random", per_map=2, seed=0).attack(maps.obstacles, maps.starts[:, 0], maps.goals, _model(),
+                                                              maps.corner_cutting)
+    result.pairs.save(path)
+    return path
+
+
+def write_weights(path: Path) -> Path:
+    from vinadv.planners.weights import save_vin
+
+    save_vin(_model(), path)
+    return path
+
+
+def write_classifier(path: Path) -> Path:
+    from vinadv.classify import SVMImageClassifier, label_batch
+    from vinadv.classify.synthetic import synthetic_pairs
+
+    batch = synthetic_pairs(60, size=8, seed=2, mix=True)
+    labels = label_batch(batch).labels
+    keep = np.flatnonzero(np.isin(labels, ("DP", "FP")))
+    SVMImageClassifier().fit(batch.subset(keep), labels[keep]).save(path)
+    return path
+
+
+def write_database(path: Path) -> Path:
+    import sqlite3
+
+    from vinadv.store import Store
+    from vinadv.store.synthetic import random_records
+
+    with Store.open(str(path)) as store:
+        store.write_pairs(store.create_run("fuzz"), random_records(6, size=5, seed=1))
+    conn = sqlite3.connect(path)  # one self-contained file (no -wal) so byte mutations reach every page
+    conn.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    conn.execute("PRAGMA journal_mode=DELETE")
+    conn.close()
+    return path
+
+
+def read_npz(path: Path) -> dict[str, np.ndarray]:
+    with np.load(path, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}
+
+
+def rewrite_npz(src: Path, dst: Path, **changes) -> Path:
+    """`src`'s arrays with `changes` (name=array, or name=None to drop it) written to `dst`."""
+    arrays = read_npz(src)
+    for name, value in changes.items():
+        if value is None:
+            arrays.pop(name, None)
+        else:
+            arrays[name] = np.asarray(value)
+    with open(dst, "wb") as fh:
+        np.savez(fh, **arrays)
+    return dst
+
+
+@contextlib.contextmanager
+def tmpfs(path: Path, size: str = "4M", options: str = ""):
+    """A small tmpfs mounted at `path` (`options` like ",ro"): a full or read-only file system for a test. Root
+    only; the test is skipped where mounting is not allowed."""
+    path.mkdir(parents=True, exist_ok=True)
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}{options}", "tmpfs", str(path)], check=False,
+                          capture_output=True)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
+    try:
+        yield path
+    finally:
+        subprocess.run(["umount", "-l", str(path)], check=False)
