@@ -61,8 +61,12 @@ def map_legend(fig, axes, **kwargs) -> None:
         for handle, label in zip(*ax.get_legend_handles_labels()):
             handles.setdefault(label, handle)
     if handles:
-        options = {"loc": "lower center", "ncol": min(len(handles), 5), "fontsize": 8, "frameon": False,
-                   "bbox_to_anchor": (0.5, -0.02), **kwargs}
+        from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+        # under constrained layout an "outside" legend gets its own room; else it hangs below the axes
+        place = ({"loc": "outside lower center"} if isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
+                 else {"loc": "lower center", "bbox_to_anchor": (0.5, -0.02)})
+        options = {**place, "ncol": min(len(handles), 5), "fontsize": 8, "frameon": False, **kwargs}
         fig.legend(list(handles.values()), list(handles), **options)
 
 

@@ -77,7 +77,9 @@ def example_pairs(records, stem: Path, columns: int = 4, distances=None) -> list
     n = len(records)
     columns = max(1, min(columns, n))
     rows = -(-n // columns)
-    fig, axes = plt.subplots(2 * rows, columns, figsize=(2.3 * columns, 4.6 * rows), squeeze=False)
+    # constrained: the distances under an adversarial map stay clear of the title of the map below
+    fig, axes = plt.subplots(2 * rows, columns, figsize=(2.3 * columns, 4.8 * rows), squeeze=False,
+                             layout="constrained")
     for ax in axes.ravel():
         ax.axis("off")
     for i in range(n):
