@@ -118,8 +118,8 @@ def bad_files(tmp_path):
     torch.save({"format": WEIGHTS_FORMAT, "config": {"k": -1}, "state_dict": state}, tmp_path / "config.pt")
     torch.save([1, 2, 3], tmp_path / "list.pt")
     return {
-        "garbage.pt": "not a readable weights file",
-        "truncated.pt": "not a readable weights file",
+        "garbage.pt": "not a vinadv/PyTorch weights file",
+        "truncated.pt": "not a vinadv/PyTorch weights file",
         "shape.pt": "'fc.weight' has shape",
         "version.pt": "not supported",
         "missing_key.pt": "lacks",
