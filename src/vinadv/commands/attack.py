@@ -6,16 +6,15 @@ import argparse
 import json
 import time
 
-from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.grid.mapset import MapSet
-from vinadv.planners.weights import load_vin
+from vinadv.commands import LazyChoices
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("attack", help="make adversarial maps (one added obstacle) from a maps file")
     p.add_argument("--maps", required=True, help="maps file (.npz from `vinadv maps generate`)")
-    p.add_argument("--strategy", required=True, choices=list(STRATEGIES), help="attack strategy")
+    p.add_argument("--strategy", required=True, choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
+                   metavar="STRATEGY", help="attack strategy: %(choices)s")
     p.add_argument("--out", required=True, help="output pairs file (.npz)")
     p.add_argument("--per-map", type=int, default=1,
                    help="pairs per map (default 1; 0 with exhaustive: every valid cell)")
@@ -54,7 +53,10 @@ def print_counts(summary: dict) -> None:
 
 
 def cmd_attack(args: argparse.Namespace) -> int:
+    from vinadv.attacks.strategies import make_attack
+    from vinadv.grid.mapset import MapSet
     from vinadv.identify import identify, rule_strength  # scikit-learn behind it: imported for this command only
+    from vinadv.planners.weights import load_vin
 
     maps = MapSet.load(args.maps)
     model = load_vin(args.weights, size=maps.size)

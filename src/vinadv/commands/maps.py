@@ -9,7 +9,6 @@ import time
 import numpy as np
 
 from vinadv.errors import InputError
-from vinadv.grid import MapSet, generate_maps, obstacle_fraction
 
 
 def register(subparsers) -> None:
@@ -38,6 +37,8 @@ def register(subparsers) -> None:
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
+    from vinadv.grid import generate_maps, obstacle_fraction
+
     t0 = time.perf_counter()
     maps = generate_maps(args.n, args.size, args.seed, args.starts, corner_cutting=not args.no_corner_cutting)
     elapsed = time.perf_counter() - t0
@@ -57,8 +58,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    from vinadv.grid.draw import draw_map, save_figure
     import matplotlib.pyplot as plt
+
+    from vinadv.grid import MapSet
+    from vinadv.grid.draw import draw_map, save_figure
 
     maps = MapSet.load(args.maps)
     if not 0 <= args.index < len(maps):
