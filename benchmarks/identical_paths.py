@@ -68,7 +68,8 @@ def main() -> None:
             "mean_moves": round(float(ref.paths.lengths.mean() - 1), 2),
             "action_cells": int(actions.size), "undecided_cells": int((~decided).sum()),
             "decided_cells_differing_from_torch_argmax": int((actions[decided] != torch_actions[decided]).sum()),
-            "rollouts_redone_with_torch": int(stats.get("torch_rollouts", 0)),
+            "near_tie_rollouts": int(stats.get("near_tie_rollouts", 0)),
+            "near_tie_maps": int(stats.get("near_tie_maps", 0)),
             "reference_seconds": round(ref_s, 1),
         })
         if not args.json:

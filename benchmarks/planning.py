@@ -26,7 +26,8 @@ import numpy as np
 import torch
 
 from vinadv.grid import generate_maps
-from vinadv.planners.engine import N_THREADS, action_maps, plan_batch
+from vinadv.planners.batching import N_THREADS
+from vinadv.planners.engine import action_maps, plan_batch
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input

@@ -7,6 +7,7 @@ Each module in `vinadv.commands` exposes `register(subparsers)`, which adds its 
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import os
 import sys
@@ -65,6 +66,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("vinadv: interrupted", file=sys.stderr)
         return 130
+    if argv is None:
+        # Run as the program, which exits next. The interpreter's shutdown runs the garbage collector over every
+        # object PyTorch and the rest created (hundreds of thousands): after a command that imported PyTorch, exit
+        # took ~0.5 s on a quiet machine and 8 s beside busy ones; 2 s with them frozen (left to reference counting).
+        gc.freeze()
     return int(code or 0)
 
 

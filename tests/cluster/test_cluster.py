@@ -77,10 +77,10 @@ def test_workers_are_single_threaded(cluster):
         single_threaded()
         import numba
 
-        from vinadv.planners import engine
+        from vinadv.planners import batching
 
         return (torch.get_num_threads(), numba.get_num_threads(), os.environ.get("NUMBA_NUM_THREADS"),
-                getattr(engine, "N_THREADS", 1))
+                batching.N_THREADS)
 
     assert set(client.run(threads).values()) == {(1, 1, "1", 1)}
 

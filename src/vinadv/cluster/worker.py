@@ -39,10 +39,9 @@ def single_threaded() -> None:
 
     torch.set_num_threads(1)
     numba.set_num_threads(1)
-    from vinadv.planners import engine
+    from vinadv.planners.batching import set_threads
 
-    if hasattr(engine, "N_THREADS"):  # the engine's own thread pool over maps (sized from the CPU affinity)
-        engine.N_THREADS = 1
+    set_threads(1)  # the planners' own thread pool over maps (sized from the CPU affinity)
     _THREAD_STATE.done = True
 
 

@@ -6,17 +6,15 @@ import argparse
 import json
 import time
 
-from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.grid.mapset import MapSet
-from vinadv.outfile import check_output_path
-from vinadv.planners.weights import load_vin
+from vinadv.commands import LazyChoices
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("attack", help="make adversarial maps (one added obstacle) from a maps file")
     p.add_argument("--maps", required=True, help="maps file (.npz from `vinadv maps generate`)")
-    p.add_argument("--strategy", required=True, choices=list(STRATEGIES), help="attack strategy")
+    p.add_argument("--strategy", required=True, choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
+                   metavar="STRATEGY", help="attack strategy: %(choices)s")
     p.add_argument("--out", required=True, help="output pairs file (.npz)")
     p.add_argument("--per-map", type=int, default=1,
                    help="pairs per map (default 1; 0 with exhaustive: every valid cell)")
@@ -88,8 +86,12 @@ def print_counts(summary: dict) -> None:
 
 
 def cmd_attack(args: argparse.Namespace) -> int:
+    from vinadv.attacks.strategies import make_attack
     from vinadv.classify.harm import check_tolerances
+    from vinadv.grid.mapset import MapSet
     from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
+    from vinadv.outfile import check_output_path
+    from vinadv.planners.weights import load_vin
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder

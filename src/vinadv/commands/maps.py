@@ -7,8 +7,6 @@ import json
 import time
 
 from vinadv.errors import InputError
-from vinadv.grid import MapSet, generate_maps, obstacle_fraction
-from vinadv.outfile import check_output_path
 
 
 def register(subparsers) -> None:
@@ -40,6 +38,9 @@ def register(subparsers) -> None:
 def cmd_generate(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
+    from vinadv.grid import generate_maps, obstacle_fraction
+    from vinadv.outfile import check_output_path
+
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     t0 = time.perf_counter()
     with tqdm(total=max(args.n, 0), unit="map", desc="maps", disable=args.quiet or args.json) as bar:
@@ -62,8 +63,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    from vinadv.grid.draw import draw_map, map_legend, save_figure
     import matplotlib.pyplot as plt
+
+    from vinadv.grid import MapSet
+    from vinadv.grid.draw import draw_map, map_legend, save_figure
 
     maps = MapSet.load(args.maps)
     if not 0 <= args.index < len(maps):
@@ -134,6 +137,7 @@ def cmd_import(args: argparse.Namespace) -> int:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    from vinadv.grid import MapSet
     from vinadv.interop.maps import export_maps
 
     maps = MapSet.load(args.maps)

@@ -6,13 +6,8 @@ import argparse
 import json
 import time
 
-import numpy as np
-
 from vinadv.errors import InputError
-from vinadv.grid import MapSet
-from vinadv.outfile import check_output_path
-from vinadv.planners.engine import DEFAULT_CHUNK, plan_maps
-from vinadv.planners.pathset import PathSet
+from vinadv.planners.batching import DEFAULT_CHUNK
 
 
 def register(subparsers) -> None:
@@ -28,7 +23,13 @@ def register(subparsers) -> None:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from vinadv.planners.weights import load_vin, weights_checksum, default_weights_path
+    import numpy as np
+
+    from vinadv.grid import MapSet
+    from vinadv.outfile import check_output_path
+    from vinadv.planners.engine import plan_maps
+    from vinadv.planners.pathset import PathSet
+    from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
 
     if args.chunk_size < 1:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")

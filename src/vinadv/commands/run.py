@@ -6,8 +6,8 @@ import argparse
 import json
 import time
 
-from vinadv.attacks.strategies import STRATEGIES
 from vinadv.cluster import add_cluster_arguments, open_cluster
+from vinadv.commands import LazyChoices
 from vinadv.commands.attack import add_harm_arguments, add_objective_argument, attack_summary, print_counts
 from vinadv.errors import InputError
 
@@ -16,7 +16,9 @@ def register(subparsers) -> None:
     run = subparsers.add_parser("run", help="the main job: maps -> attack -> identify -> store (-> report)")
     run.add_argument("--n", type=int, default=5000, help="maps (default 5000)")
     run.add_argument("--size", type=int, default=28, help="map side N (default 28)")
-    run.add_argument("--attack", default="near-path", choices=list(STRATEGIES), help="attack strategy")
+    run.add_argument("--attack", default="near-path",
+                     choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"), metavar="STRATEGY",
+                     help="attack strategy: %(choices)s (default near-path)")
     run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     run.add_argument("--per-map", type=int, default=1, help="pairs per map (default 1)")
     run.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map")

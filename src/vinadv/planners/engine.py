@@ -8,29 +8,26 @@ float32 PyTorch VIN at every step). The engine gets there differently, map by ma
    logits, the lowest index on ties) is computed only when a rollout stands on it, about 15 cells of 784.
 3. Near ties. The engine's arithmetic is not torch's, so logits differ by rounding; where the two best logits of a
    cell are closer than a margin that bounds that difference, the cell is uncertain, and a rollout that steps on
-   one is re-done with torch's own value map for that map, the very numbers the reference computes (replayed bit for
-   bit by `vinadv.planners.torch_replay`, ~0.5 ms instead of the ~3 ms of a batch-1 `q_values`), so a near tie is
-   decided as the reference decides it.
+   one is re-done (same compiled rollout) with the reference's own decision at every cell of that map:
+   `torch_replay.exact_actions`, from PyTorch's value map replayed bit for bit without calling PyTorch (under
+   1 ms a map, where a batch-1 `q_values` costs ~3 ms on a quiet core and far more beside a busy one).
 
-`action_maps` gives the action of every cell (uncertain: -1), for inspection and benchmarks.
+The step limit 2L comes from an A* search (`vinadv.grid.optimal_moves`) run only for the few rollouts that get
+that far; maps are split between threads by `vinadv.planners.batching.over_maps`. `action_maps` gives the action
+of every cell (uncertain: -1), for inspection and benchmarks.
 """
 
 from __future__ import annotations
-
-import functools
-import os
-from concurrent.futures import ThreadPoolExecutor
-from typing import Callable
 
 import numba
 import numpy as np
 import torch
 
 from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.optimal_moves import optimal_moves_kernel
 from vinadv.grid.paths import PackedPaths
-from vinadv.grid.shortest_paths import heap_pop, heap_push
+from vinadv.planners.batching import DEFAULT_CHUNK, over_maps
 from vinadv.planners.flat import layout, zero_row_gaps
-from vinadv.planners.reference import rollout
 from vinadv.planners.result import (
     COLLISION,
     GOAL,
@@ -40,13 +37,11 @@ from vinadv.planners.result import (
     PlanResult,
     check_plan_inputs,
 )
-from vinadv.planners.torch_replay import best_and_gap, exact_policy
+from vinadv.planners.torch_replay import best_and_gap, exact_actions
 from vinadv.planners.vin import GOAL_VALUE, VIN
 
-__all__ = ["PlanResult", "TERMINATIONS", "plan_batch", "action_maps"]
+__all__ = ["DEFAULT_CHUNK", "PlanResult", "TERMINATIONS", "plan_batch", "plan_maps", "action_maps"]
 
-#: maps per chunk: bounds the memory of the path buffers (N * N cells per rollout, touched only as far as used).
-DEFAULT_CHUNK = 4096
 #: a cell is uncertain when its two best logits are closer than REL_MARGIN * (logit scale of its map).
 REL_MARGIN = 5e-6
 UNDECIDED = -1  # rollout code: stepped on an uncertain cell, to be re-done with torch's logits
@@ -65,28 +60,6 @@ def action_maps(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndar
         obstacles[lo:hi], goals[lo:hi], p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k, REL_MARGIN,
         actions[lo:hi]))
     return actions
-
-
-N_THREADS = max(1, min(len(os.sched_getaffinity(0)), 8))
-
-
-@functools.cache
-def _pool() -> ThreadPoolExecutor:
-    return ThreadPoolExecutor(N_THREADS, thread_name_prefix="vinadv-plan")
-
-
-def over_maps(b: int, work: Callable[[int, int], None], threads: int = N_THREADS) -> None:
-    """`work(lo, hi)` over `range(b)` split between `threads` threads (at most N_THREADS), for nogil kernels.
-
-    Plain threads over nogil kernels rather than Numba's OpenMP layer: OpenMP workers left spinning slow down
-    torch's own OpenMP pool, which the near-tie fallback uses right after.
-    """
-    threads = max(1, min(threads, N_THREADS))
-    if threads == 1 or b < 2 * threads:
-        work(0, b)
-        return
-    bounds = np.linspace(0, b, threads + 1).astype(int)
-    list(_pool().map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
 
 
 class FoldedVIN:
@@ -297,63 +270,89 @@ def _decide(q, fc, n, rel_margin, actions):
 def _plan_kernel(lo, hi, obstacles, goals, starts, reward_w, reward_b, goal_value, q_w, w, fc, k, rel_margin,
                  corner_cutting, deltas, cells, lengths, terms):
     """Maps lo..hi-1: value map, then the rollouts of the map's S starts (rollout b * S + s), deciding the action
-    of a cell only when a rollout stands on it. cells: `(B * S, N * N, 2)`; writes lengths and terms `(B * S,)`.
-
-    The step limit 2L needs L, the optimal move count (an A* search); a rollout needs it only once it has made
-    2 * max(|dr|, |dc|) moves (a lower bound of 2L), which few do, so L is searched for then.
-    """
+    of a cell only when a rollout stands on it. cells: `(B * S, N * N, 2)`; writes lengths and terms `(B * S,)`."""
     n, lq, n_starts = obstacles.shape[1], q_w.shape[0], starts.shape[1]
-    width, p0 = layout(n)[:2]
     reward_q, q, v, vm, vp, best, best2, work = _scratch(n, lq)
     logits = np.empty(fc.shape[0])
     stamp = np.zeros((n, n), dtype=np.int64)  # t + 1 on the cells rollout t has visited
-    one_start, one_map, one_moves = np.empty((1, 2), dtype=np.int64), np.empty(1, dtype=np.int64), np.empty(1, np.int64)
+    no_actions = np.empty((0, 0), dtype=np.int8)
     for b in range(lo, hi):
         _reward_terms(obstacles[b], goals[b, 0], goals[b, 1], reward_w, reward_b, goal_value, q_w, reward_q, work)
         _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n)
         margin = _margin(q, fc, n, rel_margin)
-        gr, gc = goals[b, 0], goals[b, 1]
         for s in range(n_starts):
-            t = b * n_starts + s
-            r, c = starts[b, s, 0], starts[b, s, 1]
-            cells[t, 0, 0] = r
-            cells[t, 0, 1] = c
-            length = 1
-            stamp[r, c] = t + 1
-            limit, exact = 2 * max(abs(r - gr), abs(c - gc)), False
-            while True:
-                if r == gr and c == gc:
-                    term = GOAL
-                    break
-                if length - 1 >= limit and not exact:
-                    one_start[0, 0], one_start[0, 1], one_map[0] = starts[b, s, 0], starts[b, s, 1], b
-                    _optimal_moves(obstacles, goals, one_start, one_map, corner_cutting, deltas, one_moves)
-                    limit, exact = 2 * (one_moves[0] if one_moves[0] >= 0 else n * n), True
-                if length - 1 >= limit:
-                    term = STEP_LIMIT
-                    break
-                a = _action_at(q, fc, p0 + r * width + c, margin, logits)
-                if a < 0:
-                    term = UNDECIDED
-                    break
-                dr, dc = deltas[a, 0], deltas[a, 1]
-                nr, nc = r + dr, c + dc
-                if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[b, nr, nc]:
-                    term = COLLISION
-                    break
-                if not corner_cutting and dr != 0 and dc != 0 and (obstacles[b, nr, c] or obstacles[b, r, nc]):
-                    term = COLLISION
-                    break
-                if stamp[nr, nc] == t + 1:
-                    term = LOOP
-                    break
-                r, c = nr, nc
-                stamp[r, c] = t + 1
-                cells[t, length, 0] = r
-                cells[t, length, 1] = c
-                length += 1
-            lengths[t] = length
-            terms[t] = term
+            _rollout(obstacles, goals, starts, b, s, q, fc, margin, logits, no_actions, corner_cutting, deltas, stamp,
+                     cells, lengths, terms)
+
+
+@numba.njit(cache=True, nogil=True)
+def _redo_kernel(rollouts, map_of, actions, obstacles, goals, starts, corner_cutting, deltas, cells, lengths, terms):
+    """Rollouts `rollouts (R,)` (index b * S + s) again, the action of every cell given: `actions[map_of[i]]`
+    `(N, N)` for rollout i (`exact_actions` of its map)."""
+    n, n_starts = obstacles.shape[1], starts.shape[1]
+    stamp = np.zeros((n, n), dtype=np.int64)
+    q, fc, logits = np.empty((0, 0), dtype=np.float32), np.empty((0, 0)), np.empty(0)  # unused: actions are given
+    for i in range(len(rollouts)):
+        b, s = rollouts[i] // n_starts, rollouts[i] % n_starts
+        _rollout(obstacles, goals, starts, b, s, q, fc, 0.0, logits, actions[map_of[i]], corner_cutting, deltas,
+                 stamp, cells, lengths, terms)
+
+
+@numba.njit(cache=True, nogil=True)
+def _rollout(obstacles, goals, starts, b, s, q, fc, margin, logits, actions, corner_cutting, deltas, stamp, cells,
+             lengths, terms):
+    """Rollout t = b * S + s (DESIGN.md's rule, as `reference.rollout`) into cells[t], lengths[t], terms[t]. The
+    action of a cell: `actions[r, c]` when `actions` is not empty, else `_action_at` on the map's q (UNDECIDED on
+    a near tie ends the rollout, to be re-done).
+
+    The step limit 2L needs L, the optimal move count (an A* search); a rollout needs it only once it has made
+    2 * max(|dr|, |dc|) moves (a lower bound of 2L), which few do, so L is searched for then."""
+    n, n_starts = obstacles.shape[1], starts.shape[1]
+    width, p0 = layout(n)[:2]
+    t = b * n_starts + s
+    r, c = starts[b, s, 0], starts[b, s, 1]
+    gr, gc = goals[b, 0], goals[b, 1]
+    cells[t, 0, 0] = r
+    cells[t, 0, 1] = c
+    length = 1
+    stamp[r, c] = t + 1
+    limit, exact = 2 * max(abs(r - gr), abs(c - gc)), False
+    while True:
+        if r == gr and c == gc:
+            term = GOAL
+            break
+        if length - 1 >= limit and not exact:
+            moves = np.empty(1, dtype=np.int64)
+            optimal_moves_kernel(obstacles, goals, starts[b, s : s + 1], np.full(1, b), corner_cutting, deltas, moves)
+            limit, exact = 2 * (moves[0] if moves[0] >= 0 else n * n), True
+        if length - 1 >= limit:
+            term = STEP_LIMIT
+            break
+        if actions.shape[0]:
+            a = actions[r, c]
+        else:
+            a = _action_at(q, fc, p0 + r * width + c, margin, logits)
+            if a < 0:
+                term = UNDECIDED
+                break
+        dr, dc = deltas[a, 0], deltas[a, 1]
+        nr, nc = r + dr, c + dc
+        if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[b, nr, nc]:
+            term = COLLISION
+            break
+        if not corner_cutting and dr != 0 and dc != 0 and (obstacles[b, nr, c] or obstacles[b, r, nc]):
+            term = COLLISION
+            break
+        if stamp[nr, nc] == t + 1:
+            term = LOOP
+            break
+        r, c = nr, nc
+        stamp[r, c] = t + 1
+        cells[t, length, 0] = r
+        cells[t, length, 1] = c
+        length += 1
+    lengths[t] = length
+    terms[t] = term
 
 
 def plan_batch(
@@ -428,93 +427,15 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
         lo, hi, obstacles, goals, starts, p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k, REL_MARGIN,
         bool(corner_cutting), ACTION_DELTAS, cells, lengths, terms))
     undecided = np.flatnonzero(terms == UNDECIDED)
-    stats["torch_rollouts"] = stats.get("torch_rollouts", 0) + len(undecided)
-    if len(undecided):  # rare: a rollout that stepped on a near tie is re-done with torch's own logits
-        map_index = undecided // s
-        flat_starts = starts.reshape(-1, 2)[undecided]
-        limits = _limits(obstacles, goals, flat_starts, map_index, corner_cutting)
-        policies = {}  # one PyTorch value map per map, shared by that map's re-done rollouts
-        for t, m, start, limit in zip(undecided, map_index, flat_starts, limits):
-            if m not in policies:
-                policies[m] = exact_policy(model, obstacles[m], goals[m])
-            path, term = rollout(policies[m], obstacles[m], start, goals[m], int(limit), corner_cutting)
-            cells[t, : len(path)] = path
-            lengths[t] = len(path)
-            terms[t] = term
+    if len(undecided):  # rare: a rollout that stepped on a near tie is re-done with the reference's own decisions
+        maps, map_of = np.unique(undecided // s, return_inverse=True)
+        actions = exact_actions(model, obstacles[maps], goals[maps])
+        _redo_kernel(undecided, map_of, actions, obstacles, goals, starts, bool(corner_cutting), ACTION_DELTAS,
+                     cells, lengths, terms)
+        stats["near_tie_maps"] = stats.get("near_tie_maps", 0) + len(maps)
+    stats["near_tie_rollouts"] = stats.get("near_tie_rollouts", 0) + len(undecided)
     offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
     np.cumsum(lengths, out=offsets[1:])
     longest = int(lengths.max(initial=0))
     packed = cells[:, :longest][np.arange(longest)[None, :] < lengths[:, None]]
     return PlanResult(paths=PackedPaths(packed, offsets), termination=terms)
-
-
-def _limits(obstacles, goals, starts, map_index, corner_cutting) -> np.ndarray:
-    """Step limits 2L of rollouts from `starts (R, 2)` on maps `map_index (R,)` (L = optimal move count; N * N
-    when the goal is unreachable), `(R,)` int64."""
-    out = np.empty(len(starts), dtype=np.int64)
-    _optimal_moves(obstacles, goals, np.ascontiguousarray(starts, dtype=np.int64),
-                   np.ascontiguousarray(map_index, dtype=np.int64), bool(corner_cutting), ACTION_DELTAS, out)
-    n = obstacles.shape[1]
-    return 2 * np.where(out < 0, n * n, out)
-
-
-@numba.njit(cache=True, nogil=True)
-def _optimal_moves(obstacles, goals, starts, map_index, corner_cutting, deltas, out):
-    """A* from each start to its goal (octile heuristic, consistent), stopping at the goal: the move count of an
-    optimal path, -1 when unreachable. Costs are kept as integer pairs (a orthogonal, b diagonal moves) and compared
-    as a + b * sqrt(2): an optimal cost fixes a and b, so the move count a + b is that of every optimal path."""
-    n = obstacles.shape[1]
-    sqrt2 = np.sqrt(2.0)
-    cap = 8 * n * n + 1
-    heap_key = np.empty(cap)
-    heap_cell = np.empty(cap, dtype=np.int64)
-    g_a = np.empty(n * n, dtype=np.int64)
-    g_b = np.empty(n * n, dtype=np.int64)
-    seen = np.zeros(n * n, dtype=np.int64)  # stamp: t + 1 once the cell has a tentative cost in this search
-    done = np.zeros(n * n, dtype=np.int64)
-    for t in range(len(starts)):
-        m = map_index[t]
-        sr, sc = starts[t, 0], starts[t, 1]
-        gr, gc = goals[m, 0], goals[m, 1]
-        stamp = t + 1
-        if obstacles[m, sr, sc] or obstacles[m, gr, gc]:  # as shortest_distances: obstacles are unreachable
-            out[t] = -1
-            continue
-        start = sr * n + sc
-        g_a[start] = 0
-        g_b[start] = 0
-        seen[start] = stamp
-        size = heap_push(heap_key, heap_cell, 0, 0.0, start)
-        result = -1
-        while size > 0:
-            _, cell, size = heap_pop(heap_key, heap_cell, size)
-            if done[cell] == stamp:
-                continue
-            done[cell] = stamp
-            r, c = cell // n, cell % n
-            if r == gr and c == gc:
-                result = g_a[cell] + g_b[cell]
-                break
-            for a in range(8):
-                dr, dc = deltas[a, 0], deltas[a, 1]
-                nr, nc = r + dr, c + dc
-                if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[m, nr, nc]:
-                    continue
-                diag = dr != 0 and dc != 0
-                if diag and not corner_cutting and (obstacles[m, nr, c] or obstacles[m, r, nc]):
-                    continue
-                nb = nr * n + nc
-                if done[nb] == stamp:
-                    continue
-                na = g_a[cell] + (0 if diag else 1)
-                nbb = g_b[cell] + (1 if diag else 0)
-                g = na + nbb * sqrt2
-                if seen[nb] == stamp and g_a[nb] + g_b[nb] * sqrt2 <= g:
-                    continue
-                seen[nb] = stamp
-                g_a[nb] = na
-                g_b[nb] = nbb
-                dy, dx = abs(nr - gr), abs(nc - gc)
-                key = g + (max(dy, dx) - min(dy, dx)) + min(dy, dx) * sqrt2
-                size = heap_push(heap_key, heap_cell, size, key, nb)
-        out[t] = result

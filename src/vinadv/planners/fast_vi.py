@@ -18,7 +18,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from vinadv.planners.engine import over_maps
+from vinadv.planners.batching import over_maps
 
 
 def _over_maps(kernel, b: int, *arrays) -> None:

@@ -1,31 +1,38 @@
-"""PyTorch's own value map for one map, bit for bit, in a fraction of PyTorch's time: how the engine settles near ties.
+"""PyTorch's own value map and policy for one map, bit for bit, without PyTorch: how the engine settles near ties.
 
 Where two logits of a cell are within rounding of each other, the engine must take the reference's decision, which is
 made by PyTorch's float32 arithmetic: a batch-1 `VIN.q_values`, then `fc` at the cell. That call costs ~3 ms at
-28x28, nearly all of it the overhead of the 3k small ops of the loop, each cheap and simple:
+28x28 on a quiet core, nearly all of it the overhead of the 3k small ops of the loop, and much more on a busy
+machine: with 2 PyTorch threads and another process holding a core, each small op waits for OpenMP threads (the h
+layer alone took 23 ms instead of 0.1 ms). Each op is cheap and simple to replay:
 
-- the 1 -> l_q 3x3 convolutions (the first q layer on r, then w on v at every step) go through ATen's
-  `slow_conv2d`: im2col (exact copies, zero padding), then a BLAS sgemm with K = 9, which builds each output as a
-  chain over the nine taps in kernel order, starting from 0; per output channel the chain is either fused
-  multiply-adds or multiply-then-add, depending on the BLAS kernel (with MKL on 2 threads: blocks of 8 channels
-  fused, the rest not; on 1 thread: all fused);
+- h, the 2 -> l_h 3x3 convolution with bias, and the 1 -> l_q 3x3 convolutions (the first q layer on r, then w on
+  v at every step) go through ATen's `slow_conv2d` at batch size 1: im2col (exact copies, zero padding), then a BLAS
+  sgemm with K = 9 x input channels, which builds each output as a chain over the taps (input channel, kernel row,
+  kernel column), starting from 0, then adds the bias; per output channel the chain is either fused multiply-adds
+  or multiply-then-add, depending on the BLAS kernel (MKL, 1 -> l_q on 2 threads: blocks of 8 channels fused, the
+  rest not; on 1 thread: all fused; h: all fused on 1 and 2 threads);
 - r, the 1x1 convolution l_h -> 1, is an sgemm with M = 1: one or two chains over the l_h channels (MKL on 2
   threads: fused, split at 128; on 1 thread: one unfused chain);
 - `q_r + conv` is one float32 add and the max over channels is exact.
 
-`replay_q_values` runs h through PyTorch (oneDNN; the same batch-1 call as `q_values`), then replays r, the first q
-layer and the k steps in compiled loops that round exactly as above. Which chains is measured, never assumed:
-`conv_modes` and `sum_order` run PyTorch's convolutions on random data once for each (map size, widths, PyTorch
-threads) and keep the chains that reproduce them bit for bit; the first `VERIFY_MAPS` maps of each setting are also
-compared whole with `VIN.q_values`. If a check fails, that setting uses `VIN.q_values` itself (slow, but exact).
+`replay_q_values` replays all of it in compiled loops that round exactly as above. Which chains is measured, never
+assumed: `conv_modes` and `sum_order` run PyTorch's convolutions on random data once for each (map size, widths,
+PyTorch threads) and keep the chains that reproduce them bit for bit; the first `VERIFY_MAPS` maps of each setting
+are also compared whole with `VIN.q_values`. If a check fails, that setting uses `VIN.q_values` itself (slow, but
+exact). So the only PyTorch calls are those checks, a few per setting and process.
 
-`exact_policy` then decides each cell from that value map: in float64 where the two best logits are further apart
-than any float32 evaluation of `fc` could move them (a rigorous bound), else with PyTorch's `fc` at the cell.
+"Bit for bit" means: equal to what PyTorch computes with the caller's `torch.get_num_threads()`, the setting the
+reference planner runs under (PyTorch's own float32 results depend on its thread count).
+
+`exact_actions` then decides every cell of a map from that value map: in float64 where the two best logits are
+further apart than any float32 evaluation of `fc` could move them (a rigorous bound), else with PyTorch's `fc` at
+the cell, a (1, l_q) x (l_q, A) product, as the reference computes it (rare: a few cells in thousands of maps).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -33,10 +40,9 @@ import torch
 import torch.nn.functional as F
 
 from vinadv.planners.flat import from_flat, layout, to_flat, zero_row_gaps
-from vinadv.planners.reference import torch_action_at
 from vinadv.planners.vin import VIN, make_input
 
-__all__ = ["conv_modes", "exact_policy", "replay_q_values", "sum_order"]
+__all__ = ["best_and_gap", "conv_modes", "exact_actions", "replay_q_values", "sum_order"]
 
 #: maps per setting whose replayed value map is compared with `VIN.q_values` before the replay is trusted alone
 VERIFY_MAPS = 2
@@ -44,37 +50,40 @@ VERIFY_MAPS = 2
 PROBES = 16
 _FLOAT32_UNIT_ROUNDOFF = 2.0**-24
 
-# (N, l_q, torch threads) -> per-channel fused flags; (N, l_h, torch threads) -> (fused, split); None where no
-# replay reproduces PyTorch
-_modes: dict[tuple[int, int, int], np.ndarray | None] = {}
+# (N, out channels, in channels, bias, torch threads) -> per-channel fused flags; (N, l_h, torch threads) ->
+# (fused, split); None where no replay reproduces PyTorch
+_modes: dict[tuple[int, int, int, bool, int], np.ndarray | None] = {}
 _orders: dict[tuple[int, int, int], tuple[bool, int] | None] = {}
 # (N, l_h, l_q, torch threads): maps checked whole against VIN.q_values; settings where one differed
 _verified: dict[tuple[int, int, int, int], int] = {}
 _failed: set[tuple[int, int, int, int]] = set()
 
 
-def conv_modes(n: int, l_q: int) -> np.ndarray | None:
-    """Per output channel, whether PyTorch's `conv2d((1, 1, N, N), (l_q, 1, 3, 3), padding=1)` chains its nine taps
-    with fused multiply-adds (True) or multiply-then-add (False), `(l_q,)` bool; None if neither chain reproduces
-    some channel bit for bit. Measured once per (N, l_q, PyTorch threads) on random data, then cached.
+def conv_modes(n: int, l_out: int, l_in: int = 1, bias: bool = False) -> np.ndarray | None:
+    """Per output channel, whether PyTorch's `conv2d((1, l_in, N, N), (l_out, l_in, 3, 3), padding=1)` (with a
+    bias added last when `bias`) chains its 9 * l_in taps with fused multiply-adds (True) or multiply-then-add
+    (False), `(l_out,)` bool; None if neither chain reproduces some channel bit for bit. Measured once per
+    (N, widths, bias, PyTorch threads) on random data, then cached.
 
     Several probes at scales from 1e-2 to 1e2: a BLAS may treat a few cells apart (seen: MKL on 2 threads at 9x9 and
     13x13 rounds two cells of the unfused channels otherwise), and one probe can round them alike by chance."""
-    key = (n, l_q, torch.get_num_threads())
+    key = (n, l_out, l_in, bias, torch.get_num_threads())
     if key not in _modes:
         rng = np.random.default_rng(0)
-        fused_ok, plain_ok = np.ones(l_q, bool), np.ones(l_q, bool)
+        fused_ok, plain_ok = np.ones(l_out, bool), np.ones(l_out, bool)
         for scale in np.logspace(-2, 2, PROBES):
-            v = (scale * rng.standard_normal((n, n))).astype(np.float32)
-            w = rng.standard_normal((l_q, 3, 3)).astype(np.float32)
+            v = (scale * rng.standard_normal((l_in, n, n))).astype(np.float32)
+            w = rng.standard_normal((l_out, l_in, 3, 3)).astype(np.float32)
+            b = rng.standard_normal(l_out).astype(np.float32) if bias else None
             with torch.no_grad():
-                want = F.conv2d(torch.from_numpy(v)[None, None], torch.from_numpy(w)[:, None], padding=1)[0].numpy()
-            flat_v = to_flat(v[None])[0]
-            fused, plain = np.empty((l_q, flat_v.size), np.float32), np.empty((l_q, flat_v.size), np.float32)
-            _conv_fused(flat_v, w, n, fused)
-            _conv_plain(flat_v, w, n, plain)
-            fused_ok &= (from_flat(fused, n) == want).reshape(l_q, -1).all(axis=1)
-            plain_ok &= (from_flat(plain, n) == want).reshape(l_q, -1).all(axis=1)
+                want = F.conv2d(torch.from_numpy(v)[None], torch.from_numpy(w),
+                                None if b is None else torch.from_numpy(b), padding=1)[0].numpy()
+            flat_v = to_flat(v)
+            for fused, ok in ((True, fused_ok), (False, plain_ok)):
+                out = np.empty((l_out, flat_v.shape[1]), np.float32)
+                _conv_chains(flat_v, w, n, np.full(l_out, fused), out)
+                got = _add_bias(from_flat(out, n), b)
+                ok &= (got == want).reshape(l_out, -1).all(axis=1)
         # a channel that both chains reproduce would leave its mode unknown; random data makes that vanishingly rare
         _modes[key] = fused_ok if np.all(fused_ok ^ plain_ok) else None
     return _modes[key]
@@ -100,22 +109,78 @@ def sum_order(n: int, l_h: int) -> tuple[bool, int] | None:
     return _orders[key]
 
 
-def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
-    """`model.q_values(x)[0]` for one map `x (1, 2, N, N)`, bit for bit: `(l_q, N, N)` float32.
+@dataclass(frozen=True)
+class _Weights:
+    """A VIN's float32 weights as numpy arrays, read once per batch of maps: h `(l_h, l_i, 3, 3)` and its bias,
+    r `(l_h,)`, q and w `(l_q, 1, 3, 3)`; fc `(A, l_q)` float64 for the certain decisions."""
 
-    PyTorch runs h (oneDNN); r, the first q layer and the k steps are replayed (`sum_order`, `conv_modes`)."""
-    n, l_h, l_q = x.shape[-1], model.config.l_h, model.config.l_q
-    modes, order = conv_modes(n, l_q), sum_order(n, l_h)
-    setting = (n, l_h, l_q, torch.get_num_threads())
-    if modes is None or order is None or setting in _failed:
-        return _torch_q_values(model, x)
+    h: np.ndarray
+    h_bias: np.ndarray
+    r: np.ndarray
+    q: np.ndarray
+    w: np.ndarray
+    fc: np.ndarray
+    k: int
+
+    @classmethod
+    def of(cls, model: VIN) -> _Weights:
+        def get(t: torch.Tensor) -> np.ndarray:
+            return np.ascontiguousarray(t.detach().cpu().numpy(), dtype=np.float32)
+
+        return cls(h=get(model.h.weight), h_bias=get(model.h.bias), r=get(model.r.weight[0, :, 0, 0]),
+                   q=get(model.q.weight), w=get(model.w), fc=model.fc.weight.detach().to(torch.float64).numpy(),
+                   k=int(model.config.k))
+
+
+def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
+    """`model.q_values(x)[0]` for one map `x (1, l_i, N, N)`, bit for bit (with the caller's PyTorch threads):
+    `(l_q, N, N)` float32."""
+    return _q_values(model, _Weights.of(model), x[0].numpy())
+
+
+def exact_actions(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+    """The reference's action at every cell (argmax of PyTorch's logits, lowest index on ties), `(M, N, N)` int8,
+    for obstacles `(M, N, N)` bool and goals `(M, 2)`: the replayed value map (`replay_q_values`), each cell
+    decided in float64 where that is certain, else by PyTorch's `fc` at the cell."""
+    p = _Weights.of(model)
+    x = make_input(obstacles, np.asarray(goals)).numpy()
+    gamma = p.fc.shape[1] * _FLOAT32_UNIT_ROUNDOFF
+    out = np.empty(np.shape(obstacles), dtype=np.int8)
+    for m in range(len(x)):  # per map: compiled loops (PyTorch only for a setting's first checks)
+        q = _q_values(model, p, x[m])
+        _certain_actions(q, p.fc, gamma, out[m])
+        unsure = np.argwhere(out[m] < 0)
+        if len(unsure):
+            q_t = torch.from_numpy(q[None])
+            for row, col in unsure:
+                out[m, row, col] = _torch_action(model, q_t, int(row), int(col))
+    return out
+
+
+def _torch_action(model: VIN, q: torch.Tensor, row: int, col: int) -> int:
+    """The reference's decision at one cell: `fc` on `q[arange(1), :, row, col]` as `VIN.forward` picks it, argmax
+    with the lowest index on ties (`np.argmax`)."""
     with torch.no_grad():
-        h = model.h(x)[0].numpy()
-    r = _sum_channels(h, model.r.weight.detach()[0, :, 0, 0].numpy(), *order)
-    flat_r = to_flat(r[None])[0]
-    q = np.zeros((l_q, flat_r.size), dtype=np.float32)
-    _conv_chains(flat_r, np.ascontiguousarray(model.q.weight.detach()[:, 0].numpy()), n, modes, q)
-    _replay_kernel(q, np.ascontiguousarray(model.w.detach()[:, 0].numpy()), int(model.config.k), n, modes)
+        logits = model.fc(q[torch.arange(1), :, torch.tensor([row]), torch.tensor([col])])
+    return int(np.argmax(logits[0].numpy()))
+
+
+def _q_values(model: VIN, p: _Weights, x: np.ndarray) -> np.ndarray:
+    """q of one map `x (l_i, N, N)` float32: replayed where the setting's chains are known and verified, else
+    `VIN.q_values` itself. `(l_q, N, N)` float32."""
+    l_i, n = x.shape[0], x.shape[-1]
+    l_h, l_q = p.h.shape[0], p.q.shape[0]
+    h_modes, q_modes, order = conv_modes(n, l_h, l_i, bias=True), conv_modes(n, l_q), sum_order(n, l_h)
+    setting = (n, l_h, l_q, torch.get_num_threads())
+    if h_modes is None or q_modes is None or order is None or setting in _failed:
+        return _torch_q_values(model, x)
+    flat_x = to_flat(x)
+    h = np.empty((l_h, flat_x.shape[1]), dtype=np.float32)
+    _conv_chains(flat_x, p.h, n, h_modes, h)
+    r = _sum_channels(_add_bias(from_flat(h, n), p.h_bias), p.r, *order)
+    q = np.empty((l_q, flat_x.shape[1]), dtype=np.float32)
+    _conv_chains(to_flat(r[None]), p.q, n, q_modes, q)
+    _replay_kernel(q, p.w, p.k, n, q_modes)
     q = from_flat(q, n)
     if _verified.get(setting, 0) < VERIFY_MAPS:
         want = _torch_q_values(model, x)
@@ -126,81 +191,78 @@ def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
     return q
 
 
-def exact_policy(model: VIN, obstacles: np.ndarray, goal: np.ndarray) -> Callable[[int, int], int]:
-    """The reference's policy on one map (`torch_action_at`: argmax of PyTorch's logits, lowest index on ties),
-    without re-running PyTorch: obstacles `(N, N)` bool, goal `(2,)`; returns `action_at(row, col)`."""
-    x = make_input(obstacles[None], np.asarray(goal)[None])
-    q = replay_q_values(model, x)
-    fc = model.fc.weight.detach().to(torch.float64).numpy()
-    gamma = fc.shape[1] * _FLOAT32_UNIT_ROUNDOFF
-    torch_at = torch_action_at(model, x, torch.from_numpy(q[None]))
-
-    def action_at(row: int, col: int) -> int:
-        a = _certain_action(q, fc, gamma, row, col)  # per cell: a rollout visits ~15 of them
-        return a if a >= 0 else torch_at(row, col)
-
-    return action_at
-
-
-def _torch_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
+def _torch_q_values(model: VIN, x: np.ndarray) -> np.ndarray:
     with torch.no_grad():
-        return model.q_values(x)[0].numpy()
+        return model.q_values(torch.from_numpy(np.ascontiguousarray(x))[None])[0].numpy()
 
 
-# Both chains run over the flat layout (`vinadv.planners.flat`), the nine taps read through views at their offsets; a real cell reads zeros where it
-# leaves the grid, as im2col does. Each chain starts from 0, as the BLAS kernels do.
+def _add_bias(x: np.ndarray, bias: np.ndarray | None) -> np.ndarray:
+    """x `(C, N, N)` float32 plus bias `(C,)` per channel, one float32 add, as the BLAS adds it after the chain."""
+    return x if bias is None else x + bias[:, None, None]
+
+
+# The chains run over the flat layout (`vinadv.planners.flat`), the taps read through views at their offsets; a real
+# cell reads zeros where it leaves the grid, as im2col does. Each chain starts from 0, as the BLAS kernels do, and
+# goes through the input channels in order, the nine taps of each in kernel order; `out` holds the running sum
+# between channels (a float32 store is exact).
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
 def _conv_fused(v, w, n, out):
-    """out[c] = the nine taps of w[c] chained in kernel order, acc = fma(w[c, tap], v[cell + tap], acc)."""
+    """out[o] = the taps of w[o] chained, acc = fma(w[o, c, tap], v[c, cell + tap], acc). v `(C, size)`,
+    w `(O, C, 3, 3)`, out `(O, size)` float32."""
     width, p0, length = layout(n)[:3]
-    u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]  # rows above, same, below
-    zero = np.float32(0.0)
-    for c in range(w.shape[0]):
-        w00, w01, w02, w10, w11, w12, w20, w21, w22 = w[c].ravel()
-        o = out[c, p0 : p0 + length]
-        for t in range(length):
-            acc = w00 * u0[t] + zero  # from 0, so that each add has one product to fuse with, the chain's own
-            acc = w01 * u0[t + 1] + acc
-            acc = w02 * u0[t + 2] + acc
-            acc = w10 * u1[t] + acc
-            acc = w11 * u1[t + 1] + acc
-            acc = w12 * u1[t + 2] + acc
-            acc = w20 * u2[t] + acc
-            acc = w21 * u2[t + 1] + acc
-            o[t] = w22 * u2[t + 2] + acc
+    for o in range(w.shape[0]):
+        acc = out[o, p0 : p0 + length]
+        acc[:] = 0.0  # so that each add has one product to fuse with, the chain's own
+        for c in range(w.shape[1]):
+            x = v[c]
+            u0, u1, u2 = x[p0 - width - 1 :], x[p0 - 1 :], x[p0 + width - 1 :]  # rows above, same, below
+            w00, w01, w02, w10, w11, w12, w20, w21, w22 = w[o, c].ravel()
+            for t in range(length):
+                a = w00 * u0[t] + acc[t]
+                a = w01 * u0[t + 1] + a
+                a = w02 * u0[t + 2] + a
+                a = w10 * u1[t] + a
+                a = w11 * u1[t + 1] + a
+                a = w12 * u1[t + 2] + a
+                a = w20 * u2[t] + a
+                a = w21 * u2[t + 1] + a
+                acc[t] = w22 * u2[t + 2] + a
 
 
 @numba.njit(cache=True, nogil=True)
 def _conv_plain(v, w, n, out):
     """As `_conv_fused`, each product rounded before it is added (compiled without `contract`: never fused)."""
     width, p0, length = layout(n)[:3]
-    u0, u1, u2 = v[p0 - width - 1 :], v[p0 - 1 :], v[p0 + width - 1 :]
-    zero = np.float32(0.0)
-    for c in range(w.shape[0]):
-        w00, w01, w02, w10, w11, w12, w20, w21, w22 = w[c].ravel()
-        o = out[c, p0 : p0 + length]
-        for t in range(length):
-            acc = w00 * u0[t] + zero
-            acc = w01 * u0[t + 1] + acc
-            acc = w02 * u0[t + 2] + acc
-            acc = w10 * u1[t] + acc
-            acc = w11 * u1[t + 1] + acc
-            acc = w12 * u1[t + 2] + acc
-            acc = w20 * u2[t] + acc
-            acc = w21 * u2[t + 1] + acc
-            o[t] = w22 * u2[t + 2] + acc
+    for o in range(w.shape[0]):
+        acc = out[o, p0 : p0 + length]
+        acc[:] = 0.0
+        for c in range(w.shape[1]):
+            x = v[c]
+            u0, u1, u2 = x[p0 - width - 1 :], x[p0 - 1 :], x[p0 + width - 1 :]
+            w00, w01, w02, w10, w11, w12, w20, w21, w22 = w[o, c].ravel()
+            for t in range(length):
+                a = w00 * u0[t] + acc[t]
+                a = w01 * u0[t + 1] + a
+                a = w02 * u0[t + 2] + a
+                a = w10 * u1[t] + a
+                a = w11 * u1[t + 1] + a
+                a = w12 * u1[t + 2] + a
+                a = w20 * u2[t] + a
+                a = w21 * u2[t + 1] + a
+                acc[t] = w22 * u2[t + 2] + a
 
 
 @numba.njit(cache=True, nogil=True)
 def _conv_chains(v, w, n, fused, out):
-    """out[c] = channel c of the convolution of v (flat) with w[c], chained as `fused[c]` says."""
-    for c in range(w.shape[0]):
-        if fused[c]:
-            _conv_fused(v, w[c : c + 1], n, out[c : c + 1])
+    """out[o] = output channel o of the convolution of v (flat, `(C, size)`) with w `(O, C, 3, 3)`, chained as
+    `fused[o]` says."""
+    for o in range(w.shape[0]):
+        if fused[o]:
+            _conv_fused(v, w[o : o + 1], n, out[o : o + 1])
         else:
-            _conv_plain(v, w[c : c + 1], n, out[c : c + 1])
+            _conv_plain(v, w[o : o + 1], n, out[o : o + 1])
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
@@ -235,24 +297,32 @@ def _sum_channels(h: np.ndarray, w: np.ndarray, fused: bool, split: int) -> np.n
 @numba.njit(cache=True, nogil=True)
 def _replay_kernel(q, w, k, n, fused):
     """In place: q `(l_q, size)` holds q_r on entry and the k-th step's q on exit (flat layout); each step
-    v = max over channels, q = q_r + conv(v), every channel's chain as `fused` says."""
+    v = max over channels, q = q_r + conv(v, w), w `(l_q, 1, 3, 3)`, every channel's chain as `fused` says."""
     lq = q.shape[0]
     p0, length = layout(n)[1:3]
     q_r = q.copy()
-    v = np.zeros(q.shape[1], dtype=np.float32)
-    vc = v[p0 : p0 + length]
+    v = np.zeros((1, q.shape[1]), dtype=np.float32)
+    vc = v[0, p0 : p0 + length]
     for _ in range(k):
         vc[:] = q[0, p0 : p0 + length]
         for c in range(1, lq):
             qc = q[c, p0 : p0 + length]
             for t in range(length):
                 vc[t] = np.maximum(vc[t], qc[t])
-        zero_row_gaps(v, n)
+        zero_row_gaps(v[0], n)
         _conv_chains(v, w, n, fused, q)
         for c in range(lq):
             qc, rc = q[c, p0 : p0 + length], q_r[c, p0 : p0 + length]
             for t in range(length):
                 qc[t] = rc[t] + qc[t]
+
+
+@numba.njit(cache=True, nogil=True)
+def _certain_actions(q, fc, gamma, out):
+    """`_certain_action` of every cell of q `(l_q, N, N)` into out `(N, N)` int8 (-1: not certain)."""
+    for i in range(q.shape[1]):
+        for j in range(q.shape[2]):
+            out[i, j] = _certain_action(q, fc, gamma, i, j)
 
 
 @numba.njit(cache=True, nogil=True)

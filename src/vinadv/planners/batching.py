@@ -1,0 +1,55 @@
+"""How the planners split a batch of maps: chunks (bound memory) and threads (`over_maps`).
+
+Light on purpose (standard library only): `vinadv plan --help` reads `DEFAULT_CHUNK` from here without loading
+Numba or PyTorch.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+
+#: maps per chunk of the planning engine: bounds the memory of its path buffers (N * N cells per rollout, touched
+#: only as far as used).
+DEFAULT_CHUNK = 4096
+#: threads of `over_maps`: the cores this process may use, at most 8. A Dask worker sets it to 1
+#: (`set_threads`).
+N_THREADS = max(1, min(len(os.sched_getaffinity(0)), 8))
+
+
+def set_threads(threads: int) -> None:
+    """Use at most `threads` threads in `over_maps` from now on."""
+    global N_THREADS
+    N_THREADS = max(1, int(threads))
+
+
+@functools.cache
+def _pool(threads: int) -> ThreadPoolExecutor:
+    """A pool of `threads` workers (one per thread count asked for: a pool's size bounds how many pieces run at
+    once)."""
+    return ThreadPoolExecutor(threads, thread_name_prefix="vinadv-plan")
+
+
+#: pieces per thread in `over_maps`, and the fewest maps in a piece
+PIECES_PER_THREAD = 4
+MIN_PIECE = 16
+
+
+def over_maps(b: int, work: Callable[[int, int], None], threads: int | None = None) -> None:
+    """`work(lo, hi)` over `range(b)` split between `threads` threads (default and at most `N_THREADS`), for
+    kernels that release the GIL (Numba `nogil=True`).
+
+    Plain threads rather than Numba's OpenMP layer: OpenMP workers left spinning slow down PyTorch's own OpenMP
+    pool, which callers use right after. Several pieces per thread, taken as threads come free: on a machine where
+    another process holds a core, the thread sharing that core does less of the work instead of holding up the
+    rest (one piece per thread made the job as slow as its slowest thread, about 2x).
+    """
+    threads = N_THREADS if threads is None else max(1, min(threads, N_THREADS))
+    pieces = min(threads * PIECES_PER_THREAD, b // MIN_PIECE)
+    if threads == 1 or pieces < 2:
+        work(0, b)
+        return
+    bounds = [b * i // pieces for i in range(pieces + 1)]
+    list(_pool(threads).map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))

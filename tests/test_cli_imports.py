@@ -1,0 +1,33 @@
+"""`vinadv --help`, `--version` and the help of commands that need no heavy library import none of them: the parser
+is built from light modules (behaviour, not timing: which modules a fresh interpreter loaded)."""
+
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("torch", "numba", "sklearn", "sqlalchemy", "scipy", "matplotlib", "distributed", "flask")
+
+
+def imported_modules(*argv: str) -> set[str]:
+    """Top-level packages a fresh `python -X importtime -m vinadv.cli ARGV` imported (it exits 0)."""
+    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "vinadv.cli", *argv], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = [line.split("|")[-1] for line in done.stderr.splitlines() if line.startswith("import time:")]
+    names = {line.strip().split(".")[0] for line in lines}
+    assert "vinadv" in names  # the importtime report was read
+    return names
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["maps", "generate", "--help"], ["plan", "--help"],
+                                  ["export", "--help"], ["report", "--help"], ["serve", "--help"]],
+                         ids=" ".join)
+def test_parser_imports_no_heavy_library(argv):
+    assert not imported_modules(*argv) & set(HEAVY)
+
+
+def test_a_command_still_checks_its_choices():
+    done = subprocess.run([sys.executable, "-m", "vinadv.cli", "run", "--attack", "nope", "--n", "1"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "near-path" in done.stderr and "nope" in done.stderr
