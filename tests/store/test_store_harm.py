@@ -63,6 +63,8 @@ def test_version_1_database_is_upgraded_on_open(db_url):
         page = store.page_pairs(run_id, limit=5)
         assert len(page) == 5 and all(r["harm"] is None and r["regret_a"] is None for r in page)
         assert store.page_pairs(run_id, harm="harmful") == []
+        with pytest.raises(InputError, match="opened without create"):
+            store.write_pairs(run_id, random_records(2, size=7, seed=9, first_index=500))
     assert _columns_and_version(db_url) == (columns, "1")
     with Store.open(db_url) as store:
         assert store.read_pairs(run_id).equals(old)  # the old rows: same values, harm NULL

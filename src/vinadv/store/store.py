@@ -311,6 +311,9 @@ class Store:
         all-or-nothing: a crash leaves whole batches only. `progress(n_rows)` is called after each batch.
         """
         run_id = int(run_id)
+        if self._absent_columns:
+            raise InputError(f"database {self.url}: schema version {PREVIOUS_SCHEMA_VERSION} opened without create; "
+                             "open it with create to upgrade it before writing")
         # strictly increasing, as jobs write them, means no duplicates: the sort of np.unique only otherwise
         increasing = bool((np.diff(records.pair_index) > 0).all())
         if not increasing and len(np.unique(records.pair_index)) != len(records):
