@@ -74,10 +74,6 @@ class PairHarm:
     def __len__(self) -> int:
         return len(self.harm)
 
-    def counts(self) -> dict[str, int]:
-        """Pairs per harm value, every value present."""
-        return {value: int(np.sum(self.harm == value)) for value in HARMS}
-
     @classmethod
     def concatenate(cls, parts: list[PairHarm]) -> PairHarm:
         """The pairs of `parts` in order (all computed with the same tolerances)."""
