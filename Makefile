@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 DEMO_DIR ?= demo-out
 
-.PHONY: venv browser test demo bench clean
+.PHONY: venv browser test test-fast demo bench clean
 
 venv: $(STAMP)
 
@@ -21,6 +21,10 @@ browser:
 
 test: venv browser
 	$(PY) -m pytest
+
+# the quick part of the suite while working (under a minute): everything not marked slow
+test-fast: venv
+	$(PY) -m pytest -m "not slow"
 
 demo: venv
 	mkdir -p $(DEMO_DIR)

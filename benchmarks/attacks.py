@@ -14,8 +14,9 @@ import time
 
 from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.grid import generate_maps
-from vinadv.identify import LABEL_STRENGTH, identify, rule_strength
+from vinadv.identify import identify, rule_strength
 from vinadv.planners.weights import load_vin
+from vinadv.vocabulary import LABEL_STRENGTH, label_counts, success_count
 
 PAPER = {"invalid": None, "UcP": 2088, "DP": 1076, "FP": 204, "UrP": 1632}
 
@@ -40,9 +41,9 @@ def main() -> None:
         result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength)
         seconds = time.perf_counter() - t0
         labels = identify(result.pairs).labels
-        counts = {label: int((labels == label).sum()) for label in LABEL_STRENGTH}
+        counts = label_counts(labels)
         valid = len(labels) - counts["invalid"]
-        success = counts["UrP"] + counts["FP"]
+        success = success_count(counts)
         rows.append({
             "strategy": name, "maps": args.n, "pairs": len(labels), "counts": counts,
             "success_rate": success / valid if valid else None, "planner_calls": result.planner_calls,

@@ -21,8 +21,8 @@ import numpy as np
 
 from vinadv.classify import (
     HybridClassifier,
+    PathPairBatch,
     balance_batch,
-    concat_batches,
     label_batch,
     make_fp_classifier,
     render_batch,
@@ -46,8 +46,8 @@ def python_rule(batch, t):
     """The DESIGN.md rule, one pair at a time in plain Python (the side-by-side reference)."""
     labels = []
     for i in range(len(batch)):
-        o = [tuple(c) for c in batch.o_cells[batch.o_offsets[i]:batch.o_offsets[i + 1]].tolist()]
-        a = [tuple(c) for c in batch.a_cells[batch.a_offsets[i]:batch.a_offsets[i + 1]].tolist()]
+        o = [tuple(c) for c in batch.path_o[i].tolist()]
+        a = [tuple(c) for c in batch.path_a[i].tolist()]
         goal = tuple(batch.goals[i].tolist())
         if not o or o[-1] != goal:
             labels.append("invalid")
@@ -75,35 +75,34 @@ def main(argv=None) -> int:
 
     if args.pairs:
         from vinadv.attacks.pairs import PairSet
-        from vinadv.classify import PathPairBatch
 
-        batch = PathPairBatch.from_pairset(PairSet.load(args.pairs))
+        batch = PathPairBatch.from_pairs(PairSet.load(args.pairs))
         source = f"real pairs from {args.pairs}"
     else:
         from vinadv.classify.synthetic import synthetic_pairs
 
         base = synthetic_pairs(min(args.n, 5000), 28, seed=0, mix=True)
-        batch = concat_batches([base] * -(-args.n // len(base))).subset(np.arange(args.n))
+        batch = PathPairBatch.concat([base] * -(-args.n // len(base))).take(np.arange(args.n))
         source = ("SYNTHETIC pairs (expert paths on generated 28x28 maps, one obstacle on the path, mixed into "
                   "all five categories), not VIN attack pairs")
     n = len(batch)
     results = {"source": source, "pairs": n, "size": batch.size}
     print(f"{source}: {n} pairs of {batch.size}x{batch.size}", file=sys.stderr)
 
-    label_batch(batch.subset(np.arange(10)))  # compile the Numba kernel outside the timing
+    label_batch(batch.take(np.arange(10)))  # compile the Numba kernel outside the timing
     seconds, labels = timed(lambda: label_batch(batch))
     counts = dict(zip(*np.unique(labels.labels, return_counts=True)))
     results["label_counts"] = {str(k): int(v) for k, v in counts.items()}
     results["rule_pairs_per_s"] = n / seconds
-    small = batch.subset(np.arange(min(n, 2000)))
+    small = batch.take(np.arange(min(n, 2000)))
     py_seconds, py_labels = timed(lambda: python_rule(small, labels.t), 0.2)
     assert np.array_equal(py_labels, labels.labels[: len(small)]), "the labeller disagrees with the Python rule"
     results["python_rule_pairs_per_s"] = len(small) / py_seconds
     # the same comparison on FP/DP pairs only, where the rule has to compare cells
-    fp_dp_only = batch.subset(np.flatnonzero(np.isin(labels.labels, ("DP", "FP"))))
+    fp_dp_only = batch.take(np.flatnonzero(np.isin(labels.labels, ("DP", "FP"))))
     seconds, _ = timed(lambda: label_batch(fp_dp_only))
     results["rule_fp_dp_pairs_per_s"] = len(fp_dp_only) / seconds
-    small_fp_dp = fp_dp_only.subset(np.arange(min(len(fp_dp_only), 1000)))
+    small_fp_dp = fp_dp_only.take(np.arange(min(len(fp_dp_only), 1000)))
     seconds, _ = timed(lambda: python_rule(small_fp_dp, labels.t), 0.2)
     results["python_rule_fp_dp_pairs_per_s"] = len(small_fp_dp) / seconds
     seconds, _ = timed(lambda: render_batch(batch))
@@ -113,8 +112,8 @@ def main(argv=None) -> int:
     fp_dp = np.flatnonzero(np.isin(y, ("DP", "FP")))
     rng = np.random.default_rng(0)
     train = np.sort(rng.choice(fp_dp, size=min(args.train, len(fp_dp)), replace=False))
-    train_batch, train_y = balance_batch(batch.subset(train), y[train], seed=0)
-    fp_dp_batch = batch.subset(fp_dp)
+    train_batch, train_y = balance_batch(batch.take(train), y[train], seed=0)
+    fp_dp_batch = batch.take(fp_dp)
     results["fp_dp_pairs"] = len(fp_dp)
     predict = {}
     models = {}
@@ -124,9 +123,9 @@ def main(argv=None) -> int:
             if kind in ("cnn", "mlp"):
                 model.set_params(epochs=1)
             model.fit(train_batch, train_y)
-            model.decision_function(fp_dp_batch.subset(np.arange(10)))  # warm up (Numba, torch)
+            model.decision_function(fp_dp_batch.take(np.arange(10)))  # warm up (Numba, torch)
             subset = fp_dp_batch if kind in ("svm", "hausdorff", "frechet", "dtw") else \
-                fp_dp_batch.subset(np.arange(min(len(fp_dp), 5000)))
+                fp_dp_batch.take(np.arange(min(len(fp_dp), 5000)))
             seconds, _ = timed(lambda: model.decision_function(subset), 0.3)
             name = kind if setting == "baseline" else f"{kind}_tuned"
             predict[name] = len(subset) / seconds
@@ -135,13 +134,13 @@ def main(argv=None) -> int:
     results["predict_pairs_per_s"] = predict
 
     # scikit-learn's own SVC.predict on the same model, side by side with our decision function
-    from sklearn.svm import SVC
     import scipy.sparse
+    from sklearn.svm import SVC
 
     svc = SVC(kernel="rbf", gamma="scale").fit(
         scipy.sparse.csr_matrix(render_batch(train_batch).reshape(len(train_batch), -1) / 255.0), train_y
     )
-    probe = fp_dp_batch.subset(np.arange(min(len(fp_dp), 2000)))
+    probe = fp_dp_batch.take(np.arange(min(len(fp_dp), 2000)))
     flat = scipy.sparse.csr_matrix(render_batch(probe).reshape(len(probe), -1) / 255.0)
     seconds, _ = timed(lambda: svc.predict(flat), 0.3)
     results["sklearn_svc_predict_pairs_per_s"] = len(probe) / seconds

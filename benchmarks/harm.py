@@ -1,6 +1,7 @@
 """Labelling throughput: today's rule labeller against the rule labeller plus harm (vinadv.classify.harm).
 
-    nice .venv/bin/python benchmarks/harm.py [--pairs PAIRS.npz] [--n 100000] [--maps 10000] [--attack near-path] [--json]
+    nice .venv/bin/python benchmarks/harm.py [--pairs PAIRS.npz] [--n 100000] [--maps 10000] [--attack near-path]
+        [--json]
 
 Without --pairs it makes real pairs: `--maps` generated 28x28 maps attacked by `--attack` with the shipped VIN
 (one pair per map), tiled to `--n` pairs (tiled whole, so no two neighbouring pairs share an original map and
@@ -39,23 +40,19 @@ def make_pairs(n_maps: int, attack: str, seed: int = 0):
     """Real attack pairs on generated maps, and the generator's expert paths of each pair's original map."""
     from vinadv.attacks.strategies import make_attack
     from vinadv.grid.generator import generate_maps
-    from vinadv.grid.paths import take_paths
     from vinadv.planners.weights import load_vin
 
     maps = generate_maps(n_maps, 28, seed=seed, n_starts=1)
     result = make_attack(attack, per_map=1, seed=seed).attack(maps.obstacles, maps.starts[:, 0], maps.goals,
                                                               load_vin(None, size=28))
     pairs = result.pairs
-    cells, offsets = take_paths(maps.expert_cells, maps.expert_offsets, pairs.map_index)
-    return pairs, (maps.expert_costs[pairs.map_index, 0], cells, offsets)
+    return pairs, (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index))
 
 
 def tile(pairs, expert, n: int):
     """`pairs` (and their expert data) repeated whole to `n` pairs."""
-    from vinadv.grid.paths import take_paths
-
     idx = np.arange(n) % len(pairs)
-    return pairs.subset(idx), (expert[0][idx], *take_paths(expert[1], expert[2], idx))
+    return pairs.take(idx), (expert[0][idx], expert[1].take(idx))
 
 
 def main(argv=None) -> int:
@@ -76,15 +73,15 @@ def main(argv=None) -> int:
         from vinadv.grid.shortest_paths import expert_paths
 
         pairs = PairSet.load(args.pairs)
-        costs, cells, offsets = expert_paths(pairs.obstacles_o, pairs.goals, pairs.starts[:, None], pairs.corner_cutting)
-        source, expert = args.pairs, (costs[:, 0], cells, offsets)
+        costs, paths = expert_paths(pairs.obstacles_o, pairs.goals, pairs.starts[:, None], pairs.corner_cutting)
+        source, expert = args.pairs, (costs[:, 0], paths)
     else:
         pairs, expert = make_pairs(args.maps, args.attack)
         source = f"{len(pairs)} {args.attack} pairs on {args.maps} generated 28x28 maps (shipped VIN)"
     pairs, expert = tile(pairs, expert, args.n)
 
     def rule():
-        return label_batch(PathPairBatch.from_pairset(pairs)).labels
+        return label_batch(PathPairBatch.from_pairs(pairs)).labels
 
     def rule_harm_scratch():
         return pairset_harm(pairs, rule())

@@ -54,7 +54,7 @@ def main() -> None:
         t0 = time.perf_counter()
         ref = plan_reference(maps.obstacles, maps.starts[:, 0], maps.goals, model, maps.corner_cutting)
         ref_s = time.perf_counter() - t0
-        same_path = [np.array_equal(a, b) for a, b in zip(fast.paths(), ref.paths())]
+        same_path = [np.array_equal(a, b) for a, b in zip(fast.paths.unpack(), ref.paths.unpack())]
         actions = action_maps(model, maps.obstacles, maps.goals)
         with torch.no_grad():
             torch_actions = model.action_logits(make_input(maps.obstacles, maps.goals)).argmax(-1).numpy()
@@ -65,7 +65,7 @@ def main() -> None:
             "identical_terminations": int(np.sum(fast.termination == ref.termination)),
             "terminations": dict(zip(("goal", "collision", "loop", "step_limit"),
                                      np.bincount(ref.termination, minlength=4).tolist())),
-            "mean_moves": round(float(ref.lengths.mean() - 1), 2),
+            "mean_moves": round(float(ref.paths.lengths.mean() - 1), 2),
             "action_cells": int(actions.size), "undecided_cells": int((~decided).sum()),
             "decided_cells_differing_from_torch_argmax": int((actions[decided] != torch_actions[decided]).sum()),
             "rollouts_redone_with_torch": int(stats.get("torch_rollouts", 0)),

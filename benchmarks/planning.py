@@ -90,7 +90,7 @@ def main() -> None:
 
     fast = plan_batch(obs[:r], starts[:r], goals[:r], model)
     ref = plan_reference(obs[:r], starts[:r], goals[:r], model)
-    identical = all(np.array_equal(a, b) for a, b in zip(fast.paths(), ref.paths())) and np.array_equal(
+    identical = all(np.array_equal(a, b) for a, b in zip(fast.paths.unpack(), ref.paths.unpack())) and np.array_equal(
         fast.termination, ref.termination)
 
     cfg = model.config

@@ -47,8 +47,8 @@ def test_stored_labels_agree_with_an_independent_recomputation(weights, sqlite_u
     summary = run_pipeline(config(weights, attack="key-points"), db=sqlite_url, progress=False)
     engine = sa.create_engine(sqlite_url)
     with engine.connect() as conn:
-        rows = conn.execute(sa.text("SELECT path_o, path_a, goal, label, attack, dh, dv FROM map_pairs WHERE run_id = :r"),
-                            {"r": summary.run_id}).all()
+        query = "SELECT path_o, path_a, goal, label, attack, dh, dv FROM map_pairs WHERE run_id = :r"
+        rows = conn.execute(sa.text(query), {"r": summary.run_id}).all()
     assert len(rows) == summary.n_pairs
     seen = set()
     for path_o, path_a, goal, label, attack, dh, dv in rows:

@@ -46,7 +46,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         code = args.func(args)
     except InputError as exc:
-        print(f"vinadv: error: {exc}", file=sys.stderr)
+        from vinadv.commands import cli_message
+
+        print(f"vinadv: error: {cli_message(exc)}", file=sys.stderr)
         return 2
     except FileNotFoundError as exc:
         print(f"vinadv: error: no such file: {exc.filename}", file=sys.stderr)

@@ -8,6 +8,8 @@ for the FP/DP rest), mark attack success (UrP or FP), and return `D_adversarial`
 from __future__ import annotations
 
 import os
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,18 +20,17 @@ from vinadv.classify import (
     PairClassifier,
     PathPairBatch,
     RuleClassifier,
-    SUCCESS_LABELS,
     label_batch,
     load_model,
     path_distances,
 )
-from vinadv.classify.harm import DEFAULT_TOL, PairHarm, cross_table, pairset_harm
+from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_table, pairset_harm
 from vinadv.errors import InputError
+from vinadv.grid.columns import Columns
 from vinadv.planners.engine import plan_batch
 from vinadv.planners.vin import VIN
+from vinadv.vocabulary import LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
 
-#: strength of each label for choosing among attacks: UrP > FP > DP > UcP > invalid
-LABEL_STRENGTH = {"invalid": 0, "UcP": 1, "DP": 2, "FP": 3, "UrP": 4}
 BUILTIN_CLASSIFIERS = ("rule",)
 
 
@@ -39,8 +40,8 @@ def load_classifier(spec: str | os.PathLike | None) -> tuple[PairClassifier, str
     if spec is None or str(spec) == "rule":
         return RuleClassifier(), "rule"
     if not os.path.exists(spec):
-        raise InputError(f"--classifier {spec}: neither a built-in classifier ({', '.join(BUILTIN_CLASSIFIERS)}) "
-                         "nor an existing model file")
+        raise InputError(f"classifier {spec}: neither a built-in classifier ({', '.join(BUILTIN_CLASSIFIERS)}) "
+                         "nor an existing model file", "classifier")
     model = load_model(spec)
     if not isinstance(model, (HybridClassifier, RuleClassifier)):
         model = HybridClassifier(model)
@@ -48,19 +49,21 @@ def load_classifier(spec: str | os.PathLike | None) -> tuple[PairClassifier, str
     return model, f"{model.kind}:{os.path.basename(str(spec))}"
 
 
-@dataclass
-class Identification:
-    """Identified pairs: `pairs` with one label each.
+@dataclass(kw_only=True, eq=False)
+class Identification(Columns):
+    """Identified pairs: `pairs` with one label each (`take`/`concat` from `Columns`).
 
     Attributes:
-        pairs: the map pairs with both paths.
-        labels: `(n,)` str, 'invalid' | 'UrP' | 'UcP' | 'DP' | 'FP'.
-        attack: `(n,)` bool, attack success (UrP or FP).
+        pairs: the n map pairs with both paths (`PairSet`).
+        labels: `(n,)` str, one of `vocabulary.LABELS`.
+        attack: `(n,)` bool, attack success (`vocabulary.SUCCESS_LABELS`: UrP or FP).
         score: `(n,)` float64, the classifier's FP score for pairs it decided, NaN elsewhere.
         dh, dv: `(n,)` int64, the rule's horizontal/vertical distances for DP/FP pairs, -1 elsewhere.
         label_source: the classifier's name.
         harm: the pairs' harm (costs, regrets, expert label, harmful/harmless/invalid; `vinadv.classify.harm`).
     """
+
+    META = ("label_source",)
 
     pairs: PairSet
     labels: np.ndarray
@@ -71,15 +74,21 @@ class Identification:
     label_source: str
     harm: PairHarm
 
-    def __len__(self) -> int:
-        return len(self.labels)
-
     def adversarial(self) -> np.ndarray:
         """Indices of `D_adversarial`: the successful attacks."""
         return np.flatnonzero(self.attack)
 
     def counts(self) -> dict[str, int]:
-        return {label: int(np.sum(self.labels == label)) for label in LABEL_STRENGTH}
+        """Pairs per label, weakest first (`vocabulary.label_counts`)."""
+        return label_counts(self.labels)
+
+    def records(self, pair_index: np.ndarray | None = None):
+        """The store's `PairRecords` of these pairs (`pair_index` defaults to `0..n-1`)."""
+        from vinadv.store.records import PairRecords
+
+        return PairRecords.from_pairs(self.pairs, label=self.labels, attack=self.attack,
+                                      label_source=self.label_source, score=self.score, dh=self.dh, dv=self.dv,
+                                      pair_index=pair_index, harm=self.harm)
 
     def harm_table(self) -> dict[str, dict[str, int]]:
         """Pairs per (label, harm): `{label: {harm: count}}`."""
@@ -91,9 +100,10 @@ def replan(pairs: PairSet, model: VIN) -> PairSet:
     o = plan_batch(pairs.obstacles_o, pairs.starts, pairs.goals, model, pairs.corner_cutting)
     a = plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals, model, pairs.corner_cutting)
     return PairSet(
-        pairs.obstacles_o, pairs.obstacles_a, pairs.starts, pairs.goals, pairs.added, pairs.map_index,
-        o.path_cells, o.path_offsets, a.path_cells, a.path_offsets, o.termination_names, a.termination_names,
-        pairs.strategy, dict(pairs.params), pairs.corner_cutting,
+        obstacles_o=pairs.obstacles_o, obstacles_a=pairs.obstacles_a, starts=pairs.starts, goals=pairs.goals,
+        added=pairs.added, map_index=pairs.map_index, path_o=o.paths, path_a=a.paths,
+        term_o=o.termination_names, term_a=a.termination_names, strategy=pairs.strategy, params=dict(pairs.params),
+        corner_cutting=pairs.corner_cutting,
     )
 
 
@@ -103,19 +113,19 @@ def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_sou
     (tolerances `harm_tol`, `harm_rtol`; `expert_o`: the original maps' expert data if already computed, see
     `vinadv.classify.harm.pair_harm`)."""
     classifier = classifier or RuleClassifier()
-    batch = PathPairBatch.from_pairset(pairs)
+    batch = PathPairBatch.from_pairs(pairs)
     if isinstance(classifier, RuleClassifier):
         result = label_batch(batch, classifier.t)  # exact: no classifier score
         labels, dh, dv, score = result.labels, result.dh, result.dv, np.full(len(pairs), np.nan)
     else:
         labels = np.asarray(classifier.predict(batch)).astype("<U7")
         score = np.asarray(classifier.fp_decision(batch), dtype=np.float64)
-        dh, dv = path_distances(batch.o_cells, batch.o_offsets, batch.a_cells, batch.a_offsets, batch.size)
+        dh, dv = path_distances(batch.path_o, batch.path_a, batch.size)
     fork_or_detour = np.isin(labels, ("DP", "FP"))
     return Identification(
         pairs=pairs,
         labels=labels,
-        attack=np.isin(labels, SUCCESS_LABELS),
+        attack=is_success(labels),
         score=score,
         dh=np.where(fork_or_detour, dh, -1).astype(np.int64),
         dv=np.where(fork_or_detour, dv, -1).astype(np.int64),
@@ -127,14 +137,14 @@ def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_sou
 
 def rule_strength(pairs: PairSet) -> np.ndarray:
     """Attack strength by the rule labeller (UrP > FP > DP > UcP > invalid), for the ranking attacks."""
-    return label_strength(label_batch(PathPairBatch.from_pairset(pairs)).labels)  # no harm needed here
+    return label_strength(label_batch(PathPairBatch.from_pairs(pairs)).labels)  # no harm needed here
 
 
 def harm_strength(pairs: PairSet) -> np.ndarray:
     """Attack strength by harm, for the ranking attacks: UrP strongest, then the largest `regret_a` (the adversarial
     path's excess over the optimum; a map's candidates share the original path, so this ranks the harm), invalid
     pairs weakest. `(n,)` float64."""
-    labels = label_batch(PathPairBatch.from_pairset(pairs)).labels
+    labels = label_batch(PathPairBatch.from_pairs(pairs)).labels
     regret_a = pairset_harm(pairs, labels).regret_a
     return np.where(labels == "UrP", np.inf, np.where(labels == "invalid", -np.inf, np.nan_to_num(regret_a)))
 
@@ -146,12 +156,55 @@ OBJECTIVES = {"paper": rule_strength, "harm": harm_strength}
 def objective_strength(objective: str):
     """The strength function of `objective` ('paper' or 'harm')."""
     if objective not in OBJECTIVES:
-        raise InputError(f"--objective: {objective!r} is not one of {'|'.join(OBJECTIVES)}")
+        raise InputError(f"objective: {objective!r} is not one of {'|'.join(OBJECTIVES)}", "objective")
     return OBJECTIVES[objective]
 
 
-def label_strength(labels: np.ndarray) -> np.ndarray:
-    """`LABEL_STRENGTH` of each label, `(n,)` int64."""
-    names = np.array(sorted(LABEL_STRENGTH))
-    values = np.array([LABEL_STRENGTH[name] for name in names], dtype=np.int64)
-    return values[np.searchsorted(names, np.asarray(labels))]
+@dataclass
+class StoredIdentification:
+    """What `identify_and_store` did: the identification, the run it was stored as, and how long it took."""
+
+    identification: Identification
+    run_id: int
+    seconds: float
+
+
+def identify_and_store(pairs_path: str | os.PathLike, db: str | None = None, *, classifier: str | None = None,
+                       weights: str | None = None, name: str | None = None, harm_tol: float = DEFAULT_TOL,
+                       harm_rtol: float = 0.0, remote: Callable[..., Identification] | None = None,
+                       ) -> StoredIdentification:
+    """`vinadv identify`: label the pairs of a pairs file (after planning both maps again with `weights`, if
+    given) and store them as a new run in `db`, with their harm (tolerances `harm_tol`, `harm_rtol`).
+
+    `remote(pairs, weights, classifier, label_source, harm_tol=, harm_rtol=)` computes the identification elsewhere (say
+    `vinadv.cluster.ClusterIdentify`); it is called after the inputs are checked, so a bad file is refused before
+    any worker starts. Without it, everything runs in this process."""
+    from vinadv.planners.weights import load_vin, weights_checksum
+    from vinadv.store import Store
+
+    check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
+    pairs = PairSet.load(pairs_path)
+    t0 = time.perf_counter()
+    model = load_vin(weights, size=pairs.size) if weights else None
+    classifier_model, classifier_name = load_classifier(classifier)
+    if remote is None:
+        if model is not None:
+            pairs = replan(pairs, model)
+        ident = identify(pairs, classifier_model, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
+    else:
+        ident = remote(pairs, weights, classifier, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
+    elapsed = time.perf_counter() - t0
+    with Store.open(db) as store:
+        run_id = store.create_run(
+            name, config={"pairs": str(pairs_path), "strategy": pairs.strategy, "params": pairs.params,
+                          "classifier": classifier, "weights": weights, "harm_tolerance": harm_tol,
+                          "harm_rtol": harm_rtol},
+            weights_checksum=weights_checksum(weights) if weights else None,
+            attack=pairs.strategy, classifier=classifier_name)
+        store.write_pairs(run_id, ident.records())
+        store.finish_run(run_id, timings={"identify": elapsed})
+    return StoredIdentification(ident, run_id, elapsed)
+
+
+__all__ = ["BUILTIN_CLASSIFIERS", "LABELS", "Identification", "StoredIdentification", "identify",
+           "identify_and_store", "load_classifier", "replan", "rule_strength"]

@@ -23,10 +23,10 @@ from vinadv.attacks.strategies import make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
-from vinadv.grid.paths import take_paths
-from vinadv.identify import LABEL_STRENGTH, Identification, identify, load_classifier, objective_strength
+from vinadv.identify import Identification, identify, load_classifier, objective_strength
 from vinadv.planners.vin import VIN
 from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
+from vinadv.vocabulary import LABEL_STRENGTH, success_count
 
 STAGES = ("generate", "attack", "identify", "store")
 
@@ -52,9 +52,9 @@ class RunConfig:
 
     def __post_init__(self):
         if self.n < 1:
-            raise InputError(f"--n must be >= 1, got {self.n}")
+            raise InputError(f"n must be >= 1, got {self.n}", "n")
         if self.shard_size < 1:
-            raise InputError(f"--shard-size must be >= 1, got {self.shard_size}")
+            raise InputError(f"shard_size must be >= 1, got {self.shard_size}", "shard_size")
         check_tolerances(self.harm_tolerance, self.harm_rtol)
         objective_strength(self.objective)  # InputError for an unknown objective
 
@@ -84,7 +84,8 @@ class ShardResult:
     seconds: dict = field(default_factory=dict)
 
 
-def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None, label_source: str = "rule") -> ShardResult:
+def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None,
+                  label_source: str = "rule") -> ShardResult:
     """Generate, attack and identify shard `shard` of the run: deterministic for `(config, shard)`."""
     first_map = shard * config.shard_size
     n_maps = min(config.shard_size, config.n - first_map)
@@ -100,9 +101,9 @@ def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None, la
     t2 = time.perf_counter()
     # the generator's expert paths of the original maps: harm then searches only adversarial maps (and few of them)
     pairs = result.pairs
-    expert_cells, expert_offsets = take_paths(maps.expert_cells, maps.expert_offsets, pairs.map_index)
+    expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
     ident = identify(pairs, classifier, label_source, harm_tol=config.harm_tolerance, harm_rtol=config.harm_rtol,
-                     expert_o=(maps.expert_costs[pairs.map_index, 0], expert_cells, expert_offsets))
+                     expert_o=expert_o)
     t3 = time.perf_counter()
     seconds.update(generate=t1 - t0, attack=t2 - t1, identify=t3 - t2)
     global_map = first_map + pairs.map_index
@@ -117,13 +118,7 @@ def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None, la
 
 def shard_records(result: ShardResult):
     """The store's `PairRecords` of one shard."""
-    from vinadv.store import PairRecords
-
-    ident = result.identification
-    return PairRecords.from_pairs(
-        ident.pairs, label=ident.labels, attack=ident.attack, label_source=ident.label_source, score=ident.score,
-        dh=ident.dh, dv=ident.dv, pair_index=result.pair_index, harm=ident.harm,
-    )
+    return result.identification.records(pair_index=result.pair_index)
 
 
 @dataclass
@@ -161,7 +156,7 @@ class RunSummary:
 
     def to_dict(self) -> dict:
         valid = self.n_pairs - self.counts["invalid"]
-        success = self.counts["UrP"] + self.counts["FP"]
+        success = success_count(self.counts)
         return {
             "run_id": self.run_id, "name": self.name, "db": self.db, "maps": self.n_maps, "pairs": self.n_pairs,
             "stored": self.stored, "skipped_shards": self.skipped_shards, "maps_without_valid_cell": self.no_valid_cell,
@@ -186,15 +181,15 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, checksum:
     """The run to write into: a new one, or with `resume` the latest run called `name` (same config only)."""
     if resume:
         if not name:
-            raise InputError("--resume needs --name (the run to resume)")
+            raise InputError("resume needs name (the run to resume)", "resume", "name")
         run_id = store.find_run(name)
         if run_id is None:
-            raise InputError(f"--resume: no run named '{name}' in {store.url}")
+            raise InputError(f"resume: no run named '{name}' in {store.url}", "resume")
         stored_config = store.run_info(run_id)["config"] or {}
         if stored_config != config.to_dict():
             diff = sorted(k for k in config.to_dict() if stored_config.get(k) != config.to_dict()[k])
-            raise InputError(f"--resume: run '{name}' was made with other settings ({', '.join(diff)}); "
-                             "use the same options or another --name")
+            raise InputError(f"resume: run '{name}' was made with other settings ({', '.join(diff)}); "
+                             "use the same options or another name", "resume", "name")
         return run_id
     return store.create_run(name, config=config.to_dict(), seed=config.seed, weights_checksum=checksum,
                             attack=config.attack, classifier=classifier_name, version=__version__)

@@ -78,7 +78,7 @@ def pairs_as_lists(batch: PathPairBatch):
     """The pairs of a batch as Python lists of (original cells, adversarial cells, goal)."""
     out = []
     for i in range(len(batch)):
-        o = batch.o_cells[batch.o_offsets[i] : batch.o_offsets[i + 1]].tolist()
-        a = batch.a_cells[batch.a_offsets[i] : batch.a_offsets[i + 1]].tolist()
+        o = batch.path_o[i].tolist()
+        a = batch.path_a[i].tolist()
         out.append((o, a, batch.goals[i].tolist()))
     return out

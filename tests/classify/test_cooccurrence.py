@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from sklearn.metrics import balanced_accuracy_score, roc_auc_score
 
-from vinadv.classify import balance_batch, label_batch, make_fp_classifier, render_batch, transform_images
+from vinadv.classify import balance_batch, label_batch, make_fp_classifier, render_batch
 from vinadv.classify.cooccurrence import (
     FEATURES,
     cooccurrence,
@@ -17,6 +17,7 @@ from vinadv.classify.cooccurrence import (
 from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
 from vinadv.classify.synthetic import synthetic_pairs
 from vinadv.errors import InputError
+from vinadv.grid.dihedral import transform_grids
 
 
 def _random_images(n: int, size: int, seed: int) -> np.ndarray:
@@ -70,7 +71,7 @@ def test_features_of_rendered_pairs_see_the_rules_cell_sets():
     batch = synthetic_pairs(40, size=12, seed=3)
     result = label_batch(batch)
     keep = np.isin(result.labels, ("DP", "FP"))
-    p = offset_cooccurrence(render_batch(batch.subset(keep), "split"))
+    p = offset_cooccurrence(render_batch(batch.take(keep), "split"))
     offsets = np.abs(np.arange(-11, 12))
     dh = np.array([offsets[row > 0].max(initial=0) for row in p[:, 0]])
     dv = np.array([offsets[col > 0].max(initial=0) for col in p[:, 1]])
@@ -80,7 +81,7 @@ def test_features_of_rendered_pairs_see_the_rules_cell_sets():
 def test_transpose_swaps_rows_and_columns():
     images = _random_images(4, 6, seed=1)
     c = cooccurrence(images)
-    t = cooccurrence(transform_images(images, 6))
+    t = cooccurrence(transform_grids(images, 6))
     assert np.array_equal(t[:, 0], c[:, 1]) and np.array_equal(t[:, 1], c[:, 0])
 
 
@@ -122,8 +123,8 @@ def rule_pairs():
     test = synthetic_pairs(1000, size=16, seed=2)
     y_train, y_test = label_batch(train).labels, label_batch(test).labels
     keep_train, keep_test = np.isin(y_train, ("DP", "FP")), np.isin(y_test, ("DP", "FP"))
-    X, y = balance_batch(train.subset(keep_train), y_train[keep_train])
-    Xt, yt = test.subset(keep_test), y_test[keep_test]
+    X, y = balance_batch(train.take(keep_train), y_train[keep_train])
+    Xt, yt = test.take(keep_test), y_test[keep_test]
     assert (yt == "FP").sum() >= 30
     return X, y, Xt, yt
 
@@ -148,7 +149,7 @@ def test_tuned_classifiers_learn_the_rule(rule_pairs, kind):
 ], ids=["svm-offsets", "svm-cooccurrence", "mlp-offsets", "mlp-cooccurrence", "cnn-cooccurrence"])
 def test_feature_models_round_trip(rule_pairs, make, tmp_path):
     X, y, Xt, _ = rule_pairs
-    X, y = X.subset(np.arange(0, len(X), 4)), y[::4]
+    X, y = X.take(np.arange(0, len(X), 4)), y[::4]
     model = make().fit(X, y)
     params = model.get_params()
     assert params["features"] == model.features and params["encoding"] == "split"
@@ -167,7 +168,7 @@ def test_model_files_from_before_features_load_as_pixels(rule_pairs, tmp_path):
     import json
 
     X, y, Xt, _ = rule_pairs
-    X, y = X.subset(np.arange(0, len(X), 8)), y[::8]
+    X, y = X.take(np.arange(0, len(X), 8)), y[::8]
     model = SVMImageClassifier().fit(X, y)
     path = tmp_path / "old.npz"
     model.save(path)

@@ -1,19 +1,19 @@
 import numpy as np
 
 from vinadv.classify.batch import PathPairBatch
-from vinadv.classify.features import path_features, reaches_goal, same_paths
-from vinadv.grid.paths import pack_paths
+from vinadv.classify.features import path_features, reaches_goal
+from vinadv.grid.paths import PackedPaths
 
 
 def test_reaches_goal_uses_last_cell():
-    cells, offsets = pack_paths([np.array([[0, 0], [1, 1]]), np.zeros((0, 2)), np.array([[1, 1], [0, 0]])])
-    assert reaches_goal(cells, offsets, [(1, 1), (1, 1), (1, 1)]).tolist() == [True, False, False]
+    paths = PackedPaths.pack([np.array([[0, 0], [1, 1]]), np.zeros((0, 2)), np.array([[1, 1], [0, 0]])])
+    assert reaches_goal(paths, [(1, 1), (1, 1), (1, 1)]).tolist() == [True, False, False]
 
 
 def test_same_paths_compares_order_and_length():
     o = [np.array([[0, 0], [1, 1]]), np.array([[0, 0], [1, 1]]), np.array([[0, 0]]), np.zeros((0, 2))]
     a = [np.array([[0, 0], [1, 1]]), np.array([[1, 1], [0, 0]]), np.array([[0, 0], [0, 1]]), np.zeros((0, 2))]
-    assert same_paths(*pack_paths(o), *pack_paths(a)).tolist() == [True, False, False, True]
+    assert PackedPaths.pack(o).same_as(PackedPaths.pack(a)).tolist() == [True, False, False, True]
 
 
 def test_features_are_exclusive_in_design_order():
@@ -24,7 +24,7 @@ def test_features_are_exclusive_in_design_order():
     batch = PathPairBatch.from_paths(
         [o_bad, o_bad, o_ok, o_ok, o_ok], [o_bad, a_other, o_bad, o_ok, a_other], [goal] * 5, 4
     )
-    f = path_features(batch.o_cells, batch.o_offsets, batch.a_cells, batch.a_offsets, batch.goals)
+    f = path_features(batch.path_o, batch.path_a, batch.goals)
     assert f.invalid.tolist() == [True, True, False, False, False]
     assert f.unreached.tolist() == [False, False, True, False, False]
     assert f.unchanged.tolist() == [False, False, False, True, False]

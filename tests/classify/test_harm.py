@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from tests.classify.oracle import rule_oracle
 from vinadv.classify.harm import HARMS, pair_harm
 from vinadv.errors import InputError
+from vinadv.grid.paths import PackedPaths
 
 MOVES = [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)]
 
@@ -57,7 +58,8 @@ def optimal_path(obstacles, start, goal, corner_cutting):
         for dr, dc in MOVES:
             nb = (r + dr, c + dc)
             step = math.sqrt(2) if dr and dc else 1.0
-            if legal(obstacles, r, c, dr, dc, corner_cutting) and nb in dist and abs(step + dist[nb] - dist[cell]) <= 1e-9:
+            tight = nb in dist and abs(step + dist[nb] - dist[cell]) <= 1e-9
+            if legal(obstacles, r, c, dr, dc, corner_cutting) and tight:
                 cell = nb
                 break
         path.append(cell)
@@ -115,14 +117,10 @@ def run(rows, cc, **kwargs):
     starts = np.array([r[2] for r in rows])
     goals = np.array([r[3] for r in rows])
 
-    def pack(paths):
-        offsets = np.concatenate([[0], np.cumsum([len(p) for p in paths])])
-        return np.array([c for p in paths for c in p], dtype=np.int16).reshape(-1, 2), offsets
-
-    (oc, oo), (ac, ao) = pack([r[4] for r in rows]), pack([r[5] for r in rows])
+    path_o, path_a = PackedPaths.pack([r[4] for r in rows]), PackedPaths.pack([r[5] for r in rows])
     t = round(4 * obstacles_o.shape[-1] / 28)
     labels = np.array([rule_oracle(r[4], r[5], r[3], t)[0] for r in rows])
-    return pair_harm(obstacles_o, obstacles_a, starts, goals, oc, oo, ac, ao, labels, cc, **kwargs), labels, t
+    return pair_harm(obstacles_o, obstacles_a, starts, goals, path_o, path_a, labels, cc, **kwargs), labels, t
 
 
 def close(a, b):
@@ -262,7 +260,6 @@ def test_tolerances():
 
 def test_shared_original_and_given_expert_data_give_the_same_result():
     from vinadv.grid.generator import generate_maps
-    from vinadv.grid.paths import take_paths
     from vinadv.grid.shortest_paths import expert_paths
 
     maps = generate_maps(40, 16, seed=5, n_starts=1)
@@ -272,28 +269,27 @@ def test_shared_original_and_given_expert_data_give_the_same_result():
     rng = np.random.default_rng(0)
     obstacles_a = obstacles_o.copy()
     free = np.argwhere(~obstacles_o)
-    lengths = np.diff(maps.expert_offsets)[map_index]
-    on_path = maps.expert_cells[maps.expert_offsets[map_index] + (rng.random(len(map_index)) * lengths).astype(int)]
+    lengths = maps.expert.lengths[map_index]
+    on_path = maps.expert.cells[maps.expert.offsets[map_index] + (rng.random(len(map_index)) * lengths).astype(int)]
     for i in range(len(map_index)):
         cell = on_path[i] if i % 2 else free[rng.integers(len(free))][1:]
         if tuple(cell) not in (tuple(maps.starts[map_index[i], 0]), tuple(maps.goals[map_index[i]])):
             obstacles_a[i, cell[0], cell[1]] = True
     starts, goals = maps.starts[map_index, 0], maps.goals[map_index]
-    _, ecells, eoff = expert_paths(obstacles_o, goals, starts[:, None])
-    _, acells, aoff = expert_paths(obstacles_a, goals, starts[:, None])
-    labels = np.array([rule_oracle(ecells[eoff[i]:eoff[i + 1]], acells[aoff[i]:aoff[i + 1]], goals[i], 2)[0]
-                       for i in range(len(map_index))])
-    args = (obstacles_o, obstacles_a, starts, goals, ecells, eoff, acells, aoff, labels)
+    _, expert_o = expert_paths(obstacles_o, goals, starts[:, None])
+    _, expert_a = expert_paths(obstacles_a, goals, starts[:, None])
+    labels = np.array([rule_oracle(expert_o[i], expert_a[i], goals[i], 2)[0] for i in range(len(map_index))])
+    args = (obstacles_o, obstacles_a, starts, goals, expert_o, expert_a, labels)
     plain = pair_harm(*args)
-    given_cells, given_offsets = take_paths(maps.expert_cells, maps.expert_offsets, map_index)
-    given = pair_harm(*args, expert_o=(maps.expert_costs[map_index, 0], given_cells, given_offsets))
+    given = pair_harm(*args, expert_o=(maps.expert_costs[map_index, 0], maps.expert.take(map_index)))
     shuffled = rng.permutation(len(map_index))  # no consecutive repeats: every original searched on its own
     alone = pair_harm(obstacles_o[shuffled], obstacles_a[shuffled], starts[shuffled], goals[shuffled],
-                      *take_paths(ecells, eoff, shuffled), *take_paths(acells, aoff, shuffled), labels[shuffled])
+                      expert_o.take(shuffled), expert_a.take(shuffled), labels[shuffled])
     for name in ("opt_cost_o", "opt_cost_a", "regret_a", "expert_label", "harm"):
         a, b, c = getattr(plain, name), getattr(given, name), getattr(alone, name)
         if a.dtype.kind == "f":  # sums of 1 and sqrt(2) in another order: equal up to rounding
-            assert np.allclose(a, b, atol=1e-9, equal_nan=True) and np.allclose(a[shuffled], c, atol=1e-9, equal_nan=True)
+            assert np.allclose(a, b, atol=1e-9, equal_nan=True)
+            assert np.allclose(a[shuffled], c, atol=1e-9, equal_nan=True)
         else:
             assert np.array_equal(a, b) and np.array_equal(a[shuffled], c), name
     assert set(plain.expert_label) >= {"UcP", "DP"}
@@ -303,13 +299,11 @@ def test_bad_input_is_refused():
     obstacles, start, goal = _corridor()
     path = [(3, 0), (2, 1), (2, 2), (2, 3), (2, 4), (2, 5), (3, 6)]
     rows = [(obstacles, obstacles, start, goal, path, path)]
+    one = PackedPaths.pack([path])
     with pytest.raises(InputError, match="labels"):
-        pair_harm(obstacles[None], obstacles[None], [start], [goal], np.array(path), [0, 7], np.array(path), [0, 7],
-                  ["UcP", "UcP"])
+        pair_harm(obstacles[None], obstacles[None], [start], [goal], one, one, ["UcP", "UcP"])
     with pytest.raises(InputError, match="starts"):
-        pair_harm(obstacles[None], obstacles[None], [(9, 9)], [goal], np.array(path), [0, 7], np.array(path),
-                  [0, 7], ["UcP"])
-    with pytest.raises(InputError, match="a_offsets"):
-        pair_harm(obstacles[None], obstacles[None], [start], [goal], np.array(path), [0, 7], np.array(path),
-                  [0, 6], ["UcP"])
+        pair_harm(obstacles[None], obstacles[None], [(9, 9)], [goal], one, one, ["UcP"])
+    with pytest.raises(InputError, match="path_a"):
+        pair_harm(obstacles[None], obstacles[None], [start], [goal], one, PackedPaths.pack([path, path]), ["UcP"])
     assert run(rows, True)[0].harm[0] == "harmless"

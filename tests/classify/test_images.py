@@ -8,10 +8,9 @@ from vinadv.classify.images import (
     balance_batch,
     balance_images,
     render_batch,
-    transform_cells,
-    transform_images,
 )
 from vinadv.classify.rule import label_batch
+from vinadv.grid.dihedral import transform_grids
 
 from .oracle import path_pairs
 
@@ -31,27 +30,10 @@ def test_path_image_colours_red_on_top_of_blue():
     assert image[1, 0].tolist() == blue and image[0, 0].tolist() == red and image[3, 3].tolist() == black
 
 
-def test_transform_cells_match_numpy_image_ops():
-    size = 5
-    grid = np.arange(size * size).reshape(1, size, size)
-    cells = np.array([(r, c) for r in range(size) for c in range(size)])
-    reference = {
-        0: grid, 1: np.rot90(grid, -1, axes=(1, 2)), 2: np.rot90(grid, 2, axes=(1, 2)),
-        3: np.rot90(grid, 1, axes=(1, 2)), 4: grid[:, :, ::-1], 5: grid[:, ::-1, :],
-        6: grid.transpose(0, 2, 1), 7: np.rot90(grid, 2, axes=(1, 2)).transpose(0, 2, 1),
-    }
-    for k, ref in reference.items():
-        assert np.array_equal(transform_images(grid, k), ref)
-        moved = transform_cells(cells, size, k)
-        out = np.empty_like(grid)
-        out[0, moved[:, 0], moved[:, 1]] = grid[0, cells[:, 0], cells[:, 1]]
-        assert np.array_equal(out, ref), k
-
-
 @settings(max_examples=40, deadline=None)
 @given(path_pairs(), st.integers(0, 7))
 def test_rendering_commutes_with_transforms(batch, k):
-    assert np.array_equal(render_batch(batch.transformed(k)), transform_images(render_batch(batch), k))
+    assert np.array_equal(render_batch(batch.transformed(k)), transform_grids(render_batch(batch), k))
 
 
 def test_augmentation_plan_balances_with_distinct_copies():
@@ -93,4 +75,4 @@ def test_split_encoding_marks_shared_cells_green():
 @given(path_pairs(), st.integers(0, 7))
 def test_split_rendering_commutes_with_transforms(batch, k):
     assert np.array_equal(render_batch(batch.transformed(k), "split"),
-                          transform_images(render_batch(batch, "split"), k))
+                          transform_grids(render_batch(batch, "split"), k))

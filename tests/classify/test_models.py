@@ -28,7 +28,7 @@ def pairs():
     labels = label_batch(batch).labels
     fp_dp = np.flatnonzero(np.isin(labels, ("DP", "FP")))
     assert {"DP", "FP"} <= set(labels[fp_dp].tolist())
-    return batch, labels, batch.subset(fp_dp), labels[fp_dp]
+    return batch, labels, batch.take(fp_dp), labels[fp_dp]
 
 
 def test_svm_decision_equals_sklearn_svc(pairs):
@@ -85,7 +85,7 @@ def test_hybrid_uses_features_then_classifier(pairs, tmp_path):
     feature_labelled = np.isin(labels, ("invalid", "UrP", "UcP"))
     assert np.array_equal(predicted[feature_labelled], labels[feature_labelled])
     rest = ~feature_labelled
-    assert np.array_equal(predicted[rest], hybrid.fp_classifier.predict(batch.subset(rest)))
+    assert np.array_equal(predicted[rest], hybrid.fp_classifier.predict(batch.take(rest)))
     assert np.isnan(hybrid.fp_decision(batch)[feature_labelled]).all()
     # with no labels given, the hybrid trains on the rule's
     assert np.array_equal(HybridClassifier(make_fp_classifier("hausdorff")).fit(batch).predict(batch), predicted)

@@ -6,8 +6,9 @@ from hypothesis import strategies as st
 from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.rule import default_threshold, label_batch, label_pairs, path_distances
 from vinadv.errors import InputError
+from vinadv.grid.paths import PackedPaths
 
-from .oracle import path_pairs, pairs_as_lists, rule_oracle
+from .oracle import pairs_as_lists, path_pairs, rule_oracle
 
 
 def one(o, a, goal=None, size=28, t=None):
@@ -132,10 +133,12 @@ def test_empty_batch_and_empty_paths():
 
 
 def test_cells_outside_grid_refused():
-    with pytest.raises(InputError, match="outside"):
-        path_distances(np.array([[0, 9]]), [0, 1], np.array([[0, 0]]), [0, 1], 5)
-    with pytest.raises(InputError):
-        label_pairs(np.zeros((1, 2)), [0, 1], np.zeros((1, 2)), [0, 1], [(0, 0)], 5, t=-1)
+    with pytest.raises(InputError, match="original paths: cells outside the 5x5 grid"):
+        path_distances(PackedPaths.pack([[[0, 9]]]), PackedPaths.pack([[[0, 0]]]), 5)
+    with pytest.raises(InputError, match="threshold t must be >= 0"):
+        label_pairs(PackedPaths.pack([[[0, 0]]]), PackedPaths.pack([[[0, 0]]]), [(0, 0)], 5, t=-1)
+    with pytest.raises(InputError, match="adversarial paths: cells outside"):
+        PathPairBatch.from_paths([[[0, 0]]], [[[5, 0]]], [(0, 0)], 5)
 
 
 @settings(max_examples=150, deadline=None)

@@ -19,14 +19,13 @@ def pairs_file(tmp_path_factory):
     obstacles[:, 0, :] = True
     obstacles_a = obstacles.copy()
     obstacles_a[:, size - 1, size - 1] = True
-    last = lambda cells, off: cells[np.maximum(off[1:] - 1, 0)]  # noqa: E731
-    term = lambda cells, off: np.where(np.all(last(cells, off) == batch.goals, 1), "goal", "collision")  # noqa: E731
+    last = lambda paths: paths.cells[np.maximum(paths.offsets[1:] - 1, 0)]  # noqa: E731
+    term = lambda paths: np.where(np.all(last(paths) == batch.goals, 1), "goal", "collision")  # noqa: E731
     pairs = PairSet(
-        obstacles_o=obstacles, obstacles_a=obstacles_a, starts=batch.o_cells[batch.o_offsets[:-1]].astype(np.int64),
+        obstacles_o=obstacles, obstacles_a=obstacles_a, starts=batch.path_o.cells[batch.path_o.offsets[:-1]],
         goals=batch.goals, added=np.tile([size - 1, size - 1], (n, 1)), map_index=np.arange(n),
-        path_o_cells=batch.o_cells, path_o_offsets=batch.o_offsets, path_a_cells=batch.a_cells,
-        path_a_offsets=batch.a_offsets, term_o=term(batch.o_cells, batch.o_offsets),
-        term_a=term(batch.a_cells, batch.a_offsets), strategy="synthetic",
+        path_o=batch.path_o, path_a=batch.path_a, term_o=term(batch.path_o), term_a=term(batch.path_a),
+        strategy="synthetic",
     )
     path = tmp_path_factory.mktemp("classify") / "pairs.npz"
     pairs.save(path)

@@ -30,15 +30,16 @@ def test_maps_have_border_free_interior_goal_and_good_starts(maps28):
     start_moves = moves[np.arange(n)[:, None], starts[..., 0], starts[..., 1]]
     assert (start_moves >= 2).all()
     # expert paths have exactly the optimal number of moves
-    np.testing.assert_array_equal(np.diff(maps28.expert_offsets) - 1, start_moves.ravel())
+    np.testing.assert_array_equal(maps28.expert.lengths - 1, start_moves.ravel())
 
 
 def test_same_seed_same_maps_and_prefix_stable():
     a = generate_maps(700, 16, seed=5, n_starts=3)
     b = generate_maps(700, 16, seed=5, n_starts=3)
     c = generate_maps(100, 16, seed=5, n_starts=3)
-    for field in ("obstacles", "goals", "starts", "expert_costs", "expert_cells", "expert_offsets"):
+    for field in ("obstacles", "goals", "starts", "expert_costs"):
         np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+    assert a.expert == b.expert
     np.testing.assert_array_equal(a.obstacles[:100], c.obstacles)
     np.testing.assert_array_equal(a.starts[:100], c.starts)
     d = generate_maps(100, 16, seed=6, n_starts=3)
@@ -53,9 +54,11 @@ def test_sizes(size):
 
 
 def test_bad_arguments_are_input_errors():
-    with pytest.raises(InputError, match="--size"):
+    # the library names its parameters (the CLI shows them as flags: tests/commands/test_errors.py)
+    with pytest.raises(InputError, match="^size must be >= 8") as exc:
         generate_maps(5, 6)
-    with pytest.raises(InputError, match="--n"):
+    assert exc.value.parameters == ("size",)
+    with pytest.raises(InputError, match="^n must be >= 0"):
         generate_maps(-1)
-    with pytest.raises(InputError, match="--starts"):
+    with pytest.raises(InputError, match="^n_starts must be >= 1"):
         generate_maps(3, 8, n_starts=0)

@@ -14,8 +14,9 @@ def maps():
 def test_round_trip(tmp_path, maps):
     maps.save(tmp_path / "m.npz")
     back = MapSet.load(tmp_path / "m.npz")
-    for field in ("obstacles", "goals", "starts", "expert_costs", "expert_cells", "expert_offsets"):
+    for field in ("obstacles", "goals", "starts", "expert_costs"):
         np.testing.assert_array_equal(getattr(back, field), getattr(maps, field))
+    assert back.expert == maps.expert
     assert back.corner_cutting == maps.corner_cutting and back.seed == 2
 
 
@@ -76,3 +77,4 @@ def test_cli_generate_show_and_bad_files(tmp_path, capsys):
     assert main(["maps", "show", str(tmp_path / "junk.npz"), "--out", str(png)]) == 2
     assert "junk.npz: not an .npz file" in capsys.readouterr().err
     assert main(["maps", "generate", "--n", "5", "--size", "4", "--out", str(out)]) == 2
+    assert "vinadv: error: --size must be >= 8, got 4" in capsys.readouterr().err

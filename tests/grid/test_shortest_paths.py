@@ -10,9 +10,7 @@ from vinadv.grid import (
     ACTION_DELTAS,
     expert_paths,
     optimal_actions,
-    path_costs,
     shortest_distances,
-    unpack_paths,
     valid_moves,
 )
 
@@ -89,12 +87,12 @@ def test_expert_paths_are_legal_and_optimal(case, corner_cutting, seed):
     reachable = [cell for cell, (cost, _) in best.items() if math.isfinite(cost)]
     rng = np.random.default_rng(seed)
     starts = np.array([reachable[i] for i in rng.integers(0, len(reachable), 3)])
-    costs, cells, offsets = expert_paths(obstacles[None], goal[None], starts[None], corner_cutting)
-    for s, path in enumerate(unpack_paths(cells, offsets)):
+    costs, paths = expert_paths(obstacles[None], goal[None], starts[None], corner_cutting)
+    for s, path in enumerate(paths.unpack()):
         assert tuple(path[0]) == tuple(starts[s]) and tuple(path[-1]) == tuple(goal)
         for (r, c), (r2, c2) in zip(path[:-1], path[1:]):
             a = [tuple(d) for d in ACTION_DELTAS.tolist()].index((r2 - r, c2 - c))
             assert legal(obstacles.tolist(), r, c, a, corner_cutting)
         assert math.isclose(costs[0, s], best[tuple(starts[s])][0], abs_tol=1e-9)
         assert len(path) - 1 == best[tuple(starts[s])][1]
-    np.testing.assert_allclose(path_costs(cells, offsets), costs[0], atol=1e-9)
+    np.testing.assert_allclose(paths.costs(), costs[0], atol=1e-9)

@@ -15,8 +15,7 @@ E, W = 2, 3
 
 
 def assert_same(a, b):
-    np.testing.assert_array_equal(a.path_offsets, b.path_offsets)
-    np.testing.assert_array_equal(a.path_cells, b.path_cells)
+    assert a.paths == b.paths
     np.testing.assert_array_equal(a.termination, b.termination)
     np.testing.assert_array_equal(a.reached, b.reached)
 
@@ -112,7 +111,7 @@ def test_hand_built_endings(west, start, goal, term, moves):
     for planner in (plan_batch, plan_reference):
         result = planner(obs, starts, goals, model)
         assert result.termination_names[0] == term
-        path = result.path(0)
+        path = result.paths[0]
         assert len(path) == moves + 1
         np.testing.assert_array_equal(path[0], start)
         np.testing.assert_array_equal(path[:, 0], start[0])
@@ -132,7 +131,7 @@ def test_step_limit_past_the_straight_line_bound():
     for planner in (plan_batch, plan_reference):
         result = planner(obs[None], np.array([start]), np.array([goal]), hand_vin(False))
         assert result.termination_names[0] == "step_limit"
-        assert len(result.path(0)) == limit + 1
+        assert len(result.paths[0]) == limit + 1
 
 
 def test_collision_into_obstacle():
@@ -140,7 +139,7 @@ def test_collision_into_obstacle():
     obs[8, 5] = True  # stops the eastward walk at column 4
     model = hand_vin(False)
     res = plan_batch(obs[None], np.array([[8, 1]]), np.array([[1, 1]]), model)
-    assert res.termination_names[0] == "collision" and res.path(0)[-1].tolist() == [8, 4]
+    assert res.termination_names[0] == "collision" and res.paths[0][-1].tolist() == [8, 4]
 
 
 def test_unreachable_goal_uses_n_squared_limit():
@@ -149,13 +148,13 @@ def test_unreachable_goal_uses_n_squared_limit():
     _, moves = shortest_distances(obs[None], np.array([[8, 12]]))
     assert moves[0, 8, 1] == -1
     res = plan_batch(obs[None], np.array([[8, 1]]), np.array([[8, 12]]), hand_vin(False))
-    assert res.termination_names[0] == "collision" and len(res.path(0)) == 7
+    assert res.termination_names[0] == "collision" and len(res.paths[0]) == 7
 
 
 def test_empty_batch_and_bad_inputs():
     model = planning_vin(16)
     res = plan_batch(np.zeros((0, 16, 16), bool), np.zeros((0, 2), int), np.zeros((0, 2), int), model)
-    assert len(res) == 0 and res.path_offsets.tolist() == [0]
+    assert len(res) == 0 and res.paths.offsets.tolist() == [0]
     with pytest.raises(InputError):
         plan_batch(np.zeros((1, 16, 16), bool), np.array([[16, 0]]), np.array([[1, 1]]), model)
     with pytest.raises(InputError):

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import torch
 
-from tests.grid.oracle import DELTAS, brute_distances, legal
+from tests.grid.oracle import brute_distances, legal
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths
 from vinadv.planners.evaluation import action_accuracy_counts, evaluate_vin, rollout_metrics
-from vinadv.planners.result import COLLISION, GOAL, LOOP, STEP_LIMIT, PlanResult
+from vinadv.planners.result import COLLISION, GOAL, LOOP, PlanResult
 from vinadv.planners.vin import VIN, VINConfig
 
 N_, S_, E_, W_ = 0, 1, 2, 3
@@ -54,8 +54,9 @@ def make_maps(size, cases):
             obstacles[i, r, c] = True
     goals = np.array([g for _, g, _ in cases], dtype=np.int64)
     starts = np.array([[s] for _, _, s in cases], dtype=np.int64)
-    costs, cells, offsets = expert_paths(obstacles, goals, starts)
-    return MapSet(obstacles, goals, starts, costs, cells, offsets, corner_cutting=True, seed=-1)
+    costs, paths = expert_paths(obstacles, goals, starts)
+    return MapSet(obstacles=obstacles, goals=goals, starts=starts, expert_costs=costs, expert=paths,
+                  corner_cutting=True, seed=-1)
 
 
 def test_rollout_metrics_on_hand_built_paths():

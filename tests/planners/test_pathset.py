@@ -22,7 +22,7 @@ def planned():
 
 
 def fields(ps: PathSet) -> dict:
-    return {"path_cells": ps.path_cells, "path_offsets": ps.path_offsets, "reached": ps.reached,
+    return {"path_cells": ps.paths.cells, "path_offsets": ps.paths.offsets, "reached": ps.reached,
             "termination": ps.termination, "n_starts": np.array(ps.n_starts), "size": np.array(ps.size)}
 
 
@@ -30,10 +30,11 @@ def test_round_trip(planned, tmp_path):
     _, ps = planned
     ps.save(tmp_path / "p.npz")
     back = PathSet.load(tmp_path / "p.npz")
-    for name in ("path_cells", "path_offsets", "reached", "termination"):
+    assert back.paths == ps.paths
+    for name in ("reached", "termination"):
         np.testing.assert_array_equal(getattr(back, name), getattr(ps, name))
     assert (back.n_starts, back.size, back.corner_cutting, back.model, back.n_maps) == (3, 16, True, "test", 12)
-    np.testing.assert_array_equal(back.path(2, 1), ps.path_cells[ps.path_offsets[7] : ps.path_offsets[8]])
+    np.testing.assert_array_equal(back.path(2, 1), ps.paths.cells[ps.paths.offsets[7] : ps.paths.offsets[8]])
 
 
 @pytest.mark.parametrize(
@@ -82,7 +83,7 @@ def test_cli_plan(planned, tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     assert summary["paths"] == 36
     back = PathSet.load(tmp_path / "paths.npz")
-    np.testing.assert_array_equal(back.path_cells, ps.path_cells)
+    assert back.paths == ps.paths
     np.testing.assert_array_equal(back.termination, ps.termination)
 
 

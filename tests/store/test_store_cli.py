@@ -1,4 +1,5 @@
-"""`vinadv export` (src/vinadv/commands/store.py): csv / jsonl / npz of a stored run, and exit status 2 on bad databases."""
+"""`vinadv export` (src/vinadv/commands/store.py): csv / jsonl / npz of a stored run, and exit status 2 on bad
+databases."""
 
 from __future__ import annotations
 
@@ -9,13 +10,11 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
-from vinadv.cli import main
-from vinadv.grid.paths import unpack_paths
-from vinadv.store import Store
-from vinadv.store.synthetic import random_records
-
 from tests.store.oracle import map_text, path_text
 from tests.store.test_store_db import HARM_FLOATS
+from vinadv.cli import main
+from vinadv.store import Store
+from vinadv.store.synthetic import random_records
 
 
 @pytest.fixture
@@ -33,7 +32,7 @@ def test_export_csv_matches_oracle(stored, tmp_path):
     assert main(["export", "--db", url, "--run", str(run_id), "--format", "csv", "--out", str(out), "--quiet"]) == 0
     rows = list(csv.DictReader(out.open()))
     assert [int(r["pair_index"]) for r in rows] == list(range(40))
-    paths_a = unpack_paths(records.path_a_cells, records.path_a_offsets)
+    paths_a = records.path_a.unpack()
     for i, row in enumerate(rows):
         assert row["map_o"] == map_text(records.obstacles_o[i])
         assert row["map_a"] == map_text(records.obstacles_a[i])

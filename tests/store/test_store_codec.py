@@ -8,11 +8,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from vinadv.errors import InputError
-from vinadv.grid.paths import pack_paths, unpack_paths
-from vinadv.store import codec
-
 from tests.store.oracle import map_text, parse_map, parse_path, path_text
+from vinadv.errors import InputError
+from vinadv.grid.paths import PackedPaths
+from vinadv.store import codec
 
 maps_strategy = st.integers(0, 12).flatmap(
     lambda size: hnp.arrays(bool, st.tuples(st.integers(0, 6), st.just(size), st.just(size)))
@@ -22,7 +21,8 @@ paths_strategy = st.lists(st.lists(st.tuples(cell_value, cell_value), max_size=2
 
 
 def _pack(paths):
-    return pack_paths([np.array(p, dtype=np.int64).reshape(-1, 2) for p in paths])
+    packed = PackedPaths.pack(paths)
+    return packed.cells, packed.offsets
 
 
 @settings(max_examples=150, deadline=None)
@@ -48,7 +48,7 @@ def test_paths_match_oracle_and_round_trip(paths):
     back_cells, back_offsets = codec.decode_paths(texts)
     assert np.array_equal(back_offsets, offsets)
     assert np.array_equal(back_cells, cells)
-    assert [p.tolist() for p in unpack_paths(back_cells, back_offsets)] == [[list(c) for c in p] for p in paths]
+    assert [p.tolist() for p in PackedPaths(back_cells, back_offsets).unpack()] == [[list(c) for c in p] for p in paths]
 
 
 @settings(max_examples=100, deadline=None)
@@ -76,7 +76,9 @@ def test_malformed_paths_are_refused(text):
         codec.decode_paths(["0,0", text])
 
 
-@pytest.mark.parametrize("text", ["0110;1001;0000;111", "0110;1001;0000;1112", "0110,1001,0000,1111", "01101001;00001111;"])
+@pytest.mark.parametrize(
+    "text", ["0110;1001;0000;111", "0110;1001;0000;1112", "0110,1001,0000,1111", "01101001;00001111;"]
+)
 def test_malformed_maps_are_refused(text):
     with pytest.raises(InputError, match="map 1"):
         codec.decode_maps(["0110;1001;0000;1111", text])

@@ -14,27 +14,25 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
+from tests.store.oracle import map_text, path_text
 from vinadv.errors import InputError
-from vinadv.grid.paths import unpack_paths
 from vinadv.store import LABELS, PairRecords, Store, schema
 from vinadv.store.synthetic import random_records
-
-from tests.store.oracle import map_text, path_text
 
 HARM_FLOATS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a")
 
 
 def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
     """What the map_pairs rows must hold, built one cell at a time in plain Python."""
-    paths_o = unpack_paths(records.path_o_cells, records.path_o_offsets)
-    paths_a = unpack_paths(records.path_a_cells, records.path_a_offsets)
+    paths_o = records.path_o.unpack()
+    paths_a = records.path_a.unpack()
     rows = []
     for i in range(len(records)):
         score = float(records.score[i])
         rows.append((
             run_id, int(records.pair_index[i]), map_text(records.obstacles_o[i]), map_text(records.obstacles_a[i]),
             path_text(paths_o[i]), path_text(paths_a[i]), str(records.label[i]), bool(records.attack[i]),
-            "%d,%d" % tuple(records.starts[i]), "%d,%d" % tuple(records.goals[i]), "%d,%d" % tuple(records.added[i]),
+            "{},{}".format(*records.starts[i]), "{},{}".format(*records.goals[i]), "{},{}".format(*records.added[i]),
             str(records.label_source[i]), None if np.isnan(score) else score,
             str(records.term_o[i]), str(records.term_a[i]),
             None if records.dh[i] < 0 else int(records.dh[i]), None if records.dv[i] < 0 else int(records.dv[i]),
@@ -68,9 +66,9 @@ def test_write_read_round_trip_matches_oracle(db_url):
         assert store.label_counts(run_id) == {lab: int((records.label == lab).sum()) for lab in LABELS}
         assert store.attack_counts(run_id) == {True: int(records.attack.sum()), False: int((~records.attack).sum())}
         successful = store.read_pairs(run_id, successful_only=True)
-        assert successful.equals(records.subset(records.attack))
+        assert successful.equals(records.take(records.attack))
         fp = store.read_pairs(run_id, labels=["FP"])
-        assert fp.equals(records.subset(records.label == "FP"))
+        assert fp.equals(records.take(records.label == "FP"))
         some = store.read_pairs(run_id, pair_indices=[5, 3, 250])
         assert some.pair_index.tolist() == [3, 5, 250]
         store.finish_run(run_id, timings={"plan": 1.5, "store": 0.25}, status="done")
@@ -101,14 +99,14 @@ def test_resume_skips_stored_pairs_and_rejects_duplicates(sqlite_url):
     records = random_records(100, size=8, seed=3)
     with Store.open(sqlite_url) as store:
         run_id = store.create_run("resume")
-        store.write_pairs(run_id, records.subset(np.arange(0, 100, 3)))
+        store.write_pairs(run_id, records.take(np.arange(0, 100, 3)))
         assert store.find_run("resume") == run_id and store.find_run("nope") is None
         assert store.write_pairs(run_id, records) == 100 - 34
         assert np.array_equal(store.stored_indices(run_id), np.arange(100))
         assert store.read_pairs(run_id).equals(records)
         # without skipping, a stored pair is a unique-key violation and the whole batch is rolled back
         with pytest.raises(sa.exc.IntegrityError):
-            store.write_pairs(run_id, records.subset([0]), skip_stored=False)
+            store.write_pairs(run_id, records.take([0]), skip_stored=False)
         assert store.count_pairs(run_id) == 100
 
 
@@ -119,7 +117,7 @@ _WRITER = textwrap.dedent("""
     from vinadv.store.synthetic import random_records
     url, n = sys.argv[1], int(sys.argv[2])
     records = random_records(n, size=12, seed=5)
-    records = records.subset(np.random.default_rng(0).permutation(n))  # stored out of index order
+    records = records.take(np.random.default_rng(0).permutation(n))  # stored out of index order
     store = Store.open(url)
     run_id = store.find_run("killed") or store.create_run("killed")
     store.write_pairs(run_id, records, batch_size=50, progress=lambda k: time.sleep(0.02))
@@ -194,7 +192,8 @@ def test_other_schema_version_is_refused_and_left_untouched(db_url):
         store.write_pairs(run_id, records)
     engine = sa.create_engine(db_url, poolclass=sa.pool.NullPool)
     with engine.begin() as conn:
-        conn.execute(sa.text("UPDATE vinadv_meta SET value = '999' WHERE " + engine.dialect.identifier_preparer.quote("key") + " = 'schema_version'"))
+        key = engine.dialect.identifier_preparer.quote("key")
+        conn.execute(sa.text(f"UPDATE vinadv_meta SET value = '999' WHERE {key} = 'schema_version'"))
     engine.dispose()
     before = _tables_and_rows(db_url)
     with pytest.raises(InputError, match="schema version '999'"):
@@ -265,10 +264,10 @@ def test_records_validation_names_the_field():
 def test_subset_and_concatenate_keep_paths():
     records = random_records(30, size=9, seed=8)
     idx = np.array([29, 0, 7, 7, 15])
-    sub = records.subset(idx)
-    paths = unpack_paths(records.path_o_cells, records.path_o_offsets)
-    assert [p.tolist() for p in unpack_paths(sub.path_o_cells, sub.path_o_offsets)] == [paths[i].tolist() for i in idx]
-    assert PairRecords.concatenate([records.subset(np.arange(10)), records.subset(np.arange(10, 30))]).equals(records)
+    sub = records.take(idx)
+    paths = records.path_o.unpack()
+    assert [p.tolist() for p in sub.path_o.unpack()] == [paths[i].tolist() for i in idx]
+    assert PairRecords.concat([records.take(np.arange(10)), records.take(np.arange(10, 30))]).equals(records)
 
 
 def _fields(records: PairRecords) -> dict:

@@ -38,4 +38,5 @@ def test_database_made_before_the_table_existed_is_upgraded_not_refused(sqlite_u
         assert store.add_evaluations(run, [ROW]) == 1
     with engine.connect() as conn:
         assert sa.inspect(conn).has_table("evaluations")
-        assert conn.execute(sa.text("SELECT value FROM vinadv_meta WHERE key='schema_version'")).scalar() == SCHEMA_VERSION
+        version = conn.execute(sa.text("SELECT value FROM vinadv_meta WHERE key='schema_version'")).scalar()
+        assert version == SCHEMA_VERSION

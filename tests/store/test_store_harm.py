@@ -107,7 +107,8 @@ def test_unknown_version_is_refused_and_the_file_stays_byte_identical(tmp_path, 
 def test_records_refuse_unknown_harm_values():
     records = random_records(3, size=5, seed=1)
     with pytest.raises(InputError, match="harm: 'bad'"):
-        records.__class__(**{**{f: getattr(records, f) for f in records.__dataclass_fields__}, "harm": ["bad", None, None]})
+        fields = {f: getattr(records, f) for f in records.__dataclass_fields__}
+        records.__class__(**{**fields, "harm": ["bad", None, None]})
     part = records.subset([2, 0])
     assert part.harm.tolist() == [records.harm[2], records.harm[0]]
     assert np.array_equal(part.regret_a, records.regret_a[[2, 0]], equal_nan=True)

@@ -15,7 +15,7 @@ def filled(tmp_path):
     store = Store.open(f"sqlite:///{tmp_path / 'p.db'}")
     first = random_records(150, size=8, seed=1)
     # a second run with gaps in its pair indices
-    second = random_records(40, size=8, seed=2, first_index=1000).subset(np.arange(0, 40, 3))
+    second = random_records(40, size=8, seed=2, first_index=1000).take(np.arange(0, 40, 3))
     ids = [store.create_run("a"), store.create_run("b")]
     store.write_pairs(ids[0], first)
     store.write_pairs(ids[1], second)

@@ -9,12 +9,11 @@ import sqlite3
 import numpy as np
 import pytest
 
+from tests.store.test_store_db import HARM_FLOATS, _oracle_rows, _raw_rows
 from vinadv.store import Store
 from vinadv.store import store as store_module
 from vinadv.store.store import INSERT_COLUMNS, encode_rows
 from vinadv.store.synthetic import random_records
-
-from tests.store.test_store_db import HARM_FLOATS, _oracle_rows, _raw_rows
 
 
 def _comparable(row: tuple) -> tuple:

@@ -8,6 +8,7 @@ import re
 import numpy as np
 import pytest
 
+from vinadv.grid.paths import PackedPaths
 from vinadv.store import PairRecords, Store
 from vinadv.store.synthetic import random_records
 
@@ -24,18 +25,13 @@ def crafted_records() -> PairRecords:
     added = np.array([[2, 3], [3, 2], [2, 2]])
     obstacles_a[np.arange(3), added[:, 0], added[:, 1]] = True
     path_o = [[(1, 1), (2, 2), (3, 3), (4, 4)], [(1, 1), (2, 2), (3, 3), (4, 4)], [(1, 1), (1, 2)]]
-    path_a = [[(1, 1), (1, 2), (1, 3), (1, 4), (2, 4), (3, 4), (4, 4)], [(1, 1), (2, 1), (3, 1), (4, 2), (4, 3), (4, 4)],
-              [(1, 1), (1, 2)]]
+    path_a = [[(1, 1), (1, 2), (1, 3), (1, 4), (2, 4), (3, 4), (4, 4)],
+              [(1, 1), (2, 1), (3, 1), (4, 2), (4, 3), (4, 4)], [(1, 1), (1, 2)]]
 
-    def pack(paths):
-        cells = np.concatenate([np.array(p) for p in paths]).astype(np.int16)
-        return cells, np.concatenate([[0], np.cumsum([len(p) for p in paths])])
-
-    (co, oo), (ca, oa) = pack(path_o), pack(path_a)
     return PairRecords(
         pair_index=[10, 20, 30], obstacles_o=obstacles_o, obstacles_a=obstacles_a,
         starts=[[1, 1]] * 3, goals=[[4, 4]] * 3, added=added,
-        path_o_cells=co, path_o_offsets=oo, path_a_cells=ca, path_a_offsets=oa,
+        path_o=PackedPaths.pack(path_o), path_a=PackedPaths.pack(path_a),
         label=["FP", "DP", "invalid"], attack=[True, False, False],
         term_o=["goal", "goal", "collision"], term_a=["goal", "goal", "collision"],
         label_source=["svm", "svm", "rule"], score=[0.9, np.nan, np.nan], dh=[3, 1, -1], dv=[0, 2, -1],

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vinadv.store import LABELS
 from tests.viewer.conftest import N_RANDOM, csrf_from
+from vinadv.store import LABELS
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -145,7 +145,7 @@ def test_pair_json_matches_records(client, db):
         row = int(np.flatnonzero(records.pair_index == i)[0])
         assert np.array_equal(np.array([[c == "1" for c in line] for line in body["map_o"]]), records.obstacles_o[row])
         assert np.array_equal(np.array([[c == "1" for c in line] for line in body["map_a"]]), records.obstacles_a[row])
-        o = records.path_o_cells[records.path_o_offsets[row]:records.path_o_offsets[row + 1]]
+        o = records.path_o[row]
         a = records.path_a_cells[records.path_a_offsets[row]:records.path_a_offsets[row + 1]]
         assert body["path_o"] == o.tolist() and body["path_a"] == a.tolist()
         assert body["added"] == records.added[row].tolist() and body["goal"] == records.goals[row].tolist()
@@ -284,7 +284,8 @@ def test_malformed_grid_params_are_400(client, db, query, needle):
 
 
 @pytest.mark.parametrize("url", ["/?x=1", "/pairs/{run}/10?after=1", "/api/pairs/{run}/10?x=1",
-                                 "/img/{run}/10/original.png?x=1", "/pairs", "/pairs?run=abc", "/pairs/{run}/10?label=X"])
+                                 "/img/{run}/10/original.png?x=1", "/pairs", "/pairs?run=abc",
+                                 "/pairs/{run}/10?label=X"])
 def test_other_malformed_params_are_400(client, db, url):
     run_id, _ = db[1]["crafted"]
     assert client.get(url.format(run=run_id)).status_code == 400
@@ -337,7 +338,7 @@ def test_label_unknown_pair_is_404(client, store, db):
     run_id, _ = db[1]["crafted"]
     token = _token(client, run_id)
     assert client.post(f"/pairs/{run_id}/11/label", data={"csrf_token": token, "label": "FP"}).status_code == 404
-    assert client.post(f"/pairs/999/10/label", data={"csrf_token": token, "label": "FP"}).status_code == 404
+    assert client.post("/pairs/999/10/label", data={"csrf_token": token, "label": "FP"}).status_code == 404
     assert store.read_annotations(run_id) == []
 
 

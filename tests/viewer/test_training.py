@@ -48,8 +48,8 @@ def test_human_training_set_reads_the_labelled_pairs(db):
         batch, labels, pairs = human_training_set(store, run_id)
     assert pairs.tolist() == [3, 12, 40] and labels.tolist() == ["FP", "FP", "FP"]
     for k, i in enumerate(pairs):
-        o = batch.o_cells[batch.o_offsets[k]:batch.o_offsets[k + 1]]
-        expect = records.path_o_cells[records.path_o_offsets[i]:records.path_o_offsets[i + 1]]
+        o = batch.path_o[k]
+        expect = records.path_o[i]
         assert np.array_equal(o, expect)
         assert np.array_equal(batch.goals[k], records.goals[i])
 

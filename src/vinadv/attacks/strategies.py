@@ -37,7 +37,6 @@ from scipy.ndimage import maximum_filter
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import valid_cells
 from vinadv.errors import InputError
-from vinadv.grid.paths import take_paths
 from vinadv.planners.engine import plan_batch
 from vinadv.planners.result import PlanResult
 from vinadv.planners.vin import VIN, make_input
@@ -50,22 +49,8 @@ TORCH_CHUNK = 128
 
 def planner_strength(pairs: PairSet) -> np.ndarray:
     """A planner-only strength, used when no labeller is given: unreached 3, changed path 1, unchanged 0."""
-    changed = ~_same_paths(pairs)
+    changed = ~pairs.path_o.same_as(pairs.path_a)
     return np.where(~pairs.reached_a & pairs.reached_o, 3, np.where(changed, 1, 0))
-
-
-def _same_paths(pairs: PairSet) -> np.ndarray:
-    lo, la = np.diff(pairs.path_o_offsets), np.diff(pairs.path_a_offsets)
-    same = lo == la
-    if not same.any():
-        return same
-    idx = np.flatnonzero(same)
-    co, _ = take_paths(pairs.path_o_cells, pairs.path_o_offsets, idx)
-    ca, offs = take_paths(pairs.path_a_cells, pairs.path_a_offsets, idx)
-    diff = np.any(co != ca, axis=1).astype(np.int64)
-    n_diff = np.add.reduceat(diff, offs[:-1]) if len(diff) else np.zeros(len(idx), dtype=np.int64)
-    same[idx] = n_diff == 0
-    return same
 
 
 @dataclass
@@ -98,9 +83,9 @@ class AttackContext:
     def path_mask(self) -> np.ndarray:
         """`(B, N, N)` bool: the cells of each map's original VIN path."""
         mask = np.zeros_like(self.obstacles)
-        owner = np.repeat(np.arange(len(self.obstacles)), self.originals.lengths)
-        cells = self.originals.path_cells.astype(np.int64)
-        mask[owner, cells[:, 0], cells[:, 1]] = True
+        paths = self.originals.paths
+        cells = paths.cells.astype(np.int64)
+        mask[paths.owners(), cells[:, 0], cells[:, 1]] = True
         return mask
 
 
@@ -112,9 +97,9 @@ class Attack:
 
     def __init__(self, per_map: int = 1, budget: int | None = 8, seed: int = 0):
         if per_map < 0:
-            raise InputError(f"--per-map must be >= 0, got {per_map}")
+            raise InputError(f"per_map must be >= 0, got {per_map}", "per_map")
         if budget is not None and budget < 1:
-            raise InputError(f"--budget must be >= 1, got {budget}")
+            raise InputError(f"budget must be >= 1, got {budget}", "budget")
         self.per_map = per_map
         self.budget = budget
         self.seed = seed
@@ -178,7 +163,8 @@ class Attack:
             if hi > lo:
                 parts.append(self._evaluate_chunk(ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi],
                                                   corner_cutting, strength))
-        pairs = _concat_pairs(parts, ctx, self.name, self.params(), corner_cutting)
+        settings = dict(strategy=self.name, params=self.params(), corner_cutting=corner_cutting)
+        pairs = PairSet.concat(parts, **settings) if parts else PairSet.empty(ctx.obstacles.shape[1], **settings)
         return pairs, len(map_idx)
 
     def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength) -> PairSet:
@@ -192,7 +178,7 @@ class Attack:
         order = np.lexsort((rank, -np.asarray(strength(pairs)), map_idx))
         group_start = np.searchsorted(map_idx[order], map_idx[order], side="left")
         keep = order[np.arange(len(order)) - group_start < self.per_map]
-        return pairs.subset(np.sort(keep))
+        return pairs.take(np.sort(keep))
 
 
 def _top_candidates(scores: np.ndarray, per_map: int | None):
@@ -211,39 +197,12 @@ def _top_candidates(scores: np.ndarray, per_map: int | None):
 
 
 def _make_pairs(ctx: AttackContext, map_idx, cells, obstacles_a, planned: PlanResult, corner_cutting) -> PairSet:
-    o_cells, o_offsets = take_paths(ctx.originals.path_cells, ctx.originals.path_offsets, map_idx)
     return PairSet(
         obstacles_o=ctx.obstacles[map_idx], obstacles_a=obstacles_a, starts=ctx.starts[map_idx],
         goals=ctx.goals[map_idx], added=cells.astype(np.int64), map_index=map_idx.astype(np.int64),
-        path_o_cells=o_cells, path_o_offsets=o_offsets,
-        path_a_cells=planned.path_cells, path_a_offsets=planned.path_offsets,
+        path_o=ctx.originals.paths.take(map_idx), path_a=planned.paths,
         term_o=ctx.originals.termination_names[map_idx], term_a=planned.termination_names,
         corner_cutting=corner_cutting,
-    )
-
-
-def _concat_pairs(parts: list[PairSet], ctx: AttackContext, name: str, params: dict, corner_cutting) -> PairSet:
-    n = ctx.obstacles.shape[1]
-    if not parts:
-        empty_paths = (np.zeros((0, 2), np.int16), np.zeros(1, np.int64))
-        return PairSet(
-            np.zeros((0, n, n), bool), np.zeros((0, n, n), bool), np.zeros((0, 2), np.int64),
-            np.zeros((0, 2), np.int64), np.zeros((0, 2), np.int64), np.zeros(0, np.int64), *empty_paths,
-            *empty_paths, np.zeros(0, "<U10"), np.zeros(0, "<U10"), name, params, corner_cutting,
-        )
-
-    def cat_paths(cells_name, offsets_name):
-        offsets = [getattr(p, offsets_name) for p in parts]
-        shift = np.cumsum([0] + [o[-1] for o in offsets[:-1]])
-        all_offsets = np.concatenate([offsets[0][:1]] + [o[1:] + s for o, s in zip(offsets, shift)])
-        return np.concatenate([getattr(p, cells_name) for p in parts]), all_offsets
-
-    po = cat_paths("path_o_cells", "path_o_offsets")
-    pa = cat_paths("path_a_cells", "path_a_offsets")
-    cat = lambda field: np.concatenate([getattr(p, field) for p in parts])  # noqa: E731
-    return PairSet(
-        cat("obstacles_o"), cat("obstacles_a"), cat("starts"), cat("goals"), cat("added"), cat("map_index"),
-        po[0], po[1], pa[0], pa[1], cat("term_o"), cat("term_a"), name, params, corner_cutting,
     )
 
 
@@ -265,7 +224,7 @@ class NearPathAttack(Attack):
     def __init__(self, per_map: int = 1, radius: int = 2, seed: int = 0):
         super().__init__(per_map=per_map, budget=None, seed=seed)
         if radius < 0:
-            raise InputError(f"--radius must be >= 0, got {radius}")
+            raise InputError(f"radius must be >= 0, got {radius}", "radius")
         self.radius = radius
 
     def params(self) -> dict:
@@ -281,10 +240,8 @@ class KeyPointsAttack(Attack):
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         b, n, _ = ctx.obstacles.shape
-        cells = ctx.originals.path_cells.astype(np.int64)
-        offsets = ctx.originals.path_offsets
-        lengths = np.diff(offsets)
-        owner = np.repeat(np.arange(b), lengths)
+        paths = ctx.originals.paths
+        cells, offsets, lengths, owner = paths.cells.astype(np.int64), paths.offsets, paths.lengths, paths.owners()
         pos = np.arange(len(cells)) - np.repeat(offsets[:-1], lengths)  # index along its path
         on_path = ctx.path_mask()
         scores = np.full((b, n, n), -np.inf)
@@ -348,9 +305,8 @@ class SaliencyAttack(Attack):
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         model = ctx.model
         b = len(ctx.obstacles)
-        lengths = ctx.originals.lengths
-        owner_all = np.repeat(np.arange(b), lengths)
-        cells_all = ctx.originals.path_cells.astype(np.int64)
+        owner_all = ctx.originals.paths.owners()
+        cells_all = ctx.originals.paths.cells.astype(np.int64)
         # the decisions along the path: every path cell but the goal
         at_goal = np.all(cells_all == ctx.goals[owner_all], axis=1)
         out = np.empty(ctx.obstacles.shape)

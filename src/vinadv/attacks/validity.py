@@ -79,9 +79,9 @@ def valid_cells(
     valid[idx, goals[:, 0], goals[:, 1]] = False
     if b == 0:
         return valid
-    costs, cells, offsets = expert_paths(obstacles, goals, starts[:, None, :], corner_cutting)
+    costs, paths = expert_paths(obstacles, goals, starts[:, None, :], corner_cutting)
     separator = np.zeros_like(valid)
-    _mark_separators(obstacles, starts, goals, cells.astype(np.int64), offsets, bool(corner_cutting),
+    _mark_separators(obstacles, starts, goals, paths.cells.astype(np.int64), paths.offsets, bool(corner_cutting),
                      ACTION_DELTAS, separator)
     valid &= ~separator
     # a start that cannot reach its goal has no valid cell at all (the map is not a solvable map)

@@ -1,12 +1,13 @@
 """Path pair classification: path features, the exact FP/DP rule, path images, classifiers, baselines.
 
-Input everywhere: packed path pairs (`PathPairBatch`, or the packed arrays of `vinadv.grid.paths`).
+Input everywhere: path pairs (`PathPairBatch`, or two `vinadv.grid.paths.PackedPaths`). Label names come from
+`vinadv.vocabulary`, flips and rotations from `vinadv.grid.dihedral`.
 """
 
 from vinadv.classify.base import MODEL_FORMAT, PairClassifier, load_model, save_model
-from vinadv.classify.batch import PathPairBatch, concat_batches
+from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.cooccurrence import FEATURES, cooccurrence, image_features, offset_cooccurrence
-from vinadv.classify.features import LABELS, SUCCESS_LABELS, PathFeatures, path_features, reaches_goal, same_paths
+from vinadv.classify.features import PathFeatures, path_features, reaches_goal
 from vinadv.classify.hybrid import (
     FP_DP_KINDS,
     HybridClassifier,
@@ -20,8 +21,6 @@ from vinadv.classify.images import (
     balance_images,
     render_batch,
     render_path_images,
-    transform_cells,
-    transform_images,
 )
 from vinadv.classify.metrics import binary_metrics
 from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
@@ -35,11 +34,10 @@ from vinadv.classify.similarity import (
 
 __all__ = [
     "AUGMENT_TRANSFORMS", "CNNImageClassifier", "DistanceThresholdClassifier", "FEATURES", "FP_DP_KINDS",
-    "HybridClassifier", "LABELS", "MLPImageClassifier", "MODEL_FORMAT", "PairClassifier", "PairLabels",
-    "PathFeatures", "PathPairBatch", "RuleClassifier", "SUCCESS_LABELS", "SVMImageClassifier", "augmentation_plan",
-    "balance_batch", "balance_images", "binary_metrics", "concat_batches", "cooccurrence", "default_threshold",
+    "HybridClassifier", "MLPImageClassifier", "MODEL_FORMAT", "PairClassifier", "PairLabels",
+    "PathFeatures", "PathPairBatch", "RuleClassifier", "SVMImageClassifier", "augmentation_plan",
+    "balance_batch", "balance_images", "binary_metrics", "cooccurrence", "default_threshold",
     "dtw_distances", "frechet_distances", "hausdorff_distances", "image_features", "is_fork", "label_batch",
     "label_pairs", "load_model", "make_fp_classifier", "offset_cooccurrence", "path_distances", "path_features",
-    "reaches_goal", "render_batch", "render_path_images", "same_paths", "save_model", "transform_cells",
-    "transform_images",
+    "reaches_goal", "render_batch", "render_path_images", "save_model",
 ]

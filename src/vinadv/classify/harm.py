@@ -28,14 +28,14 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from vinadv.classify.features import LABELS
 from vinadv.classify.rule import _distances_kernel, default_threshold, is_fork
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
+from vinadv.grid.columns import Columns
+from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import COST_TOL, heap_pop, heap_push
+from vinadv.vocabulary import HARMS, LABELS
 
-#: the three harm values
-HARMS = ("harmful", "harmless", "invalid")
 #: default absolute tolerance of the harm test (cost units: one orthogonal move = 1)
 DEFAULT_TOL = 1e-6
 #: pairs per block of the kernel (a block runs on one thread, its pairs in order, so a shared original is seen)
@@ -46,8 +46,8 @@ _SQRT2 = float(np.sqrt(2.0))
 _E_INVALID, _E_URP, _E_UCP, _E_CHANGED = 0, 1, 2, 3
 
 
-@dataclass(frozen=True)
-class PairHarm:
+@dataclass(kw_only=True, eq=False)
+class PairHarm(Columns):
     """Harm of `n` pairs (see the module doc). Costs are in move-cost units (orthogonal 1, diagonal sqrt(2)).
 
     Attributes:
@@ -57,8 +57,10 @@ class PairHarm:
         expert_label: `(n,)` str, the rule label of the two expert paths: 'UcP' | 'DP' | 'FP' ('invalid' / 'UrP'
             only where the goal is unreachable on the original / adversarial map).
         harm: `(n,)` str, 'harmful' | 'harmless' | 'invalid'.
-        tol, rtol: the absolute and relative tolerance used for `harm`.
+        tol, rtol: the absolute and relative tolerance used for `harm` (settings, not rows: `Columns.META`).
     """
+
+    META = ("tol", "rtol")
 
     opt_cost_o: np.ndarray
     opt_cost_a: np.ndarray
@@ -70,23 +72,6 @@ class PairHarm:
     harm: np.ndarray
     tol: float = DEFAULT_TOL
     rtol: float = 0.0
-
-    def __len__(self) -> int:
-        return len(self.harm)
-
-    @classmethod
-    def concatenate(cls, parts: list[PairHarm]) -> PairHarm:
-        """The pairs of `parts` in order (all computed with the same tolerances)."""
-        if not parts:
-            raise InputError("PairHarm.concatenate: nothing to concatenate")
-        if len({(p.tol, p.rtol) for p in parts}) != 1:
-            raise InputError("PairHarm.concatenate: parts computed with different tolerances")
-        arrays = {name: np.concatenate([getattr(p, name) for p in parts]) for name in HARM_FIELDS}
-        return cls(**arrays, tol=parts[0].tol, rtol=parts[0].rtol)
-
-
-#: the per-pair fields of `PairHarm`, in the order of the store's columns
-HARM_FIELDS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a", "expert_label", "harm")
 
 
 def harm_summary(table: dict[str, dict[str, int]]) -> dict:
@@ -125,17 +110,15 @@ def pair_harm(
     obstacles_a: np.ndarray,
     starts: np.ndarray,
     goals: np.ndarray,
-    o_cells: np.ndarray,
-    o_offsets: np.ndarray,
-    a_cells: np.ndarray,
-    a_offsets: np.ndarray,
+    path_o: PackedPaths,
+    path_a: PackedPaths,
     labels: np.ndarray,
     corner_cutting: bool = True,
     *,
     tol: float = DEFAULT_TOL,
     rtol: float = 0.0,
     t: int | None = None,
-    expert_o: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    expert_o: tuple[np.ndarray, PackedPaths] | None = None,
 ) -> PairHarm:
     """Harm of `n` pairs.
 
@@ -143,13 +126,13 @@ def pair_harm(
         obstacles_o, obstacles_a: `(n, N, N)` bool, True = obstacle; `obstacles_a` adds obstacles to `obstacles_o`
             (a pair where it does not is still right, only slower).
         starts, goals: `(n, 2)` int `(row, col)`.
-        o_cells, o_offsets, a_cells, a_offsets: the planner's paths on both maps, packed (`vinadv.grid.paths`).
+        path_o, path_a: `PackedPaths` of n paths each, the planner's paths on both maps.
         labels: `(n,)` str, the paper's label of each pair ('invalid' | 'UrP' | 'UcP' | 'DP' | 'FP').
         corner_cutting: the run's corner-cutting setting (the moves of the optimal paths).
         tol, rtol: absolute and relative (times `opt_cost_a`) tolerance of the harm test, >= 0.
         t: the rule's FP/DP threshold for `expert_label` (default `round(4 * N / 28)`).
-        expert_o: optional expert data of the original maps already computed (the generator's `expert_costs[:, 0]`,
-            `expert_cells`, `expert_offsets` with one start per map): `(costs (n,), cells, offsets (n + 1,))`.
+        expert_o: optional expert data of the original maps already computed (the generator's `expert_costs[:, 0]`
+            and expert paths, one per pair): `(costs (n,), PackedPaths of n paths)`.
     """
     obstacles_o = np.ascontiguousarray(obstacles_o, dtype=np.bool_)
     obstacles_a = np.ascontiguousarray(obstacles_a, dtype=np.bool_)
@@ -167,19 +150,20 @@ def pair_harm(
     t = default_threshold(size) if t is None else int(t)
     if t < 0:
         raise InputError(f"threshold t must be >= 0, got {t}")
-    o_offsets = _offsets(o_offsets, o_cells, n, "o_offsets")
-    a_offsets = _offsets(a_offsets, a_cells, n, "a_offsets")
+    given = None if expert_o is None else expert_o[1]
+    for name, paths in (("path_o", path_o), ("path_a", path_a), ("expert_o", given)):
+        if paths is not None and len(paths) != n:
+            raise InputError(f"{name}: {len(paths)} paths for {n} pairs", name)
 
     if expert_o is None:
         given_cost, given_cells, given_offsets = np.zeros(0), np.zeros((0, 2), np.int16), np.zeros(1, np.int64)
     else:
         given_cost = np.ascontiguousarray(expert_o[0], dtype=np.float64).reshape(-1)
-        given_cells = np.ascontiguousarray(expert_o[1], dtype=np.int16).reshape(-1, 2)
-        given_offsets = _offsets(expert_o[2], given_cells, n, "expert_o offsets")
+        given_cells, given_offsets = expert_o[1].cells, expert_o[1].offsets
         if len(given_cost) != n:
-            raise InputError(f"expert_o: {len(given_cost)} costs for {n} pairs")
+            raise InputError(f"expert_o: {len(given_cost)} costs for {n} pairs", "expert_o")
         if len(given_cells) and (given_cells.min() < 0 or given_cells.max() >= size):
-            raise InputError(f"expert_o: cells outside the {size}x{size} grid")
+            raise InputError(f"expert_o: cells outside the {size}x{size} grid", "expert_o")
     opt_o = np.empty(n)
     opt_a = np.empty(n)
     code = np.empty(n, dtype=np.int8)
@@ -195,8 +179,8 @@ def pair_harm(
     expert_label[code == _E_URP] = "UrP"
     expert_label[code == _E_INVALID] = "invalid"
 
-    cost_o = _reached_costs(o_cells, o_offsets, goals)
-    cost_a = _reached_costs(a_cells, a_offsets, goals)
+    cost_o = _reached_costs(path_o, goals)
+    cost_a = _reached_costs(path_a, goals)
     opt_o[~np.isfinite(opt_o)] = np.nan
     opt_a[~np.isfinite(opt_a)] = np.nan
     regret_o = cost_o - opt_o
@@ -208,19 +192,19 @@ def pair_harm(
     )
 
 
-def check_tolerances(tol: float, rtol: float, names=("--harm-tolerance", "--harm-rtol")) -> None:
-    """InputError naming the bad one unless both tolerances are finite numbers >= 0."""
+def check_tolerances(tol: float, rtol: float, names=("harm_tolerance", "harm_rtol")) -> None:
+    """InputError naming the bad one (as the parameter `names`) unless both are finite numbers >= 0."""
     for name, value in zip(names, (tol, rtol)):
         if not np.isfinite(value) or value < 0:
-            raise InputError(f"{name}: must be a finite number >= 0, got {value}")
+            raise InputError(f"{name}: must be a finite number >= 0, got {value}", name)
 
 
 def pairset_harm(pairs, labels: np.ndarray, *, tol: float = DEFAULT_TOL, rtol: float = 0.0, t: int | None = None,
                  expert_o=None) -> PairHarm:
     """`pair_harm` of a `vinadv.attacks.pairs.PairSet`-like object (read by field name) and its labels."""
     return pair_harm(
-        pairs.obstacles_o, pairs.obstacles_a, pairs.starts, pairs.goals, pairs.path_o_cells, pairs.path_o_offsets,
-        pairs.path_a_cells, pairs.path_a_offsets, labels, pairs.corner_cutting, tol=tol, rtol=rtol, t=t,
+        pairs.obstacles_o, pairs.obstacles_a, pairs.starts, pairs.goals, pairs.path_o, pairs.path_a, labels,
+        pairs.corner_cutting, tol=tol, rtol=rtol, t=t,
         expert_o=expert_o,
     )
 
@@ -234,18 +218,11 @@ def _cells(value, name: str, n: int, size: int) -> np.ndarray:
     return arr
 
 
-def _offsets(offsets, cells, n: int, name: str) -> np.ndarray:
-    offsets = np.ascontiguousarray(offsets, dtype=np.int64).reshape(-1)
-    if len(offsets) != n + 1 or offsets[0] != 0 or offsets[-1] != len(cells) or np.any(np.diff(offsets) < 0):
-        raise InputError(f"{name}: expected {n + 1} offsets from 0 to {len(cells)}, never decreasing")
-    return offsets
-
-
-def _reached_costs(cells, offsets, goals) -> np.ndarray:
-    """Cost of each packed path that ends on its goal (1 per orthogonal move, sqrt(2) per diagonal, as
-    `grid.paths.path_costs`, in one compiled pass), NaN for the others: `(n,)` float64."""
-    out = np.empty(len(offsets) - 1)
-    _reached_costs_kernel(np.ascontiguousarray(cells, dtype=np.int16).reshape(-1, 2), offsets, goals, out)
+def _reached_costs(paths: PackedPaths, goals) -> np.ndarray:
+    """Cost of each path that ends on its goal (1 per orthogonal move, sqrt(2) per diagonal, as
+    `PackedPaths.costs`, in one compiled pass), NaN for the others: `(n,)` float64."""
+    out = np.empty(len(paths))
+    _reached_costs_kernel(paths.cells, paths.offsets, goals, out)
     return out
 
 

@@ -10,11 +10,12 @@ import numpy as np
 
 from vinadv.classify.base import PairClassifier, _pack_state, model_from_state, register_kind
 from vinadv.classify.batch import PathPairBatch
-from vinadv.classify.features import LABELS, path_features
+from vinadv.classify.features import path_features
 from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
 from vinadv.classify.rule import default_threshold, label_batch
 from vinadv.classify.similarity import DistanceThresholdClassifier
 from vinadv.errors import InputError
+from vinadv.vocabulary import LABELS
 
 FP_DP_KINDS = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw")
 SETTINGS = ("baseline", "tuned")
@@ -92,7 +93,7 @@ class HybridClassifier(_FiveWay):
         y = label_batch(X, self.t).labels if y is None else self._check_labels(X, y)
         self.classes_ = np.array(LABELS)
         rest = np.isin(y, ("DP", "FP"))
-        self.fp_classifier.fit(X.subset(rest), y[rest])
+        self.fp_classifier.fit(X.take(rest), y[rest])
         self.size_ = X.size
         self.training_time_s_ = getattr(self.fp_classifier, "training_time_s_", 0.0)
         return self
@@ -100,20 +101,20 @@ class HybridClassifier(_FiveWay):
     def fp_decision(self, X) -> np.ndarray:
         """FP score of the pairs the features leave to the FP/DP classifier, NaN for the others: `(n,)`."""
         X = _check_batch(X)
-        rest = path_features(X.o_cells, X.o_offsets, X.a_cells, X.a_offsets, X.goals).rest
+        rest = path_features(X.path_o, X.path_a, X.goals).rest
         out = np.full(len(X), np.nan)
         if rest.any():
-            out[rest] = self.fp_classifier.decision_function(X.subset(rest))
+            out[rest] = self.fp_classifier.decision_function(X.take(rest))
         return out
 
     def predict(self, X) -> np.ndarray:
         """Five-way labels `(n,)` str."""
         X = _check_batch(X)
-        features = path_features(X.o_cells, X.o_offsets, X.a_cells, X.a_offsets, X.goals)
+        features = path_features(X.path_o, X.path_a, X.goals)
         labels = np.full(len(X), "DP", dtype="<U7")
         rest = features.rest
         if rest.any():
-            labels[rest] = self.fp_classifier.predict(X.subset(rest))
+            labels[rest] = self.fp_classifier.predict(X.take(rest))
         labels[features.unchanged] = "UcP"
         labels[features.unreached] = "UrP"
         labels[features.invalid] = "invalid"

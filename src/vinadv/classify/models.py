@@ -27,6 +27,7 @@ from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.cooccurrence import feature_shape, image_features, offset_matrix, torch_features
 from vinadv.classify.images import render_batch
 from vinadv.errors import InputError
+from vinadv.grid.dihedral import transform_grids
 
 CHUNK = 4096
 
@@ -36,7 +37,7 @@ def _image_chunks(X, chunk: int = CHUNK, encoding: str = "paper"):
     an image array, used as it is)."""
     if isinstance(X, PathPairBatch):
         for start in range(0, len(X), chunk):
-            yield start, render_batch(X.subset(np.arange(start, min(start + chunk, len(X)))), encoding)
+            yield start, render_batch(X.take(np.arange(start, min(start + chunk, len(X)))), encoding)
     else:
         images = np.asarray(X)
         if images.ndim != 4 or images.shape[3] != 3 or images.shape[1] != images.shape[2]:
@@ -91,7 +92,8 @@ class SVMImageClassifier(PairClassifier):
         # a sparse fit gives sparse support vectors and dual coefficients
         self.support_vectors_ = np.asarray(svc.support_vectors_.toarray(), dtype=np.float32)
         dual = svc.dual_coef_
-        self.dual_coef_ = np.asarray(dual.toarray() if scipy.sparse.issparse(dual) else dual, dtype=np.float64).reshape(-1)
+        dual = dual.toarray() if scipy.sparse.issparse(dual) else dual
+        self.dual_coef_ = np.asarray(dual, dtype=np.float64).reshape(-1)
         self.intercept_ = float(svc.intercept_[0])
         self.gamma_ = float(svc._gamma)
         self.size_ = _image_size(X)
@@ -268,7 +270,8 @@ class TorchImageClassifier(PairClassifier):
         else:
             raise InputError(f"unknown optimizer {self.optimizer!r} (adam, adamw)")
         steps = self.epochs * -(-len(y) // self.batch_size)
-        scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(steps, 1)) if self.schedule == "cosine" else None
+        cosine = self.schedule == "cosine"
+        scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(steps, 1)) if cosine else None
         loss_fn = torch.nn.CrossEntropyLoss()
         from tqdm import tqdm
 
@@ -278,7 +281,7 @@ class TorchImageClassifier(PairClassifier):
             for batch in order.split(self.batch_size):
                 xb, yb = inputs[batch], targets[batch]
                 if self.augment:
-                    xb = _dihedral(xb, int(rng.integers(8)))
+                    xb = transform_grids(xb, int(rng.integers(8)), axes=(2, 3))
                 opt.zero_grad()
                 loss = loss_fn(self.network_(self._inputs(xb)), yb)
                 loss.backward()
@@ -332,22 +335,6 @@ class TorchImageClassifier(PairClassifier):
             raise InputError(f"model weights do not fit the {kind} architecture: {exc}") from None
         model.network_.eval()
         return model
-
-
-def _dihedral(x, transform: int):
-    """One of the 8 flips/rotations on a `(B, C, N, N)` tensor (ids as in `vinadv.classify.images`)."""
-    torch = _torch()
-    if transform in (1, 2, 3):
-        return torch.rot90(x, k=-transform, dims=(2, 3))
-    if transform == 4:
-        return x.flip(3)
-    if transform == 5:
-        return x.flip(2)
-    if transform == 6:
-        return x.transpose(2, 3)
-    if transform == 7:
-        return x.transpose(2, 3).flip(2).flip(3)
-    return x
 
 
 @register_kind("cnn")

@@ -17,6 +17,7 @@ import numpy as np
 
 from vinadv.classify.features import path_features
 from vinadv.errors import InputError
+from vinadv.grid.paths import PackedPaths
 
 
 def default_threshold(size: int) -> int:
@@ -105,27 +106,17 @@ def _distances_kernel(o_cells, o_offsets, a_cells, a_offsets, size, dh, dv):  # 
             col_max_a[c] = -1
 
 
-def _packed(cells, offsets, size, name):
-    cells = np.ascontiguousarray(cells, dtype=np.int16).reshape(-1, 2)
-    offsets = np.ascontiguousarray(offsets, dtype=np.int64).reshape(-1)
-    if len(offsets) == 0 or offsets[0] != 0 or offsets[-1] != len(cells):
-        raise InputError(f"{name}: offsets must start at 0 and end at the number of cells ({len(cells)})")
-    if len(cells) and (cells.min() < 0 or cells.max() >= size):
-        raise InputError(f"{name}: cells outside the {size}x{size} grid")
-    return cells, offsets
-
-
-def path_distances(o_cells, o_offsets, a_cells, a_offsets, size: int) -> tuple[np.ndarray, np.ndarray]:
-    """`(dh, dv)`, each `(n,)` int64 cells: the horizontal and vertical distances of the rule."""
+def path_distances(path_o: PackedPaths, path_a: PackedPaths, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """`(dh, dv)`, each `(n,)` int64 cells: the horizontal and vertical distances of the rule, for n pairs of
+    original and adversarial paths on `size x size` maps."""
     size = int(size)
-    o_cells, o_offsets = _packed(o_cells, o_offsets, size, "original paths")
-    a_cells, a_offsets = _packed(a_cells, a_offsets, size, "adversarial paths")
-    if len(o_offsets) != len(a_offsets):
-        raise InputError(f"{len(o_offsets) - 1} original paths but {len(a_offsets) - 1} adversarial paths")
-    n = len(o_offsets) - 1
-    dh = np.zeros(n, dtype=np.int64)
-    dv = np.zeros(n, dtype=np.int64)
-    _distances_kernel(o_cells, o_offsets, a_cells, a_offsets, size, dh, dv)
+    path_o.check_grid(size, "original paths")
+    path_a.check_grid(size, "adversarial paths")
+    if len(path_o) != len(path_a):
+        raise InputError(f"{len(path_o)} original paths but {len(path_a)} adversarial paths")
+    dh = np.zeros(len(path_o), dtype=np.int64)
+    dv = np.zeros(len(path_o), dtype=np.int64)
+    _distances_kernel(path_o.cells, path_o.offsets, path_a.cells, path_a.offsets, size, dh, dv)
     return dh, dv
 
 
@@ -147,17 +138,18 @@ class PairLabels:
     t: int
 
 
-def label_pairs(o_cells, o_offsets, a_cells, a_offsets, goals, size: int, t: int | None = None) -> PairLabels:
-    """The full DESIGN.md label of each pair: invalid, UrP, UcP, then DP/FP by the rule with threshold `t`."""
+def label_pairs(path_o: PackedPaths, path_a: PackedPaths, goals, size: int, t: int | None = None) -> PairLabels:
+    """The full DESIGN.md label of each pair (original and adversarial paths, goals `(n, 2)`, `size x size`
+    maps): invalid, UrP, UcP, then DP/FP by the rule with threshold `t`."""
     size = int(size)
     t = default_threshold(size) if t is None else int(t)
     if t < 0:
         raise InputError(f"threshold t must be >= 0, got {t}")
-    dh, dv = path_distances(o_cells, o_offsets, a_cells, a_offsets, size)
+    dh, dv = path_distances(path_o, path_a, size)
     goals = np.asarray(goals, dtype=np.int64).reshape(-1, 2)
     if len(goals) != len(dh):
         raise InputError(f"{len(goals)} goals for {len(dh)} path pairs")
-    features = path_features(o_cells, o_offsets, a_cells, a_offsets, goals)
+    features = path_features(path_o, path_a, goals)
     labels = np.where(is_fork(dh, dv, t), "FP", "DP").astype("<U7")
     labels[features.unchanged] = "UcP"
     labels[features.unreached] = "UrP"
@@ -167,4 +159,4 @@ def label_pairs(o_cells, o_offsets, a_cells, a_offsets, goals, size: int, t: int
 
 def label_batch(batch, t: int | None = None) -> PairLabels:
     """`label_pairs` of a `PathPairBatch`."""
-    return label_pairs(batch.o_cells, batch.o_offsets, batch.a_cells, batch.a_offsets, batch.goals, batch.size, t)
+    return label_pairs(batch.path_o, batch.path_a, batch.goals, batch.size, t)

@@ -72,12 +72,7 @@ def _dp_kernel(o_cells, o_off, a_cells, a_off, out, frechet):  # pragma: no cove
 
 
 def _kernel_inputs(batch: PathPairBatch):
-    return (
-        np.ascontiguousarray(batch.o_cells, dtype=np.int16),
-        np.ascontiguousarray(batch.o_offsets, dtype=np.int64),
-        np.ascontiguousarray(batch.a_cells, dtype=np.int16),
-        np.ascontiguousarray(batch.a_offsets, dtype=np.int64),
-    )
+    return batch.path_o.cells, batch.path_o.offsets, batch.path_a.cells, batch.path_a.offsets
 
 
 def hausdorff_distances(batch: PathPairBatch) -> np.ndarray:

@@ -42,7 +42,7 @@ WINDOW_PER_THREAD = 4
 
 __all__ = [
     "INSTALL_HINT", "add_cluster_arguments", "open_cluster", "start_local_cluster", "ClusterShards",
-    "attack_on_cluster", "identify_on_cluster", "concat_pairsets", "require_dask",
+    "ClusterIdentify", "attack_on_cluster", "identify_on_cluster", "require_dask",
 ]
 
 
@@ -51,8 +51,8 @@ def require_dask():
     try:
         import distributed
     except ImportError as exc:
-        raise InputError(f"--workers/--cluster need Dask's distributed scheduler ({exc}); install it with "
-                         f"{INSTALL_HINT}") from None
+        raise InputError(f"workers/cluster need Dask's distributed scheduler ({exc}); install it with "
+                         f"{INSTALL_HINT}", "workers", "cluster") from None
     return distributed
 
 
@@ -70,7 +70,7 @@ def add_cluster_arguments(parser, shard_size: bool = False) -> None:
 def start_local_cluster(workers: int, **kwargs):
     """A LocalCluster of `workers` processes, one thread each, numeric libraries single-threaded."""
     if workers < 1:
-        raise InputError(f"--workers must be >= 1, got {workers}")
+        raise InputError(f"workers must be >= 1, got {workers}", "workers")
     require_dask()
     from distributed import LocalCluster
 
@@ -89,7 +89,7 @@ def open_cluster(address: str | None = None, workers: int | None = None) -> Iter
         yield None
         return
     if address is not None and workers is not None:
-        raise InputError("give either --cluster or --workers, not both")
+        raise InputError("give either cluster or workers, not both", "cluster", "workers")
     require_dask()
     from distributed import Client
 
@@ -104,7 +104,7 @@ def open_cluster(address: str | None = None, workers: int | None = None) -> Iter
             try:
                 client = stack.enter_context(Client(address, timeout="15s"))
             except (OSError, TimeoutError, ValueError) as exc:
-                raise InputError(f"--cluster {address}: cannot connect to a Dask scheduler ({exc})") from None
+                raise InputError(f"cluster {address}: cannot connect to a Dask scheduler ({exc})", "cluster") from None
         client.register_plugin(_plugin_class()())
         yield client
 
@@ -122,11 +122,11 @@ def _check_reachable(address: str) -> None:
     except ValueError:
         host = port = None
     if not host or not port:
-        raise InputError(f"--cluster {address}: expected tcp://HOST:PORT")
+        raise InputError(f"cluster {address}: expected tcp://HOST:PORT", "cluster")
     try:
         socket.create_connection((host, port), timeout=10).close()
     except OSError as exc:
-        raise InputError(f"--cluster {address}: cannot connect to a Dask scheduler ({exc})") from None
+        raise InputError(f"cluster {address}: cannot connect to a Dask scheduler ({exc})", "cluster") from None
 
 
 def _absolute(path) -> str:
@@ -220,7 +220,7 @@ def _gather_in_order(client, futures, progress: bool, desc: str, unit_counts):
 
 def _bounds(n: int, shard_size: int) -> list[tuple[int, int]]:
     if shard_size < 1:
-        raise InputError(f"--shard-size must be >= 1, got {shard_size}")
+        raise InputError(f"shard_size must be >= 1, got {shard_size}", "shard_size")
     return [(lo, min(n, lo + shard_size)) for lo in range(0, n, shard_size)]
 
 
@@ -248,10 +248,28 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
     for (lo, _), part in zip(bounds, parts):
         part.pairs.map_index = part.pairs.map_index + lo
         shifted.append(part.pairs)
-    pairs = concat_pairsets(shifted, strategy, attack.params(), maps.corner_cutting, maps.size)
+    from vinadv.attacks.pairs import PairSet
+
+    settings = dict(strategy=strategy, params=attack.params(), corner_cutting=maps.corner_cutting)
+    pairs = PairSet.concat(shifted, **settings) if shifted else PairSet.empty(maps.size, **settings)
     no_valid = np.concatenate([p.no_valid_cell + lo for (lo, _), p in zip(bounds, parts)]).astype(np.int64) \
         if parts else np.zeros(0, np.int64)
     return AttackResult(pairs, no_valid, int(sum(p.planner_calls for p in parts)))
+
+
+class ClusterIdentify:
+    """`identify.identify_and_store`'s `remote`: `identify_on_cluster` on the Dask scheduler at `address`, or on a
+    local cluster of `workers`, opened when called (after the caller has checked its inputs) and closed after."""
+
+    def __init__(self, address: str | None = None, workers: int | None = None, shard_size: int = 1000,
+                 progress: bool = False):
+        self.address, self.workers, self.shard_size, self.progress = address, workers, shard_size, progress
+
+    def __call__(self, pairs, weights: str | None, classifier: str | None, label_source: str, *, harm_tol: float,
+                 harm_rtol: float):
+        with open_cluster(self.address, self.workers) as client:
+            return identify_on_cluster(client, pairs, weights, classifier, label_source, shard_size=self.shard_size,
+                                       progress=self.progress, harm_tol=harm_tol, harm_rtol=harm_rtol)
 
 
 def identify_on_cluster(client, pairs, weights: str | None, classifier: str | None, label_source: str,
@@ -260,7 +278,6 @@ def identify_on_cluster(client, pairs, weights: str | None, classifier: str | No
     """`identify` (after `replan` with `weights`) of `pairs`, `shard_size` pairs per task: the same
     `Identification` as the local command (harm with the tolerances `harm_tol`, `harm_rtol`)."""
     from vinadv.cluster.worker import identify_shard_task
-    from vinadv.classify.harm import PairHarm
     from vinadv.identify import Identification
     from vinadv.planners.weights import weights_checksum
 
@@ -270,7 +287,7 @@ def identify_on_cluster(client, pairs, weights: str | None, classifier: str | No
     classifier_sum = None if classifier in (None, "rule") else weights_checksum(classifier)
     bounds = _bounds(len(pairs), shard_size)
     futures = [
-        client.submit(identify_shard_task, pairs.subset(np.arange(lo, hi)), weights, weights_sum, classifier,
+        client.submit(identify_shard_task, pairs.take(np.arange(lo, hi)), weights, weights_sum, classifier,
                       classifier_sum, label_source, harm_tol, harm_rtol, retries=RETRIES, pure=False)
         for lo, hi in bounds
     ]
@@ -279,37 +296,4 @@ def identify_on_cluster(client, pairs, weights: str | None, classifier: str | No
         from vinadv.identify import identify
 
         return identify(pairs, None, label_source, harm_tol=harm_tol, harm_rtol=harm_rtol)
-    cat = lambda name: np.concatenate([getattr(p, name) for p in parts])  # noqa: E731
-    return Identification(
-        pairs=concat_pairsets([p.pairs for p in parts], pairs.strategy, dict(pairs.params), pairs.corner_cutting,
-                              pairs.size),
-        labels=cat("labels"), attack=cat("attack"), score=cat("score"), dh=cat("dh"), dv=cat("dv"),
-        label_source=label_source, harm=PairHarm.concatenate([p.harm for p in parts]),
-    )
-
-
-def concat_pairsets(parts: list, strategy: str, params: dict, corner_cutting: bool, size: int):
-    """One `PairSet` of `parts` in order (paths re-packed)."""
-    from vinadv.attacks.pairs import PairSet
-
-    parts = [p for p in parts if len(p)]
-    if not parts:
-        empty_paths = (np.zeros((0, 2), np.int16), np.zeros(1, np.int64))
-        return PairSet(
-            np.zeros((0, size, size), bool), np.zeros((0, size, size), bool), np.zeros((0, 2), np.int64),
-            np.zeros((0, 2), np.int64), np.zeros((0, 2), np.int64), np.zeros(0, np.int64), *empty_paths,
-            *empty_paths, np.zeros(0, "<U10"), np.zeros(0, "<U10"), strategy, params, corner_cutting,
-        )
-
-    def paths(prefix):
-        offsets = [getattr(p, f"{prefix}_offsets") for p in parts]
-        shift = np.cumsum([0] + [int(o[-1]) for o in offsets[:-1]])
-        packed = np.concatenate([offsets[0][:1]] + [o[1:] + s for o, s in zip(offsets, shift)])
-        return np.concatenate([getattr(p, f"{prefix}_cells") for p in parts]), packed.astype(np.int64)
-
-    cat = lambda name: np.concatenate([np.asarray(getattr(p, name)) for p in parts])  # noqa: E731
-    po, pa = paths("path_o"), paths("path_a")
-    return PairSet(
-        cat("obstacles_o"), cat("obstacles_a"), cat("starts"), cat("goals"), cat("added"), cat("map_index"),
-        po[0], po[1], pa[0], pa[1], cat("term_o"), cat("term_a"), strategy, params, corner_cutting,
-    )
+    return Identification.concat(parts, label_source=label_source)

@@ -12,7 +12,6 @@ from __future__ import annotations
 import os
 import threading
 
-
 #: environment of a worker process: one thread for each numeric library (a worker process is one core)
 SINGLE_THREAD_ENV = {
     "OMP_NUM_THREADS": "1",

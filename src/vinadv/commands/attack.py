@@ -54,11 +54,11 @@ def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, secon
     """The summary of labelled pairs: counts, the paper's success rate, and with `harm_table` (a
     `vinadv.classify.harm.cross_table`) the harm counts, the harmful rate and the label x harm table."""
     from vinadv.classify.harm import harm_summary
-    from vinadv.identify import LABEL_STRENGTH
+    from vinadv.vocabulary import label_counts, success_count
 
-    counts = {label: int((labels == label).sum()) for label in LABEL_STRENGTH}
+    counts = label_counts(labels)
     valid = len(labels) - counts["invalid"]
-    success = counts["UrP"] + counts["FP"]
+    success = success_count(counts)
     return {
         "maps": n_maps, "pairs": len(labels), "maps_without_valid_cell": no_valid, "counts": counts,
         "success_rate": success / valid if valid else None, "planner_calls": planner_calls,
@@ -117,8 +117,10 @@ def cmd_attack(args: argparse.Namespace) -> int:
     elif not args.quiet:
         print(f"{args.strategy}: {summary['pairs']:,} pairs from {len(maps):,} maps in {elapsed:.1f} s -> {args.out}")
         if result.no_valid_cell.size:
-            print(f"{len(result.no_valid_cell)} maps had no valid cell for the added obstacle; no pair was made for them")
+            print(f"{len(result.no_valid_cell)} maps had no valid cell for the added obstacle; "
+                  "no pair was made for them")
         print_counts(summary)
         per = summary["planner_calls_per_success"]
-        print(f"planner calls: {result.planner_calls:,} ({'n/a' if per is None else f'{per:.1f}'} per successful attack)")
+        per_text = "n/a" if per is None else f"{per:.1f}"
+        print(f"planner calls: {result.planner_calls:,} ({per_text} per successful attack)")
     return 0

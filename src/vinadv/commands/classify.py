@@ -4,9 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
-
-import numpy as np
 
 from vinadv.errors import InputError
 
@@ -64,7 +61,7 @@ def _load_pairs(path):
     from vinadv.attacks.pairs import PairSet
     from vinadv.classify import PathPairBatch
 
-    return PathPairBatch.from_pairset(PairSet.load(path))
+    return PathPairBatch.from_pairs(PairSet.load(path))
 
 
 def _human_labels(args):
@@ -79,112 +76,39 @@ def _human_labels(args):
         return batch, labels, f"{store.url} run {args.run} (human labels)"
 
 
-def _counts(labels) -> dict:
-    values, counts = np.unique(np.asarray(labels), return_counts=True)
-    return {str(v): int(c) for v, c in zip(values, counts)}
-
-
 def cmd_train(args: argparse.Namespace) -> int:
-    from sklearn.model_selection import train_test_split
+    from vinadv.classify import label_batch
+    from vinadv.classify.rule import default_threshold
+    from vinadv.classify.train_eval import train_classifier
 
-    from vinadv.classify import HybridClassifier, balance_batch, default_threshold, label_batch, make_fp_classifier
-
-    if not 0.0 <= args.test_fraction < 1.0:
-        raise InputError(f"--test-fraction must be in [0, 1), got {args.test_fraction}")
     if args.labels == "human":
         batch, labels, args.pairs = _human_labels(args)
-        t = default_threshold(batch.size) if args.threshold is None else args.threshold
     else:
         if args.pairs is None:
             raise InputError("--pairs is required with --labels rule")
         batch = _load_pairs(args.pairs)
-        t = default_threshold(batch.size) if args.threshold is None else args.threshold
-        labels = label_batch(batch, t).labels
-    fp_dp = np.flatnonzero(np.isin(labels, ("DP", "FP")))
-    counts = _counts(labels[fp_dp])
-    need = 2 if args.test_fraction > 0 else 1
-    if counts.get("DP", 0) < need or counts.get("FP", 0) < need:
-        raise InputError(f"{args.pairs}: training needs at least {need} FP and {need} DP pairs, "
-                         f"the file has {counts.get('FP', 0)} FP and {counts.get('DP', 0)} DP")
-    if args.test_fraction > 0:
-        train_index, test_index = train_test_split(
-            fp_dp, test_size=args.test_fraction, stratify=labels[fp_dp], random_state=args.seed
-        )
-        train_index, test_index = np.sort(train_index), np.sort(test_index)
-    else:
-        train_index, test_index = fp_dp, np.zeros(0, dtype=np.int64)
-    train_batch, train_labels = batch.subset(train_index), labels[train_index]
-    if args.balance:
-        train_batch, train_labels = balance_batch(train_batch, train_labels, seed=args.seed)
-    model = HybridClassifier(make_fp_classifier(args.model, args.setting, args.seed, verbose=not args.quiet), t=t)
-    start = time.perf_counter()
-    model.fit(train_batch, train_labels)
-    seconds = time.perf_counter() - start
-    record = {
-        "pairs": str(args.pairs), "pairs_fingerprint": batch.fingerprint(), "n_pairs": len(batch),
-        "size": batch.size, "labels": args.labels, "threshold": t, "model": args.model, "setting": args.setting,
-        "balance": bool(args.balance), "seed": args.seed, "test_fraction": args.test_fraction,
-        "train_counts": _counts(labels[train_index]), "train_counts_balanced": _counts(train_labels),
-        "test_counts": _counts(labels[test_index]), "training_seconds": round(seconds, 3),
-    }
-    model.save(args.out, record, {"train_index": train_index, "test_index": test_index})
+        labels = label_batch(batch, default_threshold(batch.size) if args.threshold is None else args.threshold).labels
+    model, record, arrays = train_classifier(
+        batch, labels, model=args.model, setting=args.setting, threshold=args.threshold, balance=args.balance,
+        test_fraction=args.test_fraction, seed=args.seed, source=str(args.pairs), verbose=not args.quiet)
+    record = {**record, "labels": args.labels}
+    model.save(args.out, record, arrays)
     if args.json:
         print(json.dumps({"out": args.out, **record}))
     elif not args.quiet:
-        print(f"trained {args.model} ({args.setting}) on {len(train_labels)} pairs "
-              f"{record['train_counts_balanced']} in {seconds:.2f} s; held out {len(test_index)} "
-              f"{record['test_counts']}; wrote {args.out}")
+        print(f"trained {args.model} ({args.setting}) on {sum(record['train_counts_balanced'].values())} pairs "
+              f"{record['train_counts_balanced']} in {record['training_seconds']:.2f} s; held out "
+              f"{len(arrays['test_index'])} {record['test_counts']}; wrote {args.out}")
     return 0
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from vinadv.classify import HybridClassifier, RuleClassifier, binary_metrics, default_threshold, label_batch
     from vinadv.classify.base import load_model
+    from vinadv.classify.train_eval import as_hybrid, evaluate_classifier
 
-    model = load_model(args.model)
-    if not isinstance(model, (HybridClassifier, RuleClassifier)):
-        record, arrays = model.record_, model.record_arrays_
-        model = HybridClassifier(model, t=record.get("threshold"))
-        model.record_, model.record_arrays_ = record, arrays
-    batch = _load_pairs(args.pairs)
-    record = getattr(model, "record_", {}) or {}
-    t = model.t if model.t is not None else default_threshold(batch.size)
-    truth = label_batch(batch, t).labels
-    same_file = record.get("pairs_fingerprint") == batch.fingerprint()
-    train_index = model.record_arrays_.get("train_index", np.zeros(0, np.int64)) if same_file else np.zeros(0, np.int64)
-    if same_file and not args.all:
-        eval_index = model.record_arrays_.get("test_index", np.zeros(0, np.int64)).astype(np.int64)
-        scope = "held-out test split of the training file"
-    else:
-        eval_index = np.flatnonzero(np.isin(truth, ("DP", "FP")))
-        scope = "all FP/DP pairs of the file" + (" (including training pairs)" if same_file else "")
-    if len(eval_index) == 0:
-        raise InputError(f"{args.pairs}: no FP/DP pairs to evaluate on ({scope})")
-
-    subset = batch.subset(eval_index)
-    start = time.perf_counter()
-    predicted = model.predict(subset)
-    predict_seconds = time.perf_counter() - start
-    scores = model.fp_decision(subset)
-    figures = binary_metrics(truth[eval_index], predicted, scores)
-
-    # the five-way labels of every pair the model did not train on (features + classifier, against the rule)
-    unseen = np.setdiff1d(np.arange(len(batch)), train_index)
-    start = time.perf_counter()
-    five_way = model.predict(batch.subset(unseen))
-    five_way_seconds = time.perf_counter() - start
-    result = {
-        "pairs": str(args.pairs), "model": str(args.model), "kind": record.get("model", model.kind),
-        "setting": record.get("setting"), "threshold": t, "scope": scope, "fp_dp": figures,
-        "training_time_s": getattr(model, "training_time_s_", None),
-        "prediction_seconds_per_100_pairs": round(100 * predict_seconds / len(eval_index), 6),
-        "five_way": {
-            "n": int(len(unseen)),
-            "accuracy": float(np.mean(five_way == truth[unseen])) if len(unseen) else None,
-            "truth_counts": _counts(truth[unseen]), "predicted_counts": _counts(five_way),
-            "prediction_seconds_per_100_pairs": round(100 * five_way_seconds / max(len(unseen), 1), 6),
-        },
-    }
+    model = as_hybrid(load_model(args.model))
+    result = evaluate_classifier(model, _load_pairs(args.pairs), all_pairs=args.all, source=str(args.pairs))
+    result = {"pairs": result["pairs"], "model": str(args.model), **result}
     if args.json:
         print(json.dumps(result))
     elif not args.quiet:

@@ -1,12 +1,10 @@
-"""`vinadv maps generate` and `vinadv maps show`."""
+"""`vinadv maps generate`, `vinadv maps show`, `vinadv maps import` and `vinadv maps export`."""
 
 from __future__ import annotations
 
 import argparse
 import json
 import time
-
-import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps, obstacle_fraction
@@ -35,6 +33,7 @@ def register(subparsers) -> None:
     show.add_argument("--out", required=True, help="output image (.png, .svg or .pdf)")
     show.add_argument("--all-starts", action="store_true", help="draw the expert paths of every start")
     show.set_defaults(func=cmd_show)
+    _register_interop(sub)
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
@@ -45,7 +44,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
     summary = {
         "out": args.out, "maps": len(maps), "size": maps.size, "starts": maps.n_starts, "seed": args.seed,
         "corner_cutting": maps.corner_cutting, "obstacle_fraction": round(obstacle_fraction(maps.obstacles), 4),
-        "mean_expert_moves": round(float(np.diff(maps.expert_offsets).mean() - 1), 3) if len(maps) else None,
+        "mean_expert_moves": round(float(maps.expert.lengths.mean() - 1), 3) if len(maps) else None,
         "seconds": round(elapsed, 3),
     }
     if args.json:
@@ -71,4 +70,67 @@ def cmd_show(args: argparse.Namespace) -> int:
              title=f"map {args.index}: expert cost {cost:.2f}")
     save_figure(fig, args.out)
     print(f"wrote {args.out}")
+    return 0
+
+
+FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn")
+
+
+def _register_interop(sub) -> None:
+    imp = sub.add_parser("import", help="read maps of the kentsommer PyTorch port, avivt's .mat files or GPPN",
+                         description="Regroup another codebase's samples into maps and trajectories; expert costs "
+                                     "are vinadv's (diagonal cost sqrt 2). See README, 'Using data and models "
+                                     "from other VIN/GPPN code'.")
+    imp.add_argument("input", metavar="IN", help="the file to read (.npz for kentsommer and gppn, .mat for avivt)")
+    imp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the file's layout")
+    imp.add_argument("--out", required=True, help="output maps file (.npz)")
+    imp.add_argument("--split", default=None,
+                     help="kentsommer: train|test|all (default test); gppn: train|valid|test|all (default test); "
+                          "avivt: test|train layout (default: the one the file has)")
+    imp.add_argument("--starts", type=int, default=None,
+                     help="starts drawn per map where the file has none (gppn; default 7)")
+    imp.add_argument("--seed", type=int, default=0, help="seed of the drawn starts (default 0)")
+    imp.add_argument("--json", action="store_true", help="print a JSON summary")
+    imp.add_argument("--quiet", action="store_true", help="print nothing")
+    imp.set_defaults(func=cmd_import)
+
+    exp = sub.add_parser("export", help="write a maps file in the kentsommer, avivt or GPPN layout")
+    exp.add_argument("maps", help="maps file (.npz)")
+    exp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the layout to write")
+    exp.add_argument("--out", required=True, help="output file (.npz for kentsommer and gppn, .mat for avivt)")
+    exp.add_argument("--split", default=None,
+                     help="kentsommer: train|test; gppn: train|valid|test; avivt: test|train layout (default test)")
+    exp.add_argument("--json", action="store_true", help="print a JSON summary")
+    exp.set_defaults(func=cmd_export)
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    from vinadv.interop.maps import read_maps
+
+    if args.starts is not None and args.starts < 1:
+        raise InputError(f"--starts must be >= 1, got {args.starts}")
+    maps, info = read_maps(args.input, args.format, split=args.split, starts=args.starts, seed=args.seed)
+    maps.save(args.out)
+    info = {"out": args.out, **info}
+    if args.json:
+        print(json.dumps(info))
+    elif not args.quiet:
+        padded = f", {info['maps_padded']} with fewer starts (padded, see start_counts)" if info["maps_padded"] else ""
+        print(f"wrote {info['maps']} maps of {info['size']}x{info['size']} (up to {info['starts_per_map']} starts"
+              f"{padded}) to {args.out}; expert paths: {info['expert_paths']}")
+        for key in ("file_paths_optimal", "movement", "maps_left_out_no_start"):
+            if info.get(key):
+                print(f"  {key.replace('_', ' ')}: {info[key]}")
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from vinadv.interop.maps import export_maps
+
+    maps = MapSet.load(args.maps)
+    summary = export_maps(maps, args.out, args.format, split=args.split)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"wrote {summary['maps']} maps to {args.out} ({args.format}, {summary['split']})")
     return 0

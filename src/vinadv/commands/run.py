@@ -6,7 +6,6 @@ import argparse
 import json
 import time
 
-from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.cluster import add_cluster_arguments, open_cluster
 from vinadv.commands.attack import add_harm_arguments, add_objective_argument, attack_summary, print_counts
@@ -103,48 +102,21 @@ def _print_run(result: dict) -> None:
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
-    from vinadv.classify.harm import check_tolerances
-    from vinadv.identify import identify, load_classifier, replan
-    from vinadv.planners.weights import load_vin, weights_checksum
-    from vinadv.store import PairRecords, Store
+    from vinadv.cluster import ClusterIdentify
+    from vinadv.identify import identify_and_store
 
-    check_tolerances(args.harm_tolerance, args.harm_rtol)
-    pairs = PairSet.load(args.pairs)
-    t0 = time.perf_counter()
-    harm = dict(harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol)
-    if args.cluster is None and args.workers is None:
-        if args.weights:
-            pairs = replan(pairs, load_vin(args.weights, size=pairs.size))
-        classifier, classifier_name = load_classifier(args.classifier)
-        ident = identify(pairs, classifier, classifier_name, **harm)
-    else:
-        from vinadv.cluster import identify_on_cluster
-
-        if args.weights:
-            load_vin(args.weights, size=pairs.size)  # a bad file is refused here, before any worker starts
-        classifier_name = load_classifier(args.classifier)[1]
-        with open_cluster(args.cluster, args.workers) as client:
-            ident = identify_on_cluster(client, pairs, args.weights, args.classifier, classifier_name,
-                                        shard_size=args.shard_size, progress=not args.quiet, **harm)
-        pairs = ident.pairs
-    elapsed = time.perf_counter() - t0
-    records = PairRecords.from_pairs(pairs, label=ident.labels, attack=ident.attack, label_source=classifier_name,
-                                     score=ident.score, dh=ident.dh, dv=ident.dv, harm=ident.harm)
-    with Store.open(args.db) as store:
-        run_id = store.create_run(
-            args.name, config={"pairs": args.pairs, "strategy": pairs.strategy, "params": pairs.params,
-                               "classifier": args.classifier, "weights": args.weights,
-                               "harm_tolerance": args.harm_tolerance, "harm_rtol": args.harm_rtol},
-            weights_checksum=weights_checksum(args.weights) if args.weights else None,
-            attack=pairs.strategy, classifier=classifier_name)
-        store.write_pairs(run_id, records)
-        store.finish_run(run_id, timings={"identify": elapsed})
-    summary = attack_summary(ident.labels, len(pairs), 0, 0, elapsed, harm_table=ident.harm_table())
-    summary.update(run_id=run_id, adversarial=int(ident.attack.sum()))
+    remote = None
+    if args.cluster is not None or args.workers is not None:
+        remote = ClusterIdentify(args.cluster, args.workers, shard_size=args.shard_size, progress=not args.quiet)
+    done = identify_and_store(args.pairs, args.db, classifier=args.classifier, weights=args.weights, name=args.name,
+                              harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol, remote=remote)
+    ident = done.identification
+    summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds, harm_table=ident.harm_table())
+    summary.update(run_id=done.run_id, adversarial=int(ident.attack.sum()))
     if args.json:
         print(json.dumps(summary))
     elif not args.quiet:
-        print(f"run {run_id}: {len(pairs):,} pairs identified in {elapsed:.2f} s; "
+        print(f"run {done.run_id}: {len(ident):,} pairs identified in {done.seconds:.2f} s; "
               f"{summary['adversarial']:,} successful attacks (D_adversarial)")
         print_counts(summary)
     return 0

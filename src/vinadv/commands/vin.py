@@ -51,10 +51,23 @@ def register(subparsers) -> None:
     ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
     ev.add_argument("--k", type=int, default=None, help="value-iteration steps for a port-style weights file")
     ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    ev.add_argument("--protocol", choices=("vinadv", "kentsommer", "gppn"), default="vinadv",
+                    help="measure as vinadv (default), the kentsommer port's test.py, or GPPN (%%Opt/%%Suc over every "
+                         "free cell); see README, 'Using data and models from other VIN/GPPN code'")
+    ev.add_argument("--prior", type=float, default=None,
+                    help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)")
     ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.add_argument("--json", action="store_true", help="print the figures as JSON")
     ev.set_defaults(func=cmd_eval)
+
+    exw = sub.add_parser("export-weights", help="write VIN weights as a plain state dict for the PyTorch ports")
+    exw.add_argument("weights", metavar="W", help="weights file (.pt)")
+    exw.add_argument("--format", required=True, choices=("state-dict",),
+                     help="state-dict: exactly the keys h.weight h.bias r.weight q.weight w fc.weight")
+    exw.add_argument("--out", required=True, help="output file (.pth)")
+    exw.add_argument("--json", action="store_true", help="print the keys and shapes as JSON")
+    exw.set_defaults(func=cmd_export_weights)
 
 
 def _command_line() -> str:
@@ -117,7 +130,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
     from vinadv.grid.generator import generate_maps
     from vinadv.grid.mapset import MapSet
-    from vinadv.planners.evaluation import evaluate_vin
+    from vinadv.interop.protocols import evaluate_protocol
     from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
 
     _set_threads(args.threads)
@@ -138,7 +151,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
     if data_seed is not None and data_seed == maps.seed and not args.quiet:
         print(f"vinadv: warning: these maps use seed {maps.seed}, the seed of the training data", file=sys.stderr)
     t0 = time.perf_counter()
-    metrics = evaluate_vin(model, maps, progress=not (args.quiet or args.json))
+    if args.prior is not None and args.protocol != "kentsommer":
+        raise InputError("--prior applies to --protocol kentsommer only")
+    metrics = evaluate_protocol(model, maps, args.protocol, args.prior, progress=not (args.quiet or args.json))
     weights_path = args.weights or f"shipped:{default_weights_path(maps.size).name}"
     metrics = {"weights": weights_path, "weights_sha256": weights_checksum(model.weights_path), **source, **metrics,
                "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
@@ -146,13 +161,26 @@ def cmd_eval(args: argparse.Namespace) -> int:
         Path(args.out).write_text(json.dumps(metrics, indent=2) + "\n")
     if args.json:
         print(json.dumps(metrics))
-    else:
+    elif args.protocol == "vinadv":
         _print_metrics(metrics)
+    else:
+        _print_protocol_metrics(metrics)
     return 0
 
 
 def _pct(x: float) -> str:
     return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{100 * x:.2f}%"
+
+
+def _print_protocol_metrics(m: dict) -> None:
+    print(f"{m['maps']} maps of {m['size']}x{m['size']}, measured as {m['protocol']} ({m['weights']})")
+    if m["protocol"] == "kentsommer":
+        print(f"  rollout success   {_pct(m['success_rate'])} of {m['rollouts']} (goal prior {m['prior']:g})")
+        print(f"  action accuracy   {_pct(m['action_accuracy_single_label'])} single-label, "
+              f"{m['trajectory_states']} trajectory states")
+    else:
+        print(f"  %Opt              {_pct(m['percent_optimal'])} of {m['cells']} free cells (diagonal cost 1)")
+        print(f"  %Suc              {_pct(m['percent_success'])}")
 
 
 def _print_metrics(m: dict) -> None:
@@ -163,3 +191,31 @@ def _print_metrics(m: dict) -> None:
     print(f"  optimal paths     {_pct(m['optimal_rate'])} (of reached: {_pct(m['optimal_rate_of_reached'])})")
     print(f"  mean extra cost   {m['mean_extra_cost']:.4f} (relative {_pct(m['mean_extra_cost_relative'])})")
     print(f"  terminations      {terms}")
+
+
+def cmd_export_weights(args: argparse.Namespace) -> int:
+    import torch
+
+    from vinadv.interop.checkpoints import export_state_dict, gppn_vin_gaps, read_checkpoint
+    from vinadv.planners.weights import load_vin
+
+    try:
+        model = load_vin(args.weights)
+    except InputError:
+        try:  # a GPPN checkpoint: say what vinadv's VIN cannot represent
+            state, _ = read_checkpoint(args.weights)
+        except InputError:
+            state = None
+        if state is None:
+            raise
+        raise InputError(f"{args.weights}: a GPPN-style checkpoint; vinadv's VIN cannot represent it: "
+                         + "; ".join(gppn_vin_gaps(state))) from None
+    shapes = export_state_dict(model, args.out)
+    summary = {"out": args.out, "format": args.format, "k": model.config.k,
+               "keys": {k: list(v) for k, v in shapes.items()}, "torch": torch.__version__}
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"wrote {args.out}: plain state dict {', '.join(shapes)} (k = {model.config.k} is not stored: "
+              f"the ports take it as an option)")
+    return 0

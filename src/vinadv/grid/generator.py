@@ -46,9 +46,9 @@ def _draw_obstacles(rng: np.random.Generator, n: int, size: int, goals: np.ndarr
 
     rows = np.arange(size)[None, None, :, None]
     cols = np.arange(size)[None, None, None, :]
-    t, l = top[..., None, None], left[..., None, None]
-    rect = (rows >= t) & (rows < t + height[..., None, None]) & (cols >= l) & (cols < l + width[..., None, None])
-    disc = (rows - t) ** 2 + (cols - l) ** 2 <= radius[..., None, None] ** 2
+    t, lft = top[..., None, None], left[..., None, None]
+    rect = (rows >= t) & (rows < t + height[..., None, None]) & (cols >= lft) & (cols < lft + width[..., None, None])
+    disc = (rows - t) ** 2 + (cols - lft) ** 2 <= radius[..., None, None] ** 2
     shapes = np.where(is_disc[..., None, None], disc, rect)
     shapes &= (np.arange(max_obs)[None, :] < attempts[:, None])[..., None, None]
     covers_goal = shapes[np.arange(n), :, goals[:, 0], goals[:, 1]]
@@ -58,7 +58,8 @@ def _draw_obstacles(rng: np.random.Generator, n: int, size: int, goals: np.ndarr
     return obstacles
 
 
-def _generate_chunk(seed: tuple[int, ...], chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int, max_size: int):
+def _generate_chunk(seed: tuple[int, ...], chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int,
+                    max_size: int):
     rng = np.random.default_rng([*seed, chunk])
     goals = rng.integers(1, size - 1, (CHUNK, 2))
     obstacles = _draw_obstacles(rng, CHUNK, size, goals, max_obs, max_size)
@@ -89,11 +90,11 @@ def generate_maps(
     """
     seeds = (int(seed),) if np.isscalar(seed) else tuple(int(s) for s in seed)
     if n < 0:
-        raise InputError(f"--n must be >= 0, got {n}")
+        raise InputError(f"n must be >= 0, got {n}", "n")
     if size < MIN_SIZE:
-        raise InputError(f"--size must be >= {MIN_SIZE}, got {size}")
+        raise InputError(f"size must be >= {MIN_SIZE}, got {size}", "size")
     if n_starts < 1:
-        raise InputError(f"--starts must be >= 1, got {n_starts}")
+        raise InputError(f"n_starts must be >= 1, got {n_starts}", "n_starts")
     default_obs, default_size = default_obstacle_params(size)
     max_obs = default_obs if max_obs is None else max_obs
     max_size = default_size if max_size is None else max_size
@@ -108,7 +109,8 @@ def generate_maps(
         have += len(part[0])
         chunk += 1
         if chunk > 64 and have == 0:
-            raise InputError(f"could not place {n_starts} starts on any {size}x{size} map; use fewer --starts")
+            raise InputError(f"could not place {n_starts} starts on any {size}x{size} map; use fewer (n_starts)",
+                             "n_starts")
     if parts:
         obstacles, goals, starts, dist = (np.concatenate(x)[:n] for x in zip(*parts))
     else:
@@ -116,14 +118,13 @@ def generate_maps(
         goals = np.zeros((0, 2), dtype=np.int64)
         starts = np.zeros((0, n_starts, 2), dtype=np.int64)
         dist = np.zeros((0, size, size))
-    costs, cells, offsets = expert_paths_from(dist, obstacles, goals, starts, corner_cutting)
+    costs, expert = expert_paths_from(dist, obstacles, goals, starts, corner_cutting)
     return MapSet(
         obstacles=obstacles,
         goals=goals.astype(np.int64),
         starts=starts.astype(np.int64),
         expert_costs=costs,
-        expert_cells=cells,
-        expert_offsets=offsets,
+        expert=expert,
         corner_cutting=corner_cutting,
         seed=seeds[0] if len(seeds) == 1 else -1,
     )

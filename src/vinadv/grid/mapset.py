@@ -7,12 +7,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vinadv.npzfile import NpzReader, check_cells_in_grid, check_offsets, save_npz
+from vinadv.grid.paths import PackedPaths
+from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 
 MAPS_FORMAT = "vinadv.maps/1"
 
 
-@dataclass
+@dataclass(kw_only=True, eq=False)
 class MapSet:
     """n maps of N x N cells with S starts each.
 
@@ -21,19 +22,30 @@ class MapSet:
         goals: `(n, 2)` int64 `(row, col)`.
         starts: `(n, S, 2)` int64.
         expert_costs: `(n, S)` float64, optimal cost from each start (1 per orthogonal, sqrt 2 per diagonal move).
-        expert_cells, expert_offsets: optimal paths packed flat, path `i * S + s` from start `s` of map `i`.
+        expert: `PackedPaths` of n * S optimal paths, path `i * S + s` from start `s` of map `i` (file fields
+            `expert_cells`, `expert_offsets`).
         corner_cutting: whether a diagonal move may pass between two obstacles on these maps.
         seed: the generator seed (-1 when unknown).
+        start_counts: `(n,)` int64 or None. Maps imported from other codebases may have fewer starts than others:
+            map `i` then has `start_counts[i]` real starts and its slots `s >= start_counts[i]` are explicit padding
+            (start = the goal, cost 0, a one-cell path), to be skipped through `start_mask`. None: all S are real.
     """
 
     obstacles: np.ndarray
     goals: np.ndarray
     starts: np.ndarray
     expert_costs: np.ndarray
-    expert_cells: np.ndarray
-    expert_offsets: np.ndarray
+    expert: PackedPaths
     corner_cutting: bool = True
     seed: int = -1
+    start_counts: np.ndarray | None = None
+
+    @property
+    def start_mask(self) -> np.ndarray:
+        """`(n, S)` bool: which start slots are real starts (all True unless `start_counts` pads some)."""
+        if self.start_counts is None:
+            return np.ones(self.starts.shape[:2], dtype=bool)
+        return np.arange(self.n_starts)[None, :] < np.asarray(self.start_counts)[:, None]
 
     def __len__(self) -> int:
         return len(self.obstacles)
@@ -47,8 +59,8 @@ class MapSet:
         return int(self.starts.shape[1])
 
     def expert_path(self, i: int, s: int = 0) -> np.ndarray:
-        k = i * self.n_starts + s
-        return self.expert_cells[self.expert_offsets[k] : self.expert_offsets[k + 1]]
+        """The optimal path from start `s` of map `i`, `(L, 2)` int16."""
+        return self.expert[i * self.n_starts + s]
 
     def save(self, path: str | os.PathLike) -> None:
         save_npz(
@@ -59,15 +71,15 @@ class MapSet:
                 "goals": self.goals.astype(np.int64),
                 "starts": self.starts.astype(np.int64),
                 "expert_costs": self.expert_costs.astype(np.float64),
-                "expert_cells": self.expert_cells.astype(np.int16),
-                "expert_offsets": self.expert_offsets.astype(np.int64),
+                **self.expert.to_fields("expert"),
                 "corner_cutting": np.array(bool(self.corner_cutting)),
                 "seed": np.array(int(self.seed)),
+                **({} if self.start_counts is None else {"start_counts": np.asarray(self.start_counts, np.int64)}),
             },
         )
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "MapSet":
+    def load(cls, path: str | os.PathLike) -> MapSet:
         """Read and validate a maps file; any problem raises InputError naming the file and field."""
         r = NpzReader(path, MAPS_FORMAT)
         obstacles = r.array("obstacles", "b", 3)
@@ -78,12 +90,9 @@ class MapSet:
         starts = r.array("starts", "i", 3, (n, None, 2)).astype(np.int64)
         s = starts.shape[1]
         costs = r.array("expert_costs", "f", 2, (n, s)).astype(np.float64)
-        cells = r.array("expert_cells", "i", 2, (None, 2)).astype(np.int16)
-        offsets = r.array("expert_offsets", "i", 1).astype(np.int64)
         check_cells_in_grid(r, "goals", goals, size)
         check_cells_in_grid(r, "starts", starts, size)
-        check_cells_in_grid(r, "expert_cells", cells, size)
-        check_offsets(r, "expert_offsets", offsets, n * s, len(cells))
+        expert = PackedPaths.read(r, "expert", n * s, size)
         idx = np.arange(n)
         if n and obstacles[idx, goals[:, 0], goals[:, 1]].any():
             raise r.fail("goals", "has a goal on an obstacle")
@@ -91,13 +100,16 @@ class MapSet:
             raise r.fail("starts", "has a start on an obstacle")
         if np.any(~np.isfinite(costs)) or np.any(costs < 0):
             raise r.fail("expert_costs", "has a negative or non-finite cost")
+        counts = r.array("start_counts", "i", 1, (n,)).astype(np.int64) if r.has("start_counts") else None
+        if counts is not None and n and (counts.min() < 1 or counts.max() > s):
+            raise r.fail("start_counts", f"has a count outside 1..{s} (the starts per map)")
         return cls(
             obstacles=obstacles.astype(bool),
             goals=goals,
             starts=starts,
             expert_costs=costs,
-            expert_cells=cells,
-            expert_offsets=offsets,
+            expert=expert,
             corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
             seed=int(r.scalar("seed", "i", default=-1)),
+            start_counts=counts,
         )

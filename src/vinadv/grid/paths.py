@@ -1,6 +1,8 @@
-"""Paths as flat arrays: varying-length paths stored as `cells (total, 2)` plus `offsets (n + 1,)`.
+"""`PackedPaths`: n varying-length paths stored flat, `cells (total, 2)` plus `offsets (n + 1,)`.
 
-Path `i` is `cells[offsets[i]:offsets[i + 1]]`, a sequence of `(row, col)` cells, start first.
+Path `i` is `cells[offsets[i]:offsets[i + 1]]`, a sequence of `(row, col)` cells, start first. This is the
+layout of every paths field in vinadv's files (`*_cells` int16, `*_offsets` int64) and of every type that holds
+paths (plans, pairs, stored records); subsetting and concatenation are vectorised, never a loop over paths.
 """
 
 from __future__ import annotations
@@ -9,48 +11,176 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from vinadv.errors import InputError
 from vinadv.grid.actions import SQRT2
 
 
-def pack_paths(paths: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Pack a list of `(L_i, 2)` cell arrays into `(cells int16 (sum L_i, 2), offsets int64 (n + 1,))`."""
-    lengths = np.array([len(p) for p in paths], dtype=np.int64)
-    offsets = np.zeros(len(paths) + 1, dtype=np.int64)
-    np.cumsum(lengths, out=offsets[1:])
-    if len(paths) == 0 or offsets[-1] == 0:
-        return np.zeros((0, 2), dtype=np.int16), offsets
-    cells = np.concatenate([np.asarray(p, dtype=np.int16).reshape(-1, 2) for p in paths])
-    return cells, offsets
+class PackedPaths:
+    """n paths of `(row, col)` cells, packed flat.
 
+    Attributes:
+        cells: `(total, 2)` int16, all paths one after the other.
+        offsets: `(n + 1,)` int64, `offsets[0] == 0`, never decreasing, `offsets[-1] == total`; path `i` is
+            `cells[offsets[i]:offsets[i + 1]]` (an empty path is allowed here; files demand at least one cell).
 
-def unpack_paths(cells: np.ndarray, offsets: np.ndarray) -> list[np.ndarray]:
-    """The inverse of `pack_paths`: a list of `(L_i, 2)` views into `cells`."""
-    return [cells[offsets[i] : offsets[i + 1]] for i in range(len(offsets) - 1)]
-
-
-def path_costs(cells: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """Cost of each packed path (1 per orthogonal move, sqrt(2) per diagonal move), shape (n,).
-
-    Every path needs at least one cell.
+    Construction checks the layout (InputError naming `offsets`/`cells`) and converts the dtypes (no copy when
+    they already match). Instances are immutable by convention: operations return new ones.
     """
-    n = len(offsets) - 1
-    if n == 0:
-        return np.zeros(0)
-    cells = np.asarray(cells, dtype=np.int64)
-    move = np.abs(np.diff(cells, axis=0))
-    step = move[:, 0] + move[:, 1]  # not .sum(axis=1): NumPy's reduction over a length-2 axis is ~50x slower
-    # cost[k] is the move from cell k to cell k + 1; the last cell of each path makes no move.
-    cost = np.append(np.where(step == 2, SQRT2, step.astype(np.float64)), 0.0)
-    cost[offsets[1:] - 1] = 0.0
-    return np.add.reduceat(cost, offsets[:-1])
 
+    __slots__ = ("cells", "offsets")
 
-def take_paths(cells: np.ndarray, offsets: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The packed paths at `idx` (int array), repacked as `(cells, offsets)`; no Python loop over paths."""
-    lengths = np.diff(offsets)[idx]
-    new_offsets = np.zeros(len(idx) + 1, dtype=np.int64)
-    np.cumsum(lengths, out=new_offsets[1:])
-    # position j of the output takes cell offsets[idx[p]] + (j - new_offsets[p]) for the path p holding j
-    owner = np.repeat(np.arange(len(idx)), lengths)
-    src = offsets[idx][owner] + np.arange(new_offsets[-1]) - new_offsets[:-1][owner]
-    return cells[src], new_offsets
+    def __init__(self, cells, offsets):
+        cells = np.asarray(cells)
+        offsets = np.asarray(offsets)
+        if cells.size == 0:
+            cells = cells.reshape(0, 2)
+        if cells.ndim != 2 or cells.shape[1] != 2:
+            raise InputError(f"cells has shape {cells.shape}, expected (total, 2)")
+        if cells.size and not np.issubdtype(cells.dtype, np.integer):
+            raise InputError(f"cells has dtype {cells.dtype}, expected integers")
+        if offsets.ndim != 1 or len(offsets) == 0 or (offsets.size and not np.issubdtype(offsets.dtype, np.integer)):
+            raise InputError(f"offsets has shape {offsets.shape} and dtype {offsets.dtype}, expected (n + 1,) integers")
+        if offsets[0] != 0 or offsets[-1] != len(cells) or np.any(offsets[1:] < offsets[:-1]):
+            raise InputError(f"offsets must start at 0, never decrease and end at the number of cells ({len(cells)})")
+        self.cells = np.ascontiguousarray(cells, dtype=np.int16)
+        self.offsets = np.ascontiguousarray(offsets, dtype=np.int64)
+
+    # --- construction -------------------------------------------------------------------------------------------
+
+    @classmethod
+    def pack(cls, paths: Sequence[np.ndarray]) -> PackedPaths:
+        """Pack a sequence of `(L_i, 2)` cell arrays (or lists of `(row, col)`)."""
+        arrays = [np.asarray(p, dtype=np.int16).reshape(-1, 2) for p in paths]
+        offsets = np.zeros(len(arrays) + 1, dtype=np.int64)
+        np.cumsum([len(a) for a in arrays], out=offsets[1:])
+        cells = np.concatenate(arrays) if arrays else np.zeros((0, 2), np.int16)
+        return cls(cells, offsets)
+
+    @classmethod
+    def empty(cls, n: int = 0) -> PackedPaths:
+        """`n` empty paths."""
+        return cls(np.zeros((0, 2), np.int16), np.zeros(n + 1, np.int64))
+
+    @classmethod
+    def concat(cls, parts: Sequence[PackedPaths]) -> PackedPaths:
+        """The paths of `parts`, in order (no parts: zero paths)."""
+        parts = list(parts)
+        if not parts:
+            return cls.empty()
+        lengths = np.concatenate([p.lengths for p in parts])
+        offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
+        np.cumsum(lengths, out=offsets[1:])
+        return cls(np.concatenate([p.cells for p in parts]), offsets)
+
+    # --- access ---------------------------------------------------------------------------------------------------
+
+    def __len__(self) -> int:
+        return len(self.offsets) - 1
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        """Path `i`: a `(L_i, 2)` int16 view into `cells`."""
+        i = range(len(self))[i]  # bounds check and negative indices, as for a list
+        return self.cells[self.offsets[i] : self.offsets[i + 1]]
+
+    def __eq__(self, other) -> bool:
+        if not isinstance(other, PackedPaths):
+            return NotImplemented
+        return np.array_equal(self.offsets, other.offsets) and np.array_equal(self.cells, other.cells)
+
+    __hash__ = None  # mutable arrays inside
+
+    def __repr__(self) -> str:
+        return f"PackedPaths({len(self)} paths, {len(self.cells)} cells)"
+
+    def __getstate__(self):
+        return self.cells, self.offsets
+
+    def __setstate__(self, state) -> None:
+        self.cells, self.offsets = state
+
+    @property
+    def lengths(self) -> np.ndarray:
+        """`(n,)` int64 number of cells of each path (moves + 1 for a non-empty path)."""
+        return np.diff(self.offsets)
+
+    def unpack(self) -> list[np.ndarray]:
+        """The paths as a list of `(L_i, 2)` int16 views into `cells`."""
+        return [self.cells[a:b] for a, b in zip(self.offsets[:-1].tolist(), self.offsets[1:].tolist())]
+
+    def owners(self) -> np.ndarray:
+        """`(total,)` int64: the path each cell belongs to."""
+        return np.repeat(np.arange(len(self)), self.lengths)
+
+    def take(self, index) -> PackedPaths:
+        """The paths at `index` (int array, bool mask or slice), in that order, repacked."""
+        idx = np.arange(len(self))[index]
+        return self._segments(self.offsets[:-1][idx], self.lengths[idx])
+
+    def prefixes(self, lengths) -> PackedPaths:
+        """The first `lengths[i]` cells of each path i (`(n,)` ints, each at most that path's length)."""
+        lengths = np.asarray(lengths, dtype=np.int64)
+        if lengths.shape != (len(self),) or np.any((lengths < 0) | (lengths > self.lengths)):
+            raise InputError(f"lengths: expected {len(self)} values between 0 and each path's length")
+        return self._segments(self.offsets[:-1], lengths)
+
+    def _segments(self, starts: np.ndarray, lengths: np.ndarray) -> PackedPaths:
+        """New paths `cells[starts[p]:starts[p] + lengths[p]]`, packed without a loop over paths."""
+        offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
+        np.cumsum(lengths, out=offsets[1:])
+        # output position j takes cell starts[p] + (j - offsets[p]) for the path p holding j
+        gather = np.repeat(starts - offsets[:-1], lengths) + np.arange(offsets[-1])
+        return PackedPaths(self.cells[gather], offsets)
+
+    # --- figures ----------------------------------------------------------------------------------------------------
+
+    def costs(self) -> np.ndarray:
+        """`(n,)` float64 cost of each path: 1 per orthogonal move, sqrt(2) per diagonal move (0 for <= 1 cell)."""
+        if len(self.cells) == 0:
+            return np.zeros(len(self))
+        cells = self.cells.astype(np.int64)
+        move = np.abs(np.diff(cells, axis=0))
+        step = move[:, 0] + move[:, 1]  # not .sum(axis=1): NumPy's reduction over a length-2 axis is ~50x slower
+        # cost[k] is the move from cell k to cell k + 1; the last cell of each path makes no move
+        cost = np.append(np.where(step == 2, SQRT2, step.astype(np.float64)), 0.0)
+        nonempty = self.lengths > 0
+        cost[self.offsets[1:][nonempty] - 1] = 0.0
+        out = np.zeros(len(self))
+        out[nonempty] = np.add.reduceat(cost, self.offsets[:-1][nonempty])
+        return out
+
+    def same_as(self, other: PackedPaths) -> np.ndarray:
+        """`(n,)` bool: path `i` of `self` equals path `i` of `other`, cell for cell."""
+        if len(other) != len(self):
+            raise InputError(f"cannot compare {len(self)} paths with {len(other)} paths")
+        same = self.lengths == other.lengths
+        idx = np.flatnonzero(same)
+        if len(idx) == 0:
+            return same
+        mine, theirs = self.take(idx), other.take(idx)
+        differs = np.any(mine.cells != theirs.cells, axis=1)
+        same[idx] = np.bincount(mine.owners()[differs], minlength=len(idx)) == 0
+        return same
+
+    def check_grid(self, size: int, name: str = "paths") -> None:
+        """Raise InputError naming `name` unless every cell lies in the `size x size` grid."""
+        if len(self.cells) and (self.cells.min() < 0 or self.cells.max() >= size):
+            raise InputError(f"{name}: cells outside the {size}x{size} grid")
+
+    # --- files ----------------------------------------------------------------------------------------------------
+
+    def to_fields(self, prefix: str) -> dict[str, np.ndarray]:
+        """The file fields `{prefix}_cells` int16 and `{prefix}_offsets` int64."""
+        return {f"{prefix}_cells": self.cells, f"{prefix}_offsets": self.offsets}
+
+    @classmethod
+    def read(cls, reader, prefix: str, n: int, size: int) -> PackedPaths:
+        """Fields `{prefix}_cells`/`{prefix}_offsets` of an `NpzReader`, checked: `n` paths of at least one cell
+        inside the `size x size` grid (errors name the file and the field)."""
+        from vinadv.npzfile import check_cells_in_grid, check_offsets
+
+        cells = reader.array(f"{prefix}_cells", "i", 2, (None, 2))
+        offsets = reader.array(f"{prefix}_offsets", "i", 1).astype(np.int64)
+        check_cells_in_grid(reader, f"{prefix}_cells", cells, size)
+        check_offsets(reader, f"{prefix}_offsets", offsets, n, len(cells))
+        return cls(cells, offsets)
+

@@ -12,6 +12,7 @@ import numba
 import numpy as np
 
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS, N_ACTIONS
+from vinadv.grid.paths import PackedPaths
 
 # Costs are sums of 1 and sqrt(2); two different sums of up to a few thousand terms differ by far more.
 COST_TOL = 1e-9
@@ -200,15 +201,15 @@ def _follow_policy(actions, starts, goals, deltas, lengths, cells, fill):
 
 def expert_paths(
     obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, PackedPaths]:
     """Optimal paths from every start to the goal (ties broken by the lowest action index).
 
     Args:
         obstacles: `(B, N, N)` bool. goals: `(B, 2)`. starts: `(B, S, 2)`, each able to reach its goal.
 
     Returns:
-        `costs (B, S) float64`, and the paths packed flat, path `b * S + s` first: `cells (total, 2) int16`,
-        `offsets (B * S + 1,) int64`. A start that cannot reach the goal gets cost inf and a one-cell path.
+        `costs (B, S) float64`, and the paths, `PackedPaths` of B * S paths, path `b * S + s` from start `s` of
+        map `b`. A start that cannot reach the goal gets cost inf and a one-cell path.
     """
     dist, _ = shortest_distances(obstacles, goals, corner_cutting)
     return expert_paths_from(dist, obstacles, goals, starts, corner_cutting)
@@ -216,7 +217,7 @@ def expert_paths(
 
 def expert_paths_from(
     dist: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, PackedPaths]:
     """`expert_paths` for distances already computed by `shortest_distances`."""
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
@@ -230,4 +231,4 @@ def expert_paths_from(
     cells = np.empty((offsets[-1], 2), dtype=np.int16)
     _follow_policy(actions, starts, goals, ACTION_DELTAS, lengths, cells, True)
     costs = dist[np.arange(b)[:, None], starts[..., 0], starts[..., 1]]
-    return costs, cells, offsets
+    return costs, PackedPaths(cells, offsets)

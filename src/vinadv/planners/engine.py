@@ -27,6 +27,7 @@ import numpy as np
 import torch
 
 from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import heap_pop, heap_push
 from vinadv.planners.flat import layout, zero_row_gaps
 from vinadv.planners.reference import rollout
@@ -412,7 +413,7 @@ def plan_maps(
                     corner_cutting, stats if stats is not None else {})
         for i in chunks
     ]
-    return PlanResult.concatenate(parts)
+    return PlanResult.concat(parts)
 
 
 def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanResult:
@@ -444,7 +445,7 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
     np.cumsum(lengths, out=offsets[1:])
     longest = int(lengths.max(initial=0))
     packed = cells[:, :longest][np.arange(longest)[None, :] < lengths[:, None]]
-    return PlanResult(packed, offsets, terms == GOAL, terms)
+    return PlanResult(paths=PackedPaths(packed, offsets), termination=terms)
 
 
 def _limits(obstacles, goals, starts, map_index, corner_cutting) -> np.ndarray:

@@ -9,16 +9,16 @@
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 import torch
 
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.paths import path_costs
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
-from vinadv.planners.result import TERMINATIONS, PlanResult
+from vinadv.planners.result import PlanResult
 from vinadv.planners.vin import VIN, make_input
+from vinadv.vocabulary import TERMINATIONS
 
 #: planner(obstacles (B,N,N), goals (B,2), starts (B,S,2), model, corner_cutting) -> PlanResult, path b*S+s.
 MultiStartPlanner = Callable[[np.ndarray, np.ndarray, np.ndarray, VIN, bool], PlanResult]
@@ -53,15 +53,19 @@ def _engine_planner(obstacles, goals, starts, model, corner_cutting) -> PlanResu
     return engine.plan_batch(obstacles[idx], starts.reshape(-1, 2), goals[idx], model, corner_cutting)
 
 
-def rollout_metrics(result: PlanResult, expert_costs: np.ndarray) -> dict:
-    """Rollout figures from a `PlanResult` and the expert (optimal) cost of each path `(B,)`."""
-    expert_costs = np.asarray(expert_costs, dtype=np.float64).reshape(-1)
-    n = len(result)
-    costs = path_costs(result.path_cells, result.path_offsets)
-    reached = np.asarray(result.reached, dtype=bool)
+def rollout_metrics(result: PlanResult, expert_costs: np.ndarray, mask: np.ndarray | None = None) -> dict:
+    """Rollout figures from a `PlanResult` and the expert (optimal) cost of each path `(B,)`.
+
+    `mask` `(B,)` bool, if given, keeps only those paths (a MapSet's padded start slots are left out).
+    """
+    keep = np.ones(len(result), dtype=bool) if mask is None else np.asarray(mask, dtype=bool).reshape(-1)
+    expert_costs = np.asarray(expert_costs, dtype=np.float64).reshape(-1)[keep]
+    n = int(keep.sum())
+    costs = result.paths.costs()[keep]
+    reached = np.asarray(result.reached, dtype=bool)[keep]
     optimal = reached & (np.abs(costs - expert_costs) <= COST_TOL)
     extra = costs[reached] - expert_costs[reached]
-    names = result.termination_names
+    names = result.termination_names[keep]
     return {
         "rollouts": int(n),
         "success_rate": float(reached.mean()) if n else float("nan"),
@@ -90,7 +94,7 @@ def evaluate_vin(model: VIN, maps: MapSet, planner: MultiStartPlanner | None = N
         correct += c
         cells += n
         parts.append(planner(obstacles[sl], goals[sl], starts[sl], model, maps.corner_cutting))
-    result = PlanResult.concatenate(parts)
+    result = PlanResult.concat(parts)
     metrics = {
         "maps": len(maps),
         "size": maps.size,
@@ -100,5 +104,5 @@ def evaluate_vin(model: VIN, maps: MapSet, planner: MultiStartPlanner | None = N
         "action_accuracy": correct / cells if cells else float("nan"),
         "action_cells": cells,
     }
-    metrics.update(rollout_metrics(result, maps.expert_costs))
+    metrics.update(rollout_metrics(result, maps.expert_costs, maps.start_mask))
     return metrics

@@ -7,69 +7,50 @@ from dataclasses import dataclass
 import numpy as np
 
 from vinadv.errors import InputError
-from vinadv.grid.paths import pack_paths, unpack_paths
+from vinadv.grid.columns import Columns
+from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import shortest_distances
+from vinadv.vocabulary import COLLISION, GOAL, LOOP, STEP_LIMIT, TERMINATIONS, termination_names
 
-#: why a rollout ended; `PlanResult.termination` holds indices into this tuple.
-TERMINATIONS = ("goal", "collision", "loop", "step_limit")
-GOAL, COLLISION, LOOP, STEP_LIMIT = 0, 1, 2, 3
+__all__ = ["COLLISION", "GOAL", "LOOP", "STEP_LIMIT", "TERMINATIONS", "PlanResult", "check_plan_inputs", "step_limits"]
 
 
-@dataclass
-class PlanResult:
-    """B planned paths.
+@dataclass(kw_only=True, eq=False)
+class PlanResult(Columns):
+    """B planned paths (`take`/`concat` from `Columns`).
 
     Attributes:
-        path_cells: `(total, 2)` int16 `(row, col)`; path `i` is `path_cells[path_offsets[i]:path_offsets[i + 1]]`,
-            the visited cells, start included.
-        path_offsets: `(B + 1,)` int64.
-        reached: `(B,)` bool, the path ends at the goal.
-        termination: `(B,)` int8, indices into `TERMINATIONS`.
+        paths: `PackedPaths` of B paths, the visited `(row, col)` cells, start included.
+        termination: `(B,)` int8, why each rollout ended: indices into `vocabulary.TERMINATIONS`.
     """
 
-    path_cells: np.ndarray
-    path_offsets: np.ndarray
-    reached: np.ndarray
+    paths: PackedPaths
     termination: np.ndarray
 
-    def __len__(self) -> int:
-        return len(self.reached)
+    def __post_init__(self) -> None:
+        self.termination = np.asarray(self.termination, dtype=np.int8)
+        if not isinstance(self.paths, PackedPaths) or self.termination.shape != (len(self.paths),):
+            raise InputError(f"PlanResult: expected PackedPaths and one termination per path, got {self.paths!r} "
+                             f"and termination of shape {self.termination.shape}")
+
+    @classmethod
+    def empty(cls) -> PlanResult:
+        return cls(paths=PackedPaths.empty(), termination=np.zeros(0, np.int8))
+
+    @classmethod
+    def from_paths(cls, paths: list[np.ndarray], termination: np.ndarray) -> PlanResult:
+        """From a list of `(L_i, 2)` paths and their termination codes."""
+        return cls(paths=PackedPaths.pack(paths), termination=termination)
+
+    @property
+    def reached(self) -> np.ndarray:
+        """`(B,)` bool, the path ends at the goal."""
+        return self.termination == GOAL
 
     @property
     def termination_names(self) -> np.ndarray:
         """`(B,)` str: 'goal', 'collision', 'loop' or 'step_limit'."""
-        return np.array(TERMINATIONS)[self.termination]
-
-    @property
-    def lengths(self) -> np.ndarray:
-        """`(B,)` int64 number of cells of each path (moves + 1)."""
-        return np.diff(self.path_offsets)
-
-    def path(self, i: int) -> np.ndarray:
-        return self.path_cells[self.path_offsets[i] : self.path_offsets[i + 1]]
-
-    def paths(self) -> list[np.ndarray]:
-        return unpack_paths(self.path_cells, self.path_offsets)
-
-    @classmethod
-    def from_paths(cls, paths: list[np.ndarray], termination: np.ndarray) -> "PlanResult":
-        cells, offsets = pack_paths(paths)
-        termination = np.asarray(termination, dtype=np.int8)
-        return cls(cells, offsets, termination == GOAL, termination)
-
-    @classmethod
-    def concatenate(cls, parts: list["PlanResult"]) -> "PlanResult":
-        if not parts:
-            return cls(np.zeros((0, 2), np.int16), np.zeros(1, np.int64), np.zeros(0, bool), np.zeros(0, np.int8))
-        offsets = [parts[0].path_offsets]
-        for p in parts[1:]:
-            offsets.append(p.path_offsets[1:] + offsets[-1][-1])
-        return cls(
-            np.concatenate([p.path_cells for p in parts]),
-            np.concatenate(offsets),
-            np.concatenate([p.reached for p in parts]),
-            np.concatenate([p.termination for p in parts]),
-        )
+        return termination_names(self.termination)
 
 
 def check_plan_inputs(obstacles, starts, goals) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

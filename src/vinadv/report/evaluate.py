@@ -92,7 +92,7 @@ def load_run_pairs(store, run_id: int, seed: int = 0, max_other: int = MAX_OTHER
     if len(others) > max_other:
         others = np.sort(np.random.default_rng(seed).choice(others, max_other, replace=False))
     parts = [store.read_pairs(run_id, pair_indices=part) for part in (fp_dp, others) if len(part)]
-    records = PairRecords.concatenate(parts)
+    records = PairRecords.concat(parts)
     batch = _batch_of(records)
     t = default_threshold(batch.size)
     truth = label_batch(batch, t).labels

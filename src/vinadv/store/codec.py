@@ -87,13 +87,15 @@ def decode_maps(texts: Sequence[str], size: int | None = None) -> np.ndarray:
         return np.zeros((n, 0, 0), dtype=bool)
     if (lengths != size * (size + 1) - 1).any():
         bad = int(np.flatnonzero(lengths != size * (size + 1) - 1)[0])
-        raise InputError(f"map {bad}: {lengths[bad]} characters, expected {size * (size + 1) - 1} for a {size}x{size} map")
+        raise InputError(f"map {bad}: {lengths[bad]} characters, expected {size * (size + 1) - 1} for a "
+                         f"{size}x{size} map")
     full = np.full((n, size * (size + 1)), _SEMI, dtype=np.uint8)
     full[:, :-1] = buf[:, : size * (size + 1) - 1]
     full = full.reshape(n, size, size + 1)
     cells = full[:, :, :size]
     if (full[:, :, size] != _SEMI).any() or ((cells != _ZERO) & (cells != _ZERO + 1)).any():
-        bad = int(np.flatnonzero(((full[:, :, size] != _SEMI).any(1)) | ((cells > _ZERO + 1) | (cells < _ZERO)).any((1, 2)))[0])
+        wrong = (full[:, :, size] != _SEMI).any(1) | ((cells > _ZERO + 1) | (cells < _ZERO)).any((1, 2))
+        bad = int(np.flatnonzero(wrong)[0])
         raise InputError(f"map {bad}: not 0/1 rows joined by ';': {texts[bad][:60]!r}")
     return cells == _ZERO + 1
 

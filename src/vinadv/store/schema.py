@@ -23,12 +23,14 @@ from __future__ import annotations
 import sqlalchemy as sa
 from sqlalchemy.dialects import mysql
 
+from vinadv.vocabulary import HARM_FIELDS, HARM_FLOAT_FIELDS
+from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exported for the store's users
+from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
+
 #: bump when a table or column changes; a database with another version is refused with a clear error.
 SCHEMA_VERSION = "2"
 #: the version before: upgraded on open by adding `HARM_COLUMNS` (nothing existing changes)
 PREVIOUS_SCHEMA_VERSION = "1"
-
-LABELS = ("invalid", "UrP", "UcP", "DP", "FP")
 
 metadata = sa.MetaData()
 
@@ -132,9 +134,8 @@ evaluations = sa.Table(
 )
 
 #: `map_pairs` columns added by schema version 2 (numbers first, then the two labels)
-HARM_FLOAT_COLUMNS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a")
-HARM_COLUMNS = (*HARM_FLOAT_COLUMNS, "expert_label", "harm")
-HARMS = ("harmful", "harmless", "invalid")
+HARM_FLOAT_COLUMNS = HARM_FLOAT_FIELDS
+HARM_COLUMNS = HARM_FIELDS
 
 TABLES = (meta_table, runs, map_pairs, annotations, evaluations)
 #: tables added to schema version 1 later: created when missing, never a reason to refuse a database

@@ -26,6 +26,7 @@ from sqlalchemy import exc as sa_exc
 
 from vinadv import __version__
 from vinadv.errors import InputError
+from vinadv.grid.paths import PackedPaths
 from vinadv.store import codec
 from vinadv.store.records import PairRecords
 from vinadv.store.schema import (
@@ -202,7 +203,8 @@ class Store:
             for name in HARM_COLUMNS:
                 if name not in have:
                     kind = map_pairs.c[name].type.compile(dialect=self.engine.dialect)
-                    conn.execute(sa.text(f"ALTER TABLE {prep.format_table(map_pairs)} ADD COLUMN {prep.quote(name)} {kind}"))
+                    table, column = prep.format_table(map_pairs), prep.quote(name)
+                    conn.execute(sa.text(f"ALTER TABLE {table} ADD COLUMN {column} {kind}"))
             conn.execute(meta_table.update().where(meta_table.c.key == "schema_version").values(value=SCHEMA_VERSION))
 
     def close(self) -> None:
@@ -718,8 +720,8 @@ def decode_rows(rows: Sequence) -> PairRecords:
         starts=codec.decode_cells(col["start"]).reshape(-1, 2),
         goals=codec.decode_cells(col["goal"]).reshape(-1, 2),
         added=codec.decode_cells(col["added_obstacle"]).reshape(-1, 2),
-        path_o_cells=path_o[0], path_o_offsets=path_o[1],
-        path_a_cells=path_a[0], path_a_offsets=path_a[1],
+        path_o=PackedPaths(*path_o),
+        path_a=PackedPaths(*path_a),
         label=np.array(col["label"], dtype=object),
         attack=np.array([bool(a) for a in col["attack"]], dtype=bool),
         term_o=np.array(col["term_o"], dtype=object),

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from vinadv.store.records import TERMINATIONS, PairRecords
-from vinadv.store.schema import HARM_FLOAT_COLUMNS, HARMS, LABELS
+from vinadv.grid.paths import PackedPaths
+from vinadv.store.records import PairRecords
+from vinadv.store.schema import HARM_FLOAT_COLUMNS
+from vinadv.vocabulary import HARMS, LABELS, TERMINATIONS, is_success
 
 
 def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, first_index: int = 0) -> PairRecords:
@@ -17,12 +19,12 @@ def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, fi
     added = rng.integers(0, size, (n, 2))
     obstacles_a[np.arange(n), added[:, 0], added[:, 1]] = True
 
-    def paths():
+    def paths() -> PackedPaths:
         lengths = rng.integers(0, max_path + 1, n)
         offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
-        return rng.integers(0, size, (offsets[-1], 2)).astype(np.int16), offsets
+        return PackedPaths(rng.integers(0, size, (offsets[-1], 2)), offsets)
 
-    (co, oo), (ca, oa) = paths(), paths()
+    path_o, path_a = paths(), paths()
     label = np.array(LABELS, dtype=object)[rng.integers(0, len(LABELS), n)]
     score = rng.random(n)
     score[rng.random(n) < 0.3] = np.nan
@@ -36,8 +38,7 @@ def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, fi
         pair_index=first_index + np.arange(n),
         obstacles_o=obstacles_o, obstacles_a=obstacles_a,
         starts=rng.integers(0, size, (n, 2)), goals=rng.integers(0, size, (n, 2)), added=added,
-        path_o_cells=co, path_o_offsets=oo, path_a_cells=ca, path_a_offsets=oa,
-        label=label, attack=np.isin(label, ("UrP", "FP")),
+        path_o=path_o, path_a=path_a, label=label, attack=is_success(label),
         term_o=np.array(TERMINATIONS, dtype=object)[rng.integers(0, 4, n)],
         term_a=np.array(TERMINATIONS, dtype=object)[rng.integers(0, 4, n)],
         label_source=np.array(["rule", "svm"], dtype=object)[rng.integers(0, 2, n)],

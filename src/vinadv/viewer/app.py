@@ -45,9 +45,9 @@ from werkzeug.exceptions import BadRequest, Forbidden, HTTPException
 
 from vinadv.errors import InputError
 from vinadv.store import LABELS, Store
-from vinadv.store.schema import HARM_FLOAT_COLUMNS, HARMS
 from vinadv.store.records import PairRecords
 from vinadv.viewer.render import KINDS, PngCache, render_pair_png
+from vinadv.vocabulary import HARM_FLOAT_FIELDS, HARMS
 
 #: labels a person can set (the automatic 'invalid' is a fact about the original path, not a judgement)
 HUMAN_LABELS = ("FP", "DP", "UrP", "UcP")
@@ -325,7 +325,7 @@ class _ViewerState:
             "label": r.label[0], "attack": bool(r.attack[0]), "label_source": r.label_source[0],
             "score": _none_if_nan(r.score[0]), "dh": _none_if_negative(r.dh[0]), "dv": _none_if_negative(r.dv[0]),
             "term_o": r.term_o[0], "term_a": r.term_a[0],
-            **{name: _none_if_nan(float(getattr(r, name)[0])) for name in HARM_FLOAT_COLUMNS},
+            **{name: _none_if_nan(float(getattr(r, name)[0])) for name in HARM_FLOAT_FIELDS},
             "expert_label": r.expert_label[0], "harm": r.harm[0],
             "start": r.starts[0].tolist(), "goal": r.goals[0].tolist(), "added": r.added[0].tolist(),
             "path_o": o.tolist(), "path_a": a.tolist(),

@@ -72,8 +72,7 @@ def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
 
     from vinadv.grid.draw import draw_map
 
-    o = records.path_o_cells[records.path_o_offsets[i]:records.path_o_offsets[i + 1]]
-    a = records.path_a_cells[records.path_a_offsets[i]:records.path_a_offsets[i + 1]]
+    o, a = records.path_o[i], records.path_a[i]
     paths = []
     if kind == "original":
         obstacles, added, title = records.obstacles_o[i], None, "original map, original path"
@@ -103,12 +102,7 @@ def _path_image_png(records: PairRecords, i: int) -> bytes:
 
     from vinadv.classify.images import render_path_images
 
-    lo_o, hi_o = records.path_o_offsets[i], records.path_o_offsets[i + 1]
-    lo_a, hi_a = records.path_a_offsets[i], records.path_a_offsets[i + 1]
-    image = render_path_images(
-        records.path_o_cells[lo_o:hi_o], np.array([0, hi_o - lo_o]),
-        records.path_a_cells[lo_a:hi_a], np.array([0, hi_a - lo_a]), records.size,
-    )[0]
+    image = render_path_images(records.path_o.take([i]), records.path_a.take([i]), records.size)[0]
     big = np.repeat(np.repeat(image, PATH_IMAGE_SCALE, axis=0), PATH_IMAGE_SCALE, axis=1)
     buf = io.BytesIO()
     Image.fromarray(big, mode="RGB").save(buf, format="PNG", optimize=False)

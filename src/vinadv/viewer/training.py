@@ -47,13 +47,11 @@ def human_training_set(store, run_id: int) -> tuple[PathPairBatch, np.ndarray, n
     store.run_info(run_id)  # InputError naming the run when there is none
     pair_indices, labels = resolve_human_labels(store.read_annotations(run_id))
     if len(pair_indices) == 0:
-        raise InputError(f"--run {run_id}: no human labels in database {store.url} (label pairs with `vinadv serve`)")
+        raise InputError(f"run_id {run_id}: no human labels in database {store.url} (label pairs with `vinadv serve`)",
+                         "run_id")
     records = store.read_pairs(run_id, pair_indices=pair_indices)
     if len(records) != len(pair_indices):  # an annotation of a pair that is not stored (deleted, other db)
         keep = np.isin(pair_indices, records.pair_index)
         pair_indices, labels = pair_indices[keep], labels[keep]
-    batch = PathPairBatch.from_arrays(
-        records.path_o_cells, records.path_o_offsets, records.path_a_cells, records.path_a_offsets,
-        records.goals, records.size,
-    )
+    batch = PathPairBatch.from_pairs(records)
     return batch, labels, pair_indices

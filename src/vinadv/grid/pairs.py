@@ -1,0 +1,120 @@
+"""`PathPairs`: n (original map, adversarial map) pairs with the path planned on each, the core of every pair type.
+
+The pairs file (`vinadv.attacks.pairs.PairSet`), the classifier view (`vinadv.classify.batch.PathPairBatch`) and
+the store's rows (`vinadv.store.records.PairRecords`) all build on it, so its checks, `take` and `concat` are
+written once. It lives in `grid` although pairs are made by the attacks: every stage that handles pairs (attacks,
+classify, identify, store, report) may import `grid`, and `grid` is the only such package that imports neither
+PyTorch nor a planner; the type itself needs nothing but NumPy and `PackedPaths`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vinadv.errors import InputError
+from vinadv.grid.columns import Columns
+from vinadv.grid.paths import PackedPaths
+from vinadv.vocabulary import GOAL, TERMINATIONS
+
+
+@dataclass(kw_only=True, eq=False)
+class PathPairs(Columns):
+    """n map pairs of N x N cells, one start and goal each, and both planned paths.
+
+    Attributes (cells are `(row, col)`):
+        obstacles_o, obstacles_a: `(n, N, N)` bool, True = obstacle; `obstacles_a` is `obstacles_o` plus `added`.
+        starts, goals, added: `(n, 2)` int64: start, goal and the added obstacle cell of each pair.
+        path_o, path_a: `PackedPaths` of n paths each, the planned paths on the original and adversarial map.
+        term_o, term_a: `(n,)` str, why each path ended: one of `vocabulary.TERMINATIONS`.
+    """
+
+    obstacles_o: np.ndarray
+    obstacles_a: np.ndarray
+    starts: np.ndarray
+    goals: np.ndarray
+    added: np.ndarray
+    path_o: PackedPaths
+    path_a: PackedPaths
+    term_o: np.ndarray
+    term_a: np.ndarray
+
+    def __post_init__(self) -> None:
+        name = type(self).__name__
+        self.obstacles_o = np.asarray(self.obstacles_o, dtype=bool)
+        self.obstacles_a = np.asarray(self.obstacles_a, dtype=bool)
+        shape = self.obstacles_o.shape
+        if len(shape) != 3 or shape[1] != shape[2]:
+            raise InputError(f"{name}.obstacles_o: expected shape (n, N, N), got {shape}")
+        n = shape[0]
+        if self.obstacles_a.shape != shape:
+            raise InputError(f"{name}.obstacles_a: expected shape {shape}, got {self.obstacles_a.shape}")
+        for field in ("starts", "goals", "added"):
+            setattr(self, field, int_column(getattr(self, field), f"{name}.{field}", (n, 2)))
+        for field in ("path_o", "path_a"):
+            paths = getattr(self, field)
+            if not isinstance(paths, PackedPaths) or len(paths) != n:
+                raise InputError(f"{name}.{field}: expected PackedPaths of {n} paths, got {paths!r}")
+        for field in ("term_o", "term_a"):
+            term = np.asarray(getattr(self, field))
+            if term.shape != (n,):
+                raise InputError(f"{name}.{field}: expected shape ({n},), got {term.shape}")
+            setattr(self, field, term)
+
+    @classmethod
+    def empty(cls, size: int | None = None, **settings):
+        """No pairs, on `size x size` maps; `settings`: the other fields of a subclass."""
+        if size is None:
+            raise InputError(f"{cls.__name__}.concat: no parts; pass size= (the map side) for an empty result",
+                             "size")
+        return cls(
+            obstacles_o=np.zeros((0, size, size), bool), obstacles_a=np.zeros((0, size, size), bool),
+            starts=np.zeros((0, 2), np.int64), goals=np.zeros((0, 2), np.int64), added=np.zeros((0, 2), np.int64),
+            path_o=PackedPaths.empty(), path_a=PackedPaths.empty(),
+            term_o=np.zeros(0, "<U10"), term_a=np.zeros(0, "<U10"), **settings,
+        )
+
+    @property
+    def size(self) -> int:
+        """Map side N."""
+        return int(self.obstacles_o.shape[-1])
+
+    @property
+    def reached_o(self) -> np.ndarray:
+        """`(n,)` bool: the original path ends at the goal."""
+        return np.asarray(self.term_o) == TERMINATIONS[GOAL]
+
+    @property
+    def reached_a(self) -> np.ndarray:
+        """`(n,)` bool: the adversarial path ends at the goal."""
+        return np.asarray(self.term_a) == TERMINATIONS[GOAL]
+
+    # Thin read-only views under the old flat names, for the report and viewer code (other owners) that reads
+    # them; new code uses `path_o.cells` and the like.
+    @property
+    def path_o_cells(self) -> np.ndarray:
+        return self.path_o.cells
+
+    @property
+    def path_o_offsets(self) -> np.ndarray:
+        return self.path_o.offsets
+
+    @property
+    def path_a_cells(self) -> np.ndarray:
+        return self.path_a.cells
+
+    @property
+    def path_a_offsets(self) -> np.ndarray:
+        return self.path_a.offsets
+
+
+def int_column(value, name: str, shape: tuple) -> np.ndarray:
+    """`value` as int64 of exactly `shape`, or InputError naming `name` (an empty array may be of any dtype)."""
+    arr = np.asarray(value)
+    if arr.shape != shape:
+        raise InputError(f"{name}: expected shape {shape}, got {arr.shape}")
+    if arr.size and not np.issubdtype(arr.dtype, np.integer):
+        raise InputError(f"{name}: expected integers, got {arr.dtype}")
+    return arr.astype(np.int64, copy=False)
+

@@ -1,0 +1,118 @@
+"""Weights for and from other VIN/GPPN code.
+
+- `export_state_dict`: a plain state dict with exactly the port's keys `h.weight h.bias r.weight q.weight w
+  fc.weight` (float32, CPU), which `torch.load(weights_only=True)` reads and the kentsommer port's VIN class loads.
+- `read_checkpoint`: a GPPN training checkpoint (`{"model": state dict, "best_model": state dict, ...}`, metadata
+  with numpy float64 values) read with torch's weights-only unpickler plus an allow-list of numpy's scalar/array
+  reconstructors and `argparse.Namespace`: no other object can be built, so a checkpoint cannot run code. It returns
+  the state dict and the metadata generically (any model: VIN keys `h r q w policy`, GPPN keys `hid h0 c0 conv
+  lstm policy`).
+- `gppn_vin_gaps`: what vinadv's VIN lacks to represent a GPPN VIN; such a checkpoint is refused with that list.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from vinadv.errors import InputError
+from vinadv.planners.vin import VIN
+from vinadv.planners.weights import STATE_KEYS
+
+GPPN_VIN_KEYS = ("h.weight", "h.bias", "r.weight", "q.weight", "w", "policy.weight")
+
+
+def export_state_dict(model: VIN, path: str | os.PathLike) -> dict[str, tuple[int, ...]]:
+    """Write `model`'s weights as a plain state dict (exactly STATE_KEYS, float32, CPU); returns key -> shape."""
+    state = model.state_dict()
+    plain = {key: state[key].detach().to("cpu", torch.float32).contiguous().clone() for key in STATE_KEYS}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    torch.save(plain, tmp)
+    os.replace(tmp, path)
+    return {key: tuple(value.shape) for key, value in plain.items()}
+
+
+def _allowed_globals() -> list:
+    """numpy's pickling helpers under both the numpy 2 (`numpy._core`) and numpy 1 (`numpy.core`) names."""
+    core = np._core.multiarray if hasattr(np, "_core") else np.core.multiarray  # numpy 2 / numpy 1.26
+    allowed: list = [argparse.Namespace, np.dtype, np.ndarray]
+    for name in ("scalar", "_reconstruct"):
+        fn = getattr(core, name)
+        allowed += [fn, (fn, f"numpy.core.multiarray.{name}")]
+    allowed += [type(np.dtype(t)) for t in ("float64", "float32", "int64", "int32", "bool")]
+    return allowed
+
+
+def _plain(value: Any) -> Any:
+    """Metadata as JSON-like values: numpy scalars and arrays to Python, Namespace to dict; tensors summarised."""
+    if isinstance(value, argparse.Namespace):
+        value = vars(value)
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist() if value.size <= 16 else f"array{value.shape}"
+    if isinstance(value, torch.Tensor):
+        return f"tensor{tuple(value.shape)}"
+    return value
+
+
+def read_checkpoint(path: str | os.PathLike, which: str | None = None) -> tuple[dict[str, torch.Tensor], dict]:
+    """`(state_dict, metadata)` of a checkpoint dict `{which: state dict, ...}` (GPPN's training checkpoints).
+
+    `which` defaults to 'best_model' when present, else 'model'. State values that are numpy arrays become
+    tensors. Raises InputError naming the file for an unreadable file, an object outside the allow-list, or a
+    missing state dict.
+    """
+    name = str(path)
+    if not os.path.exists(name):
+        raise InputError(f"{name}: no such checkpoint file")
+    try:
+        with torch.serialization.safe_globals(_allowed_globals()):
+            data = torch.load(name, map_location="cpu", weights_only=True)
+    except Exception as exc:  # torch raises many types: pickle, zip, EOF, a global outside the allow-list
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{name}: not a readable checkpoint ({first})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{name}: expected a checkpoint dict, found {type(data).__name__}")
+    which = which or ("best_model" if "best_model" in data else "model")
+    state = data.get(which)
+    if not isinstance(state, dict):
+        raise InputError(f"{name}: entry '{which}' is missing or not a state dict (has {sorted(map(str, data))})")
+    out = {}
+    for key, value in state.items():
+        if isinstance(value, np.ndarray):
+            value = torch.from_numpy(np.ascontiguousarray(value))
+        if not isinstance(value, torch.Tensor):
+            raise InputError(f"{name}: '{which}' entry '{key}' is not a tensor or array")
+        out[str(key)] = value
+    meta = {str(k): _plain(v) for k, v in data.items() if k not in ("model", "best_model")}
+    return out, {"entry": which, **meta}
+
+
+def gppn_vin_gaps(state: dict[str, torch.Tensor]) -> list[str]:
+    """What vinadv's VIN class lacks to represent the GPPN VIN `state` (non-empty: such weights are refused)."""
+    missing = [key for key in GPPN_VIN_KEYS if key not in state]
+    if missing:
+        return [f"not a GPPN VIN: keys {missing} missing (has {sorted(state)[:8]})"]
+    gaps = ["input polarity: GPPN's maze channel is 1 = free and its h layer zero-pads it, so outside the grid "
+            "reads as wall; vinadv's VIN takes 1 = obstacle with zero padding (outside = free), so border cells "
+            "differ and no weight change makes the two equal"]
+    f = int(state["h.weight"].shape[-1])
+    if f != 3:
+        gaps.append(f"kernel size f = {f}: vinadv's VIN has 3x3 h, q and w kernels only")
+    if int(state["h.weight"].shape[1]) != 2:
+        gaps.append(f"{int(state['h.weight'].shape[1]) - 1} orientations: vinadv's VIN has one")
+    if int(state["policy.weight"].shape[0]) != 8:
+        gaps.append(f"{int(state['policy.weight'].shape[0])} actions: vinadv plans with 8 moves")
+    return gaps

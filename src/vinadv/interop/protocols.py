@@ -1,0 +1,121 @@
+"""A VIN measured the way each codebase measures it, so figures side by side compare like with like.
+
+- `vinadv` (DESIGN.md): `vinadv.planners.evaluation.evaluate_vin`: action accuracy against the set of optimal
+  actions at every free reachable cell; rollouts from every real start, a collision, a revisited cell or more than
+  2L moves (L: moves of an optimal path) end a path unreached.
+- `kentsommer` (the port's test.py and train.py): the goal channel is its test-time reward prior, -1 everywhere and
+  10 at the goal (`prior`; its training data used 0); from each start, up to 2L + 1 moves (`L = len(path) * 2`
+  cells, start included), a move is clamped to the grid and into an obstacle leaves the agent where it is, no loop
+  stop;
+  success when the agent stands on the goal at the end. Accuracy is single-label: over the states of the expert
+  trajectories (goal excluded), the share where the argmax equals the trajectory's own action.
+- `gppn` (GPPN's utils/runner.py): every Moore move costs 1; from every free cell the argmax policy is followed
+  (an illegal move stays put, no step limit); %Suc is the share of free cells (goal included) whose policy reaches
+  the goal, %Opt the share whose policy path has as few moves as a shortest path (free cells that cannot reach the
+  goal at all count as optimal, as GPPN's code counts them), averaged over maps.
+Ties between logits go to the lowest vinadv action index in all three.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from vinadv.errors import InputError
+from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.mapset import MapSet
+from vinadv.interop.maps import expert_steps, unit_cost_distances
+from vinadv.planners.evaluation import evaluate_vin
+from vinadv.planners.vin import VIN, make_input
+
+PROTOCOLS = ("vinadv", "kentsommer", "gppn")
+PORT_TEST_PRIOR = -1.0
+
+
+def argmax_actions(model: VIN, obstacles: np.ndarray, goals: np.ndarray, prior: float = 0.0,
+                   batch_size: int = 128) -> np.ndarray:
+    """The argmax action of every cell, `(n, N, N)` int64; the goal channel is 10 at the goal, `prior` elsewhere."""
+    out = []
+    model.eval()
+    for i in range(0, len(obstacles), batch_size):
+        x = make_input(obstacles[i : i + batch_size], goals[i : i + batch_size])
+        if prior != 0.0:
+            x[:, 1] = torch.where(x[:, 1] == 0, torch.tensor(float(prior)), x[:, 1])
+        with torch.no_grad():
+            out.append(np.argmax(model.action_logits(x).numpy(), axis=-1))
+    return np.concatenate(out) if out else np.zeros(obstacles.shape, np.int64)
+
+
+def _moves(obstacles: np.ndarray, actions: np.ndarray, clamp: bool = False) -> np.ndarray:
+    """Flat index of the cell each cell's action leads to, staying put where the move is illegal: `(n, N*N)`.
+
+    `clamp`: the port's gridworld first clamps each coordinate to the grid (a diagonal move off one edge slides
+    along it), then stays put on an obstacle; without it (GPPN) a move off the grid stays put.
+    """
+    n, size = obstacles.shape[0], obstacles.shape[1]
+    rows, cols = np.divmod(np.arange(size * size), size)
+    flat = actions.reshape(n, size * size)
+    nr, nc = rows + ACTION_DELTAS[flat, 0], cols + ACTION_DELTAS[flat, 1]
+    if clamp:
+        nr, nc = np.clip(nr, 0, size - 1), np.clip(nc, 0, size - 1)
+    inside = (nr >= 0) & (nr < size) & (nc >= 0) & (nc < size)
+    ok = inside & ~obstacles.reshape(n, size * size)[np.arange(n)[:, None], np.where(inside, nr * size + nc, 0)]
+    return np.where(ok, nr * size + nc, np.arange(size * size))
+
+
+def kentsommer_protocol(model: VIN, maps: MapSet, prior: float = PORT_TEST_PRIOR) -> dict:
+    """The port's figures on `maps` (module doc): rollout success and single-label accuracy."""
+    actions = argmax_actions(model, maps.obstacles, maps.goals, prior)
+    map_of_step, states, labels, traj_map = expert_steps(maps)
+    hit = actions[map_of_step, states[:, 0], states[:, 1]] == labels
+    real = np.flatnonzero(maps.start_mask.reshape(-1))
+    size = maps.size
+    succ = _moves(maps.obstacles, actions, clamp=True)
+    pos = maps.starts.reshape(-1, 2)[real] @ np.array([size, 1])
+    goal = maps.goals[traj_map] @ np.array([size, 1])
+    limit = 2 * maps.expert.lengths[real] - 1  # the port: L = 2 * cells, moves j = 1 .. L - 1
+    for step in range(int(limit.max()) if len(limit) else 0):
+        moving = (step < limit) & (pos != goal)
+        pos = np.where(moving, succ[traj_map, pos], pos)
+    reached = pos == goal
+    return {"protocol": "kentsommer", "prior": float(prior), "maps": len(maps), "size": size,
+            "rollouts": len(real), "success_rate": float(reached.mean()) if len(real) else float("nan"),
+            "action_accuracy_single_label": float(hit.mean()) if len(hit) else float("nan"),
+            "trajectory_states": int(len(hit))}
+
+
+def gppn_protocol(model: VIN, maps: MapSet) -> dict:
+    """GPPN's %Opt and %Suc on `maps` (module doc)."""
+    n, size = len(maps), maps.size
+    actions = argmax_actions(model, maps.obstacles, maps.goals)
+    succ = _moves(maps.obstacles, actions)
+    goal = maps.goals @ np.array([size, 1])
+    rows = np.arange(n)[:, None]
+    succ[np.arange(n), goal] = goal  # the goal absorbs, with no move counted
+    length = (np.arange(size * size)[None, :] != goal[:, None]).astype(np.int64)
+    # pointer doubling: after k rounds succ is the 2^k-th successor and length the moves made on the way
+    for _ in range(int(np.ceil(np.log2(size * size))) + 1):
+        length = length + length[rows, succ]
+        succ = succ[rows, succ]
+    reached = succ == goal[:, None]
+    free = ~maps.obstacles.reshape(n, size * size)
+    opt = unit_cost_distances(maps.obstacles, maps.goals).reshape(n, size * size)
+    optimal = free & (~np.isfinite(opt) | (reached & (length == opt)))
+    open_cells = free.sum(axis=1)
+    return {"protocol": "gppn", "maps": n, "size": size, "cells": int(open_cells.sum()),
+            "percent_optimal": float((optimal.sum(axis=1) / open_cells).mean()) if n else float("nan"),
+            "percent_success": float(((free & reached).sum(axis=1) / open_cells).mean()) if n else float("nan")}
+
+
+def evaluate_protocol(model: VIN, maps: MapSet, protocol: str, prior: float | None = None,
+                      progress: bool = False) -> dict:
+    """`model`'s figures on `maps` measured by `protocol` ('vinadv', 'kentsommer' or 'gppn')."""
+    if protocol not in PROTOCOLS:
+        raise InputError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
+    if prior is not None and protocol != "kentsommer":
+        raise InputError("prior applies to the kentsommer protocol only")
+    if protocol == "vinadv":
+        return {"protocol": "vinadv", **evaluate_vin(model, maps, progress=progress)}
+    if protocol == "kentsommer":
+        return kentsommer_protocol(model, maps, PORT_TEST_PRIOR if prior is None else prior)
+    return gppn_protocol(model, maps)
