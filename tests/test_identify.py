@@ -24,7 +24,7 @@ def test_exhaustive_with_the_harm_objective_keeps_the_most_harmful_cell_of_a_bru
                                               strength=objective_strength("harm"))
     for i in range(len(maps.obstacles)):
         obstacles, start, goal = maps.obstacles[i], tuple(maps.starts[i, 0]), tuple(maps.goals[i])
-        original = plan_reference(obstacles[None], np.array([start]), np.array([goal]), model).path_cells.tolist()
+        original = plan_reference(obstacles[None], np.array([start]), np.array([goal]), model).paths.cells.tolist()
         strengths = {}
         for r in range(SIZE):  # every cell, the slow way: independent of the attack and harm code
             for c in range(SIZE):
@@ -35,7 +35,7 @@ def test_exhaustive_with_the_harm_objective_keeps_the_most_harmful_cell_of_a_bru
                 expert = optimal_path(adv.tolist(), start, goal, True)
                 if expert is None:
                     continue  # not a valid cell: the goal must stay reachable
-                path = plan_reference(adv[None], np.array([start]), np.array([goal]), model).path_cells.tolist()
+                path = plan_reference(adv[None], np.array([start]), np.array([goal]), model).paths.cells.tolist()
                 label = rule_oracle(original, path, goal, round(4 * SIZE / 28))[0]
                 if label == "UrP":
                     strengths[(r, c)] = math.inf
@@ -51,5 +51,5 @@ def test_exhaustive_with_the_harm_objective_keeps_the_most_harmful_cell_of_a_bru
 
 
 def test_unknown_objective_is_refused():
-    with pytest.raises(InputError, match="--objective"):
+    with pytest.raises(InputError, match="objective"):
         objective_strength("fastest")

@@ -60,6 +60,11 @@ def test_version_1_database_is_upgraded_on_open(db_url):
     with Store.open(db_url, create=False) as store:  # read-only use: nothing changes, harm reads as NULL
         old = store.read_pairs(run_id)
         assert len(old) == 30 and all(h is None for h in old.harm) and np.isnan(old.opt_cost_o).all()
+        page = store.page_pairs(run_id, limit=5)
+        assert len(page) == 5 and all(r["harm"] is None and r["regret_a"] is None for r in page)
+        assert store.page_pairs(run_id, harm="harmful") == []
+        with pytest.raises(InputError, match="opened without create"):
+            store.write_pairs(run_id, random_records(2, size=7, seed=9, first_index=500))
     assert _columns_and_version(db_url) == (columns, "1")
     with Store.open(db_url) as store:
         assert store.read_pairs(run_id).equals(old)  # the old rows: same values, harm NULL

@@ -74,6 +74,8 @@ def test_grid_pages_cover_every_pair_in_order(client, db):
     ("source=svm", lambda r: r.label_source == "svm"),
     ("label=UrP&source=rule", lambda r: (r.label == "UrP") & (r.label_source == "rule")),
     ("label=DP&attack=yes", lambda r: np.zeros(len(r), bool)),
+    ("harm=harmful", lambda r: r.harm == "harmful"),
+    ("harm=harmless&label=FP", lambda r: (r.harm == "harmless") & (r.label == "FP")),
 ])
 def test_grid_filters(client, db, query, mask):
     run_id, records = db[1]["random"]
@@ -152,6 +154,23 @@ def test_pair_json_matches_records(client, db):
         assert body["score"] == (None if np.isnan(score) else pytest.approx(score))
         assert body["dh"] == (None if records.dh[row] < 0 else int(records.dh[row]))
         assert body["human_labels"] == []
+        assert body["harm"] == records.harm[row] and body["expert_label"] == records.expert_label[row]
+        for name in ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a"):
+            value = getattr(records, name)[row]
+            assert body[name] == (None if np.isnan(value) else pytest.approx(value)), name
+
+
+def test_harm_and_regret_on_the_grid_and_the_pair_page(client, db):
+    run_id, records = db[1]["random"]
+    row = int(np.flatnonzero((records.harm == "harmful") & ~np.isnan(records.regret_a))[0])
+    i = int(records.pair_index[row])
+    rows = client.get(f"/api/runs/{run_id}/pairs?harm=harmful&size=200").get_json()["pairs"]
+    got = next(r for r in rows if r["pair_index"] == i)
+    assert got["harm"] == "harmful" and got["regret_a"] == pytest.approx(records.regret_a[row])
+    html = client.get(f"/pairs/{run_id}/{i}?harm=harmful").get_data(as_text=True)
+    assert 'id="harm">harmful' in html and f"{records.regret_a[row]:.3f}" in html
+    assert client.get(f"/runs/{run_id}/pairs?harm=bad").status_code == 400
+    assert 'id="filter-harm"' in client.get(f"/runs/{run_id}/pairs").get_data(as_text=True)
 
 
 @pytest.mark.parametrize("kind", ["original", "adversarial", "pathimage"])

@@ -73,11 +73,6 @@ class PairHarm(Columns):
     tol: float = DEFAULT_TOL
     rtol: float = 0.0
 
-    def counts(self) -> dict[str, int]:
-        """Pairs per harm value, every value present."""
-        return {value: int(np.sum(self.harm == value)) for value in HARMS}
-
-
 
 def harm_summary(table: dict[str, dict[str, int]]) -> dict:
     """The harm figures of a summary from a `cross_table`: pairs per harm value, harmful pairs, the harmful rate
@@ -167,6 +162,8 @@ def pair_harm(
         given_cells, given_offsets = expert_o[1].cells, expert_o[1].offsets
         if len(given_cost) != n:
             raise InputError(f"expert_o: {len(given_cost)} costs for {n} pairs", "expert_o")
+        if len(given_cells) and (given_cells.min() < 0 or given_cells.max() >= size):
+            raise InputError(f"expert_o: cells outside the {size}x{size} grid", "expert_o")
     opt_o = np.empty(n)
     opt_a = np.empty(n)
     code = np.empty(n, dtype=np.int8)
@@ -271,6 +268,26 @@ def _load_padded(obs, pad, w):
             pad[base + c] = obs[r, c]
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _padded_legal(pad, p, a, step, side_r, side_c, corner_cutting):
+    """Whether action `a` from the cell `p` of the padded flat map is legal (as `_legal`)."""
+    if pad[p + step[a]]:
+        return False
+    if not corner_cutting and side_r[a] != 0 and side_c[a] != 0:
+        if pad[p + side_r[a]] or pad[p + side_c[a]]:
+            return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _octile(p, w, sr, sc):
+    """Octile distance from the cell `p` of a padded flat map (row width `w`) to the cell `(sr, sc)` (padded)."""
+    r = p // w
+    dr = abs(r - sr)
+    dc = abs(p - r * w - sc)
+    return min(dr, dc) * (_SQRT2 - 1.0) + max(dr, dc)
+
+
 @numba.njit(cache=True, nogil=True)
 def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch, heap_key, heap_val):
     """A* on the padded flat map `pad` (row width `w`) from the cell `goal` toward the cell `s` (heuristic: octile
@@ -284,9 +301,7 @@ def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, sta
     best = np.inf
     g[goal] = 0.0
     stamp[goal] = -epoch
-    hr = abs(goal // w - sr)
-    hc = abs(goal - (goal // w) * w - sc)
-    size = heap_push(heap_key, heap_val, 0, min(hr, hc) * (_SQRT2 - 1.0) + max(hr, hc), goal)
+    size = heap_push(heap_key, heap_val, 0, _octile(goal, w, sr, sc), goal)
     while size > 0:
         f, p, size = heap_pop(heap_key, heap_val, size)
         if f > best + COST_TOL:
@@ -298,12 +313,9 @@ def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, sta
         if p == s:
             best = gv
         for a in range(8):
-            q = p + step[a]
-            if pad[q]:
+            if not _padded_legal(pad, p, a, step, side_r, side_c, corner_cutting):
                 continue
-            if not corner_cutting and side_r[a] != 0 and side_c[a] != 0:
-                if pad[p + side_r[a]] or pad[p + side_c[a]]:
-                    continue
+            q = p + step[a]
             st = stamp[q]
             if st == epoch:
                 continue
@@ -311,10 +323,7 @@ def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, sta
             if st != -epoch or nd < g[q] - COST_TOL:
                 g[q] = nd
                 stamp[q] = -epoch
-                qr = q // w
-                hr = abs(qr - sr)
-                hc = abs(q - qr * w - sc)
-                size = heap_push(heap_key, heap_val, size, nd + min(hr, hc) * (_SQRT2 - 1.0) + max(hr, hc), q)
+                size = heap_push(heap_key, heap_val, size, nd + _octile(q, w, sr, sc), q)
     return best
 
 
@@ -335,11 +344,8 @@ def _walk(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp
         moved = False
         for a in range(8):
             q = p + step[a]
-            if pad[q]:
+            if not _padded_legal(pad, p, a, step, side_r, side_c, corner_cutting):
                 continue
-            if not corner_cutting and side_r[a] != 0 and side_c[a] != 0:
-                if pad[p + side_r[a]] or pad[p + side_c[a]]:
-                    continue
             if stamp[q] == epoch and abs(costs[a] + g[q] - g[p]) <= COST_TOL:
                 p = q
                 moved = True

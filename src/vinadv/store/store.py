@@ -383,6 +383,9 @@ class Store:
         all-or-nothing: a crash leaves whole batches only. `progress(n_rows)` is called after each batch.
         """
         run_id = int(run_id)
+        if self._absent_columns:
+            raise InputError(f"database {self.url}: schema version {PREVIOUS_SCHEMA_VERSION} opened without create; "
+                             "open it with create to upgrade it before writing")
         # strictly increasing, as jobs write them, means no duplicates: the sort of np.unique only otherwise
         increasing = bool((np.diff(records.pair_index) > 0).all())
         if not increasing and len(np.unique(records.pair_index)) != len(records):
@@ -596,6 +599,7 @@ class Store:
         label: str | None = None,
         attack: bool | None = None,
         label_source: str | None = None,
+        harm: str | None = None,
         after: int | None = None,
         before: int | None = None,
         limit: int = 50,
@@ -604,18 +608,23 @@ class Store:
 
         `after`/`before`: only pairs with a larger/smaller index (`before` returns the `limit` pairs just before
         it, still in ascending order). Filters are exact matches. Each dict: pair_index, label, attack,
-        label_source, score, dh, dv, term_o, term_a, added_obstacle. With the (run_id, <filter>, pair_index)
-        indexes every page is one index range read, however deep.
+        label_source, score, dh, dv, term_o, term_a, added_obstacle, harm, regret_o, regret_a. With the
+        (run_id, <filter>, pair_index) indexes every page is one index range read, however deep (the harm filter
+        has no index of its own: it reads the run's pairs in order until the page is full).
         """
         c = map_pairs.c
+        harm_columns = [sa.null().label(name) if name in self._absent_columns else c[name]
+                        for name in ("harm", "regret_o", "regret_a")]
         query = sa.select(c.pair_index, c.label, c.attack, c.label_source, c.score, c.dh, c.dv,
-                          c.term_o, c.term_a, c.added_obstacle).where(c.run_id == int(run_id))
+                          c.term_o, c.term_a, c.added_obstacle, *harm_columns).where(c.run_id == int(run_id))
         if label is not None:
             query = query.where(c.label == label)
         if attack is not None:
             query = query.where(c.attack == (sa.true() if attack else sa.false()))
         if label_source is not None:
             query = query.where(c.label_source == label_source)
+        if harm is not None:
+            query = query.where(sa.false() if "harm" in self._absent_columns else c.harm == harm)
         if after is not None:
             query = query.where(c.pair_index > int(after))
         if before is not None:

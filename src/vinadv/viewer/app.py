@@ -47,6 +47,7 @@ from vinadv.errors import InputError
 from vinadv.store import LABELS, Store
 from vinadv.store.records import PairRecords
 from vinadv.viewer.render import KINDS, PngCache, render_pair_png
+from vinadv.vocabulary import HARM_FLOAT_FIELDS, HARMS
 
 #: labels a person can set (the automatic 'invalid' is a fact about the original path, not a judgement)
 HUMAN_LABELS = ("FP", "DP", "UrP", "UcP")
@@ -65,7 +66,7 @@ _ANNOTATOR_RE = re.compile(r"^[\w .@+\-]{1,64}$")
 _MAX_ID = 2**63 - 1
 _COUNTS_TTL_S = 10.0
 _LOOPBACK_NAMES = {"localhost", "127.0.0.1", "::1", "[::1]"}
-_FILTER_PARAMS = ("label", "attack", "source")
+_FILTER_PARAMS = ("label", "attack", "source", "harm")
 _GRID_PARAMS = frozenset(_FILTER_PARAMS + ("after", "before", "size"))
 
 
@@ -82,8 +83,9 @@ def create_app(store: Store, *, secret_key: bytes | str | None = None, allow_rem
     )
     app.json.sort_keys = False
     app.extensions["vinadv"] = state = _ViewerState(store, image_cache_bytes)
-    app.jinja_env.globals.update(LABELS=LABELS, HUMAN_LABELS=HUMAN_LABELS, LABEL_KEYS=LABEL_KEYS,
-                                 fmt_score=_fmt_score, fmt_dist=_fmt_dist, csrf_token=_csrf_token)
+    app.jinja_env.globals.update(LABELS=LABELS, HUMAN_LABELS=HUMAN_LABELS, LABEL_KEYS=LABEL_KEYS, HARMS=HARMS,
+                                 fmt_score=_fmt_score, fmt_dist=_fmt_dist, fmt_cost=_fmt_cost,
+                                 csrf_token=_csrf_token)
 
     @app.before_request
     def _check_host():
@@ -292,7 +294,7 @@ class _ViewerState:
         size = _int_param("size", default=DEFAULT_PAGE_SIZE)
         if not 1 <= size <= MAX_PAGE_SIZE:
             raise BadRequest(f"size: must be 1 to {MAX_PAGE_SIZE}, got {size}")
-        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"])
+        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"], harm=filters["harm"])
         rows = self.store.page_pairs(run_id, after=after, before=before, limit=size + 1, **kw)
         if before is not None:
             has_prev = len(rows) > size
@@ -314,7 +316,7 @@ class _ViewerState:
         }
 
     def neighbours(self, run_id: int, pair_index: int, filters: dict) -> dict:
-        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"])
+        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"], harm=filters["harm"])
         nxt = self.store.page_pairs(run_id, after=pair_index, limit=1, **kw)
         prv = self.store.page_pairs(run_id, before=pair_index, limit=1, **kw)
         return {"next": nxt[0]["pair_index"] if nxt else None, "prev": prv[0]["pair_index"] if prv else None}
@@ -336,6 +338,8 @@ class _ViewerState:
             "label": r.label[0], "attack": bool(r.attack[0]), "label_source": r.label_source[0],
             "score": _none_if_nan(r.score[0]), "dh": _none_if_negative(r.dh[0]), "dv": _none_if_negative(r.dv[0]),
             "term_o": r.term_o[0], "term_a": r.term_a[0],
+            **{name: _none_if_nan(float(getattr(r, name)[0])) for name in HARM_FLOAT_FIELDS},
+            "expert_label": r.expert_label[0], "harm": r.harm[0],
             "start": r.starts[0].tolist(), "goal": r.goals[0].tolist(), "added": r.added[0].tolist(),
             "path_o": o.tolist(), "path_a": a.tolist(),
             "map_o": ["".join("1" if v else "0" for v in row) for row in r.obstacles_o[0]],
@@ -386,7 +390,10 @@ def _filters() -> dict:
     source = request.args.get("source") or None
     if source is not None and (len(source) > 255 or not source.isprintable()):
         raise BadRequest("source: expected a label source name of at most 255 printable characters")
-    return {"label": label, "attack": attack, "source": source}
+    harm = request.args.get("harm") or None
+    if harm is not None and harm not in HARMS:
+        raise BadRequest(f"harm: {harm[:40]!r} is not one of {'|'.join(HARMS)}")
+    return {"label": label, "attack": attack, "source": source, "harm": harm}
 
 
 def _filter_query(filters: dict) -> str:
@@ -410,6 +417,8 @@ def _filter_items(filters: dict) -> dict:
         query["attack"] = "yes" if filters["attack"] else "no"
     if filters["source"] is not None:
         query["source"] = filters["source"]
+    if filters["harm"] is not None:
+        query["harm"] = filters["harm"]
     return query
 
 
@@ -460,6 +469,7 @@ def _pair_row_json(row: dict, humans: list[dict]) -> dict:
         "label_source": row["label_source"], "score": _none_if_nan(row["score"]),
         "dh": _none_if_negative(row["dh"]), "dv": _none_if_negative(row["dv"]),
         "term_o": row["term_o"], "term_a": row["term_a"], "human_labels": humans,
+        "harm": row["harm"], "regret_o": _none_if_nan(row["regret_o"]), "regret_a": _none_if_nan(row["regret_a"]),
     }
 
 
@@ -473,6 +483,10 @@ def _run_json(run: dict) -> dict:
 
 
 def _fmt_score(value) -> str:
+    return "—" if value is None else f"{value:.3f}"
+
+
+def _fmt_cost(value) -> str:
     return "—" if value is None else f"{value:.3f}"
 
 
