@@ -1,6 +1,7 @@
-"""Training a VIN on a maps file: every free cell of every map is a supervised state.
+"""Training a whole-map planner (the VIN, the GPPN, any torch planner) on a maps file: every free cell of every map
+is a supervised state.
 
-The value map depends only on the map, so one forward pass per map gives the logits of all its cells at once.
+The policy depends only on the map, so one forward pass per map gives the logits of all its cells at once.
 Dijkstra gives the set of optimal actions at every cell that can reach the goal; where several actions are
 optimal any is right, so the loss is the negative log of the probability mass on the optimal set,
 `-log sum_{a optimal} softmax(logits)_a`, averaged over the supervised cells (free, reachable, not the goal).
@@ -28,6 +29,7 @@ from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.planners import fast_vi
+from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.vin import VIN, VINConfig, default_k, make_input
 
 CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
@@ -37,7 +39,9 @@ _BITS = 1 << np.arange(8, dtype=np.uint16)
 @dataclass
 class TrainConfig:
     """Training hyper-parameters. `lr` is the peak RMSprop rate, reached by a linear warm-up over `warmup_steps`
-    optimizer steps, then decayed by a cosine to `lr * lr_final_fraction`."""
+    optimizer steps, then decayed by a cosine to `lr * lr_final_fraction`. `planner` names the model trained
+    ('vin' or 'gppn'); `k` and `l_h` are its iterations and width, `l_q` the VIN's q channels, `kernel` the GPPN's
+    recurrent kernel."""
 
     epochs: int = 30
     lr: float = 0.005
@@ -55,6 +59,8 @@ class TrainConfig:
     # RMSprop's mean square starts at 0, so its first steps are ~10x lr: a warm-up keeps them from undoing
     # what an --init model already knows. None: 5% of all steps, at most 200.
     warmup_steps: int | None = None
+    planner: str = "vin"
+    kernel: int = 3
 
     def validate(self) -> None:
         if self.epochs < 1:
@@ -99,13 +105,23 @@ def optimal_set_loss(logits: torch.Tensor, optimal: torch.Tensor) -> torch.Tenso
     return (torch.logsumexp(logits, dim=-1) - torch.logsumexp(masked, dim=-1)).mean()
 
 
-def batch_loss(model: VIN, obstacles: np.ndarray, goals: np.ndarray, bits: np.ndarray, device: torch.device):
+def cell_logits(model: torch.nn.Module, obstacles: np.ndarray, goals: np.ndarray, device: torch.device):
+    """`(B, N, N, A)` logits of every cell, with gradients. A `VIN` runs its own input and (on CPU) the compiled
+    value iteration; any other module follows the planner contract `forward(obstacles (B, N, N) float 0/1,
+    goals (B, 2) int64) -> (B, A, N, N)`."""
+    if isinstance(model, VIN):
+        x = make_input(obstacles, goals).to(device)
+        if device.type == "cpu":  # the compiled value-iteration loop: same function, several times faster on CPU
+            return model.fc(fast_vi.q_values(model, x).permute(0, 2, 3, 1))
+        return model.action_logits(x)
+    obs = torch.from_numpy(np.asarray(obstacles, dtype=np.float32)).to(device)
+    return model(obs, torch.from_numpy(np.asarray(goals, dtype=np.int64)).to(device)).permute(0, 2, 3, 1)
+
+
+def batch_loss(model: torch.nn.Module, obstacles: np.ndarray, goals: np.ndarray, bits: np.ndarray,
+               device: torch.device):
     """Loss, number of supervised cells and number whose argmax is optimal, for one batch of maps."""
-    x = make_input(obstacles, goals).to(device)
-    if device.type == "cpu":  # the compiled value-iteration loop: same function, several times faster on CPU
-        logits = model.fc(fast_vi.q_values(model, x).permute(0, 2, 3, 1))
-    else:
-        logits = model.action_logits(x)
+    logits = cell_logits(model, obstacles, goals, device)
     mask = bits_to_mask(torch.from_numpy(bits).to(device), logits.shape[-1])
     supervised = mask.any(dim=-1)
     logits, mask = logits[supervised], mask[supervised]
@@ -165,7 +181,7 @@ class _State:
     epochs: list = field(default_factory=list)
 
 
-def evaluate_loss(model: VIN, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int,
+def evaluate_loss(model: torch.nn.Module, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int,
                   device: torch.device) -> dict:
     """Loss and action accuracy over the maps `idx` (cell-weighted), without gradients."""
     total_loss, cells, correct = 0.0, 0, 0
@@ -189,29 +205,77 @@ def train_vin(
     record: dict | None = None,
     log: Callable[[str], None] | None = None,
 ) -> tuple[VIN, dict]:
-    """Train a VIN on `maps`; returns the model (CPU, eval mode) and the training record.
+    """Train a VIN on `maps`; returns the model (CPU, eval mode) and the training record (see `train_model`)."""
+    config.validate()
+    torch.manual_seed(config.seed)
+    vin_config = VINConfig(k=config.k or default_k(maps.size), l_h=config.l_h, l_q=config.l_q)
+    model = VIN(vin_config)
+    if config.init:
+        from vinadv.planners.weights import load_vin, weights_checksum
+
+        start = load_vin(config.init, size=maps.size, k=vin_config.k)
+        if start.config != vin_config:
+            raise InputError(f"--init {config.init}: its VIN ({start.config}) is not the one to train ({vin_config})")
+        model.load_state_dict(start.state_dict())
+        record = {**(record or {}), "init_sha256": weights_checksum(config.init)}
+    cpu = resolve_device(config.device).type == "cpu"
+    record = {**(record or {}), "value_iteration": "compiled (vinadv.planners.fast_vi)" if cpu else "torch"}
+    return train_model(model, maps, config, vin_config.to_dict(), checkpoint, resume, progress, record, log)
+
+
+def train_gppn(
+    maps: MapSet,
+    config: TrainConfig,
+    checkpoint: str | os.PathLike | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    record: dict | None = None,
+    log: Callable[[str], None] | None = None,
+) -> tuple[GPPN, dict]:
+    """Train a GPPN (`config.k` iterations, width `config.l_h`, kernel `config.kernel`) on `maps`, as `train_model`;
+    `config.init` names a GPPN weights file to start from."""
+    config.validate()
+    torch.manual_seed(config.seed)
+    gppn_config = GPPNConfig(k=config.k or default_k(maps.size), l_h=config.l_h, f=config.kernel)
+    model = GPPN(gppn_config)
+    if config.init:
+        from vinadv.planners.gppn import load_gppn
+        from vinadv.planners.weights import weights_checksum
+
+        start = load_gppn(config.init, size=maps.size)
+        if start.config != gppn_config:
+            raise InputError(f"--init {config.init}: its GPPN ({start.config}) is not the one to train "
+                             f"({gppn_config})")
+        model.load_state_dict(start.state_dict())
+        record = {**(record or {}), "init_sha256": weights_checksum(config.init)}
+    return train_model(model, maps, config, gppn_config.to_dict(), checkpoint, resume, progress, record, log)
+
+
+def train_model(
+    model: torch.nn.Module,
+    maps: MapSet,
+    config: TrainConfig,
+    model_config: dict,
+    checkpoint: str | os.PathLike | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    record: dict | None = None,
+    log: Callable[[str], None] | None = None,
+) -> tuple[torch.nn.Module, dict]:
+    """Train `model` (a `VIN`, or any module with the planner contract, see `cell_logits`) on `maps`; returns it
+    (CPU, eval mode) and the training record.
 
     Args:
         maps: the training maps (their starts and expert paths are not needed: every cell is supervised).
-        config: hyper-parameters (`TrainConfig`).
+        config: hyper-parameters (`TrainConfig`); `config.planner` names the model in the record and checkpoint.
+        model_config: the model's hyper-parameters, for the record.
         checkpoint: file written after every epoch; with `resume`, training continues from it.
         record: extra entries for the record (command, data checksum...), kept as given.
         log: called with one line per epoch (None: silent).
     """
     config.validate()
     device = resolve_device(config.device)
-    torch.manual_seed(config.seed)
     size = maps.size
-    vin_config = VINConfig(k=config.k or default_k(size), l_h=config.l_h, l_q=config.l_q)
-    model = VIN(vin_config)
-    if config.init:
-        from vinadv.planners.weights import load_vin, weights_checksum
-
-        start = load_vin(config.init, size=size, k=vin_config.k)
-        if start.config != vin_config:
-            raise InputError(f"--init {config.init}: its VIN ({start.config}) is not the one to train ({vin_config})")
-        model.load_state_dict(start.state_dict())
-        record = {**(record or {}), "init_sha256": weights_checksum(config.init)}
     model = model.to(device)
     optimizer = torch.optim.RMSprop(model.parameters(), lr=config.lr, eps=1e-6)
     train_idx, val_idx = split_indices(len(maps), config.val_fraction, config.seed)
@@ -220,10 +284,11 @@ def train_vin(
     state = _State()
     rec = dict(record or {})
     rec.update(
-        format="vinadv.vin-training-record/1",
+        format=f"vinadv.{config.planner}-training-record/1",
+        planner=config.planner,
         seed=config.seed,
         train_config=config.to_dict(),
-        model=vin_config.to_dict(),
+        model=model_config,
         size=size,
         n_maps=len(maps),
         n_train=len(train_idx),
@@ -232,7 +297,6 @@ def train_vin(
         hardware=hardware_info(device),
         loss="-log sum_{a optimal} softmax(logits)_a, mean over free reachable non-goal cells",
         optimizer="RMSprop(eps=1e-6), cosine lr schedule per step, grad-norm clipping",
-        value_iteration="compiled (vinadv.planners.fast_vi)" if device.type == "cpu" else "torch",
     )
     if resume and checkpoint is not None and Path(checkpoint).exists():
         state = _load_checkpoint(checkpoint, model, optimizer, config, rec)
@@ -340,8 +404,10 @@ def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> 
     # Resuming under other settings would silently mix two trainings; only the epoch count may grow.
     saved = dict(ck.get("train_config", {}))
     now = config.to_dict()
-    for key in ("lr", "lr_final_fraction", "batch_size", "val_fraction", "seed", "k", "l_h", "l_q", "epochs"):
-        if saved.get(key) != now.get(key):
+    defaults = TrainConfig().to_dict()  # checkpoints older than a key hold its default
+    for key in ("planner", "lr", "lr_final_fraction", "batch_size", "val_fraction", "seed", "k", "l_h", "l_q",
+                "kernel", "epochs"):
+        if saved.get(key, defaults[key]) != now.get(key):
             raise InputError(f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {now.get(key)!r}; "
                              f"use the same options to resume, or remove the checkpoint")
     data_sha = rec.get("data", {}).get("sha256")
