@@ -96,3 +96,12 @@ def test_plan_optimal_and_vin_from_the_cli(tmp_path, capsys):
     vin = json.loads(capsys.readouterr().out)
     assert vin["planner"]["name"] == "vin" and len(vin["planner"]["weights_sha256"]) == 64
     assert PathSet.load(tmp_path / "v.npz").model.startswith("vin k=36 sha256=")
+
+
+def test_planners_command(capsys):
+    assert main(["planners", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [p["name"] for p in out["planners"]] == ["vin", "gppn", "optimal"]
+    assert main(["planners"]) == 0
+    text = capsys.readouterr().out
+    assert "optimal" in text and "FILE.py:FACTORY" in text
