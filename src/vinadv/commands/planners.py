@@ -12,7 +12,7 @@ from vinadv.errors import InputError
 
 #: GPPN defaults at 28x28, chosen by benchmarks/gppn_training.py on the 2-core CPU (README, "Planners"): a 5x5
 #: recurrent kernel reaches two cells per iteration, so 20 iterations cross a 28x28 map.
-GPPN_DEFAULTS = {"l_h": 32, "k": 20, "kernel": 5, "lr": 0.002}
+GPPN_DEFAULTS = {"l_h": 32, "k": 20, "kernel": 5, "lr": 0.001}
 
 
 def register(subparsers) -> None:
