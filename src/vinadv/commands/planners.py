@@ -7,8 +7,15 @@ import json
 import time
 from pathlib import Path
 
-from vinadv.commands.vin import _command_line, _print_metrics, _set_threads, add_train_arguments, run_training
-from vinadv.errors import InputError
+from vinadv.commands.vin import (
+    _command_line,
+    _print_metrics,
+    _set_threads,
+    add_eval_maps_arguments,
+    add_train_arguments,
+    eval_maps,
+    run_training,
+)
 
 #: GPPN defaults at 28x28, chosen by benchmarks/gppn_training.py on the 2-core CPU (README, "Planners"): a 5x5
 #: recurrent kernel reaches two cells per iteration, so 20 iterations cross a 28x28 map.
@@ -34,12 +41,7 @@ def register(subparsers) -> None:
 
     ev = sub.add_parser("eval", help="action accuracy and rollout figures of a GPPN")
     ev.add_argument("--weights", default=None, help="GPPN weights file (default: the shipped weights for the size)")
-    src = ev.add_mutually_exclusive_group(required=True)
-    src.add_argument("--data", help="maps file (.npz)")
-    src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")
-    ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
-    ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
-    ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+    add_eval_maps_arguments(ev)
     ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
     ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -73,20 +75,11 @@ def cmd_gppn_train(args: argparse.Namespace) -> int:
 
 
 def cmd_gppn_eval(args: argparse.Namespace) -> int:
-    from vinadv.grid.generator import generate_maps
-    from vinadv.grid.mapset import MapSet
     from vinadv.planners.evaluation import evaluate_planner
     from vinadv.planners.registry import load_planner
 
     _set_threads(args.threads)
-    if args.data is not None:
-        maps = MapSet.load(args.data)
-        source = {"data": args.data}
-    else:
-        if args.n < 1:
-            raise InputError(f"--n must be >= 1, got {args.n}")
-        maps = generate_maps(args.n, args.size, args.seed, args.starts)
-        source = {"generated": {"n": args.n, "seed": args.seed, "size": args.size}}
+    maps, source = eval_maps(args)
     planner = load_planner("gppn", maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
     t0 = time.perf_counter()
     metrics = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))

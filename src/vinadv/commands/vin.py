@@ -24,12 +24,7 @@ def register(subparsers) -> None:
 
     ev = sub.add_parser("eval", help="action accuracy and rollout figures of a VIN")
     ev.add_argument("--weights", default=None, help="weights file (default: the shipped weights for the map size)")
-    src = ev.add_mutually_exclusive_group(required=True)
-    src.add_argument("--data", help="maps file (.npz)")
-    src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")
-    ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
-    ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
-    ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+    add_eval_maps_arguments(ev)
     ev.add_argument("--k", type=int, default=None, help="value-iteration steps for a port-style weights file")
     ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
     ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
@@ -60,6 +55,29 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
     train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
     train.add_argument("--quiet", action="store_true", help="no progress bar or per-epoch lines")
     train.add_argument("--json", action="store_true", help="print the training record as JSON")
+
+
+def add_eval_maps_arguments(ev: argparse.ArgumentParser) -> None:
+    """The maps options of every `eval` command: a maps file, or N maps generated on the fly (`eval_maps`)."""
+    src = ev.add_mutually_exclusive_group(required=True)
+    src.add_argument("--data", help="maps file (.npz)")
+    src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")
+    ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
+    ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
+    ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+
+
+def eval_maps(args: argparse.Namespace):
+    """`(MapSet, source)`: the maps of `add_eval_maps_arguments`' options and a record of where they came from."""
+    from vinadv.grid.generator import generate_maps
+    from vinadv.grid.mapset import MapSet
+
+    if args.data is not None:
+        return MapSet.load(args.data), {"data": args.data}
+    if args.n < 1:
+        raise InputError(f"--n must be >= 1, got {args.n}")
+    maps = generate_maps(args.n, args.size, args.seed, args.starts)
+    return maps, {"generated": {"n": args.n, "seed": args.seed, "size": args.size}}
 
 
 def _command_line() -> str:
@@ -135,20 +153,11 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
 def cmd_eval(args: argparse.Namespace) -> int:
     import time
 
-    from vinadv.grid.generator import generate_maps
-    from vinadv.grid.mapset import MapSet
     from vinadv.planners.evaluation import evaluate_vin
     from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
 
     _set_threads(args.threads)
-    if args.data is not None:
-        maps = MapSet.load(args.data)
-        source = {"data": args.data}
-    else:
-        if args.n < 1:
-            raise InputError(f"--n must be >= 1, got {args.n}")
-        maps = generate_maps(args.n, args.size, args.seed, args.starts)
-        source = {"generated": {"n": args.n, "seed": args.seed, "size": args.size}}
+    maps, source = eval_maps(args)
     model = load_vin(args.weights, size=maps.size, k=args.k)
     trained = model.record.get("size")
     if trained is not None and trained != maps.size:

@@ -211,13 +211,9 @@ def train_vin(
     vin_config = VINConfig(k=config.k or default_k(maps.size), l_h=config.l_h, l_q=config.l_q)
     model = VIN(vin_config)
     if config.init:
-        from vinadv.planners.weights import load_vin, weights_checksum
+        from vinadv.planners.weights import load_vin
 
-        start = load_vin(config.init, size=maps.size, k=vin_config.k)
-        if start.config != vin_config:
-            raise InputError(f"--init {config.init}: its VIN ({start.config}) is not the one to train ({vin_config})")
-        model.load_state_dict(start.state_dict())
-        record = {**(record or {}), "init_sha256": weights_checksum(config.init)}
+        record = _start_from(model, load_vin(config.init, size=maps.size, k=vin_config.k), config.init, record)
     cpu = resolve_device(config.device).type == "cpu"
     record = {**(record or {}), "value_iteration": "compiled (vinadv.planners.fast_vi)" if cpu else "torch"}
     return train_model(model, maps, config, vin_config.to_dict(), checkpoint, resume, progress, record, log)
@@ -240,15 +236,20 @@ def train_gppn(
     model = GPPN(gppn_config)
     if config.init:
         from vinadv.planners.gppn import load_gppn
-        from vinadv.planners.weights import weights_checksum
 
-        start = load_gppn(config.init, size=maps.size)
-        if start.config != gppn_config:
-            raise InputError(f"--init {config.init}: its GPPN ({start.config}) is not the one to train "
-                             f"({gppn_config})")
-        model.load_state_dict(start.state_dict())
-        record = {**(record or {}), "init_sha256": weights_checksum(config.init)}
+        record = _start_from(model, load_gppn(config.init, size=maps.size), config.init, record)
     return train_model(model, maps, config, gppn_config.to_dict(), checkpoint, resume, progress, record, log)
+
+
+def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: dict | None) -> dict:
+    """Load `start`'s weights (read from `path`, `--init`) into `model`; the record gains their checksum."""
+    from vinadv.planners.weights import weights_checksum
+
+    if start.config != model.config:
+        raise InputError(f"--init {path}: its {type(start).__name__} ({start.config}) is not the one to train "
+                         f"({model.config})")
+    model.load_state_dict(start.state_dict())
+    return {**(record or {}), "init_sha256": weights_checksum(path)}
 
 
 def train_model(
