@@ -62,3 +62,32 @@ def test_cli_train_eval_plan(tmp_path, capsys):
     assert main(["gppn", "eval", "--weights", str(weights), "--n", "2", "--size", "12", "--quiet"]) == 2
     assert "trained on 10x10 maps" in capsys.readouterr().err
     assert np.isfinite(metrics["action_accuracy"])
+
+
+def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatch):
+    import vinadv.planners.training as training
+
+    torch.set_num_threads(1)
+    maps = generate_maps(40, 8, seed=6, n_starts=1)
+    config = TrainConfig(planner="gppn", epochs=2, lr=0.01, batch_size=8, k=4, l_h=4, kernel=3, seed=2,
+                         checkpoint_min=1e-9)  # a checkpoint after every batch
+    whole, whole_rec = train_gppn(maps, config, checkpoint=tmp_path / "a.ckpt", progress=False)
+    real, calls = training.batch_loss, []
+
+    def dies_in_epoch_two(*args):
+        calls.append(1)
+        if len(calls) == 9:  # epoch 2, after its first two batches (5 per epoch, then one validation call)
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(training, "batch_loss", dies_in_epoch_two)
+    with pytest.raises(KeyboardInterrupt):
+        train_gppn(maps, config, checkpoint=tmp_path / "b.ckpt", progress=False)
+    monkeypatch.setattr(training, "batch_loss", real)
+    ck = torch.load(tmp_path / "b.ckpt", weights_only=True)
+    assert ck["epoch"] == 1 and ck["step"] == 7
+    resumed, rec = train_gppn(maps, config, checkpoint=tmp_path / "b.ckpt", resume=True, progress=False)
+    for k, v in whole.state_dict().items():
+        torch.testing.assert_close(resumed.state_dict()[k], v, rtol=0, atol=0)
+    assert rec["steps"] == whole_rec["steps"] == 10
+    assert rec["epochs"][1]["train_loss"] == pytest.approx(whole_rec["epochs"][1]["train_loss"], rel=1e-6)

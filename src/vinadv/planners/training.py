@@ -8,8 +8,8 @@ optimal any is right, so the loss is the negative log of the probability mass on
 
 Optimiser: RMSprop (as the original VIN and the common PyTorch ports, eps 1e-6) with a cosine learning-rate
 schedule, gradient-norm clipping (value iteration through max can spike the gradient). The last `val_fraction`
-of the maps (after a seeded shuffle) is held out. After each epoch a checkpoint (model, optimiser, record) is
-written, so a killed run resumes where it stopped.
+of the maps (after a seeded shuffle) is held out. After each epoch, and every `checkpoint_min` minutes within one,
+a checkpoint (model, optimiser, record, position) is written, so a killed run resumes where it stopped.
 """
 
 from __future__ import annotations
@@ -61,6 +61,8 @@ class TrainConfig:
     warmup_steps: int | None = None
     planner: str = "vin"
     kernel: int = 3
+    # a checkpoint also every this many minutes inside an epoch (an epoch of a slow model can take an hour)
+    checkpoint_min: float | None = 10.0
 
     def validate(self) -> None:
         if self.epochs < 1:
@@ -179,6 +181,7 @@ class _State:
     step: int = 0
     wall_s: float = 0.0
     epochs: list = field(default_factory=list)
+    partial: list = field(default_factory=lambda: [0.0, 0, 0])  # loss, cells, correct of the unfinished epoch
 
 
 def evaluate_loss(model: torch.nn.Module, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int,
@@ -302,19 +305,21 @@ def train_model(
     if resume and checkpoint is not None and Path(checkpoint).exists():
         state = _load_checkpoint(checkpoint, model, optimizer, config, rec)
         if log:
-            log(f"resumed from {checkpoint} after epoch {state.epoch}")
+            log(f"resumed from {checkpoint} after epoch {state.epoch}, step {state.step}")
     bits = optimal_action_bits(maps)
     started = time.time() - state.wall_s
     stopped = None
+    last_save = time.time()
     for epoch in range(state.epoch, config.epochs):
         model.train()
         order = train_idx[np.random.default_rng([config.seed, epoch]).permutation(len(train_idx))]
-        batches = range(0, len(order), config.batch_size)
+        done = state.step - epoch * steps_per_epoch  # batches of this epoch done before a mid-epoch checkpoint
+        batches = range(done * config.batch_size, len(order), config.batch_size)
         if progress:
             from tqdm import tqdm
 
             batches = tqdm(batches, desc=f"epoch {epoch + 1}/{config.epochs}", unit="batch", leave=False)
-        loss_sum, cell_sum, correct_sum = 0.0, 0, 0
+        loss_sum, cell_sum, correct_sum = state.partial if done else (0.0, 0, 0)
         epoch_start = time.time()
         for i in batches:
             b = order[i : i + config.batch_size]
@@ -333,6 +338,11 @@ def train_model(
             correct_sum += c
             if progress:
                 batches.set_postfix(loss=f"{loss_sum / max(cell_sum, 1):.4f}", lr=f"{lr:.2g}")
+            if checkpoint is not None and config.checkpoint_min and time.time() - last_save > 60 * config.checkpoint_min:
+                state.partial, state.wall_s = [loss_sum, cell_sum, correct_sum], time.time() - started
+                _save_checkpoint(checkpoint, model, optimizer, config, state, rec)
+                last_save = time.time()
+        state.partial = [0.0, 0, 0]
         val = evaluate_loss(model, maps, bits, val_idx, config.batch_size, device) if len(val_idx) else {}
         state.epoch = epoch + 1
         state.wall_s = time.time() - started
@@ -389,6 +399,7 @@ def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -
             "step": state.step,
             "wall_s": state.wall_s,
             "epochs": state.epochs,
+            "partial": state.partial,
         },
         tmp,
     )
@@ -419,4 +430,5 @@ def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> 
         optimizer.load_state_dict(ck["optimizer"])
     except (RuntimeError, KeyError, ValueError) as exc:
         raise InputError(f"{path}: checkpoint does not match the model ({exc})") from None
-    return _State(epoch=int(ck["epoch"]), step=int(ck["step"]), wall_s=float(ck["wall_s"]), epochs=list(ck["epochs"]))
+    return _State(epoch=int(ck["epoch"]), step=int(ck["step"]), wall_s=float(ck["wall_s"]), epochs=list(ck["epochs"]),
+                  partial=list(ck.get("partial", [0.0, 0, 0])))
