@@ -168,3 +168,14 @@ def test_cli_refuses_a_broken_planner_with_exit_2(tmp_path, capsys):
                  "--planner", f"{tmp_path / 'bad.py'}:make"])
     err = capsys.readouterr().err
     assert code == 2 and "bad.py:make" in err and "Traceback" not in err
+
+
+def test_bad_starts_are_refused():
+    maps = generate_maps(2, 8, seed=1, n_starts=2)
+    planner = OptimalPlanner(8)
+    with pytest.raises(InputError, match=r"starts has shape \(2, 2\), expected \(2, S, 2\)"):
+        planner.plan_maps(maps.obstacles, maps.goals, maps.starts[:, 0])
+    with pytest.raises(InputError, match="starts has a cell outside the 8x8 grid"):
+        planner.plan_maps(maps.obstacles, maps.goals, maps.starts + 8)
+    with pytest.raises(InputError, match="goals has shape"):
+        planner.plan_maps(maps.obstacles, maps.goals[:1], maps.starts)

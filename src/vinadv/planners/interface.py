@@ -132,15 +132,15 @@ class Planner(ABC):
 
 
 def _check_multi(obstacles, goals, starts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`check_plan_inputs` for `starts (B, S, 2)`."""
-    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    """`check_plan_inputs` for `starts (B, S, 2)`: normalised `(obstacles, goals, starts)`."""
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-    if starts.ndim != 3 or starts.shape[0] != len(obstacles) or starts.shape[2] != 2:
-        raise InputError(f"starts has shape {starts.shape}, expected ({len(obstacles)}, S, 2)")
-    for s in range(starts.shape[1]):
-        obstacles, _, goals = check_plan_inputs(obstacles, starts[:, s], goals)
-    if starts.shape[1] == 0:
-        obstacles, _, goals = check_plan_inputs(obstacles, np.zeros((len(obstacles), 2)), goals)
+    obstacles, _, goals = check_plan_inputs(obstacles, np.zeros((len(obstacles), 2)), goals)
+    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    b, n = obstacles.shape[0], obstacles.shape[1]
+    if starts.ndim != 3 or starts.shape[0] != b or starts.shape[2] != 2:
+        raise InputError(f"starts has shape {starts.shape}, expected ({b}, S, 2)")
+    if starts.size and (starts.min() < 0 or starts.max() >= n):
+        raise InputError(f"starts has a cell outside the {n}x{n} grid")
     return obstacles, goals, starts
 
 
