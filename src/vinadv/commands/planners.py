@@ -9,10 +9,10 @@ from pathlib import Path
 
 from vinadv.commands.vin import (
     _command_line,
-    _print_metrics,
     _set_threads,
     add_eval_maps_arguments,
     add_train_arguments,
+    emit_metrics,
     eval_maps,
     run_training,
 )
@@ -85,10 +85,4 @@ def cmd_gppn_eval(args: argparse.Namespace) -> int:
     metrics = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))
     metrics = {"planner": planner.spec(), "weights": args.weights or "shipped", **source, **metrics,
                "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
-    if args.out:
-        Path(args.out).write_text(json.dumps(metrics, indent=2) + "\n")
-    if args.json:
-        print(json.dumps(metrics))
-    else:
-        _print_metrics(metrics)
-    return 0
+    return emit_metrics(args, metrics)

@@ -171,6 +171,11 @@ def cmd_eval(args: argparse.Namespace) -> int:
     weights_path = args.weights or f"shipped:{default_weights_path(maps.size).name}"
     metrics = {"weights": weights_path, "weights_sha256": weights_checksum(model.weights_path), **source, **metrics,
                "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
+    return emit_metrics(args, metrics)
+
+
+def emit_metrics(args: argparse.Namespace, metrics: dict) -> int:
+    """Write an `eval` command's figures to `--out`, and print them as JSON (`--json`) or as text."""
     if args.out:
         Path(args.out).write_text(json.dumps(metrics, indent=2) + "\n")
     if args.json:

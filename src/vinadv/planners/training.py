@@ -222,17 +222,9 @@ def train_vin(
     return train_model(model, maps, config, vin_config.to_dict(), checkpoint, resume, progress, record, log)
 
 
-def train_gppn(
-    maps: MapSet,
-    config: TrainConfig,
-    checkpoint: str | os.PathLike | None = None,
-    resume: bool = False,
-    progress: bool = True,
-    record: dict | None = None,
-    log: Callable[[str], None] | None = None,
-) -> tuple[GPPN, dict]:
-    """Train a GPPN (`config.k` iterations, width `config.l_h`, kernel `config.kernel`) on `maps`, as `train_model`;
-    `config.init` names a GPPN weights file to start from."""
+def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, dict]:
+    """Train a GPPN (`config.k` iterations, width `config.l_h`, kernel `config.kernel`) on `maps`; `options` and the
+    result as `train_model`'s. `config.init` names a GPPN weights file to start from."""
     config.validate()
     torch.manual_seed(config.seed)
     gppn_config = GPPNConfig(k=config.k or default_k(maps.size), l_h=config.l_h, f=config.kernel)
@@ -240,8 +232,9 @@ def train_gppn(
     if config.init:
         from vinadv.planners.gppn import load_gppn
 
-        record = _start_from(model, load_gppn(config.init, size=maps.size), config.init, record)
-    return train_model(model, maps, config, gppn_config.to_dict(), checkpoint, resume, progress, record, log)
+        options["record"] = _start_from(model, load_gppn(config.init, size=maps.size), config.init,
+                                        options.get("record"))
+    return train_model(model, maps, config, gppn_config.to_dict(), **options)
 
 
 def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: dict | None) -> dict:
