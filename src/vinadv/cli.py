@@ -20,6 +20,7 @@ COMMAND_MODULES = [
     "vinadv.commands.maps",
     "vinadv.commands.vin",
     "vinadv.commands.plan",
+    "vinadv.commands.planners",
     "vinadv.commands.attack",
     "vinadv.commands.classify",
     "vinadv.commands.run",

@@ -1,4 +1,4 @@
-"""`vinadv plan`: plan a path from every start of every map with the VIN (the fast batched engine)."""
+"""`vinadv plan`: plan a path from every start of every map with a planner (default: the VIN and its fast engine)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,14 @@ from vinadv.planners.batching import DEFAULT_CHUNK
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("plan", help="plan VIN paths from every start of every map")
+    p = subparsers.add_parser("plan", help="plan paths from every start of every map (VIN or another planner)")
     p.add_argument("--maps", required=True, help="maps file (.npz, from `vinadv maps generate`)")
     p.add_argument("--out", required=True, help="output paths file (.npz, format vinadv.paths/1)")
-    p.add_argument("--weights", default=None, help="VIN weights file (default: the shipped weights for the map size)")
+    p.add_argument("--planner", default=None, metavar="NAME|SPEC",
+                   help="vin (default), gppn, optimal, or your own FILE.py:FACTORY / MODULE:FACTORY "
+                        "(see `vinadv planners`)")
+    p.add_argument("--weights", default=None,
+                   help="weights file of the vin or gppn planner (default: the shipped weights for the map size)")
     p.add_argument("--chunk-size", type=int, default=DEFAULT_CHUNK,
                    help=f"maps per batch; bounds memory (default {DEFAULT_CHUNK})")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
@@ -27,25 +31,25 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
     from vinadv.grid import MapSet
     from vinadv.outfile import check_output_path
-    from vinadv.planners.engine import plan_maps
     from vinadv.planners.pathset import PathSet
-    from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
+    from vinadv.planners.registry import load_planner
 
     if args.chunk_size < 1:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
-    model = load_vin(args.weights, size=maps.size)
-    weights_file = args.weights if args.weights is not None else default_weights_path(maps.size)
+    planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
     t0 = time.perf_counter()
-    result = plan_maps(maps.obstacles, maps.goals, maps.starts, model, maps.corner_cutting, args.chunk_size,
-                       progress=not (args.quiet or args.json))
+    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts, maps.corner_cutting, args.chunk_size,
+                               progress=not (args.quiet or args.json))
     elapsed = time.perf_counter() - t0
-    PathSet.from_result(result, maps.n_starts, maps.size, maps.corner_cutting,
-                        model=f"vin k={model.config.k} sha256={weights_checksum(weights_file)}").save(args.out)
+    k = planner.config.get("k")
+    label = " ".join([planner.name] + ([f"k={k}"] if k is not None else [])
+             + ([f"sha256={planner.checksum}"] if planner.checksum else []))
+    PathSet.from_result(result, maps.n_starts, maps.size, maps.corner_cutting, model=label).save(args.out)
     counts = np.bincount(result.termination, minlength=4)
     summary = {
-        "out": args.out, "maps": len(maps), "starts": maps.n_starts, "paths": len(result),
+        "out": args.out, "planner": planner.spec(), "maps": len(maps), "starts": maps.n_starts, "paths": len(result),
         "reached": round(float(result.reached.mean()), 4) if len(result) else None,
         "terminations": dict(zip(("goal", "collision", "loop", "step_limit"), counts.tolist())),
         "seconds": round(elapsed, 3), "plans_per_s": round(len(result) / elapsed, 1) if elapsed > 0 else None,

@@ -20,36 +20,12 @@ def register(subparsers) -> None:
     sub.required = True
 
     train = sub.add_parser("train", help="train a VIN on a maps file (every free cell is supervised)")
-    train.add_argument("--data", required=True, help="maps file (.npz, from `vinadv maps generate`)")
-    train.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
-    train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
-    train.add_argument("--lr", type=float, default=0.005, help="peak RMSprop learning rate, cosine-decayed (default 0.005)")
-    train.add_argument("--batch-size", type=int, default=32, help="maps per batch (default 32)")
-    train.add_argument("--warmup", type=int, default=None, metavar="STEPS",
-                       help="linear learning-rate warm-up over the first STEPS optimizer steps "
-                            "(default: 5%% of all steps, at most 200)")
-    train.add_argument("--val-fraction", type=float, default=0.05, help="maps held out for validation (default 0.05)")
-    train.add_argument("--seed", type=int, default=0, help="seed for initialisation, split and shuffling (default 0)")
-    train.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
-    train.add_argument("--k", type=int, default=None, help="value-iteration steps (default: 10/20/36 at 8/16/28)")
-    train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
-    train.add_argument("--time-limit", type=float, default=None, metavar="MIN",
-                       help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)")
-    train.add_argument("--init", metavar="WEIGHTS", help="start from these weights (continue a training) instead of "
-                       "a fresh initialisation")
-    train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
-    train.add_argument("--quiet", action="store_true", help="no progress bar or per-epoch lines")
-    train.add_argument("--json", action="store_true", help="print the training record as JSON")
+    add_train_arguments(train, lr=0.005, k_help="value-iteration steps (default: 10/20/36 at 8/16/28)")
     train.set_defaults(func=cmd_train)
 
     ev = sub.add_parser("eval", help="action accuracy and rollout figures of a VIN")
     ev.add_argument("--weights", default=None, help="weights file (default: the shipped weights for the map size)")
-    src = ev.add_mutually_exclusive_group(required=True)
-    src.add_argument("--data", help="maps file (.npz)")
-    src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")
-    ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
-    ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
-    ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+    add_eval_maps_arguments(ev)
     ev.add_argument("--k", type=int, default=None, help="value-iteration steps for a port-style weights file")
     ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
     ev.add_argument("--protocol", choices=("vinadv", "kentsommer", "gppn"), default="vinadv",
@@ -71,6 +47,53 @@ def register(subparsers) -> None:
     exw.set_defaults(func=cmd_export_weights)
 
 
+def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) -> None:
+    """The options every planner's `train` command shares (`vin train`, `gppn train`)."""
+    train.add_argument("--data", required=True, help="maps file (.npz, from `vinadv maps generate`)")
+    train.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
+    train.add_argument("--lr", type=float, default=lr, help=f"peak RMSprop learning rate, cosine-decayed (default {lr})")
+    train.add_argument("--batch-size", type=int, default=32, help="maps per batch (default 32)")
+    train.add_argument("--warmup", type=int, default=None, metavar="STEPS",
+                       help="linear learning-rate warm-up over the first STEPS optimizer steps "
+                            "(default: 5%% of all steps, at most 200)")
+    train.add_argument("--val-fraction", type=float, default=0.05, help="maps held out for validation (default 0.05)")
+    train.add_argument("--seed", type=int, default=0, help="seed for initialisation, split and shuffling (default 0)")
+    train.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
+    train.add_argument("--k", type=int, default=None, help=k_help)
+    train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
+    train.add_argument("--time-limit", type=float, default=None, metavar="MIN",
+                       help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)")
+    train.add_argument("--init", metavar="WEIGHTS", help="start from these weights (continue a training) instead of "
+                       "a fresh initialisation")
+    train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    train.add_argument("--quiet", action="store_true", help="no progress bar or per-epoch lines")
+    train.add_argument("--json", action="store_true", help="print the training record as JSON")
+
+
+def add_eval_maps_arguments(ev: argparse.ArgumentParser) -> None:
+    """The maps options of every `eval` command: a maps file, or N maps generated on the fly (`eval_maps`)."""
+    src = ev.add_mutually_exclusive_group(required=True)
+    src.add_argument("--data", help="maps file (.npz)")
+    src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")
+    ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
+    ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
+    ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+
+
+def eval_maps(args: argparse.Namespace):
+    """`(MapSet, source)`: the maps of `add_eval_maps_arguments`' options and a record of where they came from."""
+    from vinadv.grid.generator import generate_maps
+    from vinadv.grid.mapset import MapSet
+
+    if args.data is not None:
+        return MapSet.load(args.data), {"data": args.data}
+    if args.n < 1:
+        raise InputError(f"--n must be >= 1, got {args.n}")
+    maps = generate_maps(args.n, args.size, args.seed, args.starts)
+    return maps, {"generated": {"n": args.n, "seed": args.seed, "size": args.size}}
+
+
 def _command_line() -> str:
     return "vinadv " + shlex.join(sys.argv[1:])
 
@@ -84,17 +107,32 @@ def _set_threads(n: int | None) -> None:
         torch.set_num_threads(n)
 
 
-def cmd_train(args: argparse.Namespace) -> int:
-    from vinadv import __version__
-    from vinadv.grid.mapset import MapSet
-    from vinadv.planners.training import TrainConfig, train_vin
-    from vinadv.planners.weights import save_vin, weights_checksum
+def train_config(args: argparse.Namespace, **extra):
+    """The `TrainConfig` of a `train` command's shared options (`add_train_arguments`), plus `extra` fields."""
+    from vinadv.planners.training import TrainConfig
 
-    _set_threads(args.threads)
     config = TrainConfig(epochs=args.epochs, lr=args.lr, batch_size=args.batch_size, val_fraction=args.val_fraction,
                          seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit,
-                         init=args.init, warmup_steps=args.warmup)
+                         init=args.init, warmup_steps=args.warmup, **extra)
     config.validate()
+    return config
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from vinadv.planners.training import train_vin
+    from vinadv.planners.weights import save_vin
+
+    return run_training(args, train_config(args), train_vin, save_vin)
+
+
+def run_training(args: argparse.Namespace, config, train, save) -> int:
+    """Load the data, train with `train(maps, config, ...)` (checkpoint OUT.ckpt, `--resume`), write the weights
+    with `save(model, out, record)` and the record next to them; the body of every `train` command."""
+    from vinadv import __version__
+    from vinadv.grid.mapset import MapSet
+    from vinadv.planners.weights import weights_checksum
+
+    _set_threads(args.threads)
     check_output_path(args.out, mkdir=True)  # before hours of training: a folder in the way
     maps = MapSet.load(args.data)
     if len(maps) < 2:
@@ -111,10 +149,10 @@ def cmd_train(args: argparse.Namespace) -> int:
                  "seed": int(maps.seed), "corner_cutting": bool(maps.corner_cutting)},
     }
     log = None if args.quiet or args.json else (lambda line: print(line, flush=True))
-    model, record = train_vin(maps, config, checkpoint=checkpoint, resume=args.resume,
-                              progress=not (args.quiet or args.json), record=record, log=log)
+    model, record = train(maps, config, checkpoint=checkpoint, resume=args.resume,
+                          progress=not (args.quiet or args.json), record=record, log=log)
     record["finished"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    save_vin(model, out, record)
+    save(model, out, record)
     record_path = out.with_suffix(".json")
     with atomic_output(record_path, "w") as fh:
         fh.write(json.dumps(record, indent=2) + "\n")
@@ -131,20 +169,11 @@ def cmd_train(args: argparse.Namespace) -> int:
 def cmd_eval(args: argparse.Namespace) -> int:
     import time
 
-    from vinadv.grid.generator import generate_maps
-    from vinadv.grid.mapset import MapSet
     from vinadv.interop.protocols import evaluate_protocol
     from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
 
     _set_threads(args.threads)
-    if args.data is not None:
-        maps = MapSet.load(args.data)
-        source = {"data": args.data}
-    else:
-        if args.n < 1:
-            raise InputError(f"--n must be >= 1, got {args.n}")
-        maps = generate_maps(args.n, args.size, args.seed, args.starts)
-        source = {"generated": {"n": args.n, "seed": args.seed, "size": args.size}}
+    maps, source = eval_maps(args)
     model = load_vin(args.weights, size=maps.size, k=args.k)
     trained = model.record.get("size")
     if trained is not None and trained != maps.size:
@@ -160,12 +189,17 @@ def cmd_eval(args: argparse.Namespace) -> int:
     weights_path = args.weights or f"shipped:{default_weights_path(maps.size).name}"
     metrics = {"weights": weights_path, "weights_sha256": weights_checksum(model.weights_path), **source, **metrics,
                "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
+    return emit_metrics(args, metrics)
+
+
+def emit_metrics(args: argparse.Namespace, metrics: dict) -> int:
+    """Write an `eval` command's figures to `--out`, and print them as JSON (`--json`) or as text."""
     if args.out:
         with atomic_output(args.out, "w") as fh:
             fh.write(json.dumps(metrics, indent=2) + "\n")
     if args.json:
         print(json.dumps(metrics))
-    elif args.protocol == "vinadv":
+    elif getattr(args, "protocol", "vinadv") == "vinadv":
         _print_metrics(metrics)
     else:
         _print_protocol_metrics(metrics)

@@ -25,7 +25,6 @@ import torch
 
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.optimal_moves import optimal_moves_kernel
-from vinadv.grid.paths import PackedPaths
 from vinadv.planners.batching import DEFAULT_CHUNK, over_maps
 from vinadv.planners.flat import layout, zero_row_gaps
 from vinadv.planners.result import (
@@ -434,8 +433,4 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
                      cells, lengths, terms)
         stats["near_tie_maps"] = stats.get("near_tie_maps", 0) + len(maps)
     stats["near_tie_rollouts"] = stats.get("near_tie_rollouts", 0) + len(undecided)
-    offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
-    np.cumsum(lengths, out=offsets[1:])
-    longest = int(lengths.max(initial=0))
-    packed = cells[:, :longest][np.arange(longest)[None, :] < lengths[:, None]]
-    return PlanResult(paths=PackedPaths(packed, offsets), termination=terms)
+    return PlanResult.from_buffers(cells, lengths, terms)

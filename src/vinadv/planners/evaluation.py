@@ -1,4 +1,4 @@
-"""How good a VIN is on a set of maps: action accuracy and rollout metrics.
+"""How good a VIN (or any planner, `evaluate_planner`) is on a set of maps: action accuracy and rollout metrics.
 
 - action accuracy: over every free, reachable, non-goal cell of every map, the fraction where the argmax action
   (lowest index on ties) is one of the optimal actions (Dijkstra).
@@ -31,16 +31,23 @@ def action_accuracy_counts(model: VIN, obstacles: np.ndarray, goals: np.ndarray,
     model.eval()
     for i in range(0, len(obstacles), batch_size):
         obs, g = obstacles[i : i + batch_size], goals[i : i + batch_size]
-        dist, _ = shortest_distances(obs, g, corner_cutting)
-        optimal = optimal_actions(dist, obs, corner_cutting)
         with torch.no_grad():
             logits = model.action_logits(make_input(obs, g)).numpy()
-        best = np.argmax(logits, axis=-1)  # lowest index on ties, as the rollout rule
-        supervised = optimal.any(axis=-1)
-        hit = np.take_along_axis(optimal, best[..., None], axis=-1)[..., 0]
-        correct += int((hit & supervised).sum())
-        cells += int(supervised.sum())
+        c, n = accuracy_counts_from_logits(logits, obs, g, corner_cutting)
+        correct += c
+        cells += n
     return correct, cells
+
+
+def accuracy_counts_from_logits(logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray,
+                                corner_cutting: bool = True) -> tuple[int, int]:
+    """`(correct, cells)` for logits `(B, N, N, A)` of the maps `obstacles (B, N, N)`, `goals (B, 2)`."""
+    dist, _ = shortest_distances(obstacles, goals, corner_cutting)
+    optimal = optimal_actions(dist, obstacles, corner_cutting)
+    best = np.argmax(logits, axis=-1)  # lowest index on ties, as the rollout rule
+    supervised = optimal.any(axis=-1)
+    hit = np.take_along_axis(optimal, best[..., None], axis=-1)[..., 0]
+    return int((hit & supervised).sum()), int(supervised.sum())
 
 
 def _engine_planner(obstacles, goals, starts, model, corner_cutting) -> PlanResult:
@@ -81,6 +88,29 @@ def evaluate_vin(model: VIN, maps: MapSet, planner: MultiStartPlanner | None = N
                  progress: bool = False) -> dict:
     """All figures for `model` on `maps` (rollouts from every start). `planner` defaults to the engine."""
     planner = planner or _engine_planner
+
+    def counts(obs, goals):
+        return action_accuracy_counts(model, obs, goals, maps.corner_cutting, batch_size)
+
+    return _evaluate(maps, counts, lambda obs, goals, starts: planner(obs, goals, starts, model, maps.corner_cutting),
+                     batch_size, progress)
+
+
+def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> dict:
+    """All figures for any `vinadv.planners.interface.Planner` on `maps`: action accuracy from its logits, rollouts
+    (from every start) by its `plan_maps`."""
+
+    def counts(obs, goals):
+        logits = planner.logits(obs, goals).transpose(0, 2, 3, 1)
+        return accuracy_counts_from_logits(logits, obs, goals, maps.corner_cutting)
+
+    return _evaluate(maps, counts, lambda obs, goals, starts: planner.plan_maps(obs, goals, starts,
+                                                                                maps.corner_cutting),
+                     batch_size, progress)
+
+
+def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> dict:
+    """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)`, `plan(obs, goals, starts)`."""
     obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
     chunks = range(0, len(maps), batch_size)
     if progress:
@@ -90,10 +120,10 @@ def evaluate_vin(model: VIN, maps: MapSet, planner: MultiStartPlanner | None = N
     correct, cells, parts = 0, 0, []
     for i in chunks:
         sl = slice(i, i + batch_size)
-        c, n = action_accuracy_counts(model, obstacles[sl], goals[sl], maps.corner_cutting, batch_size)
+        c, n = counts(obstacles[sl], goals[sl])
         correct += c
         cells += n
-        parts.append(planner(obstacles[sl], goals[sl], starts[sl], model, maps.corner_cutting))
+        parts.append(plan(obstacles[sl], goals[sl], starts[sl]))
     result = PlanResult.concat(parts)
     metrics = {
         "maps": len(maps),

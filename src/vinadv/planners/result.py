@@ -38,6 +38,16 @@ class PlanResult(Columns):
         return cls(paths=PackedPaths.empty(), termination=np.zeros(0, np.int8))
 
     @classmethod
+    def from_buffers(cls, cells: np.ndarray, lengths: np.ndarray, termination: np.ndarray) -> PlanResult:
+        """From rollout buffers, the planners' output: `cells (R, M, 2)` whose first `lengths[r]` rows are rollout
+        r's path, and the termination codes `termination (R,)`."""
+        offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
+        np.cumsum(lengths, out=offsets[1:])
+        longest = int(lengths.max(initial=0))
+        packed = cells[:, :longest][np.arange(longest)[None, :] < lengths[:, None]]
+        return cls(paths=PackedPaths(packed, offsets), termination=termination)
+
+    @classmethod
     def from_paths(cls, paths: list[np.ndarray], termination: np.ndarray) -> PlanResult:
         """From a list of `(L_i, 2)` paths and their termination codes."""
         return cls(paths=PackedPaths.pack(paths), termination=termination)

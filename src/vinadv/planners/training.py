@@ -1,14 +1,15 @@
-"""Training a VIN on a maps file: every free cell of every map is a supervised state.
+"""Training a whole-map planner (the VIN, the GPPN, any torch planner) on a maps file: every free cell of every map
+is a supervised state.
 
-The value map depends only on the map, so one forward pass per map gives the logits of all its cells at once.
+The policy depends only on the map, so one forward pass per map gives the logits of all its cells at once.
 Dijkstra gives the set of optimal actions at every cell that can reach the goal; where several actions are
 optimal any is right, so the loss is the negative log of the probability mass on the optimal set,
 `-log sum_{a optimal} softmax(logits)_a`, averaged over the supervised cells (free, reachable, not the goal).
 
 Optimiser: RMSprop (as the original VIN and the common PyTorch ports, eps 1e-6) with a cosine learning-rate
 schedule, gradient-norm clipping (value iteration through max can spike the gradient). The last `val_fraction`
-of the maps (after a seeded shuffle) is held out. After each epoch a checkpoint (model, optimiser, record) is
-written, so a killed run resumes where it stopped.
+of the maps (after a seeded shuffle) is held out. After each epoch, and every `checkpoint_min` minutes within one,
+a checkpoint (model, optimiser, record, position) is written, so a killed run resumes where it stopped.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
 from vinadv.planners import fast_vi
+from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.vin import VIN, VINConfig, default_k, make_input
 
 CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
@@ -38,7 +40,9 @@ _BITS = 1 << np.arange(8, dtype=np.uint16)
 @dataclass
 class TrainConfig:
     """Training hyper-parameters. `lr` is the peak RMSprop rate, reached by a linear warm-up over `warmup_steps`
-    optimizer steps, then decayed by a cosine to `lr * lr_final_fraction`."""
+    optimizer steps, then decayed by a cosine to `lr * lr_final_fraction`. `planner` names the model trained
+    ('vin' or 'gppn'); `k` and `l_h` are its iterations and width, `l_q` the VIN's q channels, `kernel` the GPPN's
+    recurrent kernel."""
 
     epochs: int = 30
     lr: float = 0.005
@@ -56,6 +60,10 @@ class TrainConfig:
     # RMSprop's mean square starts at 0, so its first steps are ~10x lr: a warm-up keeps them from undoing
     # what an --init model already knows. None: 5% of all steps, at most 200.
     warmup_steps: int | None = None
+    planner: str = "vin"
+    kernel: int = 3
+    # a checkpoint also every this many minutes inside an epoch (an epoch of a slow model can take an hour)
+    checkpoint_min: float | None = 10.0
 
     def validate(self) -> None:
         if self.epochs < 1:
@@ -100,13 +108,23 @@ def optimal_set_loss(logits: torch.Tensor, optimal: torch.Tensor) -> torch.Tenso
     return (torch.logsumexp(logits, dim=-1) - torch.logsumexp(masked, dim=-1)).mean()
 
 
-def batch_loss(model: VIN, obstacles: np.ndarray, goals: np.ndarray, bits: np.ndarray, device: torch.device):
+def cell_logits(model: torch.nn.Module, obstacles: np.ndarray, goals: np.ndarray, device: torch.device):
+    """`(B, N, N, A)` logits of every cell, with gradients. A `VIN` runs its own input and (on CPU) the compiled
+    value iteration; any other module follows the planner contract `forward(obstacles (B, N, N) float 0/1,
+    goals (B, 2) int64) -> (B, A, N, N)`."""
+    if isinstance(model, VIN):
+        x = make_input(obstacles, goals).to(device)
+        if device.type == "cpu":  # the compiled value-iteration loop: same function, several times faster on CPU
+            return model.fc(fast_vi.q_values(model, x).permute(0, 2, 3, 1))
+        return model.action_logits(x)
+    obs = torch.from_numpy(np.asarray(obstacles, dtype=np.float32)).to(device)
+    return model(obs, torch.from_numpy(np.asarray(goals, dtype=np.int64)).to(device)).permute(0, 2, 3, 1)
+
+
+def batch_loss(model: torch.nn.Module, obstacles: np.ndarray, goals: np.ndarray, bits: np.ndarray,
+               device: torch.device):
     """Loss, number of supervised cells and number whose argmax is optimal, for one batch of maps."""
-    x = make_input(obstacles, goals).to(device)
-    if device.type == "cpu":  # the compiled value-iteration loop: same function, several times faster on CPU
-        logits = model.fc(fast_vi.q_values(model, x).permute(0, 2, 3, 1))
-    else:
-        logits = model.action_logits(x)
+    logits = cell_logits(model, obstacles, goals, device)
     mask = bits_to_mask(torch.from_numpy(bits).to(device), logits.shape[-1])
     supervised = mask.any(dim=-1)
     logits, mask = logits[supervised], mask[supervised]
@@ -164,9 +182,10 @@ class _State:
     step: int = 0
     wall_s: float = 0.0
     epochs: list = field(default_factory=list)
+    partial: list = field(default_factory=lambda: [0.0, 0, 0])  # loss, cells, correct of the unfinished epoch
 
 
-def evaluate_loss(model: VIN, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int,
+def evaluate_loss(model: torch.nn.Module, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int,
                   device: torch.device) -> dict:
     """Loss and action accuracy over the maps `idx` (cell-weighted), without gradients."""
     total_loss, cells, correct = 0.0, 0, 0
@@ -190,29 +209,71 @@ def train_vin(
     record: dict | None = None,
     log: Callable[[str], None] | None = None,
 ) -> tuple[VIN, dict]:
-    """Train a VIN on `maps`; returns the model (CPU, eval mode) and the training record.
+    """Train a VIN on `maps`; returns the model (CPU, eval mode) and the training record (see `train_model`)."""
+    config.validate()
+    torch.manual_seed(config.seed)
+    vin_config = VINConfig(k=config.k or default_k(maps.size), l_h=config.l_h, l_q=config.l_q)
+    model = VIN(vin_config)
+    if config.init:
+        from vinadv.planners.weights import load_vin
+
+        record = _start_from(model, load_vin(config.init, size=maps.size, k=vin_config.k), config.init, record)
+    cpu = resolve_device(config.device).type == "cpu"
+    record = {**(record or {}), "value_iteration": "compiled (vinadv.planners.fast_vi)" if cpu else "torch"}
+    return train_model(model, maps, config, vin_config.to_dict(), checkpoint, resume, progress, record, log)
+
+
+def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, dict]:
+    """Train a GPPN (`config.k` iterations, width `config.l_h`, kernel `config.kernel`) on `maps`; `options` and the
+    result as `train_model`'s. `config.init` names a GPPN weights file to start from."""
+    config.validate()
+    torch.manual_seed(config.seed)
+    gppn_config = GPPNConfig(k=config.k or default_k(maps.size), l_h=config.l_h, f=config.kernel)
+    model = GPPN(gppn_config)
+    if config.init:
+        from vinadv.planners.gppn import load_gppn
+
+        options["record"] = _start_from(model, load_gppn(config.init, size=maps.size), config.init,
+                                        options.get("record"))
+    return train_model(model, maps, config, gppn_config.to_dict(), **options)
+
+
+def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: dict | None) -> dict:
+    """Load `start`'s weights (read from `path`, `--init`) into `model`; the record gains their checksum."""
+    from vinadv.planners.weights import weights_checksum
+
+    if start.config != model.config:
+        raise InputError(f"--init {path}: its {type(start).__name__} ({start.config}) is not the one to train "
+                         f"({model.config})")
+    model.load_state_dict(start.state_dict())
+    return {**(record or {}), "init_sha256": weights_checksum(path)}
+
+
+def train_model(
+    model: torch.nn.Module,
+    maps: MapSet,
+    config: TrainConfig,
+    model_config: dict,
+    checkpoint: str | os.PathLike | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    record: dict | None = None,
+    log: Callable[[str], None] | None = None,
+) -> tuple[torch.nn.Module, dict]:
+    """Train `model` (a `VIN`, or any module with the planner contract, see `cell_logits`) on `maps`; returns it
+    (CPU, eval mode) and the training record.
 
     Args:
         maps: the training maps (their starts and expert paths are not needed: every cell is supervised).
-        config: hyper-parameters (`TrainConfig`).
+        config: hyper-parameters (`TrainConfig`); `config.planner` names the model in the record and checkpoint.
+        model_config: the model's hyper-parameters, for the record.
         checkpoint: file written after every epoch; with `resume`, training continues from it.
         record: extra entries for the record (command, data checksum...), kept as given.
         log: called with one line per epoch (None: silent).
     """
     config.validate()
     device = resolve_device(config.device)
-    torch.manual_seed(config.seed)
     size = maps.size
-    vin_config = VINConfig(k=config.k or default_k(size), l_h=config.l_h, l_q=config.l_q)
-    model = VIN(vin_config)
-    if config.init:
-        from vinadv.planners.weights import load_vin, weights_checksum
-
-        start = load_vin(config.init, size=size, k=vin_config.k)
-        if start.config != vin_config:
-            raise InputError(f"--init {config.init}: its VIN ({start.config}) is not the one to train ({vin_config})")
-        model.load_state_dict(start.state_dict())
-        record = {**(record or {}), "init_sha256": weights_checksum(config.init)}
     model = model.to(device)
     optimizer = torch.optim.RMSprop(model.parameters(), lr=config.lr, eps=1e-6)
     train_idx, val_idx = split_indices(len(maps), config.val_fraction, config.seed)
@@ -221,10 +282,11 @@ def train_vin(
     state = _State()
     rec = dict(record or {})
     rec.update(
-        format="vinadv.vin-training-record/1",
+        format=f"vinadv.{config.planner}-training-record/1",
+        planner=config.planner,
         seed=config.seed,
         train_config=config.to_dict(),
-        model=vin_config.to_dict(),
+        model=model_config,
         size=size,
         n_maps=len(maps),
         n_train=len(train_idx),
@@ -233,24 +295,25 @@ def train_vin(
         hardware=hardware_info(device),
         loss="-log sum_{a optimal} softmax(logits)_a, mean over free reachable non-goal cells",
         optimizer="RMSprop(eps=1e-6), cosine lr schedule per step, grad-norm clipping",
-        value_iteration="compiled (vinadv.planners.fast_vi)" if device.type == "cpu" else "torch",
     )
     if resume and checkpoint is not None and Path(checkpoint).exists():
         state = _load_checkpoint(checkpoint, model, optimizer, config, rec)
         if log:
-            log(f"resumed from {checkpoint} after epoch {state.epoch}")
+            log(f"resumed from {checkpoint} after epoch {state.epoch}, step {state.step}")
     bits = optimal_action_bits(maps)
     started = time.time() - state.wall_s
     stopped = None
+    last_save = time.time()
     for epoch in range(state.epoch, config.epochs):
         model.train()
         order = train_idx[np.random.default_rng([config.seed, epoch]).permutation(len(train_idx))]
-        batches = range(0, len(order), config.batch_size)
+        done = state.step - epoch * steps_per_epoch  # batches of this epoch done before a mid-epoch checkpoint
+        batches = range(done * config.batch_size, len(order), config.batch_size)
         if progress:
             from tqdm import tqdm
 
             batches = tqdm(batches, desc=f"epoch {epoch + 1}/{config.epochs}", unit="batch", leave=False)
-        loss_sum, cell_sum, correct_sum = 0.0, 0, 0
+        loss_sum, cell_sum, correct_sum = state.partial if done else (0.0, 0, 0)
         epoch_start = time.time()
         for i in batches:
             b = order[i : i + config.batch_size]
@@ -269,6 +332,11 @@ def train_vin(
             correct_sum += c
             if progress:
                 batches.set_postfix(loss=f"{loss_sum / max(cell_sum, 1):.4f}", lr=f"{lr:.2g}")
+            if checkpoint is not None and config.checkpoint_min and time.time() - last_save > 60 * config.checkpoint_min:
+                state.partial, state.wall_s = [loss_sum, cell_sum, correct_sum], time.time() - started
+                _save_checkpoint(checkpoint, model, optimizer, config, state, rec)
+                last_save = time.time()
+        state.partial = [0.0, 0, 0]
         val = evaluate_loss(model, maps, bits, val_idx, config.batch_size, device) if len(val_idx) else {}
         state.epoch = epoch + 1
         state.wall_s = time.time() - started
@@ -323,6 +391,7 @@ def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -
             "step": state.step,
             "wall_s": state.wall_s,
             "epochs": state.epochs,
+            "partial": state.partial,
         },
         fh,
     )
@@ -338,8 +407,10 @@ def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> 
     # Resuming under other settings would silently mix two trainings; only the epoch count may grow.
     saved = dict(ck.get("train_config", {}))
     now = config.to_dict()
-    for key in ("lr", "lr_final_fraction", "batch_size", "val_fraction", "seed", "k", "l_h", "l_q", "epochs"):
-        if saved.get(key) != now.get(key):
+    defaults = TrainConfig().to_dict()  # checkpoints older than a key hold its default
+    for key in ("planner", "lr", "lr_final_fraction", "batch_size", "val_fraction", "seed", "k", "l_h", "l_q",
+                "kernel", "epochs"):
+        if saved.get(key, defaults[key]) != now.get(key):
             raise InputError(f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {now.get(key)!r}; "
                              f"use the same options to resume, or remove the checkpoint")
     data_sha = rec.get("data", {}).get("sha256")
@@ -350,4 +421,5 @@ def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> 
         optimizer.load_state_dict(ck["optimizer"])
     except (RuntimeError, KeyError, ValueError) as exc:
         raise InputError(f"{path}: checkpoint does not match the model ({exc})") from None
-    return _State(epoch=int(ck["epoch"]), step=int(ck["step"]), wall_s=float(ck["wall_s"]), epochs=list(ck["epochs"]))
+    return _State(epoch=int(ck["epoch"]), step=int(ck["step"]), wall_s=float(ck["wall_s"]), epochs=list(ck["epochs"]),
+                  partial=list(ck.get("partial", [0.0, 0, 0])))

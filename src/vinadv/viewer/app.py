@@ -294,7 +294,8 @@ class _ViewerState:
         size = _int_param("size", default=DEFAULT_PAGE_SIZE)
         if not 1 <= size <= MAX_PAGE_SIZE:
             raise BadRequest(f"size: must be 1 to {MAX_PAGE_SIZE}, got {size}")
-        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"], harm=filters["harm"])
+        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"],
+                  harm=filters["harm"])
         rows = self.store.page_pairs(run_id, after=after, before=before, limit=size + 1, **kw)
         if before is not None:
             has_prev = len(rows) > size
@@ -316,7 +317,8 @@ class _ViewerState:
         }
 
     def neighbours(self, run_id: int, pair_index: int, filters: dict) -> dict:
-        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"], harm=filters["harm"])
+        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"],
+                  harm=filters["harm"])
         nxt = self.store.page_pairs(run_id, after=pair_index, limit=1, **kw)
         prv = self.store.page_pairs(run_id, before=pair_index, limit=1, **kw)
         return {"next": nxt[0]["pair_index"] if nxt else None, "prev": prv[0]["pair_index"] if prv else None}

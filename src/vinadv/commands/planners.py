@@ -1,0 +1,88 @@
+"""`vinadv planners` (the registry) and `vinadv gppn train` / `vinadv gppn eval`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+from vinadv.commands.vin import (
+    _command_line,
+    _set_threads,
+    add_eval_maps_arguments,
+    add_train_arguments,
+    emit_metrics,
+    eval_maps,
+    run_training,
+)
+
+#: GPPN defaults at 28x28, chosen by benchmarks/gppn_training.py on the 2-core CPU (README, "Planners"): a 5x5
+#: recurrent kernel reaches two cells per iteration, so 20 iterations cross a 28x28 map.
+GPPN_DEFAULTS = {"l_h": 32, "k": 20, "kernel": 5, "lr": 0.001}
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("planners", help="list the planners (--planner NAME) and how to bring your own")
+    p.add_argument("--size", type=int, default=28, help="map side whose shipped weights to look for (default 28)")
+    p.add_argument("--json", action="store_true", help="print the list as JSON")
+    p.set_defaults(func=cmd_planners)
+
+    gppn = subparsers.add_parser("gppn", help="train and evaluate the GPPN planner")
+    sub = gppn.add_subparsers(dest="gppn_command", metavar="ACTION")
+    sub.required = True
+    train = sub.add_parser("train", help="train a GPPN on a maps file (every free cell is supervised)")
+    add_train_arguments(train, lr=GPPN_DEFAULTS["lr"], k_help=f"iterations (default {GPPN_DEFAULTS['k']})")
+    train.add_argument("--l-h", type=int, default=GPPN_DEFAULTS["l_h"],
+                       help=f"hidden (LSTM) channels (default {GPPN_DEFAULTS['l_h']})")
+    train.add_argument("--kernel", type=int, default=GPPN_DEFAULTS["kernel"],
+                       help=f"odd kernel of the recurrent convolution (default {GPPN_DEFAULTS['kernel']})")
+    train.set_defaults(func=cmd_gppn_train, k=GPPN_DEFAULTS["k"])
+
+    ev = sub.add_parser("eval", help="action accuracy and rollout figures of a GPPN")
+    ev.add_argument("--weights", default=None, help="GPPN weights file (default: the shipped weights for the size)")
+    add_eval_maps_arguments(ev)
+    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
+    ev.add_argument("--quiet", action="store_true", help="no progress bar")
+    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
+    ev.set_defaults(func=cmd_gppn_eval)
+
+
+def cmd_planners(args: argparse.Namespace) -> int:
+    from vinadv.planners.registry import list_planners
+
+    planners = list_planners(args.size)
+    if args.json:
+        print(json.dumps({"planners": planners, "bring_your_own": "FILE.py:FACTORY or MODULE:FACTORY"}))
+        return 0
+    for p in planners:
+        weights = "" if p["weights"] is None else (f"  [weights {Path(p['weights']).name}"
+                                                   f"{'' if p['weights_available'] else ' not shipped'}]")
+        print(f"{p['name']:<9} {p['description']}{weights}")
+    print("your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
+          "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (README, 'Planners')")
+    return 0
+
+
+def cmd_gppn_train(args: argparse.Namespace) -> int:
+    from vinadv.commands.vin import train_config
+    from vinadv.planners.gppn import save_gppn
+    from vinadv.planners.training import train_gppn
+
+    config = train_config(args, planner="gppn", l_h=args.l_h, kernel=args.kernel)
+    return run_training(args, config, train_gppn, save_gppn)
+
+
+def cmd_gppn_eval(args: argparse.Namespace) -> int:
+    from vinadv.planners.evaluation import evaluate_planner
+    from vinadv.planners.registry import load_planner
+
+    _set_threads(args.threads)
+    maps, source = eval_maps(args)
+    planner = load_planner("gppn", maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
+    t0 = time.perf_counter()
+    metrics = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))
+    metrics = {"planner": planner.spec(), "weights": args.weights or "shipped", **source, **metrics,
+               "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
+    return emit_metrics(args, metrics)

@@ -1,0 +1,228 @@
+"""One interface for every planner: whole-map action logits, and paths by DESIGN.md's rollout.
+
+A whole-map policy planner answers `policy_logits(obstacles (B, N, N) bool, goals (B, 2)) -> (B, 8, N, N)` float
+logits in DESIGN.md's action order (N, S, E, W, NE, NW, SE, SW); the logits do not depend on the agent's cell, so
+one map per map serves all its rollouts. `Planner.plan_maps` turns them into paths with the compiled rollout of
+`vinadv.planners.rollout` (argmax, lowest index on ties), the same for every planner. A planner may plan faster its
+own way as long as the paths are the same: the VIN keeps its exact engine (`VINPlanner`).
+
+Every planner's logits pass `check_logits`: a planner that returns another shape, a non-float type or NaN is
+refused with a `PlannerError` (an `InputError`: the planner is the user's input) naming it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from abc import ABC, abstractmethod
+
+import numpy as np
+import torch
+from torch import nn
+
+from vinadv.errors import InputError
+from vinadv.grid.actions import N_ACTIONS
+from vinadv.planners.result import PlanResult, check_plan_inputs
+from vinadv.planners.rollout import rollout_logits
+
+#: maps per chunk of `plan_maps`: bounds the memory of the logits (B * 8 * N * N floats) and of the path buffers.
+DEFAULT_CHUNK = 1024
+
+
+class PlannerError(InputError):
+    """A planner that does not keep the interface (wrong shape, type, NaN), or that cannot be loaded."""
+
+
+def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
+    """`logits` as a float32/float64 NumPy array `(b, 8, n, n)` without NaN; else a `PlannerError` naming `name`."""
+    if isinstance(logits, torch.Tensor):
+        if not torch.is_floating_point(logits):
+            raise PlannerError(f"planner {name!r} returned {logits.dtype} logits; expected a float tensor")
+        logits = logits.detach().to("cpu", torch.float32).numpy()
+    elif isinstance(logits, np.ndarray):
+        if logits.dtype.kind != "f":
+            raise PlannerError(f"planner {name!r} returned {logits.dtype} logits; expected float")
+    else:
+        raise PlannerError(f"planner {name!r} returned {type(logits).__name__}; expected a (B, 8, N, N) float array")
+    if logits.shape != (b, N_ACTIONS, n, n):
+        raise PlannerError(f"planner {name!r} returned logits of shape {tuple(logits.shape)}; expected "
+                           f"(B, 8, N, N) = ({b}, {N_ACTIONS}, {n}, {n})")
+    if logits.dtype not in (np.float32, np.float64):
+        logits = logits.astype(np.float32)
+    if np.isnan(logits).any():
+        raise PlannerError(f"planner {name!r} returned NaN logits (on {int(np.isnan(logits).any(axis=(1, 2, 3)).sum())}"
+                           f" of {b} maps)")
+    return logits
+
+
+def state_checksum(module: nn.Module) -> str:
+    """SHA-256 (hex) of a module's state dict: names, dtypes, shapes and bytes, in name order."""
+    h = hashlib.sha256()
+    for key, value in sorted(module.state_dict().items()):
+        t = value.detach().to("cpu").contiguous()
+        h.update(f"{key}:{t.dtype}:{tuple(t.shape)};".encode())
+        h.update(t.numpy().tobytes() if t.dtype != torch.bfloat16 else t.float().numpy().tobytes())
+    return h.hexdigest()
+
+
+class Planner(ABC):
+    """A whole-map policy planner for N x N maps.
+
+    Attributes:
+        name: the registry name or the user's spec (`vin`, `gppn`, `optimal`, `file.py:factory`), used in errors.
+        size: N, the map side the planner was made for.
+    """
+
+    name: str
+    size: int
+
+    @abstractmethod
+    def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray | torch.Tensor:
+        """`(B, 8, N, N)` float action logits of every cell, for obstacles `(B, N, N)` bool and goals `(B, 2)`."""
+
+    @property
+    def checksum(self) -> str | None:
+        """SHA-256 identifying the planner's weights (None for a planner without weights)."""
+        return None
+
+    @property
+    def config(self) -> dict:
+        """Hyper-parameters worth recording (JSON values)."""
+        return {}
+
+    def spec(self) -> dict:
+        """What a run records about the planner: name, size, config and weights checksum."""
+        return {"name": self.name, "size": int(self.size), "config": self.config, "weights_sha256": self.checksum}
+
+    def logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """`policy_logits`, checked (`check_logits`): `(B, 8, N, N)` float32/float64 NumPy."""
+        obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+        goals = np.ascontiguousarray(goals, dtype=np.int64)
+        self._check_size(obstacles)
+        raw = self.policy_logits(obstacles, goals)
+        return check_logits(self.name, raw, obstacles.shape[0], obstacles.shape[1])
+
+    def plan_maps(self, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True,
+                  chunk_size: int = DEFAULT_CHUNK, progress: bool = False) -> PlanResult:
+        """Paths from `starts (B, S, 2)`: path `b * S + s` from start `s` of map `b`, `chunk_size` maps at a time."""
+        obstacles, goals, starts = _check_multi(obstacles, goals, starts)
+        self._check_size(obstacles)
+        chunk_size = max(1, int(chunk_size))
+        chunks = range(0, len(obstacles), chunk_size)
+        if progress:
+            from tqdm import tqdm
+
+            chunks = tqdm(chunks, unit="chunk", desc=f"planning ({self.name})")
+        parts = []
+        for i in chunks:
+            sl = slice(i, i + chunk_size)
+            parts.append(rollout_logits(self.logits(obstacles[sl], goals[sl]), obstacles[sl], goals[sl], starts[sl],
+                                        corner_cutting))
+        return PlanResult.concat(parts)
+
+    def plan_batch(self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray,
+                   corner_cutting: bool = True) -> PlanResult:
+        """One path per map: `starts (B, 2)`; same paths as `plan_maps` with one start per map."""
+        obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
+        return self.plan_maps(obstacles, goals, starts[:, None, :], corner_cutting)
+
+    def _check_size(self, obstacles: np.ndarray) -> None:
+        if obstacles.ndim == 3 and obstacles.shape[1] != self.size:
+            n = obstacles.shape[1]
+            raise PlannerError(f"planner {self.name!r} is for {self.size}x{self.size} maps, the maps are {n}x{n}")
+
+
+def _check_multi(obstacles, goals, starts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`check_plan_inputs` for `starts (B, S, 2)`: normalised `(obstacles, goals, starts)`."""
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+    obstacles, _, goals = check_plan_inputs(obstacles, np.zeros((len(obstacles), 2)), goals)
+    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    b, n = obstacles.shape[0], obstacles.shape[1]
+    if starts.ndim != 3 or starts.shape[0] != b or starts.shape[2] != 2:
+        raise InputError(f"starts has shape {starts.shape}, expected ({b}, S, 2)")
+    if starts.size and (starts.min() < 0 or starts.max() >= n):
+        raise InputError(f"starts has a cell outside the {n}x{n} grid")
+    return obstacles, goals, starts
+
+
+class TorchPlanner(Planner):
+    """A planner around a `torch.nn.Module` whose `forward(obstacles, goals)` takes obstacles as 0/1 float32
+    `(B, N, N)` and goals as int64 `(B, 2)` and returns `(B, 8, N, N)` logits (the bring-your-own contract).
+
+    The module runs in eval mode without gradients, `batch_size` maps at a time, on `device`; `module` stays
+    available for gradient-based attacks.
+    """
+
+    def __init__(self, module: nn.Module, name: str, size: int, checksum: str | None = None,
+                 config: dict | None = None, batch_size: int = 64, device: str | torch.device = "cpu"):
+        if not isinstance(module, nn.Module):
+            raise PlannerError(f"planner {name!r}: expected a torch.nn.Module, got {type(module).__name__}")
+        self.module, self.name, self.size = module, name, int(size)
+        self._checksum = checksum if checksum is not None else state_checksum(module)
+        self._config = dict(config or {})
+        self.batch_size = max(1, int(batch_size))
+        self.device = torch.device(device)
+
+    @property
+    def checksum(self) -> str | None:
+        return self._checksum
+
+    @property
+    def config(self) -> dict:
+        return self._config
+
+    def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        self.module.eval()
+        b, n = obstacles.shape[0], obstacles.shape[1]
+        out = np.empty((b, N_ACTIONS, n, n), dtype=np.float32)
+        with torch.no_grad():
+            for i in range(0, b, self.batch_size):
+                sl = slice(i, i + self.batch_size)
+                obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
+                g = torch.from_numpy(goals[sl].astype(np.int64)).to(self.device)
+                try:
+                    raw = self.module(obs, g)
+                except Exception as exc:  # a user's module: say which planner failed, in one line
+                    raise PlannerError(f"planner {self.name!r}: forward failed: {type(exc).__name__}: {exc}") from None
+                out[sl] = check_logits(self.name, raw, obs.shape[0], n)
+        return out
+
+
+class VINPolicy(nn.Module):
+    """A `VIN` behind the bring-your-own contract: `forward(obstacles (B,N,N) float, goals (B,2) int64)` ->
+    `(B, 8, N, N)` logits (`VIN.action_logits` with the channels first)."""
+
+    def __init__(self, vin):
+        super().__init__()
+        self.vin = vin
+
+    def forward(self, obstacles: torch.Tensor, goals: torch.Tensor) -> torch.Tensor:
+        from vinadv.planners.vin import GOAL_VALUE
+
+        b = obstacles.shape[0]
+        goal_image = torch.zeros_like(obstacles)
+        goal_image[torch.arange(b, device=goals.device), goals[:, 0], goals[:, 1]] = GOAL_VALUE
+        x = torch.stack([obstacles, goal_image], dim=1)
+        return self.vin.action_logits(x).permute(0, 3, 1, 2)
+
+
+class VINPlanner(TorchPlanner):
+    """The VIN: logits from `VIN.action_logits`; paths from the exact engine (`vinadv.planners.engine`, the same
+    paths as re-running the network at every step), not the generic rollout."""
+
+    def __init__(self, vin, size: int, checksum: str | None = None):
+        from vinadv.planners.weights import weights_checksum
+
+        path = getattr(vin, "weights_path", None)
+        if checksum is None and path is not None:
+            checksum = weights_checksum(path)
+        super().__init__(VINPolicy(vin), "vin", size, checksum=checksum, config=vin.config.to_dict())
+        self.vin = vin
+
+    def plan_maps(self, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True,
+                  chunk_size: int | None = None, progress: bool = False) -> PlanResult:
+        from vinadv.planners import engine
+
+        obstacles, goals, starts = _check_multi(obstacles, goals, starts)
+        self._check_size(obstacles)
+        return engine.plan_maps(obstacles, goals, starts, self.vin, corner_cutting,
+                                chunk_size or engine.DEFAULT_CHUNK, progress)

@@ -1,0 +1,58 @@
+"""The `optimal` planner: exact shortest paths, the control every learned planner is compared with.
+
+Its logits are minus the excess cost of each move over the best one: `-(cost(a) + d(next) - d(cell))`, with `d` the
+exact cost-to-go (Dijkstra, `vinadv.grid.shortest_paths`). Every optimal action gets exactly 0 (the optimal set is
+decided with the tolerance of `optimal_actions`, so rounding never splits a tie) and every other legal move a
+negative logit, so the rollout's argmax (lowest index on ties) takes the lowest-index optimal action: DESIGN.md's
+tie-break, the paths of `expert_paths`. An illegal move gets `ILLEGAL`; at cells without an optimal action (the
+goal, obstacles, cells cut off from the goal) every legal move gets 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vinadv.errors import InputError
+from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS, N_ACTIONS
+from vinadv.grid.shortest_paths import optimal_actions, shortest_distances, valid_moves
+from vinadv.planners.interface import DEFAULT_CHUNK, Planner
+
+#: logit of an illegal move: below the excess cost of any legal move (at most about 2 * sqrt(2) * N * N).
+ILLEGAL = -1.0e9
+
+
+class OptimalPlanner(Planner):
+    """Exact shortest paths with DESIGN.md's tie-break, as a whole-map policy planner (no weights)."""
+
+    def __init__(self, size: int, corner_cutting: bool = True):
+        self.name, self.size, self.corner_cutting = "optimal", int(size), bool(corner_cutting)
+
+    @property
+    def config(self) -> dict:
+        return {"corner_cutting": self.corner_cutting}
+
+    def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """`(B, 8, N, N)` float64: 0 for optimal moves, minus the excess cost for other legal ones, ILLEGAL else."""
+        dist, _ = shortest_distances(obstacles, goals, self.corner_cutting)
+        legal = valid_moves(obstacles, self.corner_cutting)
+        optimal = optimal_actions(dist, obstacles, self.corner_cutting)
+        b, n = obstacles.shape[0], obstacles.shape[1]
+        padded = np.full((b, n + 2, n + 2), np.inf)
+        padded[:, 1:-1, 1:-1] = dist
+        out = np.empty((b, N_ACTIONS, n, n))
+        has_optimal = optimal.any(axis=-1)
+        for a, (dr, dc) in enumerate(ACTION_DELTAS):
+            via = padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + n] + ACTION_COSTS[a]
+            with np.errstate(invalid="ignore"):  # inf - inf where both cells are cut off from the goal
+                excess = np.where(has_optimal, via - dist, 0.0)
+            # a legal move to a cell cut off from the goal, from a cell that is not: excess inf -> a finite floor
+            excess = np.minimum(np.nan_to_num(excess, nan=0.0, posinf=-ILLEGAL / 2), -ILLEGAL / 2)
+            out[:, a] = np.where(optimal[..., a], 0.0, np.where(legal[..., a], -excess, ILLEGAL))
+        return out
+
+    def plan_maps(self, obstacles, goals, starts, corner_cutting: bool = True, chunk_size: int | None = None,
+                  progress: bool = False):
+        if bool(corner_cutting) != self.corner_cutting:  # the logits follow the planner's own move rule
+            raise InputError(f"planner 'optimal' was made with corner_cutting={self.corner_cutting}, "
+                             f"the maps use corner_cutting={bool(corner_cutting)}")
+        return super().plan_maps(obstacles, goals, starts, corner_cutting, chunk_size or DEFAULT_CHUNK, progress)

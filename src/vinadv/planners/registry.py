@@ -1,0 +1,148 @@
+"""The planners vinadv knows by name, and bring-your-own planners by spec.
+
+`load_planner(spec, size, ...)` gives a `Planner` for:
+- `vin` (default): the VIN and its exact engine; weights from `weights=` or the shipped `vin{N}.pt`.
+- `gppn`: the Gated Path Planning Network; weights from `weights=` or the shipped `gppn{N}.pt`.
+- `optimal`: exact shortest paths (the control: what a perfect planner does).
+- `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
+  `forward(obstacles, goals)` takes obstacles as 0/1 float32 `(B, N, N)` and goals as int64 `(B, 2)` and returns
+  `(B, 8, N, N)` logits in DESIGN.md's action order. Its source file and weights are checksummed for run records.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
+
+
+@dataclass(frozen=True)
+class PlannerInfo:
+    """One registered planner: its name and what it is."""
+
+    name: str
+    description: str
+
+    def to_dict(self, size: int = 28) -> dict:
+        """Name, description, the shipped weights for `size x size` maps (None: no weights) and whether present."""
+        path = _default_weights(self.name, size)
+        return {**asdict(self), "weights": None if path is None else str(path),
+                "weights_available": None if path is None else path.exists()}
+
+
+REGISTRY = {
+    "vin": PlannerInfo("vin", "Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine "
+                       "(default)"),
+    "gppn": PlannerInfo("gppn", "Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, 8 actions"),
+    "optimal": PlannerInfo("optimal", "exact shortest paths (Dijkstra, lowest action index on ties): the control"),
+}
+DEFAULT_PLANNER = "vin"
+
+
+def _default_weights(name: str, size: int) -> Path | None:
+    if name == "vin":
+        from vinadv.planners.weights import default_weights_path
+
+        return default_weights_path(size)
+    if name == "gppn":
+        from vinadv.planners.gppn import default_gppn_path
+
+        return default_gppn_path(size)
+    return None
+
+
+def list_planners(size: int = 28) -> list[dict]:
+    """The registered planners as JSON-ready dicts (name, description, default weights for `size`, present?)."""
+    return [info.to_dict(size) for info in REGISTRY.values()]
+
+
+def load_planner(spec: str | None, size: int, weights: str | None = None, corner_cutting: bool = True,
+                 device: str = "cpu") -> Planner:
+    """The planner named or specified by `spec` (None: `vin`) for `size x size` maps.
+
+    Args:
+        spec: a registered name or `file.py:factory` / `module:factory`.
+        weights: a weights file for `vin` or `gppn` (default: the shipped ones); refused for the others.
+        corner_cutting: the move rule of the maps (the `optimal` planner's logits follow it).
+        device: torch device of a torch planner's forward.
+
+    Raises `PlannerError` (an `InputError`) naming the spec for anything that cannot be loaded.
+    """
+    spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
+    if weights is not None and spec not in ("vin", "gppn"):
+        raise PlannerError(f"planner {spec!r} takes no weights file (weights={weights!r})")
+    if spec == "vin":
+        from vinadv.planners.weights import load_vin
+
+        return VINPlanner(load_vin(weights, size=size), size=size)
+    if spec == "gppn":
+        from vinadv.planners.gppn import load_gppn
+        from vinadv.planners.weights import weights_checksum
+
+        model = load_gppn(weights, size=size)
+        trained = model.record.get("size")
+        if trained is not None and trained != size:
+            raise PlannerError(f"{model.weights_path}: GPPN weights trained on {trained}x{trained} maps, "
+                               f"the maps are {size}x{size}")
+        return TorchPlanner(model, "gppn", size, checksum=weights_checksum(model.weights_path),
+                            config=model.config.to_dict(), device=device)
+    if spec == "optimal":
+        from vinadv.planners.optimal import OptimalPlanner
+
+        return OptimalPlanner(size, corner_cutting)
+    if ":" in spec:
+        return load_custom(spec, size, device)
+    raise PlannerError(f"unknown planner {spec!r}: use one of {', '.join(REGISTRY)}, or FILE.py:FACTORY / "
+                       f"MODULE:FACTORY for your own")
+
+
+def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
+    """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring)."""
+    from vinadv.planners.weights import weights_checksum
+
+    source, _, factory_name = spec.rpartition(":")
+    if not source or not factory_name.isidentifier():
+        raise PlannerError(f"planner {spec!r}: expected FILE.py:FACTORY or MODULE:FACTORY")
+    source_sha = None
+    if source.endswith(".py") or "/" in source or "\\" in source:
+        path = Path(source)
+        if not path.is_file():
+            raise PlannerError(f"planner {spec!r}: no such file {source}")
+        module_name = f"vinadv_user_planner_{abs(hash(str(path.resolve())))}"
+        module_spec = importlib.util.spec_from_file_location(module_name, path)
+        module = importlib.util.module_from_spec(module_spec)
+        sys.modules[module_name] = module  # dataclasses and pickling look the module up by name
+        try:
+            module_spec.loader.exec_module(module)
+        except Exception as exc:
+            sys.modules.pop(module_name, None)
+            raise PlannerError(f"planner {spec!r}: {source} failed to import: {type(exc).__name__}: {exc}") from None
+        source_sha = weights_checksum(path)
+    else:
+        try:
+            module = importlib.import_module(source)
+        except Exception as exc:
+            raise PlannerError(f"planner {spec!r}: cannot import module {source!r}: {type(exc).__name__}: {exc}") \
+                from None
+        if getattr(module, "__file__", None):
+            source_sha = weights_checksum(module.__file__)
+    factory = getattr(module, factory_name, None)
+    if not callable(factory):
+        raise PlannerError(f"planner {spec!r}: {source} has no callable {factory_name!r}")
+    try:
+        net = factory(int(size))
+    except Exception as exc:
+        raise PlannerError(f"planner {spec!r}: {factory_name}({size}) failed: {type(exc).__name__}: {exc}") from None
+    import torch
+
+    if not isinstance(net, torch.nn.Module):
+        raise PlannerError(f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, "
+                           f"expected a torch.nn.Module")
+    net = net.to(device)
+    return TorchPlanner(net, spec, size, checksum=state_checksum(net),
+                        config={"source": source, "factory": factory_name, "source_sha256": source_sha},
+                        device=device)

@@ -1,0 +1,111 @@
+"""DESIGN.md's rollout from whole-map action logits, for every planner alike, compiled and batched.
+
+A whole-map policy planner gives one logits map `(8, N, N)` per map (it does not depend on the agent's cell); the
+rollouts of all starts of all maps then follow argmax actions (lowest index on ties) in one Numba kernel, with the
+rules and termination codes of `vinadv.planners.reference.rollout` (the engine's and the reference's rule):
+at each cell the goal ends the path ('goal'); a path that already made its step limit 2L of moves ends as
+'step_limit'; otherwise the move is taken: off the grid, into an obstacle, or (without corner cutting) diagonally
+past an obstacle ends it as 'collision', onto a visited cell as 'loop'.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.shortest_paths import shortest_distances
+from vinadv.planners.result import COLLISION, GOAL, LOOP, STEP_LIMIT, PlanResult
+
+
+def multi_start_limits(obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray,
+                       corner_cutting: bool) -> np.ndarray:
+    """Step limits `(B, S)` int64 of rollouts from `starts (B, S, 2)`: 2 L, L the optimal move count (N * N where
+    the goal cannot be reached), as `vinadv.planners.result.step_limits` for one start."""
+    b, n = obstacles.shape[0], obstacles.shape[1]
+    if b == 0:
+        return np.zeros(starts.shape[:2], dtype=np.int64)
+    _, moves = shortest_distances(obstacles, goals, corner_cutting)
+    lengths = moves[np.arange(b)[:, None], starts[..., 0], starts[..., 1]].astype(np.int64)
+    return 2 * np.where(lengths < 0, n * n, lengths)
+
+
+@numba.njit(cache=True, nogil=True)
+def _rollout_kernel(logits, obstacles, goals, starts, limits, corner_cutting, deltas, cells, lengths, terms):
+    """logits (B, A, N, N) float; starts (B, S, 2); limits (B, S). Rollout b * S + s into cells[b * S + s]
+    (`(N * N, 2)` int16: a rollout never visits a cell twice), its cell count into lengths, its code into terms."""
+    n_maps, n_act, n = logits.shape[0], logits.shape[1], logits.shape[2]
+    n_starts = starts.shape[1]
+    stamp = np.zeros((n, n), dtype=np.int64)  # t + 1 on the cells rollout t has visited
+    for b in range(n_maps):
+        gr, gc = goals[b, 0], goals[b, 1]
+        for s in range(n_starts):
+            t = b * n_starts + s
+            r, c = starts[b, s, 0], starts[b, s, 1]
+            cells[t, 0, 0] = r
+            cells[t, 0, 1] = c
+            length = 1
+            stamp[r, c] = t + 1
+            limit = limits[b, s]
+            while True:
+                if r == gr and c == gc:
+                    term = GOAL
+                    break
+                if length - 1 >= limit:
+                    term = STEP_LIMIT
+                    break
+                a = 0
+                best = logits[b, 0, r, c]
+                for k in range(1, n_act):  # strict >: the lowest index wins a tie
+                    if logits[b, k, r, c] > best:
+                        best = logits[b, k, r, c]
+                        a = k
+                dr, dc = deltas[a, 0], deltas[a, 1]
+                nr, nc = r + dr, c + dc
+                if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[b, nr, nc]:
+                    term = COLLISION
+                    break
+                if not corner_cutting and dr != 0 and dc != 0 and (obstacles[b, nr, c] or obstacles[b, r, nc]):
+                    term = COLLISION
+                    break
+                if stamp[nr, nc] == t + 1:
+                    term = LOOP
+                    break
+                r, c = nr, nc
+                stamp[r, c] = t + 1
+                cells[t, length, 0] = r
+                cells[t, length, 1] = c
+                length += 1
+            lengths[t] = length
+            terms[t] = term
+
+
+def rollout_logits(logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray,
+                   corner_cutting: bool = True, limits: np.ndarray | None = None) -> PlanResult:
+    """Paths from `starts (B, S, 2)` following the argmax of `logits (B, 8, N, N)` (one map per map).
+
+    Args:
+        logits: float32/float64, action order of DESIGN.md, finite or -inf (checked by the caller: NaN argmax is
+            undefined). obstacles: `(B, N, N)` bool. goals: `(B, 2)`. starts: `(B, S, 2)`, inside the grid.
+        limits: step limits `(B, S)`; default `multi_start_limits` (2L).
+
+    Returns:
+        `PlanResult`, path `b * S + s` from start `s` of map `b`.
+    """
+    logits = np.ascontiguousarray(logits)
+    if logits.dtype not in (np.float32, np.float64):
+        logits = logits.astype(np.float32)
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    if limits is None:
+        limits = multi_start_limits(obstacles, goals, starts, corner_cutting)
+    limits = np.ascontiguousarray(limits, dtype=np.int64)
+    b, s, n = starts.shape[0], starts.shape[1], obstacles.shape[1]
+    cells = np.empty((b * s, n * n, 2), dtype=np.int16)  # np.empty: untouched pages cost nothing
+    lengths = np.empty(b * s, dtype=np.int64)
+    terms = np.empty(b * s, dtype=np.int8)
+    if b * s:
+        _rollout_kernel(logits, obstacles, goals, starts, limits, bool(corner_cutting), ACTION_DELTAS, cells,
+                        lengths, terms)
+    return PlanResult.from_buffers(cells, lengths, terms)

@@ -1,0 +1,94 @@
+"""GPPN: the forward against a plain implementation of the published equations, the weights file, the keys."""
+
+import numpy as np
+import pytest
+import torch
+
+from vinadv.errors import InputError
+from vinadv.grid import generate_maps
+from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn, save_gppn
+
+
+def plain_gppn(model: GPPN, free: torch.Tensor, goal_map: torch.Tensor) -> torch.Tensor:
+    """Lee et al. (2018) written out: conv layers on (B, C, N, N) maps, an LSTM cell applied at every cell with
+    its own gates spelled out (i, f, g, o in PyTorch's order), k - 1 steps, a 1x1 policy conv."""
+    sd = dict(model.named_parameters())  # live parameters: gradients reach them
+    f = model.config.f
+    x = torch.stack([free, goal_map], dim=1)
+    hid = torch.nn.functional.conv2d(x, sd["hid.weight"], sd["hid.bias"], padding=1)
+    h = torch.nn.functional.conv2d(hid, sd["h0.weight"], sd["h0.bias"], padding=1)
+    c = torch.nn.functional.conv2d(hid, sd["c0.weight"], sd["c0.bias"], padding=1)
+    w_ih, w_hh = sd["lstm.weight_ih"], sd["lstm.weight_hh"]  # (4 l_h, 1), (4 l_h, l_h)
+    b_ih, b_hh = sd["lstm.bias_ih"], sd["lstm.bias_hh"]
+    l_h = h.shape[1]
+    for _ in range(model.config.k - 1):
+        inp = torch.nn.functional.conv2d(h, sd["conv.weight"], sd["conv.bias"], padding=f // 2)  # (B, 1, N, N)
+        # gates[b, :, i, j] = W_ih inp[b, :, i, j] + b_ih + W_hh h[b, :, i, j] + b_hh
+        gates = (torch.einsum("gc,bcij->bgij", w_ih, inp) + torch.einsum("gc,bcij->bgij", w_hh, h)
+                 + (b_ih + b_hh)[None, :, None, None])
+        i_g, f_g, g_g, o_g = (gates[:, q * l_h : (q + 1) * l_h] for q in range(4))
+        c = torch.sigmoid(f_g) * c + torch.sigmoid(i_g) * torch.tanh(g_g)
+        h = torch.sigmoid(o_g) * torch.tanh(c)
+    return torch.nn.functional.conv2d(h, sd["policy.weight"])
+
+
+@pytest.mark.parametrize("k,l_h,f", [(5, 8, 3), (8, 6, 5), (1, 4, 1)])
+def test_forward_matches_the_published_equations(k, l_h, f):
+    torch.manual_seed(k)
+    model = GPPN(GPPNConfig(k=k, l_h=l_h, f=f)).double()
+    maps = generate_maps(6, 12, seed=1, n_starts=1)
+    obstacles = torch.from_numpy(maps.obstacles.astype(np.float64))
+    goals = torch.from_numpy(maps.goals)
+    goal_map = torch.zeros_like(obstacles)
+    for b, (r, c) in enumerate(maps.goals):
+        goal_map[b, r, c] = 1.0
+    with torch.no_grad():
+        got = model(obstacles, goals)
+        want = plain_gppn(model, 1.0 - obstacles, goal_map)
+    assert got.shape == (6, 8, 12, 12)
+    torch.testing.assert_close(got, want, rtol=1e-10, atol=1e-10)
+
+
+def test_gradients_match_the_published_equations():
+    torch.manual_seed(0)
+    model = GPPN(GPPNConfig(k=6, l_h=5, f=3)).double()
+    maps = generate_maps(3, 10, seed=2, n_starts=1)
+    obstacles = torch.from_numpy(maps.obstacles.astype(np.float64))
+    goal_map = torch.zeros_like(obstacles)
+    goal_map[np.arange(3), maps.goals[:, 0], maps.goals[:, 1]] = 1.0
+    weights = torch.randn(3, 8, 10, 10, dtype=torch.float64)
+    (model(obstacles, torch.from_numpy(maps.goals)) * weights).sum().backward()
+    got = {k: p.grad.clone() for k, p in model.named_parameters()}
+    model.zero_grad()
+    (plain_gppn(model, 1.0 - obstacles, goal_map) * weights).sum().backward()
+    for k, p in model.named_parameters():
+        torch.testing.assert_close(got[k], p.grad, rtol=1e-9, atol=1e-10, msg=k)
+
+
+def test_state_dict_keys_are_those_of_the_public_code():
+    keys = set(GPPN(GPPNConfig(l_h=4)).state_dict())
+    assert keys == {"hid.weight", "hid.bias", "h0.weight", "h0.bias", "c0.weight", "c0.bias", "conv.weight",
+                    "conv.bias", "lstm.weight_ih", "lstm.weight_hh", "lstm.bias_ih", "lstm.bias_hh",
+                    "policy.weight"}
+
+
+def test_save_and_load_round_trip(tmp_path):
+    model = GPPN(GPPNConfig(k=4, l_h=6, f=5))
+    save_gppn(model, tmp_path / "g.pt", {"note": "x"})
+    back = load_gppn(tmp_path / "g.pt")
+    assert back.config == model.config and back.record == {"note": "x"}
+    for k, v in model.state_dict().items():
+        torch.testing.assert_close(back.state_dict()[k], v)
+
+
+def test_bad_files_are_refused(tmp_path):
+    with pytest.raises(InputError, match="no such weights file"):
+        load_gppn(tmp_path / "missing.pt")
+    (tmp_path / "junk.pt").write_bytes(b"not torch")
+    with pytest.raises(InputError, match="junk.pt: not a readable"):
+        load_gppn(tmp_path / "junk.pt")
+    torch.save({"h.weight": torch.zeros(1)}, tmp_path / "vin.pt")
+    with pytest.raises(InputError, match="not a GPPN weights file"):
+        load_gppn(tmp_path / "vin.pt")
+    with pytest.raises(InputError, match="kernel f must be odd"):
+        GPPN(GPPNConfig(f=4))

@@ -1,0 +1,93 @@
+"""GPPN training through the generic trainer: it learns, resumes, refuses another planner's checkpoint; the CLI."""
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from vinadv.cli import main
+from vinadv.errors import InputError
+from vinadv.grid import generate_maps
+from vinadv.planners.gppn import load_gppn
+from vinadv.planners.training import TrainConfig, evaluate_loss, optimal_action_bits, split_indices, train_gppn
+
+
+def test_a_short_training_lowers_the_loss_and_resumes(tmp_path):
+    torch.set_num_threads(1)
+    maps = generate_maps(48, 10, seed=3, n_starts=1)
+    config = TrainConfig(planner="gppn", epochs=3, lr=0.01, batch_size=8, k=8, l_h=8, kernel=3, seed=1)
+    ck = tmp_path / "g.ckpt"
+    model, record = train_gppn(maps, config, checkpoint=ck, progress=False)
+    losses = [e["train_loss"] for e in record["epochs"]]
+    assert losses[-1] < losses[0]
+    assert record["format"] == "vinadv.gppn-training-record/1" and record["model"]["f"] == 3
+    # resuming a finished checkpoint with more epochs continues from epoch 3
+    more = TrainConfig(**{**config.to_dict(), "epochs": 4})
+    with pytest.raises(InputError, match="epochs=3"):  # epochs is part of the schedule: refused, as for the VIN
+        train_gppn(maps, more, checkpoint=ck, resume=True, progress=False)
+    again, rec2 = train_gppn(maps, config, checkpoint=ck, resume=True, progress=False)
+    assert rec2["epochs_done"] == 3 and rec2["epochs"] == record["epochs"]
+    for k, v in model.state_dict().items():
+        torch.testing.assert_close(again.state_dict()[k], v)
+    # a VIN training may not resume a GPPN checkpoint
+    from vinadv.planners.training import train_vin
+
+    with pytest.raises(InputError, match="planner='gppn', now 'vin'"):
+        train_vin(maps, TrainConfig(**{**config.to_dict(), "planner": "vin"}), checkpoint=ck, resume=True,
+                  progress=False)
+    bits = optimal_action_bits(maps)
+    _, val = split_indices(len(maps), config.val_fraction, config.seed)
+    assert evaluate_loss(model, maps, bits, val, 8, torch.device("cpu"))["cells"] > 0
+
+
+def test_cli_train_eval_plan(tmp_path, capsys):
+    data, weights = tmp_path / "train.npz", tmp_path / "g.pt"
+    assert main(["maps", "generate", "--n", "24", "--size", "10", "--seed", "4", "--out", str(data), "--quiet"]) == 0
+    assert main(["gppn", "train", "--data", str(data), "--out", str(weights), "--epochs", "2", "--batch-size", "8",
+                 "--k", "6", "--l-h", "6", "--kernel", "3", "--threads", "1", "--quiet"]) == 0
+    record = json.loads((tmp_path / "g.json").read_text())
+    assert record["planner"] == "gppn" and record["epochs_done"] == 2 and record["data"]["maps"] == 24
+    model = load_gppn(weights)
+    assert model.config.k == 6 and model.config.l_h == 6 and model.record["planner"] == "gppn"
+    assert main(["gppn", "eval", "--weights", str(weights), "--n", "5", "--size", "10", "--starts", "2",
+                 "--json"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert metrics["rollouts"] == 10 and 0 <= metrics["success_rate"] <= 1
+    assert metrics["planner"]["name"] == "gppn" and len(metrics["planner"]["weights_sha256"]) == 64
+    assert main(["plan", "--maps", str(data), "--out", str(tmp_path / "p.npz"), "--planner", "gppn", "--weights",
+                 str(weights), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["paths"] == 24 * 7
+    # another size than the weights': a clear error, exit 2
+    assert main(["gppn", "eval", "--weights", str(weights), "--n", "2", "--size", "12", "--quiet"]) == 2
+    assert "trained on 10x10 maps" in capsys.readouterr().err
+    assert np.isfinite(metrics["action_accuracy"])
+
+
+def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatch):
+    import vinadv.planners.training as training
+
+    torch.set_num_threads(1)
+    maps = generate_maps(40, 8, seed=6, n_starts=1)
+    config = TrainConfig(planner="gppn", epochs=2, lr=0.01, batch_size=8, k=4, l_h=4, kernel=3, seed=2,
+                         checkpoint_min=1e-9)  # a checkpoint after every batch
+    whole, whole_rec = train_gppn(maps, config, checkpoint=tmp_path / "a.ckpt", progress=False)
+    real, calls = training.batch_loss, []
+
+    def dies_in_epoch_two(*args):
+        calls.append(1)
+        if len(calls) == 9:  # epoch 2, after its first two batches (5 per epoch, then one validation call)
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(training, "batch_loss", dies_in_epoch_two)
+    with pytest.raises(KeyboardInterrupt):
+        train_gppn(maps, config, checkpoint=tmp_path / "b.ckpt", progress=False)
+    monkeypatch.setattr(training, "batch_loss", real)
+    ck = torch.load(tmp_path / "b.ckpt", weights_only=True)
+    assert ck["epoch"] == 1 and ck["step"] == 7
+    resumed, rec = train_gppn(maps, config, checkpoint=tmp_path / "b.ckpt", resume=True, progress=False)
+    for k, v in whole.state_dict().items():
+        torch.testing.assert_close(resumed.state_dict()[k], v, rtol=0, atol=0)
+    assert rec["steps"] == whole_rec["steps"] == 10
+    assert rec["epochs"][1]["train_loss"] == pytest.approx(whole_rec["epochs"][1]["train_loss"], rel=1e-6)

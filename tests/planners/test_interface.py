@@ -1,0 +1,180 @@
+"""The planner interface: the generic rollout against the per-step reference rule and the VIN engine, every
+registered planner batched vs one by one, and planners that break the contract refused by name."""
+
+import numpy as np
+import pytest
+import torch
+from torch import nn
+
+from vinadv.cli import main
+from vinadv.errors import InputError
+from vinadv.grid import generate_maps
+from vinadv.planners.engine import plan_maps as engine_plan_maps
+from vinadv.planners.gppn import GPPN, GPPNConfig
+from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, check_logits
+from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.reference import rollout
+from vinadv.planners.result import step_limits
+from vinadv.planners.rollout import rollout_logits
+from vinadv.planners.testing import planning_vin
+from vinadv.planners.vin import make_input
+
+
+def assert_same(a, b):
+    assert a.paths == b.paths
+    np.testing.assert_array_equal(a.termination, b.termination)
+    np.testing.assert_array_equal(a.reached, b.reached)
+
+
+@pytest.mark.parametrize("corner_cutting", [True, False])
+def test_rollout_follows_the_reference_rule_on_arbitrary_logits(corner_cutting):
+    # random logits: every ending occurs; the oracle is the reference planner's per-step Python rule
+    maps = generate_maps(60, 12, seed=7, n_starts=3, corner_cutting=corner_cutting)
+    rng = np.random.default_rng(0)
+    logits = rng.normal(size=(60, 8, 12, 12)).astype(np.float32)
+    logits[:20] = np.round(logits[:20])  # many exact ties: the lowest index must win
+    got = rollout_logits(logits, maps.obstacles, maps.goals, maps.starts, corner_cutting)
+    seen = set()
+    for b in range(60):
+        for s in range(3):
+            limit = step_limits(maps.obstacles[b : b + 1], maps.starts[b : b + 1, s], maps.goals[b : b + 1],
+                                corner_cutting)[0]
+
+            def action_at(r, c, b=b):
+                return int(np.argmax(logits[b, :, r, c]))  # the first of tied maxima
+
+            path, term = rollout(action_at, maps.obstacles[b], maps.starts[b, s], maps.goals[b], int(limit),
+                                 corner_cutting)
+            t = b * 3 + s
+            np.testing.assert_array_equal(got.path(t), np.array(path).reshape(-1, 2))
+            assert got.termination[t] == term
+            seen.add(term)
+    assert {0, 1, 2} <= seen  # goal, collision, loop at least
+
+
+def test_step_limit_ending():
+    # a policy that walks a cycle of 4 distinct cells is a loop; one that snakes forever hits the limit
+    obstacles = np.zeros((1, 7, 7), bool)
+    obstacles[0, [0, -1], :] = obstacles[0, :, [0, -1]] = True
+    logits = np.zeros((1, 8, 7, 7), np.float32)
+    logits[0, 2] = 1.0  # East everywhere: from (3, 1) towards a goal on row 1 it never turns
+    res = rollout_logits(logits, obstacles, np.array([[1, 5]]), np.array([[[3, 1]]]), limits=np.array([[3]]))
+    assert res.termination_names[0] == "step_limit" and len(res.path(0)) == 4
+
+
+def _vin_logits_per_map(model, obstacles, goals):
+    with torch.no_grad():
+        return model.action_logits(make_input(obstacles, goals)).permute(0, 3, 1, 2).numpy()
+
+
+@pytest.mark.parametrize("size", [16, 28])
+def test_generic_rollout_on_vin_logits_gives_the_engines_paths(size):
+    maps = generate_maps(40, size, seed=3, n_starts=2)
+    model = planning_vin(size, seed=1)
+    logits = _vin_logits_per_map(model, maps.obstacles, maps.goals)
+    generic = rollout_logits(logits, maps.obstacles, maps.goals, maps.starts)
+    engine = engine_plan_maps(maps.obstacles, maps.goals, maps.starts, model)
+    # exact equality wherever no cell of the engine's path is a near tie (batched torch rounds differently)
+    top2 = np.sort(logits, axis=1)[:, -2:]
+    gap = top2[:, 1] - top2[:, 0]
+    compared = 0
+    for t in range(len(engine)):
+        b = t // 2
+        cells = engine.path(t)
+        if (gap[b][cells[:, 0], cells[:, 1]] < 1e-3).any():
+            continue
+        compared += 1
+        np.testing.assert_array_equal(generic.path(t), cells)
+        assert generic.termination[t] == engine.termination[t]
+    assert compared >= 0.9 * len(engine)
+
+
+def _planners(size):
+    torch.manual_seed(0)
+    gppn = GPPN(GPPNConfig(k=6, l_h=8))
+    with torch.no_grad():  # a wider logit spread than the default initialisation: longer, varied paths
+        gppn.policy.weight.mul_(30)
+    from vinadv.planners.registry import load_custom
+
+    return [
+        VINPlanner(planning_vin(size, seed=2), size=size),
+        OptimalPlanner(size),
+        TorchPlanner(gppn, "gppn", size),
+        load_custom("examples/my_planner.py:make", size),
+    ]
+
+
+@pytest.mark.parametrize("index", range(4), ids=["vin", "optimal", "gppn", "byo-example"])
+def test_every_planner_batched_equals_one_by_one(index):
+    maps = generate_maps(12, 16, seed=9, n_starts=3)
+    planner = _planners(16)[index]
+    batched = planner.plan_maps(maps.obstacles, maps.goals, maps.starts, chunk_size=5)
+    for b in range(len(maps)):
+        for s in range(3):
+            one = planner.plan_batch(maps.obstacles[b : b + 1], maps.starts[b : b + 1, s], maps.goals[b : b + 1])
+            np.testing.assert_array_equal(one.path(0), batched.path(b * 3 + s))
+            assert one.termination[0] == batched.termination[b * 3 + s]
+    spec = planner.spec()
+    assert spec["name"] == planner.name and spec["size"] == 16
+    assert (spec["weights_sha256"] is None) == (planner.name == "optimal")
+
+
+class Broken(nn.Module):
+    def __init__(self, mode):
+        super().__init__()
+        self.mode = mode
+        self.w = nn.Parameter(torch.ones(1))
+
+    def forward(self, obstacles, goals):
+        b, n = obstacles.shape[0], obstacles.shape[-1]
+        if self.mode == "shape":
+            return torch.zeros(b, 4, n, n)
+        if self.mode == "nan":
+            out = torch.zeros(b, 8, n, n)
+            out[0, 3, 2, 2] = float("nan")
+            return out
+        if self.mode == "int":
+            return torch.zeros(b, 8, n, n, dtype=torch.int64)
+        raise RuntimeError("boom")
+
+
+@pytest.mark.parametrize("mode,message", [("shape", r"logits of shape \(3, 4, 8, 8\); expected \(B, 8, N, N\)"),
+                                          ("nan", "NaN logits"), ("int", "torch.int64 logits"),
+                                          ("raise", "forward failed: RuntimeError: boom")])
+def test_a_planner_that_breaks_the_contract_is_refused_by_name(mode, message):
+    maps = generate_maps(3, 8, seed=1, n_starts=1)
+    planner = TorchPlanner(Broken(mode), "my-broken", 8)
+    with pytest.raises(PlannerError, match="planner 'my-broken'.*" + message):
+        planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    assert issubclass(PlannerError, InputError)
+
+
+def test_check_logits_numpy_and_sizes():
+    with pytest.raises(PlannerError, match="returned list"):
+        check_logits("p", [[0.0]], 1, 4)
+    assert check_logits("p", np.zeros((1, 8, 4, 4), np.float16), 1, 4).dtype == np.float32
+    maps = generate_maps(2, 8, seed=1, n_starts=1)
+    with pytest.raises(PlannerError, match="planner 'optimal' is for 16x16 maps, the maps are 8x8"):
+        OptimalPlanner(16).plan_maps(maps.obstacles, maps.goals, maps.starts)
+
+
+def test_cli_refuses_a_broken_planner_with_exit_2(tmp_path, capsys):
+    (tmp_path / "bad.py").write_text("import torch\n\ndef make(size):\n    return torch.nn.Conv2d(1, 4, 1)\n")
+    generate = ["maps", "generate", "--n", "3", "--size", "8", "--seed", "1", "--out", str(tmp_path / "m.npz"),
+                "--quiet"]
+    assert main(generate) == 0
+    code = main(["plan", "--maps", str(tmp_path / "m.npz"), "--out", str(tmp_path / "p.npz"), "--quiet",
+                 "--planner", f"{tmp_path / 'bad.py'}:make"])
+    err = capsys.readouterr().err
+    assert code == 2 and "bad.py:make" in err and "Traceback" not in err
+
+
+def test_bad_starts_are_refused():
+    maps = generate_maps(2, 8, seed=1, n_starts=2)
+    planner = OptimalPlanner(8)
+    with pytest.raises(InputError, match=r"starts has shape \(2, 2\), expected \(2, S, 2\)"):
+        planner.plan_maps(maps.obstacles, maps.goals, maps.starts[:, 0])
+    with pytest.raises(InputError, match="starts has a cell outside the 8x8 grid"):
+        planner.plan_maps(maps.obstacles, maps.goals, maps.starts + 8)
+    with pytest.raises(InputError, match="goals has shape"):
+        planner.plan_maps(maps.obstacles, maps.goals[:1], maps.starts)

@@ -1,0 +1,107 @@
+"""The planner registry, bring-your-own specs, the shipped example, and the CLI (`vinadv planners`, `plan`)."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from vinadv.cli import main
+from vinadv.errors import InputError
+from vinadv.grid import generate_maps
+from vinadv.planners.interface import PlannerError
+from vinadv.planners.pathset import PathSet
+from vinadv.planners.registry import list_planners, load_planner
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
+
+
+def test_list_names_the_registered_planners():
+    names = [p["name"] for p in list_planners(28)]
+    assert names == ["vin", "gppn", "optimal"]
+    vin = list_planners(28)[0]
+    assert vin["weights"].endswith("vin28.pt") and vin["weights_available"] is True
+
+
+def test_unknown_names_and_bad_specs_are_refused():
+    with pytest.raises(PlannerError, match="unknown planner 'vim'"):
+        load_planner("vim", 28)
+    with pytest.raises(PlannerError, match="no such file"):
+        load_planner("nowhere/x.py:make", 28)
+    with pytest.raises(PlannerError, match="has no callable 'nothere'"):
+        load_planner(f"{EXAMPLE}:nothere", 28)
+    with pytest.raises(PlannerError, match="cannot import module"):
+        load_planner("no_such_module_xyz:make", 28)
+    with pytest.raises(PlannerError, match="takes no weights file"):
+        load_planner("optimal", 28, weights="w.pt")
+    with pytest.raises(InputError, match="no shipped GPPN weights for 12x12"):
+        load_planner("gppn", 12)
+
+
+def test_module_factory_spec(tmp_path, monkeypatch):
+    (tmp_path / "userpkg_planner.py").write_text(EXAMPLE.read_text())
+    monkeypatch.syspath_prepend(str(tmp_path))
+    planner = load_planner("userpkg_planner:make", 16)
+    maps = generate_maps(3, 16, seed=1, n_starts=2)
+    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    assert len(result) == 6
+    spec = planner.spec()
+    assert spec["name"] == "userpkg_planner:make" and spec["config"]["factory"] == "make"
+    assert len(spec["weights_sha256"]) == 64 and len(spec["config"]["source_sha256"]) == 64
+
+
+def test_factory_returning_something_else_is_refused(tmp_path):
+    (tmp_path / "p.py").write_text("def make(size):\n    return 'not a module'\n")
+    with pytest.raises(PlannerError, match=r"make\(28\) returned str, expected a torch.nn.Module"):
+        load_planner(f"{tmp_path / 'p.py'}:make", 28)
+
+
+def test_the_shipped_example_plans_from_the_cli(tmp_path, capsys):
+    maps_file, out = tmp_path / "m.npz", tmp_path / "p.npz"
+    assert main(["maps", "generate", "--n", "4", "--size", "12", "--seed", "3", "--out", str(maps_file),
+                 "--quiet"]) == 0
+    assert main(["plan", "--maps", str(maps_file), "--out", str(out), "--planner", f"{EXAMPLE}:make",
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["planner"]["name"].endswith("my_planner.py:make") and summary["paths"] == 4 * 7
+    paths = PathSet.load(out)
+    assert paths.model.startswith(str(EXAMPLE)) and "sha256=" in paths.model
+    # the same paths as planning through the library
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("example_planner", EXAMPLE)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    net = module.make(12).eval()
+    from vinadv.grid import MapSet
+    from vinadv.planners.rollout import rollout_logits
+
+    m = MapSet.load(maps_file)
+    with torch.no_grad():
+        logits = net(torch.from_numpy(m.obstacles.astype(np.float32)), torch.from_numpy(m.goals)).numpy()
+    want = rollout_logits(logits, m.obstacles, m.goals, m.starts, m.corner_cutting)
+    assert paths.paths == want.paths
+
+
+def test_plan_optimal_and_vin_from_the_cli(tmp_path, capsys):
+    maps_file = tmp_path / "m.npz"
+    assert main(["maps", "generate", "--n", "5", "--size", "28", "--seed", "3", "--out", str(maps_file),
+                 "--quiet"]) == 0
+    assert main(["plan", "--maps", str(maps_file), "--out", str(tmp_path / "o.npz"), "--planner", "optimal",
+                 "--json"]) == 0
+    optimal = json.loads(capsys.readouterr().out)
+    assert optimal["reached"] == 1.0 and optimal["planner"]["weights_sha256"] is None
+    assert main(["plan", "--maps", str(maps_file), "--out", str(tmp_path / "v.npz"), "--json"]) == 0
+    vin = json.loads(capsys.readouterr().out)
+    assert vin["planner"]["name"] == "vin" and len(vin["planner"]["weights_sha256"]) == 64
+    assert PathSet.load(tmp_path / "v.npz").model.startswith("vin k=36 sha256=")
+
+
+def test_planners_command(capsys):
+    assert main(["planners", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [p["name"] for p in out["planners"]] == ["vin", "gppn", "optimal"]
+    assert main(["planners"]) == 0
+    text = capsys.readouterr().out
+    assert "optimal" in text and "FILE.py:FACTORY" in text
