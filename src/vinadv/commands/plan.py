@@ -28,6 +28,7 @@ def register(subparsers) -> None:
 
 def cmd_plan(args: argparse.Namespace) -> int:
     from vinadv.planners.weights import load_vin, weights_checksum, default_weights_path
+    from vinadv.vocabulary import TERMINATIONS
 
     if args.chunk_size < 1:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")
@@ -44,7 +45,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     summary = {
         "out": args.out, "maps": len(maps), "starts": maps.n_starts, "paths": len(result),
         "reached": round(float(result.reached.mean()), 4) if len(result) else None,
-        "terminations": dict(zip(("goal", "collision", "loop", "step_limit"), counts.tolist())),
+        "terminations": dict(zip(TERMINATIONS, counts.tolist())),
         "seconds": round(elapsed, 3), "plans_per_s": round(len(result) / elapsed, 1) if elapsed > 0 else None,
     }
     if args.json:
