@@ -96,7 +96,7 @@ def categories(examples: dict, stem: Path) -> list[str]:
                  title=f"({'abcd'[c]}) the {label}")
         draw_map(column[1], records.obstacles_a[i], records.goals[i], records.starts[i],
                  paths=[("adversarial", a)], added=records.added[i])
-        image = render_path_images(o, np.array([0, len(o)]), a, np.array([0, len(a)]), records.size)[0]
+        image = render_path_images(records.path_o.take([i]), records.path_a.take([i]), records.size)[0]
         column[2].imshow(image, interpolation="nearest")
         column[2].set_xticks([])
         column[2].set_yticks([])
