@@ -27,6 +27,7 @@ from vinadv.classify import (
     make_fp_classifier,
     render_batch,
 )
+from vinadv.vocabulary import FORK_OR_DETOUR
 
 PAPER_PAIRS_PER_S = 100 / 0.22
 
@@ -99,7 +100,7 @@ def main(argv=None) -> int:
     assert np.array_equal(py_labels, labels.labels[: len(small)]), "the labeller disagrees with the Python rule"
     results["python_rule_pairs_per_s"] = len(small) / py_seconds
     # the same comparison on FP/DP pairs only, where the rule has to compare cells
-    fp_dp_only = batch.take(np.flatnonzero(np.isin(labels.labels, ("DP", "FP"))))
+    fp_dp_only = batch.take(np.flatnonzero(np.isin(labels.labels, FORK_OR_DETOUR)))
     seconds, _ = timed(lambda: label_batch(fp_dp_only))
     results["rule_fp_dp_pairs_per_s"] = len(fp_dp_only) / seconds
     small_fp_dp = fp_dp_only.take(np.arange(min(len(fp_dp_only), 1000)))
@@ -109,7 +110,7 @@ def main(argv=None) -> int:
     results["render_pairs_per_s"] = n / seconds
 
     y = labels.labels
-    fp_dp = np.flatnonzero(np.isin(y, ("DP", "FP")))
+    fp_dp = np.flatnonzero(np.isin(y, FORK_OR_DETOUR))
     rng = np.random.default_rng(0)
     train = np.sort(rng.choice(fp_dp, size=min(args.train, len(fp_dp)), replace=False))
     train_batch, train_y = balance_batch(batch.take(train), y[train], seed=0)

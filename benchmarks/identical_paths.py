@@ -22,6 +22,7 @@ from vinadv.planners.engine import action_maps, plan_maps
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.testing import planning_vin, random_vin
 from vinadv.planners.vin import make_input
+from vinadv.vocabulary import TERMINATIONS
 
 
 def weight_sets(size: int, weights: str | None) -> dict:
@@ -63,8 +64,7 @@ def main() -> None:
             "weights": name, "maps": args.n, "size": args.size,
             "identical_paths": int(np.sum(same_path)),
             "identical_terminations": int(np.sum(fast.termination == ref.termination)),
-            "terminations": dict(zip(("goal", "collision", "loop", "step_limit"),
-                                     np.bincount(ref.termination, minlength=4).tolist())),
+            "terminations": dict(zip(TERMINATIONS, np.bincount(ref.termination, minlength=4).tolist())),
             "mean_moves": round(float(ref.paths.lengths.mean() - 1), 2),
             "action_cells": int(actions.size), "undecided_cells": int((~decided).sum()),
             "decided_cells_differing_from_torch_argmax": int((actions[decided] != torch_actions[decided]).sum()),

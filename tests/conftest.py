@@ -14,6 +14,29 @@ import sqlalchemy as sa
 
 from tests.needs import skip_or_fail
 
+#: Tests left out of `make test-fast` (`pytest -m "not slow"`), by node id prefix: the ones that start Dask
+#: clusters or a browser, train networks or classifiers, or run the whole pipeline; together they take most of the
+#: suite's time. One list, so the fast selection is decided in one place.
+SLOW = (
+    "tests/cluster/",
+    "tests/report/",
+    "tests/viewer/test_browser.py",
+    "tests/planners/test_training.py",
+    "tests/classify/test_models.py",
+    "tests/classify/test_cooccurrence.py",
+    "tests/commands/test_classify.py::test_train_and_eval_on_held_out_split",
+    "tests/test_pipeline.py::test_killed_run_resumes_with_every_pair_exactly_once",
+    "tests/test_pipeline.py::test_stored_labels_agree_with_an_independent_recomputation",
+    "tests/test_readme.py",
+)
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    for item in items:
+        if item.nodeid.startswith(SLOW):
+            item.add_marker(pytest.mark.slow)
+
+
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"
 POSTGRES_DEFAULT = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 BACKENDS = ("sqlite", "mysql", "postgres")

@@ -29,7 +29,7 @@ from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
 from vinadv.planners.engine import plan_batch
 from vinadv.planners.vin import VIN
-from vinadv.vocabulary import LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
+from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
 
 BUILTIN_CLASSIFIERS = ("rule",)
 
@@ -121,7 +121,7 @@ def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_sou
         labels = np.asarray(classifier.predict(batch)).astype("<U7")
         score = np.asarray(classifier.fp_decision(batch), dtype=np.float64)
         dh, dv = path_distances(batch.path_o, batch.path_a, batch.size)
-    fork_or_detour = np.isin(labels, ("DP", "FP"))
+    fork_or_detour = np.isin(labels, FORK_OR_DETOUR)
     return Identification(
         pairs=pairs,
         labels=labels,

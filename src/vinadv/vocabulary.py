@@ -12,6 +12,8 @@ from vinadv.errors import InputError
 
 #: The five path pair labels, in DESIGN.md order (paper, section 3.2).
 LABELS = ("invalid", "UrP", "UcP", "DP", "FP")
+#: The labels the path features leave to the FP/DP rule (or an image classifier): both paths reach the goal and differ.
+FORK_OR_DETOUR = ("DP", "FP")
 #: Labels that mean a successful attack: the adversarial path does not reach the goal, or it forks away.
 SUCCESS_LABELS = ("UrP", "FP")
 #: Labels by attack strength, strongest first: UrP > FP > DP > UcP > invalid (the paper's table 4 order).

@@ -113,5 +113,7 @@ def test_subclass_columns_settings_and_optional_fields():
         Tagged.concat([a, Tagged.concat([b], tag="y")])
     assert Tagged.concat([a, Tagged.concat([b], tag="y")], tag="z").tag == "z"
     assert Tagged.concat([], size=SIZE, tag="q").tag == "q"
-    with pytest.raises(InputError, match="not among its settings"):
+    with pytest.raises(InputError, match="different map sizes"):
         Tagged.concat([a], size=3)
+    with pytest.raises(InputError, match="not among its settings"):
+        Tagged.concat([a], colour="red")

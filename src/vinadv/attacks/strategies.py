@@ -163,8 +163,8 @@ class Attack:
             if hi > lo:
                 parts.append(self._evaluate_chunk(ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi],
                                                   corner_cutting, strength))
-        settings = dict(strategy=self.name, params=self.params(), corner_cutting=corner_cutting)
-        pairs = PairSet.concat(parts, **settings) if parts else PairSet.empty(ctx.obstacles.shape[1], **settings)
+        pairs = PairSet.concat(parts, size=ctx.obstacles.shape[1], strategy=self.name, params=self.params(),
+                               corner_cutting=corner_cutting)
         return pairs, len(map_idx)
 
     def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength) -> PairSet:

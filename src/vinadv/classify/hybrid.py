@@ -15,7 +15,7 @@ from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMIm
 from vinadv.classify.rule import default_threshold, label_batch
 from vinadv.classify.similarity import DistanceThresholdClassifier
 from vinadv.errors import InputError
-from vinadv.vocabulary import LABELS
+from vinadv.vocabulary import FORK_OR_DETOUR, LABELS
 
 FP_DP_KINDS = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw")
 SETTINGS = ("baseline", "tuned")
@@ -92,7 +92,7 @@ class HybridClassifier(_FiveWay):
             raise InputError("HybridClassifier needs an fp_classifier")
         y = label_batch(X, self.t).labels if y is None else self._check_labels(X, y)
         self.classes_ = np.array(LABELS)
-        rest = np.isin(y, ("DP", "FP"))
+        rest = np.isin(y, FORK_OR_DETOUR)
         self.fp_classifier.fit(X.take(rest), y[rest])
         self.size_ = X.size
         self.training_time_s_ = getattr(self.fp_classifier, "training_time_s_", 0.0)
@@ -167,7 +167,7 @@ class RuleClassifier(_FiveWay):
         result = label_batch(X, self.t)
         t = default_threshold(X.size) if self.t is None else self.t
         score = np.maximum(result.dh, result.dv) - t - 0.5
-        return np.where(np.isin(result.labels, ("DP", "FP")), score, np.nan)
+        return np.where(np.isin(result.labels, FORK_OR_DETOUR), score, np.nan)
 
     def decision_function(self, X) -> np.ndarray:
         return self.fp_decision(X)

@@ -19,6 +19,7 @@ from vinadv.classify.images import balance_batch
 from vinadv.classify.metrics import binary_metrics
 from vinadv.classify.rule import default_threshold, label_batch
 from vinadv.errors import InputError
+from vinadv.vocabulary import FORK_OR_DETOUR
 
 
 def label_counts_of(labels) -> dict:
@@ -42,7 +43,7 @@ def train_classifier(batch: PathPairBatch, labels: np.ndarray, *, model: str, se
         raise InputError(f"test_fraction must be in [0, 1), got {test_fraction}", "test_fraction")
     labels = np.asarray(labels)
     t = default_threshold(batch.size) if threshold is None else threshold
-    fp_dp = np.flatnonzero(np.isin(labels, ("DP", "FP")))
+    fp_dp = np.flatnonzero(np.isin(labels, FORK_OR_DETOUR))
     counts = label_counts_of(labels[fp_dp])
     need = 2 if test_fraction > 0 else 1
     if counts.get("DP", 0) < need or counts.get("FP", 0) < need:
@@ -99,7 +100,7 @@ def evaluate_classifier(model: HybridClassifier | RuleClassifier, batch: PathPai
         eval_index = arrays.get("test_index", none).astype(np.int64)
         scope = "held-out test split of the training file"
     else:
-        eval_index = np.flatnonzero(np.isin(truth, ("DP", "FP")))
+        eval_index = np.flatnonzero(np.isin(truth, FORK_OR_DETOUR))
         scope = "all FP/DP pairs of the file" + (" (including training pairs)" if same_file else "")
     if len(eval_index) == 0:
         raise InputError(f"{source}: no FP/DP pairs to evaluate on ({scope})")

@@ -250,8 +250,8 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
         shifted.append(part.pairs)
     from vinadv.attacks.pairs import PairSet
 
-    settings = dict(strategy=strategy, params=attack.params(), corner_cutting=maps.corner_cutting)
-    pairs = PairSet.concat(shifted, **settings) if shifted else PairSet.empty(maps.size, **settings)
+    pairs = PairSet.concat(shifted, size=maps.size, strategy=strategy, params=attack.params(),
+                           corner_cutting=maps.corner_cutting)
     no_valid = np.concatenate([p.no_valid_cell + lo for (lo, _), p in zip(bounds, parts)]).astype(np.int64) \
         if parts else np.zeros(0, np.int64)
     return AttackResult(pairs, no_valid, int(sum(p.planner_calls for p in parts)))

@@ -33,6 +33,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from vinadv.outfile import check_output_path
     from vinadv.planners.pathset import PathSet
     from vinadv.planners.registry import load_planner
+    from vinadv.vocabulary import TERMINATIONS
 
     if args.chunk_size < 1:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")
@@ -51,7 +52,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     summary = {
         "out": args.out, "planner": planner.spec(), "maps": len(maps), "starts": maps.n_starts, "paths": len(result),
         "reached": round(float(result.reached.mean()), 4) if len(result) else None,
-        "terminations": dict(zip(("goal", "collision", "loop", "step_limit"), counts.tolist())),
+        "terminations": dict(zip(TERMINATIONS, counts.tolist())),
         "seconds": round(elapsed, 3), "plans_per_s": round(len(result) / elapsed, 1) if elapsed > 0 else None,
     }
     if args.json:

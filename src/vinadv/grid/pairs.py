@@ -63,6 +63,18 @@ class PathPairs(Columns):
             setattr(self, field, term)
 
     @classmethod
+    def concat(cls, parts, size: int | None = None, **settings):
+        """The pairs of `parts` in order (`Columns.concat`); `size`, the map side, makes an empty result possible
+        (no parts) and is checked against the parts' maps."""
+        parts = list(parts)
+        if not parts:
+            return cls.empty(size, **settings)
+        sizes = {p.size for p in parts} | ({size} if size is not None else set())
+        if len(sizes) > 1:
+            raise InputError(f"{cls.__name__}.concat: pairs of different map sizes {sorted(sizes)}", "size")
+        return super().concat(parts, **settings)
+
+    @classmethod
     def empty(cls, size: int | None = None, **settings):
         """No pairs, on `size x size` maps; `settings`: the other fields of a subclass."""
         if size is None:
