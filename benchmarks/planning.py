@@ -119,7 +119,8 @@ def main() -> None:
     print(f"{args.size}x{args.size}, k={cfg.k}, weights: {weights_name}; {cores} cores, "
           f"load average {out['load_average_1min']:.1f}")
     print(f"  per-step reference   {out['reference_plans_per_s']:>10.1f} plans/s   ({r} maps)")
-    print(f"  batched torch fwd    {out['torch_batched_maps_per_s']:>10.1f} maps/s    ({args.torch_n} maps, no rollouts)")
+    print(f"  batched torch fwd    {out['torch_batched_maps_per_s']:>10.1f} maps/s    "
+          f"({args.torch_n} maps, no rollouts)")
     print(f"  engine (plan_batch)  {engine:>10.1f} plans/s   ({args.n} maps, 1 start each)")
     print(f"    of which value maps {out['engine_action_maps_per_s']:>9.1f} maps/s")
     print(f"  engine / torch batched = {out['engine_vs_torch_batched']}x, engine / reference = "

@@ -187,7 +187,8 @@ def main(argv: list[str] | None = None) -> int:
         if kind == "sqlite":
             extra = (f"   ({entry['write_rows_per_cpu_s']:,.0f} written per CPU second; "
                      f"{entry['write_rows_per_s'] / result['sqlite3_ceiling_rows_per_s']:.2f} x ceiling)")
-        print(f"  {kind:<9} write {entry['write_rows_per_s']:>10,.0f} rows/s   read {entry['read_rows_per_s']:>10,.0f} rows/s{extra}")
+        print(f"  {kind:<9} write {entry['write_rows_per_s']:>10,.0f} rows/s   "
+              f"read {entry['read_rows_per_s']:>10,.0f} rows/s{extra}")
     return 0
 
 

@@ -8,6 +8,7 @@ import torch.nn.functional as F
 
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.grid import generate_maps
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import VIN, VINConfig, make_input
 from vinadv.planners.weights import (
@@ -18,7 +19,6 @@ from vinadv.planners.weights import (
     save_vin,
     weights_checksum,
 )
-from vinadv.grid import generate_maps
 
 
 @pytest.mark.parametrize("size,k", [(8, 10), (16, 20), (28, 36)])

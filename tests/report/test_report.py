@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 import sqlalchemy as sa
-
 from tests.report.conftest import SIZE
+
 from vinadv.cli import main
 from vinadv.report import write_report
 from vinadv.report.render import PAGE_SECTIONS

@@ -13,7 +13,6 @@ import threading
 from pathlib import Path
 
 import pytest
-
 from tests import needs
 from tests.needs import CHROMIUM_ARGS
 

@@ -8,8 +8,8 @@ import html
 import re
 
 import pytest
-
 from tests.store.oracle import parse_path
+
 from vinadv.report.build import _context
 from vinadv.report.gather import SECTIONS, gather_report
 from vinadv.report.render import PAGE_SECTIONS, render_page, render_report

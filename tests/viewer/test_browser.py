@@ -15,6 +15,7 @@ from tests import needs
 from tests.needs import CHROMIUM_ARGS
 from vinadv.store import Store
 
+
 @pytest.fixture
 def served(db):
     """(base URL, url of the database, runs) with the viewer served from a thread on a free 127.0.0.1 port."""

@@ -19,7 +19,8 @@ def register(subparsers) -> None:
         "next/previous). Human labels go to the annotations table, beside the automatic ones. Binds to "
         "127.0.0.1; there is no login, so serving other addresses needs --allow-remote.",
     )
-    serve.add_argument("--db", default=None, help="database URL or SQLite file (default: env VINADV_DB, else vinadv.db)")
+    serve.add_argument("--db", default=None,
+                       help="database URL or SQLite file (default: env VINADV_DB, else vinadv.db)")
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     serve.add_argument("--port", type=int, default=8000, help="port (default 8000)")
     serve.add_argument("--allow-remote", action="store_true",

@@ -52,7 +52,8 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
     train.add_argument("--data", required=True, help="maps file (.npz, from `vinadv maps generate`)")
     train.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
     train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
-    train.add_argument("--lr", type=float, default=lr, help=f"peak RMSprop learning rate, cosine-decayed (default {lr})")
+    train.add_argument("--lr", type=float, default=lr,
+                       help=f"peak RMSprop learning rate, cosine-decayed (default {lr})")
     train.add_argument("--batch-size", type=int, default=32, help="maps per batch (default 32)")
     train.add_argument("--warmup", type=int, default=None, metavar="STEPS",
                        help="linear learning-rate warm-up over the first STEPS optimizer steps "
@@ -144,14 +145,14 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
     record = {
         "command": _command_line(),
         "vinadv": __version__,
-        "started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "data": {"path": str(args.data), "sha256": weights_checksum(args.data), "maps": len(maps), "size": maps.size,
                  "seed": int(maps.seed), "corner_cutting": bool(maps.corner_cutting)},
     }
     log = None if args.quiet or args.json else (lambda line: print(line, flush=True))
     model, record = train(maps, config, checkpoint=checkpoint, resume=args.resume,
                           progress=not (args.quiet or args.json), record=record, log=log)
-    record["finished"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     save(model, out, record)
     record_path = out.with_suffix(".json")
     with atomic_output(record_path, "w") as fh:

@@ -74,7 +74,7 @@ class FoldedVIN:
         self.goal_value = goal_value
 
     @classmethod
-    def from_model(cls, model: VIN) -> "FoldedVIN":
+    def from_model(cls, model: VIN) -> FoldedVIN:
         sd = {name: t.detach().to(torch.float64).cpu().numpy() for name, t in model.state_dict().items()}
         r = sd["r.weight"][0, :, 0, 0]  # (l_h,)
         return cls(
@@ -126,7 +126,8 @@ def _scratch(n, lq):
 
 @numba.njit(cache=True, nogil=True)
 def _reward_terms(obs, gr, gc, reward_w, reward_b, goal_value, q_w, reward_q, work):
-    """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32. Flat layout; `work` is float64 scratch `(2, size)`, zero outside the map's cells."""
+    """reward_q[c] = q_w[c] * r, r = folded reward (zero outside the grid), in float64, stored float32. Flat
+    layout; `work` is float64 scratch `(2, size)`, zero outside the map's cells."""
     n, lq = obs.shape[0], reward_q.shape[0]
     width, p0, length = layout(n)[:3]
     padded, r = work[0], work[1]

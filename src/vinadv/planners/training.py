@@ -18,9 +18,9 @@ import math
 import os
 import platform
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import torch
@@ -332,7 +332,8 @@ def train_model(
             correct_sum += c
             if progress:
                 batches.set_postfix(loss=f"{loss_sum / max(cell_sum, 1):.4f}", lr=f"{lr:.2g}")
-            if checkpoint is not None and config.checkpoint_min and time.time() - last_save > 60 * config.checkpoint_min:
+            due = config.checkpoint_min and time.time() - last_save > 60 * config.checkpoint_min
+            if checkpoint is not None and due:
                 state.partial, state.wall_s = [loss_sum, cell_sum, correct_sum], time.time() - started
                 _save_checkpoint(checkpoint, model, optimizer, config, state, rec)
                 last_save = time.time()
@@ -360,7 +361,8 @@ def train_model(
             )
         if checkpoint is not None:
             _save_checkpoint(checkpoint, model, optimizer, config, state, rec)
-        if config.time_limit_min is not None and state.wall_s > 60 * config.time_limit_min and state.epoch < config.epochs:
+        past_limit = config.time_limit_min is not None and state.wall_s > 60 * config.time_limit_min
+        if past_limit and state.epoch < config.epochs:
             stopped = f"time limit of {config.time_limit_min} min reached after epoch {state.epoch}"
             if log:
                 log(stopped)

@@ -82,7 +82,7 @@ def safe_url(url: str | sa.URL) -> str:
 
 
 def _utcnow() -> dt.datetime:
-    return dt.datetime.now(dt.timezone.utc).replace(tzinfo=None, microsecond=0)
+    return dt.datetime.now(dt.UTC).replace(tzinfo=None, microsecond=0)
 
 
 def _first_line(exc: BaseException) -> str:
