@@ -27,6 +27,12 @@ def test_parser_imports_no_heavy_library(argv):
     assert not imported_modules(*argv) & set(HEAVY)
 
 
+@pytest.mark.parametrize("argv", [["--help"], ["--version"]], ids=" ".join)
+def test_top_level_help_imports_no_numpy_either(argv):
+    # NumPy alone is a third of a second to import: the bare parser does without it
+    assert "numpy" not in imported_modules(*argv)
+
+
 def test_a_command_still_checks_its_choices():
     done = subprocess.run([sys.executable, "-m", "vinadv.cli", "run", "--attack", "nope", "--n", "1"],
                           capture_output=True, text=True, timeout=300)

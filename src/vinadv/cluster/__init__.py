@@ -22,6 +22,8 @@ Who computes and who writes:
   `dask worker tcp://HOST:PORT --nworkers <cores> --nthreads 1`.
 
 Dask is the optional extra `vinadv[cluster]`; nothing here imports it until a cluster is asked for.
+
+NumPy too is imported inside the functions that use it: `vinadv --help` builds its parser from this module.
 """
 
 from __future__ import annotations
@@ -29,8 +31,6 @@ from __future__ import annotations
 import contextlib
 import os
 from collections.abc import Iterator
-
-import numpy as np
 
 from vinadv.errors import InputError
 
@@ -229,6 +229,8 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
     """`Attack.attack` of every map of `maps` (first start of each), `shard_size` maps per task: the same
     `AttackResult` as the local command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...);
     `objective`: what the ranking strategies keep ('paper' | 'harm', `vinadv.identify.OBJECTIVES`)."""
+    import numpy as np
+
     from vinadv.attacks.strategies import AttackResult, make_attack
     from vinadv.cluster.worker import attack_shard_task
     from vinadv.planners.weights import default_weights_path, weights_checksum
@@ -277,6 +279,8 @@ def identify_on_cluster(client, pairs, weights: str | None, classifier: str | No
                         harm_rtol: float):
     """`identify` (after `replan` with `weights`) of `pairs`, `shard_size` pairs per task: the same
     `Identification` as the local command (harm with the tolerances `harm_tol`, `harm_rtol`)."""
+    import numpy as np
+
     from vinadv.cluster.worker import identify_shard_task
     from vinadv.identify import Identification
     from vinadv.planners.weights import weights_checksum

@@ -8,8 +8,6 @@ import csv
 import json
 import sys
 
-import numpy as np
-
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 
@@ -58,6 +56,8 @@ def run_export(args: argparse.Namespace) -> int:
 
 
 def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
+    import numpy as np
+
     from vinadv.store.schema import HARM_FLOAT_COLUMNS
 
     info = store.run_info(run_id)
