@@ -46,7 +46,7 @@ def test_rollout_follows_the_reference_rule_on_arbitrary_logits(corner_cutting):
             path, term = rollout(action_at, maps.obstacles[b], maps.starts[b, s], maps.goals[b], int(limit),
                                  corner_cutting)
             t = b * 3 + s
-            np.testing.assert_array_equal(got.path(t), np.array(path).reshape(-1, 2))
+            np.testing.assert_array_equal(got.paths[t], np.array(path).reshape(-1, 2))
             assert got.termination[t] == term
             seen.add(term)
     assert {0, 1, 2} <= seen  # goal, collision, loop at least
@@ -59,7 +59,7 @@ def test_step_limit_ending():
     logits = np.zeros((1, 8, 7, 7), np.float32)
     logits[0, 2] = 1.0  # East everywhere: from (3, 1) towards a goal on row 1 it never turns
     res = rollout_logits(logits, obstacles, np.array([[1, 5]]), np.array([[[3, 1]]]), limits=np.array([[3]]))
-    assert res.termination_names[0] == "step_limit" and len(res.path(0)) == 4
+    assert res.termination_names[0] == "step_limit" and len(res.paths[0]) == 4
 
 
 def _vin_logits_per_map(model, obstacles, goals):
@@ -80,11 +80,11 @@ def test_generic_rollout_on_vin_logits_gives_the_engines_paths(size):
     compared = 0
     for t in range(len(engine)):
         b = t // 2
-        cells = engine.path(t)
+        cells = engine.paths[t]
         if (gap[b][cells[:, 0], cells[:, 1]] < 1e-3).any():
             continue
         compared += 1
-        np.testing.assert_array_equal(generic.path(t), cells)
+        np.testing.assert_array_equal(generic.paths[t], cells)
         assert generic.termination[t] == engine.termination[t]
     assert compared >= 0.9 * len(engine)
 
@@ -112,7 +112,7 @@ def test_every_planner_batched_equals_one_by_one(index):
     for b in range(len(maps)):
         for s in range(3):
             one = planner.plan_batch(maps.obstacles[b : b + 1], maps.starts[b : b + 1, s], maps.goals[b : b + 1])
-            np.testing.assert_array_equal(one.path(0), batched.path(b * 3 + s))
+            np.testing.assert_array_equal(one.paths[0], batched.paths[b * 3 + s])
             assert one.termination[0] == batched.termination[b * 3 + s]
     spec = planner.spec()
     assert spec["name"] == planner.name and spec["size"] == 16

@@ -65,7 +65,7 @@ def test_paths_equal_brute_force_shortest_paths(corner_cutting):
         for s in range(3):
             want, cost = brute_path(obs, tuple(map(int, maps.starts[b, s])), tuple(map(int, maps.goals[b])),
                                     corner_cutting)
-            np.testing.assert_array_equal(result.path(b * 3 + s), np.array(want))
+            np.testing.assert_array_equal(result.paths[b * 3 + s], np.array(want))
             assert cost == pytest.approx(maps.expert_costs[b, s], abs=1e-9)
 
 
