@@ -67,7 +67,7 @@ def write_classifier(path: Path) -> Path:
     batch = synthetic_pairs(60, size=8, seed=2, mix=True)
     labels = label_batch(batch).labels
     keep = np.flatnonzero(np.isin(labels, ("DP", "FP")))
-    SVMImageClassifier().fit(batch.subset(keep), labels[keep]).save(path)
+    SVMImageClassifier().fit(batch.take(keep), labels[keep]).save(path)
     return path
 
 

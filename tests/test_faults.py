@@ -213,11 +213,12 @@ def test_generator_chunks_shrink_with_the_size_and_keep_memory_bounded():
     # the stream does not depend on n: a shorter run is a prefix, across the chunk boundary
     shorter = generator.generate_maps(generator.chunk_maps(60) + 1, 60, seed=1, n_starts=2)
     assert np.array_equal(maps.obstacles[: len(shorter)], shorter.obstacles)
-    assert np.array_equal(maps.expert_cells[: len(shorter.expert_cells)], shorter.expert_cells)
+    assert np.array_equal(maps.expert.cells[: len(shorter.expert.cells)], shorter.expert.cells)
 
 
 def test_generator_library_errors_name_parameters():
     from vinadv.grid import generate_maps
 
-    with pytest.raises(InputError, match="--size 5000"):
+    with pytest.raises(InputError, match="^size 5000") as caught:  # the command line shows --size 5000
         generate_maps(1, 5000)
+    assert "size" in caught.value.parameters

@@ -121,9 +121,9 @@ def test_read_only_database_report(tmp_path):
         _remount_readonly(folder)
         with Store.open(url, readonly=True) as store:
             assert store.list_runs()[0]["n_pairs"] == 12
-        from vinadv.report.html import build_report
+        from vinadv.report import build_report
 
-        with pytest.raises(InputError, match="--run: no run named 'absent'"):
+        with pytest.raises(InputError, match="run_id: no run named 'absent'"):
             build_report(url, tmp_path / "report", run_id="absent")
 
 
@@ -158,8 +158,9 @@ def test_one_rule_for_run_references(sqlite_url):
         assert store.resolve_run(str(a)) == a and store.resolve_run(b) == b
         assert store.resolve_run("beta") == b and store.resolve_run(" alpha ") == a
         for bad in ("99", "gamma", ""):
-            with pytest.raises(InputError, match="--run: no run"):
+            with pytest.raises(InputError, match="run_id: no run") as caught:  # the library names the parameter
                 store.resolve_run(bad)
+            assert caught.value.parameters == ("run_id",)  # which the command line shows as --run
 
 
 def test_mysql_and_postgres_refusal_changes_nothing(db_url):
