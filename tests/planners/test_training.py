@@ -116,7 +116,7 @@ def test_init_continues_from_given_weights(tmp_path):
     for key, value in first.state_dict().items():
         torch.testing.assert_close(same.state_dict()[key], value)
     save_vin(VIN(VINConfig(k=10, l_h=12, l_q=8)), tmp_path / "other.pt")
-    with pytest.raises(InputError, match="--init"):
+    with pytest.raises(InputError, match="^init "):
         train_vin(maps, TrainConfig(**TINY, init=str(tmp_path / "other.pt")), progress=False)
 
 

@@ -142,8 +142,11 @@ def test_full_disk_while_writing_is_one_line_naming_the_database(tmp_path):
 def test_run_name_is_unique_and_not_a_number(sqlite_url):
     with Store.open(sqlite_url) as store:
         first = store.create_run("k")
-        with pytest.raises(InputError, match="already called 'k'.*--resume"):
+        with pytest.raises(InputError, match="already called 'k'.*resume") as caught:
             store.create_run("k")
+        from vinadv.commands import cli_message
+
+        assert "with --resume, or choose another --name" in cli_message(caught.value)
         with pytest.raises(InputError, match="numbers are run ids"):
             store.create_run("12")
         assert [r["id"] for r in store.list_runs()] == [first]

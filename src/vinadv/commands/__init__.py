@@ -36,7 +36,7 @@ class LazyChoices:
 
 
 #: library parameters whose flag is not `--` plus the name with dashes
-FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tolerance"}
+FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tolerance", "warmup_steps": "--warmup"}
 
 
 def flag(parameter: str) -> str:

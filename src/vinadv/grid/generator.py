@@ -170,7 +170,7 @@ def generate_maps(
     if max_obs < 1 or max_size < 1:
         raise InputError(f"max_obs and max_size must be >= 1, got {max_obs} and {max_size}")
     if n_starts >= size * size:
-        raise InputError(f"--starts {n_starts}: a {size}x{size} map has fewer free cells than that")
+        raise InputError(f"n_starts {n_starts}: a {size}x{size} map has fewer free cells than that", "n_starts")
     check_limits(n, size, n_starts, max_obs)
     count = chunk_maps(size, max_obs)
 

@@ -67,15 +67,15 @@ class TrainConfig:
 
     def validate(self) -> None:
         if self.epochs < 1:
-            raise InputError(f"--epochs must be >= 1, got {self.epochs}")
+            raise InputError(f"epochs must be >= 1, got {self.epochs}", "epochs")
         if not self.lr > 0:
-            raise InputError(f"--lr must be > 0, got {self.lr}")
+            raise InputError(f"lr must be > 0, got {self.lr}", "lr")
         if self.batch_size < 1:
-            raise InputError(f"--batch-size must be >= 1, got {self.batch_size}")
+            raise InputError(f"batch_size must be >= 1, got {self.batch_size}", "batch_size")
         if not 0 <= self.val_fraction < 1:
-            raise InputError(f"--val-fraction must be in [0, 1), got {self.val_fraction}")
+            raise InputError(f"val_fraction must be in [0, 1), got {self.val_fraction}", "val_fraction")
         if self.warmup_steps is not None and self.warmup_steps < 0:
-            raise InputError(f"--warmup must be >= 0, got {self.warmup_steps}")
+            raise InputError(f"warmup_steps must be >= 0, got {self.warmup_steps}", "warmup_steps")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -168,11 +168,11 @@ def resolve_device(name: str) -> torch.device:
     try:
         device = torch.device(name)
     except RuntimeError as exc:
-        raise InputError(f"--device {name!r} is not a device ({exc})") from None
+        raise InputError(f"device {name!r} is not a device ({exc})", "device") from None
     if device.type == "cuda" and not torch.cuda.is_available():
-        raise InputError(f"--device {name!r}: CUDA is not available on this machine")
+        raise InputError(f"device {name!r}: CUDA is not available on this machine", "device")
     if device.type not in ("cpu", "cuda", "mps"):
-        raise InputError(f"--device {name!r}: use cpu or cuda")
+        raise InputError(f"device {name!r}: use cpu or cuda", "device")
     return device
 
 
@@ -243,8 +243,8 @@ def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: di
     from vinadv.planners.weights import weights_checksum
 
     if start.config != model.config:
-        raise InputError(f"--init {path}: its {type(start).__name__} ({start.config}) is not the one to train "
-                         f"({model.config})")
+        raise InputError(f"init {path}: its {type(start).__name__} ({start.config}) is not the one to train "
+                         f"({model.config})", "init")
     model.load_state_dict(start.state_dict())
     return {**(record or {}), "init_sha256": weights_checksum(path)}
 

@@ -239,7 +239,7 @@ def parse_list(text: str | Sequence[str] | None, allowed: Sequence[str], option:
     items = [s.strip() for s in (text.split(",") if isinstance(text, str) else text) if s.strip()]
     bad = [s for s in items if s not in allowed]
     if bad or not items:
-        raise InputError(f"{option}: {', '.join(bad) or 'empty'} not in {','.join(allowed)}")
+        raise InputError(f"{option}: {', '.join(bad) or 'empty'} not in {','.join(allowed)}", option)
     return list(dict.fromkeys(items))
 
 
@@ -250,10 +250,10 @@ def parse_sizes(text: str | Sequence[float] | None) -> list[float]:
     try:
         values = [float(s) for s in (text.split(",") if isinstance(text, str) else text) if str(s).strip()]
     except ValueError:
-        raise InputError(f"--sizes: expected comma-separated fractions like 0.1,0.5,1, got {text!r}") from None
+        raise InputError(f"sizes: expected comma-separated fractions like 0.1,0.5,1, got {text!r}", "sizes") from None
     bad = [v for v in values if not 0.0 < v <= 1.0]
     if bad:
-        raise InputError(f"--sizes: fractions must be in (0, 1], got {bad[0]}")
+        raise InputError(f"sizes: fractions must be in (0, 1], got {bad[0]}", "sizes")
     return sorted(set(values) | {1.0})
 
 
@@ -266,10 +266,10 @@ def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, s
     epochs used. Returns the rows (dicts with the `evaluations` columns, `metrics` and `curves` as dicts).
     """
     if setting not in SETTINGS:
-        raise InputError(f"--setting: {setting!r} not in {','.join(SETTINGS)}")
+        raise InputError(f"setting: {setting!r} not in {','.join(SETTINGS)}", "setting")
     if max_epochs is not None and int(max_epochs) < 1:
         raise InputError(f"max_epochs: must be >= 1, got {max_epochs}")
-    classifiers = parse_list(list(classifiers), CLASSIFIERS, "--classifiers")
+    classifiers = parse_list(list(classifiers), CLASSIFIERS, "classifiers")
     sizes = parse_sizes(list(sizes))
     store.run_info(run_id)
     data = load_run_pairs(store, run_id, seed)

@@ -121,7 +121,7 @@ class Store:
         try:
             parsed = sa.make_url(url)
         except sa_exc.ArgumentError as exc:
-            raise InputError(f"--db: not a database URL: {shown} ({exc})") from None
+            raise InputError(f"db: not a database URL: {shown} ({exc})", "db") from None
         backend = parsed.get_backend_name()
         connect_args: dict = {}
         if backend == "sqlite":
@@ -260,11 +260,12 @@ class Store:
         not a number (`resolve_run` reads a number as a run id): InputError otherwise."""
         if name is not None:
             if not name.strip() or name.strip().isdigit():
-                raise InputError(f"--name: {name!r} cannot be a run name (a name needs a letter; numbers are run ids)")
+                raise InputError(f"name: {name!r} cannot be a run name (a name needs a letter; numbers are run ids)",
+                                 "name")
             found = self.find_run(name)
             if found is not None:
-                raise InputError(f"--name: run {found} in database {self.url} is already called {name!r}; "
-                                 "continue it with --resume, or choose another --name")
+                raise InputError(f"name: run {found} in database {self.url} is already called {name!r}; "
+                                 "continue it with resume, or choose another name", "name", "resume", "name")
         with self.engine.begin() as conn:
             result = conn.execute(
                 runs.insert().values(
@@ -324,7 +325,7 @@ class Store:
         with self.engine.connect() as conn:
             row = conn.execute(sa.select(runs).where(runs.c.id == int(run_id))).mappings().one_or_none()
         if row is None:
-            raise InputError(f"--run: no run {run_id} in database {self.url}")
+            raise InputError(f"run_id: no run {run_id} in database {self.url}", "run_id")
         return dict(row)
 
     def list_runs(self, with_counts: bool = True) -> list[dict]:
@@ -353,7 +354,7 @@ class Store:
                 runs.update().where(runs.c.id == int(run_id)).values(timings=timings, status=status)
             ).rowcount
         if updated != 1:
-            raise InputError(f"--run: no run {run_id} in database {self.url}")
+            raise InputError(f"run_id: no run {run_id} in database {self.url}", "run_id")
 
     # -------------------------------------------------------------------------------------------- pairs
 
