@@ -28,14 +28,13 @@ from vinadv.grid.optimal_moves import optimal_moves_kernel
 from vinadv.planners.batching import DEFAULT_CHUNK, over_maps
 from vinadv.planners.flat import layout, zero_row_gaps
 from vinadv.planners.result import (
-    COLLISION,
     GOAL,
-    LOOP,
     STEP_LIMIT,
     TERMINATIONS,
     PlanResult,
     check_plan_inputs,
 )
+from vinadv.planners.rollout import MOVED, rollout_step
 from vinadv.planners.torch_replay import best_and_gap, exact_actions
 from vinadv.planners.vin import GOAL_VALUE, VIN
 
@@ -335,22 +334,9 @@ def _rollout(obstacles, goals, starts, b, s, q, fc, margin, logits, actions, cor
             if a < 0:
                 term = UNDECIDED
                 break
-        dr, dc = deltas[a, 0], deltas[a, 1]
-        nr, nc = r + dr, c + dc
-        if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[b, nr, nc]:
-            term = COLLISION
+        term, r, c, length = rollout_step(obstacles, b, t, r, c, a, corner_cutting, deltas, stamp, cells, length)
+        if term != MOVED:
             break
-        if not corner_cutting and dr != 0 and dc != 0 and (obstacles[b, nr, c] or obstacles[b, r, nc]):
-            term = COLLISION
-            break
-        if stamp[nr, nc] == t + 1:
-            term = LOOP
-            break
-        r, c = nr, nc
-        stamp[r, c] = t + 1
-        cells[t, length, 0] = r
-        cells[t, length, 1] = c
-        length += 1
     lengths[t] = length
     terms[t] = term
 

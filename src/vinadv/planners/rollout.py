@@ -60,24 +60,37 @@ def _rollout_kernel(logits, obstacles, goals, starts, limits, corner_cutting, de
                     if logits[b, k, r, c] > best:
                         best = logits[b, k, r, c]
                         a = k
-                dr, dc = deltas[a, 0], deltas[a, 1]
-                nr, nc = r + dr, c + dc
-                if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[b, nr, nc]:
-                    term = COLLISION
+                term, r, c, length = rollout_step(obstacles, b, t, r, c, a, corner_cutting, deltas, stamp, cells,
+                                                  length)
+                if term != MOVED:
                     break
-                if not corner_cutting and dr != 0 and dc != 0 and (obstacles[b, nr, c] or obstacles[b, r, nc]):
-                    term = COLLISION
-                    break
-                if stamp[nr, nc] == t + 1:
-                    term = LOOP
-                    break
-                r, c = nr, nc
-                stamp[r, c] = t + 1
-                cells[t, length, 0] = r
-                cells[t, length, 1] = c
-                length += 1
             lengths[t] = length
             terms[t] = term
+
+
+#: `rollout_step`'s code for a move made (every termination code is >= -1)
+MOVED = -2
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def rollout_step(obstacles, b, t, r, c, a, corner_cutting, deltas, stamp, cells, length):
+    """One DESIGN.md move of rollout `t` on map `b` from `(r, c)` by action `a`, shared by every planner's rollout:
+    `(MOVED, new r, new c, length + 1)` with the new cell stamped and written to `cells[t, length]`, or
+    `(COLLISION | LOOP, r, c, length)` when the move ends the rollout (off the grid, into an obstacle, between two
+    obstacles without corner cutting, or onto a cell this rollout visited: `stamp == t + 1`)."""
+    n = obstacles.shape[1]
+    dr, dc = deltas[a, 0], deltas[a, 1]
+    nr, nc = r + dr, c + dc
+    if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[b, nr, nc]:
+        return COLLISION, r, c, length
+    if not corner_cutting and dr != 0 and dc != 0 and (obstacles[b, nr, c] or obstacles[b, r, nc]):
+        return COLLISION, r, c, length
+    if stamp[nr, nc] == t + 1:
+        return LOOP, r, c, length
+    stamp[nr, nc] = t + 1
+    cells[t, length, 0] = nr
+    cells[t, length, 1] = nc
+    return MOVED, nr, nc, length + 1
 
 
 def rollout_logits(logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray,
