@@ -62,9 +62,12 @@ def test_export_npz_round_trips(stored, tmp_path):
     assert main(["export", "--db", url, "--run", str(run_id), "--format", "npz", "--out", str(out), "--quiet"]) == 0
     with np.load(out) as data:
         assert str(data["format"]) == "vinadv.labelled_pairs/1" and str(data["strategy"]) == "near-path"
-        for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added", "path_o_cells", "path_o_offsets",
-                     "path_a_cells", "path_a_offsets", "attack", "dh", "dv", "pair_index"):
+        for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added", "attack", "dh", "dv", "pair_index"):
             assert np.array_equal(data[name], getattr(records, name)), name
+        for side in ("o", "a"):
+            paths = getattr(records, f"path_{side}")
+            assert np.array_equal(data[f"path_{side}_cells"], paths.cells)
+            assert np.array_equal(data[f"path_{side}_offsets"], paths.offsets)
         assert data["label"].tolist() == records.label.tolist()
         assert np.array_equal(data["score"], records.score, equal_nan=True)
         for name in HARM_FLOATS:

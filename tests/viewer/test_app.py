@@ -146,7 +146,7 @@ def test_pair_json_matches_records(client, db):
         assert np.array_equal(np.array([[c == "1" for c in line] for line in body["map_o"]]), records.obstacles_o[row])
         assert np.array_equal(np.array([[c == "1" for c in line] for line in body["map_a"]]), records.obstacles_a[row])
         o = records.path_o[row]
-        a = records.path_a_cells[records.path_a_offsets[row]:records.path_a_offsets[row + 1]]
+        a = records.path_a[row]
         assert body["path_o"] == o.tolist() and body["path_a"] == a.tolist()
         assert body["added"] == records.added[row].tolist() and body["goal"] == records.goals[row].tolist()
         assert body["label"] == records.label[row] and body["attack"] == bool(records.attack[row])

@@ -102,24 +102,6 @@ class PathPairs(Columns):
         """`(n,)` bool: the adversarial path ends at the goal."""
         return np.asarray(self.term_a) == TERMINATIONS[GOAL]
 
-    # Thin read-only views under the old flat names, for the report and viewer code (other owners) that reads
-    # them; new code uses `path_o.cells` and the like.
-    @property
-    def path_o_cells(self) -> np.ndarray:
-        return self.path_o.cells
-
-    @property
-    def path_o_offsets(self) -> np.ndarray:
-        return self.path_o.offsets
-
-    @property
-    def path_a_cells(self) -> np.ndarray:
-        return self.path_a.cells
-
-    @property
-    def path_a_offsets(self) -> np.ndarray:
-        return self.path_a.offsets
-
 
 def int_column(value, name: str, shape: tuple) -> np.ndarray:
     """`value` as int64 of exactly `shape`, or InputError naming `name` (an empty array may be of any dtype)."""

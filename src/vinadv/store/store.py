@@ -803,8 +803,9 @@ def _encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, 
     rows = slice(lo, hi)
 
     def path(side: str) -> list[str]:
-        offsets = getattr(records, f"path_{side}_offsets")[lo : hi + 1]
-        cells = getattr(records, f"path_{side}_cells")[offsets[0] : offsets[-1]]
+        paths = getattr(records, f"path_{side}")
+        offsets = paths.offsets[lo : hi + 1]
+        cells = paths.cells[offsets[0] : offsets[-1]]
         return codec.encode_paths(cells, offsets - offsets[0])
 
     def nullable(values: np.ndarray, null: np.ndarray) -> list:
