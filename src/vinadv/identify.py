@@ -27,8 +27,7 @@ from vinadv.classify import (
 from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_table, pairset_harm
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
-from vinadv.planners.engine import plan_batch
-from vinadv.planners.vin import VIN
+from vinadv.planners.interface import Planner, as_planner
 from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
 
 BUILTIN_CLASSIFIERS = ("rule",)
@@ -95,10 +94,12 @@ class Identification(Columns):
         return cross_table(self.labels, self.harm.harm)
 
 
-def replan(pairs: PairSet, model: VIN) -> PairSet:
-    """`pairs` with both paths planned again by `model` (say, another planner's weights)."""
-    o = plan_batch(pairs.obstacles_o, pairs.starts, pairs.goals, model, pairs.corner_cutting)
-    a = plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals, model, pairs.corner_cutting)
+def replan(pairs: PairSet, planner: Planner) -> PairSet:
+    """`pairs` with both paths planned again by `planner` (a `Planner` or a `VIN`): the attacks found on one
+    planner, tried on another (transfer)."""
+    planner = as_planner(planner, pairs.size)
+    o = planner.plan_batch(pairs.obstacles_o, pairs.starts, pairs.goals, pairs.corner_cutting)
+    a = planner.plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals, pairs.corner_cutting)
     return PairSet(
         obstacles_o=pairs.obstacles_o, obstacles_a=pairs.obstacles_a, starts=pairs.starts, goals=pairs.goals,
         added=pairs.added, map_index=pairs.map_index, path_o=o.paths, path_a=a.paths,
@@ -160,6 +161,10 @@ def objective_strength(objective: str):
     return OBJECTIVES[objective]
 
 
+#: the key of a run's stored config holding its planner's `Planner.spec()` (name, size, config, weights checksum)
+PLANNER_SPEC = "planner_spec"
+
+
 @dataclass
 class StoredIdentification:
     """What `identify_and_store` did: the identification, the run it was stored as, and how long it took."""
@@ -170,36 +175,45 @@ class StoredIdentification:
 
 
 def identify_and_store(pairs_path: str | os.PathLike, db: str | None = None, *, classifier: str | None = None,
-                       weights: str | None = None, name: str | None = None, harm_tol: float = DEFAULT_TOL,
-                       harm_rtol: float = 0.0, remote: Callable[..., Identification] | None = None,
-                       ) -> StoredIdentification:
-    """`vinadv identify`: label the pairs of a pairs file (after planning both maps again with `weights`, if
-    given) and store them as a new run in `db`, with their harm (tolerances `harm_tol`, `harm_rtol`).
+                       planner: str | None = None, weights: str | None = None, name: str | None = None,
+                       harm_tol: float = DEFAULT_TOL, harm_rtol: float = 0.0,
+                       remote: Callable[..., Identification] | None = None) -> StoredIdentification:
+    """`vinadv identify`: label the pairs of a pairs file and store them as a new run in `db`, with their harm
+    (tolerances `harm_tol`, `harm_rtol`). With `planner` or `weights` (`vinadv.planners.registry.load_planner`),
+    both maps of every pair are planned again by that planner first: the attacks, found on the planner that made the
+    file, tried on another (transfer). The run's config records both planners (`attack_planner`: the file's).
 
-    `remote(pairs, weights, classifier, label_source, harm_tol=, harm_rtol=)` computes the identification elsewhere (say
-    `vinadv.cluster.ClusterIdentify`); it is called after the inputs are checked, so a bad file is refused before
-    any worker starts. Without it, everything runs in this process."""
-    from vinadv.planners.weights import load_vin, weights_checksum
+    `remote(pairs, planner_ref, classifier, label_source, harm_tol=, harm_rtol=)` computes the identification
+    elsewhere (say `vinadv.cluster.ClusterIdentify`; `planner_ref` a `PlannerRef`, or None to keep the file's
+    paths); it is called after the inputs are checked, so a bad file is refused before any worker starts. Without
+    it, everything runs in this process."""
+    from vinadv.planners.registry import PlannerRef, load_planner
     from vinadv.store import Store
 
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
     pairs = PairSet.load(pairs_path)
     t0 = time.perf_counter()
-    model = load_vin(weights, size=pairs.size) if weights else None
+    replanner = None
+    if planner is not None or weights is not None:
+        replanner = load_planner(planner, pairs.size, weights=weights, corner_cutting=pairs.corner_cutting)
     classifier_model, classifier_name = load_classifier(classifier)
     if remote is None:
-        if model is not None:
-            pairs = replan(pairs, model)
+        if replanner is not None:
+            pairs = replan(pairs, replanner)
         ident = identify(pairs, classifier_model, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
     else:
-        ident = remote(pairs, weights, classifier, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
+        ref = None if replanner is None else PlannerRef.of(replanner, planner, weights, pairs.corner_cutting)
+        ident = remote(pairs, ref, classifier, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
     elapsed = time.perf_counter() - t0
+    attack_planner = pairs.params.get("planner")  # the spec of the planner that made the file (vinadv >= 0.2)
+    used = replanner.spec() if replanner is not None else attack_planner
     with Store.open(db) as store:
         run_id = store.create_run(
             name, config={"pairs": str(pairs_path), "strategy": pairs.strategy, "params": pairs.params,
-                          "classifier": classifier, "weights": weights, "harm_tolerance": harm_tol,
-                          "harm_rtol": harm_rtol},
-            weights_checksum=weights_checksum(weights) if weights else None,
+                          "classifier": classifier, "planner": None if used is None else used["name"],
+                          "weights": weights, PLANNER_SPEC: used, "attack_planner": attack_planner,
+                          "harm_tolerance": harm_tol, "harm_rtol": harm_rtol},
+            weights_checksum=None if used is None else used["weights_sha256"],
             attack=pairs.strategy, classifier=classifier_name)
         store.write_pairs(run_id, ident.records())
         store.finish_run(run_id, timings={"identify": elapsed})

@@ -25,9 +25,9 @@ from vinadv.attacks.strategies import make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.errors import InputError, OutputError
 from vinadv.grid.generator import generate_maps
-from vinadv.identify import Identification, identify, load_classifier, objective_strength
-from vinadv.planners.vin import VIN
-from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
+from vinadv.identify import PLANNER_SPEC, Identification, identify, load_classifier, objective_strength
+from vinadv.planners.interface import Planner
+from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
 from vinadv.vocabulary import LABEL_STRENGTH, success_count
 
 STAGES = ("generate", "attack", "identify", "store")
@@ -47,6 +47,7 @@ class RunConfig:
     corner_cutting: bool = True
     shard_size: int = 1000
     classifier: str | None = None
+    planner: str = DEFAULT_PLANNER
     weights: str | None = None
     harm_tolerance: float = DEFAULT_TOL
     harm_rtol: float = 0.0
@@ -86,7 +87,7 @@ class ShardResult:
     seconds: dict = field(default_factory=dict)
 
 
-def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None,
+def compute_shard(config: RunConfig, shard: int, planner: Planner, classifier=None,
                   label_source: str = "rule") -> ShardResult:
     """Generate, attack and identify shard `shard` of the run: deterministic for `(config, shard)`."""
     first_map = shard * config.shard_size
@@ -98,7 +99,7 @@ def compute_shard(config: RunConfig, shard: int, model: VIN, classifier=None,
     t1 = time.perf_counter()
     attack = make_attack(config.attack, per_map=config.per_map, seed=(config.seed, shard), budget=config.budget,
                          radius=config.radius)
-    result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, config.corner_cutting,
+    result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, planner, config.corner_cutting,
                            strength=objective_strength(config.objective))
     t2 = time.perf_counter()
     # the generator's expert paths of the original maps: harm then searches only adversarial maps (and few of them)
@@ -130,6 +131,7 @@ class RunSummary:
     run_id: int
     name: str | None
     db: str
+    planner: dict = field(default_factory=dict)
     n_maps: int = 0
     n_pairs: int = 0
     stored: int = 0
@@ -160,7 +162,8 @@ class RunSummary:
         valid = self.n_pairs - self.counts["invalid"]
         success = success_count(self.counts)
         return {
-            "run_id": self.run_id, "name": self.name, "db": self.db, "maps": self.n_maps, "pairs": self.n_pairs,
+            "run_id": self.run_id, "name": self.name, "db": self.db, "planner": self.planner, "maps": self.n_maps,
+            "pairs": self.n_pairs,
             "stored": self.stored, "skipped_shards": self.skipped_shards, "maps_without_valid_cell": self.no_valid_cell,
             "counts": dict(self.counts), "valid_pairs": valid, "successful": success,
             "success_rate": success / valid if valid else None, **harm_summary(self.harm_table),
@@ -172,29 +175,36 @@ class RunSummary:
         }
 
 
-def resolve_weights(config: RunConfig) -> tuple[VIN, str]:
-    """The planner of a run and the checksum of its weights file."""
-    path = config.weights or default_weights_path(config.size)
-    model = load_vin(config.weights, size=config.size)
-    return model, weights_checksum(path)
+def resolve_planner(config: RunConfig) -> Planner:
+    """The planner of a run (`config.planner` with `config.weights`, for the run's map size and move rule)."""
+    return load_planner(config.planner, config.size, weights=config.weights, corner_cutting=config.corner_cutting)
 
 
-def open_run(store, config: RunConfig, name: str | None, resume: bool, checksum: str, classifier_name: str):
-    """The run to write into: a new one, or with `resume` the latest run called `name` (same config only)."""
+def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: Planner, classifier_name: str):
+    """The run to write into: a new one, or with `resume` the latest run called `name` (the same config and the same
+    planner, weights checksum included, only). A new run records `planner.spec()` in its config and the weights
+    checksum in `runs.weights_checksum`."""
     if resume:
         if not name:
             raise InputError("resume needs name (the run to resume)", "resume", "name")
         run_id = store.find_run(name)
         if run_id is None:
             raise InputError(f"resume: no run named '{name}' in {store.url}", "resume")
-        stored_config = store.run_info(run_id)["config"] or {}
+        info = store.run_info(run_id)
+        stored_config = {"planner": DEFAULT_PLANNER, **(info["config"] or {})}  # runs before planners: the VIN
+        stored_config.pop(PLANNER_SPEC, None)
         if stored_config != config.to_dict():
             diff = sorted(k for k in config.to_dict() if stored_config.get(k) != config.to_dict()[k])
             raise InputError(f"resume: run '{name}' was made with other settings ({', '.join(diff)}); "
                              "use the same options or another name", "resume", "name")
+        if info["weights_checksum"] != planner.checksum:
+            raise InputError(f"resume: run '{name}' was made with another {planner.name!r} planner (weights sha256 "
+                             f"{info['weights_checksum']}, now {planner.checksum}); use the same planner or another "
+                             "name", "resume", "planner")
         return run_id
-    return store.create_run(name, config=config.to_dict(), seed=config.seed, weights_checksum=checksum,
-                            attack=config.attack, classifier=classifier_name, version=__version__)
+    return store.create_run(name, config={**config.to_dict(), PLANNER_SPEC: planner.spec()}, seed=config.seed,
+                            weights_checksum=planner.checksum, attack=config.attack, classifier=classifier_name,
+                            version=__version__)
 
 
 def run_pipeline(
@@ -205,16 +215,16 @@ def run_pipeline(
     progress: bool = True,
     shard_results: Callable | None = None,
 ) -> RunSummary:
-    """Run the main job and store it; returns the summary. `shard_results(config, shards, model, classifier,
+    """Run the main job and store it; returns the summary. `shard_results(config, shards, planner, classifier,
     label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order."""
     from vinadv.store import Store
 
     t_start = time.perf_counter()
-    model, checksum = resolve_weights(config)
+    planner = resolve_planner(config)
     classifier, classifier_name = load_classifier(config.classifier)
     with Store.open(db) as store:
-        run_id = open_run(store, config, name, resume, checksum, classifier_name)
-        summary = RunSummary(run_id, name, store.url)
+        run_id = open_run(store, config, name, resume, planner, classifier_name)
+        summary = RunSummary(run_id, name, store.url, planner.spec())
         shards = range(config.n_shards)  # a range, not a list: a huge --n streams shard by shard
         if resume:
             summary.skipped_shards = _complete_shards(store, run_id, config)
@@ -227,7 +237,7 @@ def run_pipeline(
             bar = tqdm(total=max(0, config.n - summary.skipped_shards * config.shard_size), desc="maps", unit="map")
         done = summary.skipped_shards
         try:
-            for result in compute(config, shards, model, classifier, classifier_name):
+            for result in compute(config, shards, planner, classifier, classifier_name):
                 t0 = time.perf_counter()
                 written = store.write_pairs(run_id, shard_records(result),
                                             skip_stored=resume or shard_results is not None)
@@ -259,6 +269,6 @@ def _complete_shards(store, run_id: int, config: RunConfig) -> int:
     return min(config.n_shards, max(recorded, before_last))
 
 
-def _local_shards(config, shards, model, classifier, label_source):
+def _local_shards(config, shards, planner, classifier, label_source):
     for shard in shards:
-        yield compute_shard(config, shard, model, classifier, label_source)
+        yield compute_shard(config, shard, planner, classifier, label_source)

@@ -60,7 +60,8 @@ def test_every_pair_is_valid_and_seeds_reproduce(name, model, maps, tmp_path):
     first.pairs.save(tmp_path / "p.npz")
     back = PairSet.load(tmp_path / "p.npz")
     np.testing.assert_array_equal(back.added, first.pairs.added)
-    assert back.strategy == name and back.params == attack.params()
+    assert back.strategy == name and back.params == {**attack.params(), "planner": first.pairs.params["planner"]}
+    assert back.params["planner"]["name"] == "vin"  # which planner the attacks were found on
 
 
 def test_paths_in_pairs_are_the_reference_planners(model, maps):

@@ -86,11 +86,12 @@ def test_workers_are_single_threaded(cluster):
 
 
 def test_a_worker_with_other_weights_refuses_them(weights):
-    from vinadv.cluster.worker import worker_vin
+    from vinadv.cluster.worker import worker_planner
     from vinadv.errors import InputError
+    from vinadv.planners.registry import PlannerRef
 
-    with pytest.raises(InputError, match="workers need the same file"):
-        worker_vin(weights, SIZE, "0" * 64)
+    with pytest.raises(InputError, match="workers need the same planner files"):
+        worker_planner(PlannerRef("vin", weights, SIZE, True, "0" * 64))
 
 
 @pytest.mark.slow  # starts (and stops) a LocalCluster of its own: the path users take with --workers

@@ -1,4 +1,4 @@
-"""One-obstacle attack strategies, from random to exhaustive, all batched on the fast planner.
+"""One-obstacle attack strategies, from random to exhaustive, batched, on any planner (`vinadv.planners`).
 
 Every strategy follows the same three steps, and differs only in the first:
 
@@ -12,15 +12,18 @@ Every strategy follows the same three steps, and differs only in the first:
 
 The strategies:
 - `random`: uniformly chosen valid cells.
-- `near-path`: uniformly chosen valid cells within Chebyshev distance `radius` (default 2) of the original VIN
-  path, path cells included (the paper's setting adds one obstacle "near the path"; its three rules are not
+- `near-path`: uniformly chosen valid cells within Chebyshev distance `radius` (default 2) of the original
+  planner path, path cells included (the paper's setting adds one obstacle "near the path"; its three rules are not
   public, so this is ours).
 - `key-points`: rule-based ranking, in tiers: (1) cells where the original path turns (earlier turns first),
   (2) cells beside a diagonal move of the path (the corners it cuts), (3) other cells next to the path, steepest
-  VIN value change to a neighbour first, (4) the remaining path cells. Evaluates the top `budget` (default 8).
-- `saliency`: white-box. The gradient, with respect to the obstacle channel, of the log-probability of the
-  VIN's chosen actions along the original path; the most negative gradient first (adding an obstacle there
-  lowers the planner's confidence in its own path the most, to first order). Evaluates the top `budget`.
+  value change to a neighbour first (`Planner.value_maps`: the VIN's value map, `optimal`'s cost-to-go, for other
+  planners the log-probability of the chosen action), (4) the remaining path cells. Evaluates the top `budget`
+  (default 8).
+- `saliency`: white-box. The gradient, with respect to the obstacles, of the log-probability of the planner's
+  chosen actions along the original path (autograd through `Planner.differentiable`); the most negative
+  gradient first (adding an obstacle there lowers the planner's confidence in its own path the most, to first
+  order). Evaluates the top `budget`. A planner without gradients (`optimal`) is ranked as by `key-points`.
 - `exhaustive`: every valid cell of every map; keeps the strongest per map, or all pairs with `per_map=0`.
   This is the upper bound of what one obstacle can do.
 """
@@ -37,13 +40,12 @@ from scipy.ndimage import maximum_filter
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import valid_cells
 from vinadv.errors import InputError
-from vinadv.planners.engine import plan_batch
+from vinadv.planners.interface import Planner, as_planner
 from vinadv.planners.result import PlanResult
-from vinadv.planners.vin import VIN, make_input
 
 #: candidates planned together; bounds memory (each holds an N x N map and a path)
 EVAL_CHUNK = 8192
-#: maps per torch forward in the white-box and value-map strategies
+#: maps per torch forward and backward of the white-box strategy
 TORCH_CHUNK = 128
 
 
@@ -77,11 +79,11 @@ class AttackContext:
     goals: np.ndarray
     valid: np.ndarray
     originals: PlanResult
-    model: VIN
+    planner: Planner
     rng: np.random.Generator
 
     def path_mask(self) -> np.ndarray:
-        """`(B, N, N)` bool: the cells of each map's original VIN path."""
+        """`(B, N, N)` bool: the cells of each map's original path."""
         mask = np.zeros_like(self.obstacles)
         paths = self.originals.paths
         cells = paths.cells.astype(np.int64)
@@ -116,13 +118,14 @@ class Attack:
         obstacles: np.ndarray,
         starts: np.ndarray,
         goals: np.ndarray,
-        model: VIN,
+        planner: Planner,
         corner_cutting: bool = True,
         strength: Callable[[PairSet], np.ndarray] | None = None,
         progress: bool = False,
         first_map: int = 0,
     ) -> AttackResult:
-        """Attack a batch of maps: obstacles `(B, N, N)` bool, starts and goals `(B, 2)`; see the module doc.
+        """Attack a batch of maps with `planner` (a `Planner`, or a `VIN`): obstacles `(B, N, N)` bool, starts
+        and goals `(B, 2)`; see the module doc.
 
         `first_map`: these maps are maps `first_map..first_map+B-1` of a larger batch; the result is that
         batch's result for them (so a batch can be attacked in shards). Randomised strategies draw one
@@ -131,16 +134,18 @@ class Attack:
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         starts = np.ascontiguousarray(starts, dtype=np.int64)
         goals = np.ascontiguousarray(goals, dtype=np.int64)
-        originals = plan_batch(obstacles, starts, goals, model, corner_cutting)
+        planner = as_planner(planner, obstacles.shape[1])
+        originals = planner.plan_batch(obstacles, starts, goals, corner_cutting)
         valid = valid_cells(obstacles, starts, goals, corner_cutting)
         rng = np.random.default_rng(self.seed)
         rng.bit_generator.advance(first_map * obstacles.shape[1] * obstacles.shape[2])
-        ctx = AttackContext(obstacles, starts, goals, valid, originals, model, rng)
+        ctx = AttackContext(obstacles, starts, goals, valid, originals, planner, rng)
         scores = np.where(valid, self.candidate_scores(ctx), -np.inf)
         map_idx, cells, rank = _top_candidates(scores, self._evaluated_per_map())
         no_valid = np.flatnonzero(~np.isfinite(scores).any(axis=(1, 2)))
         kept, calls = self._evaluate(ctx, map_idx, cells, rank, corner_cutting, strength or planner_strength,
                                      progress)
+        kept.params = {**kept.params, "planner": planner.spec()}  # which planner the attacks were found on
         return AttackResult(kept, no_valid, len(obstacles) + calls)
 
     def _evaluated_per_map(self) -> int | None:
@@ -170,7 +175,7 @@ class Attack:
     def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength) -> PairSet:
         obstacles_a = ctx.obstacles[map_idx].copy()
         obstacles_a[np.arange(len(map_idx)), cells[:, 0], cells[:, 1]] = True
-        planned = plan_batch(obstacles_a, ctx.starts[map_idx], ctx.goals[map_idx], ctx.model, corner_cutting)
+        planned = ctx.planner.plan_batch(obstacles_a, ctx.starts[map_idx], ctx.goals[map_idx], corner_cutting)
         pairs = _make_pairs(ctx, map_idx, cells, obstacles_a, planned, corner_cutting)
         if not self.ranked or self.per_map == 0:
             return pairs
@@ -249,7 +254,7 @@ class KeyPointsAttack(Attack):
         # tier 4 (lowest): any path cell
         scores[on_path] = 0.0
         # tier 3: other cells next to the path, by the steepest value change to a neighbour, in [1, 2)
-        value = _value_maps(ctx)
+        value = ctx.planner.value_maps(ctx.obstacles, ctx.goals)
         steep = _steepness(value, ctx.obstacles)
         near = maximum_filter(on_path, size=(1, 3, 3), mode="constant") & ~on_path
         scale = np.maximum(steep.reshape(b, -1).max(axis=1), 1e-12)[:, None, None]
@@ -274,16 +279,6 @@ class KeyPointsAttack(Attack):
         return scores
 
 
-def _value_maps(ctx: AttackContext) -> np.ndarray:
-    """The VIN's value map `max_a q` of every map, `(B, N, N)` float32."""
-    out = []
-    with torch.no_grad():
-        for i in range(0, len(ctx.obstacles), TORCH_CHUNK):
-            x = make_input(ctx.obstacles[i : i + TORCH_CHUNK], ctx.goals[i : i + TORCH_CHUNK])
-            out.append(ctx.model.q_values(x).max(dim=1).values.numpy())
-    return np.concatenate(out) if out else np.zeros(ctx.obstacles.shape, np.float32)
-
-
 def _steepness(value: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
     """Largest |value change| from each cell to a free 8-neighbour, `(B, N, N)`."""
     b, n, m = value.shape
@@ -303,7 +298,11 @@ class SaliencyAttack(Attack):
     name = "saliency"
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
-        model = ctx.model
+        module = ctx.planner.differentiable
+        if module is None:  # no gradients (the `optimal` control): rank as key-points does
+            return KeyPointsAttack.candidate_scores(self, ctx)
+        device = getattr(ctx.planner, "device", torch.device("cpu"))
+        module.eval()
         b = len(ctx.obstacles)
         owner_all = ctx.originals.paths.owners()
         cells_all = ctx.originals.paths.cells.astype(np.int64)
@@ -313,15 +312,16 @@ class SaliencyAttack(Attack):
         for lo in range(0, b, TORCH_CHUNK):
             hi = min(b, lo + TORCH_CHUNK)
             sel = (owner_all >= lo) & (owner_all < hi) & ~at_goal
-            x = make_input(ctx.obstacles[lo:hi], ctx.goals[lo:hi]).requires_grad_(True)
-            logits = model.action_logits(x)
-            owner = torch.from_numpy(owner_all[sel] - lo)
-            rows, cols = torch.from_numpy(cells_all[sel, 0]), torch.from_numpy(cells_all[sel, 1])
-            picked = torch.log_softmax(logits[owner, rows, cols], dim=-1)
+            x = torch.from_numpy(ctx.obstacles[lo:hi].astype(np.float32)).to(device).requires_grad_(True)
+            logits = module(x, torch.from_numpy(ctx.goals[lo:hi]).to(device))  # (b, 8, N, N)
+            owner = torch.from_numpy(owner_all[sel] - lo).to(device)
+            rows = torch.from_numpy(cells_all[sel, 0]).to(device)
+            cols = torch.from_numpy(cells_all[sel, 1]).to(device)
+            picked = torch.log_softmax(logits[owner, :, rows, cols], dim=-1)
             chosen = picked.detach().argmax(dim=-1)
             objective = picked.gather(1, chosen[:, None]).sum()
             (grad,) = torch.autograd.grad(objective, x)
-            out[lo:hi] = -grad[:, 0].numpy()
+            out[lo:hi] = -grad.cpu().numpy()
         return out
 
 

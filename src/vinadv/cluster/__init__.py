@@ -15,9 +15,9 @@ Who computes and who writes:
 - A lost worker's shard is recomputed by Dask (the scheduler reschedules the tasks of a dead worker; tasks that
   raise are retried `retries` times); a shard's future yields its result once, and the client writes with
   `skip_stored` on the unique `(run_id, pair_index)`, so a shard is never stored twice.
-- Workers rebuild the planner (and a classifier model) from the file path, checked against the client's
-  checksum, once per worker process; they need the same files at the same paths (shared file system, or the
-  shipped default weights of the installed package).
+- Workers rebuild the planner (`vinadv.planners.registry.PlannerRef`: spec and weights file) and a classifier model
+  from their file paths, checked against the client's checksums, once per worker process; they need the same files
+  at the same paths (shared file system, or the shipped default weights of the installed package).
 - Each worker process uses one thread for torch, Numba and the planner's pool; start external workers with
   `dask worker tcp://HOST:PORT --nworkers <cores> --nthreads 1`.
 
@@ -151,18 +151,18 @@ class ClusterShards:
         self.window = window
         self.on_result = on_result  # test hook: called with each ShardResult as it arrives
 
-    def __call__(self, config, shards, model, classifier, label_source):
+    def __call__(self, config, shards, planner, classifier, label_source):
         from dask.base import tokenize
         from distributed import as_completed
 
         from vinadv.cluster.worker import run_shard_task
-        from vinadv.planners.weights import default_weights_path, weights_checksum
+        from vinadv.planners.registry import PlannerRef
+        from vinadv.planners.weights import weights_checksum
 
-        weights = _absolute(config.weights or default_weights_path(config.size))
-        weights_sum = weights_checksum(weights)
+        ref = PlannerRef.of(planner, config.planner, config.weights, config.corner_cutting)
         classifier = config.classifier if config.classifier in (None, "rule") else _absolute(config.classifier)
         classifier_sum = None if classifier in (None, "rule") else weights_checksum(classifier)
-        token = tokenize(config.to_dict(), weights_sum, classifier_sum, label_source)
+        token = tokenize(config.to_dict(), ref, classifier_sum, label_source)
         pending = list(shards)[::-1]  # pop() from the end = lowest shard first
         order = list(shards)
         arrived: dict = {}
@@ -175,7 +175,7 @@ class ClusterShards:
             while pending and in_flight + len(arrived) < window:
                 shard = pending.pop()
                 futures.add(self.client.submit(
-                    run_shard_task, config, shard, weights, weights_sum, classifier, classifier_sum, label_source,
+                    run_shard_task, config, shard, ref, classifier, classifier_sum, label_source,
                     key=f"vinadv-shard-{token}-{shard}", retries=self.retries, pure=False))
                 in_flight += 1
 
@@ -224,24 +224,22 @@ def _bounds(n: int, shard_size: int) -> list[tuple[int, int]]:
     return [(lo, min(n, lo + shard_size)) for lo in range(0, n, shard_size)]
 
 
-def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str | None, shard_size: int = 1000,
+def attack_on_cluster(client, strategy: str, options: dict, maps, planner_ref, shard_size: int = 1000,
                       progress: bool = False, objective: str = "paper"):
-    """`Attack.attack` of every map of `maps` (first start of each), `shard_size` maps per task: the same
-    `AttackResult` as the local command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...);
-    `objective`: what the ranking strategies keep ('paper' | 'harm', `vinadv.identify.OBJECTIVES`)."""
+    """`Attack.attack` of every map of `maps` (first start of each) with the planner of `planner_ref` (a
+    `vinadv.planners.registry.PlannerRef`), `shard_size` maps per task: the same `AttackResult` as the local
+    command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...); `objective`: what the ranking
+    strategies keep ('paper' | 'harm', `vinadv.identify.OBJECTIVES`)."""
     import numpy as np
 
     from vinadv.attacks.strategies import AttackResult, make_attack
     from vinadv.cluster.worker import attack_shard_task
-    from vinadv.planners.weights import default_weights_path, weights_checksum
 
     attack = make_attack(strategy, **options)  # validates the options here, before anything is sent
-    path = _absolute(weights or default_weights_path(maps.size))
-    weights_sum = weights_checksum(path)
     bounds = _bounds(len(maps), shard_size)
     futures = [
         client.submit(attack_shard_task, strategy, options, maps.obstacles[lo:hi], maps.starts[lo:hi, 0],
-                      maps.goals[lo:hi], lo, maps.corner_cutting, path, weights_sum, objective, retries=RETRIES,
+                      maps.goals[lo:hi], lo, maps.corner_cutting, planner_ref, objective, retries=RETRIES,
                       pure=False)
         for lo, hi in bounds
     ]
@@ -252,7 +250,8 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, weights: str |
         shifted.append(part.pairs)
     from vinadv.attacks.pairs import PairSet
 
-    pairs = PairSet.concat(shifted, size=maps.size, strategy=strategy, params=attack.params(),
+    params = parts[0].pairs.params if parts else attack.params()  # the planner's spec included
+    pairs = PairSet.concat(shifted, size=maps.size, strategy=strategy, params=params,
                            corner_cutting=maps.corner_cutting)
     no_valid = np.concatenate([p.no_valid_cell + lo for (lo, _), p in zip(bounds, parts)]).astype(np.int64) \
         if parts else np.zeros(0, np.int64)
@@ -267,32 +266,30 @@ class ClusterIdentify:
                  progress: bool = False):
         self.address, self.workers, self.shard_size, self.progress = address, workers, shard_size, progress
 
-    def __call__(self, pairs, weights: str | None, classifier: str | None, label_source: str, *, harm_tol: float,
+    def __call__(self, pairs, planner_ref, classifier: str | None, label_source: str, *, harm_tol: float,
                  harm_rtol: float):
         with open_cluster(self.address, self.workers) as client:
-            return identify_on_cluster(client, pairs, weights, classifier, label_source, shard_size=self.shard_size,
+            return identify_on_cluster(client, pairs, planner_ref, classifier, label_source, shard_size=self.shard_size,
                                        progress=self.progress, harm_tol=harm_tol, harm_rtol=harm_rtol)
 
 
-def identify_on_cluster(client, pairs, weights: str | None, classifier: str | None, label_source: str,
+def identify_on_cluster(client, pairs, planner_ref, classifier: str | None, label_source: str,
                         shard_size: int = 1000, progress: bool = False, *, harm_tol: float,
                         harm_rtol: float):
-    """`identify` (after `replan` with `weights`) of `pairs`, `shard_size` pairs per task: the same
-    `Identification` as the local command (harm with the tolerances `harm_tol`, `harm_rtol`)."""
+    """`identify` (after `replan` with the planner of `planner_ref`, unless None) of `pairs`, `shard_size` pairs
+    per task: the same `Identification` as the local command (harm with the tolerances `harm_tol`, `harm_rtol`)."""
     import numpy as np
 
     from vinadv.cluster.worker import identify_shard_task
     from vinadv.identify import Identification
     from vinadv.planners.weights import weights_checksum
 
-    weights = _absolute(weights) if weights else None
-    weights_sum = weights_checksum(weights) if weights else None
     classifier = classifier if classifier in (None, "rule") else _absolute(classifier)
     classifier_sum = None if classifier in (None, "rule") else weights_checksum(classifier)
     bounds = _bounds(len(pairs), shard_size)
     futures = [
-        client.submit(identify_shard_task, pairs.take(np.arange(lo, hi)), weights, weights_sum, classifier,
-                      classifier_sum, label_source, harm_tol, harm_rtol, retries=RETRIES, pure=False)
+        client.submit(identify_shard_task, pairs.take(np.arange(lo, hi)), planner_ref, classifier, classifier_sum,
+                      label_source, harm_tol, harm_rtol, retries=RETRIES, pure=False)
         for lo, hi in bounds
     ]
     parts = _gather_in_order(client, futures, progress, "identify", [hi - lo for lo, hi in bounds])

@@ -52,19 +52,10 @@ def _cached(key, load):
         return _MODELS[key]
 
 
-def worker_vin(path: str, size: int, checksum: str):
-    """The VIN of weights file `path`, loaded once per worker process; InputError if the file differs."""
-    from vinadv.errors import InputError
-    from vinadv.planners.weights import load_vin, weights_checksum
-
-    def load():
-        found = weights_checksum(path)
-        if found != checksum:
-            raise InputError(f"weights file {path} on this worker has checksum {found}, the client's has {checksum}; "
-                             "workers need the same file at the same path")
-        return load_vin(path, size=size)
-
-    return _cached(("vin", path, size, checksum), load)
+def worker_planner(ref):
+    """The planner of `ref` (a `vinadv.planners.registry.PlannerRef`), loaded once per worker process;
+    `PlannerError` if this worker's planner differs from the client's (another weights file, say)."""
+    return _cached(("planner", ref), ref.load)
 
 
 def worker_classifier(spec: str | None, checksum: str | None):
@@ -84,41 +75,39 @@ def worker_classifier(spec: str | None, checksum: str | None):
     return _cached(("classifier", spec, checksum), load)
 
 
-def run_shard_task(config, shard: int, weights: str, weights_sum: str, classifier_spec: str | None,
-                   classifier_sum: str | None, label_source: str):
-    """`vinadv run`: shard `shard` of the run (`pipeline.compute_shard`), on a worker. `weights` and
-    `classifier_spec` are the client's files as absolute paths."""
+def run_shard_task(config, shard: int, planner_ref, classifier_spec: str | None, classifier_sum: str | None,
+                   label_source: str):
+    """`vinadv run`: shard `shard` of the run (`pipeline.compute_shard`), on a worker, with the planner of
+    `planner_ref`; `classifier_spec` is the client's file as an absolute path."""
     from vinadv.pipeline import compute_shard
 
     single_threaded()
-    model = worker_vin(weights, config.size, weights_sum)
     classifier = worker_classifier(classifier_spec, classifier_sum)
-    return compute_shard(config, shard, model, classifier, label_source)
+    return compute_shard(config, shard, worker_planner(planner_ref), classifier, label_source)
 
 
 def attack_shard_task(strategy: str, options: dict, obstacles, starts, goals, first_map: int, corner_cutting: bool,
-                      weights: str, weights_sum: str, objective: str = "paper"):
+                      planner_ref, objective: str = "paper"):
     """`vinadv attack` on maps `first_map .. first_map + len(obstacles)` of the file: the same pairs as attacking
     the whole file at once (map indices local to the shard; the client shifts them)."""
     from vinadv.attacks.strategies import make_attack
     from vinadv.identify import objective_strength
 
     single_threaded()
-    model = worker_vin(weights, obstacles.shape[1], weights_sum)
     attack = make_attack(strategy, **options)
-    return attack.attack(obstacles, starts, goals, model, corner_cutting, strength=objective_strength(objective),
-                         first_map=first_map)
+    return attack.attack(obstacles, starts, goals, worker_planner(planner_ref), corner_cutting,
+                         strength=objective_strength(objective), first_map=first_map)
 
 
-def identify_shard_task(pairs, weights: str | None, weights_sum: str | None, classifier_spec: str | None,
-                        classifier_sum: str | None, label_source: str, harm_tol: float,
-                        harm_rtol: float):
-    """`vinadv identify` on a shard of pairs: plan again (with weights), label, and compute the harm."""
+def identify_shard_task(pairs, planner_ref, classifier_spec: str | None, classifier_sum: str | None,
+                        label_source: str, harm_tol: float, harm_rtol: float):
+    """`vinadv identify` on a shard of pairs: plan again (with the planner of `planner_ref`, unless None), label,
+    and compute the harm."""
     from vinadv.identify import identify, replan
 
     single_threaded()
-    if weights is not None:
-        pairs = replan(pairs, worker_vin(weights, pairs.size, weights_sum))
+    if planner_ref is not None:
+        pairs = replan(pairs, worker_planner(planner_ref))
     return identify(pairs, worker_classifier(classifier_spec, classifier_sum), label_source, harm_tol=harm_tol,
                     harm_rtol=harm_rtol)
 

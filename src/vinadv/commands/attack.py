@@ -7,11 +7,12 @@ import json
 import time
 
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices
+from vinadv.commands import LazyChoices, add_planner_arguments
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("attack", help="make adversarial maps (one added obstacle) from a maps file")
+    p = subparsers.add_parser("attack", help="make adversarial maps (one added obstacle) from a maps file, on any "
+                              "planner")
     p.add_argument("--maps", required=True, help="maps file (.npz from `vinadv maps generate`)")
     p.add_argument("--strategy", required=True, choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
                    metavar="STRATEGY", help="attack strategy: %(choices)s")
@@ -22,7 +23,7 @@ def register(subparsers) -> None:
     p.add_argument("--budget", type=int, default=8,
                    help="key-points and saliency: candidates evaluated per map (default 8)")
     p.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
-    p.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
+    add_planner_arguments(p)
     add_harm_arguments(p)
     add_objective_argument(p)
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -91,23 +92,24 @@ def cmd_attack(args: argparse.Namespace) -> int:
     from vinadv.grid.mapset import MapSet
     from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
     from vinadv.outfile import check_output_path
-    from vinadv.planners.weights import load_vin
+    from vinadv.planners.registry import PlannerRef, load_planner
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
-    model = load_vin(args.weights, size=maps.size)
+    planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
     attack = make_attack(args.strategy, per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
     t0 = time.perf_counter()
     if args.cluster is None and args.workers is None:
-        result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, maps.corner_cutting,
+        result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, planner, maps.corner_cutting,
                                strength=objective_strength(args.objective), progress=not args.quiet)
     else:
         from vinadv.cluster import attack_on_cluster
 
         options = dict(per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
         with open_cluster(args.cluster, args.workers) as client:
-            result = attack_on_cluster(client, args.strategy, options, maps, args.weights,
+            ref = PlannerRef.of(planner, args.planner, args.weights, maps.corner_cutting)
+            result = attack_on_cluster(client, args.strategy, options, maps, ref,
                                        shard_size=args.shard_size, progress=not args.quiet,
                                        objective=args.objective)
     elapsed = time.perf_counter() - t0
@@ -115,11 +117,13 @@ def cmd_attack(args: argparse.Namespace) -> int:
     ident = identify(result.pairs, harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol)
     summary = attack_summary(ident.labels, len(maps), len(result.no_valid_cell), result.planner_calls, elapsed,
                              harm_table=ident.harm_table())
-    summary.update(strategy=args.strategy, params=attack.params(), out=args.out, objective=args.objective)
+    summary.update(strategy=args.strategy, params=attack.params(), planner=planner.spec(), out=args.out,
+                   objective=args.objective)
     if args.json:
         print(json.dumps(summary))
     elif not args.quiet:
-        print(f"{args.strategy}: {summary['pairs']:,} pairs from {len(maps):,} maps in {elapsed:.1f} s -> {args.out}")
+        print(f"{args.strategy} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps in "
+              f"{elapsed:.1f} s -> {args.out}")
         if result.no_valid_cell.size:
             print(f"{len(result.no_valid_cell)} maps had no valid cell for the added obstacle; "
                   "no pair was made for them")

@@ -6,6 +6,7 @@ import argparse
 import json
 import time
 
+from vinadv.commands import add_planner_arguments
 from vinadv.errors import InputError
 from vinadv.planners.batching import DEFAULT_CHUNK
 
@@ -14,11 +15,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("plan", help="plan paths from every start of every map (VIN or another planner)")
     p.add_argument("--maps", required=True, help="maps file (.npz, from `vinadv maps generate`)")
     p.add_argument("--out", required=True, help="output paths file (.npz, format vinadv.paths/1)")
-    p.add_argument("--planner", default=None, metavar="NAME|SPEC",
-                   help="vin (default), gppn, optimal, or your own FILE.py:FACTORY / MODULE:FACTORY "
-                        "(see `vinadv planners`)")
-    p.add_argument("--weights", default=None,
-                   help="weights file of the vin or gppn planner (default: the shipped weights for the map size)")
+    add_planner_arguments(p)
     p.add_argument("--chunk-size", type=int, default=DEFAULT_CHUNK,
                    help=f"maps per batch; bounds memory (default {DEFAULT_CHUNK})")
     p.add_argument("--json", action="store_true", help="print a JSON summary")

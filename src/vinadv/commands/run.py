@@ -7,7 +7,7 @@ import json
 import time
 
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices
+from vinadv.commands import LazyChoices, add_planner_arguments
 from vinadv.commands.attack import add_harm_arguments, add_objective_argument, attack_summary, print_counts
 from vinadv.errors import InputError
 
@@ -26,7 +26,7 @@ def register(subparsers) -> None:
     run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
     run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
     run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
-    run.add_argument("--weights", help="VIN weights file (default: the shipped weights)")
+    add_planner_arguments(run)
     add_harm_arguments(run)
     add_objective_argument(run)
     run.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
@@ -46,7 +46,9 @@ def register(subparsers) -> None:
     ident.add_argument("--pairs", required=True, help="pairs file (.npz from `vinadv attack`)")
     ident.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     ident.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
-    ident.add_argument("--weights", help="plan both maps again with these VIN weights (default: keep the file's paths)")
+    add_planner_arguments(ident, weights_help="weights file of the vin or gppn planner")
+    ident.epilog = ("With --planner or --weights, both maps of every pair are planned again by that planner (the "
+                    "attacks of the file, tried on another planner: transfer); without, the file's paths are kept.")
     add_harm_arguments(ident)
     ident.add_argument("--name", help="run name")
     ident.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -63,7 +65,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     config = RunConfig(
         n=args.n, size=args.size, attack=args.attack, seed=args.seed, per_map=args.per_map, budget=args.budget,
         radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
-        classifier=args.classifier, weights=args.weights, harm_tolerance=args.harm_tolerance, harm_rtol=args.harm_rtol,
+        classifier=args.classifier, planner=args.planner or "vin", weights=args.weights,
+        harm_tolerance=args.harm_tolerance, harm_rtol=args.harm_rtol,
         objective=args.objective,
     )
     with open_cluster(args.cluster, args.workers) as client:
@@ -99,7 +102,7 @@ def _print_run(result: dict) -> None:
     from vinadv.pipeline import STAGES
 
     print(f"run {result['run_id']} ({result['name'] or 'unnamed'}) in {result['db']}: {result['pairs']:,} pairs from "
-          f"{result['maps']:,} maps, {result['stored']:,} stored")
+          f"{result['maps']:,} maps on planner {result['planner']['name']}, {result['stored']:,} stored")
     if result["skipped_shards"]:
         print(f"resumed: {result['skipped_shards']} complete shards skipped")
     if result["maps_without_valid_cell"]:
@@ -121,7 +124,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     remote = None
     if args.cluster is not None or args.workers is not None:
         remote = ClusterIdentify(args.cluster, args.workers, shard_size=args.shard_size, progress=not args.quiet)
-    done = identify_and_store(args.pairs, args.db, classifier=args.classifier, weights=args.weights, name=args.name,
+    done = identify_and_store(args.pairs, args.db, classifier=args.classifier, planner=args.planner,
+                              weights=args.weights, name=args.name,
                               harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol, remote=remote)
     ident = done.identification
     summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds, harm_table=ident.harm_table())

@@ -6,9 +6,10 @@ Numba or PyTorch.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 
 #: maps per chunk of the planning engine: bounds the memory of its path buffers (N * N cells per rollout, touched
@@ -53,3 +54,22 @@ def over_maps(b: int, work: Callable[[int, int], None], threads: int | None = No
         return
     bounds = [b * i // pieces for i in range(pieces + 1)]
     list(_pool(threads).map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
+
+
+@contextlib.contextmanager
+def torch_threads(threads: int) -> Iterator[None]:
+    """PyTorch's intra-op threads set to `threads` inside the block, restored after (a process-wide setting).
+
+    The torch planners run their forward on one torch thread per `over_maps` thread: on small maps a multi-threaded
+    op spends its time synchronising, and on a machine where another process holds a core it waits for that core
+    (measured: 40x slower with 2 threads than with 1 for a small GPPN on 10x10 maps, one busy core)."""
+    import torch
+
+    before = torch.get_num_threads()
+    if before != threads:
+        torch.set_num_threads(threads)
+    try:
+        yield
+    finally:
+        if before != threads:
+            torch.set_num_threads(before)

@@ -21,6 +21,7 @@ from torch import nn
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
+from vinadv.planners.batching import over_maps, torch_threads
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
 
@@ -93,6 +94,22 @@ class Planner(ABC):
         """What a run records about the planner: name, size, config and weights checksum."""
         return {"name": self.name, "size": int(self.size), "config": self.config, "weights_sha256": self.checksum}
 
+    @property
+    def differentiable(self) -> nn.Module | None:
+        """A module computing the logits differentiably: `module(obstacles (B,N,N) float, goals (B,2) int64)`
+        -> `(B, 8, N, N)` (the gradient attacks use it); None for a planner without gradients."""
+        return None
+
+    def value_maps(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """`(B, N, N)` float: how good each cell is for reaching the goal, for the value-based attack ranking.
+
+        A planner without a value map gets a stand-in: the log-probability of the action it chooses at each cell
+        (`max_a log_softmax(logits)`, its confidence). The VIN answers its value map `max_a q`, `optimal` minus
+        the exact cost-to-go.
+        """
+        logits = torch.from_numpy(self.logits(obstacles, goals))
+        return torch.log_softmax(logits.double(), dim=1).max(dim=1).values.numpy()
+
     def logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
         """`policy_logits`, checked (`check_logits`): `(B, 8, N, N)` float32/float64 NumPy."""
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
@@ -148,8 +165,9 @@ class TorchPlanner(Planner):
     """A planner around a `torch.nn.Module` whose `forward(obstacles, goals)` takes obstacles as 0/1 float32
     `(B, N, N)` and goals as int64 `(B, 2)` and returns `(B, 8, N, N)` logits (the bring-your-own contract).
 
-    The module runs in eval mode without gradients, `batch_size` maps at a time, on `device`; `module` stays
-    available for gradient-based attacks.
+    The module runs in eval mode without gradients, `batch_size` maps at a time, on `device`; on the CPU the maps
+    are split between threads (`vinadv.planners.batching.over_maps`), each running the forward on one torch thread,
+    so `forward` must not change the module's state. `module` stays available for gradient-based attacks.
     """
 
     def __init__(self, module: nn.Module, name: str, size: int, checksum: str | None = None,
@@ -170,20 +188,33 @@ class TorchPlanner(Planner):
     def config(self) -> dict:
         return self._config
 
+    @property
+    def differentiable(self) -> nn.Module:
+        return self.module
+
     def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
         self.module.eval()
         b, n = obstacles.shape[0], obstacles.shape[1]
         out = np.empty((b, N_ACTIONS, n, n), dtype=np.float32)
-        with torch.no_grad():
-            for i in range(0, b, self.batch_size):
-                sl = slice(i, i + self.batch_size)
-                obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
-                g = torch.from_numpy(goals[sl].astype(np.int64)).to(self.device)
-                try:
-                    raw = self.module(obs, g)
-                except Exception as exc:  # a user's module: say which planner failed, in one line
-                    raise PlannerError(f"planner {self.name!r}: forward failed: {type(exc).__name__}: {exc}") from None
-                out[sl] = check_logits(self.name, raw, obs.shape[0], n)
+
+        def forward(lo: int, hi: int) -> None:
+            with torch.no_grad():  # per thread: grad mode is thread-local
+                for i in range(lo, hi, self.batch_size):
+                    sl = slice(i, min(hi, i + self.batch_size))
+                    obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
+                    g = torch.from_numpy(goals[sl].astype(np.int64)).to(self.device)
+                    try:
+                        raw = self.module(obs, g)
+                    except Exception as exc:  # a user's module: say which planner failed, in one line
+                        raise PlannerError(f"planner {self.name!r}: forward failed: {type(exc).__name__}: "
+                                           f"{exc}") from None
+                    out[sl] = check_logits(self.name, raw, obs.shape[0], n)
+
+        if self.device.type != "cpu":
+            forward(0, b)
+        else:  # maps split between threads, one torch thread each (`torch_threads`)
+            with torch_threads(1):
+                over_maps(b, forward)
         return out
 
 
@@ -218,6 +249,19 @@ class VINPlanner(TorchPlanner):
         super().__init__(VINPolicy(vin), "vin", size, checksum=checksum, config=vin.config.to_dict())
         self.vin = vin
 
+    def value_maps(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """The VIN's value maps `max_a q`, `(B, N, N)` float32, `batch_size` maps per forward."""
+        from vinadv.planners.vin import make_input
+
+        obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+        self._check_size(obstacles)
+        out = np.empty(obstacles.shape, np.float32)
+        with torch.no_grad():
+            for i in range(0, len(obstacles), self.batch_size):
+                x = make_input(obstacles[i : i + self.batch_size], goals[i : i + self.batch_size])
+                out[i : i + self.batch_size] = self.vin.q_values(x).max(dim=1).values.numpy()
+        return out
+
     def plan_maps(self, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True,
                   chunk_size: int | None = None, progress: bool = False) -> PlanResult:
         from vinadv.planners import engine
@@ -226,3 +270,15 @@ class VINPlanner(TorchPlanner):
         self._check_size(obstacles)
         return engine.plan_maps(obstacles, goals, starts, self.vin, corner_cutting,
                                 chunk_size or engine.DEFAULT_CHUNK, progress)
+
+
+def as_planner(planner, size: int) -> Planner:
+    """`planner` if it is a `Planner`; a `VIN` wrapped as the `vin` planner for `size x size` maps (the library
+    functions that take a planner also take a VIN, as before there were other planners)."""
+    if isinstance(planner, Planner):
+        return planner
+    from vinadv.planners.vin import VIN
+
+    if isinstance(planner, VIN):
+        return VINPlanner(planner, size)
+    raise PlannerError(f"planner: expected a Planner or a VIN, got {type(planner).__name__}", "planner")

@@ -50,6 +50,13 @@ class OptimalPlanner(Planner):
             out[:, a] = np.where(optimal[..., a], 0.0, np.where(legal[..., a], -excess, ILLEGAL))
         return out
 
+    def value_maps(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """Minus the exact cost-to-go, `(B, N, N)` float64; NaN where the goal cannot be reached (and on obstacles)."""
+        obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+        self._check_size(obstacles)
+        dist, _ = shortest_distances(obstacles, np.asarray(goals, dtype=np.int64), self.corner_cutting)
+        return np.where(np.isfinite(dist), -dist, np.nan)
+
     def plan_maps(self, obstacles, goals, starts, corner_cutting: bool = True, chunk_size: int | None = None,
                   progress: bool = False):
         if bool(corner_cutting) != self.corner_cutting:  # the logits follow the planner's own move rule

@@ -146,3 +146,35 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
     return TorchPlanner(net, spec, size, checksum=state_checksum(net),
                         config={"source": source, "factory": factory_name, "source_sha256": source_sha},
                         device=device)
+
+
+@dataclass(frozen=True)
+class PlannerRef:
+    """A loaded planner by reference, for another process (a Dask worker) to load the same one: the spec and weights
+    file as absolute paths (None: the shipped weights there), the map size, the move rule and the checksum the
+    client's planner has (`Planner.checksum`). `load` refuses a planner whose checksum differs."""
+
+    spec: str
+    weights: str | None
+    size: int
+    corner_cutting: bool
+    checksum: str | None
+
+    @classmethod
+    def of(cls, planner: Planner, spec: str | None, weights: str | None, corner_cutting: bool) -> PlannerRef:
+        """The reference of `planner`, loaded here by `load_planner(spec, ..., weights=weights)`."""
+        spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
+        source, sep, factory = spec.rpartition(":")
+        if sep and (source.endswith(".py") or "/" in source or "\\" in source):
+            spec = f"{Path(source).resolve()}:{factory}"
+        weights = None if weights is None else str(Path(weights).resolve())
+        return cls(spec, weights, int(planner.size), bool(corner_cutting), planner.checksum)
+
+    def load(self, device: str = "cpu") -> Planner:
+        planner = load_planner(self.spec, self.size, weights=self.weights, corner_cutting=self.corner_cutting,
+                               device=device)
+        if planner.checksum != self.checksum:
+            raise PlannerError(f"planner {self.spec!r} (weights {self.weights or 'shipped'}) here has checksum "
+                               f"{planner.checksum}, the client's has {self.checksum}; workers need the same planner "
+                               "files at the same paths")
+        return planner
