@@ -20,6 +20,7 @@ from vinadv.report.render import PAGE_SECTIONS
 
 FIGURES = ("fig1_map_pair", "fig2_path_pair", "fig3_categories", "fig5_map_pairs", "fig_table4_categories")
 TABLES = ("run_config.csv", "vin_quality.csv", "table4_categories.csv", "table7_processing_time.csv", "style.css")
+HARM_TABLES = ("harm_label_x_harm.csv", "harm_regret_changes.csv")  # written where the run has harm
 EVAL_FIGURES = ("fig8_accuracy_vs_size", "fig9_roc_pr_baseline")
 EVAL_TABLES = ("table5_training_time.csv", "table6_accuracy.csv", "classifier_metrics.csv", "fig8_accuracy_vs_size.csv")
 
@@ -53,7 +54,7 @@ def _sql(url: str, query: str, **params):
         return conn.execute(sa.text(query), params).all()
 
 
-def _check_complete(out: Path, evaluated: bool) -> str:
+def _check_complete(out: Path, evaluated: bool, harm: bool = True) -> str:
     index = out / "index.html"
     parsed = _parse(index)
     assert [sid for sid, _ in PAGE_SECTIONS] == [i for i in parsed.ids if i in dict(PAGE_SECTIONS)]
@@ -62,7 +63,7 @@ def _check_complete(out: Path, evaluated: bool) -> str:
             continue
         assert "://" not in link and not link.startswith("/"), link
         assert (out / link).is_file(), f"missing {link}"
-    expected = [f"{f}.{ext}" for f in FIGURES for ext in ("png", "svg")] + list(TABLES)
+    expected = [f"{f}.{ext}" for f in FIGURES for ext in ("png", "svg")] + list(TABLES) + list(HARM_TABLES * harm)
     if evaluated:
         expected += [f"{f}.{ext}" for f in EVAL_FIGURES for ext in ("png", "svg")] + list(EVAL_TABLES)
     for name in expected:

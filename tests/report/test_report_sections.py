@@ -16,7 +16,7 @@ from vinadv.report.render import PAGE_SECTIONS, render_page, render_report
 from vinadv.store import Store
 
 #: sections whose data has no time measured while gathering (those differ from one gathering to the next)
-TIMELESS = ("run", "examples", "categories", "distribution", "classifiers")
+TIMELESS = ("run", "examples", "categories", "distribution", "harm", "classifiers")
 
 
 def _gather(url, out, order, runs):

@@ -11,8 +11,10 @@ import sqlalchemy as sa
 
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
+from vinadv.store.schema import map_pairs
 from vinadv.store.synthetic import random_records
 
+HARM_INDEX = next(ix for ix in map_pairs.indexes if ix.name == "ix_map_pairs_run_harm")
 HARM_COLUMNS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a", "expert_label", "harm")
 
 
@@ -24,6 +26,7 @@ def _make_version_1(url: str) -> int:
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     quote = engine.dialect.identifier_preparer.quote
     with engine.begin() as conn:
+        HARM_INDEX.drop(conn)  # version 1 had no index on harm (SQLite cannot drop an indexed column)
         for name in HARM_COLUMNS:
             conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote(name)}"))
         conn.execute(sa.text(f"UPDATE vinadv_meta SET value = '1' WHERE {quote('key')} = 'schema_version'"))
@@ -112,3 +115,44 @@ def test_records_refuse_unknown_harm_values():
     part = records.take([2, 0])
     assert part.harm.tolist() == [records.harm[2], records.harm[0]]
     assert np.array_equal(part.regret_a, records.regret_a[[2, 0]], equal_nan=True)
+
+
+def _index_names(url: str) -> set[str]:
+    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
+    with engine.connect() as conn:
+        names = {ix["name"] for ix in sa.inspect(conn).get_indexes("map_pairs")}
+    engine.dispose()
+    return names
+
+
+def test_harm_index_is_made_for_new_databases_and_by_ensure_indexes_for_older_ones(db_url):
+    run_id = _make_version_1(db_url)
+    assert HARM_INDEX.name not in _index_names(db_url)
+    with Store.open(db_url, create=False) as store:  # version 1, not upgraded: no harm column to index yet
+        assert store.ensure_indexes() == []
+        assert store.page_pairs(run_id, harm="harmful") == []
+    assert HARM_INDEX.name not in _index_names(db_url) and _columns_and_version(db_url)[1] == "1"
+    with Store.open(db_url) as store:  # upgraded on open; the index comes with `ensure_indexes` (`vinadv serve`)
+        assert store.ensure_indexes() == [HARM_INDEX.name]
+        assert store.ensure_indexes() == []
+    with Store.open(db_url) as store:
+        fresh = store.create_run("new")
+        records = random_records(40, size=7, seed=5)
+        store.write_pairs(fresh, records)
+        got = [r["pair_index"] for r in store.page_pairs(fresh, harm="harmless", limit=100)]
+    assert got == [int(i) for i, h in zip(records.pair_index, records.harm) if h == "harmless"]
+
+
+def test_new_database_has_the_harm_index_and_the_harm_filter_reads_it(sqlite_url):
+    with Store.open(sqlite_url) as store:
+        run_id = store.create_run("r")
+        store.write_pairs(run_id, random_records(200, size=7, seed=2))
+        seen = []
+        sa.event.listen(store.engine, "before_cursor_execute",
+                        lambda conn, cursor, statement, params, context, many: seen.append((statement, params)))
+        store.page_pairs(run_id, harm="harmful", after=50, limit=5)
+        statement, params = seen[-1]
+        with store.engine.connect() as conn:
+            plan = " ".join(str(row) for row in conn.exec_driver_sql("EXPLAIN QUERY PLAN " + statement, params))
+    assert HARM_INDEX.name in _index_names(sqlite_url)
+    assert f"USING INDEX {HARM_INDEX.name}" in plan and "TEMP B-TREE" not in plan, plan

@@ -173,6 +173,29 @@ def test_harm_and_regret_on_the_grid_and_the_pair_page(client, db):
     assert 'id="filter-harm"' in client.get(f"/runs/{run_id}/pairs").get_data(as_text=True)
 
 
+def test_grid_page_filtered_by_harm_lists_those_pairs_with_their_harm_and_regrets(client, db):
+    import re
+
+    from vinadv.viewer.app import _fmt_cost
+
+    run_id, records = db[1]["random"]
+    html = client.get(f"/runs/{run_id}/pairs?harm=harmless&size=20").get_data(as_text=True)
+    order = np.argsort(records.pair_index)
+    rows = order[records.harm[order] == "harmless"][:20]
+    body = html.split('<tbody>', 1)[1].split("</tbody>", 1)[0]
+    assert [int(i) for i in re.findall(r'class="pair-link"[^>]*>(\d+)<', body)] == records.pair_index[rows].tolist()
+    assert body.count("<td>harmless</td>") == len(rows) == 20
+    for row in rows:
+        assert f"{_fmt_cost(_nan_none(records.regret_o[row]))} / {_fmt_cost(_nan_none(records.regret_a[row]))}" in body
+    assert '<option value="harmless" selected>' in html
+    # float noise of a zero regret reads 0.000, not -0.000
+    assert (_fmt_cost(-1.7e-15), _fmt_cost(1.41421356), _fmt_cost(None)) == ("0.000", "1.414", "—")
+
+
+def _nan_none(value):
+    return None if np.isnan(value) else float(value)
+
+
 @pytest.mark.parametrize("kind", ["original", "adversarial", "pathimage"])
 def test_images_png_cached_with_etag(client, app, db, kind):
     run_id, _ = db[1]["crafted"]

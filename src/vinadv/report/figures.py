@@ -129,6 +129,71 @@ def categories(examples: dict, stem: Path, distances: dict | None = None) -> lis
     return save(fig, stem)
 
 
+def _cost(value: float) -> str:
+    """`12.66` (two decimals; float noise around 0 shows as 0.00, not -0.00)."""
+    return f"{round(float(value), 2) + 0.0:.2f}"
+
+
+def harm_pairs(records, examples, stem: Path, per_row: int = 2) -> list[str]:
+    """The harm examples: each pair of `records` as its original map (the planner's path and the expert path) next
+    to its adversarial map (likewise, the added obstacle marked), `per_row` pairs to a row, their costs and
+    regrets under the maps. `examples`: one `gather.HarmExample` per record (the expert paths, the costs)."""
+    n = len(records)
+    per_row = max(1, min(per_row, n))
+    rows = -(-n // per_row)
+    # constrained layout, and room for a title above and the costs below every (square) map
+    fig, axes = plt.subplots(rows, 2 * per_row, figsize=(2.6 * 2 * per_row, 3.4 * rows), squeeze=False,
+                             layout="constrained")
+    for ax in axes.ravel():
+        ax.axis("off")
+    for i, e in enumerate(examples):
+        left, right = axes[i // per_row, 2 * (i % per_row)], axes[i // per_row, 2 * (i % per_row) + 1]
+        o, a = _paths(records, i)
+        for ax, obstacles, paths, added, title, costs in (
+            (left, records.obstacles_o[i], [("expert", np.array(e.expert_path_o)), ("original", o)], None,
+             f"pair {e.pair_index}: original", (e.cost_o, e.opt_cost_o, e.regret_o)),
+            (right, records.obstacles_a[i], [("expert", np.array(e.expert_path_a)), ("adversarial", a)],
+             records.added[i], f"adversarial ({e.label}, {e.harm})", (e.cost_a, e.opt_cost_a, e.regret_a)),
+        ):
+            ax.axis("on")
+            draw_map(ax, obstacles, records.goals[i], records.starts[i], paths=paths, added=added, title=title)
+            cost, optimum, regret = (_cost(v) for v in costs)
+            ax.set_xlabel(f"cost {cost}, optimal {optimum}: regret {regret}", fontsize=8)
+    map_legend(fig, axes)
+    return save(fig, stem)
+
+
+def regret_histogram(edges: np.ndarray, counts: dict[str, dict[str, np.ndarray]], tol: float, stem: Path) -> list[str]:
+    """The regret change `regret_a - regret_o` of the FP and DP pairs: one panel per label of `counts`
+    ({label: {harm: pairs per bin (len(edges) - 1,)}}), the harm values stacked, bins `(edges[k], edges[k + 1]]`,
+    a log count axis (most pairs sit in the bin of 0) and a dashed line at the harm tolerance `tol`."""
+    labels = list(counts)
+    fig, axes = plt.subplots(1, len(labels), figsize=(4.4 * len(labels), 3.2), sharex=True, sharey=True,
+                             squeeze=False, layout="constrained")
+    widths = np.diff(edges)
+    colours = {"harmful": "#d62728", "harmless": "#7f7f7f"}
+    for ax, label in zip(axes[0], labels):
+        bottom = np.zeros(len(widths))
+        for harm, colour in colours.items():
+            part = counts[label].get(harm)
+            if part is None or not part.any():
+                continue
+            ax.bar(edges[:-1], part, widths, bottom=bottom, align="edge", color=colour, edgecolor="white",
+                   linewidth=0.5, label=harm, log=True)
+            bottom = bottom + part
+        ax.axvline(tol, color="k", ls="--", lw=1, label=f"tolerance ({tol:g})")
+        ax.set_title(f"{label} pairs ({int(bottom.sum()):,})", fontsize=9)
+        ax.set_xlabel("regret_a - regret_o (cost units)", fontsize=8)
+    axes[0, 0].set_ylabel("pairs (log scale)", fontsize=8)
+    handles: dict = {}
+    for ax in axes[0]:
+        for handle, name in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(name, handle)
+    fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=len(handles), fontsize=8,
+               frameon=False)
+    return save(fig, stem)
+
+
 def category_bars(table: Sequence[tuple[str, dict]], paper: dict | None, stem: Path) -> list[str]:
     """Table 4 as bars: share of each category per run (and the paper's 5,000 pairs)."""
     series = list(table) + ([("paper (5,000 pairs)", paper)] if paper else [])

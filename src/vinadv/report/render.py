@@ -22,12 +22,12 @@ PAGE_SECTIONS = (*((sid, title) for sid, title, _ in SECTIONS), ("files", "Files
 
 
 def num(value, digits: int = 3) -> str:
-    """`1,234` for integers, `0.913` for floats, an em dash for None/NaN."""
+    """`1,234` for integers, `0.913` for floats (never `-0.000`), an em dash for None/NaN."""
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "—"
     if isinstance(value, numbers.Integral):
         return f"{int(value):,}"
-    return f"{float(value):.{digits}f}"
+    return f"{round(float(value), digits) + 0.0:.{digits}f}"  # + 0.0: float noise below 0 shows as 0.000
 
 
 def pct(value) -> str:

@@ -99,6 +99,8 @@ map_pairs = sa.Table(
     sa.Index("ix_map_pairs_run_label", "run_id", "label", "pair_index"),
     sa.Index("ix_map_pairs_run_attack", "run_id", "attack", "pair_index"),
     sa.Index("ix_map_pairs_run_source", "run_id", "label_source", "pair_index"),
+    # the viewer's harm filter, the report's harm examples; made by `Store.ensure_indexes` in an older database
+    sa.Index("ix_map_pairs_run_harm", "run_id", "harm", "pair_index"),
     sa.Index("ix_map_pairs_label", "label"),
 )
 

@@ -51,6 +51,7 @@ from vinadv.store.schema import (
     metadata,
     runs,
 )
+from vinadv.vocabulary import FORK_OR_DETOUR
 
 DEFAULT_DB = "vinadv.db"
 ENV_DB = "VINADV_DB"
@@ -61,6 +62,8 @@ _ROW_CHUNK = 2048
 #: rows per SQLite INSERT statement (at most what SQLite's parameter limit allows), see `Store._insert_sqlite`
 _SQLITE_ROWS_PER_STATEMENT = 256
 _CONNECT_TIMEOUT_S = 5
+#: cost units per grouping step of `Store.regret_changes` (1e-6: far below the gap between two distinct costs)
+_MICRO = 1_000_000
 
 _PAIR_TEXT_COLUMNS = ("map_o", "map_a", "path_o", "path_a", "start", "goal", "added_obstacle")
 
@@ -583,11 +586,14 @@ class Store:
 
     def ensure_indexes(self) -> list[str]:
         """Create the indexes of the current schema that the database lacks (one made by an older vinadv);
-        return their names. Paging stays correct without them, only slower."""
+        return their names. Paging stays correct without them, only slower. An index on a column the database
+        does not have yet (the harm columns of a version-1 database opened without `create`) is left for later."""
         created = []
         with self.engine.begin() as conn:
             present = {ix["name"] for ix in sa.inspect(conn).get_indexes(map_pairs.name)}
             for index in sorted(map_pairs.indexes, key=lambda ix: ix.name):
+                if {c.name for c in index.columns} & self._absent_columns:
+                    continue
                 if index.name not in present:
                     index.create(conn)
                     created.append(index.name)
@@ -610,8 +616,7 @@ class Store:
         `after`/`before`: only pairs with a larger/smaller index (`before` returns the `limit` pairs just before
         it, still in ascending order). Filters are exact matches. Each dict: pair_index, label, attack,
         label_source, score, dh, dv, term_o, term_a, added_obstacle, harm, regret_o, regret_a. With the
-        (run_id, <filter>, pair_index) indexes every page is one index range read, however deep (the harm filter
-        has no index of its own: it reads the run's pairs in order until the page is full).
+        (run_id, <filter>, pair_index) indexes every page is one index range read, however deep.
         """
         c = map_pairs.c
         harm_columns = [sa.null().label(name) if name in self._absent_columns else c[name]
@@ -686,6 +691,47 @@ class Store:
                 sa.select(column, sa.func.count()).where(map_pairs.c.run_id == int(run_id)).group_by(column)
             ).all()
         return {str(term): int(k) for term, k in sorted(rows)}
+
+
+    def harm_counts(self, run_id: int) -> dict[str, dict[str | None, int]]:
+        """Stored pairs per (paper label, harm), in one GROUP BY: `{label: {harm: n}}`, only the combinations
+        present. Harm None: not computed (NULL: a pair stored before vinadv kept harm, or every pair of a
+        version-1 database opened read-only)."""
+        c = map_pairs.c
+        keys = (c.label,) if "harm" in self._absent_columns else (c.label, c.harm)
+        with self.engine.connect() as conn:
+            rows = conn.execute(
+                sa.select(*keys, sa.func.count()).where(c.run_id == int(run_id)).group_by(*keys)
+            ).all()
+        counts: dict[str, dict[str | None, int]] = {}
+        for row in rows:
+            harm = row[1] if len(keys) == 2 else None
+            counts.setdefault(str(row[0]), {})[harm] = int(row[-1])
+        return counts
+
+    def regret_changes(self, run_id: int, labels: Sequence[str] = FORK_OR_DETOUR
+                       ) -> dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]:
+        """What the attack added to the planner's regret, `regret_a - regret_o` (cost units), over the run's pairs
+        with a label of `labels` whose two regrets are stored, as one GROUP BY (the report's histogram):
+        `{(label, harm): (changes (k,) float64 ascending, pairs (k,) int64)}`, only the groups present.
+
+        Changes are grouped after rounding to 1e-6 cost units: costs are sums of 1 and sqrt 2, so a run of any size
+        has few distinct changes, and rounding merges the float noise of one value's different sums."""
+        c = map_pairs.c
+        if self._absent_columns & {"harm", "regret_o", "regret_a"}:
+            return {}
+        change = sa.func.round((c.regret_a - c.regret_o) * _MICRO).label("change")
+        query = (sa.select(c.label, c.harm, change, sa.func.count())
+                 .where(c.run_id == int(run_id), c.label.in_(list(labels)), c.harm.is_not(None),
+                        c.regret_o.is_not(None), c.regret_a.is_not(None))
+                 .group_by(c.label, c.harm, change))
+        with self.engine.connect() as conn:
+            rows = conn.execute(query).all()
+        groups: dict[tuple[str, str], list] = {}
+        for label, harm, value, k in rows:
+            groups.setdefault((str(label), str(harm)), []).append((float(value) / _MICRO, int(k)))
+        return {key: (np.array([v for v, _ in part], dtype=np.float64), np.array([k for _, k in part], np.int64))
+                for key, part in ((key, sorted(part)) for key, part in sorted(groups.items()))}
 
 
 def _sqlite_pragmas(dbapi_conn, _record) -> None:

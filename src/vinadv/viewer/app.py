@@ -489,7 +489,8 @@ def _fmt_score(value) -> str:
 
 
 def _fmt_cost(value) -> str:
-    return "—" if value is None else f"{value:.3f}"
+    """`1.414`; float noise around 0 (a regret of -2e-15) as `0.000`, not `-0.000`."""
+    return "—" if value is None else f"{round(float(value), 3) + 0.0:.3f}"
 
 
 def _fmt_dist(value) -> str:
