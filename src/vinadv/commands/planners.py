@@ -1,4 +1,4 @@
-"""`vinadv planners` (the registry) and `vinadv gppn train` / `vinadv gppn eval`."""
+"""`vinadv planners` (the registry), `vinadv eval` (any planner, both conventions) and `vinadv gppn train|eval`."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import json
 import time
 from pathlib import Path
 
+from vinadv.commands import add_planner_arguments
 from vinadv.commands.vin import (
     _command_line,
     _set_threads,
@@ -27,6 +28,16 @@ def register(subparsers) -> None:
     p.add_argument("--size", type=int, default=28, help="map side whose shipped weights to look for (default 28)")
     p.add_argument("--json", action="store_true", help="print the list as JSON")
     p.set_defaults(func=cmd_planners)
+
+    ev = subparsers.add_parser("eval", help="any planner's figures in both conventions: vinadv's rollouts and "
+                               "GPPN's %%Opt/%%Suc over every free cell")
+    add_planner_arguments(ev)
+    add_eval_maps_arguments(ev)
+    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
+    ev.add_argument("--quiet", action="store_true", help="no progress bar")
+    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
+    ev.set_defaults(func=cmd_eval)
 
     gppn = subparsers.add_parser("gppn", help="train and evaluate the GPPN planner")
     sub = gppn.add_subparsers(dest="gppn_command", metavar="ACTION")
@@ -62,6 +73,36 @@ def cmd_planners(args: argparse.Namespace) -> int:
         print(f"{p['name']:<9} {p['description']}{weights}")
     print("your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
           "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (README, 'Planners')")
+    return 0
+
+
+def cmd_eval(args: argparse.Namespace) -> int:
+    from vinadv.interop.protocols import gppn_protocol
+    from vinadv.outfile import atomic_output
+    from vinadv.planners.evaluation import evaluate_planner
+    from vinadv.planners.registry import load_planner
+
+    _set_threads(args.threads)
+    maps, source = eval_maps(args)
+    planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
+    t0 = time.perf_counter()
+    ours = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))
+    t1 = time.perf_counter()
+    theirs = gppn_protocol(planner, maps)
+    metrics = {"planner": planner.spec(), "weights": args.weights or "shipped", **source, "vinadv": ours,
+               "gppn": theirs, "seconds": {"vinadv": round(t1 - t0, 2), "gppn": round(time.perf_counter() - t1, 2)},
+               "command": _command_line()}
+    if args.out:
+        with atomic_output(args.out, "w") as fh:
+            fh.write(json.dumps(metrics, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(metrics))
+    elif not args.quiet:
+        print(f"planner {planner.name}: {ours['maps']} maps of {ours['size']}x{ours['size']}")
+        print(f"  vinadv: rollout success {ours['success_rate']:.2%} of {ours['rollouts']} rollouts, optimal paths "
+              f"{ours['optimal_rate']:.2%}, action accuracy {ours['action_accuracy']:.2%}")
+        print(f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
+              f"{theirs['cells']} free cells (every Moore move costs 1)")
     return 0
 
 
