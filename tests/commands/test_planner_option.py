@@ -116,3 +116,19 @@ def test_bad_planner_exits_2(maps_file, tmp_path, capsys):
         assert "unknown planner 'nonesuch'" in capsys.readouterr().err
     assert main(["eval", "--data", maps_file, "--planner", "optimal", "--weights", "w.pt"]) == 2
     assert "takes no weights" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_report_and_viewer_show_the_runs_planner(tmp_path):
+    from vinadv.report import write_report
+    from vinadv.viewer.app import create_app
+
+    db = str(tmp_path / "r.db")
+    assert main(["run", "--n", "20", "--size", str(SIZE), "--shard-size", "10", "--db", db, "--planner", "optimal",
+                 "--attack", "key-points", "--quiet"]) == 0
+    html = write_report(db, tmp_path / "rep").read_text()
+    assert "<td>planner</td><td>optimal</td>" in html
+    assert "quick evaluation of planner &#39;optimal&#39;" in html  # its quality, not the VIN's
+    with Store.open(db, readonly=True) as store:
+        runs = create_app(store).test_client().get("/api/runs").get_json()["runs"]
+    assert [r["planner"] for r in runs] == ["optimal"]

@@ -29,7 +29,7 @@ class PlannerInfo:
 
     def to_dict(self, size: int = 28) -> dict:
         """Name, description, the shipped weights for `size x size` maps (None: no weights) and whether present."""
-        path = _default_weights(self.name, size)
+        path = default_weights(self.name, size)
         return {**asdict(self), "weights": None if path is None else str(path),
                 "weights_available": None if path is None else path.exists()}
 
@@ -43,7 +43,8 @@ REGISTRY = {
 DEFAULT_PLANNER = "vin"
 
 
-def _default_weights(name: str, size: int) -> Path | None:
+def default_weights(name: str, size: int) -> Path | None:
+    """The shipped weights file of planner `name` for `size x size` maps; None for a planner without weights."""
     if name == "vin":
         from vinadv.planners.weights import default_weights_path
 
