@@ -59,6 +59,19 @@ def register(subparsers) -> None:
     ev.add_argument("--json", action="store_true", help="print the figures as JSON")
     ev.set_defaults(func=cmd_gppn_eval)
 
+    imp = sub.add_parser("import-weights", help="a checkpoint of the GPPN authors' code as vinadv GPPN weights")
+    imp.add_argument("checkpoint", metavar="CKPT",
+                     help="the GPPN code's checkpoint (.pth: {'model', 'best_model', ...})")
+    imp.add_argument("--k", type=int, required=True,
+                     help="iterations the model was trained with (the GPPN code's --k; not in its checkpoints)")
+    imp.add_argument("--entry", choices=("best_model", "model"), default=None,
+                     help="which state dict of the checkpoint (default best_model when present)")
+    imp.add_argument("--size", type=int, default=None,
+                     help="map side the model is for (recorded; default: any, the GPPN is fully convolutional)")
+    imp.add_argument("--out", required=True, help="output weights (.pt) for --planner gppn --weights")
+    imp.add_argument("--json", action="store_true", help="print what was written as JSON")
+    imp.set_defaults(func=cmd_gppn_import_weights)
+
 
 def cmd_planners(args: argparse.Namespace) -> int:
     from vinadv.planners.registry import list_planners
@@ -113,6 +126,28 @@ def cmd_gppn_train(args: argparse.Namespace) -> int:
 
     config = train_config(args, planner="gppn", l_h=args.l_h, kernel=args.kernel)
     return run_training(args, config, train_gppn, save_gppn)
+
+
+def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
+    from vinadv.interop.checkpoints import gppn_from_checkpoint
+    from vinadv.outfile import check_output_path
+    from vinadv.planners.gppn import save_gppn
+    from vinadv.planners.weights import weights_checksum
+
+    check_output_path(args.out, mkdir=True)
+    model = gppn_from_checkpoint(args.checkpoint, args.k, args.entry)
+    record = {"imported_from": {**model.source, "sha256": weights_checksum(args.checkpoint)},
+              "command": _command_line(), "action_order": "reordered from GPPN's N,E,W,S,NE,NW,SE,SW"}
+    if args.size is not None:
+        record["size"] = args.size
+    save_gppn(model, args.out, record)
+    summary = {"out": args.out, "config": model.config.to_dict(), **record}
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"wrote {args.out}: GPPN {model.config.to_dict()} from {args.checkpoint} ({model.source['entry']}); "
+              f"use --planner gppn --weights {args.out}")
+    return 0
 
 
 def cmd_gppn_eval(args: argparse.Namespace) -> int:
