@@ -83,7 +83,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
     for p in planners:
         weights = "" if p["weights"] is None else (f"  [weights {Path(p['weights']).name}"
                                                    f"{'' if p['weights_available'] else ' not shipped'}]")
-        print(f"{p['name']:<9} {p['description']}{weights}")
+        print(f"{p['name']:<11} {p['description']}{weights}")
     print("your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
           "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (README, 'Planners')")
     return 0
