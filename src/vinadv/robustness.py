@@ -188,8 +188,8 @@ def check_strategies(strategies, exhaustive: bool = False) -> tuple[str, ...]:
             at = names.index("all")
             names = [*names[:at], *DEFAULT_STRATEGIES, *names[at + 1:]]
     if EXHAUSTIVE in names and not exhaustive:
-        raise InputError("strategies: exhaustive runs only with exhaustive (it plans every valid cell of every map)",
-                         "strategies", "exhaustive")
+        raise InputError("strategies: add exhaustive to run the exhaustive strategy (it plans every valid cell of "
+                         "every map at every step: slow)", "strategies", "exhaustive")
     if exhaustive and EXHAUSTIVE not in names:
         names.append(EXHAUSTIVE)
     return _known(names)
