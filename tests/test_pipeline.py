@@ -1,5 +1,6 @@
 """The main job end to end: maps -> attack -> identify -> store, on every database backend."""
 
+import json
 import os
 import signal
 import subprocess
@@ -186,8 +187,6 @@ def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
                  "--quiet"]) == 0
     assert main(["attack", "--maps", str(maps), "--strategy", "key-points", "--out", str(pairs),
                  "--weights", weights, "--json"]) == 0
-    import json
-
     summary = json.loads(capsys.readouterr().out)
     assert summary["pairs"] == sum(summary["counts"].values())
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--json"]) == 0
@@ -236,8 +235,6 @@ def test_run_of_several_obstacles_stores_every_added_cell_and_resume_compares_it
 
 def test_a_run_stored_before_several_obstacles_resumes_as_one_obstacle(weights, sqlite_url):
     summary = run_pipeline(config(weights, n=30), db=sqlite_url, name="old", progress=False)
-    import json
-
     with Store.open(sqlite_url) as store:
         stored = store.run_info(summary.run_id)["config"]
     stored.pop("obstacles")
@@ -248,3 +245,23 @@ def test_a_run_stored_before_several_obstacles_resumes_as_one_obstacle(weights, 
     engine.dispose()
     again = run_pipeline(config(weights, n=30), db=sqlite_url, name="old", resume=True, progress=False)
     assert again.run_id == summary.run_id and again.stored == 0
+
+
+def test_attack_and_identify_keep_every_added_obstacle(weights, tmp_path, sqlite_url, capsys):
+    from vinadv.attacks.pairs import PairSet
+
+    maps, pairs = tmp_path / "maps.npz", tmp_path / "pairs.npz"
+    assert main(["maps", "generate", "--n", "20", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
+                 "--quiet"]) == 0
+    assert main(["attack", "--maps", str(maps), "--strategy", "near-path", "--obstacles", "3", "--out", str(pairs),
+                 "--weights", weights, "--quiet"]) == 0
+    made = PairSet.load(pairs)
+    assert made.added.shape == (len(made), 3, 2) and made.params["obstacles"] == 3
+    assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--weights", weights, "--json"]) == 0
+    run_id = json.loads(capsys.readouterr().out)["run_id"]
+    with Store.open(sqlite_url) as store:
+        stored = store.read_pairs(run_id)
+    assert np.array_equal(stored.added, made.added) and np.array_equal(stored.obstacles_a, made.obstacles_a)
+    assert main(["attack", "--maps", str(maps), "--strategy", "random", "--obstacles", "0", "--out", str(pairs),
+                 "--weights", weights]) == 2
+    assert "--obstacles must be >= 1" in capsys.readouterr().err

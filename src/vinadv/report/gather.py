@@ -206,7 +206,9 @@ def gather_examples(ctx: Context) -> ExamplesData:
                 pairs[0].pair_index)
     i = position[lead]
     fig1 = Figure(tuple(figures.map_pair(records, i, ctx.out / "fig1_map_pair", with_paths=False)),
-                  "Fig. 1: a pair of maps, the normal map and the adversarial map (one added obstacle, orange).",
+                  "Fig. 1: a pair of maps, the normal map and the adversarial map ("
+                  + ("one added obstacle" if records.n_added == 1 else f"{records.n_added} added obstacles")
+                  + ", orange).",
                   "original and adversarial map", 760)
     fig2 = Figure(tuple(figures.map_pair(records, i, ctx.out / "fig2_path_pair", with_paths=True,
                                          distances=pairs[i])),
