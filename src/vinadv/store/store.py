@@ -163,6 +163,10 @@ class Store:
         except sa_exc.DBAPIError as exc:
             engine.dispose()
             raise InputError(f"cannot connect to database {shown}: {_first_line(exc)}") from None
+        except UnicodeDecodeError:
+            # a damaged SQLite file whose error text is no longer UTF-8: sqlite3 cannot even decode the message
+            engine.dispose()
+            raise InputError(f"database {shown}: a damaged file (SQLite's own error message is not text)") from None
         return store
 
     def _check_schema(self, create: bool) -> None:
