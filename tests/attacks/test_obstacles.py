@@ -87,8 +87,9 @@ def test_every_k_obstacle_pair_keeps_the_rules(seed, k, name, per_map):
         expected[tuple(pairs.added[i].T)] = True
         assert np.array_equal(pairs.obstacles_a[i], expected)
     assert valid_additions(pairs.obstacles_o, pairs.starts, pairs.goals, pairs.added).all()
-    # the maps left out really had no valid cell at some step: a map with no pair at step k had none left
-    for step, kept in enumerate(result.steps):
+    # the maps left out really had no valid cell at some step: a map with no pair at step k had none left (for the
+    # strategies that score every cell; key-points and near-path score only cells near the path: no candidate there)
+    for step, kept in enumerate(result.steps if name in ("random", "saliency", "exhaustive") else []):
         for m in sorted(set(range(len(maps))) - set(kept.map_index.tolist())):
             before = result.steps[step - 1] if step else None
             if before is not None and m not in before.map_index:
