@@ -213,6 +213,20 @@ def test_cli_bad_input_exits_2_with_one_line(weights, capsys, args, message):
     assert message in err and err.count("\n") == 1
 
 
+def test_cli_refuses_a_foreign_database_or_a_file_as_report_folder_before_the_work(weights, tmp_path, capsys):
+    import sqlite3
+
+    foreign = tmp_path / "other.db"
+    with sqlite3.connect(foreign) as conn:
+        conn.execute("CREATE TABLE runs (who TEXT)")
+    args = ["robustness", "--size", str(SIZE), "--weights", weights, "--n", "2"]
+    assert main([*args, "--db", str(foreign)]) == 2
+    assert "not a vinadv database" in capsys.readouterr().err
+    (tmp_path / "page").write_text("x")
+    assert main([*args, "--report", str(tmp_path / "page")]) == 2
+    assert "not a folder" in capsys.readouterr().err
+
+
 def test_cli_json_db_and_report(weights, tmp_path, capsys):
     db = tmp_path / "r.db"
     args = ["robustness", "--size", str(SIZE), "--weights", weights, "--n", "12", "--seed", "4", "--max-obstacles",

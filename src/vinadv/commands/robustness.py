@@ -66,6 +66,11 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
+    if args.db is not None:  # a database that will be refused is refused now, not after the benchmark
+        from vinadv.store import Store
+
+        with Store.open(args.db):
+            pass
     from vinadv.planners.registry import load_planner
     from vinadv.robustness import benchmark_maps, robustness, save_robustness
 
