@@ -1,4 +1,4 @@
-"""`vinadv planners` (the registry) and `vinadv gppn train` / `vinadv gppn eval`."""
+"""`vinadv planners` (the registry), `vinadv eval` (any planner, both conventions) and `vinadv gppn train|eval`."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import json
 import time
 from pathlib import Path
 
+from vinadv.commands import add_planner_arguments
 from vinadv.commands.vin import (
     _command_line,
     _set_threads,
@@ -28,6 +29,16 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="print the list as JSON")
     p.set_defaults(func=cmd_planners)
 
+    ev = subparsers.add_parser("eval", help="any planner's figures in both conventions: vinadv's rollouts and "
+                               "GPPN's %%Opt/%%Suc over every free cell")
+    add_planner_arguments(ev)
+    add_eval_maps_arguments(ev)
+    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
+    ev.add_argument("--quiet", action="store_true", help="no progress bar")
+    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
+    ev.set_defaults(func=cmd_eval)
+
     gppn = subparsers.add_parser("gppn", help="train and evaluate the GPPN planner")
     sub = gppn.add_subparsers(dest="gppn_command", metavar="ACTION")
     sub.required = True
@@ -48,6 +59,19 @@ def register(subparsers) -> None:
     ev.add_argument("--json", action="store_true", help="print the figures as JSON")
     ev.set_defaults(func=cmd_gppn_eval)
 
+    imp = sub.add_parser("import-weights", help="a checkpoint of the GPPN authors' code as vinadv GPPN weights")
+    imp.add_argument("checkpoint", metavar="CKPT",
+                     help="the GPPN code's checkpoint (.pth: {'model', 'best_model', ...})")
+    imp.add_argument("--k", type=int, required=True,
+                     help="iterations the model was trained with (the GPPN code's --k; not in its checkpoints)")
+    imp.add_argument("--entry", choices=("best_model", "model"), default=None,
+                     help="which state dict of the checkpoint (default best_model when present)")
+    imp.add_argument("--size", type=int, default=None,
+                     help="map side the model is for (recorded; default: any, the GPPN is fully convolutional)")
+    imp.add_argument("--out", required=True, help="output weights (.pt) for --planner gppn --weights")
+    imp.add_argument("--json", action="store_true", help="print what was written as JSON")
+    imp.set_defaults(func=cmd_gppn_import_weights)
+
 
 def cmd_planners(args: argparse.Namespace) -> int:
     from vinadv.planners.registry import list_planners
@@ -65,6 +89,36 @@ def cmd_planners(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_eval(args: argparse.Namespace) -> int:
+    from vinadv.interop.protocols import gppn_protocol
+    from vinadv.outfile import atomic_output
+    from vinadv.planners.evaluation import evaluate_planner
+    from vinadv.planners.registry import load_planner
+
+    _set_threads(args.threads)
+    maps, source = eval_maps(args)
+    planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
+    t0 = time.perf_counter()
+    ours = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))
+    t1 = time.perf_counter()
+    theirs = gppn_protocol(planner, maps)
+    metrics = {"planner": planner.spec(), "weights": args.weights or "shipped", **source, "vinadv": ours,
+               "gppn": theirs, "seconds": {"vinadv": round(t1 - t0, 2), "gppn": round(time.perf_counter() - t1, 2)},
+               "command": _command_line()}
+    if args.out:
+        with atomic_output(args.out, "w") as fh:
+            fh.write(json.dumps(metrics, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(metrics))
+    elif not args.quiet:
+        print(f"planner {planner.name}: {ours['maps']} maps of {ours['size']}x{ours['size']}")
+        print(f"  vinadv: rollout success {ours['success_rate']:.2%} of {ours['rollouts']} rollouts, optimal paths "
+              f"{ours['optimal_rate']:.2%}, action accuracy {ours['action_accuracy']:.2%}")
+        print(f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
+              f"{theirs['cells']} free cells (every Moore move costs 1)")
+    return 0
+
+
 def cmd_gppn_train(args: argparse.Namespace) -> int:
     from vinadv.commands.vin import train_config
     from vinadv.planners.gppn import save_gppn
@@ -72,6 +126,28 @@ def cmd_gppn_train(args: argparse.Namespace) -> int:
 
     config = train_config(args, planner="gppn", l_h=args.l_h, kernel=args.kernel)
     return run_training(args, config, train_gppn, save_gppn)
+
+
+def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
+    from vinadv.interop.checkpoints import gppn_from_checkpoint
+    from vinadv.outfile import check_output_path
+    from vinadv.planners.gppn import save_gppn
+    from vinadv.planners.weights import weights_checksum
+
+    check_output_path(args.out, mkdir=True)
+    model = gppn_from_checkpoint(args.checkpoint, args.k, args.entry)
+    record = {"imported_from": {**model.source, "sha256": weights_checksum(args.checkpoint)},
+              "command": _command_line(), "action_order": "reordered from GPPN's N,E,W,S,NE,NW,SE,SW"}
+    if args.size is not None:
+        record["size"] = args.size
+    save_gppn(model, args.out, record)
+    summary = {"out": args.out, "config": model.config.to_dict(), **record}
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"wrote {args.out}: GPPN {model.config.to_dict()} from {args.checkpoint} ({model.source['entry']}); "
+              f"use --planner gppn --weights {args.out}")
+    return 0
 
 
 def cmd_gppn_eval(args: argparse.Namespace) -> int:

@@ -10,6 +10,7 @@ import shlex
 import sys
 from pathlib import Path
 
+from vinadv.commands import LazyChoices
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 
@@ -68,6 +69,20 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
     train.add_argument("--init", metavar="WEIGHTS", help="start from these weights (continue a training) instead of "
                        "a fresh initialisation")
     train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    adv = train.add_argument_group("adversarial training (vinadv.hardening)")
+    adv.add_argument("--adversarial", action="store_true",
+                     help="before each epoch, attack training maps with the current model and add the adversarial "
+                          "maps of the harmful pairs to the training maps")
+    adv.add_argument("--adv-maps", type=int, default=1000, metavar="M",
+                     help="training maps attacked before each epoch (default 1000)")
+    adv.add_argument("--adv-strategy", choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
+                     default="exhaustive", metavar="STRATEGY",
+                     help="attack strategy: %(choices)s (default exhaustive: each map's worst single obstacle)")
+    adv.add_argument("--adv-budget", type=int, default=8, help="key-points/saliency: candidates per map (default 8)")
+    adv.add_argument("--adv-objective", choices=("harm", "paper"), default="harm",
+                     help="what the attack keeps as a map's strongest pair (default harm)")
+    adv.add_argument("--adv-start", type=int, default=None, metavar="EPOCH",
+                     help="first epoch (1-based) before which maps are attacked (default 1 with --init, else 2)")
     train.add_argument("--quiet", action="store_true", help="no progress bar or per-epoch lines")
     train.add_argument("--json", action="store_true", help="print the training record as JSON")
 
@@ -114,9 +129,30 @@ def train_config(args: argparse.Namespace, **extra):
 
     config = TrainConfig(epochs=args.epochs, lr=args.lr, batch_size=args.batch_size, val_fraction=args.val_fraction,
                          seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit,
-                         init=args.init, warmup_steps=args.warmup, **extra)
+                         init=args.init, warmup_steps=args.warmup, adversarial=adversarial_config(args), **extra)
     config.validate()
     return config
+
+
+def adversarial_config(args: argparse.Namespace) -> dict | None:
+    """The `AdversarialConfig` of `--adversarial` and its options, as a dict (None without `--adversarial`)."""
+    if not args.adversarial:
+        return None
+    from vinadv.hardening import AdversarialConfig
+
+    start = args.adv_start if args.adv_start is not None else (1 if args.init else 2)
+    if start < 1:
+        raise InputError(f"--adv-start must be >= 1, got {start}")
+    config = AdversarialConfig(maps_per_epoch=args.adv_maps, strategy=args.adv_strategy, budget=args.adv_budget,
+                               objective=args.adv_objective, start_epoch=start - 1)
+    try:
+        config.validate()
+    except InputError as exc:  # the library names its parameters; here they are the --adv-* flags
+        flags = {"maps_per_epoch": "--adv-maps", "budget": "--adv-budget", "strategy": "--adv-strategy",
+                 "objective": "--adv-objective"}
+        raise InputError(" ".join(flags.get(w.rstrip(":"), w.rstrip(":")) + (":" if w.endswith(":") else "")
+                                  for w in str(exc).split(" "))) from None
+    return config.to_dict()
 
 
 def cmd_train(args: argparse.Namespace) -> int:
@@ -150,8 +186,13 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
                  "seed": int(maps.seed), "corner_cutting": bool(maps.corner_cutting)},
     }
     log = None if args.quiet or args.json else (lambda line: print(line, flush=True))
+    augment = None
+    if config.adversarial is not None:
+        from vinadv.hardening import AdversarialConfig, AdversarialMaps
+
+        augment = AdversarialMaps(maps, AdversarialConfig(**config.adversarial), seed=config.seed)
     model, record = train(maps, config, checkpoint=checkpoint, resume=args.resume,
-                          progress=not (args.quiet or args.json), record=record, log=log)
+                          progress=not (args.quiet or args.json), record=record, log=log, augment=augment)
     record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     save(model, out, record)
     record_path = out.with_suffix(".json")

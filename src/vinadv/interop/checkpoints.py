@@ -116,3 +116,47 @@ def gppn_vin_gaps(state: dict[str, torch.Tensor]) -> list[str]:
     if int(state["policy.weight"].shape[0]) != 8:
         gaps.append(f"{int(state['policy.weight'].shape[0])} actions: vinadv plans with 8 moves")
     return gaps
+
+
+GPPN_KEYS = ("hid.weight", "hid.bias", "h0.weight", "h0.bias", "c0.weight", "c0.bias", "conv.weight", "conv.bias",
+             "lstm.weight_ih", "lstm.weight_hh", "lstm.bias_ih", "lstm.bias_hh", "policy.weight")
+
+
+def gppn_from_checkpoint(path: str | os.PathLike, k: int, which: str | None = None):
+    """vinadv's `GPPN` with the weights of a checkpoint of the GPPN authors' code (`read_checkpoint`), `k`
+    iterations (the code does not store them: its `--k`).
+
+    The keys and shapes are the same; the input is too (channel 0 is 1 on free cells, the goal map 1 at the goal,
+    zero padding reading as wall); only the order of the 8 actions differs (GPPN's Moore order N,E,W,S,NE,NW,SE,SW),
+    so the rows of `policy.weight` are reordered to vinadv's. Refused with an InputError naming the file: another
+    model, a 3-D (orientation) maze, or 4 actions (GPPN's 'news' mechanism; vinadv plans with 8 moves).
+    """
+    from vinadv.interop.maps import GPPN_TO_VINADV
+    from vinadv.planners.gppn import GPPN, GPPNConfig
+
+    state, meta = read_checkpoint(path, which)
+    missing = [key for key in GPPN_KEYS if key not in state]
+    if missing:
+        raise InputError(f"{path}: not a GPPN checkpoint: keys {missing} missing (has {sorted(state)[:8]})")
+    if int(state["hid.weight"].shape[1]) != 2:
+        raise InputError(f"{path}: a GPPN for 3-D mazes ({int(state['hid.weight'].shape[1])} input channels); "
+                         "vinadv plans on 2-D grids")
+    n_actions = int(state["policy.weight"].shape[0])
+    if n_actions != 8:
+        raise InputError(f"{path}: a GPPN with {n_actions} actions (GPPN's 'news' mechanism?); vinadv plans with "
+                         "8 moves")
+    config = GPPNConfig(k=int(k), l_h=int(state["hid.weight"].shape[0]), f=int(state["conv.weight"].shape[-1]))
+    config.validate()
+    state = {key: state[key].to(torch.float32) for key in GPPN_KEYS}
+    policy = torch.empty_like(state["policy.weight"])
+    policy[torch.from_numpy(GPPN_TO_VINADV)] = state["policy.weight"]  # GPPN's action g: vinadv's GPPN_TO_VINADV[g]
+    state["policy.weight"] = policy
+    model = GPPN(config)
+    try:
+        model.load_state_dict(state)
+    except RuntimeError as exc:
+        raise InputError(f"{path}: weights do not fit a GPPN of {config.to_dict()} "
+                         f"({str(exc).splitlines()[0]})") from None
+    model.eval()
+    model.source = {"checkpoint": str(path), "entry": meta["entry"]}
+    return model

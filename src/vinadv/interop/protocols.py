@@ -1,4 +1,7 @@
-"""A VIN measured the way each codebase measures it, so figures side by side compare like with like.
+"""A planner measured the way each codebase measures it, so figures side by side compare like with like.
+
+`vinadv` and `gppn` take any planner (`vinadv.planners.interface.Planner`, or a VIN); `kentsommer` a VIN (its goal
+prior is a VIN input).
 
 - `vinadv` (DESIGN.md): `vinadv.planners.evaluation.evaluate_vin`: action accuracy against the set of optimal
   actions at every free reachable cell; rollouts from every real start, a collision, a revisited cell or more than
@@ -84,10 +87,20 @@ def kentsommer_protocol(model: VIN, maps: MapSet, prior: float = PORT_TEST_PRIOR
             "trajectory_states": int(len(hit))}
 
 
-def gppn_protocol(model: VIN, maps: MapSet) -> dict:
-    """GPPN's %Opt and %Suc on `maps` (module doc)."""
+def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_size: int = 256) -> np.ndarray:
+    """The argmax action (lowest index on ties) of every cell by `planner` (a `Planner` or a VIN), `(n, N, N)`."""
+    from vinadv.planners.interface import as_planner
+
+    planner = as_planner(planner, obstacles.shape[1])
+    out = [np.argmax(planner.logits(obstacles[i : i + batch_size], goals[i : i + batch_size]), axis=1)
+           for i in range(0, len(obstacles), batch_size)]
+    return np.concatenate(out) if out else np.zeros(obstacles.shape, np.int64)
+
+
+def gppn_protocol(planner, maps: MapSet) -> dict:
+    """GPPN's %Opt and %Suc of `planner` (a `Planner` or a VIN) on `maps` (module doc)."""
     n, size = len(maps), maps.size
-    actions = argmax_actions(model, maps.obstacles, maps.goals)
+    actions = planner_actions(planner, maps.obstacles, maps.goals)
     succ = _moves(maps.obstacles, actions)
     goal = maps.goals @ np.array([size, 1])
     rows = np.arange(n)[:, None]

@@ -115,6 +115,10 @@ def save_gppn(model: GPPN, path: str | os.PathLike, record: dict | None = None) 
     os.replace(tmp, path)
 
 
+_AUTHORS_HINT = ("a checkpoint of the GPPN authors' code is converted by `vinadv gppn import-weights CKPT --k K --out "
+                 "gppn.pt` (their checkpoints do not store k)")
+
+
 def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
     """The GPPN in `path` (a vinadv.gppn/1 file), or the shipped weights for `size` when None.
 
@@ -131,7 +135,9 @@ def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
     try:
         data = torch.load(name, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises many types for a bad file
-        raise InputError(f"{name}: not a readable weights file ({type(exc).__name__})") from None
+        raise InputError(f"{name}: not a readable weights file ({type(exc).__name__}); {_AUTHORS_HINT}") from None
+    if isinstance(data, dict) and data.get("format") is None and ("best_model" in data or "model" in data):
+        raise InputError(f"{name}: not a vinadv GPPN weights file; {_AUTHORS_HINT}")
     if not isinstance(data, dict) or data.get("format") != GPPN_FORMAT:
         raise InputError(f"{name}: not a GPPN weights file (expected format {GPPN_FORMAT!r})")
     try:

@@ -274,11 +274,15 @@ class VINPlanner(TorchPlanner):
 
 def as_planner(planner, size: int) -> Planner:
     """`planner` if it is a `Planner`; a `VIN` wrapped as the `vin` planner for `size x size` maps (the library
-    functions that take a planner also take a VIN, as before there were other planners)."""
+    functions that take a planner also take a VIN, as before there were other planners); any other
+    `torch.nn.Module` as a `TorchPlanner` named after its class."""
     if isinstance(planner, Planner):
         return planner
     from vinadv.planners.vin import VIN
 
     if isinstance(planner, VIN):
         return VINPlanner(planner, size)
-    raise PlannerError(f"planner: expected a Planner or a VIN, got {type(planner).__name__}", "planner")
+    if isinstance(planner, nn.Module):  # a module with the bring-your-own contract (a GPPN, say)
+        return TorchPlanner(planner, type(planner).__name__.lower(), size)
+    raise PlannerError(f"planner: expected a Planner, a VIN or a torch.nn.Module, got {type(planner).__name__}",
+                       "planner")

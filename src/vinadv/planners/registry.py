@@ -2,6 +2,8 @@
 
 `load_planner(spec, size, ...)` gives a `Planner` for:
 - `vin` (default): the VIN and its exact engine; weights from `weights=` or the shipped `vin{N}.pt`.
+- `vin_robust`: the same VIN architecture with the shipped adversarially trained weights `vin{N}_robust.pt`
+  (`vinadv.hardening`).
 - `gppn`: the Gated Path Planning Network; weights from `weights=` or the shipped `gppn{N}.pt`.
 - `optimal`: exact shortest paths (the control: what a perfect planner does).
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
@@ -29,7 +31,7 @@ class PlannerInfo:
 
     def to_dict(self, size: int = 28) -> dict:
         """Name, description, the shipped weights for `size x size` maps (None: no weights) and whether present."""
-        path = _default_weights(self.name, size)
+        path = default_weights(self.name, size)
         return {**asdict(self), "weights": None if path is None else str(path),
                 "weights_available": None if path is None else path.exists()}
 
@@ -37,17 +39,24 @@ class PlannerInfo:
 REGISTRY = {
     "vin": PlannerInfo("vin", "Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine "
                        "(default)"),
+    "vin_robust": PlannerInfo("vin_robust", "the VIN, adversarially trained (vinadv.hardening; `vin train "
+                              "--adversarial`)"),
     "gppn": PlannerInfo("gppn", "Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, 8 actions"),
     "optimal": PlannerInfo("optimal", "exact shortest paths (Dijkstra, lowest action index on ties): the control"),
 }
 DEFAULT_PLANNER = "vin"
 
 
-def _default_weights(name: str, size: int) -> Path | None:
+def default_weights(name: str, size: int) -> Path | None:
+    """The shipped weights file of planner `name` for `size x size` maps; None for a planner without weights."""
     if name == "vin":
         from vinadv.planners.weights import default_weights_path
 
         return default_weights_path(size)
+    if name == "vin_robust":
+        from vinadv.planners.weights import WEIGHTS_DIR
+
+        return WEIGHTS_DIR / f"vin{int(size)}_robust.pt"
     if name == "gppn":
         from vinadv.planners.gppn import default_gppn_path
 
@@ -73,12 +82,22 @@ def load_planner(spec: str | None, size: int, weights: str | None = None, corner
     Raises `PlannerError` (an `InputError`) naming the spec for anything that cannot be loaded.
     """
     spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
-    if weights is not None and spec not in ("vin", "gppn"):
+    if weights is not None and spec not in ("vin", "gppn"):  # vin_robust is vin with its own weights
         raise PlannerError(f"planner {spec!r} takes no weights file (weights={weights!r})")
     if spec == "vin":
         from vinadv.planners.weights import load_vin
 
         return VINPlanner(load_vin(weights, size=size), size=size)
+    if spec == "vin_robust":
+        from vinadv.planners.weights import load_vin
+
+        path = default_weights("vin_robust", size)
+        if not path.exists():
+            raise PlannerError(f"no shipped adversarially trained VIN for {size}x{size} maps ({path}); make one with "
+                               "`vinadv vin train --adversarial` and use --planner vin --weights")
+        planner = VINPlanner(load_vin(path, size=size), size=size)
+        planner.name = "vin_robust"
+        return planner
     if spec == "gppn":
         from vinadv.planners.gppn import load_gppn
         from vinadv.planners.weights import weights_checksum

@@ -64,6 +64,8 @@ class TrainConfig:
     kernel: int = 3
     # a checkpoint also every this many minutes inside an epoch (an epoch of a slow model can take an hour)
     checkpoint_min: float | None = 10.0
+    # adversarial training's settings (`vinadv.hardening.AdversarialConfig.to_dict()`), None: plain training
+    adversarial: dict | None = None
 
     def validate(self) -> None:
         if self.epochs < 1:
@@ -82,17 +84,28 @@ class TrainConfig:
 
 
 def optimal_action_bits(maps: MapSet) -> np.ndarray:
-    """Optimal actions of every cell as a bit mask: `(n, N, N)` uint8, bit `a` set when action `a` is optimal.
+    """Optimal actions of every cell of `maps` as a bit mask: see `action_bits`."""
+    return action_bits(maps.obstacles, maps.goals, maps.corner_cutting)
+
+
+def action_bits(obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True) -> np.ndarray:
+    """Optimal actions of every cell as a bit mask: `(n, N, N)` uint8, bit `a` set when action `a` is optimal, for
+    obstacles `(n, N, N)` bool and goals `(n, 2)`.
 
     Zero at obstacles, the goal and cells that cannot reach the goal (they are not supervised).
     """
-    out = np.zeros(maps.obstacles.shape, dtype=np.uint8)
-    for i in range(0, len(maps), 1024):  # bounds the (chunk, N, N, 8) temporaries
-        obs, goals = maps.obstacles[i : i + 1024], maps.goals[i : i + 1024]
-        dist, _ = shortest_distances(obs, goals, maps.corner_cutting)
-        opt = optimal_actions(dist, obs, maps.corner_cutting)
+    out = np.zeros(obstacles.shape, dtype=np.uint8)
+    for i in range(0, len(obstacles), 1024):  # bounds the (chunk, N, N, 8) temporaries
+        obs, g = obstacles[i : i + 1024], goals[i : i + 1024]
+        dist, _ = shortest_distances(obs, g, corner_cutting)
+        opt = optimal_actions(dist, obs, corner_cutting)
         out[i : i + 1024] = (opt.astype(np.uint16) * _BITS).sum(axis=-1).astype(np.uint8)
     return out
+
+
+#: `augment(model, epoch, train_idx)`, called before each epoch: None, or `(obstacles (m, N, N) bool, goals (m, 2),
+#: info dict)` of maps to add to the training maps from then on (adversarial training, `vinadv.hardening`)
+Augment = Callable[[torch.nn.Module, int, np.ndarray], "tuple[np.ndarray, np.ndarray, dict] | None"]
 
 
 def bits_to_mask(bits: torch.Tensor, n_actions: int = 8) -> torch.Tensor:
@@ -183,6 +196,10 @@ class _State:
     wall_s: float = 0.0
     epochs: list = field(default_factory=list)
     partial: list = field(default_factory=lambda: [0.0, 0, 0])  # loss, cells, correct of the unfinished epoch
+    # maps added by `augment` (obstacles, goals) and what each call said
+    added_obstacles: np.ndarray | None = None
+    added_goals: np.ndarray | None = None
+    augment_rounds: list = field(default_factory=list)
 
 
 def evaluate_loss(model: torch.nn.Module, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int,
@@ -208,6 +225,7 @@ def train_vin(
     progress: bool = True,
     record: dict | None = None,
     log: Callable[[str], None] | None = None,
+    augment: Augment | None = None,
 ) -> tuple[VIN, dict]:
     """Train a VIN on `maps`; returns the model (CPU, eval mode) and the training record (see `train_model`)."""
     config.validate()
@@ -220,7 +238,7 @@ def train_vin(
         record = _start_from(model, load_vin(config.init, size=maps.size, k=vin_config.k), config.init, record)
     cpu = resolve_device(config.device).type == "cpu"
     record = {**(record or {}), "value_iteration": "compiled (vinadv.planners.fast_vi)" if cpu else "torch"}
-    return train_model(model, maps, config, vin_config.to_dict(), checkpoint, resume, progress, record, log)
+    return train_model(model, maps, config, vin_config.to_dict(), checkpoint, resume, progress, record, log, augment)
 
 
 def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, dict]:
@@ -259,9 +277,15 @@ def train_model(
     progress: bool = True,
     record: dict | None = None,
     log: Callable[[str], None] | None = None,
+    augment: Augment | None = None,
 ) -> tuple[torch.nn.Module, dict]:
     """Train `model` (a `VIN`, or any module with the planner contract, see `cell_logits`) on `maps`; returns it
     (CPU, eval mode) and the training record.
+
+    With `augment` (see `Augment`), the maps it returns before an epoch join the training maps, with their own
+    Dijkstra supervision, for that epoch and the rest: an epoch keeps its number of steps (so the learning-rate
+    schedule does not change) and draws its batches from the training maps and the added ones together. The added
+    maps are kept in the checkpoint and every call's `info` in the record (`augment_rounds`).
 
     Args:
         maps: the training maps (their starts and expert paths are not needed: every cell is supervised).
@@ -301,13 +325,34 @@ def train_model(
         if log:
             log(f"resumed from {checkpoint} after epoch {state.epoch}, step {state.step}")
     bits = optimal_action_bits(maps)
+    obstacles, goals = maps.obstacles, maps.goals
+    if state.added_obstacles is not None and len(state.added_obstacles):  # resumed with added maps
+        obstacles = np.concatenate([maps.obstacles, state.added_obstacles])
+        goals = np.concatenate([maps.goals, state.added_goals])
+        bits = np.concatenate([bits, action_bits(state.added_obstacles, state.added_goals, maps.corner_cutting)])
     started = time.time() - state.wall_s
     stopped = None
     last_save = time.time()
     for epoch in range(state.epoch, config.epochs):
-        model.train()
-        order = train_idx[np.random.default_rng([config.seed, epoch]).permutation(len(train_idx))]
         done = state.step - epoch * steps_per_epoch  # batches of this epoch done before a mid-epoch checkpoint
+        if augment is not None and not done and len(state.augment_rounds) <= epoch:
+            found = augment(model, epoch, train_idx)
+            new_obs, new_goals, info = found if found is not None else (None, None, {})
+            if new_obs is not None and len(new_obs):
+                state.added_obstacles = new_obs if state.added_obstacles is None else np.concatenate(
+                    [state.added_obstacles, new_obs])
+                state.added_goals = new_goals if state.added_goals is None else np.concatenate(
+                    [state.added_goals, new_goals])
+                obstacles = np.concatenate([obstacles, new_obs])
+                goals = np.concatenate([goals, new_goals])
+                bits = np.concatenate([bits, action_bits(new_obs, new_goals, maps.corner_cutting)])
+            state.augment_rounds.append({"epoch": epoch + 1, "added": 0 if new_obs is None else len(new_obs),
+                                         "added_total": len(obstacles) - len(maps), **info})
+            if log:
+                log(f"epoch {epoch + 1}: {state.augment_rounds[-1]}")
+        model.train()
+        pool = np.concatenate([train_idx, np.arange(len(maps), len(obstacles))])
+        order = pool[np.random.default_rng([config.seed, epoch]).permutation(len(pool))][: len(train_idx)]
         batches = range(done * config.batch_size, len(order), config.batch_size)
         if progress:
             from tqdm import tqdm
@@ -320,7 +365,7 @@ def train_model(
             lr = _lr_at(state.step, total_steps, config)
             for group in optimizer.param_groups:
                 group["lr"] = lr
-            loss, n, c = batch_loss(model, maps.obstacles[b], maps.goals[b], bits[b], device)
+            loss, n, c = batch_loss(model, obstacles[b], goals[b], bits[b], device)
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
             grad_norm = torch.nn.utils.clip_grad_norm_(model.parameters(), config.clip_norm)
@@ -369,6 +414,8 @@ def train_model(
             break
     rec.update(epochs=state.epochs, epochs_done=state.epoch, wall_time_s=round(state.wall_s, 1), steps=state.step,
                stopped_early=stopped)
+    if augment is not None:
+        rec.update(augment_rounds=state.augment_rounds, added_maps=len(obstacles) - len(maps))
     model = model.to("cpu").eval()
     return model, rec
 
@@ -394,6 +441,9 @@ def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -
             "wall_s": state.wall_s,
             "epochs": state.epochs,
             "partial": state.partial,
+            "augment_rounds": state.augment_rounds,
+            "added_obstacles": None if state.added_obstacles is None else torch.from_numpy(state.added_obstacles),
+            "added_goals": None if state.added_goals is None else torch.from_numpy(state.added_goals),
         },
         fh,
     )
@@ -411,7 +461,7 @@ def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> 
     now = config.to_dict()
     defaults = TrainConfig().to_dict()  # checkpoints older than a key hold its default
     for key in ("planner", "lr", "lr_final_fraction", "batch_size", "val_fraction", "seed", "k", "l_h", "l_q",
-                "kernel", "epochs"):
+                "kernel", "epochs", "adversarial"):
         if saved.get(key, defaults[key]) != now.get(key):
             raise InputError(f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {now.get(key)!r}; "
                              f"use the same options to resume, or remove the checkpoint")
@@ -423,5 +473,9 @@ def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> 
         optimizer.load_state_dict(ck["optimizer"])
     except (RuntimeError, KeyError, ValueError) as exc:
         raise InputError(f"{path}: checkpoint does not match the model ({exc})") from None
+    added_obs, added_goals = ck.get("added_obstacles"), ck.get("added_goals")
     return _State(epoch=int(ck["epoch"]), step=int(ck["step"]), wall_s=float(ck["wall_s"]), epochs=list(ck["epochs"]),
-                  partial=list(ck.get("partial", [0.0, 0, 0])))
+                  partial=list(ck.get("partial", [0.0, 0, 0])),
+                  added_obstacles=None if added_obs is None else added_obs.numpy(),
+                  added_goals=None if added_goals is None else added_goals.numpy(),
+                  augment_rounds=list(ck.get("augment_rounds", [])))

@@ -364,48 +364,57 @@ QUICK_EVAL_MAPS = 50
 QUICK_EVAL_SEED = 20_240_601
 
 
-def vin_quality(config: dict, checksum: str | None, size: int) -> tuple[dict, str]:
-    """The quality of the VIN a run used: `(metrics, source)`; metrics as `vinadv.planners.evaluation.evaluate_vin`
-    (success_rate, optimal_rate, action_accuracy, ...), `{}` when the weights are not on this machine.
+def planner_quality(config: dict, checksum: str | None, size: int) -> tuple[dict, str]:
+    """The quality of the planner a run used (`config["planner"]`, default the VIN): `(metrics, source)`; metrics as
+    `vinadv.planners.evaluation.evaluate_planner` (success_rate, optimal_rate, action_accuracy, ...), `{}` when the
+    planner or its weights are not on this machine, or are not the ones the run used (`checksum`).
 
-    From a metrics JSON shipped next to the weights, else the training record inside the weights file, else a quick
-    evaluation now (`QUICK_EVAL_MAPS` fresh maps)."""
+    For `vin` and `gppn`: from a metrics JSON shipped next to the weights, else the training record inside the weights
+    file; for every planner, else a quick evaluation now (`QUICK_EVAL_MAPS` fresh maps)."""
     import json
     from pathlib import Path
 
-    from vinadv.planners.weights import default_weights_path, weights_checksum
+    from vinadv.errors import InputError
+    from vinadv.planners.registry import default_weights, load_planner
 
-    path = Path(config["weights"]) if config.get("weights") else default_weights_path(size)
-    if not path.exists():
+    name = config.get("planner") or "vin"
+    corner_cutting = bool(config.get("corner_cutting", True))
+    path = Path(config["weights"]) if config.get("weights") else default_weights(name, size)
+    if path is not None and not path.exists():
         return {}, f"not available: the run's weights file {path} is not on this machine"
-    if checksum and weights_checksum(path) != checksum:
-        return {}, f"not available: {path} is not the file the run used (its checksum differs)"
-    for candidate in (path.with_suffix(".metrics.json"), path.with_name(path.stem + "_metrics.json"),
-                      path.with_name(path.stem + "-metrics.json"), path.with_name(path.name + ".metrics.json"),
-                      path.with_suffix(".json")):
-        if candidate.exists():
-            try:
-                data = json.loads(candidate.read_text())
-            except (OSError, ValueError):
-                continue
-            found = _find_metrics(data)
-            if found:
-                return found, f"metrics file {candidate.name} shipped with the weights {path.name}"
+    try:
+        planner = load_planner(name, size, weights=config.get("weights"), corner_cutting=corner_cutting)
+    except InputError as exc:
+        return {}, f"not available: {exc}"
+    if checksum and planner.checksum != checksum:
+        return {}, f"not available: planner {name!r} here is not the one the run used (its checksum differs)"
+    if path is not None:
+        for candidate in (path.with_suffix(".metrics.json"), path.with_name(path.stem + "_metrics.json"),
+                          path.with_name(path.stem + "-metrics.json"), path.with_name(path.name + ".metrics.json"),
+                          path.with_suffix(".json")):
+            if candidate.exists():
+                try:
+                    data = json.loads(candidate.read_text())
+                except (OSError, ValueError):
+                    continue
+                found = _find_metrics(data)
+                if found:
+                    return found, f"metrics file {candidate.name} shipped with the weights {path.name}"
+        model = getattr(planner, "vin", None) or getattr(planner, "module", None)
+        found = _find_metrics(getattr(model, "record", None) or {})
+        if found:
+            return found, f"the training record inside the weights file {path.name}"
     from vinadv.grid.generator import generate_maps
-    from vinadv.planners.evaluation import evaluate_vin
-    from vinadv.planners.weights import load_vin
+    from vinadv.planners.evaluation import evaluate_planner
 
-    model = load_vin(path, size=size)
-    found = _find_metrics(getattr(model, "record", None) or {})
-    if found:
-        return found, f"the training record inside the weights file {path.name}"
-    maps = generate_maps(QUICK_EVAL_MAPS, size, seed=QUICK_EVAL_SEED,
-                         corner_cutting=bool(config.get("corner_cutting", True)))
+    maps = generate_maps(QUICK_EVAL_MAPS, size, seed=QUICK_EVAL_SEED, corner_cutting=corner_cutting)
     start = time.perf_counter()
-    metrics = evaluate_vin(model, maps)
+    metrics = evaluate_planner(planner, maps)
     seconds = time.perf_counter() - start
-    return metrics, (f"quick evaluation while writing this report: {QUICK_EVAL_MAPS} fresh {size}x{size} maps "
-                     f"(seed {QUICK_EVAL_SEED}), {maps.n_starts} starts each, weights {path.name}, {seconds:.1f} s")
+    weights = "" if path is None else f", weights {path.name}"
+    return metrics, (f"quick evaluation of planner {name!r} while writing this report: {QUICK_EVAL_MAPS} fresh "
+                     f"{size}x{size} maps (seed {QUICK_EVAL_SEED}), {maps.n_starts} starts each{weights}, "
+                     f"{seconds:.1f} s")
 
 
 def _find_metrics(data) -> dict | None:

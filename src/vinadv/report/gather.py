@@ -95,6 +95,8 @@ def gather_run(ctx: Context) -> RunData:
         ("status", info["status"]), ("attack strategy", info.get("attack")),
         ("labelled by", info.get("classifier") or ", ".join(sources)), ("label sources", ", ".join(sources)),
         ("seed", info.get("seed")), ("stored pairs", int(ctx.runs[ctx.run_id]["n_pairs"])),
+        ("planner", (info.get("config") or {}).get("planner") or "vin"),
+        ("attacks found on planner (transfer)", ((info.get("config") or {}).get("attack_planner") or {}).get("name")),
         ("planner weights (SHA-256)", info.get("weights_checksum")), ("vinadv version", info["version"]),
     ]
     config = [(k, json.dumps(v) if isinstance(v, (dict, list)) else v)
@@ -119,12 +121,12 @@ class VinData:
 
 
 def gather_vin(ctx: Context) -> VinData:
-    from vinadv.report.evaluate import vin_quality
+    from vinadv.report.evaluate import planner_quality
 
     info = ctx.store.run_info(ctx.run_id)
     config = info.get("config") or {}
     size = int(config.get("size") or _first_pairs(ctx, ctx.run_id, 1).size)
-    metrics, source = vin_quality(config, info.get("weights_checksum"), size)
+    metrics, source = planner_quality(config, info.get("weights_checksum"), size)
     terms = ctx.store.termination_counts(ctx.run_id, "o")
     total, reached = sum(terms.values()), terms.get("goal", 0)
     keys = ("success_rate", "optimal_rate", "optimal_rate_of_reached", "action_accuracy", "mean_extra_cost",
@@ -829,7 +831,7 @@ class ReportData:
 #: the page's sections in order: (id, heading, gather function)
 SECTIONS = (
     ("run", "Run and configuration", gather_run),
-    ("vin", "The VIN's quality", gather_vin),
+    ("vin", "The planner's quality", gather_vin),
     ("examples", "Example map pairs (figs. 1, 2, 5)", gather_examples),
     ("categories", "The four categories (fig. 3)", gather_categories),
     ("distribution", "Category distribution (table 4)", gather_distribution),

@@ -243,8 +243,8 @@ class _ViewerState:
             n = sum(c.values())
             valid = n - c["invalid"]
             successes = sum(c[lab] for lab in SUCCESS)
-            out.append({**run, "counts": c, "n_pairs": n, "n_valid": valid, "n_success": successes,
-                        "success_rate": successes / valid if valid else None})
+            out.append({**run, "planner": run_planner(run), "counts": c, "n_pairs": n, "n_valid": valid,
+                        "n_success": successes, "success_rate": successes / valid if valid else None})
         return out
 
     def require_run(self, run_id: int) -> dict:
@@ -476,10 +476,16 @@ def _pair_row_json(row: dict, humans: list[dict]) -> dict:
     }
 
 
+def run_planner(run: dict) -> str:
+    """The planner a run's pairs were planned by (its config's `planner`; runs before planners: `vin`)."""
+    return (run.get("config") or {}).get("planner") or "vin"
+
+
 def _run_json(run: dict) -> dict:
     return {
         "id": int(run["id"]), "name": run["name"], "created": run["created"].isoformat() + "Z",
-        "status": run["status"], "attack": run["attack"], "classifier": run["classifier"], "seed": run["seed"],
+        "status": run["status"], "attack": run["attack"], "planner": run["planner"], "classifier": run["classifier"],
+        "seed": run["seed"],
         "n_pairs": run["n_pairs"], "counts": run["counts"], "n_valid": run["n_valid"],
         "n_success": run["n_success"], "success_rate": run["success_rate"],
     }

@@ -1,0 +1,134 @@
+"""`--planner` on attack, run and identify (transfer), `vinadv eval` in both conventions, and what runs record."""
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from tests.interop.test_protocols import brute_gppn_figures
+from vinadv.attacks.pairs import PairSet
+from vinadv.cli import main
+from vinadv.grid import generate_maps
+from vinadv.identify import replan
+from vinadv.pipeline import PLANNER_SPEC
+from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.testing import planning_vin
+from vinadv.planners.weights import save_vin, weights_checksum
+from vinadv.store import Store
+
+SIZE = 10
+
+
+@pytest.fixture(scope="module")
+def weights(tmp_path_factory):
+    path = tmp_path_factory.mktemp("w") / f"vin{SIZE}.pt"
+    save_vin(planning_vin(SIZE, seed=2, noise=0.1), path)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def maps_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("m") / "maps.npz"
+    generate_maps(25, SIZE, seed=6, n_starts=1).save(path)
+    return str(path)
+
+
+def test_attack_on_the_optimal_planner_is_never_harmful(maps_file, tmp_path, capsys):
+    out = tmp_path / "p.npz"
+    assert main(["attack", "--maps", maps_file, "--strategy", "exhaustive", "--planner", "optimal", "--out",
+                 str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["planner"]["name"] == "optimal" and summary["pairs"] > 0
+    assert summary["harm_counts"]["harmful"] == 0
+    pairs = PairSet.load(out)
+    assert pairs.params["planner"]["name"] == "optimal"
+    again = OptimalPlanner(SIZE).plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals)
+    assert again.paths == pairs.path_a
+
+
+def test_identify_with_another_planner_replans_and_records_both(weights, maps_file, tmp_path, capsys):
+    pairs_file = tmp_path / "p.npz"
+    assert main(["attack", "--maps", maps_file, "--strategy", "key-points", "--weights", weights, "--out",
+                 str(pairs_file), "--quiet"]) == 0
+    db = str(tmp_path / "t.db")
+    assert main(["identify", "--pairs", str(pairs_file), "--db", db, "--planner", "optimal", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["harm_counts"]["harmful"] == 0  # the attacks found on the VIN, tried on a perfect planner
+    with Store.open(db, readonly=True) as store:
+        info = store.run_info(summary["run_id"])
+        stored = store.read_pairs(summary["run_id"])
+    assert info["config"]["planner"] == "optimal"
+    assert info["config"]["attack_planner"]["name"] == "vin"
+    assert info["config"]["attack_planner"]["weights_sha256"] == weights_checksum(weights)
+    expected = replan(PairSet.load(pairs_file), OptimalPlanner(SIZE))
+    assert stored.path_a == expected.path_a and stored.path_o == expected.path_o
+
+
+def test_run_records_the_planner_and_resume_refuses_another(weights, tmp_path, capsys):
+    db = str(tmp_path / "r.db")
+    common = ["run", "--n", "20", "--size", str(SIZE), "--shard-size", "10", "--db", db, "--name", "k", "--quiet"]
+    assert main([*common, "--planner", "optimal"]) == 0
+    with Store.open(db, readonly=True) as store:
+        info = store.run_info(store.find_run("k"))
+    assert info["config"]["planner"] == "optimal"
+    assert info["config"][PLANNER_SPEC] == OptimalPlanner(SIZE).spec()
+    capsys.readouterr()
+    before = open(db, "rb").read()
+    assert main([*common, "--resume", "--weights", weights]) == 2  # the VIN: another planner
+    err = capsys.readouterr().err
+    assert "--resume" in err and "planner" in err and "Traceback" not in err
+    assert open(db, "rb").read() == before
+
+
+def test_resume_refuses_the_same_planner_with_other_weights(weights, tmp_path, capsys):
+    mine = tmp_path / "w.pt"
+    shutil.copy(weights, mine)
+    db = str(tmp_path / "r.db")
+    common = ["run", "--n", "20", "--size", str(SIZE), "--shard-size", "10", "--db", db, "--name", "k", "--quiet",
+              "--weights", str(mine)]
+    assert main(common) == 0
+    save_vin(planning_vin(SIZE, seed=3, noise=0.1), mine)  # the same file name, other weights
+    capsys.readouterr()
+    assert main([*common, "--resume"]) == 2
+    assert "weights sha256" in capsys.readouterr().err
+
+
+def test_eval_gives_both_conventions(maps_file, tmp_path, capsys):
+    assert main(["eval", "--planner", "optimal", "--data", maps_file, "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["planner"]["name"] == "optimal"
+    assert figures["vinadv"]["success_rate"] == 1.0 and figures["vinadv"]["optimal_rate"] == 1.0
+    from vinadv.grid.mapset import MapSet
+
+    maps = MapSet.load(maps_file)
+    actions = np.argmax(OptimalPlanner(SIZE).logits(maps.obstacles, maps.goals), axis=1)
+    suc, opt = brute_gppn_figures(maps, actions)
+    assert figures["gppn"]["percent_success"] == pytest.approx(suc)
+    assert figures["gppn"]["percent_optimal"] == pytest.approx(opt)
+
+
+def test_bad_planner_exits_2(maps_file, tmp_path, capsys):
+    for argv in (["attack", "--maps", maps_file, "--strategy", "random", "--out", str(tmp_path / "p.npz")],
+                 ["run", "--n", "5", "--size", str(SIZE), "--db", str(tmp_path / "x.db")],
+                 ["eval", "--data", maps_file]):
+        assert main([*argv, "--planner", "nonesuch", "--quiet"]) == 2
+        assert "unknown planner 'nonesuch'" in capsys.readouterr().err
+    assert main(["eval", "--data", maps_file, "--planner", "optimal", "--weights", "w.pt"]) == 2
+    assert "takes no weights" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_report_and_viewer_show_the_runs_planner(tmp_path):
+    from vinadv.report import write_report
+    from vinadv.viewer.app import create_app
+
+    db = str(tmp_path / "r.db")
+    assert main(["run", "--n", "20", "--size", str(SIZE), "--shard-size", "10", "--db", db, "--planner", "optimal",
+                 "--attack", "key-points", "--quiet"]) == 0
+    html = write_report(db, tmp_path / "rep").read_text()
+    assert "<td>planner</td><td>optimal</td>" in html
+    assert "quick evaluation of planner &#39;optimal&#39;" in html  # its quality, not the VIN's
+    with Store.open(db, readonly=True) as store:
+        runs = create_app(store).test_client().get("/api/runs").get_json()["runs"]
+    assert [r["planner"] for r in runs] == ["optimal"]
