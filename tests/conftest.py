@@ -43,6 +43,9 @@ SLOW = (
     "tests/store/test_store_db.py::test_killed_writer_resumes_with_every_pair_exactly_once",
     "tests/test_cli_imports.py::test_a_command_still_checks_its_choices",
     "tests/planners/test_gppn_training.py",
+    "tests/attacks/test_obstacles.py::test_every_k_obstacle_pair_keeps_the_rules",
+    "tests/attacks/test_obstacles.py::test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search",
+    "tests/test_robustness.py::test_exhaustive_harmful_rate_is_the_share_of_maps_some_single_cell_harms",
 )
 
 

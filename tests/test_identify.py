@@ -46,7 +46,7 @@ def test_exhaustive_with_the_harm_objective_keeps_the_most_harmful_cell_of_a_bru
         kept = np.flatnonzero(result.pairs.map_index == i)
         assert len(kept) == 1
         best = max(strengths.values())
-        got = strengths[tuple(result.pairs.added[kept[0]])]
+        got = strengths[tuple(result.pairs.added[kept[0], 0])]
         assert got == best or abs(got - best) < 1e-9
 
 

@@ -1,5 +1,6 @@
 """The main job end to end: maps -> attack -> identify -> store, on every database backend."""
 
+import json
 import os
 import signal
 import subprocess
@@ -186,8 +187,6 @@ def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
                  "--quiet"]) == 0
     assert main(["attack", "--maps", str(maps), "--strategy", "key-points", "--out", str(pairs),
                  "--weights", weights, "--json"]) == 0
-    import json
-
     summary = json.loads(capsys.readouterr().out)
     assert summary["pairs"] == sum(summary["counts"].values())
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--json"]) == 0
@@ -202,3 +201,67 @@ def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
     loose = json.loads(capsys.readouterr().out)
     assert loose["harmful"] == summary["counts"]["UrP"]
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--weights", weights, "--quiet"]) == 0
+
+
+def test_run_of_several_obstacles_stores_every_added_cell_and_resume_compares_it(weights, sqlite_url, tmp_path,
+                                                                                 capsys):
+    from vinadv.attacks.strategies import make_attack
+    from vinadv.grid import generate_maps
+    from vinadv.identify import objective_strength
+    from vinadv.planners.weights import load_vin
+
+    summary = run_pipeline(config(weights, n=30, attack="key-points", obstacles=2), db=sqlite_url, name="k2",
+                           progress=False)
+    with Store.open(sqlite_url) as store:
+        got = store.read_pairs(summary.run_id)
+        assert store.run_info(summary.run_id)["config"]["obstacles"] == 2
+    # the shards' own attacks, made again here: the stored pairs hold both cells of each
+    model = load_vin(weights, size=SIZE)
+    expected = []
+    for shard, lo in enumerate((0, 25)):
+        maps = generate_maps(min(25, 30 - lo), SIZE, seed=(4, shard), n_starts=1)
+        pairs = make_attack("key-points", seed=(4, shard), obstacles=2).attack(
+            maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=objective_strength("paper")).pairs
+        expected.append(pairs.added)
+    assert got.added.shape == (summary.n_pairs, 2, 2) and np.array_equal(got.added, np.concatenate(expected))
+    args = ["run", "--n", "30", "--size", str(SIZE), "--weights", weights, "--db", sqlite_url, "--name", "k2",
+            "--attack", "key-points", "--seed", "4", "--shard-size", "25", "--resume", "--quiet"]
+    assert main([*args, "--obstacles", "3"]) == 2
+    assert "other settings (obstacles)" in capsys.readouterr().err
+    assert main([*args, "--obstacles", "2"]) == 0
+    assert main([*args[:-2], "--obstacles", "0"]) == 2
+    assert "--obstacles must be >= 1" in capsys.readouterr().err
+
+
+def test_a_run_stored_before_several_obstacles_resumes_as_one_obstacle(weights, sqlite_url):
+    summary = run_pipeline(config(weights, n=30), db=sqlite_url, name="old", progress=False)
+    with Store.open(sqlite_url) as store:
+        stored = store.run_info(summary.run_id)["config"]
+    stored.pop("obstacles")
+    engine = sa.create_engine(sqlite_url, poolclass=sa.pool.NullPool)
+    with engine.begin() as conn:  # the config an older vinadv stored: no "obstacles"
+        conn.execute(sa.text("UPDATE runs SET config = :c WHERE id = :i"),
+                     {"c": json.dumps(stored), "i": summary.run_id})
+    engine.dispose()
+    again = run_pipeline(config(weights, n=30), db=sqlite_url, name="old", resume=True, progress=False)
+    assert again.run_id == summary.run_id and again.stored == 0
+
+
+def test_attack_and_identify_keep_every_added_obstacle(weights, tmp_path, sqlite_url, capsys):
+    from vinadv.attacks.pairs import PairSet
+
+    maps, pairs = tmp_path / "maps.npz", tmp_path / "pairs.npz"
+    assert main(["maps", "generate", "--n", "20", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
+                 "--quiet"]) == 0
+    assert main(["attack", "--maps", str(maps), "--strategy", "near-path", "--obstacles", "3", "--out", str(pairs),
+                 "--weights", weights, "--quiet"]) == 0
+    made = PairSet.load(pairs)
+    assert made.added.shape == (len(made), 3, 2) and made.params["obstacles"] == 3
+    assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--weights", weights, "--json"]) == 0
+    run_id = json.loads(capsys.readouterr().out)["run_id"]
+    with Store.open(sqlite_url) as store:
+        stored = store.read_pairs(run_id)
+    assert np.array_equal(stored.added, made.added) and np.array_equal(stored.obstacles_a, made.obstacles_a)
+    assert main(["attack", "--maps", str(maps), "--strategy", "random", "--obstacles", "0", "--out", str(pairs),
+                 "--weights", weights]) == 2
+    assert "--obstacles must be >= 1" in capsys.readouterr().err

@@ -24,6 +24,7 @@ COMMAND_MODULES = [
     "vinadv.commands.attack",
     "vinadv.commands.classify",
     "vinadv.commands.run",
+    "vinadv.commands.robustness",
     "vinadv.commands.store",
     "vinadv.commands.report",
     "vinadv.commands.serve",

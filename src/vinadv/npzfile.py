@@ -49,6 +49,10 @@ class NpzReader:
     def has(self, name: str) -> bool:
         return name in self._data
 
+    def ndim(self, name: str) -> int | None:
+        """The number of dimensions of field `name` (None when it is missing), for fields of several layouts."""
+        return self._data[name].ndim if name in self._data else None
+
     def fail(self, name: str, problem: str) -> InputError:
         return InputError(f"{self.path}: field '{name}' {problem}")
 

@@ -3,7 +3,8 @@
 The work is split in shards of `shard_size` maps. Shard `k` generates its maps from the seed `(seed, k)`, attacks
 them with the seed `(seed, k)`, identifies and stores its pairs; nothing in a shard depends on another, so the
 stored run does not depend on how (or where) shards are computed. A pair's `pair_index` is fixed by its map and
-slot: `global_map * per_map + slot` (with `per_map = 0`, all pairs: `global_map * N*N + row*N + col`).
+slot: `global_map * per_map + slot` (with `per_map = 0`, all pairs: `global_map * N*N + row*N + col` of the last
+added cell).
 
 A shard is written in batches inside transactions and `(run_id, pair_index)` is unique; a run killed part way
 resumes with `resume=True`: shards are stored in order and each completely stored shard is recorded
@@ -52,12 +53,15 @@ class RunConfig:
     harm_tolerance: float = DEFAULT_TOL
     harm_rtol: float = 0.0
     objective: str = "paper"
+    obstacles: int = 1
 
     def __post_init__(self):
         if self.n < 1:
             raise InputError(f"n must be >= 1, got {self.n}", "n")
         if self.shard_size < 1:
             raise InputError(f"shard_size must be >= 1, got {self.shard_size}", "shard_size")
+        if self.obstacles < 1:
+            raise InputError(f"obstacles must be >= 1, got {self.obstacles}", "obstacles")
         check_tolerances(self.harm_tolerance, self.harm_rtol)
         objective_strength(self.objective)  # InputError for an unknown objective
 
@@ -98,7 +102,7 @@ def compute_shard(config: RunConfig, shard: int, planner: Planner, classifier=No
                          corner_cutting=config.corner_cutting)
     t1 = time.perf_counter()
     attack = make_attack(config.attack, per_map=config.per_map, seed=(config.seed, shard), budget=config.budget,
-                         radius=config.radius)
+                         radius=config.radius, obstacles=config.obstacles)
     result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, planner, config.corner_cutting,
                            strength=objective_strength(config.objective))
     t2 = time.perf_counter()
@@ -113,8 +117,8 @@ def compute_shard(config: RunConfig, shard: int, planner: Planner, classifier=No
     if config.per_map > 0:
         first_of_map = np.searchsorted(pairs.map_index, pairs.map_index, side="left")
         slot = np.arange(len(pairs)) - first_of_map
-    else:
-        slot = pairs.added[:, 0] * config.size + pairs.added[:, 1]
+    else:  # one pair per valid cell of the last step: that cell is the slot
+        slot = pairs.added[:, -1, 0] * config.size + pairs.added[:, -1, 1]
     return ShardResult(shard, ident, global_map * config.slots + slot, n_maps, len(result.no_valid_cell),
                        result.planner_calls, seconds)
 
@@ -191,7 +195,8 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         if run_id is None:
             raise InputError(f"resume: no run named '{name}' in {store.url}", "resume")
         info = store.run_info(run_id)
-        stored_config = {"planner": DEFAULT_PLANNER, **(info["config"] or {})}  # runs before planners: the VIN
+        # runs stored before planners / several obstacles: the VIN, one obstacle
+        stored_config = {"planner": DEFAULT_PLANNER, "obstacles": 1, **(info["config"] or {})}
         stored_config.pop(PLANNER_SPEC, None)
         if stored_config != config.to_dict():
             diff = sorted(k for k in config.to_dict() if stored_config.get(k) != config.to_dict()[k])

@@ -38,10 +38,11 @@ def assert_valid(pairs: PairSet, maps):
     np.testing.assert_array_equal(pairs.starts, maps.starts[src, 0])
     np.testing.assert_array_equal(pairs.goals, maps.goals[src])
     for i in range(len(pairs)):
-        r, c = pairs.added[i]
+        cells = sorted(map(tuple, pairs.added[i].tolist()))
+        assert len(set(cells)) == len(cells) == pairs.n_added  # K distinct cells
         diff = np.argwhere(pairs.obstacles_a[i] != pairs.obstacles_o[i])
-        assert diff.tolist() == [[r, c]] and pairs.obstacles_a[i, r, c]
-        assert (r, c) != tuple(pairs.starts[i]) and (r, c) != tuple(pairs.goals[i])
+        assert list(map(tuple, diff.tolist())) == cells and pairs.obstacles_a[i][tuple(np.array(cells).T)].all()
+        assert tuple(pairs.starts[i]) not in cells and tuple(pairs.goals[i]) not in cells
         assert reachable(pairs.obstacles_a[i], pairs.starts[i], pairs.goals[i])
 
 
@@ -122,7 +123,7 @@ def test_exhaustive_finds_the_strongest_cell_of_a_brute_force_search(model, maps
                     best = (label, (r, c))
         got = np.flatnonzero(result.pairs.map_index == i)
         assert len(got) == 1
-        assert tuple(result.pairs.added[got[0]]) == best[1]
+        assert tuple(result.pairs.added[got[0], 0]) == best[1]
 
 
 def test_exhaustive_keeps_every_valid_cell_with_per_map_zero(model, maps):

@@ -158,20 +158,20 @@ def test_a_shard_delivered_twice_is_stored_once(weights, tmp_path):
     assert len(np.unique(got.pair_index)) == len(got)
 
 
-@pytest.mark.parametrize("strategy", ["near-path", "random", "key-points"])
-def test_attack_on_the_cluster_writes_the_same_pairs_file(weights, cluster, tmp_path, strategy):
+@pytest.mark.parametrize("strategy, obstacles", [("near-path", 1), ("random", 1), ("key-points", 1), ("random", 3)])
+def test_attack_on_the_cluster_writes_the_same_pairs_file(weights, cluster, tmp_path, strategy, obstacles):
     local, _ = cluster
     maps = tmp_path / "maps.npz"
     assert main(["maps", "generate", "--n", "45", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
                  "--seed", "5", "--quiet"]) == 0
     args = ["attack", "--maps", str(maps), "--strategy", strategy, "--weights", weights, "--per-map", "2",
-            "--seed", "3", "--quiet"]
+            "--seed", "3", "--obstacles", str(obstacles), "--quiet"]
     assert main([*args, "--out", str(tmp_path / "local.npz")]) == 0
     # uneven shards (45 = 16 + 16 + 13): the random stream must continue across shard boundaries
     assert main([*args, "--out", str(tmp_path / "cluster.npz"), "--cluster", local.scheduler_address,
                  "--shard-size", "16"]) == 0
     a, b = PairSet.load(tmp_path / "local.npz"), PairSet.load(tmp_path / "cluster.npz")
-    assert len(a) == len(b) > 40
+    assert len(a) == len(b) > 40 and a.n_added == obstacles
     for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added", "map_index", "term_o", "term_a"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert a.path_o == b.path_o and a.path_a == b.path_a

@@ -51,3 +51,15 @@ def test_draw_map_takes_one_start_or_many():
     assert np.array_equal(lines["starts"][0], [1, 3, 0]) and np.array_equal(lines["starts"][1], [0, 2, 4])
     assert np.array_equal(lines["start"][0], [2]) and np.array_equal(lines["start"][1], [1])
     plt.close(fig)
+
+
+@pytest.mark.parametrize("added", [[3, 4], [[3, 4]], [[3, 4], [0, 0], [5, 1]]])
+def test_draw_map_marks_every_added_obstacle_once_in_the_legend(added):
+    fig, ax = plt.subplots()
+    draw.draw_map(ax, np.zeros((6, 6), bool), goal=np.array([5, 5]), start=np.array([0, 1]), added=np.array(added))
+    squares = [p for p in ax.patches if p.get_facecolor()[:3] == pytest.approx((1.0, 0x7F / 255, 0x0E / 255))]
+    cells = sorted((round(p.get_y() + 0.5), round(p.get_x() + 0.5)) for p in squares)
+    assert cells == sorted(map(tuple, np.reshape(added, (-1, 2)).tolist()))
+    labels = [label for label in ax.get_legend_handles_labels()[1] if "added" in label]
+    assert labels == ["added obstacle" if len(cells) == 1 else "added obstacles"]
+    plt.close(fig)

@@ -73,7 +73,7 @@ def test_attacks_and_eval_without_a_border(edge_maps):
         pairs = make_attack(name, per_map=2, seed=1).attack(obstacles, starts, goals, model).pairs
         assert len(pairs)
         valid = valid_cells(obstacles, starts, goals)
-        added = pairs.added
+        added = pairs.added[:, 0]
         assert valid[pairs.map_index, added[:, 0], added[:, 1]].all()
         # the adversarial map is the original plus the added cell, edge cells included
         diff = pairs.obstacles_a ^ pairs.obstacles_o

@@ -62,8 +62,9 @@ def test_export_npz_round_trips(stored, tmp_path):
     assert main(["export", "--db", url, "--run", str(run_id), "--format", "npz", "--out", str(out), "--quiet"]) == 0
     with np.load(out) as data:
         assert str(data["format"]) == "vinadv.labelled_pairs/1" and str(data["strategy"]) == "near-path"
-        for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added", "attack", "dh", "dv", "pair_index"):
+        for name in ("obstacles_o", "obstacles_a", "starts", "goals", "attack", "dh", "dv", "pair_index"):
             assert np.array_equal(data[name], getattr(records, name)), name
+        assert np.array_equal(data["added"], records.added[:, 0])  # one obstacle per pair: (n, 2), as ever
         for side in ("o", "a"):
             paths = getattr(records, f"path_{side}")
             assert np.array_equal(data[f"path_{side}_cells"], paths.cells)
@@ -74,6 +75,22 @@ def test_export_npz_round_trips(stored, tmp_path):
             assert np.array_equal(data[name], getattr(records, name), equal_nan=True), name
         assert data["harm"].tolist() == [h or "" for h in records.harm]
         assert data["expert_label"].tolist() == [h or "" for h in records.expert_label]
+
+
+def test_export_keeps_every_added_obstacle(sqlite_url, tmp_path, capsys):
+    records = random_records(12, size=7, seed=4, n_added=3)
+    with Store.open(sqlite_url) as store:
+        run_id = store.create_run("three")
+        store.write_pairs(run_id, records)
+    out = tmp_path / "three.npz"
+    assert main(["export", "--db", sqlite_url, "--run", "three", "--format", "npz", "--out", str(out), "--quiet"]) == 0
+    with np.load(out) as data:
+        assert np.array_equal(data["added"], records.added) and data["added"].shape == (12, 3, 2)
+    assert main(["export", "--db", sqlite_url, "--run", "three", "--format", "csv", "--quiet"]) == 0
+    rows = list(csv.DictReader(capsys.readouterr().out.splitlines()))
+    for row, cells in zip(rows, records.added.tolist()):  # the first cell as ever, the others in added_more
+        assert row["added_obstacle"] == "{},{}".format(*cells[0])
+        assert row["added_more"] == ";".join("{},{}".format(*c) for c in cells[1:])
 
 
 def test_export_errors_exit_2(tmp_path, capsys, sqlite_url):

@@ -32,12 +32,13 @@ def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
         rows.append((
             run_id, int(records.pair_index[i]), map_text(records.obstacles_o[i]), map_text(records.obstacles_a[i]),
             path_text(paths_o[i]), path_text(paths_a[i]), str(records.label[i]), bool(records.attack[i]),
-            "{},{}".format(*records.starts[i]), "{},{}".format(*records.goals[i]), "{},{}".format(*records.added[i]),
+            "{},{}".format(*records.starts[i]), "{},{}".format(*records.goals[i]), "{},{}".format(*records.added[i, 0]),
             str(records.label_source[i]), None if np.isnan(score) else score,
             str(records.term_o[i]), str(records.term_a[i]),
             None if records.dh[i] < 0 else int(records.dh[i]), None if records.dv[i] < 0 else int(records.dv[i]),
             *[None if math.isnan(getattr(records, c)[i]) else float(getattr(records, c)[i]) for c in HARM_FLOATS],
             records.expert_label[i], records.harm[i],
+            ";".join("{},{}".format(*c) for c in records.added[i, 1:].tolist()) or None,  # NULL: one obstacle
         ))
     return sorted(rows, key=lambda r: r[1])
 
@@ -45,7 +46,7 @@ def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
 def _raw_rows(url: str) -> list[tuple]:
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     cols = ("run_id pair_index map_o map_a path_o path_a label attack start goal added_obstacle label_source "
-            "score term_o term_a dh dv").split() + [*HARM_FLOATS, "expert_label", "harm"]
+            "score term_o term_a dh dv").split() + [*HARM_FLOATS, "expert_label", "harm", "added_more"]
     with engine.connect() as conn:
         table = schema.map_pairs  # not reflected: a reflected MySQL DOUBLE reads back as a 10-digit Decimal
         rows = conn.execute(sa.select(*[table.c[c] for c in cols]).order_by(table.c.pair_index)).all()

@@ -19,7 +19,8 @@ HARM_COLUMNS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "reg
 
 
 def _make_version_1(url: str) -> int:
-    """A database as vinadv with schema version 1 left it: 30 pairs, no harm columns."""
+    """A database as vinadv with schema version 1 left it: 30 pairs, no harm columns (nor version 3's
+    `added_more`)."""
     with Store.open(url) as store:
         run_id = store.create_run("old")
         store.write_pairs(run_id, random_records(30, size=7, seed=3))
@@ -27,7 +28,7 @@ def _make_version_1(url: str) -> int:
     quote = engine.dialect.identifier_preparer.quote
     with engine.begin() as conn:
         HARM_INDEX.drop(conn)  # version 1 had no index on harm (SQLite cannot drop an indexed column)
-        for name in HARM_COLUMNS:
+        for name in (*HARM_COLUMNS, "added_more"):
             conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote(name)}"))
         conn.execute(sa.text(f"UPDATE vinadv_meta SET value = '1' WHERE {quote('key')} = 'schema_version'"))
     engine.dispose()
@@ -75,7 +76,7 @@ def test_version_1_database_is_upgraded_on_open(db_url):
         store.write_pairs(run_id, new)
         assert store.read_pairs(run_id, pair_indices=new.pair_index).equals(new)
     columns, version = _columns_and_version(db_url)
-    assert version == SCHEMA_VERSION == "2" and set(HARM_COLUMNS) <= columns
+    assert version == SCHEMA_VERSION == "3" and {*HARM_COLUMNS, "added_more"} <= columns
     with Store.open(db_url) as store:  # opening again changes nothing
         assert store.count_pairs(run_id) == 40
 
@@ -92,7 +93,7 @@ def test_version_1_database_with_a_missing_column_is_refused_untouched(sqlite_ur
     assert _columns_and_version(sqlite_url) == before
 
 
-@pytest.mark.parametrize("version", ["0", "3", "1.5"])
+@pytest.mark.parametrize("version", ["0", "4", "1.5"])
 def test_unknown_version_is_refused_and_the_file_stays_byte_identical(tmp_path, version):
     path = tmp_path / "v.db"
     url = f"sqlite:///{path}"

@@ -22,7 +22,8 @@ def _comparable(row: tuple) -> tuple:
 
 
 def _sqlite_form(row: tuple) -> tuple:
-    """An oracle row in SQLite's native form: attack 0/1, NULL score and harm costs NaN, NULL dh/dv -1."""
+    """An oracle row in SQLite's native form: attack 0/1, NULL score and harm costs NaN, NULL dh/dv -1, NULL
+    added_more ''."""
     col = dict(zip(INSERT_COLUMNS, row))
     col["attack"] = int(col["attack"])
     col["score"] = math.nan if col["score"] is None else col["score"]
@@ -30,12 +31,14 @@ def _sqlite_form(row: tuple) -> tuple:
     col["dv"] = -1 if col["dv"] is None else col["dv"]
     for name in HARM_FLOATS:
         col[name] = math.nan if col[name] is None else col[name]
+    col["added_more"] = "" if col["added_more"] is None else col["added_more"]
     return tuple(col.values())
 
 
+@pytest.mark.parametrize("n_added", [1, 3])
 @pytest.mark.parametrize(("lo", "hi"), [(0, None), (0, 0), (5, 17), (59, 60), (40, 1000)])
-def test_encode_rows_match_oracle(lo, hi):
-    records = random_records(60, size=13, seed=11)  # pair_index 0..59: the oracle's order is the records'
+def test_encode_rows_match_oracle(lo, hi, n_added):
+    records = random_records(60, size=13, seed=11, n_added=n_added)  # pair_index 0..59: the oracle's order
     expected = _oracle_rows(3, records)[lo:hi]
     assert [_comparable(r) for r in encode_rows(3, records, lo, hi)] == [_comparable(r) for r in expected]
     native = encode_rows(3, records, lo, hi, sqlite=True)

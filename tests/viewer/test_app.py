@@ -148,7 +148,8 @@ def test_pair_json_matches_records(client, db):
         o = records.path_o[row]
         a = records.path_a[row]
         assert body["path_o"] == o.tolist() and body["path_a"] == a.tolist()
-        assert body["added"] == records.added[row].tolist() and body["goal"] == records.goals[row].tolist()
+        assert body["added"] == records.added[row, 0].tolist() and body["added_cells"] == records.added[row].tolist()
+        assert body["goal"] == records.goals[row].tolist()
         assert body["label"] == records.label[row] and body["attack"] == bool(records.attack[row])
         score = records.score[row]
         assert body["score"] == (None if np.isnan(score) else pytest.approx(score))

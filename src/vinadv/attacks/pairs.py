@@ -1,4 +1,8 @@
-"""Map pairs (original map + one added obstacle) with both planned paths; file format "vinadv.pairs/1"."""
+"""Map pairs (original map + K added obstacles, K >= 1) with both planned paths; file format "vinadv.pairs/1".
+
+The field `added` is `(n, 2)` in a file of one-obstacle pairs (as before there were several: such a file is the same
+as ever, and every vinadv reads it) and `(n, K, 2)` in a file of K > 1 obstacles per pair.
+"""
 
 from __future__ import annotations
 
@@ -51,7 +55,7 @@ class PairSet(PathPairs):
                 "obstacles_a": self.obstacles_a,
                 "starts": self.starts,
                 "goals": self.goals,
-                "added": self.added,
+                "added": self.added[:, 0] if self.n_added == 1 else self.added,  # one obstacle: (n, 2) as ever
                 "map_index": self.map_index,
                 **self.path_o.to_fields("path_o"),
                 **self.path_a.to_fields("path_a"),
@@ -74,7 +78,7 @@ class PairSet(PathPairs):
         obs_a = r.array("obstacles_a", "b", 3, obs_o.shape)
         starts = r.array("starts", "i", 2, (n, 2)).astype(np.int64)
         goals = r.array("goals", "i", 2, (n, 2)).astype(np.int64)
-        added = r.array("added", "i", 2, (n, 2)).astype(np.int64)
+        added = _read_added(r, n)
         map_index = r.array("map_index", "i", 1, (n,)).astype(np.int64)
         paths = {side: PackedPaths.read(r, f"path_{side}", n, size) for side in ("o", "a")}
         terms = {}
@@ -86,12 +90,6 @@ class PairSet(PathPairs):
             terms[side] = term
         for name, cells in (("starts", starts), ("goals", goals), ("added", added)):
             check_cells_in_grid(r, name, cells, size)
-        idx = np.arange(n)
-        diff = obs_a != obs_o
-        if n and (np.any(diff.sum(axis=(1, 2)) != 1) or not np.all(diff[idx, added[:, 0], added[:, 1]])):
-            raise r.fail("obstacles_a", "must differ from obstacles_o in exactly the cell 'added', made an obstacle")
-        if n and obs_o[idx, added[:, 0], added[:, 1]].any():
-            raise r.fail("added", "has a cell that is already an obstacle on the original map")
         check_pairs(r.path, obs_o, obs_a, starts, goals, added, paths, terms, r.scalar("corner_cutting", "b", True))
         params = r.json("params")
         if not isinstance(params, dict):
@@ -102,3 +100,13 @@ class PairSet(PathPairs):
             strategy=str(r.scalar("strategy", "U")), params=params,
             corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
         )
+
+
+def _read_added(r: NpzReader, n: int) -> np.ndarray:
+    """The file's `added`: `(n, 2)` (one obstacle per pair) or `(n, K, 2)`, as int64 `(n, K, 2)`."""
+    if r.ndim("added") == 3:
+        added = r.array("added", "i", 3, (n, None, 2))
+        if added.shape[1] < 1:
+            raise r.fail("added", f"has shape {added.shape}, expected at least one cell per pair")
+        return added.astype(np.int64)
+    return r.array("added", "i", 2, (n, 2)).astype(np.int64)[:, None, :]

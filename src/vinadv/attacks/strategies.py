@@ -1,4 +1,5 @@
-"""One-obstacle attack strategies, from random to exhaustive, batched, on any planner (`vinadv.planners`).
+"""Attack strategies, from random to exhaustive, batched, on any planner (`vinadv.planners`): one added obstacle
+per map (the paper's setting), or K added greedily.
 
 Every strategy follows the same three steps, and differs only in the first:
 
@@ -26,12 +27,21 @@ The strategies:
   order). Evaluates the top `budget`. A planner without gradients (`optimal`) is ranked as by `key-points`.
 - `exhaustive`: every valid cell of every map; keeps the strongest per map, or all pairs with `per_map=0`.
   This is the upper bound of what one obstacle can do.
+
+K obstacles (`obstacles=K`, DESIGN.md "Several obstacles"): greedy. Step 1 is the attack above; each later step runs
+the same strategy again on the maps with the cells chosen so far added (their valid cells, the planner's paths on
+them, the strategy's candidates, a fresh random stream: `SeedSequence(seed, spawn_key=(step,))`). Every candidate is
+judged as the pair it would make with the ORIGINAL map (its path and the `strength` against it). A step before the
+last keeps the strongest candidate of each map (per_map 1 of a ranking strategy, whatever the strategy: for `random`
+and `near-path` the strongest of their `per_map` drawn cells); the last step keeps `per_map` pairs as a one-obstacle
+attack does. So the pairs of K obstacles with per_map 1 extend those of K - 1 (`AttackResult.steps` holds every
+step's pairs). A map with no valid cell at some step gets no pair.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import torch
@@ -60,32 +70,59 @@ class AttackResult:
     """What an attack made.
 
     Attributes:
-        pairs: the map pairs, grouped by map in map order (`pairs.map_index`).
-        no_valid_cell: indices of the maps for which no valid candidate existed (no pair was made for them).
+        pairs: the map pairs, grouped by map in map order (`pairs.map_index`); `pairs.added` is `(n, K, 2)`.
+        no_valid_cell: indices of the maps for which no valid candidate existed, at some step (no pair was made for
+            them).
         planner_calls: rollouts run, the original maps' included.
+        steps: the pairs kept after each greedy step, `steps[k - 1]` of k added obstacles (the original map against
+            the map with the first k cells); the last is `pairs`. With per_map 1, `steps[k - 1]` is exactly what an
+            attack with `obstacles=k` makes.
     """
 
     pairs: PairSet
     no_valid_cell: np.ndarray
     planner_calls: int
+    steps: list[PairSet] = field(default_factory=list)
 
 
 @dataclass
 class AttackContext:
-    """What every strategy may use to score candidates: the maps, the valid cells and the original plans."""
+    """What every strategy may use to score candidates of one step.
+
+    Attributes:
+        obstacles: `(B, N, N)` bool, the maps searched at this step: the original maps at the first step, the maps
+            with the cells chosen so far added at a later one. starts, goals: `(B, 2)`.
+        valid: `(B, N, N)` bool, the valid cells of `obstacles` (`validity.valid_cells`; none for a map already
+            out of the attack).
+        plans: the planner's paths on `obstacles`. planner; rng: this step's random stream.
+        base_obstacles, base: the original maps and the planner's paths on them (the pairs are made against them;
+            default: `obstacles` and `plans`). added: `(B, k, 2)`, the k cells chosen at the steps before (default
+            none).
+    """
 
     obstacles: np.ndarray
     starts: np.ndarray
     goals: np.ndarray
     valid: np.ndarray
-    originals: PlanResult
+    plans: PlanResult
     planner: Planner
     rng: np.random.Generator
+    base_obstacles: np.ndarray | None = None
+    base: PlanResult | None = None
+    added: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.base_obstacles is None:
+            self.base_obstacles = self.obstacles
+        if self.base is None:
+            self.base = self.plans
+        if self.added is None:
+            self.added = np.zeros((len(self.obstacles), 0, 2), np.int64)
 
     def path_mask(self) -> np.ndarray:
-        """`(B, N, N)` bool: the cells of each map's original path."""
+        """`(B, N, N)` bool: the cells of the planner's path on each searched map."""
         mask = np.zeros_like(self.obstacles)
-        paths = self.originals.paths
+        paths = self.plans.paths
         cells = paths.cells.astype(np.int64)
         mask[paths.owners(), cells[:, 0], cells[:, 1]] = True
         return mask
@@ -97,18 +134,21 @@ class Attack:
     name = ""
     ranked = True  # keep the strongest evaluated candidates; False: keep every evaluated candidate
 
-    def __init__(self, per_map: int = 1, budget: int | None = 8, seed: int = 0):
+    def __init__(self, per_map: int = 1, budget: int | None = 8, seed: int = 0, obstacles: int = 1):
         if per_map < 0:
             raise InputError(f"per_map must be >= 0, got {per_map}", "per_map")
         if budget is not None and budget < 1:
             raise InputError(f"budget must be >= 1, got {budget}", "budget")
+        if obstacles < 1:
+            raise InputError(f"obstacles must be >= 1, got {obstacles}", "obstacles")
         self.per_map = per_map
         self.budget = budget
         self.seed = seed
+        self.obstacles = int(obstacles)
 
     def params(self) -> dict:
         """The strategy's parameters, stored with its pairs."""
-        return {"per_map": self.per_map, "budget": self.budget, "seed": self.seed}
+        return {"per_map": self.per_map, "budget": self.budget, "seed": self.seed, "obstacles": self.obstacles}
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         raise NotImplementedError
@@ -125,35 +165,67 @@ class Attack:
         first_map: int = 0,
     ) -> AttackResult:
         """Attack a batch of maps with `planner` (a `Planner`, or a `VIN`): obstacles `(B, N, N)` bool, starts
-        and goals `(B, 2)`; see the module doc.
+        and goals `(B, 2)`; `self.obstacles` cells per pair, greedily (see the module doc).
 
         `first_map`: these maps are maps `first_map..first_map+B-1` of a larger batch; the result is that
         batch's result for them (so a batch can be attacked in shards). Randomised strategies draw one
-        `rng.random((B, N, N))`, one PCG64 step per number, so a shard starts `first_map * N * N` steps in.
+        `rng.random((B, N, N))` per step, one PCG64 step per number, so a shard starts `first_map * N * N` steps in
+        (every step draws for all B maps, those out of the attack included, so no map's draw depends on another's).
         """
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         starts = np.ascontiguousarray(starts, dtype=np.int64)
         goals = np.ascontiguousarray(goals, dtype=np.int64)
         planner = as_planner(planner, obstacles.shape[1])
-        originals = planner.plan_batch(obstacles, starts, goals, corner_cutting)
-        valid = valid_cells(obstacles, starts, goals, corner_cutting)
-        rng = np.random.default_rng(self.seed)
+        strength = strength or planner_strength
+        b = len(obstacles)
+        base = planner.plan_batch(obstacles, starts, goals, corner_cutting)
+        calls = b
+        current, plans = obstacles, base
+        chosen = np.zeros((b, 0, 2), np.int64)
+        alive = np.ones(b, dtype=bool)  # maps that got a cell at every step so far
+        steps: list[PairSet] = []
+        for step in range(self.obstacles):
+            last = step == self.obstacles - 1
+            if step:
+                plans = planner.plan_batch(current, starts, goals, corner_cutting)
+                calls += b
+            valid = valid_cells(current, starts, goals, corner_cutting) & alive[:, None, None]
+            ctx = AttackContext(current, starts, goals, valid, plans, planner, self._rng(step, first_map, obstacles),
+                                base_obstacles=obstacles, base=base, added=chosen)
+            scores = np.where(valid, self.candidate_scores(ctx), -np.inf)
+            alive &= np.isfinite(scores).any(axis=(1, 2))
+            # a step before the last keeps the strongest candidate of each map, whatever the strategy
+            map_idx, cells, rank = _top_candidates(scores, self._evaluated_per_map())
+            desc = f"attack {self.name}" + (f", obstacle {step + 1}/{self.obstacles}" if self.obstacles > 1 else "")
+            kept = self._evaluate(ctx, map_idx, cells, rank, corner_cutting, strength, progress and desc,
+                                  keep=self.per_map if last else 1, ranked=self.ranked or not last)
+            calls += len(map_idx)
+            kept.params = {**kept.params, "planner": planner.spec()}  # which planner the attacks were found on
+            steps.append(kept)
+            if not last:
+                current = obstacles.copy()
+                current[kept.map_index] = kept.obstacles_a
+                chosen = np.zeros((b, step + 1, 2), np.int64)
+                chosen[kept.map_index] = kept.added
+        return AttackResult(steps[-1], np.flatnonzero(~alive), calls, steps)
+
+    def _rng(self, step: int, first_map: int, obstacles: np.ndarray) -> np.random.Generator:
+        """Step `step`'s random stream, advanced to map `first_map`: the seed's own for the first step (the stream of
+        a one-obstacle attack), an independent child stream of the seed for each later one."""
+        seed = self.seed if step == 0 else np.random.SeedSequence(self.seed, spawn_key=(step,))
+        rng = np.random.default_rng(seed)
         rng.bit_generator.advance(first_map * obstacles.shape[1] * obstacles.shape[2])
-        ctx = AttackContext(obstacles, starts, goals, valid, originals, planner, rng)
-        scores = np.where(valid, self.candidate_scores(ctx), -np.inf)
-        map_idx, cells, rank = _top_candidates(scores, self._evaluated_per_map())
-        no_valid = np.flatnonzero(~np.isfinite(scores).any(axis=(1, 2)))
-        kept, calls = self._evaluate(ctx, map_idx, cells, rank, corner_cutting, strength or planner_strength,
-                                     progress)
-        kept.params = {**kept.params, "planner": planner.spec()}  # which planner the attacks were found on
-        return AttackResult(kept, no_valid, len(obstacles) + calls)
+        return rng
 
     def _evaluated_per_map(self) -> int | None:
         if not self.ranked:
             return self.per_map or None
         return self.budget
 
-    def _evaluate(self, ctx, map_idx, cells, rank, corner_cutting, strength, progress):
+    def _evaluate(self, ctx, map_idx, cells, rank, corner_cutting, strength, progress, keep: int,
+                  ranked: bool) -> PairSet:
+        """The pairs of the candidates `(map_idx, cells, rank)`: with `ranked`, the `keep` strongest of each map
+        (all with `keep` 0), else all. `progress`: a progress bar's description, or False."""
         # chunks of about EVAL_CHUNK candidates, split at map boundaries so a map's candidates are judged together
         first = np.searchsorted(map_idx, np.arange(len(ctx.obstacles) + 1))
         chunk_of_map = first[:-1] // EVAL_CHUNK
@@ -162,28 +234,27 @@ class Attack:
         if progress:
             from tqdm import tqdm
 
-            spans = tqdm(spans, desc=f"attack {self.name}", unit="chunk")
+            spans = tqdm(spans, desc=progress, unit="chunk")
         parts = []
         for lo, hi in spans:
             if hi > lo:
                 parts.append(self._evaluate_chunk(ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi],
-                                                  corner_cutting, strength))
-        pairs = PairSet.concat(parts, size=ctx.obstacles.shape[1], strategy=self.name, params=self.params(),
-                               corner_cutting=corner_cutting)
-        return pairs, len(map_idx)
+                                                  corner_cutting, strength, keep, ranked))
+        return PairSet.concat(parts, size=ctx.obstacles.shape[1], strategy=self.name, params=self.params(),
+                              corner_cutting=corner_cutting, n_added=ctx.added.shape[1] + 1)
 
-    def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength) -> PairSet:
+    def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength, keep, ranked) -> PairSet:
         obstacles_a = ctx.obstacles[map_idx].copy()
         obstacles_a[np.arange(len(map_idx)), cells[:, 0], cells[:, 1]] = True
         planned = ctx.planner.plan_batch(obstacles_a, ctx.starts[map_idx], ctx.goals[map_idx], corner_cutting)
         pairs = _make_pairs(ctx, map_idx, cells, obstacles_a, planned, corner_cutting)
-        if not self.ranked or self.per_map == 0:
+        if not ranked or keep == 0:
             return pairs
-        # per map, the per_map strongest; ties to the better rank (lexsort: last key is the primary one)
+        # per map, the `keep` strongest; ties to the better rank (lexsort: last key is the primary one)
         order = np.lexsort((rank, -np.asarray(strength(pairs)), map_idx))
         group_start = np.searchsorted(map_idx[order], map_idx[order], side="left")
-        keep = order[np.arange(len(order)) - group_start < self.per_map]
-        return pairs.take(np.sort(keep))
+        kept = order[np.arange(len(order)) - group_start < keep]
+        return pairs.take(np.sort(kept))
 
 
 def _top_candidates(scores: np.ndarray, per_map: int | None):
@@ -202,11 +273,13 @@ def _top_candidates(scores: np.ndarray, per_map: int | None):
 
 
 def _make_pairs(ctx: AttackContext, map_idx, cells, obstacles_a, planned: PlanResult, corner_cutting) -> PairSet:
+    """The pairs (original map, searched map + cell): the original map's path against the new one's."""
+    added = np.concatenate([ctx.added[map_idx], cells.astype(np.int64)[:, None, :]], axis=1)
     return PairSet(
-        obstacles_o=ctx.obstacles[map_idx], obstacles_a=obstacles_a, starts=ctx.starts[map_idx],
-        goals=ctx.goals[map_idx], added=cells.astype(np.int64), map_index=map_idx.astype(np.int64),
-        path_o=ctx.originals.paths.take(map_idx), path_a=planned.paths,
-        term_o=ctx.originals.termination_names[map_idx], term_a=planned.termination_names,
+        obstacles_o=ctx.base_obstacles[map_idx], obstacles_a=obstacles_a, starts=ctx.starts[map_idx],
+        goals=ctx.goals[map_idx], added=added, map_index=map_idx.astype(np.int64),
+        path_o=ctx.base.paths.take(map_idx), path_a=planned.paths,
+        term_o=ctx.base.termination_names[map_idx], term_a=planned.termination_names,
         corner_cutting=corner_cutting,
     )
 
@@ -216,7 +289,7 @@ class RandomAttack(Attack):
     ranked = False
 
     def params(self) -> dict:
-        return {"per_map": self.per_map, "seed": self.seed}
+        return {"per_map": self.per_map, "seed": self.seed, "obstacles": self.obstacles}
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         return ctx.rng.random(ctx.obstacles.shape)
@@ -226,14 +299,14 @@ class NearPathAttack(Attack):
     name = "near-path"
     ranked = False
 
-    def __init__(self, per_map: int = 1, radius: int = 2, seed: int = 0):
-        super().__init__(per_map=per_map, budget=None, seed=seed)
+    def __init__(self, per_map: int = 1, radius: int = 2, seed: int = 0, obstacles: int = 1):
+        super().__init__(per_map=per_map, budget=None, seed=seed, obstacles=obstacles)
         if radius < 0:
             raise InputError(f"radius must be >= 0, got {radius}", "radius")
         self.radius = radius
 
     def params(self) -> dict:
-        return {"per_map": self.per_map, "radius": self.radius, "seed": self.seed}
+        return {"per_map": self.per_map, "radius": self.radius, "seed": self.seed, "obstacles": self.obstacles}
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         near = maximum_filter(ctx.path_mask(), size=(1, 2 * self.radius + 1, 2 * self.radius + 1), mode="constant")
@@ -245,7 +318,7 @@ class KeyPointsAttack(Attack):
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         b, n, _ = ctx.obstacles.shape
-        paths = ctx.originals.paths
+        paths = ctx.plans.paths
         cells, offsets, lengths, owner = paths.cells.astype(np.int64), paths.offsets, paths.lengths, paths.owners()
         pos = np.arange(len(cells)) - np.repeat(offsets[:-1], lengths)  # index along its path
         on_path = ctx.path_mask()
@@ -304,8 +377,8 @@ class SaliencyAttack(Attack):
         device = getattr(ctx.planner, "device", torch.device("cpu"))
         module.eval()
         b = len(ctx.obstacles)
-        owner_all = ctx.originals.paths.owners()
-        cells_all = ctx.originals.paths.cells.astype(np.int64)
+        owner_all = ctx.plans.paths.owners()
+        cells_all = ctx.plans.paths.cells.astype(np.int64)
         # the decisions along the path: every path cell but the goal
         at_goal = np.all(cells_all == ctx.goals[owner_all], axis=1)
         out = np.empty(ctx.obstacles.shape)
@@ -328,11 +401,11 @@ class SaliencyAttack(Attack):
 class ExhaustiveAttack(Attack):
     name = "exhaustive"
 
-    def __init__(self, per_map: int = 1, seed: int = 0):
-        super().__init__(per_map=per_map, budget=None, seed=seed)
+    def __init__(self, per_map: int = 1, seed: int = 0, obstacles: int = 1):
+        super().__init__(per_map=per_map, budget=None, seed=seed, obstacles=obstacles)
 
     def params(self) -> dict:
-        return {"per_map": self.per_map}
+        return {"per_map": self.per_map, "obstacles": self.obstacles}
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         return np.zeros(ctx.obstacles.shape)  # every valid cell, in row-major order
@@ -343,12 +416,14 @@ STRATEGIES: dict[str, type[Attack]] = {
 }
 
 
-def make_attack(name: str, per_map: int = 1, seed: int = 0, budget: int = 8, radius: int = 2) -> Attack:
-    """The strategy `name` with its parameters (those it does not use are ignored)."""
+def make_attack(name: str, per_map: int = 1, seed: int = 0, budget: int = 8, radius: int = 2,
+                obstacles: int = 1) -> Attack:
+    """The strategy `name` with its parameters (those it does not use are ignored); `obstacles`: K, the cells
+    added per pair (greedily, see the module doc)."""
     if name not in STRATEGIES:
         raise InputError(f"unknown attack strategy '{name}'; choose one of {', '.join(STRATEGIES)}")
     if name == "near-path":
-        return NearPathAttack(per_map=per_map, radius=radius, seed=seed)
+        return NearPathAttack(per_map=per_map, radius=radius, seed=seed, obstacles=obstacles)
     if name in ("key-points", "saliency"):
-        return STRATEGIES[name](per_map=per_map, budget=budget, seed=seed)
-    return STRATEGIES[name](per_map=per_map, seed=seed)
+        return STRATEGIES[name](per_map=per_map, budget=budget, seed=seed, obstacles=obstacles)
+    return STRATEGIES[name](per_map=per_map, seed=seed, obstacles=obstacles)

@@ -1,9 +1,14 @@
-"""Which cells may take the one added obstacle (DESIGN.md): a free cell, not the start or the goal, and only
-where the goal stays reachable from the start.
+"""Which cells may take an added obstacle (DESIGN.md): a free cell, not the start or the goal, and only where the
+goal stays reachable from the start.
 
 Only a cell on *every* start-goal path can disconnect them, so only the cells of one path (the expert path)
 need a reachability check; every other free cell is valid without one. Each check is a breadth-first search
 with that cell blocked, compiled with Numba and run in parallel over maps.
+
+K obstacles (`valid_additions`): K distinct cells, each free on the original map and neither the start nor the
+goal, with the goal still reachable from the start once all K are added. Adding obstacles only removes paths, so a
+set is valid exactly when each of its cells, added one after the other in any order, is a valid cell
+(`valid_cells`) of the map with the cells before it added: the greedy multi-obstacle attacks rely on this.
 """
 
 from __future__ import annotations
@@ -87,3 +92,44 @@ def valid_cells(
     # a start that cannot reach its goal has no valid cell at all (the map is not a solvable map)
     valid[~np.isfinite(costs[:, 0])] = False
     return valid
+
+
+@numba.njit(cache=True, parallel=True)
+def _reachable_all(obstacles, starts, goals, corner_cutting, deltas, out):
+    n, m = obstacles.shape[1], obstacles.shape[2]
+    for b in numba.prange(obstacles.shape[0]):
+        seen = np.empty((n, m), dtype=np.bool_)
+        queue = np.empty(n * m, dtype=np.int64)
+        out[b] = _reachable(obstacles[b], -1, -1, starts[b, 0], starts[b, 1], goals[b, 0], goals[b, 1],
+                            corner_cutting, deltas, seen, queue)
+
+
+def valid_additions(
+    obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, added: np.ndarray, corner_cutting: bool = True
+) -> np.ndarray:
+    """Whether adding the cells `added` to each map makes a valid adversarial map: `(B,)` bool.
+
+    Args:
+        obstacles: `(B, N, N)` bool, the original maps. starts, goals: `(B, 2)`.
+        added: `(B, K, 2)` (or `(B, 2)`, K = 1) cells: valid when they are K distinct cells on the grid, each free
+            on the original map and neither the start nor the goal, and the goal is reachable from the start
+            (and from a start on an obstacle nothing is) with all K added.
+    """
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    b, n = obstacles.shape[0], obstacles.shape[1]
+    added = np.asarray(added, dtype=np.int64).reshape(b, -1, 2)
+    on_grid = ((added >= 0) & (added < n)).all(axis=(1, 2))
+    cells = np.where(on_grid[:, None, None], added, 0)
+    idx = np.arange(b)[:, None]
+    ok = on_grid & ~obstacles[idx, cells[..., 0], cells[..., 1]].any(axis=1)
+    ok &= ~((cells == starts[:, None]).all(axis=2) | (cells == goals[:, None]).all(axis=2)).any(axis=1)
+    flat = np.sort(cells[..., 0] * n + cells[..., 1], axis=1)
+    ok &= ~(np.diff(flat, axis=1) == 0).any(axis=1)
+    blocked = obstacles.copy()
+    blocked[idx, cells[..., 0], cells[..., 1]] = True
+    reach = np.zeros(b, dtype=bool)
+    if b:
+        _reachable_all(blocked, starts, goals, bool(corner_cutting), ACTION_DELTAS, reach)
+    return ok & reach

@@ -244,18 +244,21 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, planner_ref, s
         for lo, hi in bounds
     ]
     parts = _gather_in_order(client, futures, progress, f"attack {strategy}", [hi - lo for lo, hi in bounds])
-    shifted = []
-    for (lo, _), part in zip(bounds, parts):
-        part.pairs.map_index = part.pairs.map_index + lo
-        shifted.append(part.pairs)
     from vinadv.attacks.pairs import PairSet
 
     params = parts[0].pairs.params if parts else attack.params()  # the planner's spec included
-    pairs = PairSet.concat(shifted, size=maps.size, strategy=strategy, params=params,
-                           corner_cutting=maps.corner_cutting)
+    steps = []
+    for k in range(attack.obstacles):  # each greedy step's pairs, the shards' joined (the last: the result)
+        shifted = []
+        for (lo, _), part in zip(bounds, parts):
+            step = part.steps[k]
+            step.map_index = step.map_index + lo
+            shifted.append(step)
+        steps.append(PairSet.concat(shifted, size=maps.size, n_added=k + 1, strategy=strategy, params=params,
+                                    corner_cutting=maps.corner_cutting))
     no_valid = np.concatenate([p.no_valid_cell + lo for (lo, _), p in zip(bounds, parts)]).astype(np.int64) \
         if parts else np.zeros(0, np.int64)
-    return AttackResult(pairs, no_valid, int(sum(p.planner_calls for p in parts)))
+    return AttackResult(steps[-1], no_valid, int(sum(p.planner_calls for p in parts)), steps)
 
 
 class ClusterIdentify:

@@ -1,4 +1,4 @@
-"""`vinadv attack`: one-obstacle adversarial maps from a maps file."""
+"""`vinadv attack`: adversarial maps (one added obstacle, or K added greedily) from a maps file."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from vinadv.commands import LazyChoices, add_planner_arguments
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("attack", help="make adversarial maps (one added obstacle) from a maps file, on any "
-                              "planner")
+    p = subparsers.add_parser("attack", help="make adversarial maps (one added obstacle, or --obstacles K) from a "
+                              "maps file, on any planner")
     p.add_argument("--maps", required=True, help="maps file (.npz from `vinadv maps generate`)")
     p.add_argument("--strategy", required=True, choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
                    metavar="STRATEGY", help="attack strategy: %(choices)s")
@@ -23,6 +23,7 @@ def register(subparsers) -> None:
     p.add_argument("--budget", type=int, default=8,
                    help="key-points and saliency: candidates evaluated per map (default 8)")
     p.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
+    add_obstacles_argument(p)
     add_planner_arguments(p)
     add_harm_arguments(p)
     add_objective_argument(p)
@@ -30,6 +31,14 @@ def register(subparsers) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
     add_cluster_arguments(p, shard_size=True)
     p.set_defaults(func=cmd_attack)
+
+
+def add_obstacles_argument(parser) -> None:
+    """`--obstacles K`: obstacles added per pair, greedily (DESIGN.md "Several obstacles")."""
+    parser.add_argument("--obstacles", type=int, default=1, metavar="K",
+                        help="obstacles added per pair (default 1, the paper's setting); K > 1: greedily, the "
+                             "strategy run again on the map with the cells chosen so far, keeping the strongest cell "
+                             "against the original map's path each time")
 
 
 def add_harm_arguments(parser) -> None:
@@ -98,7 +107,8 @@ def cmd_attack(args: argparse.Namespace) -> int:
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
     planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
-    attack = make_attack(args.strategy, per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
+    attack = make_attack(args.strategy, per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius,
+                         obstacles=args.obstacles)
     t0 = time.perf_counter()
     if args.cluster is None and args.workers is None:
         result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, planner, maps.corner_cutting,
@@ -106,7 +116,8 @@ def cmd_attack(args: argparse.Namespace) -> int:
     else:
         from vinadv.cluster import attack_on_cluster
 
-        options = dict(per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius)
+        options = dict(per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius,
+                       obstacles=args.obstacles)
         with open_cluster(args.cluster, args.workers) as client:
             ref = PlannerRef.of(planner, args.planner, args.weights, maps.corner_cutting)
             result = attack_on_cluster(client, args.strategy, options, maps, ref,
@@ -125,7 +136,7 @@ def cmd_attack(args: argparse.Namespace) -> int:
         print(f"{args.strategy} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps in "
               f"{elapsed:.1f} s -> {args.out}")
         if result.no_valid_cell.size:
-            print(f"{len(result.no_valid_cell)} maps had no valid cell for the added obstacle; "
+            print(f"{len(result.no_valid_cell)} maps had no valid cell for an added obstacle; "
                   "no pair was made for them")
         print_counts(summary)
         per = summary["planner_calls_per_success"]

@@ -8,7 +8,13 @@ import time
 
 from vinadv.cluster import add_cluster_arguments, open_cluster
 from vinadv.commands import LazyChoices, add_planner_arguments
-from vinadv.commands.attack import add_harm_arguments, add_objective_argument, attack_summary, print_counts
+from vinadv.commands.attack import (
+    add_harm_arguments,
+    add_objective_argument,
+    add_obstacles_argument,
+    attack_summary,
+    print_counts,
+)
 from vinadv.errors import InputError
 
 
@@ -23,6 +29,7 @@ def register(subparsers) -> None:
     run.add_argument("--per-map", type=int, default=1, help="pairs per map (default 1)")
     run.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map")
     run.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
+    add_obstacles_argument(run)
     run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
     run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
     run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
@@ -67,7 +74,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
         classifier=args.classifier, planner=args.planner or "vin", weights=args.weights,
         harm_tolerance=args.harm_tolerance, harm_rtol=args.harm_rtol,
-        objective=args.objective,
+        objective=args.objective, obstacles=args.obstacles,
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet,
@@ -106,7 +113,7 @@ def _print_run(result: dict) -> None:
     if result["skipped_shards"]:
         print(f"resumed: {result['skipped_shards']} complete shards skipped")
     if result["maps_without_valid_cell"]:
-        print(f"{result['maps_without_valid_cell']} maps had no valid cell for the added obstacle")
+        print(f"{result['maps_without_valid_cell']} maps had no valid cell for an added obstacle")
     print_counts(result)
     seconds = result["seconds"]
     print("time per stage: " + ", ".join(f"{s} {seconds[s]:.2f} s" for s in (*STAGES, "report") if s in seconds)

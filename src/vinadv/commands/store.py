@@ -17,6 +17,7 @@ EXPORT_COLUMNS = (
     "no", "map_o", "map_a", "path_o", "path_a", "label", "attack",
     "run_id", "pair_index", "start", "goal", "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv",
     "opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a", "expert_label", "harm",
+    "added_more",  # the obstacles added after `added_obstacle` ("r,c;r,c"), empty for a one-obstacle pair
 )
 
 
@@ -73,7 +74,8 @@ def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
         "obstacles_a": records.obstacles_a,
         "starts": records.starts,
         "goals": records.goals,
-        "added": records.added,
+        # (n, 2) for one-obstacle pairs, as ever; (n, K, 2) for K added obstacles
+        "added": records.added[:, 0] if records.n_added == 1 else records.added,
         **records.path_o.to_fields("path_o"),
         **records.path_a.to_fields("path_a"),
         "term_o": records.term_o.astype(str),

@@ -10,8 +10,8 @@ path or pair, so a file that would be stored wrong is refused at the door. What 
   cutting, not diagonally between obstacles), the first cell the path's start; a path that reached its goal (
   termination `goal`) ends there and one that did not does not (DESIGN.md: it reaches the goal when its last cell
   is the goal).
-- pairs: the adversarial map is the original plus exactly the added cell, which was free and is neither the start
-  nor the goal.
+- pairs: the adversarial map is the original plus exactly the added cells (K >= 1), distinct, each free and
+  neither the start nor the goal.
 
 Maps without a border wall are legitimate (the grid edge is a wall): no border is required.
 """
@@ -141,24 +141,31 @@ def check_maps(where, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarr
 
 def check_pairs(where, obstacles_o: np.ndarray, obstacles_a: np.ndarray, starts: np.ndarray, goals: np.ndarray,
                 added: np.ndarray, paths: dict, terms: dict, corner_cutting: bool = True) -> None:
-    """A pairs file's content: maps `(n, N, N)`, `starts`/`goals`/`added` `(n, 2)`, `paths[side]` (`PackedPaths`)
-    and `terms[side] (n,)` termination names for side "o" (original map) and "a" (adversarial map)."""
+    """A pairs file's content: maps `(n, N, N)`, `starts`/`goals` `(n, 2)`, `added` `(n, K, 2)` (or `(n, 2)`, K = 1),
+    `paths[side]` (`PackedPaths`) and `terms[side] (n,)` termination names for side "o" (original map) and "a"
+    (adversarial map). The added cells of a pair are K distinct cells, free on the original map, none the start or
+    the goal, and the adversarial map is the original plus exactly them (reachability is not checked here: see
+    `vinadv.attacks.validity.valid_additions`)."""
     n, size = len(obstacles_o), obstacles_o.shape[-1]
     if n == 0:
         return
+    added = np.asarray(added).reshape(n, -1, 2)
     for name, cells in (("starts", starts), ("goals", goals), ("added", added)):
         check_cells(where, name, cells, size, "pair")
     idx = np.arange(n)
     _check(obstacles_o[idx, starts[:, 0], starts[:, 1]], where, "starts", "has a start on an obstacle", "pair")
     _check(obstacles_o[idx, goals[:, 0], goals[:, 1]], where, "goals", "has a goal on an obstacle", "pair")
     _check((starts == goals).all(axis=1), where, "starts", "has a start on its goal", "pair")
-    _check((added == starts).all(axis=1), where, "added", "is on the start", "pair")
-    _check((added == goals).all(axis=1), where, "added", "is on the goal", "pair")
-    _check(obstacles_o[idx, added[:, 0], added[:, 1]], where, "added",
+    _check((added == starts[:, None]).all(axis=2).any(axis=1), where, "added", "is on the start", "pair")
+    _check((added == goals[:, None]).all(axis=2).any(axis=1), where, "added", "is on the goal", "pair")
+    _check(obstacles_o[idx[:, None], added[..., 0], added[..., 1]].any(axis=1), where, "added",
            "is already an obstacle on the original map", "pair")
-    diff = obstacles_a != obstacles_o
-    _check((diff.sum(axis=(1, 2)) != 1) | ~diff[idx, added[:, 0], added[:, 1]], where, "obstacles_a",
-           "is not obstacles_o plus exactly the cell 'added'", "pair")
+    flat = np.sort(added[..., 0] * size + added[..., 1], axis=1)
+    _check((np.diff(flat, axis=1) == 0).any(axis=1), where, "added", "has the same cell twice", "pair")
+    expected = obstacles_o.copy()
+    expected[idx[:, None], added[..., 0], added[..., 1]] = True
+    _check((obstacles_a != expected).any(axis=(1, 2)), where, "obstacles_a",
+           "is not obstacles_o plus exactly the cells 'added'", "pair")
     for side, obstacles in (("o", obstacles_o), ("a", obstacles_a)):
         check_paths(where, f"path_{side}_cells", paths[side], size, obstacles=obstacles, starts=starts,
                     goals=goals, reached=np.asarray(terms[side]) == "goal", corner_cutting=corner_cutting,

@@ -28,8 +28,8 @@ def draw_map(
     """Draw one N x N map on `ax`: obstacles black, start green circle, goal red star, paths as lines.
 
     `start` is one cell `(2,)` or several `(k, 2)` (each gets a marker). `paths` is a sequence of
-    `(label, cells (L, 2))`; a label in PATH_STYLES gets its colour. `added` marks the adversarial obstacle with an
-    orange square. Every artist carries its label, for `map_legend`.
+    `(label, cells (L, 2))`; a label in PATH_STYLES gets its colour. `added`, one cell `(2,)` or several `(k, 2)`,
+    marks the adversarial obstacles with orange squares. Every artist carries its label, for `map_legend`.
     """
     n = obstacles.shape[0]
     ax.imshow(~np.asarray(obstacles, dtype=bool), cmap="gray", vmin=0, vmax=1, interpolation="nearest")
@@ -38,7 +38,10 @@ def draw_map(
         cells = np.asarray(cells)
         ax.plot(cells[:, 1], cells[:, 0], style, color=colour, lw=2, label=label, alpha=0.9)
     if added is not None:
-        ax.add_patch(plt.Rectangle((added[1] - 0.5, added[0] - 0.5), 1, 1, color="#ff7f0e", label="added obstacle"))
+        cells = np.asarray(added).reshape(-1, 2)
+        for k, (r, c) in enumerate(cells):
+            label = ("added obstacle" if len(cells) == 1 else "added obstacles") if k == 0 else None
+            ax.add_patch(plt.Rectangle((c - 0.5, r - 0.5), 1, 1, color="#ff7f0e", label=label))
     if start is not None:
         starts = np.asarray(start).reshape(-1, 2)
         ax.plot(starts[:, 1], starts[:, 0], "o", color="#2ca02c", ms=8, mec="k", ls="none",

@@ -25,7 +25,10 @@ class PathPairs(Columns):
 
     Attributes (cells are `(row, col)`):
         obstacles_o, obstacles_a: `(n, N, N)` bool, True = obstacle; `obstacles_a` is `obstacles_o` plus `added`.
-        starts, goals, added: `(n, 2)` int64: start, goal and the added obstacle cell of each pair.
+        starts, goals: `(n, 2)` int64: start and goal of each pair.
+        added: `(n, K, 2)` int64, K >= 1: the K added obstacle cells of each pair, in the order they were added
+            (K = 1, the paper's setting, for one-obstacle pairs; every pair of one object has the same K). An
+            `(n, 2)` array given here is read as K = 1.
         path_o, path_a: `PackedPaths` of n paths each, the planned paths on the original and adversarial map.
         term_o, term_a: `(n,)` str, why each path ended: one of `vocabulary.TERMINATIONS`.
     """
@@ -50,8 +53,9 @@ class PathPairs(Columns):
         n = shape[0]
         if self.obstacles_a.shape != shape:
             raise InputError(f"{name}.obstacles_a: expected shape {shape}, got {self.obstacles_a.shape}")
-        for field in ("starts", "goals", "added"):
+        for field in ("starts", "goals"):
             setattr(self, field, int_column(getattr(self, field), f"{name}.{field}", (n, 2)))
+        self.added = added_column(self.added, f"{name}.added", n)
         for field in ("path_o", "path_a"):
             paths = getattr(self, field)
             if not isinstance(paths, PackedPaths) or len(paths) != n:
@@ -63,26 +67,35 @@ class PathPairs(Columns):
             setattr(self, field, term)
 
     @classmethod
-    def concat(cls, parts, size: int | None = None, **settings):
-        """The pairs of `parts` in order (`Columns.concat`); `size`, the map side, makes an empty result possible
-        (no parts) and is checked against the parts' maps."""
+    def concat(cls, parts, size: int | None = None, n_added: int | None = None, **settings):
+        """The pairs of `parts` in order (`Columns.concat`); `size`, the map side, and `n_added`, K (default 1),
+        make an empty result possible (no parts) and are checked against the parts."""
         parts = list(parts)
         if not parts:
-            return cls.empty(size, **settings)
+            return cls.empty(size, n_added=1 if n_added is None else n_added, **settings)
         sizes = {p.size for p in parts} | ({size} if size is not None else set())
         if len(sizes) > 1:
             raise InputError(f"{cls.__name__}.concat: pairs of different map sizes {sorted(sizes)}", "size")
+        # an empty part says nothing about K: it joins parts of any K
+        counts = {p.n_added for p in parts if len(p)} | ({n_added} if n_added is not None else set())
+        if len(counts) > 1:
+            raise InputError(f"{cls.__name__}.concat: pairs with different numbers of added obstacles "
+                             f"{sorted(counts)}", "obstacles")
+        if len(parts) > 1:
+            parts = [p for p in parts if len(p)] or parts[:1]
         return super().concat(parts, **settings)
 
     @classmethod
-    def empty(cls, size: int | None = None, **settings):
-        """No pairs, on `size x size` maps; `settings`: the other fields of a subclass."""
+    def empty(cls, size: int | None = None, n_added: int = 1, **settings):
+        """No pairs, on `size x size` maps, of `n_added` added obstacles; `settings`: the other fields of a
+        subclass."""
         if size is None:
             raise InputError(f"{cls.__name__}.concat: no parts; pass size= (the map side) for an empty result",
                              "size")
         return cls(
             obstacles_o=np.zeros((0, size, size), bool), obstacles_a=np.zeros((0, size, size), bool),
-            starts=np.zeros((0, 2), np.int64), goals=np.zeros((0, 2), np.int64), added=np.zeros((0, 2), np.int64),
+            starts=np.zeros((0, 2), np.int64), goals=np.zeros((0, 2), np.int64),
+            added=np.zeros((0, n_added, 2), np.int64),
             path_o=PackedPaths.empty(), path_a=PackedPaths.empty(),
             term_o=np.zeros(0, "<U10"), term_a=np.zeros(0, "<U10"), **settings,
         )
@@ -93,6 +106,11 @@ class PathPairs(Columns):
         return int(self.obstacles_o.shape[-1])
 
     @property
+    def n_added(self) -> int:
+        """K, the number of obstacles each pair adds (1: the paper's setting)."""
+        return int(self.added.shape[1])
+
+    @property
     def reached_o(self) -> np.ndarray:
         """`(n,)` bool: the original path ends at the goal."""
         return np.asarray(self.term_o) == TERMINATIONS[GOAL]
@@ -101,6 +119,19 @@ class PathPairs(Columns):
     def reached_a(self) -> np.ndarray:
         """`(n,)` bool: the adversarial path ends at the goal."""
         return np.asarray(self.term_a) == TERMINATIONS[GOAL]
+
+
+def added_column(value, name: str, n: int) -> np.ndarray:
+    """The added cells `value` as int64 `(n, K, 2)`, K >= 1; `(n, 2)` is K = 1. InputError naming `name` else."""
+    arr = np.asarray(value)
+    if arr.ndim == 2:
+        arr = arr.reshape(len(arr), 1, *arr.shape[1:])
+    if arr.ndim != 3 or arr.shape[0] != n or arr.shape[2] != 2 or arr.shape[1] < 1:
+        raise InputError(f"{name}: expected shape ({n}, K, 2) with K >= 1 (or ({n}, 2) for one obstacle), got "
+                         f"{np.shape(value)}")
+    if arr.size and not np.issubdtype(arr.dtype, np.integer):
+        raise InputError(f"{name}: expected integers, got {arr.dtype}")
+    return arr.astype(np.int64, copy=False)
 
 
 def int_column(value, name: str, shape: tuple) -> np.ndarray:

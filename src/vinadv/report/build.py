@@ -16,7 +16,7 @@ from vinadv.errors import InputError
 from vinadv.report.gather import SECTIONS, Context, gather_report
 from vinadv.report.render import render_report
 
-__all__ = ["SECTIONS", "ReportResult", "build_report", "report_run", "write_report"]
+__all__ = ["SECTIONS", "ReportResult", "build_report", "report_run", "robustness_report", "write_report"]
 
 
 @dataclass
@@ -101,3 +101,24 @@ def _context(store, out: Path, run_id: int | str | None, runs: list[int | str] |
     if known[main]["n_pairs"] == 0:
         raise InputError(f"run {main} has no stored pairs")
     return Context(store=store, out=out, run_id=main, compare=compare, runs=known)
+
+
+def robustness_report(out_dir, db: str | None = None, results: list[dict] | None = None) -> Path:
+    """Write the robustness page (`vinadv robustness --report DIR`) to `out_dir`: every robustness benchmark stored in
+    `db` (when given), then `results`, benchmarks not stored (rows as `Store.read_robustness` returns them, `id`
+    None). Return the path of `index.html`."""
+    from vinadv.report.gather import robustness_section
+    from vinadv.report.render import render_robustness_page
+
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"out_dir {out}: exists and is not a directory")
+    rows, url = [], None
+    if db is not None:
+        from vinadv.store import Store
+
+        with Store.open(db, readonly=True) as store:
+            rows, url = store.read_robustness(), store.url
+    out.mkdir(parents=True, exist_ok=True)
+    data = robustness_section([*rows, *(results or [])], out)
+    return render_robustness_page(data, out, url)

@@ -261,3 +261,26 @@ def roc_pr_curves(curves: dict, stem: Path) -> list[str]:
         if drawn:
             ax.legend(fontsize=7, loc="lower left" if kind == "pr" else "lower right")
     return save(fig, stem)
+
+
+def robustness_curves(series: Sequence[tuple[str, list[dict]]], stem: Path) -> list[str]:
+    """The robustness curves: harmful rate and the paper's success rate against the number of added obstacles k,
+    one line per benchmark (`series`: `(name, figures by k)`, each figure a dict with `k`, `harmful_rate`,
+    `paper_success_rate`, as `vinadv.robustness.Figures.to_dict`), in % of the valid maps."""
+    fig, axes = plt.subplots(1, 2, figsize=(9.2, 3.6), sharey=True, layout="constrained")
+    for k, (name, points) in enumerate(series):
+        ks = [p["k"] for p in points]
+        for ax, key in zip(axes, ("harmful_rate", "paper_success_rate")):
+            values = [np.nan if p[key] is None else 100.0 * p[key] for p in points]
+            ax.plot(ks, values, "o-", color=f"C{k % 10}", label=name)
+    top = max([1] + [p["k"] for _, points in series for p in points])
+    for ax, title in zip(axes, ("harmful rate (worst case per map)", "paper success rate, UrP + FP (worst case)")):
+        ax.set_xticks(range(1, top + 1))
+        ax.set_xlabel("obstacles added (k)")
+        ax.set_title(title, fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("% of valid maps")
+    axes[0].set_ylim(0, 100)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3), fontsize=8, frameon=False)
+    return save(fig, stem)

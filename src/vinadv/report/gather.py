@@ -208,7 +208,9 @@ def gather_examples(ctx: Context) -> ExamplesData:
                 pairs[0].pair_index)
     i = position[lead]
     fig1 = Figure(tuple(figures.map_pair(records, i, ctx.out / "fig1_map_pair", with_paths=False)),
-                  "Fig. 1: a pair of maps, the normal map and the adversarial map (one added obstacle, orange).",
+                  "Fig. 1: a pair of maps, the normal map and the adversarial map ("
+                  + ("one added obstacle" if records.n_added == 1 else f"{records.n_added} added obstacles")
+                  + ", orange).",
                   "original and adversarial map", 760)
     fig2 = Figure(tuple(figures.map_pair(records, i, ctx.out / "fig2_path_pair", with_paths=True,
                                          distances=pairs[i])),
@@ -706,6 +708,90 @@ def gather_timing(ctx: Context) -> TimingData:
                       machine=machine, repeats=TIMING_REPEATS, table=table)
 
 
+# -------------------------------------------------------------------------------------------- robustness
+
+#: the worst case over the strategies, as `vinadv.robustness.WORST_CASE` names it (not imported: no torch here)
+WORST_CASE = "worst case"
+
+
+@dataclass(frozen=True)
+class Benchmark:
+    """One stored robustness benchmark (`vinadv robustness`): what was measured and its figures, as stored
+    (`worst`: the worst case by k, `by_strategy`: {strategy: figures by k}; figures as `Figures.to_dict`)."""
+
+    id: int | None
+    created: str
+    planner: str
+    weights: str | None
+    n: int
+    size: int
+    maps_seed: int
+    objective: str
+    strategies: tuple[str, ...]
+    clean_success: float | None
+    clean_regret: float | None
+    worst: list[dict]
+    by_strategy: dict[str, list[dict]]
+    seconds: dict[str, float]
+
+    @property
+    def name(self) -> str:
+        """The benchmark in a legend: planner, weights (first 8 hex digits) and id."""
+        weights = f" {self.weights[:8]}" if self.weights else ""
+        return f"{self.planner}{weights}" + (f" (#{self.id})" if self.id is not None else "")
+
+
+@dataclass
+class RobustnessData:
+    """The robustness benchmarks of the database, oldest first (none: `benchmarks` empty, nothing else)."""
+
+    benchmarks: list[Benchmark]
+    table: Table | None = None
+    figure: Figure | None = None
+
+    @property
+    def max_k(self) -> int:
+        return max([0] + [len(b.worst) for b in self.benchmarks])
+
+
+def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
+    """The robustness section of `rows`, robustness benchmarks as `Store.read_robustness` returns them (`id` None for
+    one not stored): the comparison table, its CSV (every strategy and the worst case at every k) and the curves."""
+    from vinadv.report import figures
+
+    benchmarks = []
+    for row in rows:
+        result, settings = row["result"], row["settings"]
+        benchmarks.append(Benchmark(
+            id=row.get("id"), created=str(row.get("created") or ""), planner=str(row["planner"]),
+            weights=row.get("weights_checksum"), n=int(settings["n"]), size=int(settings["size"]),
+            maps_seed=int(settings["maps_seed"]), objective=str(settings["objective"]),
+            strategies=tuple(settings["strategies"]), clean_success=result["clean"]["success_rate"],
+            clean_regret=result["clean"]["mean_regret"], worst=list(result["overall"]),
+            by_strategy={name: s["by_obstacles"] for name, s in result["strategies"].items()},
+            seconds={**{name: s["seconds"] for name, s in result["strategies"].items()}, "total": result["seconds"]}))
+    data = RobustnessData(benchmarks=benchmarks)
+    if not benchmarks:
+        return data
+    keys = ("valid", "broken", "paper_success_rate", "harmful", "harmful_rate", "reached", "mean_regret")
+    data.table = Table("robustness.csv", ("benchmark", "planner", "weights_sha256", "maps", "size", "maps_seed",
+                                          "objective", "clean_success", "strategy", "k", *keys, "seconds"),
+                       [[b.id, b.planner, b.weights, b.n, b.size, b.maps_seed, b.objective, b.clean_success, name,
+                         f["k"], *(f[key] for key in keys), b.seconds.get(name, b.seconds["total"])]
+                        for b in benchmarks for name, by_k in (*b.by_strategy.items(), (WORST_CASE, b.worst))
+                        for f in by_k])
+    data.figure = Figure(
+        tuple(figures.robustness_curves([(b.name, b.worst) for b in benchmarks], out / "fig_robustness")),
+        "Robustness curves: the share of valid maps that k added obstacles make harmful (left) or break by the "
+        "paper's definition, UrP or FP (right), worst case over the strategies of each benchmark.",
+        "robustness curves", 880)
+    return data
+
+
+def gather_robustness(ctx: Context) -> RobustnessData:
+    return robustness_section(ctx.store.read_robustness(), ctx.out)
+
+
 # ------------------------------------------------------------------------------------------------ report
 
 @dataclass
@@ -751,6 +837,7 @@ SECTIONS = (
     ("distribution", "Category distribution (table 4)", gather_distribution),
     ("harm", "Harm: worse paths, or only different ones?", gather_harm),
     ("classifiers", "Classifier comparison (tables 5, 6; figs. 8, 9)", gather_classifiers),
+    ("robustness", "Robustness benchmarks", gather_robustness),
     ("timing", "Processing time for 100 pairs (table 7)", gather_timing),
 )
 

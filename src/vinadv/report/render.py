@@ -83,6 +83,32 @@ def write_tables(data: ReportData, out: Path) -> None:
             writer.writerows([["" if v is None else v for v in row] for row in table.rows])
 
 
+def render_robustness_page(data, out: Path, url: str | None = None) -> Path:
+    """The robustness page of `vinadv robustness --report`: `index.html` with only the robustness section
+    (`data`: a `gather.RobustnessData`), its CSV table and the stylesheet, into `out`; return the page's path."""
+    import time
+
+    from vinadv import __version__
+
+    out = Path(out)
+    files = sorted({*([data.table.name] if data.table else []), *(data.figure.files if data.figure else ())})
+    if data.table is not None:
+        with atomic_output(out / data.table.name, "w", newline="") as fh:
+            writer = csv.writer(fh)
+            writer.writerow(data.table.header)
+            writer.writerows([["" if v is None else v for v in row] for row in data.table.rows])
+    css = (resources.files("vinadv.report") / "templates" / STYLESHEET).read_text(encoding="utf-8")
+    with atomic_output(out / STYLESHEET, "w", encoding="utf-8") as fh:
+        fh.write(css)
+    page = _environment().get_template("robustness.html").render(
+        d=data, url=url, version=__version__, generated=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+        files=files, stylesheet=STYLESHEET)
+    index = out / "index.html"
+    with atomic_output(index, "w", encoding="utf-8") as fh:
+        fh.write(page)
+    return index
+
+
 def render_report(data: ReportData, out: Path) -> Path:
     """Write the CSV tables, the stylesheet and `index.html` of `data` into `out`; return the page's path."""
     out = Path(out)

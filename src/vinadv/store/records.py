@@ -18,7 +18,8 @@ class PairRecords(PathPairs):
     """n identified map pairs, one row each of the `map_pairs` table: `PathPairs` plus the identification.
 
     Shapes (n pairs, N x N maps; cells are (row, col)), besides those of `PathPairs` (obstacles_o/obstacles_a
-    `(n, N, N)` bool, starts/goals/added `(n, 2)` int64, path_o/path_a `PackedPaths`, term_o/term_a `(n,)` str):
+    `(n, N, N)` bool, starts/goals `(n, 2)` int64, added `(n, K, 2)` int64 (stored as `added_obstacle`, the first,
+    and `added_more`, the rest), path_o/path_a `PackedPaths`, term_o/term_a `(n,)` str):
       pair_index (n,) int64 — position of the pair in its run, unique per run (the resume key)
       label (n,) str in 'invalid|UrP|UcP|DP|FP'; attack (n,) bool (success: UrP or FP)
       label_source (n,) str — who labelled it ('rule', a classifier name, ...); a single str is broadcast

@@ -8,11 +8,16 @@ Tables:
 - `annotations`: human labels of stored pairs (the annotation tool writes them).
 - `evaluations`: classifier comparisons on a run's FP/DP pairs (`vinadv evaluate` writes them, the report reads
   them). Added after schema version 1 shipped; it is additive (no existing column changes), so `Store.open`
-  creates it in an older version-1 database instead of refusing it (`ADDITIVE_TABLES`).
+  creates it in an older database instead of refusing it (`ADDITIVE_TABLES`).
+- `robustness`: robustness benchmarks of planners (`vinadv robustness` writes them, the report reads them): one row
+  per benchmark, its settings and figures as JSON. Additive, as `evaluations`.
 
-Version 2 adds the harm columns of `map_pairs` (`HARM_COLUMNS`, all nullable: DESIGN.md "Harm"). A version-1
-database gains them on open (`ALTER TABLE ... ADD COLUMN`, see `Store`), opened read-only it reads them as NULL;
-any other version is refused untouched.
+Version 2 adds the harm columns of `map_pairs` (`HARM_COLUMNS`, all nullable: DESIGN.md "Harm"). Version 3 adds
+`added_more` (nullable): the obstacles a pair adds after the first (`added_obstacle`), for pairs of several added
+obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair, so those rows are stored as before. A
+database of an older version (`UPGRADABLE_VERSIONS`) gains the columns it lacks (`UPGRADE_COLUMNS`) on open
+(`ALTER TABLE ... ADD COLUMN`, see `Store`), opened read-only it reads them as NULL; any other version is refused
+untouched.
 
 Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
 VARCHAR would cap both.
@@ -28,9 +33,9 @@ from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exp
 from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
-SCHEMA_VERSION = "2"
-#: the version before: upgraded on open by adding `HARM_COLUMNS` (nothing existing changes)
-PREVIOUS_SCHEMA_VERSION = "1"
+SCHEMA_VERSION = "3"
+#: the versions before: upgraded on open by adding the `UPGRADE_COLUMNS` they lack (nothing existing changes)
+UPGRADABLE_VERSIONS = ("1", "2")
 
 metadata = sa.MetaData()
 
@@ -94,6 +99,9 @@ map_pairs = sa.Table(
     sa.Column("regret_a", sa.Double(), nullable=True),
     sa.Column("expert_label", sa.String(16), nullable=True),
     sa.Column("harm", sa.String(16), nullable=True),
+    # several obstacles (schema version 3): the cells added after `added_obstacle`, in order, "r,c;r,c" (as a path);
+    # NULL for a one-obstacle pair
+    sa.Column("added_more", _LongText, nullable=True),
     sa.UniqueConstraint("run_id", "pair_index", name="uq_map_pairs_run_pair"),
     # pair_index last: a filtered page of a run (`Store.page_pairs`, the viewer's grid) is one ordered index range
     sa.Index("ix_map_pairs_run_label", "run_id", "label", "pair_index"),
@@ -135,10 +143,27 @@ evaluations = sa.Table(
     sa.Index("ix_evaluations_run", "run_id", "id"),
 )
 
+robustness = sa.Table(
+    "robustness",
+    metadata,
+    sa.Column("id", _BigId, primary_key=True, autoincrement=True),
+    sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive
+    sa.Column("planner", sa.String(255), nullable=False),  # the planner's name (`Planner.name`)
+    sa.Column("weights_checksum", sa.String(128), nullable=True),  # its weights' SHA-256 (None: no weights)
+    sa.Column("settings", sa.JSON(), nullable=False),  # maps, strategies, obstacles, objective, ...
+    sa.Column("result", sa.JSON(), nullable=False),  # `RobustnessResult.to_dict()`: every figure
+    sa.Column("version", sa.String(64), nullable=False),
+    sa.Index("ix_robustness_planner", "planner", "id"),
+)
+
 #: `map_pairs` columns added by schema version 2 (numbers first, then the two labels)
 HARM_FLOAT_COLUMNS = HARM_FLOAT_FIELDS
 HARM_COLUMNS = HARM_FIELDS
+#: `map_pairs` column added by schema version 3
+MORE_ADDED_COLUMN = "added_more"
+#: `map_pairs` columns added after version 1: an older database gains those it lacks on open
+UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN)
 
-TABLES = (meta_table, runs, map_pairs, annotations, evaluations)
-#: tables added to schema version 1 later: created when missing, never a reason to refuse a database
-ADDITIVE_TABLES = (evaluations,)
+TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness)
+#: tables added to the schema later: created when missing, never a reason to refuse a database
+ADDITIVE_TABLES = (evaluations, robustness)

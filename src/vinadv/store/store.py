@@ -41,14 +41,17 @@ from vinadv.store.schema import (
     HARM_COLUMNS,
     HARM_FLOAT_COLUMNS,
     LABELS,
-    PREVIOUS_SCHEMA_VERSION,
+    MORE_ADDED_COLUMN,
     SCHEMA_VERSION,
     TABLES,
+    UPGRADABLE_VERSIONS,
+    UPGRADE_COLUMNS,
     annotations,
     evaluations,
     map_pairs,
     meta_table,
     metadata,
+    robustness,
     runs,
 )
 from vinadv.vocabulary import FORK_OR_DETOUR
@@ -107,7 +110,8 @@ class Store:
         self._insert_sql = _driver_insert_sql(engine.dialect)
         self._sqlite = engine.dialect.name == "sqlite"  # rows in SQLite's native form (see `encode_rows`)
         self._multi_insert: tuple[int, str] | None = None  # (rows per statement, SQL), see `_insert_sqlite`
-        self._absent_columns: frozenset[str] = frozenset()  # harm columns of a version-1 database opened read-only
+        # the `UPGRADE_COLUMNS` an older database opened read-only lacks (they read as NULL)
+        self._absent_columns: frozenset[str] = frozenset()
 
     # ------------------------------------------------------------------------------------------ opening
 
@@ -159,6 +163,10 @@ class Store:
         except sa_exc.DBAPIError as exc:
             engine.dispose()
             raise InputError(f"cannot connect to database {shown}: {_first_line(exc)}") from None
+        except UnicodeDecodeError:
+            # a damaged SQLite file whose error text is no longer UTF-8: sqlite3 cannot even decode the message
+            engine.dispose()
+            raise InputError(f"database {shown}: a damaged file (SQLite's own error message is not text)") from None
         return store
 
     def _check_schema(self, create: bool) -> None:
@@ -185,7 +193,7 @@ class Store:
             version = conn.execute(
                 sa.select(meta_table.c.value).where(meta_table.c.key == "schema_version")
             ).scalar_one_or_none()
-            if version not in (SCHEMA_VERSION, PREVIOUS_SCHEMA_VERSION):
+            if version not in (SCHEMA_VERSION, *UPGRADABLE_VERSIONS):
                 raise InputError(
                     f"database {self.url}: schema version {version!r}, this vinadv needs {SCHEMA_VERSION!r}; "
                     "use another database (refusing to touch it)"
@@ -198,17 +206,17 @@ class Store:
                     raise InputError(f"database {self.url}: wrong schema: table {table.name} is missing")
                 have = {c["name"] for c in inspector.get_columns(table.name)}
                 missing = {c.name for c in table.columns} - have
-                if version == PREVIOUS_SCHEMA_VERSION and table is map_pairs:
-                    missing -= set(HARM_COLUMNS)  # added by `_upgrade_from_previous`
+                if version in UPGRADABLE_VERSIONS and table is map_pairs:
+                    missing -= set(UPGRADE_COLUMNS)  # added by `_upgrade`
                 if missing:
                     raise InputError(
                         f"database {self.url}: wrong schema: table {table.name} lacks columns {sorted(missing)}"
                     )
-        if version == PREVIOUS_SCHEMA_VERSION:
+        if version in UPGRADABLE_VERSIONS:
             if create:
-                self._upgrade_from_previous()
-            else:  # read-only use: nothing changes, the harm columns read as NULL
-                self._absent_columns = frozenset(HARM_COLUMNS) - {
+                self._upgrade()
+            else:  # read-only use: nothing changes, the columns it lacks read as NULL
+                self._absent_columns = frozenset(UPGRADE_COLUMNS) - {
                     c["name"] for c in sa.inspect(self.engine).get_columns(map_pairs.name)}
         if self.readonly:
             return
@@ -222,14 +230,14 @@ class Store:
                 for table in missing_additive:
                     table.create(conn, checkfirst=True)
 
-    def _upgrade_from_previous(self) -> None:
-        """Schema version 1 -> 2: add the harm columns (nullable; existing rows read them as NULL), then record the
-        new version. Only the missing columns are added, so an upgrade cut short (MySQL commits each ALTER on its
-        own) is finished by the next open."""
+    def _upgrade(self) -> None:
+        """Schema version 1 or 2 -> 3: add the `UPGRADE_COLUMNS` the database lacks (the harm columns, `added_more`;
+        all nullable, existing rows read them as NULL), then record the new version. Only the missing columns are
+        added, so an upgrade cut short (MySQL commits each ALTER on its own) is finished by the next open."""
         prep = self.engine.dialect.identifier_preparer
         with self.engine.begin() as conn:
             have = {c["name"] for c in sa.inspect(conn).get_columns(map_pairs.name)}
-            for name in HARM_COLUMNS:
+            for name in UPGRADE_COLUMNS:
                 if name not in have:
                     kind = map_pairs.c[name].type.compile(dialect=self.engine.dialect)
                     table, column = prep.format_table(map_pairs), prep.quote(name)
@@ -388,7 +396,7 @@ class Store:
         """
         run_id = int(run_id)
         if self._absent_columns:
-            raise InputError(f"database {self.url}: schema version {PREVIOUS_SCHEMA_VERSION} opened without create; "
+            raise InputError(f"database {self.url}: an older schema version opened without create; "
                              "open it with create to upgrade it before writing")
         # strictly increasing, as jobs write them, means no duplicates: the sort of np.unique only otherwise
         increasing = bool((np.diff(records.pair_index) > 0).all())
@@ -577,6 +585,30 @@ class Store:
                 sa.select(evaluations).where(evaluations.c.run_id == int(run_id)).order_by(evaluations.c.id)
             ).mappings().all()
         return [dict(r) for r in rows]
+
+    # ------------------------------------------------------------------------------------- robustness
+
+    def add_robustness(self, planner: str, weights_checksum: str | None, settings: dict, result: dict,
+                       version: str = __version__) -> int:
+        """Store one robustness benchmark (`vinadv robustness`): the planner's name and weights checksum, the
+        benchmark's settings and its figures (`vinadv.robustness.RobustnessResult.to_dict()`), JSON; return its id."""
+        self._ensure_table(robustness)
+        with self.engine.begin() as conn:
+            row = conn.execute(robustness.insert().values(
+                created=_utcnow(), planner=str(planner), weights_checksum=weights_checksum, settings=settings,
+                result=result, version=version))
+            return int(row.inserted_primary_key[0])
+
+    def read_robustness(self, ids: Sequence[int] | None = None) -> list[dict]:
+        """The stored robustness benchmarks (of `ids` only, if given), oldest first: dicts of the table's columns
+        (`[]` when none, or when the table does not exist yet)."""
+        with self.engine.connect() as conn:
+            if not sa.inspect(conn).has_table(robustness.name):
+                return []
+            query = sa.select(robustness).order_by(robustness.c.id)
+            if ids is not None:
+                query = query.where(robustness.c.id.in_([int(i) for i in ids]))
+            return [dict(r) for r in conn.execute(query).mappings().all()]
 
     def _ensure_table(self, table: sa.Table) -> None:
         with self.engine.begin() as conn:
@@ -796,14 +828,14 @@ def _one_line_error(shown: str):
 #: columns read back, in order (`decode_rows` relies on it)
 PAIR_COLUMNS = (
     "no", "pair_index", "map_o", "map_a", "path_o", "path_a", "label", "attack", "start", "goal",
-    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv", *HARM_COLUMNS,
+    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv", *HARM_COLUMNS, MORE_ADDED_COLUMN,
 )
 
 
 #: columns written by `encode_rows`, in order
 INSERT_COLUMNS = (
     "run_id", "pair_index", "map_o", "map_a", "path_o", "path_a", "label", "attack", "start", "goal",
-    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv", *HARM_COLUMNS,
+    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv", *HARM_COLUMNS, MORE_ADDED_COLUMN,
 )
 
 
@@ -811,16 +843,16 @@ def _driver_insert_sql(dialect: sa.Dialect, rows: int = 1) -> str | None:
     """A plain `INSERT INTO map_pairs (...) VALUES (?, ...)` of `rows` rows (flat parameters, row after row) in the
     driver's positional paramstyle, or None.
 
-    For SQLite it takes `encode_rows(..., sqlite=True)` rows (dh and dv as `NULLIF(?, -1)`)."""
+    For SQLite it takes `encode_rows(..., sqlite=True)` rows (dh and dv as `NULLIF(?, -1)`, added_more as
+    `NULLIF(?, '')`)."""
     marker = {"qmark": "?", "format": "%s", "pyformat": "%s"}.get(dialect.paramstyle)
     if marker is None:
         return None
     prep = dialect.identifier_preparer
     names = ", ".join(prep.quote(name) for name in INSERT_COLUMNS)
-    values = [
-        f"NULLIF({marker}, -1)" if dialect.name == "sqlite" and name in ("dh", "dv") else marker  # see encode_rows
-        for name in INSERT_COLUMNS
-    ]
+    sqlite_null = {"dh": "-1", "dv": "-1", MORE_ADDED_COLUMN: "''"} if dialect.name == "sqlite" else {}
+    values = [f"NULLIF({marker}, {sqlite_null[name]})" if name in sqlite_null else marker  # see encode_rows
+              for name in INSERT_COLUMNS]
     group = f"({', '.join(values)})"
     return f"INSERT INTO {prep.format_table(map_pairs)} ({names}) VALUES {', '.join([group] * rows)}"
 
@@ -833,7 +865,8 @@ def encode_rows(
     NULLs are None and `attack` a bool, unless `sqlite`: then rows take SQLite's native form, holding only ints,
     floats and strs, which the sqlite3 module binds without looking for an adapter (it does for any other value,
     bool and None included: ~0.5 us each): `attack` 0/1, a NULL score a NaN (SQLite stores a NaN as NULL), a NULL
-    dh/dv -1 (`_driver_insert_sql` wraps them in `NULLIF(?, -1)`), a NULL harm cost a NaN.
+    dh/dv -1 (`_driver_insert_sql` wraps them in `NULLIF(?, -1)`), a NULL harm cost a NaN, a NULL added_more ''
+    (`NULLIF(?, '')`).
     """
     return list(zip(*_encode_columns(run_id, records, lo, hi, sqlite)))
 
@@ -874,7 +907,7 @@ def _encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, 
         "attack": (attack.astype(np.int64) if sqlite else attack).tolist(),
         "start": codec.encode_cells(records.starts[rows]),
         "goal": codec.encode_cells(records.goals[rows]),
-        "added_obstacle": codec.encode_cells(records.added[rows]),
+        "added_obstacle": codec.encode_cells(records.added[rows, 0]),
         "label_source": records.label_source[rows].tolist(),
         "score": nullable(score, np.isnan(score)),
         "term_o": records.term_o[rows].tolist(),
@@ -885,9 +918,33 @@ def _encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, 
            for name in HARM_FLOAT_COLUMNS},
         "expert_label": records.expert_label[rows].tolist(),  # None = NULL
         "harm": records.harm[rows].tolist(),
+        MORE_ADDED_COLUMN: _encode_more_added(records.added[rows], "" if sqlite else None),
     }
     assert tuple(columns) == INSERT_COLUMNS
     return list(columns.values())
+
+
+def _encode_more_added(added: np.ndarray, null) -> list:
+    """`added_more` of `added (n, K, 2)`: the cells after the first as path text, `null` for every row when K = 1."""
+    n, k = added.shape[:2]
+    if k == 1:
+        return [null] * n
+    return codec.encode_paths(added[:, 1:].reshape(-1, 2), np.arange(n + 1, dtype=np.int64) * (k - 1))
+
+
+def _decode_added(first: Sequence[str], more: Sequence[str | None]) -> np.ndarray:
+    """`(n, K, 2)` added cells from `added_obstacle` and `added_more` texts (None: none after the first); every row
+    must add as many cells (InputError otherwise: read one run's pairs at a time)."""
+    first_cells = codec.decode_cells(first).reshape(-1, 1, 2)
+    if all(m is None for m in more):
+        return first_cells
+    cells, offsets = codec.decode_paths(["" if m is None else m for m in more])
+    counts = np.diff(offsets)
+    if (counts != counts[0]).any():
+        raise InputError(f"map_pairs: rows with different numbers of added obstacles ({sorted(set(counts + 1))}) "
+                         "in one read; read one run at a time")
+    rest = cells.astype(np.int64).reshape(len(first_cells), int(counts[0]), 2)
+    return np.concatenate([first_cells, rest], axis=1)
 
 
 def decode_rows(rows: Sequence) -> PairRecords:
@@ -909,7 +966,7 @@ def decode_rows(rows: Sequence) -> PairRecords:
         obstacles_a=map_a,
         starts=codec.decode_cells(col["start"]).reshape(-1, 2),
         goals=codec.decode_cells(col["goal"]).reshape(-1, 2),
-        added=codec.decode_cells(col["added_obstacle"]).reshape(-1, 2),
+        added=_decode_added(col["added_obstacle"], col[MORE_ADDED_COLUMN]),
         path_o=PackedPaths(*path_o),
         path_a=PackedPaths(*path_a),
         label=np.array(col["label"], dtype=object),

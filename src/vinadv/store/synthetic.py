@@ -11,13 +11,15 @@ from vinadv.store.schema import HARM_FLOAT_COLUMNS
 from vinadv.vocabulary import HARMS, LABELS, TERMINATIONS, is_success
 
 
-def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, first_index: int = 0) -> PairRecords:
-    """n random pairs on `size` x `size` maps; paths of 0..max_path random cells; some NULL scores and dh/dv."""
+def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, first_index: int = 0,
+                   n_added: int = 1) -> PairRecords:
+    """n random pairs on `size` x `size` maps, `n_added` added cells each; paths of 0..max_path random cells; some
+    NULL scores and dh/dv."""
     rng = np.random.default_rng(seed)
     obstacles_o = rng.random((n, size, size)) < 0.3
     obstacles_a = obstacles_o.copy()
-    added = rng.integers(0, size, (n, 2))
-    obstacles_a[np.arange(n), added[:, 0], added[:, 1]] = True
+    added = rng.integers(0, size, (n, n_added, 2))
+    obstacles_a[np.arange(n)[:, None], added[..., 0], added[..., 1]] = True
 
     def paths() -> PackedPaths:
         lengths = rng.integers(0, max_path + 1, n)

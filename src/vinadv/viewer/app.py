@@ -342,7 +342,8 @@ class _ViewerState:
             "term_o": r.term_o[0], "term_a": r.term_a[0],
             **{name: _none_if_nan(float(getattr(r, name)[0])) for name in HARM_FLOAT_FIELDS},
             "expert_label": r.expert_label[0], "harm": r.harm[0],
-            "start": r.starts[0].tolist(), "goal": r.goals[0].tolist(), "added": r.added[0].tolist(),
+            "start": r.starts[0].tolist(), "goal": r.goals[0].tolist(), "added": r.added[0, 0].tolist(),
+            "added_cells": r.added[0].tolist(),  # every added obstacle, in the order added (`added`: the first)
             "path_o": o.tolist(), "path_a": a.tolist(),
             "map_o": ["".join("1" if v else "0" for v in row) for row in r.obstacles_o[0]],
             "map_a": ["".join("1" if v else "0" for v in row) for row in r.obstacles_a[0]],

@@ -1,0 +1,318 @@
+"""How robust is a planner? The attack suite, run worst case per map on a fixed set of held-out maps.
+
+`robustness(planner, maps, strategies, max_obstacles)` attacks every map of `maps` (first start of each) with each
+strategy, one pair per map, greedily adding 1..`max_obstacles` cells (`vinadv.attacks.strategies`: the pairs of k
+obstacles are the first k steps of one greedy attack of `max_obstacles`), labels every pair and computes its harm
+(`vinadv.identify`), and reports, for each strategy and for the worst case over the strategies, at each k:
+
+- paper success rate: maps whose pair is UrP or FP (the paper's successful attack), over the valid maps;
+- harmful rate: maps whose pair is harmful (UrP, or an adversarial path further from optimal than the original
+  path was; DESIGN.md "Harm"), over the valid maps;
+- mean regret: the mean `regret_a` (adversarial path cost minus the optimal cost on the adversarial map, cost units)
+  over the valid maps whose adversarial path reaches the goal.
+
+A map is valid for a strategy when it got a pair (a valid cell at every step) and the planner reaches the goal on the
+clean map (else the pair is `invalid`: it says nothing about the attack). Worst case per map: a map counts as broken
+(paper) or harmful when ANY strategy's pair is; it is valid when the clean path reaches the goal and some strategy made
+a pair; its regret is that of its worst pair (the most harmful: none when some strategy left the planner unreached,
+else the largest `regret_a` over the strategies). The clean figures are the planner's on the unattacked maps: rollout
+success and the mean regret of the reached paths.
+
+The ranking strategies keep, per map and step, the strongest candidate by `objective`: `harm` (default: UrP, then the
+largest `regret_a`, so the exhaustive harmful rate is exactly the share of maps some single cell harms) or `paper`
+(UrP > FP > DP > UcP). The paper success rate is that of the kept pairs, so under `harm` it can be below what
+`vinadv attack --objective paper` finds, and the other way round.
+
+`benchmark_maps(n, size, seed)` makes the fixed maps: the generator's first `n` maps of `seed` (default 1000, the
+held-out seed of the evaluation tables), one start each. Results go to a database's `robustness` table
+(`save_robustness`) and into the report (`vinadv.report`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vinadv.errors import InputError
+from vinadv.vocabulary import SUCCESS_LABELS
+
+#: the strategies run by default; `exhaustive` only on request (it plans every valid cell of every map)
+DEFAULT_STRATEGIES = ("key-points", "saliency", "near-path", "random")
+EXHAUSTIVE = "exhaustive"
+#: the held-out seed of the evaluation tables (`vinadv vin eval --seed 1000`): never used in training
+BENCHMARK_SEED = 1000
+#: the name of the worst case over the strategies in tables and dicts
+WORST_CASE = "worst case"
+
+
+def benchmark_maps(n: int = 1000, size: int = 28, seed: int = BENCHMARK_SEED, corner_cutting: bool = True):
+    """The benchmark's fixed maps: the generator's first `n` maps of `seed`, one start each (a `MapSet`)."""
+    from vinadv.grid.generator import generate_maps
+
+    return generate_maps(n, size, seed=seed, n_starts=1, corner_cutting=corner_cutting)
+
+
+@dataclass(kw_only=True, eq=False)
+class MapOutcomes:
+    """What one strategy did to each of n maps at k added obstacles (`(n,)` arrays, map order).
+
+    Attributes:
+        pair: a pair was made (the map had a valid cell at every step).
+        valid: a pair was made and the planner reaches the goal on the clean map.
+        broken: valid and the pair is UrP or FP.
+        harmful: valid and the pair is harmful.
+        regret: `regret_a` of a valid pair whose adversarial path reaches the goal, NaN elsewhere.
+        label: the pair's paper label, '' without a pair.
+    """
+
+    pair: np.ndarray
+    valid: np.ndarray
+    broken: np.ndarray
+    harmful: np.ndarray
+    regret: np.ndarray
+    label: np.ndarray
+
+
+def worst_case(outcomes: list[MapOutcomes]) -> MapOutcomes:
+    """The worst case per map over the strategies' `outcomes` (of the same maps and k; see the module doc)."""
+    pair = np.any([o.pair for o in outcomes], axis=0)
+    valid = np.any([o.valid for o in outcomes], axis=0)
+    broken = np.any([o.broken for o in outcomes], axis=0)
+    harmful = np.any([o.harmful for o in outcomes], axis=0)
+    unreached = np.any([o.valid & (o.label == "UrP") for o in outcomes], axis=0)
+    regrets = np.array([o.regret for o in outcomes])
+    reached = ~np.isnan(regrets)
+    largest = np.where(reached.any(axis=0), np.where(reached, regrets, -np.inf).max(axis=0), np.nan)
+    regret = np.where(valid & ~unreached, largest, np.nan)
+    return MapOutcomes(pair=pair, valid=valid, broken=broken, harmful=harmful, regret=regret,
+                       label=np.full(len(pair), ""))
+
+
+@dataclass
+class Figures:
+    """The figures of one strategy (or the worst case) at k added obstacles, over `maps` maps."""
+
+    k: int
+    maps: int
+    attacked: int  # maps with a pair
+    valid: int  # maps with a pair whose clean path reaches the goal: the rates' denominator
+    broken: int
+    harmful: int
+    reached: int  # valid maps whose (worst) adversarial path reaches the goal: the mean regret's denominator
+    mean_regret: float | None
+    counts: dict[str, int] | None = None  # pairs per paper label (a strategy's own pairs; None for the worst case)
+
+    @property
+    def paper_success_rate(self) -> float | None:
+        return self.broken / self.valid if self.valid else None
+
+    @property
+    def harmful_rate(self) -> float | None:
+        return self.harmful / self.valid if self.valid else None
+
+    @classmethod
+    def of(cls, k: int, outcome: MapOutcomes, counts: dict[str, int] | None = None) -> Figures:
+        regrets = outcome.regret[~np.isnan(outcome.regret)]
+        return cls(k=k, maps=len(outcome.pair), attacked=int(outcome.pair.sum()), valid=int(outcome.valid.sum()),
+                   broken=int(outcome.broken.sum()), harmful=int(outcome.harmful.sum()), reached=len(regrets),
+                   mean_regret=float(regrets.mean()) if len(regrets) else None, counts=counts)
+
+    def to_dict(self) -> dict:
+        return {"k": self.k, "maps": self.maps, "attacked": self.attacked, "valid": self.valid,
+                "broken": self.broken, "paper_success_rate": self.paper_success_rate, "harmful": self.harmful,
+                "harmful_rate": self.harmful_rate, "reached": self.reached, "mean_regret": self.mean_regret,
+                **({} if self.counts is None else {"counts": self.counts})}
+
+
+@dataclass
+class StrategyResult:
+    """One strategy's figures at k = 1..max (`by_k[k - 1]`), its time and planner calls, and the per-map outcomes
+    (`outcomes[k - 1]`; not in `to_dict`)."""
+
+    name: str
+    by_k: list[Figures]
+    seconds: float
+    planner_calls: int
+    outcomes: list[MapOutcomes] = field(default_factory=list, repr=False)
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "seconds": round(self.seconds, 3), "planner_calls": self.planner_calls,
+                "by_obstacles": [f.to_dict() for f in self.by_k]}
+
+
+@dataclass
+class RobustnessResult:
+    """A planner's robustness benchmark (see the module doc).
+
+    Attributes:
+        planner: the planner's `spec()` (name, size, config, weights checksum).
+        settings: maps (n, size, seed, corner cutting), strategies, max_obstacles, objective, budget, radius, seed of
+            the randomised strategies, harm tolerances.
+        clean: the unattacked maps: maps, reached, success_rate, mean_regret (of the reached paths).
+        strategies: {name: StrategyResult}, in the order run.
+        overall: the worst case over the strategies at k = 1..max (`overall[k - 1]`).
+        seconds: wall time of the whole benchmark.
+    """
+
+    planner: dict
+    settings: dict
+    clean: dict
+    strategies: dict[str, StrategyResult]
+    overall: list[Figures]
+    seconds: float
+    overall_outcomes: list[MapOutcomes] = field(default_factory=list, repr=False)
+
+    def figures(self, strategy: str = WORST_CASE, k: int = 1) -> Figures:
+        """The figures of `strategy` (or the worst case) at `k` obstacles."""
+        by_k = self.overall if strategy == WORST_CASE else self.strategies[strategy].by_k
+        return by_k[k - 1]
+
+    def to_dict(self) -> dict:
+        """Every figure, JSON-able (what `--json` prints and the database stores)."""
+        return {"planner": self.planner, "settings": self.settings, "clean": self.clean,
+                "strategies": {name: s.to_dict() for name, s in self.strategies.items()},
+                "overall": [f.to_dict() for f in self.overall], "seconds": round(self.seconds, 3)}
+
+
+def check_strategies(strategies, exhaustive: bool = False) -> tuple[str, ...]:
+    """The strategies `vinadv robustness` runs: `strategies` ('all' or None: `DEFAULT_STRATEGIES`; else names joined
+    by commas, 'all' among them standing for the defaults), plus `exhaustive` with `exhaustive`. InputError for an
+    unknown name, a repeated one, or exhaustive named without `exhaustive` (it is slow: the flag says so)."""
+    if strategies is None or strategies == "all":
+        names = list(DEFAULT_STRATEGIES)
+    else:
+        names = [s.strip() for s in str(strategies).split(",")]
+        if "all" in names:
+            at = names.index("all")
+            names = [*names[:at], *DEFAULT_STRATEGIES, *names[at + 1:]]
+    if EXHAUSTIVE in names and not exhaustive:
+        raise InputError("strategies: add exhaustive to run the exhaustive strategy (it plans every valid cell of "
+                         "every map at every step: slow)", "strategies", "exhaustive")
+    if exhaustive and EXHAUSTIVE not in names:
+        names.append(EXHAUSTIVE)
+    return _known(names)
+
+
+def _known(names) -> tuple[str, ...]:
+    """`names` as a tuple, each a strategy of `vinadv.attacks.strategies.STRATEGIES`, none twice, at least one."""
+    from vinadv.attacks.strategies import STRATEGIES
+
+    names = tuple(names)
+    for name in names:
+        if name not in STRATEGIES:
+            raise InputError(f"strategies: unknown strategy {name!r}; choose from all, {', '.join(STRATEGIES)}",
+                             "strategies")
+    if len(set(names)) != len(names):
+        raise InputError(f"strategies: a strategy named twice in {','.join(names)}", "strategies")
+    if not names:
+        raise InputError("strategies: none given", "strategies")
+    return names
+
+
+def robustness(
+    planner,
+    maps,
+    strategies=DEFAULT_STRATEGIES,
+    max_obstacles: int = 3,
+    *,
+    objective: str = "harm",
+    seed: int = 0,
+    budget: int = 8,
+    radius: int = 2,
+    harm_tol: float | None = None,
+    harm_rtol: float = 0.0,
+    progress: bool = False,
+) -> RobustnessResult:
+    """Run the robustness benchmark of `planner` on `maps` (see the module doc).
+
+    Args:
+        planner: a `vinadv.planners.interface.Planner` (or a VIN), for the maps' size.
+        maps: a `MapSet` (`benchmark_maps`); the first start of each map is attacked.
+        strategies: names of `vinadv.attacks.strategies.STRATEGIES`, run in this order (exhaustive included only when
+            named; see `check_strategies`).
+        max_obstacles: the curve's largest k, >= 1.
+        objective: 'harm' or 'paper', what the ranking strategies keep (`vinadv.identify.objective_strength`).
+        seed: the randomised strategies' seed; budget: key-points/saliency candidates per map and step; radius:
+            near-path's distance to the path.
+        harm_tol, harm_rtol: the harm test's tolerances (default `vinadv.classify.harm.DEFAULT_TOL`, 0).
+    """
+    from vinadv.attacks.strategies import make_attack
+    from vinadv.classify.harm import DEFAULT_TOL, check_tolerances
+    from vinadv.identify import identify, objective_strength
+    from vinadv.planners.interface import as_planner
+    from vinadv.vocabulary import label_counts
+
+    harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
+    check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
+    if int(max_obstacles) < 1:
+        raise InputError(f"max_obstacles must be >= 1, got {max_obstacles}", "max_obstacles")
+    strategies = _known(strategies.split(",") if isinstance(strategies, str) else strategies)
+    strength = objective_strength(objective)
+    if len(maps) < 1:
+        raise InputError("maps: no maps to attack", "n")
+    t_start = time.perf_counter()
+    planner = as_planner(planner, maps.size)
+    n = len(maps)
+    starts, goals, cc = maps.starts[:, 0], maps.goals, maps.corner_cutting
+    clean = _clean(planner, maps)
+
+    results: dict[str, StrategyResult] = {}
+    for name in strategies:
+        t0 = time.perf_counter()
+        attack = make_attack(name, per_map=1, seed=seed, budget=budget, radius=radius, obstacles=max_obstacles)
+        result = attack.attack(maps.obstacles, starts, goals, planner, cc, strength=strength, progress=progress)
+        by_k, outcomes = [], []
+        for k, pairs in enumerate(result.steps, start=1):
+            expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
+            ident = identify(pairs, harm_tol=harm_tol, harm_rtol=harm_rtol, expert_o=expert_o)
+            outcome = _outcomes(n, pairs.map_index, ident.labels, ident.harm.harm, ident.harm.regret_a)
+            outcomes.append(outcome)
+            by_k.append(Figures.of(k, outcome, counts=label_counts(ident.labels)))
+        results[name] = StrategyResult(name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes)
+    overall_outcomes = [worst_case([r.outcomes[k] for r in results.values()]) for k in range(int(max_obstacles))]
+    overall = [Figures.of(k + 1, o) for k, o in enumerate(overall_outcomes)]
+    settings = {"n": n, "size": maps.size, "maps_seed": int(maps.seed), "corner_cutting": bool(cc),
+                "strategies": list(strategies), "max_obstacles": int(max_obstacles), "objective": objective,
+                "seed": seed, "budget": budget, "radius": radius, "harm_tolerance": harm_tol, "harm_rtol": harm_rtol}
+    return RobustnessResult(planner=planner.spec(), settings=settings, clean=clean, strategies=results,
+                            overall=overall, seconds=time.perf_counter() - t_start, overall_outcomes=overall_outcomes)
+
+
+def _clean(planner, maps) -> dict:
+    """The planner on the unattacked maps: rollout success and the mean regret of the reached paths."""
+    plans = planner.plan_batch(maps.obstacles, maps.starts[:, 0], maps.goals, maps.corner_cutting)
+    reached = plans.reached
+    regret = plans.paths.costs()[reached] - maps.expert_costs[reached, 0]
+    return {"maps": len(maps), "reached": int(reached.sum()), "success_rate": float(reached.mean()),
+            "mean_regret": float(regret.mean()) if len(regret) else None}
+
+
+def _outcomes(n: int, map_index, labels, harm, regret_a) -> MapOutcomes:
+    """Per-map outcomes of one pair per map (`map_index`), the maps without a pair empty."""
+    pair = np.zeros(n, dtype=bool)
+    pair[map_index] = True
+    label = np.full(n, "", dtype="<U7")
+    label[map_index] = labels
+    valid = pair & (label != "invalid")
+    broken = valid & np.isin(label, SUCCESS_LABELS)
+    harmful = np.zeros(n, dtype=bool)
+    harmful[map_index] = np.asarray(harm) == "harmful"
+    regret = np.full(n, np.nan)
+    regret[map_index] = regret_a
+    regret[~valid] = np.nan  # NaN already where the adversarial path misses the goal
+    return MapOutcomes(pair=pair, valid=valid, broken=broken, harmful=harmful & valid, regret=regret, label=label)
+
+
+def save_robustness(result: RobustnessResult, db: str | None) -> int:
+    """Store `result` as a row of the database's `robustness` table; return its id."""
+    from vinadv.store import Store
+
+    with Store.open(db) as store:
+        return store.add_robustness(result.planner["name"], result.planner.get("weights_sha256"), result.settings,
+                                    result.to_dict())
+
+
+__all__ = ["BENCHMARK_SEED", "DEFAULT_STRATEGIES", "Figures", "MapOutcomes", "RobustnessResult", "StrategyResult",
+           "benchmark_maps", "check_strategies", "robustness", "save_robustness", "worst_case"]

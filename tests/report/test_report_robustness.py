@@ -1,0 +1,58 @@
+"""The report's robustness section: the stored benchmarks of the database as a table (the worst case at one obstacle,
+the harmful rate by k), a CSV of every strategy and k read back against the stored figures, and the curves; a
+database without benchmarks says how to make one."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+from tests.report.conftest import SIZE
+
+from vinadv.planners.weights import load_vin
+from vinadv.report import write_report
+from vinadv.robustness import benchmark_maps, robustness, save_robustness
+
+
+def _benchmarks(url: str, weights: str) -> list[dict]:
+    """Two benchmarks stored in `url` (the VIN with two settings); their `to_dict`s."""
+    model = load_vin(weights, size=SIZE)
+    made = []
+    for strategies, k in ((["random", "key-points"], 2), (["near-path"], 3)):
+        result = robustness(model, benchmark_maps(15, SIZE, seed=3), strategies, max_obstacles=k)
+        made.append({**result.to_dict(), "id": save_robustness(result, url)})
+    return made
+
+
+def test_robustness_section_shows_every_stored_benchmark(db_copy, report_weights, tmp_path):
+    url, (run_id, _) = db_copy
+    made = _benchmarks(url, report_weights)
+    out = tmp_path / "rep"
+    page = write_report(url, out, run_id=run_id).read_text()
+    section = page.split('<section id="robustness">', 1)[1].split("</section>", 1)[0]
+    assert 'id="robustness-table"' in section and "fig_robustness.png" in section
+    assert (out / "fig_robustness.png").exists() and (out / "fig_robustness.svg").exists()
+    # the comparison table: one row per benchmark, its worst case at k = 1 and its harmful rate at every k
+    table = section.split('id="robustness-table"', 1)[1].split("</table>", 1)[0]
+    assert table.count("<tr><td>vin") == 2 and "harmful, k = 3" in table
+    for d in made:
+        assert f"{100 * d['overall'][0]['harmful_rate']:.1f}%" in table
+    with open(out / "robustness.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    expected = [(d["id"], name, f) for d in made
+                for name, by_k in (*((n, s["by_obstacles"]) for n, s in d["strategies"].items()),
+                                   ("worst case", d["overall"]))
+                for f in by_k]
+    assert len(rows) == len(expected)
+    for row, (bid, name, f) in zip(rows, expected):
+        assert (int(row["benchmark"]), row["strategy"], int(row["k"])) == (bid, name, f["k"])
+        assert int(row["valid"]) == f["valid"] and int(row["harmful"]) == f["harmful"]
+        assert math.isclose(float(row["harmful_rate"]), f["harmful_rate"])
+
+
+def test_a_database_without_benchmarks_says_how_to_make_one(db_copy, tmp_path):
+    url, (run_id, _) = db_copy
+    page = write_report(url, tmp_path / "rep", run_id=run_id).read_text()
+    section = page.split('<section id="robustness">', 1)[1].split("</section>", 1)[0]
+    assert 'id="robustness-none"' in section and "vinadv robustness" in section
+    assert not (tmp_path / "rep" / "robustness.csv").exists()
