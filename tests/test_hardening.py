@@ -121,3 +121,14 @@ def test_cli_adversarial_training_records_everything(tmp_path, capsys):
     assert json.loads(out.with_suffix(".json").read_text())["augment_rounds"] == record["augment_rounds"]
     assert main(["vin", "train", "--data", str(data), "--out", str(out), "--adversarial", "--adv-maps", "0"]) == 2
     assert "--adv-maps" in capsys.readouterr().err
+
+
+def test_cli_gppn_adversarial_training(tmp_path, capsys):
+    data = tmp_path / "maps.npz"
+    generate_maps(12, SIZE, seed=3, n_starts=1).save(data)
+    out = tmp_path / "g.pt"
+    assert main(["gppn", "train", "--data", str(data), "--out", str(out), "--epochs", "1", "--batch-size", "4",
+                 "--l-h", "4", "--k", "4", "--kernel", "3", "--adversarial", "--adv-maps", "6", "--adv-strategy",
+                 "key-points", "--adv-start", "1", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["planner"] == "gppn" and record["augment_rounds"][0]["attacked"] == 6
