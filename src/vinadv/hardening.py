@@ -39,7 +39,7 @@ class AdversarialConfig:
         budget: candidates per map for key-points and saliency.
         objective: what "strongest" means ('harm', default, or 'paper').
         start_epoch: the first epoch (0-based) before which maps are attacked (a fresh model's early attacks
-            mostly find its ignorance; with `--init` start at 0).
+            mostly find its ignorance; a model that starts from trained weights can start at 0).
     """
 
     maps_per_epoch: int = 1000

@@ -141,17 +141,12 @@ def adversarial_config(args: argparse.Namespace) -> dict | None:
     from vinadv.hardening import AdversarialConfig
 
     start = args.adv_start if args.adv_start is not None else (1 if args.init else 2)
-    if start < 1:
-        raise InputError(f"--adv-start must be >= 1, got {start}")
+    for flag, value in (("--adv-maps", args.adv_maps), ("--adv-budget", args.adv_budget), ("--adv-start", start)):
+        if value < 1:  # checked here, in flags (strategy and objective are argparse choices)
+            raise InputError(f"{flag} must be >= 1, got {value}")
     config = AdversarialConfig(maps_per_epoch=args.adv_maps, strategy=args.adv_strategy, budget=args.adv_budget,
                                objective=args.adv_objective, start_epoch=start - 1)
-    try:
-        config.validate()
-    except InputError as exc:  # the library names its parameters; here they are the --adv-* flags
-        flags = {"maps_per_epoch": "--adv-maps", "budget": "--adv-budget", "strategy": "--adv-strategy",
-                 "objective": "--adv-objective"}
-        raise InputError(" ".join(flags.get(w.rstrip(":"), w.rstrip(":")) + (":" if w.endswith(":") else "")
-                                  for w in str(exc).split(" "))) from None
+    config.validate()
     return config.to_dict()
 
 

@@ -94,7 +94,7 @@ def load_planner(spec: str | None, size: int, weights: str | None = None, corner
         path = default_weights("vin_robust", size)
         if not path.exists():
             raise PlannerError(f"no shipped adversarially trained VIN for {size}x{size} maps ({path}); make one with "
-                               "`vinadv vin train --adversarial` and use --planner vin --weights")
+                               "`vinadv vin train --adversarial` and load it as planner 'vin' with those weights")
         planner = VINPlanner(load_vin(path, size=size), size=size)
         planner.name = "vin_robust"
         return planner
