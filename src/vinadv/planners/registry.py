@@ -119,6 +119,11 @@ def load_planner(spec: str | None, size: int, weights: str | None = None, corner
                        f"MODULE:FACTORY for your own")
 
 
+def _is_file(source: str) -> bool:
+    """Whether the part of a `SOURCE:FACTORY` spec before the colon names a file (else a module on the path)."""
+    return source.endswith(".py") or "/" in source or "\\" in source
+
+
 def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
     """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring)."""
     from vinadv.planners.weights import weights_checksum
@@ -127,7 +132,7 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
     if not source or not factory_name.isidentifier():
         raise PlannerError(f"planner {spec!r}: expected FILE.py:FACTORY or MODULE:FACTORY")
     source_sha = None
-    if source.endswith(".py") or "/" in source or "\\" in source:
+    if _is_file(source):
         path = Path(source)
         if not path.is_file():
             raise PlannerError(f"planner {spec!r}: no such file {source}")
@@ -184,7 +189,7 @@ class PlannerRef:
         """The reference of `planner`, loaded here by `load_planner(spec, ..., weights=weights)`."""
         spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
         source, sep, factory = spec.rpartition(":")
-        if sep and (source.endswith(".py") or "/" in source or "\\" in source):
+        if sep and _is_file(source):
             spec = f"{Path(source).resolve()}:{factory}"
         weights = None if weights is None else str(Path(weights).resolve())
         return cls(spec, weights, int(planner.size), bool(corner_cutting), planner.checksum)
