@@ -189,7 +189,7 @@ def test_export_into_a_broken_pipe_ends_quietly(weights, tmp_path):
 
 # ------------------------------------------------------------------------------------------- maps generate
 
-@pytest.mark.parametrize("args, limit", [(["--size", "2000"], "--size"), (["--n", "1000000000000"], "--n")])
+@pytest.mark.parametrize("args, limit", [(["--size", "100000"], "--size"), (["--n", "1000000000000"], "--n")])
 def test_maps_generate_refuses_what_cannot_fit_at_once(args, limit, tmp_path, capsys):
     t0 = time.perf_counter()
     assert main(["maps", "generate", "--n", "3", *args, "--out", str(tmp_path / "m.npz"), "--quiet"]) == 2
@@ -219,6 +219,6 @@ def test_generator_chunks_shrink_with_the_size_and_keep_memory_bounded():
 def test_generator_library_errors_name_parameters():
     from vinadv.grid import generate_maps
 
-    with pytest.raises(InputError, match="^size 5000") as caught:  # the command line shows --size 5000
-        generate_maps(1, 5000)
+    with pytest.raises(InputError, match="^size 100000") as caught:  # the command line shows --size 100000
+        generate_maps(1, 100000)
     assert "size" in caught.value.parameters

@@ -62,3 +62,36 @@ def test_bad_arguments_are_input_errors():
         generate_maps(-1)
     with pytest.raises(InputError, match="^n_starts must be >= 1"):
         generate_maps(3, 8, n_starts=0)
+
+
+def _shapes_by_testing_every_cell(attempts, is_disc, top, left, height, width, radius, goals, size):
+    """The placement as first written: every attempt tested against every cell, `(n, max_obs, N, N)` at once."""
+    rows = np.arange(size)[None, None, :, None]
+    cols = np.arange(size)[None, None, None, :]
+    t, lft = top[..., None, None], left[..., None, None]
+    rect = (rows >= t) & (rows < t + height[..., None, None]) & (cols >= lft) & (cols < lft + width[..., None, None])
+    disc = (rows - t) ** 2 + (cols - lft) ** 2 <= radius[..., None, None] ** 2
+    shapes = np.where(is_disc[..., None, None], disc, rect)
+    shapes &= (np.arange(top.shape[1])[None, :] < attempts[:, None])[..., None, None]
+    shapes &= ~shapes[np.arange(len(goals)), :, goals[:, 0], goals[:, 1]][..., None, None]
+    return shapes.any(axis=1)
+
+
+@pytest.mark.parametrize("size, max_obs, max_size", [(9, 12, 4), (28, 50, 2), (16, 30, 7)])
+def test_painted_shapes_equal_testing_every_cell(size, max_obs, max_size):
+    from vinadv.grid.generator import _paint_shapes
+
+    rng = np.random.default_rng(size)
+    n = 300
+    draws = dict(
+        attempts=rng.integers(1, max_obs, n, endpoint=True), is_disc=rng.random((n, max_obs)) < 0.5,
+        top=rng.integers(0, size, (n, max_obs)), left=rng.integers(0, size, (n, max_obs)),
+        height=rng.integers(1, max_size, (n, max_obs), endpoint=True),
+        width=rng.integers(1, max_size, (n, max_obs), endpoint=True),
+        radius=rng.integers(1, max_size, (n, max_obs), endpoint=True), goals=rng.integers(0, size, (n, 2)),
+    )
+    painted = np.zeros((n, size, size), dtype=bool)
+    _paint_shapes(*draws.values(), painted)
+    expected = _shapes_by_testing_every_cell(*draws.values(), size)
+    assert np.array_equal(painted, expected)
+    assert not painted[np.arange(n), draws["goals"][:, 0], draws["goals"][:, 1]].any()

@@ -11,9 +11,13 @@ Generation is vectorised over maps and runs in chunks of `chunk_maps(size)` maps
 `(seed, chunk)`: a dataset of n maps is the first n maps of the infinite stream for that seed and size, so it does
 not depend on n being larger, and chunks can be made anywhere (a cluster worker) without a shared RNG.
 
-Limits (InputError naming them, before any work): a size where one map's working memory (placement attempts x
-cells, ~`WORK_BYTES_PER_CELL` bytes each) exceeds half the available memory (about 390x390 with 16 GiB available),
-and an `n` whose maps would take more than half the available memory (the output is held in memory).
+The shapes are painted one by one over their bounding boxes (compiled with Numba), from the same draws as the
+original vectorised formulation (every attempt tested against every cell), so the maps are those it made.
+
+Limits (InputError naming them, before any work): a size where one map's working memory (~`WORK_BYTES_PER_CELL`
+bytes per cell: distances, optimal actions, start keys) exceeds half the available memory (about 9,000x9,000 with
+24 GiB available), and an `n` whose maps would take more than half the available memory (the output is held in
+memory).
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import math
 import os
 from collections.abc import Callable, Sequence
 
+import numba
 import numpy as np
 
 from vinadv.errors import InputError
@@ -32,8 +37,13 @@ from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
 CHUNK = 512
 #: a chunk's working memory target: `CHUNK` maps up to ~30x30, then fewer maps per chunk
 CHUNK_BYTES = 256 << 20
-#: bytes of working memory per (map, placement attempt, cell) in `_draw_obstacles` (measured peak: ~6)
-WORK_BYTES_PER_CELL = 6
+#: `chunk_maps`'s divisor per (map, placement attempt, cell). It fixes how many maps a chunk (one seed) holds, so it
+#: is part of the stream's definition and never changes (it was the working memory of the vectorised placement)
+STREAM_BYTES_PER_CELL = 6
+#: peak working memory of generation per (map, cell), measured with tracemalloc at sizes 200 and 400: 142 bytes
+WORK_BYTES_PER_CELL = 142
+#: bytes per placement attempt of one map (its seven drawn numbers)
+ATTEMPT_BYTES = 56
 MIN_SIZE = 8
 MIN_START_MOVES = 2
 
@@ -51,9 +61,9 @@ def available_memory() -> int:
 
 
 def chunk_maps(size: int, max_obs: int | None = None) -> int:
-    """Maps per generator chunk on `size x size` maps: `CHUNK`, or fewer so a chunk stays within `CHUNK_BYTES`."""
+    """Maps per generator chunk on `size x size` maps: `CHUNK`, or fewer on large maps (`STREAM_BYTES_PER_CELL`)."""
     max_obs = default_obstacle_params(size)[0] if max_obs is None else max_obs
-    return int(max(1, min(CHUNK, CHUNK_BYTES // (WORK_BYTES_PER_CELL * max_obs * size * size))))
+    return int(max(1, min(CHUNK, CHUNK_BYTES // (STREAM_BYTES_PER_CELL * max_obs * size * size))))
 
 
 def map_bytes(size: int, n_starts: int) -> int:
@@ -66,17 +76,16 @@ def check_limits(n: int, size: int, n_starts: int, max_obs: int) -> None:
     """Refuse (InputError) a size whose single map, or an `n` whose maps, would not fit half the available memory."""
     avail = available_memory()
 
-    def placing(side: int, attempts: int) -> int:  # the obstacle placement's working memory for one map
-        return WORK_BYTES_PER_CELL * attempts * side * side
+    def work(side: int, attempts: int) -> int:  # one map's working memory: its cells and its shapes' draws
+        return WORK_BYTES_PER_CELL * side * side + ATTEMPT_BYTES * attempts
 
-    work = placing(size, max_obs)
-    if work > avail // 2:
-        largest = size
-        while largest > MIN_SIZE and placing(largest, default_obstacle_params(largest)[0]) > avail // 2:
+    if work(size, max_obs) > avail // 2:
+        largest = math.isqrt(avail // 2 // WORK_BYTES_PER_CELL)
+        while largest > MIN_SIZE and work(largest, default_obstacle_params(largest)[0]) > avail // 2:
             largest -= 1 + largest // 16
-        raise InputError(f"size {size}: placing the obstacles of one {size}x{size} map needs {_gib(work)} of memory "
-                         f"({max_obs} attempts x {size * size:,} cells), more than half the {_gib(avail)} available; "
-                         f"the limit here is about size {largest}", "size", "size")
+        raise InputError(f"size {size}: generating one {size}x{size} map needs {_gib(work(size, max_obs))} of memory "
+                         f"({size * size:,} cells, {max_obs:,} placement attempts), more than half the {_gib(avail)} "
+                         f"available; the limit here is about size {largest}", "size", "size")
     need = n * map_bytes(size, n_starts)
     if need > avail // 2:
         fits = avail // 2 // map_bytes(size, n_starts)
@@ -106,19 +115,37 @@ def _draw_obstacles(rng: np.random.Generator, n: int, size: int, goals: np.ndarr
     width = np.maximum(1, np.ceil(rng.random((n, max_obs)) * max_size)).astype(np.int64)
     radius = np.maximum(1, np.ceil(rng.random((n, max_obs)) * max_size)).astype(np.int64)
 
-    # int32 (not int64) differences: the (n, max_obs, N, N) disc test is the largest array of the generator
-    rows = np.arange(size, dtype=np.int32)[None, None, :, None]
-    cols = np.arange(size, dtype=np.int32)[None, None, None, :]
-    t, lft = top.astype(np.int32)[..., None, None], left.astype(np.int32)[..., None, None]
-    rect = (rows >= t) & (rows < t + height[..., None, None]) & (cols >= lft) & (cols < lft + width[..., None, None])
-    disc = (rows - t) ** 2 + (cols - lft) ** 2 <= radius.astype(np.int32)[..., None, None] ** 2
-    shapes = np.where(is_disc[..., None, None], disc, rect)
-    shapes &= (np.arange(max_obs)[None, :] < attempts[:, None])[..., None, None]
-    covers_goal = shapes[np.arange(n), :, goals[:, 0], goals[:, 1]]
-    shapes &= ~covers_goal[..., None, None]
-    obstacles = shapes.any(axis=1)
+    obstacles = np.zeros((n, size, size), dtype=np.bool_)
+    _paint_shapes(attempts, is_disc, top, left, height, width, radius, goals.astype(np.int64), obstacles)
     obstacles[:, 0, :] = obstacles[:, -1, :] = obstacles[:, :, 0] = obstacles[:, :, -1] = True
     return obstacles
+
+
+@numba.njit(cache=True)
+def _paint_shapes(attempts, is_disc, top, left, height, width, radius, goals, out):
+    """Paint map `b`'s first `attempts[b]` shapes into `out[b]` (clipped to the map), skipping a shape that covers
+    the goal: a disc is the cells within Euclidean `radius` of `(top, left)`, a rectangle `height x width` cells from
+    `(top, left)` down and right. Only the cells in each shape's bounding box are visited."""
+    size = out.shape[1]
+    for b in range(out.shape[0]):
+        gr, gc = goals[b, 0], goals[b, 1]
+        for k in range(attempts[b]):
+            t, lf = top[b, k], left[b, k]
+            if is_disc[b, k]:
+                r2 = radius[b, k] * radius[b, k]
+                if (gr - t) ** 2 + (gc - lf) ** 2 <= r2:
+                    continue
+                for i in range(max(0, t - radius[b, k]), min(size, t + radius[b, k] + 1)):
+                    for j in range(max(0, lf - radius[b, k]), min(size, lf + radius[b, k] + 1)):
+                        if (i - t) ** 2 + (j - lf) ** 2 <= r2:
+                            out[b, i, j] = True
+            else:
+                h, w = height[b, k], width[b, k]
+                if t <= gr < t + h and lf <= gc < lf + w:
+                    continue
+                for i in range(t, min(size, t + h)):
+                    for j in range(lf, min(size, lf + w)):
+                        out[b, i, j] = True
 
 
 def _generate_chunk(seed: tuple[int, ...], chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int,
