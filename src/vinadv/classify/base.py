@@ -19,10 +19,11 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 
 from vinadv.errors import InputError, first_line
 from vinadv.outfile import atomic_output
+from vinadv.vocabulary import FORK_OR_DETOUR
 
 MODEL_FORMAT = "vinadv.classifier/1"
 #: The two classes of the image classifiers, in scikit-learn order (`decision_function > 0` means FP).
-FP_DP_CLASSES = np.array(["DP", "FP"])
+FP_DP_CLASSES = np.array(FORK_OR_DETOUR)
 
 _REGISTRY: dict[str, type] = {}
 
@@ -48,7 +49,7 @@ class PairClassifier(ClassifierMixin, BaseEstimator):
         y = np.asarray(y)
         if y.ndim != 1 or len(y) != len(X):
             raise InputError(f"{len(y)} labels for {len(X)} path pairs")
-        bad = set(np.unique(y).tolist()) - {"DP", "FP"}
+        bad = set(np.unique(y).tolist()) - set(FORK_OR_DETOUR)
         if bad:
             raise InputError(f"FP/DP classifiers take the labels 'DP' and 'FP' only, got {sorted(bad)}")
         if len(np.unique(y)) < 2:

@@ -11,6 +11,8 @@ from sklearn.metrics import (
     roc_auc_score,
 )
 
+from vinadv.vocabulary import FORK_OR_DETOUR
+
 
 def binary_metrics(y_true, y_pred, scores=None) -> dict:
     """Accuracy, per-class precision/recall/F1/support, ROC AUC and average precision, confusion matrix.
@@ -21,7 +23,7 @@ def binary_metrics(y_true, y_pred, scores=None) -> dict:
     """
     y_true = np.asarray(y_true)
     y_pred = np.asarray(y_pred)
-    classes = ["DP", "FP"]
+    classes = list(FORK_OR_DETOUR)
     precision, recall, f1, support = precision_recall_fscore_support(
         y_true, y_pred, labels=classes, zero_division=0
     )

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse
 from sklearn.svm import SVC
 
-from vinadv.classify.base import PairClassifier, register_kind
+from vinadv.classify.base import FP_DP_CLASSES, PairClassifier, register_kind
 from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.cooccurrence import feature_shape, image_features, offset_matrix, torch_features
 from vinadv.classify.images import render_batch
@@ -128,7 +128,7 @@ class SVMImageClassifier(PairClassifier):
     @classmethod
     def _from_state(cls, kind, params, meta, arrays):
         model = cls(**params)
-        model.classes_ = np.array(["DP", "FP"])
+        model.classes_ = FP_DP_CLASSES.copy()
         model.support_vectors_ = arrays["support_vectors"].astype(np.float32)
         model.dual_coef_ = arrays["dual_coef"].astype(np.float64)
         model.intercept_ = float(meta["intercept"])
@@ -324,7 +324,7 @@ class TorchImageClassifier(PairClassifier):
     def _from_state(cls, kind, params, meta, arrays):
         torch = _torch()
         model = cls(**params)
-        model.classes_ = np.array(["DP", "FP"])
+        model.classes_ = FP_DP_CLASSES.copy()
         model.size_ = int(meta["size"])
         model.training_time_s_ = float(meta.get("training_time_s", 0.0))
         model.network_ = _build_network(kind, model.architecture, model.size_, model.width, model.features)

@@ -26,84 +26,63 @@ def default_threshold(size: int) -> int:
 
 
 @numba.njit(cache=True, nogil=True)
+def _record_extent(cells, lo, hi, mark, other_bit, ext):  # pragma: no cover - compiled
+    """Per row the min/max column, per column the min/max row, of `cells[lo:hi]` not marked `other_bit`
+    (the cells of one path not on the other): `ext` rows 0-3 = row min, row max, column min, column max."""
+    for i in range(lo, hi):
+        r = cells[i, 0]
+        c = cells[i, 1]
+        if mark[r, c] & other_bit == 0:
+            if ext[0, r] < 0 or c < ext[0, r]:
+                ext[0, r] = c
+            if c > ext[1, r]:
+                ext[1, r] = c
+            if ext[2, c] < 0 or r < ext[2, c]:
+                ext[2, c] = r
+            if r > ext[3, c]:
+                ext[3, c] = r
+
+
+@numba.njit(cache=True, nogil=True)
+def _reset(cells, lo, hi, mark, ext_o, ext_a):  # pragma: no cover - compiled
+    """Clear what the cells `cells[lo:hi]` touched, so the scratch costs O(path length) per pair."""
+    for i in range(lo, hi):
+        r = cells[i, 0]
+        c = cells[i, 1]
+        mark[r, c] = 0
+        for ext in (ext_o, ext_a):
+            ext[0, r] = ext[1, r] = ext[2, c] = ext[3, c] = -1
+
+
+@numba.njit(cache=True, nogil=True)
 def _distances_kernel(o_cells, o_offsets, a_cells, a_offsets, size, dh, dv):  # pragma: no cover - compiled
     mark = np.zeros((size, size), dtype=np.uint8)  # bit 1: on the original path, bit 2: on the adversarial
-    # per row: min/max column of Do and of Da cells in it; per column: min/max row. -1 = none yet.
-    row_min_o = np.full(size, -1, np.int64)
-    row_max_o = np.full(size, -1, np.int64)
-    row_min_a = np.full(size, -1, np.int64)
-    row_max_a = np.full(size, -1, np.int64)
-    col_min_o = np.full(size, -1, np.int64)
-    col_max_o = np.full(size, -1, np.int64)
-    col_min_a = np.full(size, -1, np.int64)
-    col_max_a = np.full(size, -1, np.int64)
+    # Do's and Da's extents (see `_record_extent`); -1 = none yet
+    ext_o = np.full((4, size), -1, np.int64)
+    ext_a = np.full((4, size), -1, np.int64)
     n = len(o_offsets) - 1
     for p in range(n):
-        for i in range(o_offsets[p], o_offsets[p + 1]):
+        o_lo, o_hi, a_lo, a_hi = o_offsets[p], o_offsets[p + 1], a_offsets[p], a_offsets[p + 1]
+        for i in range(o_lo, o_hi):
             mark[o_cells[i, 0], o_cells[i, 1]] |= 1
-        for i in range(a_offsets[p], a_offsets[p + 1]):
+        for i in range(a_lo, a_hi):
             mark[a_cells[i, 0], a_cells[i, 1]] |= 2
-        for i in range(o_offsets[p], o_offsets[p + 1]):
-            r = o_cells[i, 0]
-            c = o_cells[i, 1]
-            if mark[r, c] & 2 == 0:
-                if row_min_o[r] < 0 or c < row_min_o[r]:
-                    row_min_o[r] = c
-                if c > row_max_o[r]:
-                    row_max_o[r] = c
-                if col_min_o[c] < 0 or r < col_min_o[c]:
-                    col_min_o[c] = r
-                if r > col_max_o[c]:
-                    col_max_o[c] = r
-        for i in range(a_offsets[p], a_offsets[p + 1]):
-            r = a_cells[i, 0]
-            c = a_cells[i, 1]
-            if mark[r, c] & 1 == 0:
-                if row_min_a[r] < 0 or c < row_min_a[r]:
-                    row_min_a[r] = c
-                if c > row_max_a[r]:
-                    row_max_a[r] = c
-                if col_min_a[c] < 0 or r < col_min_a[c]:
-                    col_min_a[c] = r
-                if r > col_max_a[c]:
-                    col_max_a[c] = r
+        _record_extent(o_cells, o_lo, o_hi, mark, 2, ext_o)
+        _record_extent(a_cells, a_lo, a_hi, mark, 1, ext_a)
         h = 0
         v = 0
         # max |x - y| over two sets = max(max X - min Y, max Y - min X)
-        for i in range(o_offsets[p], o_offsets[p + 1]):
+        for i in range(o_lo, o_hi):
             r = o_cells[i, 0]
             c = o_cells[i, 1]
-            if row_max_o[r] >= 0 and row_max_a[r] >= 0:
-                h = max(h, row_max_o[r] - row_min_a[r], row_max_a[r] - row_min_o[r])
-            if col_max_o[c] >= 0 and col_max_a[c] >= 0:
-                v = max(v, col_max_o[c] - col_min_a[c], col_max_a[c] - col_min_o[c])
+            if ext_o[1, r] >= 0 and ext_a[1, r] >= 0:
+                h = max(h, ext_o[1, r] - ext_a[0, r], ext_a[1, r] - ext_o[0, r])
+            if ext_o[3, c] >= 0 and ext_a[3, c] >= 0:
+                v = max(v, ext_o[3, c] - ext_a[2, c], ext_a[3, c] - ext_o[2, c])
         dh[p] = h
         dv[p] = v
-        # reset only what this pair touched, so the scratch costs O(path length) per pair
-        for i in range(o_offsets[p], o_offsets[p + 1]):
-            r = o_cells[i, 0]
-            c = o_cells[i, 1]
-            mark[r, c] = 0
-            row_min_o[r] = -1
-            row_max_o[r] = -1
-            col_min_o[c] = -1
-            col_max_o[c] = -1
-            row_min_a[r] = -1
-            row_max_a[r] = -1
-            col_min_a[c] = -1
-            col_max_a[c] = -1
-        for i in range(a_offsets[p], a_offsets[p + 1]):
-            r = a_cells[i, 0]
-            c = a_cells[i, 1]
-            mark[r, c] = 0
-            row_min_o[r] = -1
-            row_max_o[r] = -1
-            col_min_o[c] = -1
-            col_max_o[c] = -1
-            row_min_a[r] = -1
-            row_max_a[r] = -1
-            col_min_a[c] = -1
-            col_max_a[c] = -1
+        _reset(o_cells, o_lo, o_hi, mark, ext_o, ext_a)
+        _reset(a_cells, a_lo, a_hi, mark, ext_o, ext_a)
 
 
 def path_distances(path_o: PackedPaths, path_a: PackedPaths, size: int) -> tuple[np.ndarray, np.ndarray]:

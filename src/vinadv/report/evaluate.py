@@ -35,6 +35,7 @@ from vinadv.classify import (
     make_fp_classifier,
 )
 from vinadv.errors import InputError
+from vinadv.vocabulary import FORK_OR_DETOUR
 
 CLASSIFIERS = (*FP_DP_KINDS, "hybrid", "rule")
 SETTINGS = ("baseline", "tuned")
@@ -80,8 +81,8 @@ def load_run_pairs(store, run_id: int, seed: int = 0, max_other: int = MAX_OTHER
     if not len(index):
         raise InputError(f"run {run_id} has no stored pairs to evaluate on")
     # the feature stage is exact whatever labelled the run, so the stored FP/DP set is the rule's FP/DP set
-    fp_dp = np.sort(index[np.isin(labels, ("DP", "FP"))])
-    others = np.sort(index[~np.isin(labels, ("DP", "FP"))])
+    fp_dp = np.sort(index[np.isin(labels, FORK_OR_DETOUR)])
+    others = np.sort(index[~np.isin(labels, FORK_OR_DETOUR)])
     if len(others) > max_other:
         others = np.sort(np.random.default_rng(seed).choice(others, max_other, replace=False))
     parts = [store.read_pairs(run_id, pair_indices=part) for part in (fp_dp, others) if len(part)]
@@ -97,7 +98,7 @@ def split_fp_dp(truth: np.ndarray, seed: int = 0, test_fraction: float = TEST_FR
     """Stratified train/test split of the FP/DP positions of `truth`: `(train, test)` sorted int64 indices."""
     from sklearn.model_selection import train_test_split
 
-    fp_dp = np.flatnonzero(np.isin(truth, ("DP", "FP")))
+    fp_dp = np.flatnonzero(np.isin(truth, FORK_OR_DETOUR))
     n_fp, n_dp = int(np.sum(truth == "FP")), int(np.sum(truth == "DP"))
     if n_fp < 2 or n_dp < 2:
         raise InputError(f"{source} has {n_fp} FP and {n_dp} DP pairs; the classifier comparison needs at least 2 "
@@ -111,7 +112,7 @@ def nested_fraction(train: np.ndarray, truth: np.ndarray, fraction: float, seed:
     growing fractions are nested (prefixes of one seeded permutation per class)."""
     rng = np.random.default_rng(seed)
     chosen = []
-    for cls in ("DP", "FP"):
+    for cls in FORK_OR_DETOUR:
         members = rng.permutation(train[truth[train] == cls])
         chosen.append(members[: max(1, int(round(fraction * len(members))))])
     return np.sort(np.concatenate(chosen))

@@ -47,13 +47,12 @@ from vinadv.errors import InputError
 from vinadv.store import LABELS, Store
 from vinadv.store.records import PairRecords
 from vinadv.viewer.render import KINDS, PngCache, render_pair_png
-from vinadv.vocabulary import HARM_FLOAT_FIELDS, HARMS
+from vinadv.vocabulary import HARM_FLOAT_FIELDS, HARMS, SUCCESS_LABELS
 
 #: labels a person can set (the automatic 'invalid' is a fact about the original path, not a judgement)
 HUMAN_LABELS = ("FP", "DP", "UrP", "UcP")
 #: keyboard shortcut of each human label
 LABEL_KEYS = {"FP": "f", "DP": "d", "UrP": "u", "UcP": "c"}
-SUCCESS = ("UrP", "FP")
 DEFAULT_PAGE_SIZE = 50
 MAX_PAGE_SIZE = 500
 ANNOTATOR_COOKIE = "vinadv_annotator"
@@ -242,7 +241,7 @@ class _ViewerState:
             c = counts.get(int(run["id"]), {lab: 0 for lab in LABELS})
             n = sum(c.values())
             valid = n - c["invalid"]
-            successes = sum(c[lab] for lab in SUCCESS)
+            successes = sum(c[lab] for lab in SUCCESS_LABELS)
             out.append({**run, "planner": run_planner(run), "counts": c, "n_pairs": n, "n_valid": valid,
                         "n_success": successes, "success_rate": successes / valid if valid else None})
         return out
