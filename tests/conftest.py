@@ -121,3 +121,22 @@ def sqlite_url(tmp_path):
 def db_url(request):
     """A fresh empty database on each backend in turn."""
     return request.getfixturevalue(f"{request.param}_url")
+
+
+@pytest.fixture(scope="session")
+def planning_weights(tmp_path_factory):
+    """`planning_weights(size)`: the path (str) of a weights file of `planning_vin(size, seed=2, noise=0.1)`, a VIN
+    that plans well on small maps; written once per size and session."""
+    from vinadv.planners.testing import planning_vin
+    from vinadv.planners.weights import save_vin
+
+    made: dict[int, str] = {}
+
+    def path_for(size: int) -> str:
+        if size not in made:
+            path = tmp_path_factory.mktemp("w") / f"vin{size}.pt"
+            save_vin(planning_vin(size, seed=2, noise=0.1), path)
+            made[size] = str(path)
+        return made[size]
+
+    return path_for

@@ -18,8 +18,6 @@ from tests.fault_files import tmpfs
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.pipeline import RunConfig, run_pipeline
-from vinadv.planners.testing import planning_vin
-from vinadv.planners.weights import save_vin
 from vinadv.store import Store
 
 SIZE = 12
@@ -27,10 +25,8 @@ ENV = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "sr
 
 
 @pytest.fixture(scope="module")
-def weights(tmp_path_factory):
-    path = tmp_path_factory.mktemp("w") / f"vin{SIZE}.pt"
-    save_vin(planning_vin(SIZE, seed=2, noise=0.1), path)
-    return str(path)
+def weights(planning_weights):
+    return planning_weights(SIZE)
 
 
 def _args(weights, db, *extra, n=60, shard=20):

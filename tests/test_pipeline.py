@@ -14,18 +14,14 @@ import sqlalchemy as sa
 from tests.classify.oracle import rule_oracle
 from vinadv.cli import main
 from vinadv.pipeline import RunConfig, run_pipeline
-from vinadv.planners.testing import planning_vin
-from vinadv.planners.weights import save_vin
 from vinadv.store import Store
 
 SIZE = 12
 
 
 @pytest.fixture(scope="module")
-def weights(tmp_path_factory):
-    path = tmp_path_factory.mktemp("w") / f"vin{SIZE}.pt"
-    save_vin(planning_vin(SIZE, seed=2, noise=0.1), path)
-    return str(path)
+def weights(planning_weights):
+    return planning_weights(SIZE)
 
 
 def config(weights, **kw):

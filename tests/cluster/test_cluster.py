@@ -26,10 +26,8 @@ SIZE = 12
 
 
 @pytest.fixture(scope="module")
-def weights(tmp_path_factory):
-    path = tmp_path_factory.mktemp("w") / f"vin{SIZE}.pt"
-    save_vin(planning_vin(SIZE, seed=2, noise=0.1), path)
-    return str(path)
+def weights(planning_weights):
+    return planning_weights(SIZE)
 
 
 @pytest.fixture(scope="module")

@@ -7,17 +7,13 @@ import shutil
 import pytest
 
 from vinadv.pipeline import RunConfig, run_pipeline
-from vinadv.planners.testing import planning_vin
-from vinadv.planners.weights import save_vin
 
 SIZE = 12
 
 
 @pytest.fixture(scope="session")
-def report_weights(tmp_path_factory) -> str:
-    path = tmp_path_factory.mktemp("report_w") / f"vin{SIZE}.pt"
-    save_vin(planning_vin(SIZE, seed=2, noise=0.1), path)
-    return str(path)
+def report_weights(planning_weights) -> str:
+    return planning_weights(SIZE)
 
 
 @pytest.fixture(scope="session")

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
+from tests.store.old_schemas import columns_and_version, old_database
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
 from vinadv.store.schema import map_pairs
@@ -21,27 +22,13 @@ HARM_COLUMNS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "reg
 def _make_version_1(url: str) -> int:
     """A database as vinadv with schema version 1 left it: 30 pairs, no harm columns (nor version 3's
     `added_more`)."""
-    with Store.open(url) as store:
-        run_id = store.create_run("old")
-        store.write_pairs(run_id, random_records(30, size=7, seed=3))
-    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
-    quote = engine.dialect.identifier_preparer.quote
-    with engine.begin() as conn:
+
+    def undo(conn, quote):
         HARM_INDEX.drop(conn)  # version 1 had no index on harm (SQLite cannot drop an indexed column)
         for name in (*HARM_COLUMNS, "added_more"):
             conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote(name)}"))
-        conn.execute(sa.text(f"UPDATE vinadv_meta SET value = '1' WHERE {quote('key')} = 'schema_version'"))
-    engine.dispose()
-    return run_id
 
-
-def _columns_and_version(url: str) -> tuple[set, str]:
-    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
-    with engine.connect() as conn:
-        columns = {c["name"] for c in sa.inspect(conn).get_columns("map_pairs")}
-        version = conn.execute(sa.text("SELECT value FROM vinadv_meta")).scalar()
-    engine.dispose()
-    return columns, version
+    return old_database(url, 1, 30, undo)
 
 
 def test_harm_columns_round_trip_with_nulls(db_url):
@@ -59,7 +46,7 @@ def test_harm_columns_round_trip_with_nulls(db_url):
 
 def test_version_1_database_is_upgraded_on_open(db_url):
     run_id = _make_version_1(db_url)
-    columns, version = _columns_and_version(db_url)
+    columns, version = columns_and_version(db_url)
     assert version == "1" and not columns & set(HARM_COLUMNS)
     with Store.open(db_url, create=False) as store:  # read-only use: nothing changes, harm reads as NULL
         old = store.read_pairs(run_id)
@@ -69,13 +56,13 @@ def test_version_1_database_is_upgraded_on_open(db_url):
         assert store.page_pairs(run_id, harm="harmful") == []
         with pytest.raises(InputError, match="opened without create"):
             store.write_pairs(run_id, random_records(2, size=7, seed=9, first_index=500))
-    assert _columns_and_version(db_url) == (columns, "1")
+    assert columns_and_version(db_url) == (columns, "1")
     with Store.open(db_url) as store:
         assert store.read_pairs(run_id).equals(old)  # the old rows: same values, harm NULL
         new = random_records(10, size=7, seed=4, first_index=100)
         store.write_pairs(run_id, new)
         assert store.read_pairs(run_id, pair_indices=new.pair_index).equals(new)
-    columns, version = _columns_and_version(db_url)
+    columns, version = columns_and_version(db_url)
     assert version == SCHEMA_VERSION == "3" and {*HARM_COLUMNS, "added_more"} <= columns
     with Store.open(db_url) as store:  # opening again changes nothing
         assert store.count_pairs(run_id) == 40
@@ -87,10 +74,10 @@ def test_version_1_database_with_a_missing_column_is_refused_untouched(sqlite_ur
     with engine.begin() as conn:
         conn.execute(sa.text("ALTER TABLE map_pairs DROP COLUMN dv"))
     engine.dispose()
-    before = _columns_and_version(sqlite_url)
+    before = columns_and_version(sqlite_url)
     with pytest.raises(InputError, match=r"lacks columns \['dv'\]"):
         Store.open(sqlite_url)
-    assert _columns_and_version(sqlite_url) == before
+    assert columns_and_version(sqlite_url) == before
 
 
 @pytest.mark.parametrize("version", ["0", "4", "1.5"])
@@ -132,7 +119,7 @@ def test_harm_index_is_made_for_new_databases_and_by_ensure_indexes_for_older_on
     with Store.open(db_url, create=False) as store:  # version 1, not upgraded: no harm column to index yet
         assert store.ensure_indexes() == []
         assert store.page_pairs(run_id, harm="harmful") == []
-    assert HARM_INDEX.name not in _index_names(db_url) and _columns_and_version(db_url)[1] == "1"
+    assert HARM_INDEX.name not in _index_names(db_url) and columns_and_version(db_url)[1] == "1"
     with Store.open(db_url) as store:  # upgraded on open; the index comes with `ensure_indexes` (`vinadv serve`)
         assert store.ensure_indexes() == [HARM_INDEX.name]
         assert store.ensure_indexes() == []

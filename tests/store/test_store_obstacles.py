@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
+from tests.store.old_schemas import columns_and_version, old_database
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
 from vinadv.store.synthetic import random_records
@@ -21,15 +22,6 @@ def _rows(url: str, run_id: int) -> list[tuple]:
                                     f"WHERE run_id = {int(run_id)} ORDER BY pair_index")).all()
     engine.dispose()
     return [tuple(r) for r in rows]
-
-
-def _version(url: str) -> tuple[set, str]:
-    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
-    with engine.connect() as conn:
-        columns = {c["name"] for c in sa.inspect(conn).get_columns("map_pairs")}
-        version = conn.execute(sa.text("SELECT value FROM vinadv_meta")).scalar()
-    engine.dispose()
-    return columns, version
 
 
 def test_every_added_cell_round_trips_and_one_obstacle_rows_keep_added_more_null(db_url):
@@ -61,29 +53,24 @@ def test_a_read_mixing_obstacle_counts_is_refused(sqlite_url):
 def _make_version_2(url: str) -> int:
     """A database as vinadv with schema version 2 left it: 20 one-obstacle pairs, no `added_more`, no robustness
     table."""
-    with Store.open(url) as store:
-        run_id = store.create_run("old")
-        store.write_pairs(run_id, random_records(20, size=7, seed=3))
-    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
-    quote = engine.dialect.identifier_preparer.quote
-    with engine.begin() as conn:
+
+    def undo(conn, quote):
         conn.execute(sa.text("ALTER TABLE map_pairs DROP COLUMN added_more"))
         conn.execute(sa.text("DROP TABLE robustness"))
-        conn.execute(sa.text(f"UPDATE vinadv_meta SET value = '2' WHERE {quote('key')} = 'schema_version'"))
-    engine.dispose()
-    return run_id
+
+    return old_database(url, 2, 20, undo)
 
 
 def test_version_2_database_is_upgraded_on_open_and_read_only_reads_one_obstacle(db_url):
     run_id = _make_version_2(db_url)
-    before = _version(db_url)
+    before = columns_and_version(db_url)
     assert before[1] == "2" and "added_more" not in before[0]
     with Store.open(db_url, create=False) as store:  # read-only use: nothing changes
         old = store.read_pairs(run_id)
         assert old.added.shape == (20, 1, 2) and store.read_robustness() == []
         with pytest.raises(InputError, match="opened without create"):
             store.write_pairs(run_id, random_records(2, size=7, seed=9, first_index=500))
-    assert _version(db_url) == before
+    assert columns_and_version(db_url) == before
     with Store.open(db_url) as store:
         assert store.read_pairs(run_id).equals(old)
         new = random_records(6, size=7, seed=4, n_added=2)
@@ -91,7 +78,7 @@ def test_version_2_database_is_upgraded_on_open_and_read_only_reads_one_obstacle
         store.write_pairs(fresh, new)
         assert store.read_pairs(fresh).equals(new)
         assert store.add_robustness("vin", None, {"n": 3}, {"clean": {}}) >= 1
-    columns, version = _version(db_url)
+    columns, version = columns_and_version(db_url)
     assert version == SCHEMA_VERSION == "3" and "added_more" in columns
 
 

@@ -11,7 +11,7 @@ from vinadv.commands import add_planner_arguments
 from vinadv.commands.vin import (
     _command_line,
     _set_threads,
-    add_eval_maps_arguments,
+    add_eval_arguments,
     add_train_arguments,
     emit_metrics,
     eval_maps,
@@ -32,11 +32,7 @@ def register(subparsers) -> None:
     ev = subparsers.add_parser("eval", help="any planner's figures in both conventions: vinadv's rollouts and "
                                "GPPN's %%Opt/%%Suc over every free cell")
     add_planner_arguments(ev)
-    add_eval_maps_arguments(ev)
-    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
-    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
-    ev.add_argument("--quiet", action="store_true", help="no progress bar")
-    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
+    add_eval_arguments(ev)
     ev.set_defaults(func=cmd_eval)
 
     gppn = subparsers.add_parser("gppn", help="train and evaluate the GPPN planner")
@@ -52,11 +48,7 @@ def register(subparsers) -> None:
 
     ev = sub.add_parser("eval", help="action accuracy and rollout figures of a GPPN")
     ev.add_argument("--weights", default=None, help="GPPN weights file (default: the shipped weights for the size)")
-    add_eval_maps_arguments(ev)
-    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
-    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
-    ev.add_argument("--quiet", action="store_true", help="no progress bar")
-    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
+    add_eval_arguments(ev)
     ev.set_defaults(func=cmd_gppn_eval)
 
     imp = sub.add_parser("import-weights", help="a checkpoint of the GPPN authors' code as vinadv GPPN weights")

@@ -26,17 +26,13 @@ def register(subparsers) -> None:
 
     ev = sub.add_parser("eval", help="action accuracy and rollout figures of a VIN")
     ev.add_argument("--weights", default=None, help="weights file (default: the shipped weights for the map size)")
-    add_eval_maps_arguments(ev)
+    add_eval_arguments(ev)
     ev.add_argument("--k", type=int, default=None, help="value-iteration steps for a port-style weights file")
-    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
     ev.add_argument("--protocol", choices=("vinadv", "kentsommer", "gppn"), default="vinadv",
                     help="measure as vinadv (default), the kentsommer port's test.py, or GPPN (%%Opt/%%Suc over every "
                          "free cell); see README, 'Using data and models from other VIN/GPPN code'")
     ev.add_argument("--prior", type=float, default=None,
                     help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)")
-    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
-    ev.add_argument("--quiet", action="store_true", help="no progress bar")
-    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
     ev.set_defaults(func=cmd_eval)
 
     exw = sub.add_parser("export-weights", help="write VIN weights as a plain state dict for the PyTorch ports")
@@ -87,18 +83,23 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
     train.add_argument("--json", action="store_true", help="print the training record as JSON")
 
 
-def add_eval_maps_arguments(ev: argparse.ArgumentParser) -> None:
-    """The maps options of every `eval` command: a maps file, or N maps generated on the fly (`eval_maps`)."""
+def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
+    """The options of every `eval` command: the maps (a maps file, or N maps generated on the fly: `eval_maps`),
+    torch threads and where the figures go."""
     src = ev.add_mutually_exclusive_group(required=True)
     src.add_argument("--data", help="maps file (.npz)")
     src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")
     ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
     ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
     ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
+    ev.add_argument("--quiet", action="store_true", help="no progress bar")
+    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
 
 
 def eval_maps(args: argparse.Namespace):
-    """`(MapSet, source)`: the maps of `add_eval_maps_arguments`' options and a record of where they came from."""
+    """`(MapSet, source)`: the maps of `add_eval_arguments`' options and a record of where they came from."""
     from vinadv.grid.generator import generate_maps
     from vinadv.grid.mapset import MapSet
 
