@@ -11,14 +11,15 @@ import uuid
 
 import pytest
 import sqlalchemy as sa
-import torch
 
 from tests.needs import skip_or_fail
+from vinadv.planners.batching import set_torch_threads
 
 # One torch thread in the test process: the tests' maps are small, and on a shared 2-core machine a 2-thread op on
-# a small map waits for the busy core (the oracles' step-by-step planning ran 50x slower). Commands the tests start
-# in subprocesses keep torch's default.
-torch.set_num_threads(1)
+# a small map waits for the busy core (the oracles' step-by-step planning ran 50x slower). Numba's parallel kernels
+# get one too, or their first launch would put torch back on two (`set_torch_threads`). Commands the tests start in
+# subprocesses keep the defaults.
+set_torch_threads(1)
 
 #: Tests left out of `make test-fast` (`pytest -m "not slow"`), by node id prefix: the ones that start Dask
 #: clusters or a browser, train networks or classifiers, or run the whole pipeline; together they take most of the

@@ -38,3 +38,30 @@ def test_set_threads_caps_the_threads(monkeypatch):
     callers = set()
     batching.over_maps(1000, lambda lo, hi: callers.add(threading.get_ident()), threads=4)
     assert callers == {threading.get_ident()}  # one thread: the caller's own
+
+
+def test_torch_keeps_its_threads_after_numba_parallel_kernels(tmp_path):
+    """Numba's parallel kernels (OpenMP layer) can reset the calling thread's OpenMP thread count to Numba's own,
+    which torch then uses; with `set_torch_threads` both agree. In a fresh process, whose defaults (2 threads each on
+    a 2-core machine) the bug needs; torch used, then a maps file read and its maps searched, showed it."""
+    import subprocess
+    import sys
+
+    from vinadv.grid import generate_maps
+
+    path = tmp_path / "maps.npz"
+    generate_maps(3000, 28, seed=1, n_starts=1).save(path)
+    code = (
+        "import torch, numba\n"
+        "from vinadv.planners.batching import set_torch_threads\n"
+        "from vinadv.grid import shortest_distances\n"
+        "from vinadv.grid.mapset import MapSet\n"
+        "set_torch_threads(1)\n"
+        f"maps = MapSet.load({str(path)!r})\n"
+        "assert torch.get_num_threads() == 1\n"  # torch asked first (as a training step would), then Numba runs
+        "shortest_distances(maps.obstacles, maps.goals)\n"
+        "print(torch.get_num_threads(), numba.config.NUMBA_NUM_THREADS)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    torch_threads, numba_pool = map(int, out.stdout.split())
+    assert torch_threads == 1, f"torch went back to {torch_threads} threads (Numba's pool: {numba_pool})"

@@ -7,11 +7,23 @@ that live in heavy modules through `LazyChoices`.
 
 from __future__ import annotations
 
+import argparse
 import importlib
+import json
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 from vinadv.errors import InputError
+
+
+def emit(args: argparse.Namespace, summary: dict, text: str | Callable[[], None]) -> int:
+    """End a command: `summary` as one JSON line with `--json`, else (unless `--quiet`) `text`, a line or a
+    function that prints; exit status 0."""
+    if getattr(args, "json", False):
+        print(json.dumps(summary))
+    elif not getattr(args, "quiet", False):
+        text() if callable(text) else print(text)
+    return 0
 
 
 class LazyChoices:

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
+from vinadv.commands import emit
 from vinadv.errors import InputError
 
 KINDS = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw")
@@ -95,13 +95,10 @@ def cmd_train(args: argparse.Namespace) -> int:
         test_fraction=args.test_fraction, seed=args.seed, source=str(args.pairs), verbose=not args.quiet)
     record = {**record, "labels": args.labels}
     model.save(args.out, record, arrays)
-    if args.json:
-        print(json.dumps({"out": args.out, **record}))
-    elif not args.quiet:
-        print(f"trained {args.model} ({args.setting}) on {sum(record['train_counts_balanced'].values())} pairs "
-              f"{record['train_counts_balanced']} in {record['training_seconds']:.2f} s; held out "
-              f"{len(arrays['test_index'])} {record['test_counts']}; wrote {args.out}")
-    return 0
+    return emit(args, {"out": args.out, **record},
+                f"trained {args.model} ({args.setting}) on {sum(record['train_counts_balanced'].values())} "
+                f"pairs {record['train_counts_balanced']} in {record['training_seconds']:.2f} s; held out "
+                f"{len(arrays['test_index'])} {record['test_counts']}; wrote {args.out}")
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
@@ -111,11 +108,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     model = as_hybrid(load_model(args.model))
     result = evaluate_classifier(model, _load_pairs(args.pairs), all_pairs=args.all, source=str(args.pairs))
     result = {"pairs": result["pairs"], "model": str(args.model), **result}
-    if args.json:
-        print(json.dumps(result))
-    elif not args.quiet:
-        print(_format(result))
-    return 0
+    return emit(args, result, lambda: print(_format(result)))
 
 
 def _fmt(value, digits=4):

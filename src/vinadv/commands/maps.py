@@ -6,6 +6,7 @@ import argparse
 import json
 import time
 
+from vinadv.commands import emit
 from vinadv.errors import InputError
 
 
@@ -54,12 +55,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
         "mean_expert_moves": round(float(maps.expert.lengths.mean() - 1), 3) if len(maps) else None,
         "seconds": round(elapsed, 3),
     }
-    if args.json:
-        print(json.dumps(summary))
-    elif not args.quiet:
-        print(f"wrote {len(maps)} maps of {maps.size}x{maps.size} ({maps.n_starts} starts each) to {args.out} "
-              f"in {elapsed:.2f} s; obstacles {summary['obstacle_fraction']:.1%}")
-    return 0
+    return emit(args, summary,
+                f"wrote {len(maps)} maps of {maps.size}x{maps.size} ({maps.n_starts} starts each) to {args.out} "
+                f"in {elapsed:.2f} s; obstacles {summary['obstacle_fraction']:.1%}")
 
 
 def cmd_show(args: argparse.Namespace) -> int:
@@ -142,8 +140,4 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     maps = MapSet.load(args.maps)
     summary = export_maps(maps, args.out, args.format, split=args.split)
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(f"wrote {summary['maps']} maps to {args.out} ({args.format}, {summary['split']})")
-    return 0
+    return emit(args, summary, f"wrote {summary['maps']} maps to {args.out} ({args.format}, {summary['split']})")

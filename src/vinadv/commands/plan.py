@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_planner_arguments, emit
 from vinadv.errors import InputError
 from vinadv.planners.batching import DEFAULT_CHUNK
 
@@ -52,9 +51,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
         "terminations": dict(zip(TERMINATIONS, counts.tolist())),
         "seconds": round(elapsed, 3), "plans_per_s": round(len(result) / elapsed, 1) if elapsed > 0 else None,
     }
-    if args.json:
-        print(json.dumps(summary))
-    elif not args.quiet:
-        print(f"planned {len(result)} paths on {len(maps)} maps in {elapsed:.2f} s "
-              f"({summary['plans_per_s']} plans/s); reached {summary['reached']:.1%}; wrote {args.out}")
-    return 0
+    return emit(args, summary,
+                f"planned {len(result)} paths on {len(maps)} maps in {elapsed:.2f} s "
+                f"({summary['plans_per_s']} plans/s); reached {summary['reached']:.1%}; wrote {args.out}")

@@ -7,7 +7,7 @@ import json
 import time
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_planner_arguments, emit
 from vinadv.commands.vin import (
     _command_line,
     _set_threads,
@@ -134,12 +134,9 @@ def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
         record["size"] = args.size
     save_gppn(model, args.out, record)
     summary = {"out": args.out, "config": model.config.to_dict(), **record}
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(f"wrote {args.out}: GPPN {model.config.to_dict()} from {args.checkpoint} ({model.source['entry']}); "
-              f"use --planner gppn --weights {args.out}")
-    return 0
+    return emit(args, summary,
+                f"wrote {args.out}: GPPN {model.config.to_dict()} from {args.checkpoint} "
+                f"({model.source['entry']}); use --planner gppn --weights {args.out}")
 
 
 def cmd_gppn_eval(args: argparse.Namespace) -> int:

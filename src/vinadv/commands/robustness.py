@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_planner_arguments, emit
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.errors import InputError
 
@@ -89,11 +88,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
                                                    "weights_checksum": result.planner.get("weights_sha256"),
                                                    "settings": result.settings, "result": result.to_dict()}]
         out["report"] = str(robustness_report(args.report, args.db, unsaved))
-    if args.json:
-        print(json.dumps(out))
-    elif not args.quiet:
-        print_robustness(out)
-    return 0
+    return emit(args, out, lambda: print_robustness(out))
 
 
 def _pct(value) -> str:

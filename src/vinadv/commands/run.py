@@ -7,7 +7,7 @@ import json
 import time
 
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments
+from vinadv.commands import LazyChoices, add_planner_arguments, emit
 from vinadv.commands.attack import (
     add_harm_arguments,
     add_objective_argument,
@@ -89,11 +89,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         result["report"] = args.report
         result["comparison"] = report.comparison or "stored"
         result["seconds"]["report"] = round(time.perf_counter() - t0, 3)
-    if args.json:
-        print(json.dumps(result))
-    elif not args.quiet:
-        _print_run(result)
-    return 0
+    return emit(args, result, lambda: _print_run(result))
 
 
 def _cluster_options(client) -> dict:

@@ -10,7 +10,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from vinadv.commands import LazyChoices
+from vinadv.commands import LazyChoices, emit
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 
@@ -116,12 +116,12 @@ def _command_line() -> str:
 
 
 def _set_threads(n: int | None) -> None:
-    import torch
+    from vinadv.planners.batching import set_torch_threads
 
     if n is not None:
         if n < 1:
             raise InputError(f"--threads must be >= 1, got {n}")
-        torch.set_num_threads(n)
+        set_torch_threads(n)
 
 
 def train_config(args: argparse.Namespace, **extra):
@@ -195,13 +195,8 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
     with atomic_output(record_path, "w") as fh:
         fh.write(json.dumps(record, indent=2) + "\n")
     checkpoint.unlink(missing_ok=True)
-    if args.json:
-        print(json.dumps(record))
-    elif not args.quiet:
-        last = record["epochs"][-1]
-        print(f"wrote {out} and {record_path}: {record['epochs_done']} epochs in {record['wall_time_s']:.0f} s, "
-              f"val action accuracy {last['val_action_accuracy']}")
-    return 0
+    return emit(args, record, f"wrote {out} and {record_path}: {record['epochs_done']} epochs in "
+                f"{record['wall_time_s']:.0f} s, val action accuracy {record['epochs'][-1]['val_action_accuracy']}")
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
@@ -289,9 +284,6 @@ def cmd_export_weights(args: argparse.Namespace) -> int:
     shapes = export_state_dict(model, args.out)
     summary = {"out": args.out, "format": args.format, "k": model.config.k,
                "keys": {k: list(v) for k, v in shapes.items()}, "torch": torch.__version__}
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(f"wrote {args.out}: plain state dict {', '.join(shapes)} (k = {model.config.k} is not stored: "
-              f"the ports take it as an option)")
-    return 0
+    return emit(args, summary,
+                f"wrote {args.out}: plain state dict {', '.join(shapes)} (k = {model.config.k} is not stored: "
+                f"the ports take it as an option)")

@@ -56,6 +56,20 @@ def over_maps(b: int, work: Callable[[int, int], None], threads: int | None = No
     list(_pool(threads).map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
 
 
+def set_torch_threads(threads: int) -> None:
+    """PyTorch's intra-op threads set to `threads` for good, and Numba's parallel kernels to as many (at most its
+    pool).
+
+    Both matter: a Numba parallel kernel (its OpenMP layer runs on the libgomp PyTorch loads) sets the calling
+    thread's OpenMP thread count to Numba's own at every launch, and PyTorch reads its thread count from there.
+    Measured: after `torch.set_num_threads(1)`, one `shortest_distances` call put PyTorch back on 2 threads."""
+    import numba
+    import torch
+
+    torch.set_num_threads(threads)
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+
+
 @contextlib.contextmanager
 def torch_threads(threads: int) -> Iterator[None]:
     """PyTorch's intra-op threads set to `threads` inside the block, restored after (a process-wide setting).
