@@ -44,26 +44,39 @@ def main() -> None:
         counts = label_counts(labels)
         valid = len(labels) - counts["invalid"]
         success = success_count(counts)
-        rows.append({
-            "strategy": name, "maps": args.n, "pairs": len(labels), "counts": counts,
-            "success_rate": success / valid if valid else None, "planner_calls": result.planner_calls,
-            "calls_per_success": result.planner_calls / success if success else None, "seconds": seconds,
-            "plans_per_second": result.planner_calls / seconds,
-        })
+        rows.append(
+            {
+                "strategy": name,
+                "maps": args.n,
+                "pairs": len(labels),
+                "counts": counts,
+                "success_rate": success / valid if valid else None,
+                "planner_calls": result.planner_calls,
+                "calls_per_success": result.planner_calls / success if success else None,
+                "seconds": seconds,
+                "plans_per_second": result.planner_calls / seconds,
+            }
+        )
     if args.json:
         print(json.dumps(rows))
         return
     print(f"{args.n} maps of {args.size}x{args.size}, seed {args.seed}, one pair per map")
-    header = f"{'strategy':<12}" + "".join(f"{k:>9}" for k in LABEL_STRENGTH) + \
-        f"{'success':>9}{'calls/succ':>11}{'seconds':>9}{'plans/s':>9}"
+    header = (
+        f"{'strategy':<12}"
+        + "".join(f"{k:>9}" for k in LABEL_STRENGTH)
+        + f"{'success':>9}{'calls/succ':>11}{'seconds':>9}{'plans/s':>9}"
+    )
     print(header)
     print(f"{'paper':<12}" + "".join(f"{'' if v is None else f'{v:,}':>9}" for v in PAPER.values()) + f"{'36.7%':>9}")
     for row in rows:
         rate = row["success_rate"]
         per = row["calls_per_success"]
-        print(f"{row['strategy']:<12}" + "".join(f"{v:>9,}" for v in row["counts"].values())
-              + f"{'-' if rate is None else f'{rate:.1%}':>9}{'-' if per is None else f'{per:.1f}':>11}"
-              + f"{row['seconds']:>9.1f}{row['plans_per_second']:>9,.0f}")
+        print(
+            f"{row['strategy']:<12}"
+            + "".join(f"{v:>9,}" for v in row["counts"].values())
+            + f"{'-' if rate is None else f'{rate:.1%}':>9}{'-' if per is None else f'{per:.1f}':>11}"
+            + f"{row['seconds']:>9.1f}{row['plans_per_second']:>9,.0f}"
+        )
     base = next((r for r in rows if r["strategy"] == "near-path"), None)
     if base and base["success_rate"]:
         for row in rows:

@@ -84,8 +84,10 @@ def main(argv=None) -> int:
 
         base = synthetic_pairs(min(args.n, 5000), 28, seed=0, mix=True)
         batch = PathPairBatch.concat([base] * -(-args.n // len(base))).take(np.arange(args.n))
-        source = ("SYNTHETIC pairs (expert paths on generated 28x28 maps, one obstacle on the path, mixed into "
-                  "all five categories), not VIN attack pairs")
+        source = (
+            "SYNTHETIC pairs (expert paths on generated 28x28 maps, one obstacle on the path, mixed into "
+            "all five categories), not VIN attack pairs"
+        )
     n = len(batch)
     results = {"source": source, "pairs": n, "size": batch.size}
     print(f"{source}: {n} pairs of {batch.size}x{batch.size}", file=sys.stderr)
@@ -119,14 +121,17 @@ def main(argv=None) -> int:
     predict = {}
     models = {}
     for kind in ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw"):
-        for setting in (("baseline", "tuned") if kind in ("svm", "cnn", "mlp") else ("baseline",)):
+        for setting in ("baseline", "tuned") if kind in ("svm", "cnn", "mlp") else ("baseline",):
             model = make_fp_classifier(kind, setting)
             if kind in ("cnn", "mlp"):
                 model.set_params(epochs=1)
             model.fit(train_batch, train_y)
             model.decision_function(fp_dp_batch.take(np.arange(10)))  # warm up (Numba, torch)
-            subset = fp_dp_batch if kind in ("svm", "hausdorff", "frechet", "dtw") else \
-                fp_dp_batch.take(np.arange(min(len(fp_dp), 5000)))
+            subset = (
+                fp_dp_batch
+                if kind in ("svm", "hausdorff", "frechet", "dtw")
+                else fp_dp_batch.take(np.arange(min(len(fp_dp), 5000)))
+            )
             seconds, _ = timed(lambda: model.decision_function(subset), 0.3)
             name = kind if setting == "baseline" else f"{kind}_tuned"
             predict[name] = len(subset) / seconds
@@ -162,19 +167,27 @@ def main(argv=None) -> int:
     print(f"source: {source}")
     print(f"pairs: {n} ({results['label_counts']}), FP/DP pairs: {len(fp_dp)}")
     print(f"rule labeller (features + FP/DP rule): {results['rule_pairs_per_s']:>12,.0f} pairs/s  (target 100,000)")
-    print(f"  same rule, plain Python loop:        {results['python_rule_pairs_per_s']:>12,.0f} pairs/s  "
-          f"-> x{results['ratios']['rule_vs_python_loop']:,.0f}")
+    print(
+        f"  same rule, plain Python loop:        {results['python_rule_pairs_per_s']:>12,.0f} pairs/s  "
+        f"-> x{results['ratios']['rule_vs_python_loop']:,.0f}"
+    )
     print(f"rule labeller, FP/DP pairs only:       {results['rule_fp_dp_pairs_per_s']:>12,.0f} pairs/s")
-    print(f"  same rule, plain Python loop:        {results['python_rule_fp_dp_pairs_per_s']:>12,.0f} pairs/s  "
-          f"-> x{results['ratios']['rule_vs_python_loop_fp_dp']:,.0f}")
+    print(
+        f"  same rule, plain Python loop:        {results['python_rule_fp_dp_pairs_per_s']:>12,.0f} pairs/s  "
+        f"-> x{results['ratios']['rule_vs_python_loop_fp_dp']:,.0f}"
+    )
     print(f"path image rendering:                  {results['render_pairs_per_s']:>12,.0f} pairs/s")
     for name, rate in predict.items():
         print(f"predict {name:<13} (FP/DP pairs):   {rate:>12,.0f} pairs/s")
-    print(f"  scikit-learn SVC.predict (same data): {results['sklearn_svc_predict_pairs_per_s']:>11,.0f} pairs/s  "
-          f"-> ours x{results['ratios']['svm_decision_vs_sklearn_predict']:.1f}")
-    print(f"hybrid + SVM, all pairs:               {results['hybrid_svm_pairs_per_s']:>12,.0f} pairs/s  "
-          f"(target 20,000; paper {PAPER_PAIRS_PER_S:,.0f}) -> x{results['ratios']['hybrid_svm_vs_paper']:,.0f} "
-          "the paper")
+    print(
+        f"  scikit-learn SVC.predict (same data): {results['sklearn_svc_predict_pairs_per_s']:>11,.0f} pairs/s  "
+        f"-> ours x{results['ratios']['svm_decision_vs_sklearn_predict']:.1f}"
+    )
+    print(
+        f"hybrid + SVM, all pairs:               {results['hybrid_svm_pairs_per_s']:>12,.0f} pairs/s  "
+        f"(target 20,000; paper {PAPER_PAIRS_PER_S:,.0f}) -> x{results['ratios']['hybrid_svm_vs_paper']:,.0f} "
+        "the paper"
+    )
     return 0
 
 

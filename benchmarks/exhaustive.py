@@ -52,8 +52,10 @@ def main() -> None:
     warm = generate_maps(8, args.size, seed=1, n_starts=1)  # compiles the engine and its checks before timing
     attack.attack(warm.obstacles, warm.starts[:, 0], warm.goals, planner, strength=harm_strength)
 
-    runs = {"attack": lambda: attack.attack(obstacles, starts, goals, planner, strength=harm_strength).planner_calls,
-            "plan_batch": lambda: plan_candidates(planner, obstacles, starts, goals)}
+    runs = {
+        "attack": lambda: attack.attack(obstacles, starts, goals, planner, strength=harm_strength).planner_calls,
+        "plan_batch": lambda: plan_candidates(planner, obstacles, starts, goals),
+    }
     best = dict.fromkeys(runs, np.inf)
     counted = {}
     for _ in range(args.rounds):  # taking turns, so that load from other work hits both alike
@@ -62,20 +64,31 @@ def main() -> None:
             counted[name] = run()
             best[name] = min(best[name], time.perf_counter() - t0)
     calls, candidates = counted["attack"], counted["plan_batch"]
-    row = {"planner": args.planner, "maps": args.n, "candidates": candidates, "attack_planner_calls": calls,
-           "attack_s": best["attack"], "plan_batch_s": best["plan_batch"],
-           "ratio": best["attack"] / best["plan_batch"], "plans_per_second": candidates / best["plan_batch"]}
+    row = {
+        "planner": args.planner,
+        "maps": args.n,
+        "candidates": candidates,
+        "attack_planner_calls": calls,
+        "attack_s": best["attack"],
+        "plan_batch_s": best["plan_batch"],
+        "ratio": best["attack"] / best["plan_batch"],
+        "plans_per_second": candidates / best["plan_batch"],
+    }
     print(json.dumps(row) if args.json else describe(row, args.size, args.rounds))
 
 
 def describe(row: dict, size: int, rounds: int) -> str:
-    return "\n".join([
-        f"{row['maps']} maps of {size}x{size}, planner {row['planner']}: {row['candidates']:,} candidate maps "
-        f"({row['attack_planner_calls']:,} planner calls in the attack, the original maps included), best of {rounds}",
-        f"  exhaustive attack {row['attack_s']:8.2f} s",
-        f"  plan_batch alone  {row['plan_batch_s']:8.2f} s  ({row['plans_per_second']:,.0f} plans/s)",
-        f"  ratio {row['ratio']:.2f}x (goal: at most 1.3x)",
-    ])
+    return "\n".join(
+        [
+            f"{row['maps']} maps of {size}x{size}, planner {row['planner']}: {row['candidates']:,} candidate maps "
+            f"({row['attack_planner_calls']:,} planner calls in the attack, the original maps included), "
+            f"best of {rounds}",
+            f"  exhaustive attack {row['attack_s']:8.2f} s",
+            f"  plan_batch alone  {row['plan_batch_s']:8.2f} s  ({row['plans_per_second']:,.0f} plans/s)",
+            f"  ratio {row['ratio']:.2f}x (goal: at most 1.3x)",
+        ]
+    )
+
 
 if __name__ == "__main__":
     main()

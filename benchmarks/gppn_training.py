@@ -84,15 +84,22 @@ def main() -> None:
             for k in args.k:
                 torch.manual_seed(0)
                 model = GPPN(GPPNConfig(k=k, l_h=l_h, f=args.f))
-                row = {"threads": threads, "l_h": l_h, "k": k, "f": args.f, "batch_size": args.batch_size,
-                       "size": args.size, "vinadv_ms_per_map": round(step_ms_per_map(model, maps, bits,
-                                                                                     args.batch_size), 2)}
+                row = {
+                    "threads": threads,
+                    "l_h": l_h,
+                    "k": k,
+                    "f": args.f,
+                    "batch_size": args.batch_size,
+                    "size": args.size,
+                    "vinadv_ms_per_map": round(step_ms_per_map(model, maps, bits, args.batch_size), 2),
+                }
                 if not args.skip_plain:
                     with torch.no_grad():  # the same function: else the comparison means nothing
                         obs = torch.from_numpy(maps.obstacles[:4].astype("float32"))
                         goals = torch.from_numpy(maps.goals[:4])
-                        torch.testing.assert_close(PlainGPPN(model)(obs, goals), model(obs, goals), rtol=1e-4,
-                                                   atol=1e-4)
+                        torch.testing.assert_close(
+                            PlainGPPN(model)(obs, goals), model(obs, goals), rtol=1e-4, atol=1e-4
+                        )
                     row["plain_ms_per_map"] = round(step_ms_per_map(PlainGPPN(model), maps, bits, args.batch_size), 2)
                     row["speedup"] = round(row["plain_ms_per_map"] / row["vinadv_ms_per_map"], 2)
                 rows.append(row)

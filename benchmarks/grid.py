@@ -35,8 +35,10 @@ def main() -> None:
     t_expert = best_of(lambda: expert_paths(maps.obstacles, maps.goals, maps.starts))
     rate = args.n / t_total
     print(f"maps {args.n} of {args.size}x{args.size}, 7 starts each (best of 3)")
-    print(f"  whole generation (maps + Dijkstra + expert paths): {rate:10,.0f} maps/s   target >= 1,000: "
-          f"{'met' if rate >= 1000 else 'MISSED'} ({rate / 1000:.1f}x)")
+    print(
+        f"  whole generation (maps + Dijkstra + expert paths): {rate:10,.0f} maps/s   target >= 1,000: "
+        f"{'met' if rate >= 1000 else 'MISSED'} ({rate / 1000:.1f}x)"
+    )
     print(f"  Dijkstra alone (all cells, all maps):               {args.n / t_dijkstra:10,.0f} maps/s")
     print(f"  expert paths (Dijkstra + 7 trajectories):           {args.n / t_expert:10,.0f} maps/s")
     print(f"  share of generation spent in expert paths:          {t_expert / t_total:10.0%}")

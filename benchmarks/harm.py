@@ -43,8 +43,9 @@ def make_pairs(n_maps: int, attack: str, seed: int = 0):
     from vinadv.planners.weights import load_vin
 
     maps = generate_maps(n_maps, 28, seed=seed, n_starts=1)
-    result = make_attack(attack, per_map=1, seed=seed).attack(maps.obstacles, maps.starts[:, 0], maps.goals,
-                                                              load_vin(None, size=28))
+    result = make_attack(attack, per_map=1, seed=seed).attack(
+        maps.obstacles, maps.starts[:, 0], maps.goals, load_vin(None, size=28)
+    )
     pairs = result.pairs
     return pairs, (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index))
 
@@ -92,26 +93,36 @@ def main(argv=None) -> int:
     for fn in (rule, rule_harm_scratch, rule_harm_given):  # compile and warm up
         fn()
     (t_rule, t_scratch, t_given), (labels, scratch, given) = timed_side_by_side(
-        (rule, rule_harm_scratch, rule_harm_given), args.rounds)
+        (rule, rule_harm_scratch, rule_harm_given), args.rounds
+    )
     same = all(np.array_equal(getattr(scratch, f), getattr(given, f)) for f in ("harm", "expert_label"))
     blocked = float(np.mean(given.expert_label != "UcP"))
     out = {
-        "pairs": len(pairs), "source": source, "numba_threads": numba.get_num_threads(),
+        "pairs": len(pairs),
+        "source": source,
+        "numba_threads": numba.get_num_threads(),
         "rule_pairs_per_s": len(pairs) / t_rule,
         "rule_harm_scratch_pairs_per_s": len(pairs) / t_scratch,
         "rule_harm_given_pairs_per_s": len(pairs) / t_given,
-        "scratch_over_rule": t_scratch / t_rule, "given_over_rule": t_given / t_rule,
-        "adversarial_searched_fraction": blocked, "same_result": same,
-        "label_x_harm": {lab: {h: int(np.sum((labels == lab) & (given.harm == h))) for h in ("harmful", "harmless")}
-                         for lab in ("UrP", "UcP", "DP", "FP")},
+        "scratch_over_rule": t_scratch / t_rule,
+        "given_over_rule": t_given / t_rule,
+        "adversarial_searched_fraction": blocked,
+        "same_result": same,
+        "label_x_harm": {
+            lab: {h: int(np.sum((labels == lab) & (given.harm == h))) for h in ("harmful", "harmless")}
+            for lab in ("UrP", "UcP", "DP", "FP")
+        },
     }
     if args.json:
         print(json.dumps(out))
         return 0
     print(f"{out['pairs']:,} pairs: {source}; numba threads {out['numba_threads']}")
     print(f"{'labelling':<42}{'s':>8}{'pairs/s':>12}{'x rule':>8}")
-    for name, t in (("rule labeller", t_rule), ("rule + harm, from scratch", t_scratch),
-                    ("rule + harm, generator's expert paths", t_given)):
+    for name, t in (
+        ("rule labeller", t_rule),
+        ("rule + harm, from scratch", t_scratch),
+        ("rule + harm, generator's expert paths", t_given),
+    ):
         print(f"{name:<42}{t:>8.3f}{len(pairs) / t:>12,.0f}{t / t_rule:>8.2f}")
     print(f"adversarial maps searched (expert route blocked): {blocked:.1%}; both harm variants agree: {same}")
     return 0

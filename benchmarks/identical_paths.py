@@ -42,8 +42,12 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=28)
     ap.add_argument("--seed", type=int, default=2024)
     ap.add_argument("--weights", default=None)
-    ap.add_argument("--torch-threads", type=int, default=1,
-                    help="torch threads for reference and engine alike (torch's float32 results depend on it)")
+    ap.add_argument(
+        "--torch-threads",
+        type=int,
+        default=1,
+        help="torch threads for reference and engine alike (torch's float32 results depend on it)",
+    )
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     torch.set_num_threads(args.torch_threads)
@@ -60,18 +64,23 @@ def main() -> None:
         with torch.no_grad():
             torch_actions = model.action_logits(make_input(maps.obstacles, maps.goals)).argmax(-1).numpy()
         decided = actions >= 0
-        rows.append({
-            "weights": name, "maps": args.n, "size": args.size,
-            "identical_paths": int(np.sum(same_path)),
-            "identical_terminations": int(np.sum(fast.termination == ref.termination)),
-            "terminations": dict(zip(TERMINATIONS, np.bincount(ref.termination, minlength=4).tolist())),
-            "mean_moves": round(float(ref.paths.lengths.mean() - 1), 2),
-            "action_cells": int(actions.size), "undecided_cells": int((~decided).sum()),
-            "decided_cells_differing_from_torch_argmax": int((actions[decided] != torch_actions[decided]).sum()),
-            "near_tie_rollouts": int(stats.get("near_tie_rollouts", 0)),
-            "near_tie_maps": int(stats.get("near_tie_maps", 0)),
-            "reference_seconds": round(ref_s, 1),
-        })
+        rows.append(
+            {
+                "weights": name,
+                "maps": args.n,
+                "size": args.size,
+                "identical_paths": int(np.sum(same_path)),
+                "identical_terminations": int(np.sum(fast.termination == ref.termination)),
+                "terminations": dict(zip(TERMINATIONS, np.bincount(ref.termination, minlength=4).tolist())),
+                "mean_moves": round(float(ref.paths.lengths.mean() - 1), 2),
+                "action_cells": int(actions.size),
+                "undecided_cells": int((~decided).sum()),
+                "decided_cells_differing_from_torch_argmax": int((actions[decided] != torch_actions[decided]).sum()),
+                "near_tie_rollouts": int(stats.get("near_tie_rollouts", 0)),
+                "near_tie_maps": int(stats.get("near_tie_maps", 0)),
+                "reference_seconds": round(ref_s, 1),
+            }
+        )
         if not args.json:
             print(rows[-1], flush=True)
     if args.json:

@@ -92,7 +92,8 @@ def main() -> None:
     fast = plan_batch(obs[:r], starts[:r], goals[:r], model)
     ref = plan_reference(obs[:r], starts[:r], goals[:r], model)
     identical = all(np.array_equal(a, b) for a, b in zip(fast.paths.unpack(), ref.paths.unpack())) and np.array_equal(
-        fast.termination, ref.termination)
+        fast.termination, ref.termination
+    )
 
     cfg = model.config
     fma_per_map = cfg.k * args.size * args.size * cfg.l_q * 9
@@ -100,15 +101,21 @@ def main() -> None:
     peak = cores * 2 * 8 * cpu_clock_hz()
     engine = args.n / t_engine
     out = {
-        "size": args.size, "k": cfg.k, "weights": weights_name, "cores": cores, "engine_threads": N_THREADS,
-        "torch_threads": torch.get_num_threads(), "load_average_1min": os.getloadavg()[0],
+        "size": args.size,
+        "k": cfg.k,
+        "weights": weights_name,
+        "cores": cores,
+        "engine_threads": N_THREADS,
+        "torch_threads": torch.get_num_threads(),
+        "load_average_1min": os.getloadavg()[0],
         "reference_plans_per_s": round(r / t_ref, 2),
         "torch_batched_maps_per_s": round(args.torch_n / t_torch, 1),
         "engine_plans_per_s": round(engine, 1),
         "engine_action_maps_per_s": round(args.n / t_actions, 1),
         "engine_vs_torch_batched": round(engine / (args.torch_n / t_torch), 1),
         "engine_vs_reference": round(engine / (r / t_ref), 1),
-        "fma_per_map": fma_per_map, "fma_peak_per_s": peak,
+        "fma_per_map": fma_per_map,
+        "fma_peak_per_s": peak,
         "engine_share_of_fma_peak": round(engine * fma_per_map / peak, 3),
         "action_maps_share_of_fma_peak": round(args.n / t_actions * fma_per_map / peak, 3),
         "identical_to_reference_on_sample": bool(identical),
@@ -116,18 +123,25 @@ def main() -> None:
     if args.json:
         print(json.dumps(out))
         return
-    print(f"{args.size}x{args.size}, k={cfg.k}, weights: {weights_name}; {cores} cores, "
-          f"load average {out['load_average_1min']:.1f}")
+    print(
+        f"{args.size}x{args.size}, k={cfg.k}, weights: {weights_name}; {cores} cores, "
+        f"load average {out['load_average_1min']:.1f}"
+    )
     print(f"  per-step reference   {out['reference_plans_per_s']:>10.1f} plans/s   ({r} maps)")
-    print(f"  batched torch fwd    {out['torch_batched_maps_per_s']:>10.1f} maps/s    "
-          f"({args.torch_n} maps, no rollouts)")
+    print(
+        f"  batched torch fwd    {out['torch_batched_maps_per_s']:>10.1f} maps/s    ({args.torch_n} maps, no rollouts)"
+    )
     print(f"  engine (plan_batch)  {engine:>10.1f} plans/s   ({args.n} maps, 1 start each)")
     print(f"    of which value maps {out['engine_action_maps_per_s']:>9.1f} maps/s")
-    print(f"  engine / torch batched = {out['engine_vs_torch_batched']}x, engine / reference = "
-          f"{out['engine_vs_reference']}x")
-    print(f"  FMA: {fma_per_map / 1e6:.2f} M per map; peak {peak / 1e9:.1f} G/s = {cores} cores x 2 FMA units x 8 "
-          f"float32 lanes x {cpu_clock_hz() / 1e9:.2f} GHz; engine uses {out['engine_share_of_fma_peak']:.1%} "
-          f"(value maps alone {out['action_maps_share_of_fma_peak']:.1%})")
+    print(
+        f"  engine / torch batched = {out['engine_vs_torch_batched']}x, engine / reference = "
+        f"{out['engine_vs_reference']}x"
+    )
+    print(
+        f"  FMA: {fma_per_map / 1e6:.2f} M per map; peak {peak / 1e9:.1f} G/s = {cores} cores x 2 FMA units x 8 "
+        f"float32 lanes x {cpu_clock_hz() / 1e9:.2f} GHz; engine uses {out['engine_share_of_fma_peak']:.1%} "
+        f"(value maps alone {out['action_maps_share_of_fma_peak']:.1%})"
+    )
     print(f"  engine identical to the reference on the {r} sampled maps: {identical}")
 
 

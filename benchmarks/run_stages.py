@@ -46,9 +46,17 @@ def child(record: str, argv: list[str]) -> int:
     t_done = time.time()
     if len({c[3] for c in calls}) > 1:
         raise SystemExit("plans with and without corner cutting: cannot replay them in one call")
-    np.savez(record, obstacles=np.concatenate([c[0] for c in calls]), starts=np.concatenate([c[1] for c in calls]),
-             goals=np.concatenate([c[2] for c in calls]), corner_cutting=bool(calls[0][3]), planning=seconds[0],
-             enter=t_enter, imported=t_imported, done=t_done)
+    np.savez(
+        record,
+        obstacles=np.concatenate([c[0] for c in calls]),
+        starts=np.concatenate([c[1] for c in calls]),
+        goals=np.concatenate([c[2] for c in calls]),
+        corner_cutting=bool(calls[0][3]),
+        planning=seconds[0],
+        enter=t_enter,
+        imported=t_imported,
+        done=t_done,
+    )
     return code
 
 
@@ -61,8 +69,21 @@ def measure(n: int, size: int, workdir: str) -> dict:
     from vinadv.planners.weights import load_vin
 
     record = os.path.join(workdir, "plans.npz")
-    argv = ["run", "--n", str(n), "--size", str(size), "--attack", "near-path", "--classifier", "rule",
-            "--db", os.path.join(workdir, "run.sqlite"), "--json", "--quiet"]
+    argv = [
+        "run",
+        "--n",
+        str(n),
+        "--size",
+        str(size),
+        "--attack",
+        "near-path",
+        "--classifier",
+        "rule",
+        "--db",
+        os.path.join(workdir, "run.sqlite"),
+        "--json",
+        "--quiet",
+    ]
     t0 = time.time()
     done = subprocess.run([sys.executable, __file__, "--child", record, "--", *argv], capture_output=True, text=True)
     t_exit = time.time()
@@ -80,10 +101,16 @@ def measure(n: int, size: int, workdir: str) -> dict:
         engine.append(time.perf_counter() - t)
     stages = summary["seconds"]
     return {
-        "maps": n, "size": size, "plans": len(obstacles), "torch_threads": torch.get_num_threads(),
-        "engine": min(engine), "planning_in_run": float(rec["planning"]),
-        "stages": stages, "job": summary["wall_seconds"],
-        "start_and_imports": float(rec["imported"]) - t0, "exit": t_exit - float(rec["done"]),
+        "maps": n,
+        "size": size,
+        "plans": len(obstacles),
+        "torch_threads": torch.get_num_threads(),
+        "engine": min(engine),
+        "planning_in_run": float(rec["planning"]),
+        "stages": stages,
+        "job": summary["wall_seconds"],
+        "start_and_imports": float(rec["imported"]) - t0,
+        "exit": t_exit - float(rec["done"]),
         "command": t_exit - t0,
     }
 
@@ -105,16 +132,24 @@ def main() -> None:
         print(json.dumps(r))
         return
     e = r["engine"]
-    print(f"vinadv run --n {r['maps']} (near-path, rule, SQLite), {r['size']}x{r['size']}: {r['plans']:,} plans, "
-          f"torch threads {r['torch_threads']}")
+    print(
+        f"vinadv run --n {r['maps']} (near-path, rule, SQLite), {r['size']}x{r['size']}: {r['plans']:,} plans, "
+        f"torch threads {r['torch_threads']}"
+    )
     rows = [("engine alone, same plans", e), ("planning inside the run", r["planning_in_run"])]
     rows += [(f"stage {k}", v) for k, v in r["stages"].items()]
-    rows += [("job (run_pipeline)", r["job"]), ("start + imports", r["start_and_imports"]),
-             ("exit (after the job)", r["exit"]), ("whole command", r["command"])]
+    rows += [
+        ("job (run_pipeline)", r["job"]),
+        ("start + imports", r["start_and_imports"]),
+        ("exit (after the job)", r["exit"]),
+        ("whole command", r["command"]),
+    ]
     for name, sec in rows:
         print(f"  {name:<26}{sec:>8.2f} s{sec / e:>8.2f}x engine")
-    print(f"  planning / engine = {r['planning_vs_engine']:.2f} (goal <= 1.5); "
-          f"command / engine = {r['command_vs_engine']:.2f} (goal < 4)")
+    print(
+        f"  planning / engine = {r['planning_vs_engine']:.2f} (goal <= 1.5); "
+        f"command / engine = {r['command_vs_engine']:.2f} (goal < 4)"
+    )
 
 
 if __name__ == "__main__":

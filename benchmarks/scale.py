@@ -47,9 +47,13 @@ def _timed_run(config, db: str, shard_results=None) -> dict:
     t0 = time.perf_counter()
     summary = run_pipeline(config, db=db, progress=False, shard_results=shard_results)
     wall = time.perf_counter() - t0
-    return {"pairs": summary.n_pairs, "wall_s": wall, "pairs_per_s": summary.n_pairs / wall,
-            "store_s": summary.seconds["store"],
-            "compute_s": sum(summary.seconds[s] for s in ("generate", "attack", "identify"))}
+    return {
+        "pairs": summary.n_pairs,
+        "wall_s": wall,
+        "pairs_per_s": summary.n_pairs / wall,
+        "store_s": summary.seconds["store"],
+        "compute_s": sum(summary.seconds[s] for s in ("generate", "attack", "identify")),
+    }
 
 
 def main() -> None:
@@ -70,15 +74,29 @@ def main() -> None:
     from vinadv.pipeline import RunConfig
 
     load_before = os.getloadavg()
-    out = {"n_maps": args.n, "size": args.size, "shard_size": args.shard_size, "attack": args.attack,
-           "cores": len(os.sched_getaffinity(0)), "load_before": [round(v, 2) for v in load_before], "runs": {}}
+    out = {
+        "n_maps": args.n,
+        "size": args.size,
+        "shard_size": args.shard_size,
+        "attack": args.attack,
+        "cores": len(os.sched_getaffinity(0)),
+        "load_before": [round(v, 2) for v in load_before],
+        "runs": {},
+    }
     with tempfile.TemporaryDirectory() as tmp_dir:
         tmp = Path(tmp_dir)
         weights = _weights(args, tmp)
-        config = RunConfig(n=args.n, size=args.size, attack=args.attack, seed=1, shard_size=args.shard_size,
-                           weights=weights)
-        warm = RunConfig(n=args.shard_size * 2, size=args.size, attack=args.attack, seed=2,
-                         shard_size=args.shard_size, weights=weights)
+        config = RunConfig(
+            n=args.n, size=args.size, attack=args.attack, seed=1, shard_size=args.shard_size, weights=weights
+        )
+        warm = RunConfig(
+            n=args.shard_size * 2,
+            size=args.size,
+            attack=args.attack,
+            seed=2,
+            shard_size=args.shard_size,
+            weights=weights,
+        )
         _timed_run(warm, f"sqlite:///{tmp / 'warm.db'}")
         out["runs"]["local"] = _timed_run(config, f"sqlite:///{tmp / 'local.db'}")
         for k in (int(v) for v in args.workers.split(",")):
@@ -104,8 +122,10 @@ def main() -> None:
     if args.json:
         print(json.dumps(out))
         return
-    print(f"{args.n} maps of {args.size}x{args.size}, {args.attack}, shards of {args.shard_size}; "
-          f"{out['cores']} cores, load average before {load_before[0]:.2f}, after {out['load_after'][0]:.2f}")
+    print(
+        f"{args.n} maps of {args.size}x{args.size}, {args.attack}, shards of {args.shard_size}; "
+        f"{out['cores']} cores, load average before {load_before[0]:.2f}, after {out['load_after'][0]:.2f}"
+    )
     print(f"{'':<10}{'pairs':>8}{'wall s':>9}{'pairs/s':>10}{'store s':>9}")
     for name, r in runs.items():
         print(f"{name:<10}{r['pairs']:>8}{r['wall_s']:>9.2f}{r['pairs_per_s']:>10.1f}{r['store_s']:>9.2f}")
@@ -113,10 +133,13 @@ def main() -> None:
         print(f"2 workers / 1 worker: {out['ratio_2w_over_1w']:.2f}x (ideal 2.00x)")
     if "projection" in out:
         p = out["projection"]
-        print(f"10M pairs at {p['per_worker_pairs_per_s']:.0f} pairs/s per worker: {p['core_hours_for_10M']:.1f} "
-              f"worker-hours; " + ", ".join(f"{w} workers {h:.2f} h" for w, h in p["hours_on"].items())
-              + f"; one client writes SQLite at {p['client_write_pairs_per_s']:.0f} pairs/s "
-              f"(>= {p['hours_at_client_write_ceiling']:.2f} h for 10M)")
+        print(
+            f"10M pairs at {p['per_worker_pairs_per_s']:.0f} pairs/s per worker: {p['core_hours_for_10M']:.1f} "
+            f"worker-hours; "
+            + ", ".join(f"{w} workers {h:.2f} h" for w, h in p["hours_on"].items())
+            + f"; one client writes SQLite at {p['client_write_pairs_per_s']:.0f} pairs/s "
+            f"(>= {p['hours_at_client_write_ceiling']:.2f} h for 10M)"
+        )
 
 
 if __name__ == "__main__":

@@ -119,8 +119,14 @@ def main(argv: list[str] | None = None) -> int:
     # the rows `Store.write_pairs` sends to SQLite (its native form: see `encode_rows`)
     rows = encode_rows(1, records, sqlite=True)
     mean_bytes = sum(sum(len(v) for v in r if isinstance(v, str)) for r in rows[:1000]) / min(1000, len(rows))
-    result: dict = {"n": args.n, "size": args.size, "mean_text_bytes_per_row": round(mean_bytes), "batch": args.batch,
-                    "load_average_1min": round(os.getloadavg()[0], 2), "cpus": os.cpu_count()}
+    result: dict = {
+        "n": args.n,
+        "size": args.size,
+        "mean_text_bytes_per_row": round(mean_bytes),
+        "batch": args.batch,
+        "load_average_1min": round(os.getloadavg()[0], 2),
+        "cpus": os.cpu_count(),
+    }
     wall, cpu = _best(lambda: encode_rows(1, records, sqlite=True), args.repeat)
     result["encode_rows_per_s"], result["encode_rows_per_cpu_s"] = args.n / wall, args.n / cpu
 
@@ -171,13 +177,19 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
-    print(f"{args.n} rows, {args.size}x{args.size} maps, paths 0..{args.max_path} cells "
-          f"(~{result['mean_text_bytes_per_row']} text bytes/row), {args.batch} rows per transaction; "
-          f"load average {result['load_average_1min']} on {result['cpus']} CPUs")
-    print(f"  encode only                  {result['encode_rows_per_s']:>10,.0f} rows/s"
-          f"   ({result['encode_rows_per_cpu_s']:,.0f} per CPU second)")
-    print(f"  sqlite3 driver, pre-encoded  {result['sqlite3_ceiling_rows_per_s']:>10,.0f} rows/s"
-          f"   ({result['sqlite3_ceiling_rows_per_cpu_s']:,.0f} per CPU second; ceiling)")
+    print(
+        f"{args.n} rows, {args.size}x{args.size} maps, paths 0..{args.max_path} cells "
+        f"(~{result['mean_text_bytes_per_row']} text bytes/row), {args.batch} rows per transaction; "
+        f"load average {result['load_average_1min']} on {result['cpus']} CPUs"
+    )
+    print(
+        f"  encode only                  {result['encode_rows_per_s']:>10,.0f} rows/s"
+        f"   ({result['encode_rows_per_cpu_s']:,.0f} per CPU second)"
+    )
+    print(
+        f"  sqlite3 driver, pre-encoded  {result['sqlite3_ceiling_rows_per_s']:>10,.0f} rows/s"
+        f"   ({result['sqlite3_ceiling_rows_per_cpu_s']:,.0f} per CPU second; ceiling)"
+    )
     for kind in ("sqlite", "mysql", "postgres"):
         entry = result[kind]
         if "skipped" in entry:
@@ -185,10 +197,14 @@ def main(argv: list[str] | None = None) -> int:
             continue
         extra = ""
         if kind == "sqlite":
-            extra = (f"   ({entry['write_rows_per_cpu_s']:,.0f} written per CPU second; "
-                     f"{entry['write_rows_per_s'] / result['sqlite3_ceiling_rows_per_s']:.2f} x ceiling)")
-        print(f"  {kind:<9} write {entry['write_rows_per_s']:>10,.0f} rows/s   "
-              f"read {entry['read_rows_per_s']:>10,.0f} rows/s{extra}")
+            extra = (
+                f"   ({entry['write_rows_per_cpu_s']:,.0f} written per CPU second; "
+                f"{entry['write_rows_per_s'] / result['sqlite3_ceiling_rows_per_s']:.2f} x ceiling)"
+            )
+        print(
+            f"  {kind:<9} write {entry['write_rows_per_s']:>10,.0f} rows/s   "
+            f"read {entry['read_rows_per_s']:>10,.0f} rows/s{extra}"
+        )
     return 0
 
 

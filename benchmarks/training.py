@@ -62,16 +62,23 @@ def main() -> None:
     t_torch = min(epoch(q_torch) for _ in range(2))
     t_fast = min(epoch(q_fast) for _ in range(2))
     out = {
-        "size": args.size, "k": model.config.k, "maps": args.n, "batch_size": args.batch_size,
-        "threads": args.threads, "load_average": os.getloadavg()[0],
-        "torch_ms_per_map": round(t_torch, 3), "fast_ms_per_map": round(t_fast, 3),
+        "size": args.size,
+        "k": model.config.k,
+        "maps": args.n,
+        "batch_size": args.batch_size,
+        "threads": args.threads,
+        "load_average": os.getloadavg()[0],
+        "torch_ms_per_map": round(t_torch, 3),
+        "fast_ms_per_map": round(t_fast, 3),
         "speedup": round(t_torch / t_fast, 2),
     }
     if args.json:
         print(json.dumps(out))
         return
-    print(f"{args.size}x{args.size}, k={model.config.k}, batch {args.batch_size}, {args.threads} torch thread(s), "
-          f"load average {out['load_average']:.1f}")
+    print(
+        f"{args.size}x{args.size}, k={model.config.k}, batch {args.batch_size}, {args.threads} torch thread(s), "
+        f"load average {out['load_average']:.1f}"
+    )
     print(f"  plain PyTorch step      {t_torch:7.3f} ms per map")
     print(f"  vinadv CPU step         {t_fast:7.3f} ms per map")
     print(f"  speedup                 {out['speedup']:.2f}x")

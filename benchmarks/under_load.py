@@ -22,8 +22,24 @@ BUSY = "import time\nend = time.time() + {limit}\nwhile time.time() < end:\n    
 
 
 def run_once(n: int, size: int, db: str) -> dict:
-    argv = [sys.executable, "-m", "vinadv.cli", "run", "--n", str(n), "--size", str(size), "--attack", "near-path",
-            "--classifier", "rule", "--db", db, "--json", "--quiet"]
+    argv = [
+        sys.executable,
+        "-m",
+        "vinadv.cli",
+        "run",
+        "--n",
+        str(n),
+        "--size",
+        str(size),
+        "--attack",
+        "near-path",
+        "--classifier",
+        "rule",
+        "--db",
+        db,
+        "--json",
+        "--quiet",
+    ]
     t0 = time.perf_counter()
     done = subprocess.run(argv, capture_output=True, text=True)
     wall = time.perf_counter() - t0
@@ -49,8 +65,14 @@ def main() -> None:
         finally:
             busy.kill()
             busy.wait()
-    out = {"maps": args.n, "size": args.size, "cores": len(os.sched_getaffinity(0)), "quiet": quiet,
-           "one_busy_process": loaded, "ratio": loaded["command"] / quiet["command"]}
+    out = {
+        "maps": args.n,
+        "size": args.size,
+        "cores": len(os.sched_getaffinity(0)),
+        "quiet": quiet,
+        "one_busy_process": loaded,
+        "ratio": loaded["command"] / quiet["command"],
+    }
     if args.json:
         print(json.dumps(out))
         return

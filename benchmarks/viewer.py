@@ -86,8 +86,9 @@ def main() -> None:
     def offset_page(filters: dict, offset: int) -> None:
         # the same page as the grid shows, fetched the naive way: ORDER BY pair_index LIMIT 51 OFFSET k
         c = map_pairs.c
-        query = sa.select(c.pair_index, c.label, c.attack, c.label_source, c.score, c.dh, c.dv, c.term_o,
-                          c.term_a, c.added_obstacle).where(c.run_id == run_id)
+        query = sa.select(
+            c.pair_index, c.label, c.attack, c.label_source, c.score, c.dh, c.dv, c.term_o, c.term_a, c.added_obstacle
+        ).where(c.run_id == run_id)
         for key, value in filters.items():
             query = query.where(c[key] == value)
         with store.engine.connect() as conn:
@@ -120,8 +121,13 @@ def main() -> None:
         naive = best_ms(lambda: offset_page(filters, deep_offset), max(1, args.repeat // 2))
         keyset = best_ms(lambda: store.page_pairs(run_id, after=deep_after, limit=51, **filters), args.repeat)
         results["grid"][name] = {
-            "matching": int(total), "first_page_ms": first, "deep_page_ms": deep, "deep_api_ms": api,
-            "deep_query_keyset_ms": keyset, "deep_query_offset_ms": naive, "offset_over_keyset": naive / keyset,
+            "matching": int(total),
+            "first_page_ms": first,
+            "deep_page_ms": deep,
+            "deep_api_ms": api,
+            "deep_query_keyset_ms": keyset,
+            "deep_query_offset_ms": naive,
+            "offset_over_keyset": naive / keyset,
         }
 
     state._counts = None
@@ -148,20 +154,30 @@ def main() -> None:
     if args.json:
         print(json.dumps(results, indent=1))
         return
-    print(f"viewer on one run of {args.n:,} pairs ({args.size}x{args.size}), SQLite, Flask test client, best of "
-          f"{args.repeat}")
-    print(f"{'grid filter':<24}{'matching':>10}{'first page':>12}{'page @90%':>11}{'API @90%':>10}"
-          f"{'query keyset':>14}{'query OFFSET':>14}{'OFFSET/keyset':>15}")
+    print(
+        f"viewer on one run of {args.n:,} pairs ({args.size}x{args.size}), SQLite, Flask test client, best of "
+        f"{args.repeat}"
+    )
+    print(
+        f"{'grid filter':<24}{'matching':>10}{'first page':>12}{'page @90%':>11}{'API @90%':>10}"
+        f"{'query keyset':>14}{'query OFFSET':>14}{'OFFSET/keyset':>15}"
+    )
     for name, g in results["grid"].items():
-        print(f"{name:<24}{g['matching']:>10,}{g['first_page_ms']:>10.1f}ms{g['deep_page_ms']:>9.1f}ms"
-              f"{g['deep_api_ms']:>8.1f}ms{g['deep_query_keyset_ms']:>12.2f}ms{g['deep_query_offset_ms']:>12.1f}ms"
-              f"{g['offset_over_keyset']:>14.0f}x")
-    print(f"runs list: {results['runs_list_uncached_ms']:.0f} ms counting every pair, "
-          f"{results['runs_list_cached_ms']:.1f} ms from the cache")
+        print(
+            f"{name:<24}{g['matching']:>10,}{g['first_page_ms']:>10.1f}ms{g['deep_page_ms']:>9.1f}ms"
+            f"{g['deep_api_ms']:>8.1f}ms{g['deep_query_keyset_ms']:>12.2f}ms{g['deep_query_offset_ms']:>12.1f}ms"
+            f"{g['offset_over_keyset']:>14.0f}x"
+        )
+    print(
+        f"runs list: {results['runs_list_uncached_ms']:.0f} ms counting every pair, "
+        f"{results['runs_list_cached_ms']:.1f} ms from the cache"
+    )
     print(f"pair page: {results['pair_page_cold_ms']:.1f} ms first, {results['pair_page_ms']:.1f} ms again")
     for kind, im in images.items():
-        print(f"image {kind:<12} {im['cold_ms']:.1f} ms rendered, {im['cached_ms']:.2f} ms cached "
-              f"({im['cold_over_cached']:.0f}x)")
+        print(
+            f"image {kind:<12} {im['cold_ms']:.1f} ms rendered, {im['cached_ms']:.2f} ms cached "
+            f"({im['cold_over_cached']:.0f}x)"
+        )
 
 
 if __name__ == "__main__":

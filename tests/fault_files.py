@@ -47,8 +47,9 @@ def write_pairs(path: Path) -> Path:
     from vinadv.attacks.strategies import make_attack
 
     maps = _maps(1)
-    result = make_attack("random", per_map=2, seed=0).attack(maps.obstacles, maps.starts[:, 0], maps.goals, _model(),
-                                                              maps.corner_cutting)
+    result = make_attack("random", per_map=2, seed=0).attack(
+        maps.obstacles, maps.starts[:, 0], maps.goals, _model(), maps.corner_cutting
+    )
     result.pairs.save(path)
     return path
 
@@ -109,8 +110,9 @@ def tmpfs(path: Path, size: str = "4M", options: str = ""):
     """A small tmpfs mounted at `path` (`options` like ",ro"): a full or read-only file system for a test. Root
     only; the test is skipped where mounting is not allowed."""
     path.mkdir(parents=True, exist_ok=True)
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}{options}", "tmpfs", str(path)], check=False,
-                          capture_output=True)
+    done = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={size}{options}", "tmpfs", str(path)], check=False, capture_output=True
+    )
     if done.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
     try:

@@ -8,8 +8,16 @@ import shutil
 import pytest
 
 #: the flags Chromium needs here: headless as root, and no background connections to a closed network
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 def skip_or_fail(problem: str) -> None:
@@ -28,8 +36,10 @@ def chromium() -> str:
     else:
         found = shutil.which("chromium") or ("/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else None)
     if found is None:
-        skip_or_fail(f"Chromium not found at {explicit or 'chromium'} (apt-get install -y chromium, which "
-                     "`make test` does; or set VINADV_CHROMIUM)")
+        skip_or_fail(
+            f"Chromium not found at {explicit or 'chromium'} (apt-get install -y chromium, which "
+            "`make test` does; or set VINADV_CHROMIUM)"
+        )
     try:
         import playwright.sync_api  # noqa: F401
     except ImportError:

@@ -11,8 +11,9 @@ HEAVY = ("torch", "numba", "sklearn", "sqlalchemy", "scipy", "matplotlib", "dist
 
 def imported_modules(*argv: str) -> set[str]:
     """Top-level packages a fresh `python -X importtime -m vinadv.cli ARGV` imported (it exits 0)."""
-    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "vinadv.cli", *argv], capture_output=True,
-                          text=True, timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "vinadv.cli", *argv], capture_output=True, text=True, timeout=300
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     lines = [line.split("|")[-1] for line in done.stderr.splitlines() if line.startswith("import time:")]
     names = {line.strip().split(".")[0] for line in lines}
@@ -20,9 +21,19 @@ def imported_modules(*argv: str) -> set[str]:
     return names
 
 
-@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["maps", "generate", "--help"], ["plan", "--help"],
-                                  ["export", "--help"], ["report", "--help"], ["serve", "--help"]],
-                         ids=" ".join)
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["--help"],
+        ["--version"],
+        ["maps", "generate", "--help"],
+        ["plan", "--help"],
+        ["export", "--help"],
+        ["report", "--help"],
+        ["serve", "--help"],
+    ],
+    ids=" ".join,
+)
 def test_parser_imports_no_heavy_library(argv):
     assert not imported_modules(*argv) & set(HEAVY)
 
@@ -34,6 +45,10 @@ def test_top_level_help_imports_no_numpy_either(argv):
 
 
 def test_a_command_still_checks_its_choices():
-    done = subprocess.run([sys.executable, "-m", "vinadv.cli", "run", "--attack", "nope", "--n", "1"],
-                          capture_output=True, text=True, timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-m", "vinadv.cli", "run", "--attack", "nope", "--n", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 2 and "near-path" in done.stderr and "nope" in done.stderr

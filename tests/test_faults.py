@@ -30,8 +30,23 @@ def weights(planning_weights):
 
 
 def _args(weights, db, *extra, n=60, shard=20):
-    return ["run", "--n", str(n), "--size", str(SIZE), "--shard-size", str(shard), "--weights", weights, "--seed", "3",
-            "--db", db, "--quiet", *extra]
+    return [
+        "run",
+        "--n",
+        str(n),
+        "--size",
+        str(SIZE),
+        "--shard-size",
+        str(shard),
+        "--weights",
+        weights,
+        "--seed",
+        "3",
+        "--db",
+        db,
+        "--quiet",
+        *extra,
+    ]
 
 
 def _one_line(err: str) -> str:
@@ -42,6 +57,7 @@ def _one_line(err: str) -> str:
 
 
 # ----------------------------------------------------------------------------------------------------- runs
+
 
 def test_run_name_taken_is_refused_without_resume(weights, tmp_path, capsys):
     db = str(tmp_path / "runs.db")
@@ -57,9 +73,14 @@ def test_run_name_taken_is_refused_without_resume(weights, tmp_path, capsys):
 def test_full_disk_during_a_run_is_one_line_with_the_resume_hint(weights, tmp_path):
     with tmpfs(tmp_path / "full", "2M") as folder:
         db = str(folder / "full.db")
-        done = subprocess.run([sys.executable, "-m", "vinadv.cli", *_args(weights, db, "--name", "big", n=3000,
-                                                                            shard=500)],
-                              capture_output=True, text=True, env=ENV, timeout=600, check=False)
+        done = subprocess.run(
+            [sys.executable, "-m", "vinadv.cli", *_args(weights, db, "--name", "big", n=3000, shard=500)],
+            capture_output=True,
+            text=True,
+            env=ENV,
+            timeout=600,
+            check=False,
+        )
         assert done.returncode == 2, done.stderr[-2000:]
         line = _one_line(done.stderr)
         assert "full.db" in line and "full" in line and "--name big --resume" in line
@@ -104,8 +125,13 @@ _KILLED_IN_A_TRANSACTION = textwrap.dedent("""
 def test_kill_inside_a_transaction_then_resume_stores_every_pair_once(weights, tmp_path):
     db = str(tmp_path / "killed.db")
     args = _args(weights, db, "--name", "k", n=100, shard=20)
-    child = subprocess.Popen([sys.executable, "-c", _KILLED_IN_A_TRANSACTION, *args], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True, env=ENV)
+    child = subprocess.Popen(
+        [sys.executable, "-c", _KILLED_IN_A_TRANSACTION, *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+    )
     try:
         line = child.stdout.readline()
         assert line.strip() == "in transaction", child.stderr.read()
@@ -144,6 +170,7 @@ def test_evaluate_and_export_read_run_names_alike(weights, tmp_path, capsys):
 
 # ------------------------------------------------------------------------------------------------- outputs
 
+
 def _maps(out: str, *extra) -> list[str]:
     return ["maps", "generate", "--n", "5", "--size", "10", "--out", out, "--quiet", *extra]
 
@@ -166,8 +193,7 @@ def test_read_only_target_is_one_line_and_leaves_nothing(tmp_path, capsys):
 def test_full_disk_output_is_one_line_and_leaves_no_temp_file(tmp_path, capsys):
     with tmpfs(tmp_path / "full", "64k") as folder:
         (folder / "m.npz").write_bytes(b"old")
-        assert main(["maps", "generate", "--n", "200", "--size", "16", "--out", str(folder / "m.npz"),
-                     "--quiet"]) == 2
+        assert main(["maps", "generate", "--n", "200", "--size", "16", "--out", str(folder / "m.npz"), "--quiet"]) == 2
         line = _one_line(capsys.readouterr().err)
         assert "m.npz" in line and "no space left" in line
         assert [p.name for p in folder.iterdir()] == ["m.npz"] and (folder / "m.npz").read_bytes() == b"old"
@@ -176,14 +202,23 @@ def test_full_disk_output_is_one_line_and_leaves_no_temp_file(tmp_path, capsys):
 def test_export_into_a_broken_pipe_ends_quietly(weights, tmp_path):
     db = str(tmp_path / "runs.db")
     assert main(_args(weights, db, "--name", "p", n=200, shard=200)) == 0
-    done = subprocess.run(f"{sys.executable} -m vinadv.cli export --db {db} --run p --quiet | head -c 100 >/dev/null; "
-                          "echo ${PIPESTATUS[0]}", shell=True, executable="/bin/bash", capture_output=True, text=True,
-                          env=ENV, timeout=300, check=False)
+    done = subprocess.run(
+        f"{sys.executable} -m vinadv.cli export --db {db} --run p --quiet | head -c 100 >/dev/null; "
+        "echo ${PIPESTATUS[0]}",
+        shell=True,
+        executable="/bin/bash",
+        capture_output=True,
+        text=True,
+        env=ENV,
+        timeout=300,
+        check=False,
+    )
     assert done.stdout.strip() in ("0", "141"), done.stderr
     assert "Traceback" not in done.stderr and "BrokenPipe" not in done.stderr and "Exception" not in done.stderr
 
 
 # ------------------------------------------------------------------------------------------- maps generate
+
 
 @pytest.mark.parametrize("args, limit", [(["--size", "100000"], "--size"), (["--n", "1000000000000"], "--n")])
 def test_maps_generate_refuses_what_cannot_fit_at_once(args, limit, tmp_path, capsys):

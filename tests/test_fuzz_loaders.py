@@ -29,8 +29,12 @@ from vinadv.errors import InputError
 # torch warns about the odd pickle protocols of damaged files; the test is about what vinadv raises
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
 
-FUZZ = settings(max_examples=30, deadline=None, derandomize=True,
-                suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+FUZZ = settings(
+    max_examples=30,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 
 
 def _load_maps(path):
@@ -76,16 +80,22 @@ def _load_database(path):
     return True
 
 
-WRITERS = {"maps": (write_maps, _load_maps), "paths": (write_paths, _load_paths), "pairs": (write_pairs, _load_pairs),
-           "weights": (write_weights, _load_weights), "classifier": (write_classifier, _load_classifier),
-           "database": (write_database, _load_database)}
+WRITERS = {
+    "maps": (write_maps, _load_maps),
+    "paths": (write_paths, _load_paths),
+    "pairs": (write_pairs, _load_pairs),
+    "weights": (write_weights, _load_weights),
+    "classifier": (write_classifier, _load_classifier),
+    "database": (write_database, _load_database),
+}
 
 
 @pytest.fixture(scope="module")
 def valid(tmp_path_factory):
     folder = tmp_path_factory.mktemp("fuzz")
-    return {kind: write(folder / f"{kind}.{'db' if kind == 'database' else 'npz'}")
-            for kind, (write, _) in WRITERS.items()}
+    return {
+        kind: write(folder / f"{kind}.{'db' if kind == 'database' else 'npz'}") for kind, (write, _) in WRITERS.items()
+    }
 
 
 def _only_input_errors(load, path: Path) -> None:
@@ -132,6 +142,7 @@ def test_byte_mutations_give_input_errors(kind, valid, tmp_path):
 
 # ------------------------------------------------------------------------------------------- array mutations
 
+
 def _odd_value(draw, arr: np.ndarray):
     if arr.dtype.kind in "iu":
         return draw(st.sampled_from([-1, 0, 1, 2**15 - 1, -(2**15), int(np.iinfo(arr.dtype).max)]))
@@ -144,8 +155,11 @@ def _odd_value(draw, arr: np.ndarray):
 
 @st.composite
 def _array_mutation(draw, names: list[str]):
-    return draw(st.sampled_from(["drop", "rename", "dtype", "reshape", "value", "empty"])), draw(
-        st.sampled_from(names)), draw(st.randoms(use_true_random=False))
+    return (
+        draw(st.sampled_from(["drop", "rename", "dtype", "reshape", "value", "empty"])),
+        draw(st.sampled_from(names)),
+        draw(st.randoms(use_true_random=False)),
+    )
 
 
 def _mutate_arrays(arrays: dict, mutation, draw_value) -> dict:
@@ -164,8 +178,15 @@ def _mutate_arrays(arrays: dict, mutation, draw_value) -> dict:
             arrays[name] = np.zeros(arr.shape, dtype=target)
     elif op == "reshape":
         choice = rnd.randrange(3)
-        arrays[name] = arr.reshape(-1) if choice == 0 else arr[None] if choice == 1 else arr[: max(0, len(arr) - 1)] \
-            if arr.ndim else arr.reshape(1)
+        arrays[name] = (
+            arr.reshape(-1)
+            if choice == 0
+            else arr[None]
+            if choice == 1
+            else arr[: max(0, len(arr) - 1)]
+            if arr.ndim
+            else arr.reshape(1)
+        )
     elif op == "value" and arr.size:
         arr = arr.copy()
         arr.flat[rnd.randrange(arr.size)] = draw_value(arr)
@@ -198,8 +219,12 @@ def test_weights_mutations_give_input_errors(valid, tmp_path):
     target = tmp_path / "w.pt"
 
     @FUZZ
-    @given(key=st.sampled_from(sorted(payload["state_dict"])), op=st.sampled_from(
-        ["shape", "drop", "dtype", "nan", "plain", "config"]), axis=st.integers(0, 3), by=st.integers(-1, 2))
+    @given(
+        key=st.sampled_from(sorted(payload["state_dict"])),
+        op=st.sampled_from(["shape", "drop", "dtype", "nan", "plain", "config"]),
+        axis=st.integers(0, 3),
+        by=st.integers(-1, 2),
+    )
     def check(key, op, axis, by):
         state = dict(payload["state_dict"])
         tensor = state[key]

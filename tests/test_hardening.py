@@ -35,8 +35,11 @@ def test_added_maps_are_the_models_harmful_adversarial_maps():
     originals = {i: maps.obstacles[i] for i in train_idx}
     for obs, goal in zip(obstacles, goals):
         # one cell more than a training map (never a validation map) with the same goal
-        source = [i for i, o in originals.items() if (obs != o).sum() == 1 and (obs >= o).all()
-                  and tuple(maps.goals[i]) == tuple(goal)]
+        source = [
+            i
+            for i, o in originals.items()
+            if (obs != o).sum() == 1 and (obs >= o).all() and tuple(maps.goals[i]) == tuple(goal)
+        ]
         assert source, "not a training map plus one obstacle"
         i = source[0]
         start = maps.starts[i, 0]
@@ -66,7 +69,9 @@ def test_training_takes_the_added_maps_in_and_records_them(tmp_path):
     assert calls == [(0, 12), (1, 12)]
     assert rec["added_maps"] == 6
     assert [(r["epoch"], r["added"], r["added_total"], r["note"]) for r in rec["augment_rounds"]] == [
-        (1, 3, 3, 0), (2, 3, 6, 1)]
+        (1, 3, 3, 0),
+        (2, 3, 6, 1),
+    ]
     saved = torch.load(ckpt, weights_only=True)
     np.testing.assert_array_equal(saved["added_obstacles"].numpy(), extra.obstacles)
     # the added maps change what is learned: the same run without them ends elsewhere
@@ -87,8 +92,9 @@ def test_adversarial_training_is_deterministic_and_resumes_to_the_same_weights(t
     second, rec2 = run()
     for key, value in first.state_dict().items():
         torch.testing.assert_close(second.state_dict()[key], value, rtol=0, atol=0)
-    assert [{k: v for k, v in r.items() if k != "attack_s"} for r in rec1["augment_rounds"]] == \
-        [{k: v for k, v in r.items() if k != "attack_s"} for r in rec2["augment_rounds"]]
+    assert [{k: v for k, v in r.items() if k != "attack_s"} for r in rec1["augment_rounds"]] == [
+        {k: v for k, v in r.items() if k != "attack_s"} for r in rec2["augment_rounds"]
+    ]
     ckpt = tmp_path / "w.ckpt"
     run(config={"time_limit_min": 0.0}, checkpoint=ckpt)  # stops after epoch 1, as a kill would
     resumed, rec = run(checkpoint=ckpt, resume=True)
@@ -100,8 +106,12 @@ def test_adversarial_training_is_deterministic_and_resumes_to_the_same_weights(t
 
 
 def test_adversarial_config_is_validated():
-    for bad, param in ((dict(maps_per_epoch=0), "maps_per_epoch"), (dict(strategy="x"), "strategy"),
-                       (dict(objective="x"), "objective"), (dict(budget=0), "budget")):
+    for bad, param in (
+        (dict(maps_per_epoch=0), "maps_per_epoch"),
+        (dict(strategy="x"), "strategy"),
+        (dict(objective="x"), "objective"),
+        (dict(budget=0), "budget"),
+    ):
         with pytest.raises(InputError) as err:
             AdversarialConfig(**bad).validate()
         assert err.value.parameters[0] == param
@@ -111,9 +121,31 @@ def test_cli_adversarial_training_records_everything(tmp_path, capsys):
     data = tmp_path / "maps.npz"
     generate_maps(30, SIZE, seed=2, n_starts=1).save(data)
     out = tmp_path / "r.pt"
-    assert main(["vin", "train", "--data", str(data), "--out", str(out), "--epochs", "2", "--batch-size", "8",
-                 "--adversarial", "--adv-maps", "10", "--adv-strategy", "key-points", "--adv-start", "1",
-                 "--json"]) == 0
+    assert (
+        main(
+            [
+                "vin",
+                "train",
+                "--data",
+                str(data),
+                "--out",
+                str(out),
+                "--epochs",
+                "2",
+                "--batch-size",
+                "8",
+                "--adversarial",
+                "--adv-maps",
+                "10",
+                "--adv-strategy",
+                "key-points",
+                "--adv-start",
+                "1",
+                "--json",
+            ]
+        )
+        == 0
+    )
     record = json.loads(capsys.readouterr().out)
     assert record["train_config"]["adversarial"]["maps_per_epoch"] == 10
     assert [r["epoch"] for r in record["augment_rounds"]] == [1, 2]
@@ -127,8 +159,36 @@ def test_cli_gppn_adversarial_training(tmp_path, capsys):
     data = tmp_path / "maps.npz"
     generate_maps(12, SIZE, seed=3, n_starts=1).save(data)
     out = tmp_path / "g.pt"
-    assert main(["gppn", "train", "--data", str(data), "--out", str(out), "--epochs", "1", "--batch-size", "4",
-                 "--l-h", "4", "--k", "4", "--kernel", "3", "--adversarial", "--adv-maps", "6", "--adv-strategy",
-                 "key-points", "--adv-start", "1", "--json"]) == 0
+    assert (
+        main(
+            [
+                "gppn",
+                "train",
+                "--data",
+                str(data),
+                "--out",
+                str(out),
+                "--epochs",
+                "1",
+                "--batch-size",
+                "4",
+                "--l-h",
+                "4",
+                "--k",
+                "4",
+                "--kernel",
+                "3",
+                "--adversarial",
+                "--adv-maps",
+                "6",
+                "--adv-strategy",
+                "key-points",
+                "--adv-start",
+                "1",
+                "--json",
+            ]
+        )
+        == 0
+    )
     record = json.loads(capsys.readouterr().out)
     assert record["planner"] == "gppn" and record["augment_rounds"][0]["attacked"] == 6

@@ -20,8 +20,9 @@ SIZE = 10
 def test_exhaustive_with_the_harm_objective_keeps_the_most_harmful_cell_of_a_brute_force_search():
     model = planning_vin(SIZE, seed=1, noise=0.1)
     maps = generate_maps(6, SIZE, seed=3, n_starts=1)
-    result = make_attack("exhaustive").attack(maps.obstacles, maps.starts[:, 0], maps.goals, model,
-                                              strength=objective_strength("harm"))
+    result = make_attack("exhaustive").attack(
+        maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=objective_strength("harm")
+    )
     for i in range(len(maps.obstacles)):
         obstacles, start, goal = maps.obstacles[i], tuple(maps.starts[i, 0]), tuple(maps.goals[i])
         original = plan_reference(obstacles[None], np.array([start]), np.array([goal]), model).paths.cells.tolist()

@@ -67,9 +67,13 @@ def test_stored_harm_agrees_with_an_independent_recomputation(weights, sqlite_ur
     summary = run_pipeline(config(weights, attack="key-points", per_map=2), db=sqlite_url, progress=False).to_dict()
     engine = sa.create_engine(sqlite_url)
     with engine.connect() as conn:
-        rows = conn.execute(sa.text(
-            "SELECT map_o, map_a, start, goal, path_o, path_a, label, opt_cost_o, opt_cost_a, cost_o, cost_a, "
-            "regret_o, regret_a, expert_label, harm FROM map_pairs WHERE run_id = :r"), {"r": summary["run_id"]}).all()
+        rows = conn.execute(
+            sa.text(
+                "SELECT map_o, map_a, start, goal, path_o, path_a, label, opt_cost_o, opt_cost_a, cost_o, cost_a, "
+                "regret_o, regret_a, expert_label, harm FROM map_pairs WHERE run_id = :r"
+            ),
+            {"r": summary["run_id"]},
+        ).all()
     engine.dispose()
     parse = lambda text: [tuple(int(v) for v in cell.split(",")) for cell in text.split(";")]  # noqa: E731
     grid = lambda text: [[ch == "1" for ch in row] for row in text.split(";")]  # noqa: E731
@@ -93,8 +97,9 @@ def test_stored_harm_agrees_with_an_independent_recomputation(weights, sqlite_ur
         assert stored[7] == harm
         table.setdefault(label, {}).setdefault(harm, 0)
         table[label][harm] += 1
-    assert {k: {h: n for h, n in row.items() if n} for k, row in summary["label_x_harm"].items() if any(row.values())} \
-        == table
+    assert {
+        k: {h: n for h, n in row.items() if n} for k, row in summary["label_x_harm"].items() if any(row.values())
+    } == table
     valid = sum(n for label, row in table.items() if label != "invalid" for n in row.values())
     harmful = sum(row.get("harmful", 0) for row in table.values())
     assert summary["harmful"] == harmful and summary["harmful_rate"] == pytest.approx(harmful / valid)
@@ -117,8 +122,24 @@ def test_result_does_not_depend_on_the_order_shards_finish(weights, sqlite_url, 
 
 def test_killed_run_resumes_with_every_pair_exactly_once(weights, tmp_path):
     db = f"sqlite:///{tmp_path / 'kill.db'}"
-    args = ["run", "--n", "400", "--size", str(SIZE), "--shard-size", "20", "--weights", weights, "--seed", "9",
-            "--db", db, "--name", "k", "--quiet"]
+    args = [
+        "run",
+        "--n",
+        "400",
+        "--size",
+        str(SIZE),
+        "--shard-size",
+        "20",
+        "--weights",
+        weights,
+        "--seed",
+        "9",
+        "--db",
+        db,
+        "--name",
+        "k",
+        "--quiet",
+    ]
     proc = subprocess.Popen([sys.executable, "-m", "vinadv.cli", *args], env={**os.environ, "PYTHONUNBUFFERED": "1"})
     engine = sa.create_engine(db)
     deadline = time.time() + 120
@@ -150,8 +171,25 @@ def test_killed_run_resumes_with_every_pair_exactly_once(weights, tmp_path):
 
 def test_resume_refuses_other_settings(weights, sqlite_url, capsys):
     run_pipeline(config(weights), db=sqlite_url, name="r", progress=False)
-    args = ["run", "--n", "60", "--size", str(SIZE), "--weights", weights, "--db", sqlite_url, "--name", "r",
-            "--resume", "--quiet", "--seed", "5", "--shard-size", "25"]
+    args = [
+        "run",
+        "--n",
+        "60",
+        "--size",
+        str(SIZE),
+        "--weights",
+        weights,
+        "--db",
+        sqlite_url,
+        "--name",
+        "r",
+        "--resume",
+        "--quiet",
+        "--seed",
+        "5",
+        "--shard-size",
+        "25",
+    ]
     assert main(args) == 2
     assert "other settings (seed)" in capsys.readouterr().err
 
@@ -164,8 +202,23 @@ def test_bad_inputs_exit_2_and_leave_data_untouched(weights, sqlite_url, tmp_pat
     np.savez(bad, format=np.array("vinadv.pairs/1"), obstacles_o=np.zeros((2, 5, 5), bool))
     assert main(["identify", "--pairs", str(bad), "--db", sqlite_url, "--quiet"]) == 2
     assert "bad.npz: field 'obstacles_a' is missing" in capsys.readouterr().err
-    assert main(["run", "--n", "5", "--db", "mysql+pymysql://root@127.0.0.1:1/none", "--weights", weights,
-                 "--size", str(SIZE), "--quiet"]) == 2
+    assert (
+        main(
+            [
+                "run",
+                "--n",
+                "5",
+                "--db",
+                "mysql+pymysql://root@127.0.0.1:1/none",
+                "--weights",
+                weights,
+                "--size",
+                str(SIZE),
+                "--quiet",
+            ]
+        )
+        == 2
+    )
     assert "cannot connect" in capsys.readouterr().err
     other = tmp_path / "other.db"
     sa_engine = sa.create_engine(f"sqlite:///{other}")
@@ -179,10 +232,27 @@ def test_bad_inputs_exit_2_and_leave_data_untouched(weights, sqlite_url, tmp_pat
 def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
     maps = tmp_path / "maps.npz"
     pairs = tmp_path / "pairs.npz"
-    assert main(["maps", "generate", "--n", "30", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
-                 "--quiet"]) == 0
-    assert main(["attack", "--maps", str(maps), "--strategy", "key-points", "--out", str(pairs),
-                 "--weights", weights, "--json"]) == 0
+    assert (
+        main(["maps", "generate", "--n", "30", "--size", str(SIZE), "--starts", "1", "--out", str(maps), "--quiet"])
+        == 0
+    )
+    assert (
+        main(
+            [
+                "attack",
+                "--maps",
+                str(maps),
+                "--strategy",
+                "key-points",
+                "--out",
+                str(pairs),
+                "--weights",
+                weights,
+                "--json",
+            ]
+        )
+        == 0
+    )
     summary = json.loads(capsys.readouterr().out)
     assert summary["pairs"] == sum(summary["counts"].values())
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--json"]) == 0
@@ -199,15 +269,15 @@ def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--weights", weights, "--quiet"]) == 0
 
 
-def test_run_of_several_obstacles_stores_every_added_cell_and_resume_compares_it(weights, sqlite_url, tmp_path,
-                                                                                 capsys):
+def test_run_of_several_obstacles_stores_every_added_cell_and_resume_compares_it(weights, sqlite_url, tmp_path, capsys):
     from vinadv.attacks.strategies import make_attack
     from vinadv.grid import generate_maps
     from vinadv.identify import objective_strength
     from vinadv.planners.weights import load_vin
 
-    summary = run_pipeline(config(weights, n=30, attack="key-points", obstacles=2), db=sqlite_url, name="k2",
-                           progress=False)
+    summary = run_pipeline(
+        config(weights, n=30, attack="key-points", obstacles=2), db=sqlite_url, name="k2", progress=False
+    )
     with Store.open(sqlite_url) as store:
         got = store.read_pairs(summary.run_id)
         assert store.run_info(summary.run_id)["config"]["obstacles"] == 2
@@ -216,12 +286,34 @@ def test_run_of_several_obstacles_stores_every_added_cell_and_resume_compares_it
     expected = []
     for shard, lo in enumerate((0, 25)):
         maps = generate_maps(min(25, 30 - lo), SIZE, seed=(4, shard), n_starts=1)
-        pairs = make_attack("key-points", seed=(4, shard), obstacles=2).attack(
-            maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=objective_strength("paper")).pairs
+        pairs = (
+            make_attack("key-points", seed=(4, shard), obstacles=2)
+            .attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=objective_strength("paper"))
+            .pairs
+        )
         expected.append(pairs.added)
     assert got.added.shape == (summary.n_pairs, 2, 2) and np.array_equal(got.added, np.concatenate(expected))
-    args = ["run", "--n", "30", "--size", str(SIZE), "--weights", weights, "--db", sqlite_url, "--name", "k2",
-            "--attack", "key-points", "--seed", "4", "--shard-size", "25", "--resume", "--quiet"]
+    args = [
+        "run",
+        "--n",
+        "30",
+        "--size",
+        str(SIZE),
+        "--weights",
+        weights,
+        "--db",
+        sqlite_url,
+        "--name",
+        "k2",
+        "--attack",
+        "key-points",
+        "--seed",
+        "4",
+        "--shard-size",
+        "25",
+        "--resume",
+        "--quiet",
+    ]
     assert main([*args, "--obstacles", "3"]) == 2
     assert "other settings (obstacles)" in capsys.readouterr().err
     assert main([*args, "--obstacles", "2"]) == 0
@@ -236,8 +328,9 @@ def test_a_run_stored_before_several_obstacles_resumes_as_one_obstacle(weights, 
     stored.pop("obstacles")
     engine = sa.create_engine(sqlite_url, poolclass=sa.pool.NullPool)
     with engine.begin() as conn:  # the config an older vinadv stored: no "obstacles"
-        conn.execute(sa.text("UPDATE runs SET config = :c WHERE id = :i"),
-                     {"c": json.dumps(stored), "i": summary.run_id})
+        conn.execute(
+            sa.text("UPDATE runs SET config = :c WHERE id = :i"), {"c": json.dumps(stored), "i": summary.run_id}
+        )
     engine.dispose()
     again = run_pipeline(config(weights, n=30), db=sqlite_url, name="old", resume=True, progress=False)
     assert again.run_id == summary.run_id and again.stored == 0
@@ -247,10 +340,29 @@ def test_attack_and_identify_keep_every_added_obstacle(weights, tmp_path, sqlite
     from vinadv.attacks.pairs import PairSet
 
     maps, pairs = tmp_path / "maps.npz", tmp_path / "pairs.npz"
-    assert main(["maps", "generate", "--n", "20", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
-                 "--quiet"]) == 0
-    assert main(["attack", "--maps", str(maps), "--strategy", "near-path", "--obstacles", "3", "--out", str(pairs),
-                 "--weights", weights, "--quiet"]) == 0
+    assert (
+        main(["maps", "generate", "--n", "20", "--size", str(SIZE), "--starts", "1", "--out", str(maps), "--quiet"])
+        == 0
+    )
+    assert (
+        main(
+            [
+                "attack",
+                "--maps",
+                str(maps),
+                "--strategy",
+                "near-path",
+                "--obstacles",
+                "3",
+                "--out",
+                str(pairs),
+                "--weights",
+                weights,
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     made = PairSet.load(pairs)
     assert made.added.shape == (len(made), 3, 2) and made.params["obstacles"] == 3
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--weights", weights, "--json"]) == 0
@@ -258,6 +370,22 @@ def test_attack_and_identify_keep_every_added_obstacle(weights, tmp_path, sqlite
     with Store.open(sqlite_url) as store:
         stored = store.read_pairs(run_id)
     assert np.array_equal(stored.added, made.added) and np.array_equal(stored.obstacles_a, made.obstacles_a)
-    assert main(["attack", "--maps", str(maps), "--strategy", "random", "--obstacles", "0", "--out", str(pairs),
-                 "--weights", weights]) == 2
+    assert (
+        main(
+            [
+                "attack",
+                "--maps",
+                str(maps),
+                "--strategy",
+                "random",
+                "--obstacles",
+                "0",
+                "--out",
+                str(pairs),
+                "--weights",
+                weights,
+            ]
+        )
+        == 2
+    )
     assert "--obstacles must be >= 1" in capsys.readouterr().err

@@ -78,8 +78,12 @@ def _plain_figures(per_map: dict, n: int) -> dict:
         harmful += any(h for _, h, _ in got)
         if not any(label == "UrP" for label, _, _ in got):
             regrets.append(max(regret for _, _, regret in got))
-    return {"valid": valid, "broken": broken, "harmful": harmful,
-            "mean_regret": sum(regrets) / len(regrets) if regrets else None}
+    return {
+        "valid": valid,
+        "broken": broken,
+        "harmful": harmful,
+        "mean_regret": sum(regrets) / len(regrets) if regrets else None,
+    }
 
 
 def test_figures_per_strategy_and_worst_case_agree_with_a_plain_python_computation(model, maps):
@@ -90,17 +94,28 @@ def test_figures_per_strategy_and_worst_case_agree_with_a_plain_python_computati
         per_strategy = []
         for name in names:
             # the strategy alone with k obstacles, each pair judged by the plain-Python rule, costs and harm
-            pairs = make_attack(name, per_map=1, seed=3, budget=4, obstacles=k).attack(
-                maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=objective_strength("harm")).pairs
+            pairs = (
+                make_attack(name, per_map=1, seed=3, budget=4, obstacles=k)
+                .attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=objective_strength("harm"))
+                .pairs
+            )
             verdicts = {}
             for i in range(len(pairs)):
-                verdicts[int(pairs.map_index[i])] = _verdict(pairs.obstacles_o[i], pairs.obstacles_a[i],
-                                                             pairs.starts[i], pairs.goals[i],
-                                                             pairs.path_o[i].tolist(), pairs.path_a[i].tolist())
+                verdicts[int(pairs.map_index[i])] = _verdict(
+                    pairs.obstacles_o[i],
+                    pairs.obstacles_a[i],
+                    pairs.starts[i],
+                    pairs.goals[i],
+                    pairs.path_o[i].tolist(),
+                    pairs.path_a[i].tolist(),
+                )
             per_strategy.append(verdicts)
             expected, got = _plain_figures(verdicts, n), result.figures(name, k)
-            assert (got.valid, got.broken, got.harmful) == (expected["valid"], expected["broken"],
-                                                             expected["harmful"]), (name, k)
+            assert (got.valid, got.broken, got.harmful) == (
+                expected["valid"],
+                expected["broken"],
+                expected["harmful"],
+            ), (name, k)
             assert got.mean_regret == pytest.approx(expected["mean_regret"], abs=1e-9)
             assert got.attacked == len(pairs) and sum(got.counts.values()) == len(pairs)
         expected, got = _plain_figures(per_strategy, n), result.figures(k=k)
@@ -152,8 +167,14 @@ def test_worst_case_per_map_by_hand():
         labels = np.array(labels, dtype="<U7")
         pair = labels != ""
         valid = pair & (labels != "invalid")
-        return MapOutcomes(pair=pair, valid=valid, broken=valid & np.isin(labels, ("UrP", "FP")),
-                           harmful=np.array(harmful) & valid, regret=np.array(regret, dtype=float), label=labels)
+        return MapOutcomes(
+            pair=pair,
+            valid=valid,
+            broken=valid & np.isin(labels, ("UrP", "FP")),
+            harmful=np.array(harmful) & valid,
+            regret=np.array(regret, dtype=float),
+            label=labels,
+        )
 
     nan = math.nan
     a = outcome(["UrP", "DP", "", "FP", "invalid"], [True, True, False, False, False], [nan, 2.0, nan, 0.0, nan])
@@ -168,8 +189,13 @@ def test_worst_case_per_map_by_hand():
 
 def test_same_seed_same_figures_other_seed_other_maps(model):
     def run(seed):
-        return robustness(model, benchmark_maps(10, SIZE, seed=seed), ["random", "near-path", "key-points"],
-                          max_obstacles=2, seed=seed).to_dict()
+        return robustness(
+            model,
+            benchmark_maps(10, SIZE, seed=seed),
+            ["random", "near-path", "key-points"],
+            max_obstacles=2,
+            seed=seed,
+        ).to_dict()
 
     first, again, other = run(7), run(7), run(8)
     for d in (first, again, other):
@@ -188,8 +214,13 @@ def test_bad_inputs_are_refused(model, maps):
     with pytest.raises(InputError, match="objective"):
         robustness(model, maps, objective="speed")
     assert check_strategies("all") == ("key-points", "saliency", "near-path", "random")
-    assert check_strategies("exhaustive,all", exhaustive=True) == ("exhaustive", "key-points", "saliency",
-                                                                    "near-path", "random")
+    assert check_strategies("exhaustive,all", exhaustive=True) == (
+        "exhaustive",
+        "key-points",
+        "saliency",
+        "near-path",
+        "random",
+    )
     with pytest.raises(InputError, match="named twice"):
         check_strategies("random,all")
     with pytest.raises(InputError, match="add exhaustive"):
@@ -198,15 +229,18 @@ def test_bad_inputs_are_refused(model, maps):
     assert check_strategies("random", exhaustive=True) == ("random", "exhaustive")
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--max-obstacles", "0"], "--max-obstacles must be >= 1"),
-    (["--strategies", "random,nope"], "--strategies: unknown strategy 'nope'"),
-    (["--strategies", "exhaustive"], "--strategies: add --exhaustive to run the exhaustive strategy"),
-    (["--n", "0"], "--n must be >= 1"),
-    (["--budget", "0"], "--budget must be >= 1"),
-    (["--harm-tolerance", "-1"], "--harm-tolerance"),
-    (["--planner", "nope"], "nope"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--max-obstacles", "0"], "--max-obstacles must be >= 1"),
+        (["--strategies", "random,nope"], "--strategies: unknown strategy 'nope'"),
+        (["--strategies", "exhaustive"], "--strategies: add --exhaustive to run the exhaustive strategy"),
+        (["--n", "0"], "--n must be >= 1"),
+        (["--budget", "0"], "--budget must be >= 1"),
+        (["--harm-tolerance", "-1"], "--harm-tolerance"),
+        (["--planner", "nope"], "nope"),
+    ],
+)
 def test_cli_bad_input_exits_2_with_one_line(weights, capsys, args, message):
     assert main(["robustness", "--size", str(SIZE), "--weights", weights, "--n", "3", *args]) == 2
     err = capsys.readouterr().err
@@ -229,8 +263,23 @@ def test_cli_refuses_a_foreign_database_or_a_file_as_report_folder_before_the_wo
 
 def test_cli_json_db_and_report(weights, tmp_path, capsys):
     db = tmp_path / "r.db"
-    args = ["robustness", "--size", str(SIZE), "--weights", weights, "--n", "12", "--seed", "4", "--max-obstacles",
-            "2", "--strategies", "random,key-points", "--db", str(db)]
+    args = [
+        "robustness",
+        "--size",
+        str(SIZE),
+        "--weights",
+        weights,
+        "--n",
+        "12",
+        "--seed",
+        "4",
+        "--max-obstacles",
+        "2",
+        "--strategies",
+        "random,key-points",
+        "--db",
+        str(db),
+    ]
     assert main([*args, "--json", "--report", str(tmp_path / "page")]) == 0
     out = json.loads(capsys.readouterr().out)
     assert list(out["strategies"]) == ["random", "key-points"] and len(out["overall"]) == 2
@@ -244,5 +293,8 @@ def test_cli_json_db_and_report(weights, tmp_path, capsys):
     assert main([*args, "--quiet"]) == 0 and capsys.readouterr().out == ""
     assert main(args) == 0
     text = capsys.readouterr().out
-    assert "worst case" in text and "harmful rate by obstacles added" in text and "stored as robustness benchmark 3" \
-        in text
+    assert (
+        "worst case" in text
+        and "harmful rate by obstacles added" in text
+        and "stored as robustness benchmark 3" in text
+    )

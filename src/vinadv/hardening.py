@@ -82,11 +82,22 @@ class AdversarialMaps:
         planner = as_planner(copy.deepcopy(model).to("cpu").eval(), self.maps.size)
         maps = self.maps
         attack = make_attack(self.config.strategy, per_map=1, seed=[self.seed, epoch], budget=self.config.budget)
-        result = attack.attack(maps.obstacles[pick], maps.starts[pick, 0], maps.goals[pick], planner,
-                               maps.corner_cutting, strength=objective_strength(self.config.objective))
+        result = attack.attack(
+            maps.obstacles[pick],
+            maps.starts[pick, 0],
+            maps.goals[pick],
+            planner,
+            maps.corner_cutting,
+            strength=objective_strength(self.config.objective),
+        )
         ident = identify(result.pairs)
         harmful = ident.harm.harm == "harmful"
         pairs = result.pairs
-        info = {"attacked": int(len(pick)), "pairs": int(len(pairs)), "harmful": int(harmful.sum()),
-                "unreached": int((ident.labels == "UrP").sum()), "attack_s": round(time.perf_counter() - t0, 2)}
+        info = {
+            "attacked": int(len(pick)),
+            "pairs": int(len(pairs)),
+            "harmful": int(harmful.sum()),
+            "unreached": int((ident.labels == "UrP").sum()),
+            "attack_s": round(time.perf_counter() - t0, 2),
+        }
         return pairs.obstacles_a[harmful], pairs.goals[harmful], info

@@ -39,8 +39,11 @@ def load_classifier(spec: str | os.PathLike | None) -> tuple[PairClassifier, str
     if spec is None or str(spec) == "rule":
         return RuleClassifier(), "rule"
     if not os.path.exists(spec):
-        raise InputError(f"classifier {spec}: neither a built-in classifier ({', '.join(BUILTIN_CLASSIFIERS)}) "
-                         "nor an existing model file", "classifier")
+        raise InputError(
+            f"classifier {spec}: neither a built-in classifier ({', '.join(BUILTIN_CLASSIFIERS)}) "
+            "nor an existing model file",
+            "classifier",
+        )
     model = load_model(spec)
     if not isinstance(model, (HybridClassifier, RuleClassifier)):
         model = HybridClassifier(model)
@@ -85,9 +88,17 @@ class Identification(Columns):
         """The store's `PairRecords` of these pairs (`pair_index` defaults to `0..n-1`)."""
         from vinadv.store.records import PairRecords
 
-        return PairRecords.from_pairs(self.pairs, label=self.labels, attack=self.attack,
-                                      label_source=self.label_source, score=self.score, dh=self.dh, dv=self.dv,
-                                      pair_index=pair_index, harm=self.harm)
+        return PairRecords.from_pairs(
+            self.pairs,
+            label=self.labels,
+            attack=self.attack,
+            label_source=self.label_source,
+            score=self.score,
+            dh=self.dh,
+            dv=self.dv,
+            pair_index=pair_index,
+            harm=self.harm,
+        )
 
     def harm_table(self) -> dict[str, dict[str, int]]:
         """Pairs per (label, harm): `{label: {harm: count}}`."""
@@ -101,15 +112,31 @@ def replan(pairs: PairSet, planner: Planner) -> PairSet:
     o = planner.plan_batch(pairs.obstacles_o, pairs.starts, pairs.goals, pairs.corner_cutting)
     a = planner.plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals, pairs.corner_cutting)
     return PairSet(
-        obstacles_o=pairs.obstacles_o, obstacles_a=pairs.obstacles_a, starts=pairs.starts, goals=pairs.goals,
-        added=pairs.added, map_index=pairs.map_index, path_o=o.paths, path_a=a.paths,
-        term_o=o.termination_names, term_a=a.termination_names, strategy=pairs.strategy, params=dict(pairs.params),
+        obstacles_o=pairs.obstacles_o,
+        obstacles_a=pairs.obstacles_a,
+        starts=pairs.starts,
+        goals=pairs.goals,
+        added=pairs.added,
+        map_index=pairs.map_index,
+        path_o=o.paths,
+        path_a=a.paths,
+        term_o=o.termination_names,
+        term_a=a.termination_names,
+        strategy=pairs.strategy,
+        params=dict(pairs.params),
         corner_cutting=pairs.corner_cutting,
     )
 
 
-def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_source: str = "rule", *,
-             harm_tol: float = DEFAULT_TOL, harm_rtol: float = 0.0, expert_o=None) -> Identification:
+def identify(
+    pairs: PairSet,
+    classifier: PairClassifier | None = None,
+    label_source: str = "rule",
+    *,
+    harm_tol: float = DEFAULT_TOL,
+    harm_rtol: float = 0.0,
+    expert_o=None,
+) -> Identification:
     """Label every pair of `pairs` with `classifier` (default: the exact rule labeller) and compute its harm
     (tolerances `harm_tol`, `harm_rtol`; `expert_o`: the original maps' expert data if already computed, see
     `vinadv.classify.harm.pair_harm`)."""
@@ -131,8 +158,9 @@ def identify(pairs: PairSet, classifier: PairClassifier | None = None, label_sou
         dh=np.where(fork_or_detour, dh, -1).astype(np.int64),
         dv=np.where(fork_or_detour, dv, -1).astype(np.int64),
         label_source=label_source,
-        harm=pairset_harm(pairs, labels, tol=harm_tol, rtol=harm_rtol, t=getattr(classifier, "t", None),
-                          expert_o=expert_o),
+        harm=pairset_harm(
+            pairs, labels, tol=harm_tol, rtol=harm_rtol, t=getattr(classifier, "t", None), expert_o=expert_o
+        ),
     )
 
 
@@ -174,10 +202,18 @@ class StoredIdentification:
     seconds: float
 
 
-def identify_and_store(pairs_path: str | os.PathLike, db: str | None = None, *, classifier: str | None = None,
-                       planner: str | None = None, weights: str | None = None, name: str | None = None,
-                       harm_tol: float = DEFAULT_TOL, harm_rtol: float = 0.0,
-                       remote: Callable[..., Identification] | None = None) -> StoredIdentification:
+def identify_and_store(
+    pairs_path: str | os.PathLike,
+    db: str | None = None,
+    *,
+    classifier: str | None = None,
+    planner: str | None = None,
+    weights: str | None = None,
+    name: str | None = None,
+    harm_tol: float = DEFAULT_TOL,
+    harm_rtol: float = 0.0,
+    remote: Callable[..., Identification] | None = None,
+) -> StoredIdentification:
     """`vinadv identify`: label the pairs of a pairs file and store them as a new run in `db`, with their harm
     (tolerances `harm_tol`, `harm_rtol`). With `planner` or `weights` (`vinadv.planners.registry.load_planner`),
     both maps of every pair are planned again by that planner first: the attacks, found on the planner that made the
@@ -209,16 +245,36 @@ def identify_and_store(pairs_path: str | os.PathLike, db: str | None = None, *, 
     used = replanner.spec() if replanner is not None else attack_planner
     with Store.open(db) as store:
         run_id = store.create_run(
-            name, config={"pairs": str(pairs_path), "strategy": pairs.strategy, "params": pairs.params,
-                          "classifier": classifier, "planner": None if used is None else used["name"],
-                          "weights": weights, PLANNER_SPEC: used, "attack_planner": attack_planner,
-                          "harm_tolerance": harm_tol, "harm_rtol": harm_rtol},
+            name,
+            config={
+                "pairs": str(pairs_path),
+                "strategy": pairs.strategy,
+                "params": pairs.params,
+                "classifier": classifier,
+                "planner": None if used is None else used["name"],
+                "weights": weights,
+                PLANNER_SPEC: used,
+                "attack_planner": attack_planner,
+                "harm_tolerance": harm_tol,
+                "harm_rtol": harm_rtol,
+            },
             weights_checksum=None if used is None else used["weights_sha256"],
-            attack=pairs.strategy, classifier=classifier_name)
+            attack=pairs.strategy,
+            classifier=classifier_name,
+        )
         store.write_pairs(run_id, ident.records())
         store.finish_run(run_id, timings={"identify": elapsed})
     return StoredIdentification(ident, run_id, elapsed)
 
 
-__all__ = ["BUILTIN_CLASSIFIERS", "LABELS", "Identification", "StoredIdentification", "identify",
-           "identify_and_store", "load_classifier", "replan", "rule_strength"]
+__all__ = [
+    "BUILTIN_CLASSIFIERS",
+    "LABELS",
+    "Identification",
+    "StoredIdentification",
+    "identify",
+    "identify_and_store",
+    "load_classifier",
+    "replan",
+    "rule_strength",
+]

@@ -64,8 +64,10 @@ class NpzReader:
         if name not in self._data:
             raise self.fail(name, "is missing")
         arr = self._data[name]
-        ok_kind = arr.dtype.kind == kind or (kind == "i" and arr.dtype.kind == "u") or (
-            kind == "f" and arr.dtype.kind in "iu"
+        ok_kind = (
+            arr.dtype.kind == kind
+            or (kind == "i" and arr.dtype.kind == "u")
+            or (kind == "f" and arr.dtype.kind in "iu")
         )
         if not ok_kind:
             raise self.fail(name, f"has dtype {arr.dtype}, expected {_KIND_NAMES[kind]}")

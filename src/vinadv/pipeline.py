@@ -91,26 +91,41 @@ class ShardResult:
     seconds: dict = field(default_factory=dict)
 
 
-def compute_shard(config: RunConfig, shard: int, planner: Planner, classifier=None,
-                  label_source: str = "rule") -> ShardResult:
+def compute_shard(
+    config: RunConfig, shard: int, planner: Planner, classifier=None, label_source: str = "rule"
+) -> ShardResult:
     """Generate, attack and identify shard `shard` of the run: deterministic for `(config, shard)`."""
     first_map = shard * config.shard_size
     n_maps = min(config.shard_size, config.n - first_map)
     seconds = {}
     t0 = time.perf_counter()
-    maps = generate_maps(n_maps, config.size, seed=(config.seed, shard), n_starts=1,
-                         corner_cutting=config.corner_cutting)
+    maps = generate_maps(
+        n_maps, config.size, seed=(config.seed, shard), n_starts=1, corner_cutting=config.corner_cutting
+    )
     t1 = time.perf_counter()
-    attack = make_attack(config.attack, per_map=config.per_map, seed=(config.seed, shard), budget=config.budget,
-                         radius=config.radius, obstacles=config.obstacles)
-    result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, planner, config.corner_cutting,
-                           strength=objective_strength(config.objective))
+    attack = make_attack(
+        config.attack,
+        per_map=config.per_map,
+        seed=(config.seed, shard),
+        budget=config.budget,
+        radius=config.radius,
+        obstacles=config.obstacles,
+    )
+    result = attack.attack(
+        maps.obstacles,
+        maps.starts[:, 0],
+        maps.goals,
+        planner,
+        config.corner_cutting,
+        strength=objective_strength(config.objective),
+    )
     t2 = time.perf_counter()
     # the generator's expert paths of the original maps: harm then searches only adversarial maps (and few of them)
     pairs = result.pairs
     expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
-    ident = identify(pairs, classifier, label_source, harm_tol=config.harm_tolerance, harm_rtol=config.harm_rtol,
-                     expert_o=expert_o)
+    ident = identify(
+        pairs, classifier, label_source, harm_tol=config.harm_tolerance, harm_rtol=config.harm_rtol, expert_o=expert_o
+    )
     t3 = time.perf_counter()
     seconds.update(generate=t1 - t0, attack=t2 - t1, identify=t3 - t2)
     global_map = first_map + pairs.map_index
@@ -119,8 +134,9 @@ def compute_shard(config: RunConfig, shard: int, planner: Planner, classifier=No
         slot = np.arange(len(pairs)) - first_of_map
     else:  # one pair per valid cell of the last step: that cell is the slot
         slot = pairs.added[:, -1, 0] * config.size + pairs.added[:, -1, 1]
-    return ShardResult(shard, ident, global_map * config.slots + slot, n_maps, len(result.no_valid_cell),
-                       result.planner_calls, seconds)
+    return ShardResult(
+        shard, ident, global_map * config.slots + slot, n_maps, len(result.no_valid_cell), result.planner_calls, seconds
+    )
 
 
 def shard_records(result: ShardResult):
@@ -166,11 +182,20 @@ class RunSummary:
         valid = self.n_pairs - self.counts["invalid"]
         success = success_count(self.counts)
         return {
-            "run_id": self.run_id, "name": self.name, "db": self.db, "planner": self.planner, "maps": self.n_maps,
+            "run_id": self.run_id,
+            "name": self.name,
+            "db": self.db,
+            "planner": self.planner,
+            "maps": self.n_maps,
             "pairs": self.n_pairs,
-            "stored": self.stored, "skipped_shards": self.skipped_shards, "maps_without_valid_cell": self.no_valid_cell,
-            "counts": dict(self.counts), "valid_pairs": valid, "successful": success,
-            "success_rate": success / valid if valid else None, **harm_summary(self.harm_table),
+            "stored": self.stored,
+            "skipped_shards": self.skipped_shards,
+            "maps_without_valid_cell": self.no_valid_cell,
+            "counts": dict(self.counts),
+            "valid_pairs": valid,
+            "successful": success,
+            "success_rate": success / valid if valid else None,
+            **harm_summary(self.harm_table),
             "planner_calls": self.planner_calls,
             "planner_calls_per_success": self.planner_calls / success if success else None,
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
@@ -200,16 +225,30 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         stored_config.pop(PLANNER_SPEC, None)
         if stored_config != config.to_dict():
             diff = sorted(k for k in config.to_dict() if stored_config.get(k) != config.to_dict()[k])
-            raise InputError(f"resume: run '{name}' was made with other settings ({', '.join(diff)}); "
-                             "use the same options or another name", "resume", "name")
+            raise InputError(
+                f"resume: run '{name}' was made with other settings ({', '.join(diff)}); "
+                "use the same options or another name",
+                "resume",
+                "name",
+            )
         if info["weights_checksum"] != planner.checksum:
-            raise InputError(f"resume: run '{name}' was made with another {planner.name!r} planner (weights sha256 "
-                             f"{info['weights_checksum']}, now {planner.checksum}); use the same planner or another "
-                             "name", "resume", "planner")
+            raise InputError(
+                f"resume: run '{name}' was made with another {planner.name!r} planner (weights sha256 "
+                f"{info['weights_checksum']}, now {planner.checksum}); use the same planner or another "
+                "name",
+                "resume",
+                "planner",
+            )
         return run_id
-    return store.create_run(name, config={**config.to_dict(), PLANNER_SPEC: planner.spec()}, seed=config.seed,
-                            weights_checksum=planner.checksum, attack=config.attack, classifier=classifier_name,
-                            version=__version__)
+    return store.create_run(
+        name,
+        config={**config.to_dict(), PLANNER_SPEC: planner.spec()},
+        seed=config.seed,
+        weights_checksum=planner.checksum,
+        attack=config.attack,
+        classifier=classifier_name,
+        version=__version__,
+    )
 
 
 def run_pipeline(
@@ -233,7 +272,7 @@ def run_pipeline(
         shards = range(config.n_shards)  # a range, not a list: a huge --n streams shard by shard
         if resume:
             summary.skipped_shards = _complete_shards(store, run_id, config)
-            shards = shards[summary.skipped_shards:]
+            shards = shards[summary.skipped_shards :]
         compute = shard_results or _local_shards
         bar = None
         if progress:
@@ -244,8 +283,9 @@ def run_pipeline(
         try:
             for result in compute(config, shards, planner, classifier, classifier_name):
                 t0 = time.perf_counter()
-                written = store.write_pairs(run_id, shard_records(result),
-                                            skip_stored=resume or shard_results is not None)
+                written = store.write_pairs(
+                    run_id, shard_records(result), skip_stored=resume or shard_results is not None
+                )
                 if result.shard == done:  # shards arrive in order: 0 .. done-1 are all stored
                     done += 1
                     store.set_shards_done(run_id, done)
@@ -253,10 +293,14 @@ def run_pipeline(
                 if bar is not None:
                     bar.update(result.n_maps)
         except OutputError as exc:
-            how = (f"resume it with the same options and --name {name} --resume" if name else
-                   "it has no --name, so it cannot be resumed (give runs a --name)")
-            raise OutputError(f"{exc}; run {run_id} stopped with {summary.stored:,} "
-                              f"pairs stored this time: {how}") from None
+            how = (
+                f"resume it with the same options and --name {name} --resume"
+                if name
+                else "it has no --name, so it cannot be resumed (give runs a --name)"
+            )
+            raise OutputError(
+                f"{exc}; run {run_id} stopped with {summary.stored:,} pairs stored this time: {how}"
+            ) from None
         finally:
             if bar is not None:
                 bar.close()

@@ -86,8 +86,9 @@ def worst_case(outcomes: list[MapOutcomes]) -> MapOutcomes:
     reached = ~np.isnan(regrets)
     largest = np.where(reached.any(axis=0), np.where(reached, regrets, -np.inf).max(axis=0), np.nan)
     regret = np.where(valid & ~unreached, largest, np.nan)
-    return MapOutcomes(pair=pair, valid=valid, broken=broken, harmful=harmful, regret=regret,
-                       label=np.full(len(pair), ""))
+    return MapOutcomes(
+        pair=pair, valid=valid, broken=broken, harmful=harmful, regret=regret, label=np.full(len(pair), "")
+    )
 
 
 @dataclass
@@ -115,15 +116,32 @@ class Figures:
     @classmethod
     def of(cls, k: int, outcome: MapOutcomes, counts: dict[str, int] | None = None) -> Figures:
         regrets = outcome.regret[~np.isnan(outcome.regret)]
-        return cls(k=k, maps=len(outcome.pair), attacked=int(outcome.pair.sum()), valid=int(outcome.valid.sum()),
-                   broken=int(outcome.broken.sum()), harmful=int(outcome.harmful.sum()), reached=len(regrets),
-                   mean_regret=float(regrets.mean()) if len(regrets) else None, counts=counts)
+        return cls(
+            k=k,
+            maps=len(outcome.pair),
+            attacked=int(outcome.pair.sum()),
+            valid=int(outcome.valid.sum()),
+            broken=int(outcome.broken.sum()),
+            harmful=int(outcome.harmful.sum()),
+            reached=len(regrets),
+            mean_regret=float(regrets.mean()) if len(regrets) else None,
+            counts=counts,
+        )
 
     def to_dict(self) -> dict:
-        return {"k": self.k, "maps": self.maps, "attacked": self.attacked, "valid": self.valid,
-                "broken": self.broken, "paper_success_rate": self.paper_success_rate, "harmful": self.harmful,
-                "harmful_rate": self.harmful_rate, "reached": self.reached, "mean_regret": self.mean_regret,
-                **({} if self.counts is None else {"counts": self.counts})}
+        return {
+            "k": self.k,
+            "maps": self.maps,
+            "attacked": self.attacked,
+            "valid": self.valid,
+            "broken": self.broken,
+            "paper_success_rate": self.paper_success_rate,
+            "harmful": self.harmful,
+            "harmful_rate": self.harmful_rate,
+            "reached": self.reached,
+            "mean_regret": self.mean_regret,
+            **({} if self.counts is None else {"counts": self.counts}),
+        }
 
 
 @dataclass
@@ -138,8 +156,12 @@ class StrategyResult:
     outcomes: list[MapOutcomes] = field(default_factory=list, repr=False)
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "seconds": round(self.seconds, 3), "planner_calls": self.planner_calls,
-                "by_obstacles": [f.to_dict() for f in self.by_k]}
+        return {
+            "name": self.name,
+            "seconds": round(self.seconds, 3),
+            "planner_calls": self.planner_calls,
+            "by_obstacles": [f.to_dict() for f in self.by_k],
+        }
 
 
 @dataclass
@@ -171,9 +193,14 @@ class RobustnessResult:
 
     def to_dict(self) -> dict:
         """Every figure, JSON-able (what `--json` prints and the database stores)."""
-        return {"planner": self.planner, "settings": self.settings, "clean": self.clean,
-                "strategies": {name: s.to_dict() for name, s in self.strategies.items()},
-                "overall": [f.to_dict() for f in self.overall], "seconds": round(self.seconds, 3)}
+        return {
+            "planner": self.planner,
+            "settings": self.settings,
+            "clean": self.clean,
+            "strategies": {name: s.to_dict() for name, s in self.strategies.items()},
+            "overall": [f.to_dict() for f in self.overall],
+            "seconds": round(self.seconds, 3),
+        }
 
 
 def check_strategies(strategies, exhaustive: bool = False) -> tuple[str, ...]:
@@ -186,10 +213,14 @@ def check_strategies(strategies, exhaustive: bool = False) -> tuple[str, ...]:
         names = [s.strip() for s in str(strategies).split(",")]
         if "all" in names:
             at = names.index("all")
-            names = [*names[:at], *DEFAULT_STRATEGIES, *names[at + 1:]]
+            names = [*names[:at], *DEFAULT_STRATEGIES, *names[at + 1 :]]
     if EXHAUSTIVE in names and not exhaustive:
-        raise InputError("strategies: add exhaustive to run the exhaustive strategy (it plans every valid cell of "
-                         "every map at every step: slow)", "strategies", "exhaustive")
+        raise InputError(
+            "strategies: add exhaustive to run the exhaustive strategy (it plans every valid cell of "
+            "every map at every step: slow)",
+            "strategies",
+            "exhaustive",
+        )
     if exhaustive and EXHAUSTIVE not in names:
         names.append(EXHAUSTIVE)
     return _known(names)
@@ -202,8 +233,9 @@ def _known(names) -> tuple[str, ...]:
     names = tuple(names)
     for name in names:
         if name not in STRATEGIES:
-            raise InputError(f"strategies: unknown strategy {name!r}; choose from all, {', '.join(STRATEGIES)}",
-                             "strategies")
+            raise InputError(
+                f"strategies: unknown strategy {name!r}; choose from all, {', '.join(STRATEGIES)}", "strategies"
+            )
     if len(set(names)) != len(names):
         raise InputError(f"strategies: a strategy named twice in {','.join(names)}", "strategies")
     if not names:
@@ -273,11 +305,29 @@ def robustness(
         results[name] = StrategyResult(name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes)
     overall_outcomes = [worst_case([r.outcomes[k] for r in results.values()]) for k in range(int(max_obstacles))]
     overall = [Figures.of(k + 1, o) for k, o in enumerate(overall_outcomes)]
-    settings = {"n": n, "size": maps.size, "maps_seed": int(maps.seed), "corner_cutting": bool(cc),
-                "strategies": list(strategies), "max_obstacles": int(max_obstacles), "objective": objective,
-                "seed": seed, "budget": budget, "radius": radius, "harm_tolerance": harm_tol, "harm_rtol": harm_rtol}
-    return RobustnessResult(planner=planner.spec(), settings=settings, clean=clean, strategies=results,
-                            overall=overall, seconds=time.perf_counter() - t_start, overall_outcomes=overall_outcomes)
+    settings = {
+        "n": n,
+        "size": maps.size,
+        "maps_seed": int(maps.seed),
+        "corner_cutting": bool(cc),
+        "strategies": list(strategies),
+        "max_obstacles": int(max_obstacles),
+        "objective": objective,
+        "seed": seed,
+        "budget": budget,
+        "radius": radius,
+        "harm_tolerance": harm_tol,
+        "harm_rtol": harm_rtol,
+    }
+    return RobustnessResult(
+        planner=planner.spec(),
+        settings=settings,
+        clean=clean,
+        strategies=results,
+        overall=overall,
+        seconds=time.perf_counter() - t_start,
+        overall_outcomes=overall_outcomes,
+    )
 
 
 def _clean(planner, maps) -> dict:
@@ -285,8 +335,12 @@ def _clean(planner, maps) -> dict:
     plans = planner.plan_batch(maps.obstacles, maps.starts[:, 0], maps.goals, maps.corner_cutting)
     reached = plans.reached
     regret = plans.paths.costs()[reached] - maps.expert_costs[reached, 0]
-    return {"maps": len(maps), "reached": int(reached.sum()), "success_rate": float(reached.mean()),
-            "mean_regret": float(regret.mean()) if len(regret) else None}
+    return {
+        "maps": len(maps),
+        "reached": int(reached.sum()),
+        "success_rate": float(reached.mean()),
+        "mean_regret": float(regret.mean()) if len(regret) else None,
+    }
 
 
 def _outcomes(n: int, map_index, labels, harm, regret_a) -> MapOutcomes:
@@ -310,9 +364,21 @@ def save_robustness(result: RobustnessResult, db: str | None) -> int:
     from vinadv.store import Store
 
     with Store.open(db) as store:
-        return store.add_robustness(result.planner["name"], result.planner.get("weights_sha256"), result.settings,
-                                    result.to_dict())
+        return store.add_robustness(
+            result.planner["name"], result.planner.get("weights_sha256"), result.settings, result.to_dict()
+        )
 
 
-__all__ = ["BENCHMARK_SEED", "DEFAULT_STRATEGIES", "Figures", "MapOutcomes", "RobustnessResult", "StrategyResult",
-           "benchmark_maps", "check_strategies", "robustness", "save_robustness", "worst_case"]
+__all__ = [
+    "BENCHMARK_SEED",
+    "DEFAULT_STRATEGIES",
+    "Figures",
+    "MapOutcomes",
+    "RobustnessResult",
+    "StrategyResult",
+    "benchmark_maps",
+    "check_strategies",
+    "robustness",
+    "save_robustness",
+    "worst_case",
+]

@@ -69,13 +69,15 @@ def test_valid_additions_is_the_rule(seed, k, data):
 
 
 @settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 10**6), k=st.integers(1, 4), name=st.sampled_from(sorted(STRATEGIES)),
-       per_map=st.integers(1, 2))
+@given(
+    seed=st.integers(0, 10**6), k=st.integers(1, 4), name=st.sampled_from(sorted(STRATEGIES)), per_map=st.integers(1, 2)
+)
 def test_every_k_obstacle_pair_keeps_the_rules(seed, k, name, per_map):
     maps = generate_maps(6, SIZE, seed=seed, n_starts=1)
     model = planning_vin(SIZE, seed=seed % 7, noise=0.2)
     result = make_attack(name, per_map=per_map, seed=seed, budget=3, obstacles=k).attack(
-        maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength)
+        maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength
+    )
     pairs = result.pairs
     assert pairs.added.shape == (len(pairs), k, 2) and len(result.steps) == k
     assert set(pairs.map_index.tolist()).isdisjoint(result.no_valid_cell.tolist())
@@ -144,8 +146,9 @@ def _harm_value(obstacles, adv, start, goal, original, planned):
 def test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search(model, maps, objective):
     k = 3
     strength, oracle = (rule_strength, _label_strength) if objective == "paper" else (harm_strength, _harm_value)
-    result = make_attack("exhaustive", obstacles=k).attack(maps.obstacles[:8], maps.starts[:8, 0], maps.goals[:8],
-                                                          model, strength=strength)
+    result = make_attack("exhaustive", obstacles=k).attack(
+        maps.obstacles[:8], maps.starts[:8, 0], maps.goals[:8], model, strength=strength
+    )
     for i in range(8):
         expected = _brute_greedy(model, maps.obstacles[i], maps.starts[i, 0], maps.goals[i], k, oracle)
         got = np.flatnonzero(result.pairs.map_index == i)
@@ -158,11 +161,15 @@ def test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search(model, map
 
 @pytest.mark.parametrize("name", sorted(STRATEGIES))
 def test_the_steps_of_k_obstacles_are_the_attacks_of_fewer(name, model, maps):
-    full = make_attack(name, seed=3, budget=4, obstacles=3).attack(maps.obstacles, maps.starts[:, 0], maps.goals,
-                                                                   model, strength=rule_strength)
+    full = make_attack(name, seed=3, budget=4, obstacles=3).attack(
+        maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength
+    )
     for k in (1, 2, 3):
-        alone = make_attack(name, seed=3, budget=4, obstacles=k).attack(
-            maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength).pairs
+        alone = (
+            make_attack(name, seed=3, budget=4, obstacles=k)
+            .attack(maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength)
+            .pairs
+        )
         step = full.steps[k - 1]
         assert np.array_equal(step.added, alone.added) and np.array_equal(step.map_index, alone.map_index)
         assert step.path_a == alone.path_a and step.path_o == alone.path_o
@@ -171,9 +178,14 @@ def test_the_steps_of_k_obstacles_are_the_attacks_of_fewer(name, model, maps):
 @pytest.mark.parametrize("name", ["random", "near-path", "key-points"])
 def test_shards_attack_as_the_whole_batch(name, model, maps):
     whole = make_attack(name, seed=9, obstacles=2).attack(maps.obstacles, maps.starts[:, 0], maps.goals, model)
-    parts = [make_attack(name, seed=9, obstacles=2).attack(maps.obstacles[lo:lo + 10], maps.starts[lo:lo + 10, 0],
-                                                           maps.goals[lo:lo + 10], model, first_map=lo).pairs
-             for lo in (0, 10, 20)]
+    parts = [
+        make_attack(name, seed=9, obstacles=2)
+        .attack(
+            maps.obstacles[lo : lo + 10], maps.starts[lo : lo + 10, 0], maps.goals[lo : lo + 10], model, first_map=lo
+        )
+        .pairs
+        for lo in (0, 10, 20)
+    ]
     for lo, part in zip((0, 10, 20), parts):
         sel = (whole.pairs.map_index >= lo) & (whole.pairs.map_index < lo + 10)
         assert np.array_equal(part.added, whole.pairs.added[sel])
@@ -181,8 +193,9 @@ def test_shards_attack_as_the_whole_batch(name, model, maps):
 
 
 def test_per_map_keeps_several_pairs_at_the_last_step_only(model, maps):
-    result = make_attack("exhaustive", per_map=0, obstacles=2).attack(maps.obstacles[:4], maps.starts[:4, 0],
-                                                                      maps.goals[:4], model)
+    result = make_attack("exhaustive", per_map=0, obstacles=2).attack(
+        maps.obstacles[:4], maps.starts[:4, 0], maps.goals[:4], model
+    )
     first = result.steps[0]
     assert np.bincount(first.map_index).max() == 1
     for i in range(4):
@@ -207,15 +220,19 @@ def test_pairs_files_of_k_obstacles_round_trip_and_one_obstacle_files_stay_as_be
     assert np.array_equal(PairSet.load(tmp_path / "one.npz").added, one.added)
 
 
-@pytest.mark.parametrize("fault, field, message", [
-    ("twice", "added", "the same cell twice"),
-    ("start", "added", "is on the start"),
-    ("missing", "obstacles_a", "exactly the cells 'added'"),
-    ("obstacle", "added", "already an obstacle"),
-])
+@pytest.mark.parametrize(
+    "fault, field, message",
+    [
+        ("twice", "added", "the same cell twice"),
+        ("start", "added", "is on the start"),
+        ("missing", "obstacles_a", "exactly the cells 'added'"),
+        ("obstacle", "added", "already an obstacle"),
+    ],
+)
 def test_k_obstacle_pairs_files_are_checked(model, maps, tmp_path, fault, field, message):
-    pairs = make_attack("random", obstacles=3, seed=2).attack(maps.obstacles, maps.starts[:, 0], maps.goals,
-                                                               model).pairs
+    pairs = (
+        make_attack("random", obstacles=3, seed=2).attack(maps.obstacles, maps.starts[:, 0], maps.goals, model).pairs
+    )
     pairs.save(tmp_path / "p.npz")
     a = read_npz(tmp_path / "p.npz")
     added, obs_a, obs_o = a["added"].copy(), a["obstacles_a"].copy(), a["obstacles_o"].copy()

@@ -46,7 +46,8 @@ def maps():
 def test_every_strategy_runs_on_every_planner(strategy, planner_name, maps):
     planner = PLANNERS[planner_name]()
     result = make_attack(strategy, per_map=1, seed=5, budget=4).attack(
-        maps.obstacles, maps.starts[:, 0], maps.goals, planner, strength=rule_strength)
+        maps.obstacles, maps.starts[:, 0], maps.goals, planner, strength=rule_strength
+    )
     pairs = result.pairs
     assert len(pairs) > 0
     assert_valid(pairs, maps)
@@ -60,7 +61,8 @@ def test_every_strategy_runs_on_every_planner(strategy, planner_name, maps):
 def test_no_attack_on_the_optimal_planner_is_harmful(strategy, maps):
     """A perfect planner re-routes optimally: every valid pair is harmless, whatever the paper's label says."""
     result = make_attack(strategy, per_map=2, seed=1, budget=6).attack(
-        maps.obstacles, maps.starts[:, 0], maps.goals, OptimalPlanner(SIZE))
+        maps.obstacles, maps.starts[:, 0], maps.goals, OptimalPlanner(SIZE)
+    )
     ident = identify(result.pairs)
     valid = ident.labels != "invalid"
     assert valid.any()
@@ -74,8 +76,15 @@ def test_saliency_on_the_vin_planner_is_the_gradient_of_the_vin_itself(maps):
     planner = VINPlanner(vin, SIZE)
     obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
     originals = planner.plan_batch(obstacles, starts, goals)
-    ctx = AttackContext(obstacles, starts, goals, valid_cells(obstacles, starts, goals, True), originals, planner,
-                        np.random.default_rng(0))
+    ctx = AttackContext(
+        obstacles,
+        starts,
+        goals,
+        valid_cells(obstacles, starts, goals, True),
+        originals,
+        planner,
+        np.random.default_rng(0),
+    )
     scores = SaliencyAttack().candidate_scores(ctx)
     # oracle: the log-probability of the chosen action at every non-goal path cell, differentiated w.r.t. the
     # obstacle channel of the VIN's own input, one map at a time
@@ -118,8 +127,15 @@ def test_value_maps_per_planner(maps):
 def test_saliency_without_gradients_ranks_as_key_points(maps):
     planner = OptimalPlanner(SIZE)
     obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
-    ctx = AttackContext(obstacles, starts, goals, valid_cells(obstacles, starts, goals, True),
-                        planner.plan_batch(obstacles, starts, goals), planner, np.random.default_rng(0))
+    ctx = AttackContext(
+        obstacles,
+        starts,
+        goals,
+        valid_cells(obstacles, starts, goals, True),
+        planner.plan_batch(obstacles, starts, goals),
+        planner,
+        np.random.default_rng(0),
+    )
     np.testing.assert_array_equal(SaliencyAttack().candidate_scores(ctx), KeyPointsAttack().candidate_scores(ctx))
 
 

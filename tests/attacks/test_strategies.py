@@ -54,7 +54,8 @@ def test_every_pair_is_valid_and_seeds_reproduce(name, model, maps, tmp_path):
     assert_valid(first.pairs, maps)
     assert np.all(np.bincount(first.pairs.map_index) <= 2)
     second = make_attack(name, per_map=2, seed=7, budget=5).attack(
-        maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength)
+        maps.obstacles, maps.starts[:, 0], maps.goals, model, strength=rule_strength
+    )
     np.testing.assert_array_equal(first.pairs.added, second.pairs.added)
     assert first.pairs.path_a == second.pairs.path_a
     # the pairs file round-trips
@@ -103,8 +104,9 @@ def test_no_valid_cell_gives_no_pair(name):
 
 
 def test_exhaustive_finds_the_strongest_cell_of_a_brute_force_search(model, maps):
-    result = make_attack("exhaustive").attack(maps.obstacles[:6], maps.starts[:6, 0], maps.goals[:6], model,
-                                              strength=rule_strength)
+    result = make_attack("exhaustive").attack(
+        maps.obstacles[:6], maps.starts[:6, 0], maps.goals[:6], model, strength=rule_strength
+    )
     for i in range(6):
         obstacles, start, goal = maps.obstacles[i], maps.starts[i, 0], maps.goals[i]
         original = plan_reference(obstacles[None], start[None], goal[None], model)

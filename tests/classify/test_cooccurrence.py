@@ -140,13 +140,19 @@ def test_tuned_classifiers_learn_the_rule(rule_pairs, kind):
     assert roc_auc_score(yt == "FP", model.decision_function(Xt)) >= 0.99
 
 
-@pytest.mark.parametrize("make", [
-    lambda: SVMImageClassifier(C=10.0, encoding="split", features="offsets"),
-    lambda: SVMImageClassifier(encoding="split", features="cooccurrence"),
-    lambda: MLPImageClassifier(width=8, epochs=1, batch_size=32, augment=True, encoding="split", features="offsets"),
-    lambda: MLPImageClassifier(width=8, epochs=1, batch_size=32, encoding="split", features="cooccurrence"),
-    lambda: CNNImageClassifier(width=4, epochs=1, batch_size=32, encoding="split", features="cooccurrence"),
-], ids=["svm-offsets", "svm-cooccurrence", "mlp-offsets", "mlp-cooccurrence", "cnn-cooccurrence"])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: SVMImageClassifier(C=10.0, encoding="split", features="offsets"),
+        lambda: SVMImageClassifier(encoding="split", features="cooccurrence"),
+        lambda: MLPImageClassifier(
+            width=8, epochs=1, batch_size=32, augment=True, encoding="split", features="offsets"
+        ),
+        lambda: MLPImageClassifier(width=8, epochs=1, batch_size=32, encoding="split", features="cooccurrence"),
+        lambda: CNNImageClassifier(width=4, epochs=1, batch_size=32, encoding="split", features="cooccurrence"),
+    ],
+    ids=["svm-offsets", "svm-cooccurrence", "mlp-offsets", "mlp-cooccurrence", "cnn-cooccurrence"],
+)
 def test_feature_models_round_trip(rule_pairs, make, tmp_path):
     X, y, Xt, _ = rule_pairs
     X, y = X.take(np.arange(0, len(X), 4)), y[::4]

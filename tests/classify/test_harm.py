@@ -94,8 +94,12 @@ def harm_cases(draw, corner_cutting=None):
         paths = []
         for side_map in (obstacles, adv):
             kind = draw(st.sampled_from(["optimal", "detour", "cut", "original"]))
-            if kind == "original" and paths and all(
-                legal(side_map.tolist(), *p, q[0] - p[0], q[1] - p[1], cc) for p, q in zip(paths[0], paths[0][1:])
+            if (
+                kind == "original"
+                and paths
+                and all(
+                    legal(side_map.tolist(), *p, q[0] - p[0], q[1] - p[1], cc) for p, q in zip(paths[0], paths[0][1:])
+                )
             ):
                 paths.append(list(paths[0]))
                 continue
@@ -204,8 +208,14 @@ def test_harm_invariant_under_flips_and_rotations(case, k):
         return
     n = len(rows[0][0])
     moved = [
-        (_dihedral_map(o, k), _dihedral_map(a, k), _dihedral([s], n, k)[0], _dihedral([g], n, k)[0],
-         _dihedral(po, n, k), _dihedral(pa, n, k))
+        (
+            _dihedral_map(o, k),
+            _dihedral_map(a, k),
+            _dihedral([s], n, k)[0],
+            _dihedral([g], n, k)[0],
+            _dihedral(po, n, k),
+            _dihedral(pa, n, k),
+        )
         for o, a, s, g, po, pa in rows
     ]
     before, _, _ = run(rows, cc)
@@ -283,8 +293,15 @@ def test_shared_original_and_given_expert_data_give_the_same_result():
     plain = pair_harm(*args)
     given = pair_harm(*args, expert_o=(maps.expert_costs[map_index, 0], maps.expert.take(map_index)))
     shuffled = rng.permutation(len(map_index))  # no consecutive repeats: every original searched on its own
-    alone = pair_harm(obstacles_o[shuffled], obstacles_a[shuffled], starts[shuffled], goals[shuffled],
-                      expert_o.take(shuffled), expert_a.take(shuffled), labels[shuffled])
+    alone = pair_harm(
+        obstacles_o[shuffled],
+        obstacles_a[shuffled],
+        starts[shuffled],
+        goals[shuffled],
+        expert_o.take(shuffled),
+        expert_a.take(shuffled),
+        labels[shuffled],
+    )
     for name in ("opt_cost_o", "opt_cost_a", "regret_a", "expert_label", "harm"):
         a, b, c = getattr(plain, name), getattr(given, name), getattr(alone, name)
         if a.dtype.kind == "f":  # sums of 1 and sqrt(2) in another order: equal up to rounding

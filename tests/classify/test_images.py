@@ -58,8 +58,10 @@ def test_augmentation_keeps_labels(batch, seed):
     assert label_batch(balanced).labels.tolist() == new_labels.tolist()
     images, image_labels = balance_images(render_batch(batch), labels, seed)
     assert sorted(image_labels.tolist()) == sorted(new_labels.tolist())
-    assert np.array_equal(np.sort(images.reshape(len(images), -1), axis=0),
-                          np.sort(render_batch(balanced).reshape(len(images), -1), axis=0))
+    assert np.array_equal(
+        np.sort(images.reshape(len(images), -1), axis=0),
+        np.sort(render_batch(balanced).reshape(len(images), -1), axis=0),
+    )
 
 
 def test_split_encoding_marks_shared_cells_green():
@@ -74,5 +76,4 @@ def test_split_encoding_marks_shared_cells_green():
 @settings(max_examples=20, deadline=None)
 @given(path_pairs(), st.integers(0, 7))
 def test_split_rendering_commutes_with_transforms(batch, k):
-    assert np.array_equal(render_batch(batch.transformed(k), "split"),
-                          transform_grids(render_batch(batch, "split"), k))
+    assert np.array_equal(render_batch(batch.transformed(k), "split"), transform_grids(render_batch(batch, "split"), k))

@@ -1,6 +1,5 @@
 """Image classifiers, hybrid and rule classifiers, model files."""
 
-
 import numpy as np
 import pytest
 import scipy.sparse
@@ -45,8 +44,9 @@ def test_svm_decision_equals_sklearn_svc(pairs):
 TINY = {
     "svm": lambda: make_fp_classifier("svm", "tuned"),
     "cnn": lambda: CNNImageClassifier("plain", width=4, epochs=1, batch_size=16),
-    "cnn-rowcol": lambda: CNNImageClassifier("rowcol", width=4, epochs=2, batch_size=16, augment=True,
-                                             encoding="split", optimizer="adamw", schedule="cosine"),
+    "cnn-rowcol": lambda: CNNImageClassifier(
+        "rowcol", width=4, epochs=2, batch_size=16, augment=True, encoding="split", optimizer="adamw", schedule="cosine"
+    ),
     "mlp": lambda: MLPImageClassifier("plain", width=16, epochs=2, batch_size=16, augment=True),
     "hausdorff": lambda: make_fp_classifier("hausdorff"),
     "frechet": lambda: make_fp_classifier("frechet"),

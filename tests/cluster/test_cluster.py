@@ -55,8 +55,9 @@ def test_run_on_the_cluster_stores_the_same_pairs_as_the_local_run(weights, clus
     _, client = cluster
     local_db, cluster_db = f"sqlite:///{tmp_path / 'local.db'}", f"sqlite:///{tmp_path / 'cluster.db'}"
     local = run_pipeline(config(weights), db=local_db, name="x", progress=False)
-    on_cluster = run_pipeline(config(weights), db=cluster_db, name="x", progress=False,
-                              shard_results=ClusterShards(client))
+    on_cluster = run_pipeline(
+        config(weights), db=cluster_db, name="x", progress=False, shard_results=ClusterShards(client)
+    )
     assert on_cluster.stored == on_cluster.n_pairs == local.n_pairs > 150
     a, b = stored(local_db, local.run_id), stored(cluster_db, on_cluster.run_id)
     assert np.array_equal(a.pair_index, b.pair_index) and a.equals(b)
@@ -77,8 +78,12 @@ def test_workers_are_single_threaded(cluster):
 
         from vinadv.planners import batching
 
-        return (torch.get_num_threads(), numba.get_num_threads(), os.environ.get("NUMBA_NUM_THREADS"),
-                batching.N_THREADS)
+        return (
+            torch.get_num_threads(),
+            numba.get_num_threads(),
+            os.environ.get("NUMBA_NUM_THREADS"),
+            batching.N_THREADS,
+        )
 
     assert set(client.run(threads).values()) == {(1, 1, "1", 1)}
 
@@ -103,8 +108,22 @@ def test_cli_run_with_a_local_cluster_of_its_own(weights, tmp_path):
 
 def test_cli_run_with_cluster_address_matches_the_local_cli_run(weights, cluster, tmp_path):
     local, _ = cluster
-    common = ["run", "--n", "60", "--size", str(SIZE), "--shard-size", "20", "--weights", weights, "--seed", "3",
-              "--attack", "key-points", "--quiet"]
+    common = [
+        "run",
+        "--n",
+        "60",
+        "--size",
+        str(SIZE),
+        "--shard-size",
+        "20",
+        "--weights",
+        weights,
+        "--seed",
+        "3",
+        "--attack",
+        "key-points",
+        "--quiet",
+    ]
     assert main([*common, "--db", str(tmp_path / "a.db")]) == 0
     assert main([*common, "--db", str(tmp_path / "b.db"), "--cluster", local.scheduler_address]) == 0
     with Store.open(str(tmp_path / "a.db")) as a, Store.open(str(tmp_path / "b.db")) as b:
@@ -126,8 +145,9 @@ def test_a_killed_worker_still_leaves_every_pair_exactly_once(weights, cluster, 
 
     db = f"sqlite:///{tmp_path / 'kill.db'}"
     cfg = config(weights, n=240, seed=11, shard_size=10)
-    summary = run_pipeline(cfg, db=db, name="k", progress=False,
-                           shard_results=ClusterShards(client, on_result=kill_one_worker))
+    summary = run_pipeline(
+        cfg, db=db, name="k", progress=False, shard_results=ClusterShards(client, on_result=kill_one_worker)
+    )
     assert killed
     got = stored(db, summary.run_id)
     assert len(np.unique(got.pair_index)) == len(got.pair_index) == summary.n_pairs == summary.stored
@@ -160,14 +180,50 @@ def test_a_shard_delivered_twice_is_stored_once(weights, tmp_path):
 def test_attack_on_the_cluster_writes_the_same_pairs_file(weights, cluster, tmp_path, strategy, obstacles):
     local, _ = cluster
     maps = tmp_path / "maps.npz"
-    assert main(["maps", "generate", "--n", "45", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
-                 "--seed", "5", "--quiet"]) == 0
-    args = ["attack", "--maps", str(maps), "--strategy", strategy, "--weights", weights, "--per-map", "2",
-            "--seed", "3", "--obstacles", str(obstacles), "--quiet"]
+    assert (
+        main(
+            [
+                "maps",
+                "generate",
+                "--n",
+                "45",
+                "--size",
+                str(SIZE),
+                "--starts",
+                "1",
+                "--out",
+                str(maps),
+                "--seed",
+                "5",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    args = [
+        "attack",
+        "--maps",
+        str(maps),
+        "--strategy",
+        strategy,
+        "--weights",
+        weights,
+        "--per-map",
+        "2",
+        "--seed",
+        "3",
+        "--obstacles",
+        str(obstacles),
+        "--quiet",
+    ]
     assert main([*args, "--out", str(tmp_path / "local.npz")]) == 0
     # uneven shards (45 = 16 + 16 + 13): the random stream must continue across shard boundaries
-    assert main([*args, "--out", str(tmp_path / "cluster.npz"), "--cluster", local.scheduler_address,
-                 "--shard-size", "16"]) == 0
+    assert (
+        main(
+            [*args, "--out", str(tmp_path / "cluster.npz"), "--cluster", local.scheduler_address, "--shard-size", "16"]
+        )
+        == 0
+    )
     a, b = PairSet.load(tmp_path / "local.npz"), PairSet.load(tmp_path / "cluster.npz")
     assert len(a) == len(b) > 40 and a.n_added == obstacles
     for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added", "map_index", "term_o", "term_a"):
@@ -179,15 +235,46 @@ def test_attack_on_the_cluster_writes_the_same_pairs_file(weights, cluster, tmp_
 def test_identify_on_the_cluster_stores_the_same_labels(weights, cluster, tmp_path):
     local, _ = cluster
     maps, pairs = tmp_path / "maps.npz", tmp_path / "pairs.npz"
-    assert main(["maps", "generate", "--n", "50", "--size", str(SIZE), "--starts", "1", "--out", str(maps),
-                 "--quiet"]) == 0
-    assert main(["attack", "--maps", str(maps), "--strategy", "key-points", "--out", str(pairs),
-                 "--weights", weights, "--quiet"]) == 0
+    assert (
+        main(["maps", "generate", "--n", "50", "--size", str(SIZE), "--starts", "1", "--out", str(maps), "--quiet"])
+        == 0
+    )
+    assert (
+        main(
+            [
+                "attack",
+                "--maps",
+                str(maps),
+                "--strategy",
+                "key-points",
+                "--out",
+                str(pairs),
+                "--weights",
+                weights,
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     other = tmp_path / "other.pt"
     save_vin(planning_vin(SIZE, seed=3, noise=0.3), other)  # re-plan with another planner on the workers
     for db, extra in (("a.db", []), ("b.db", ["--cluster", local.scheduler_address, "--shard-size", "7"])):
-        assert main(["identify", "--pairs", str(pairs), "--db", str(tmp_path / db), "--weights", str(other),
-                     "--quiet", *extra]) == 0
+        assert (
+            main(
+                [
+                    "identify",
+                    "--pairs",
+                    str(pairs),
+                    "--db",
+                    str(tmp_path / db),
+                    "--weights",
+                    str(other),
+                    "--quiet",
+                    *extra,
+                ]
+            )
+            == 0
+        )
     with Store.open(str(tmp_path / "a.db")) as a, Store.open(str(tmp_path / "b.db")) as b:
         assert a.read_pairs(a.list_runs()[0]["id"]).equals(b.read_pairs(b.list_runs()[0]["id"]))
 
@@ -201,8 +288,25 @@ def test_workers_without_dask_says_how_to_install_it(weights, tmp_path, monkeypa
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", no_distributed)
-    assert main(["run", "--n", "5", "--size", str(SIZE), "--weights", weights, "--db", str(tmp_path / "x.db"),
-                 "--workers", "2", "--quiet"]) == 2
+    assert (
+        main(
+            [
+                "run",
+                "--n",
+                "5",
+                "--size",
+                str(SIZE),
+                "--weights",
+                weights,
+                "--db",
+                str(tmp_path / "x.db"),
+                "--workers",
+                "2",
+                "--quiet",
+            ]
+        )
+        == 2
+    )
     assert "pip install 'vinadv[cluster]'" in capsys.readouterr().err
 
 

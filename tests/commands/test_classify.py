@@ -22,9 +22,16 @@ def pairs_file(tmp_path_factory):
     last = lambda paths: paths.cells[np.maximum(paths.offsets[1:] - 1, 0)]  # noqa: E731
     term = lambda paths: np.where(np.all(last(paths) == batch.goals, 1), "goal", "collision")  # noqa: E731
     pairs = PairSet(
-        obstacles_o=obstacles, obstacles_a=obstacles_a, starts=batch.path_o.cells[batch.path_o.offsets[:-1]],
-        goals=batch.goals, added=np.tile([size - 1, size - 1], (n, 1)), map_index=np.arange(n),
-        path_o=batch.path_o, path_a=batch.path_a, term_o=term(batch.path_o), term_a=term(batch.path_a),
+        obstacles_o=obstacles,
+        obstacles_a=obstacles_a,
+        starts=batch.path_o.cells[batch.path_o.offsets[:-1]],
+        goals=batch.goals,
+        added=np.tile([size - 1, size - 1], (n, 1)),
+        map_index=np.arange(n),
+        path_o=batch.path_o,
+        path_a=batch.path_a,
+        term_o=term(batch.path_o),
+        term_a=term(batch.path_a),
         strategy="synthetic",
     )
     path = tmp_path_factory.mktemp("classify") / "pairs.npz"
@@ -35,8 +42,10 @@ def pairs_file(tmp_path_factory):
 def test_train_and_eval_on_held_out_split(pairs_file, tmp_path, capsys):
     path, labels = pairs_file
     model = tmp_path / "svm.model"
-    assert main(["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model),
-                 "--balance", "--json"]) == 0
+    assert (
+        main(["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model), "--balance", "--json"])
+        == 0
+    )
     record = json.loads(capsys.readouterr().out)
     fp_dp = np.isin(labels, ("DP", "FP"))
     assert sum(record["test_counts"].values()) == math.ceil(0.3 * fp_dp.sum())  # scikit-learn rounds the test part up
@@ -56,8 +65,9 @@ def test_train_and_eval_on_held_out_split(pairs_file, tmp_path, capsys):
 def test_cli_errors_exit_2(pairs_file, tmp_path, capsys):
     path, _ = pairs_file
     model = tmp_path / "h.model"
-    assert main(["classify", "train", "--pairs", str(path), "--model", "hausdorff", "--out", str(model),
-                 "--quiet"]) == 0
+    assert (
+        main(["classify", "train", "--pairs", str(path), "--model", "hausdorff", "--out", str(model), "--quiet"]) == 0
+    )
     with np.load(model, allow_pickle=False) as archive:
         entries = {k: archive[k] for k in archive.files}
     entries["format"] = np.array("vinadv.classifier/9")
@@ -68,9 +78,15 @@ def test_cli_errors_exit_2(pairs_file, tmp_path, capsys):
     assert main(["classify", "eval", "--pairs", str(path), "--model", str(bad)]) == 2
     assert "vinadv.classifier/9" in capsys.readouterr().err
     assert main(["classify", "eval", "--pairs", str(tmp_path / "missing.npz"), "--model", str(model)]) == 2
-    assert main(["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model),
-                 "--labels", "human"]) == 2
+    assert (
+        main(["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model), "--labels", "human"])
+        == 2
+    )
     assert "--db" in capsys.readouterr().err
-    assert main(["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model),
-                 "--test-fraction", "1.5"]) == 2
+    assert (
+        main(
+            ["classify", "train", "--pairs", str(path), "--model", "svm", "--out", str(model), "--test-fraction", "1.5"]
+        )
+        == 2
+    )
     assert main(["classify", "eval", "--pairs", str(path), "--model", str(path)]) == 2

@@ -9,7 +9,12 @@ from vinadv.errors import InputError
 
 def test_flags_of_parameters():
     assert [flag(p) for p in ("n", "shard_size", "per_map", "n_starts", "run_id")] == [
-        "--n", "--shard-size", "--per-map", "--starts", "--run"]
+        "--n",
+        "--shard-size",
+        "--per-map",
+        "--starts",
+        "--run",
+    ]
 
 
 def test_cli_message_replaces_the_first_mention_of_each_parameter():
@@ -31,7 +36,8 @@ def test_commands_show_flags(tmp_path, capsys):
     assert "vinadv: error: --n must be >= 1, got 0" in capsys.readouterr().err
     assert main(["run", "--n", "5", "--resume", "--db", str(tmp_path / "x.db"), "--quiet"]) == 2
     assert "vinadv: error: --resume needs --name (the run to resume)" in capsys.readouterr().err
-    assert main(["identify", "--pairs", str(tmp_path / "none.npz"), "--db", str(tmp_path / "x.db"),
-                 "--workers", "0"]) == 2
+    assert (
+        main(["identify", "--pairs", str(tmp_path / "none.npz"), "--db", str(tmp_path / "x.db"), "--workers", "0"]) == 2
+    )
     err = capsys.readouterr().err
     assert "vinadv: error:" in err and "Traceback" not in err

@@ -34,8 +34,23 @@ def maps_file(tmp_path_factory):
 
 def test_attack_on_the_optimal_planner_is_never_harmful(maps_file, tmp_path, capsys):
     out = tmp_path / "p.npz"
-    assert main(["attack", "--maps", maps_file, "--strategy", "exhaustive", "--planner", "optimal", "--out",
-                 str(out), "--json"]) == 0
+    assert (
+        main(
+            [
+                "attack",
+                "--maps",
+                maps_file,
+                "--strategy",
+                "exhaustive",
+                "--planner",
+                "optimal",
+                "--out",
+                str(out),
+                "--json",
+            ]
+        )
+        == 0
+    )
     summary = json.loads(capsys.readouterr().out)
     assert summary["planner"]["name"] == "optimal" and summary["pairs"] > 0
     assert summary["harm_counts"]["harmful"] == 0
@@ -47,8 +62,23 @@ def test_attack_on_the_optimal_planner_is_never_harmful(maps_file, tmp_path, cap
 
 def test_identify_with_another_planner_replans_and_records_both(weights, maps_file, tmp_path, capsys):
     pairs_file = tmp_path / "p.npz"
-    assert main(["attack", "--maps", maps_file, "--strategy", "key-points", "--weights", weights, "--out",
-                 str(pairs_file), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "attack",
+                "--maps",
+                maps_file,
+                "--strategy",
+                "key-points",
+                "--weights",
+                weights,
+                "--out",
+                str(pairs_file),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     db = str(tmp_path / "t.db")
     assert main(["identify", "--pairs", str(pairs_file), "--db", db, "--planner", "optimal", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
@@ -83,8 +113,22 @@ def test_resume_refuses_the_same_planner_with_other_weights(weights, tmp_path, c
     mine = tmp_path / "w.pt"
     shutil.copy(weights, mine)
     db = str(tmp_path / "r.db")
-    common = ["run", "--n", "20", "--size", str(SIZE), "--shard-size", "10", "--db", db, "--name", "k", "--quiet",
-              "--weights", str(mine)]
+    common = [
+        "run",
+        "--n",
+        "20",
+        "--size",
+        str(SIZE),
+        "--shard-size",
+        "10",
+        "--db",
+        db,
+        "--name",
+        "k",
+        "--quiet",
+        "--weights",
+        str(mine),
+    ]
     assert main(common) == 0
     save_vin(planning_vin(SIZE, seed=3, noise=0.1), mine)  # the same file name, other weights
     capsys.readouterr()
@@ -107,9 +151,11 @@ def test_eval_gives_both_conventions(maps_file, tmp_path, capsys):
 
 
 def test_bad_planner_exits_2(maps_file, tmp_path, capsys):
-    for argv in (["attack", "--maps", maps_file, "--strategy", "random", "--out", str(tmp_path / "p.npz")],
-                 ["run", "--n", "5", "--size", str(SIZE), "--db", str(tmp_path / "x.db")],
-                 ["eval", "--data", maps_file]):
+    for argv in (
+        ["attack", "--maps", maps_file, "--strategy", "random", "--out", str(tmp_path / "p.npz")],
+        ["run", "--n", "5", "--size", str(SIZE), "--db", str(tmp_path / "x.db")],
+        ["eval", "--data", maps_file],
+    ):
         assert main([*argv, "--planner", "nonesuch", "--quiet"]) == 2
         assert "unknown planner 'nonesuch'" in capsys.readouterr().err
     assert main(["eval", "--data", maps_file, "--planner", "optimal", "--weights", "w.pt"]) == 2
@@ -122,8 +168,27 @@ def test_report_and_viewer_show_the_runs_planner(tmp_path):
     from vinadv.viewer.app import create_app
 
     db = str(tmp_path / "r.db")
-    assert main(["run", "--n", "20", "--size", str(SIZE), "--shard-size", "10", "--db", db, "--planner", "optimal",
-                 "--attack", "key-points", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "--n",
+                "20",
+                "--size",
+                str(SIZE),
+                "--shard-size",
+                "10",
+                "--db",
+                db,
+                "--planner",
+                "optimal",
+                "--attack",
+                "key-points",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     html = write_report(db, tmp_path / "rep").read_text()
     assert "<td>planner</td><td>optimal</td>" in html
     assert "quick evaluation of planner &#39;optimal&#39;" in html  # its quality, not the VIN's

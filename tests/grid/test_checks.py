@@ -23,8 +23,11 @@ from vinadv.planners.pathset import PathSet
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("valid")
-    return {"maps": write_maps(folder / "maps.npz"), "pairs": write_pairs(folder / "pairs.npz"),
-            "paths": write_paths(folder / "paths.npz")}
+    return {
+        "maps": write_maps(folder / "maps.npz"),
+        "pairs": write_pairs(folder / "pairs.npz"),
+        "paths": write_paths(folder / "paths.npz"),
+    }
 
 
 def _path(a: dict, side: str, i: int) -> np.ndarray:
@@ -48,6 +51,7 @@ def test_valid_files_load(files):
 
 
 # ---------------------------------------------------------------------------------------------------- pairs
+
 
 @pytest.mark.parametrize("k, onto", [(3, "start"), (1, "goal")])
 def test_pairs_added_obstacle_on_the_start_or_goal(files, tmp_path, k, onto):
@@ -82,8 +86,12 @@ def test_pairs_path_through_an_obstacle_or_the_border(files, tmp_path):
     obs_o, obs_a = a["obstacles_o"].copy(), a["obstacles_a"].copy()
     obs_o[k, cell[0], cell[1]] = obs_a[k, cell[0], cell[1]] = True
     bad = rewrite_npz(files["pairs"], tmp_path / "bad.npz", obstacles_o=obs_o, obstacles_a=obs_a)
-    assert "on an obstacle" in _refused(PairSet.load, bad, "path_" + ("o" if any(
-        (c == cell).all() for c in _path(a, "o", k)) else "a") + "_cells", f"pair {k}")
+    assert "on an obstacle" in _refused(
+        PairSet.load,
+        bad,
+        "path_" + ("o" if any((c == cell).all() for c in _path(a, "o", k)) else "a") + "_cells",
+        f"pair {k}",
+    )
     # a path along the border wall: the first pair's original path moved onto row 0 (a wall on these maps)
     cells = a["path_o_cells"].copy()
     start = a["path_o_offsets"][0]
@@ -127,6 +135,7 @@ def test_bad_pairs_file_is_not_stored(files, tmp_path, capsys):
 
 
 # ----------------------------------------------------------------------------------------------------- maps
+
 
 def test_maps_duplicate_starts(files, tmp_path):
     a = read_npz(files["maps"])
@@ -182,15 +191,23 @@ def test_maps_without_corner_cutting_refuse_a_squeezing_diagonal(tmp_path):
     step = np.diff(cells, axis=0)
     paths = np.repeat(np.arange(len(off) - 1), np.diff(off))
     obstacles = a["obstacles"]
-    squeeze = [j for j in range(len(step)) if paths[j] == paths[j + 1] and abs(step[j]).sum() == 2 and (
-        obstacles[paths[j] // 2, cells[j, 0] + step[j, 0], cells[j, 1]]
-        or obstacles[paths[j] // 2, cells[j, 0], cells[j, 1] + step[j, 1]])]
+    squeeze = [
+        j
+        for j in range(len(step))
+        if paths[j] == paths[j + 1]
+        and abs(step[j]).sum() == 2
+        and (
+            obstacles[paths[j] // 2, cells[j, 0] + step[j, 0], cells[j, 1]]
+            or obstacles[paths[j] // 2, cells[j, 0], cells[j, 1] + step[j, 1]]
+        )
+    ]
     assert squeeze, "no corner-cutting move in these maps; pick another seed"
     bad = rewrite_npz(tmp_path / "cc.npz", tmp_path / "nocc.npz", corner_cutting=np.array(False))
     assert "between obstacles" in _refused(MapSet.load, bad, "expert_cells", f"path {paths[squeeze[0]]}")
 
 
 # ---------------------------------------------------------------------------------------------------- paths
+
 
 def test_paths_jump(files, tmp_path):
     a = read_npz(files["paths"])

@@ -9,8 +9,13 @@ SIZE = 5
 GRID = np.arange(2 * SIZE * SIZE).reshape(2, SIZE, SIZE)
 # independent definitions of the 8 transforms with NumPy's own rotations and flips
 REFERENCE = {
-    0: GRID, 1: np.rot90(GRID, -1, axes=(1, 2)), 2: np.rot90(GRID, 2, axes=(1, 2)), 3: np.rot90(GRID, 1, axes=(1, 2)),
-    4: GRID[:, :, ::-1], 5: GRID[:, ::-1, :], 6: GRID.transpose(0, 2, 1),
+    0: GRID,
+    1: np.rot90(GRID, -1, axes=(1, 2)),
+    2: np.rot90(GRID, 2, axes=(1, 2)),
+    3: np.rot90(GRID, 1, axes=(1, 2)),
+    4: GRID[:, :, ::-1],
+    5: GRID[:, ::-1, :],
+    6: GRID.transpose(0, 2, 1),
     7: np.rot90(GRID, 2, axes=(1, 2)).transpose(0, 2, 1),
 }
 

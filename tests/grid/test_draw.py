@@ -23,13 +23,36 @@ def _markers(fig, label: str) -> np.ndarray:
 @pytest.mark.parametrize("all_starts", [True, False])
 def test_maps_show_marks_every_start_with_a_legend(tmp_path, monkeypatch, all_starts):
     maps_file = tmp_path / "m.npz"
-    assert main(["maps", "generate", "--n", "3", "--size", "12", "--starts", "5", "--seed", "2", "--out",
-                 str(maps_file), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "maps",
+                "generate",
+                "--n",
+                "3",
+                "--size",
+                "12",
+                "--starts",
+                "5",
+                "--seed",
+                "2",
+                "--out",
+                str(maps_file),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     maps = MapSet.load(maps_file)
     shown = []
     monkeypatch.setattr(draw, "save_figure", lambda fig, path: shown.append(fig))
-    assert main(["maps", "show", str(maps_file), "--index", "1", "--out", str(tmp_path / "m.png")]
-                + (["--all-starts"] if all_starts else [])) == 0
+    assert (
+        main(
+            ["maps", "show", str(maps_file), "--index", "1", "--out", str(tmp_path / "m.png")]
+            + (["--all-starts"] if all_starts else [])
+        )
+        == 0
+    )
     (fig,) = shown
     expected = maps.starts[1] if all_starts else maps.starts[1, :1]
     got = _markers(fig, "starts" if all_starts else "start")

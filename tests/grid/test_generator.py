@@ -84,11 +84,14 @@ def test_painted_shapes_equal_testing_every_cell(size, max_obs, max_size):
     rng = np.random.default_rng(size)
     n = 300
     draws = dict(
-        attempts=rng.integers(1, max_obs, n, endpoint=True), is_disc=rng.random((n, max_obs)) < 0.5,
-        top=rng.integers(0, size, (n, max_obs)), left=rng.integers(0, size, (n, max_obs)),
+        attempts=rng.integers(1, max_obs, n, endpoint=True),
+        is_disc=rng.random((n, max_obs)) < 0.5,
+        top=rng.integers(0, size, (n, max_obs)),
+        left=rng.integers(0, size, (n, max_obs)),
         height=rng.integers(1, max_size, (n, max_obs), endpoint=True),
         width=rng.integers(1, max_size, (n, max_obs), endpoint=True),
-        radius=rng.integers(1, max_size, (n, max_obs), endpoint=True), goals=rng.integers(0, size, (n, 2)),
+        radius=rng.integers(1, max_size, (n, max_obs), endpoint=True),
+        goals=rng.integers(0, size, (n, 2)),
     )
     painted = np.zeros((n, size, size), dtype=bool)
     _paint_shapes(*draws.values(), painted)

@@ -24,18 +24,32 @@ def random_pairs(n: int, seed: int) -> PathPairs:
         return PackedPaths.pack([rng.integers(0, SIZE, (rng.integers(1, 6), 2)) for _ in range(n)])
 
     return PathPairs(
-        obstacles_o=obstacles, obstacles_a=obstacles_a, starts=rng.integers(0, SIZE, (n, 2)),
-        goals=rng.integers(0, SIZE, (n, 2)), added=added, path_o=paths(), path_a=paths(),
-        term_o=np.array(TERMINATIONS)[rng.integers(0, 4, n)], term_a=np.array(TERMINATIONS)[rng.integers(0, 4, n)],
+        obstacles_o=obstacles,
+        obstacles_a=obstacles_a,
+        starts=rng.integers(0, SIZE, (n, 2)),
+        goals=rng.integers(0, SIZE, (n, 2)),
+        added=added,
+        path_o=paths(),
+        path_a=paths(),
+        term_o=np.array(TERMINATIONS)[rng.integers(0, 4, n)],
+        term_a=np.array(TERMINATIONS)[rng.integers(0, 4, n)],
     )
 
 
 def rows(pairs: PathPairs) -> list[tuple]:
     """Each pair as plain Python values: the oracle for take/concat."""
     return [
-        (pairs.obstacles_o[i].tolist(), pairs.obstacles_a[i].tolist(), pairs.starts[i].tolist(),
-         pairs.goals[i].tolist(), pairs.added[i].tolist(), pairs.path_o[i].tolist(), pairs.path_a[i].tolist(),
-         str(pairs.term_o[i]), str(pairs.term_a[i]))
+        (
+            pairs.obstacles_o[i].tolist(),
+            pairs.obstacles_a[i].tolist(),
+            pairs.starts[i].tolist(),
+            pairs.goals[i].tolist(),
+            pairs.added[i].tolist(),
+            pairs.path_o[i].tolist(),
+            pairs.path_a[i].tolist(),
+            str(pairs.term_o[i]),
+            str(pairs.term_a[i]),
+        )
         for i in range(len(pairs))
     ]
 
@@ -82,8 +96,10 @@ def test_reached():
 )
 def test_bad_fields_are_named(change, match):
     good = random_pairs(4, 2)
-    fields = {name: getattr(good, name) for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added",
-                                                        "path_o", "path_a", "term_o", "term_a")}
+    fields = {
+        name: getattr(good, name)
+        for name in ("obstacles_o", "obstacles_a", "starts", "goals", "added", "path_o", "path_a", "term_o", "term_a")
+    }
     with pytest.raises(InputError, match=match):
         PathPairs(**{**fields, **change})
 

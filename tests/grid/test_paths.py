@@ -60,8 +60,13 @@ def test_concat_of_nothing_is_zero_paths():
 @settings(max_examples=100, deadline=None)
 @given(paths_strategy)
 def test_costs_match_a_plain_sum_of_moves(paths):
-    expect = [sum(math.sqrt(2) if abs(a[0] - b[0]) + abs(a[1] - b[1]) == 2 else abs(a[0] - b[0]) + abs(a[1] - b[1])
-                  for a, b in zip(p, p[1:])) for p in paths]
+    expect = [
+        sum(
+            math.sqrt(2) if abs(a[0] - b[0]) + abs(a[1] - b[1]) == 2 else abs(a[0] - b[0]) + abs(a[1] - b[1])
+            for a, b in zip(p, p[1:])
+        )
+        for p in paths
+    ]
     np.testing.assert_allclose(PackedPaths.pack(paths).costs(), expect, atol=1e-12)
 
 

@@ -51,7 +51,10 @@ def test_optimal_actions_are_exactly_the_cost_preserving_legal_moves(case, corne
             if not obstacles[r, c]:
                 assert legal_np[r, c, a] == is_legal
             expected = (
-                not obstacles[r, c] and math.isfinite(cost) and cost > 0 and is_legal
+                not obstacles[r, c]
+                and math.isfinite(cost)
+                and cost > 0
+                and is_legal
                 and math.isclose(best[(r + dr, c + dc)][0] + ACTION_COSTS[a], cost, abs_tol=1e-9)
             )
             assert opt[r, c, a] == expected

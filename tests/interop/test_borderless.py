@@ -25,8 +25,7 @@ def edge_maps():
     goals = base.goals.copy()
     starts = []
     for i in range(len(obstacles)):
-        edge = [(r, c) for r in range(10) for c in range(10)
-                if (r in (0, 9) or c in (0, 9)) and not obstacles[i, r, c]]
+        edge = [(r, c) for r in range(10) for c in range(10) if (r in (0, 9) or c in (0, 9)) and not obstacles[i, r, c]]
         if i % 2 and edge:
             goals[i] = edge[rng.integers(len(edge))]
         dist = brute_distances(obstacles[i].tolist(), tuple(goals[i]))

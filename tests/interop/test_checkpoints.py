@@ -47,8 +47,21 @@ class PortVIN(nn.Module):
 def test_export_weights_loads_into_the_port_class(tmp_path, capsys):
     model = planning_vin(16, seed=3)
     save_vin(model, tmp_path / "w.pt", {"note": "test"})
-    assert main(["vin", "export-weights", str(tmp_path / "w.pt"), "--format", "state-dict", "--out",
-                 str(tmp_path / "plain.pth"), "--json"]) == 0
+    assert (
+        main(
+            [
+                "vin",
+                "export-weights",
+                str(tmp_path / "w.pt"),
+                "--format",
+                "state-dict",
+                "--out",
+                str(tmp_path / "plain.pth"),
+                "--json",
+            ]
+        )
+        == 0
+    )
     assert json.loads(capsys.readouterr().out)["k"] == model.config.k
     plain = torch.load(tmp_path / "plain.pth", weights_only=True)
     assert list(plain) == ["h.weight", "h.bias", "r.weight", "q.weight", "w", "fc.weight"]
@@ -69,26 +82,53 @@ def test_export_weights_loads_into_the_port_class(tmp_path, capsys):
 def test_export_shipped_weights(tmp_path):
     if not default_weights_path(28).exists():
         pytest.skip("no shipped 28x28 weights")
-    assert main(["vin", "export-weights", str(default_weights_path(28)), "--format", "state-dict", "--out",
-                 str(tmp_path / "p.pth")]) == 0
+    assert (
+        main(
+            [
+                "vin",
+                "export-weights",
+                str(default_weights_path(28)),
+                "--format",
+                "state-dict",
+                "--out",
+                str(tmp_path / "p.pth"),
+            ]
+        )
+        == 0
+    )
     plain = torch.load(tmp_path / "p.pth", weights_only=True)
     assert {k: tuple(v.shape) for k, v in plain.items()} == {
-        "h.weight": (150, 2, 3, 3), "h.bias": (150,), "r.weight": (1, 150, 1, 1), "q.weight": (10, 1, 3, 3),
-        "w": (10, 1, 3, 3), "fc.weight": (8, 10)}
+        "h.weight": (150, 2, 3, 3),
+        "h.bias": (150,),
+        "r.weight": (1, 150, 1, 1),
+        "q.weight": (10, 1, 3, 3),
+        "w": (10, 1, 3, 3),
+        "fc.weight": (8, 10),
+    }
 
 
 def gppn_vin_state(f=3, l_h=150, l_q=600, actions=8, as_numpy=False):
     torch.manual_seed(0)
-    state = {"h.weight": torch.randn(l_h, 2, f, f), "h.bias": torch.randn(l_h), "r.weight": torch.randn(1, l_h, 1, 1),
-             "q.weight": torch.randn(l_q, 1, f, f), "w": torch.randn(l_q, 1, f, f),
-             "policy.weight": torch.randn(actions, l_q, 1, 1)}
+    state = {
+        "h.weight": torch.randn(l_h, 2, f, f),
+        "h.bias": torch.randn(l_h),
+        "r.weight": torch.randn(1, l_h, 1, 1),
+        "q.weight": torch.randn(l_q, 1, f, f),
+        "w": torch.randn(l_q, 1, f, f),
+        "policy.weight": torch.randn(actions, l_q, 1, 1),
+    }
     return {k: v.double().numpy() for k, v in state.items()} if as_numpy else state
 
 
 def test_gppn_checkpoint_with_numpy_values_is_read_generically(tmp_path):
     state = gppn_vin_state(f=5, as_numpy=True)
-    ckpt = {"model": state, "best_model": {k: v * 2 for k, v in state.items()}, "best_val_acc": np.float64(0.93),
-            "epoch": np.int64(30), "args": argparse.Namespace(k=20, f=5, l_q=600, mechanism="moore")}
+    ckpt = {
+        "model": state,
+        "best_model": {k: v * 2 for k, v in state.items()},
+        "best_val_acc": np.float64(0.93),
+        "epoch": np.int64(30),
+        "args": argparse.Namespace(k=20, f=5, l_q=600, mechanism="moore"),
+    }
     torch.save(ckpt, tmp_path / "gppn.pth")
     got, meta = read_checkpoint(tmp_path / "gppn.pth")
     assert meta["entry"] == "best_model" and meta["best_val_acc"] == pytest.approx(0.93) and meta["epoch"] == 30
@@ -118,8 +158,9 @@ def test_objects_outside_the_allow_list_are_refused(tmp_path):
 @pytest.mark.parametrize("f", [3, 11])
 def test_gppn_vin_weights_are_refused_with_what_is_missing(tmp_path, f, capsys):
     torch.save({"model": gppn_vin_state(f=f), "best_model": gppn_vin_state(f=f)}, tmp_path / "g.pth")
-    code = main(["vin", "export-weights", str(tmp_path / "g.pth"), "--format", "state-dict", "--out",
-                 str(tmp_path / "o.pth")])
+    code = main(
+        ["vin", "export-weights", str(tmp_path / "g.pth"), "--format", "state-dict", "--out", str(tmp_path / "o.pth")]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "cannot represent it" in err and "input polarity" in err
     assert ("kernel size f = 11" in err) == (f == 11)

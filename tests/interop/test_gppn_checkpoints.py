@@ -26,16 +26,16 @@ def authors_checkpoint(path, k=6, l_h=8, f=5, n_actions=8, in_channels=2):
     if in_channels != 2:
         theirs.hid = torch.nn.Conv2d(in_channels, l_h, 3, padding=1)
     state = {key: value.detach().double().numpy() for key, value in theirs.state_dict().items()}
-    torch.save({"model": {key: v * 0 for key, v in state.items()}, "best_model": state, "v_total_success": [0.9]},
-               path)
+    torch.save({"model": {key: v * 0 for key, v in state.items()}, "best_model": state, "v_total_success": [0.9]}, path)
     return theirs
 
 
 def test_imported_weights_give_the_authors_logits_in_vinadvs_action_order(tmp_path, capsys):
     theirs = authors_checkpoint(tmp_path / "gppn.final.pth")
     out = tmp_path / "gppn.pt"
-    assert main(["gppn", "import-weights", str(tmp_path / "gppn.final.pth"), "--k", "6", "--out", str(out),
-                 "--json"]) == 0
+    assert (
+        main(["gppn", "import-weights", str(tmp_path / "gppn.final.pth"), "--k", "6", "--out", str(out), "--json"]) == 0
+    )
     summary = json.loads(capsys.readouterr().out)
     assert summary["config"] == {"k": 6, "l_h": 8, "f": 5, "n_actions": 8}
     assert summary["imported_from"]["entry"] == "best_model"
@@ -59,11 +59,9 @@ def test_other_models_and_mechanisms_are_refused(tmp_path, capsys):
     with pytest.raises(InputError, match="3-D"):
         gppn_from_checkpoint(tmp_path / "3d.pth", k=6)
     torch.save({"model": {"h.weight": np.zeros((4, 2, 3, 3))}}, tmp_path / "vin.pth")
-    assert main(["gppn", "import-weights", str(tmp_path / "vin.pth"), "--k", "6", "--out",
-                 str(tmp_path / "o.pt")]) == 2
+    assert main(["gppn", "import-weights", str(tmp_path / "vin.pth"), "--k", "6", "--out", str(tmp_path / "o.pt")]) == 2
     assert "not a GPPN checkpoint" in capsys.readouterr().err
     # the authors' checkpoint given straight to --planner gppn: the one-line hint to convert it
     authors_checkpoint(tmp_path / "raw.pth")
-    assert main(["eval", "--planner", "gppn", "--weights", str(tmp_path / "raw.pth"), "--n", "2", "--size",
-                 "8"]) == 2
+    assert main(["eval", "--planner", "gppn", "--weights", str(tmp_path / "raw.pth"), "--n", "2", "--size", "8"]) == 2
     assert "gppn import-weights" in capsys.readouterr().err

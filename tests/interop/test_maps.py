@@ -47,8 +47,12 @@ def kentsommer_arrays(maps, trajs, prior=0.0):
             s1.append([r])
             s2.append([c])
             labels.append([OURS.index((r2 - r, c2 - c))])
-    return [np.array(x).reshape(-1, 2, n, n), np.array(s1).reshape(-1, 1), np.array(s2).reshape(-1, 1),
-            np.array(labels).reshape(-1, 1)]
+    return [
+        np.array(x).reshape(-1, 2, n, n),
+        np.array(s1).reshape(-1, 1),
+        np.array(s2).reshape(-1, 1),
+        np.array(labels).reshape(-1, 1),
+    ]
 
 
 def write_kentsommer(path, maps, train_trajs, test_trajs, prior=0.0):
@@ -80,8 +84,13 @@ def write_avivt_train(path, maps, trajs):
             value.append([10 if (rr, cc) == tuple(maps.goals[i]) else 0 for rr in range(n) for cc in range(n)])
             xy.append([r, c])
             labels.append([OURS.index((r2 - r, c2 - c))])
-    scipy.io.savemat(path, {k: np.array(v, np.uint8) for k, v in
-                            dict(im_data=im, value_data=value, state_xy_data=xy, label_data=labels).items()})
+    scipy.io.savemat(
+        path,
+        {
+            k: np.array(v, np.uint8)
+            for k, v in dict(im_data=im, value_data=value, state_xy_data=xy, label_data=labels).items()
+        },
+    )
 
 
 def gppn_policy(obstacles, goal):
@@ -112,8 +121,11 @@ def gppn_arrays(obstacles, goals):
     goal_maps = np.zeros((len(goals), 1, n, n), np.float32)
     for i, (r, c) in enumerate(goals):
         goal_maps[i, 0, r, c] = 1
-    return [(~obstacles).astype(np.float32), goal_maps,
-            np.array([gppn_policy(o, g) for o, g in zip(obstacles, goals)]).reshape(-1, 8, 1, n, n)]
+    return [
+        (~obstacles).astype(np.float32),
+        goal_maps,
+        np.array([gppn_policy(o, g) for o, g in zip(obstacles, goals)]).reshape(-1, 8, 1, n, n),
+    ]
 
 
 def write_gppn(path, obstacles, goals, split="test"):
@@ -147,8 +159,13 @@ def test_kentsommer_samples_regroup_into_maps_and_trajectories(tmp_path, small_m
     assert info["file_paths_optimal"] == 24
     rest = generate_maps(12, 10, seed=5, n_starts=3)
     idx = np.arange(4, 12)
-    want = MapSet(obstacles=rest.obstacles[idx], goals=rest.goals[idx], starts=rest.starts[idx],
-                  expert_costs=rest.expert_costs[idx], expert=rest.expert)
+    want = MapSet(
+        obstacles=rest.obstacles[idx],
+        goals=rest.goals[idx],
+        starts=rest.starts[idx],
+        expert_costs=rest.expert_costs[idx],
+        expert=rest.expert,
+    )
     assert_same_maps(got, want)
     everything = import_maps(tmp_path / "k.npz", "kentsommer", split="all")
     assert_same_maps(everything, small_maps)
@@ -176,8 +193,13 @@ def test_kentsommer_consecutive_trajectories_are_split_by_the_move_rule(tmp_path
     # move decides where a trajectory ends
     obstacles = np.zeros((1, 6, 6), bool)
     obstacles[0, [0, -1], :] = obstacles[0, :, [0, -1]] = True
-    maps = MapSet(obstacles=obstacles, goals=np.array([[1, 4]]), starts=np.zeros((1, 0, 2), int),
-                  expert_costs=np.zeros((1, 0)), expert=PackedPaths.empty())
+    maps = MapSet(
+        obstacles=obstacles,
+        goals=np.array([[1, 4]]),
+        starts=np.zeros((1, 0, 2), int),
+        expert_costs=np.zeros((1, 0)),
+        expert=PackedPaths.empty(),
+    )
     trajs = [(0, [(4, 1), (3, 2), (2, 3), (1, 4)]), (0, [(3, 1), (2, 2), (1, 3), (1, 4)])]
     write_kentsommer(tmp_path / "k.npz", maps, [], trajs)
     got = import_maps(tmp_path / "k.npz", "kentsommer")
@@ -230,8 +252,10 @@ def test_real_8x8_training_layout():
 
 def test_real_8x8_batched_arrays_alone_give_maps_with_drawn_starts(tmp_path):
     raw = scipy.io.loadmat(real_file("gridworld_8.mat"))
-    scipy.io.savemat(tmp_path / "b.mat", {k: raw[k] for k in ("batch_im_data", "batch_value_data", "state_x_data",
-                                                              "state_y_data", "batch_label_data")})
+    scipy.io.savemat(
+        tmp_path / "b.mat",
+        {k: raw[k] for k in ("batch_im_data", "batch_value_data", "state_x_data", "state_y_data", "batch_label_data")},
+    )
     per_sample = import_maps(real_file("gridworld_8.mat"), "avivt")
     got, info = read_maps(tmp_path / "b.mat", "avivt", starts=2, seed=4)
     assert "starts drawn" in info["layout"] and info["maps"] == len(per_sample)
@@ -301,8 +325,10 @@ def test_other_polarity_wrong_shape_and_missing_arrays_are_refused(tmp_path, sma
             import_maps(tmp_path / name, "kentsommer")
     write_avivt_test(tmp_path / "a.mat", small_maps, trajs)
     raw = scipy.io.loadmat(tmp_path / "a.mat")
-    scipy.io.savemat(tmp_path / "p.mat", {**{k: v for k, v in raw.items() if not k.startswith("__")},
-                                           "all_im_data": 1 - raw["all_im_data"]})
+    scipy.io.savemat(
+        tmp_path / "p.mat",
+        {**{k: v for k, v in raw.items() if not k.startswith("__")}, "all_im_data": 1 - raw["all_im_data"]},
+    )
     with pytest.raises(InputError, match=r"p\.mat: array 'all_im_data' has the goal on an obstacle.*1 = free"):
         import_maps(tmp_path / "p.mat", "avivt")
     g = gppn_arrays(small_maps.obstacles, small_maps.goals)
@@ -315,19 +341,36 @@ def test_other_polarity_wrong_shape_and_missing_arrays_are_refused(tmp_path, sma
 
 def test_cli_import_exit_2_names_the_array(tmp_path, small_maps, capsys):
     np.savez(tmp_path / "bad.npz", *kentsommer_arrays(small_maps, [])[:3])
-    code = main(["maps", "import", "--format", "kentsommer", "--split", "train", str(tmp_path / "bad.npz"), "--out",
-                 str(tmp_path / "m.npz")])
+    code = main(
+        [
+            "maps",
+            "import",
+            "--format",
+            "kentsommer",
+            "--split",
+            "train",
+            str(tmp_path / "bad.npz"),
+            "--out",
+            str(tmp_path / "m.npz"),
+        ]
+    )
     assert code == 2 and "bad.npz: array 'arr_3' is missing" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("fmt,split", [("kentsommer", "test"), ("kentsommer", "train"), ("avivt", "test"),
-                                       ("avivt", "train"), ("gppn", "valid")])
+@pytest.mark.parametrize(
+    "fmt,split",
+    [("kentsommer", "test"), ("kentsommer", "train"), ("avivt", "test"), ("avivt", "train"), ("gppn", "valid")],
+)
 def test_export_then_import_gives_back_the_maps(tmp_path, small_maps, fmt, split, capsys):
     maps = small_maps
     maps.save(tmp_path / "in.npz")
     out = tmp_path / ("out.mat" if fmt == "avivt" else "out.npz")
-    assert main(["maps", "export", "--format", fmt, str(tmp_path / "in.npz"), "--out", str(out),
-                 "--split", split, "--json"]) == 0
+    assert (
+        main(
+            ["maps", "export", "--format", fmt, str(tmp_path / "in.npz"), "--out", str(out), "--split", split, "--json"]
+        )
+        == 0
+    )
     args = ["maps", "import", "--format", fmt, str(out), "--out", str(tmp_path / "back.npz"), "--json"]
     if fmt != "avivt":
         args += ["--split", split]
@@ -371,8 +414,9 @@ def test_evaluation_leaves_padded_starts_out(tmp_path, small_maps):
     real = [(i, s) for i in range(len(padded)) for s in range(keep.get(i, 3))]
     assert metrics["rollouts"] == len(real) == sum(metrics["terminations"].values())
     idx = np.array([i for i, _ in real])
-    ref = plan_reference(padded.obstacles[idx], np.array([padded.starts[i, s] for i, s in real]), padded.goals[idx],
-                         model)
+    ref = plan_reference(
+        padded.obstacles[idx], np.array([padded.starts[i, s] for i, s in real]), padded.goals[idx], model
+    )
     assert metrics["success_rate"] == pytest.approx(ref.reached.mean())
 
 
@@ -384,8 +428,13 @@ def test_the_files_optimal_paths_are_kept_and_others_replaced(tmp_path):
     obstacles[:, [0, -1], :] = obstacles[:, :, [0, -1]] = True
     obstacles[1, 2, 2] = True  # the diagonal is blocked on map 1: the optimal paths cost 2 + sqrt 2
     goals = np.array([[1, 3], [1, 3]])
-    maps = MapSet(obstacles=obstacles, goals=goals, starts=np.zeros((2, 0, 2), int), expert_costs=np.zeros((2, 0)),
-                  expert=PackedPaths.empty())
+    maps = MapSet(
+        obstacles=obstacles,
+        goals=goals,
+        starts=np.zeros((2, 0, 2), int),
+        expert_costs=np.zeros((2, 0)),
+        expert=PackedPaths.empty(),
+    )
     detour = [(3, 1), (2, 1), (1, 1), (1, 2), (1, 3)]
     optimal_1 = [(3, 1), (3, 2), (2, 3), (1, 3)]  # E, NE, N on map 1: 2 + sqrt 2
     write_kentsommer(tmp_path / "k.npz", maps, [], [(0, detour), (1, optimal_1)])

@@ -51,8 +51,9 @@ def test_kentsommer_protocol_matches_the_ports_loop(model, maps, prior):
         for s in range(maps.n_starts):
             path = [tuple(int(v) for v in cell) for cell in maps.expert_path(i, s)]
             for (r, c), (r2, c2) in zip(path[:-1], path[1:]):  # single-label accuracy on trajectory states
-                hits += int(np.argmax(port_logits(model, maps.obstacles[i], goal, r, c, prior)) == OURS.index(
-                    (r2 - r, c2 - c)))
+                hits += int(
+                    np.argmax(port_logits(model, maps.obstacles[i], goal, r, c, prior)) == OURS.index((r2 - r, c2 - c))
+                )
                 states += 1
             big_l = len(path) * 2
             r, c = path[0]

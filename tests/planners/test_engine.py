@@ -69,8 +69,9 @@ def test_several_starts_share_a_value_map():
     maps = generate_maps(10, 16, seed=6, n_starts=3)
     model = planning_vin(16, seed=3)
     multi = plan_maps(maps.obstacles, maps.goals, maps.starts, model)
-    one = plan_batch(np.repeat(maps.obstacles, 3, axis=0), maps.starts.reshape(-1, 2),
-                     np.repeat(maps.goals, 3, axis=0), model)
+    one = plan_batch(
+        np.repeat(maps.obstacles, 3, axis=0), maps.starts.reshape(-1, 2), np.repeat(maps.goals, 3, axis=0), model
+    )
     assert_same(multi, one)
 
 
@@ -177,7 +178,10 @@ def test_production_code_never_imports_the_reference_planner():
         for node in ast.walk(ast.parse(path.read_text())):
             names = [a.name for a in node.names] if isinstance(node, (ast.Import, ast.ImportFrom)) else []
             module = node.module if isinstance(node, ast.ImportFrom) else ""
-            if module == "vinadv.planners.reference" or "vinadv.planners.reference" in names or (
-                    module == "vinadv.planners" and "reference" in names):
+            if (
+                module == "vinadv.planners.reference"
+                or "vinadv.planners.reference" in names
+                or (module == "vinadv.planners" and "reference" in names)
+            ):
                 importers.append(str(path.relative_to(root)))
     assert importers == []

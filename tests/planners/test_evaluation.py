@@ -55,8 +55,9 @@ def make_maps(size, cases):
     goals = np.array([g for _, g, _ in cases], dtype=np.int64)
     starts = np.array([[s] for _, _, s in cases], dtype=np.int64)
     costs, paths = expert_paths(obstacles, goals, starts)
-    return MapSet(obstacles=obstacles, goals=goals, starts=starts, expert_costs=costs, expert=paths,
-                  corner_cutting=True, seed=-1)
+    return MapSet(
+        obstacles=obstacles, goals=goals, starts=starts, expert_costs=costs, expert=paths, corner_cutting=True, seed=-1
+    )
 
 
 def test_rollout_metrics_on_hand_built_paths():
@@ -77,12 +78,15 @@ def test_rollout_metrics_on_hand_built_paths():
 
 
 def test_constant_east_policy_reaches_collides_and_hits_the_step_limit():
-    maps = make_maps(10, [
-        ([], (3, 6), (3, 2)),  # goal straight east: reached in 4 moves, optimal
-        ([(5, 5)], (7, 7), (5, 2)),  # obstacle ahead: (5,2) (5,3) (5,4), then collision
-        ([], (3, 3), (2, 2)),  # goal one diagonal move away: L = 1, limit 2 moves, then step_limit
-        ([], (2, 4), (2, 8)),  # goal west: the first move east hits the border
-    ])
+    maps = make_maps(
+        10,
+        [
+            ([], (3, 6), (3, 2)),  # goal straight east: reached in 4 moves, optimal
+            ([(5, 5)], (7, 7), (5, 2)),  # obstacle ahead: (5,2) (5,3) (5,4), then collision
+            ([], (3, 3), (2, 2)),  # goal one diagonal move away: L = 1, limit 2 moves, then step_limit
+            ([], (2, 4), (2, 8)),  # goal west: the first move east hits the border
+        ],
+    )
     m = evaluate_vin(constant_vin(E_), maps)
     assert m["terminations"] == {"goal": 1, "collision": 2, "loop": 0, "step_limit": 1}
     assert m["success_rate"] == 0.25 and m["optimal_rate"] == 0.25 and m["mean_extra_cost"] == 0.0
@@ -113,9 +117,15 @@ def test_ties_go_to_the_lowest_action_index():
     maps = make_maps(8, [([], (1, 3), (4, 3))])  # goal due north: N is optimal on that column
     correct, cells = action_accuracy_counts(model, maps.obstacles, maps.goals)
     best = brute_distances(maps.obstacles[0].tolist(), (1, 3))
-    want = sum(1 for (r, c), (cost, _) in best.items()
-               if not maps.obstacles[0, r, c] and (r, c) != (1, 3) and math.isfinite(cost)
-               and legal(maps.obstacles[0].tolist(), r, c, N_) and abs(best[(r - 1, c)][0] + 1 - cost) < 1e-9)
+    want = sum(
+        1
+        for (r, c), (cost, _) in best.items()
+        if not maps.obstacles[0, r, c]
+        and (r, c) != (1, 3)
+        and math.isfinite(cost)
+        and legal(maps.obstacles[0].tolist(), r, c, N_)
+        and abs(best[(r - 1, c)][0] + 1 - cost) < 1e-9
+    )
     assert correct == want and cells == 35
     m = evaluate_vin(model, maps)
     assert m["success_rate"] == 1.0 and m["optimal_rate"] == 1.0

@@ -24,8 +24,11 @@ def plain_gppn(model: GPPN, free: torch.Tensor, goal_map: torch.Tensor) -> torch
     for _ in range(model.config.k - 1):
         inp = torch.nn.functional.conv2d(h, sd["conv.weight"], sd["conv.bias"], padding=f // 2)  # (B, 1, N, N)
         # gates[b, :, i, j] = W_ih inp[b, :, i, j] + b_ih + W_hh h[b, :, i, j] + b_hh
-        gates = (torch.einsum("gc,bcij->bgij", w_ih, inp) + torch.einsum("gc,bcij->bgij", w_hh, h)
-                 + (b_ih + b_hh)[None, :, None, None])
+        gates = (
+            torch.einsum("gc,bcij->bgij", w_ih, inp)
+            + torch.einsum("gc,bcij->bgij", w_hh, h)
+            + (b_ih + b_hh)[None, :, None, None]
+        )
         i_g, f_g, g_g, o_g = (gates[:, q * l_h : (q + 1) * l_h] for q in range(4))
         c = torch.sigmoid(f_g) * c + torch.sigmoid(i_g) * torch.tanh(g_g)
         h = torch.sigmoid(o_g) * torch.tanh(c)
@@ -67,9 +70,21 @@ def test_gradients_match_the_published_equations():
 
 def test_state_dict_keys_are_those_of_the_public_code():
     keys = set(GPPN(GPPNConfig(l_h=4)).state_dict())
-    assert keys == {"hid.weight", "hid.bias", "h0.weight", "h0.bias", "c0.weight", "c0.bias", "conv.weight",
-                    "conv.bias", "lstm.weight_ih", "lstm.weight_hh", "lstm.bias_ih", "lstm.bias_hh",
-                    "policy.weight"}
+    assert keys == {
+        "hid.weight",
+        "hid.bias",
+        "h0.weight",
+        "h0.bias",
+        "c0.weight",
+        "c0.bias",
+        "conv.weight",
+        "conv.bias",
+        "lstm.weight_ih",
+        "lstm.weight_hh",
+        "lstm.bias_ih",
+        "lstm.bias_hh",
+        "policy.weight",
+    }
 
 
 def test_save_and_load_round_trip(tmp_path):

@@ -34,8 +34,9 @@ def test_a_short_training_lowers_the_loss_and_resumes(tmp_path):
     from vinadv.planners.training import train_vin
 
     with pytest.raises(InputError, match="planner='gppn', now 'vin'"):
-        train_vin(maps, TrainConfig(**{**config.to_dict(), "planner": "vin"}), checkpoint=ck, resume=True,
-                  progress=False)
+        train_vin(
+            maps, TrainConfig(**{**config.to_dict(), "planner": "vin"}), checkpoint=ck, resume=True, progress=False
+        )
     bits = optimal_action_bits(maps)
     _, val = split_indices(len(maps), config.val_fraction, config.seed)
     assert evaluate_loss(model, maps, bits, val, 8, torch.device("cpu"))["cells"] > 0
@@ -44,19 +45,57 @@ def test_a_short_training_lowers_the_loss_and_resumes(tmp_path):
 def test_cli_train_eval_plan(tmp_path, capsys):
     data, weights = tmp_path / "train.npz", tmp_path / "g.pt"
     assert main(["maps", "generate", "--n", "24", "--size", "10", "--seed", "4", "--out", str(data), "--quiet"]) == 0
-    assert main(["gppn", "train", "--data", str(data), "--out", str(weights), "--epochs", "2", "--batch-size", "8",
-                 "--k", "6", "--l-h", "6", "--kernel", "3", "--threads", "1", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "gppn",
+                "train",
+                "--data",
+                str(data),
+                "--out",
+                str(weights),
+                "--epochs",
+                "2",
+                "--batch-size",
+                "8",
+                "--k",
+                "6",
+                "--l-h",
+                "6",
+                "--kernel",
+                "3",
+                "--threads",
+                "1",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     record = json.loads((tmp_path / "g.json").read_text())
     assert record["planner"] == "gppn" and record["epochs_done"] == 2 and record["data"]["maps"] == 24
     model = load_gppn(weights)
     assert model.config.k == 6 and model.config.l_h == 6 and model.record["planner"] == "gppn"
-    assert main(["gppn", "eval", "--weights", str(weights), "--n", "5", "--size", "10", "--starts", "2",
-                 "--json"]) == 0
+    assert main(["gppn", "eval", "--weights", str(weights), "--n", "5", "--size", "10", "--starts", "2", "--json"]) == 0
     metrics = json.loads(capsys.readouterr().out)
     assert metrics["rollouts"] == 10 and 0 <= metrics["success_rate"] <= 1
     assert metrics["planner"]["name"] == "gppn" and len(metrics["planner"]["weights_sha256"]) == 64
-    assert main(["plan", "--maps", str(data), "--out", str(tmp_path / "p.npz"), "--planner", "gppn", "--weights",
-                 str(weights), "--json"]) == 0
+    assert (
+        main(
+            [
+                "plan",
+                "--maps",
+                str(data),
+                "--out",
+                str(tmp_path / "p.npz"),
+                "--planner",
+                "gppn",
+                "--weights",
+                str(weights),
+                "--json",
+            ]
+        )
+        == 0
+    )
     assert json.loads(capsys.readouterr().out)["paths"] == 24 * 7
     # another size than the weights': a clear error, exit 2
     assert main(["gppn", "eval", "--weights", str(weights), "--n", "2", "--size", "12", "--quiet"]) == 2
@@ -69,8 +108,9 @@ def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatc
 
     torch.set_num_threads(1)
     maps = generate_maps(40, 8, seed=6, n_starts=1)
-    config = TrainConfig(planner="gppn", epochs=2, lr=0.01, batch_size=8, k=4, l_h=4, kernel=3, seed=2,
-                         checkpoint_min=1e-9)  # a checkpoint after every batch
+    config = TrainConfig(
+        planner="gppn", epochs=2, lr=0.01, batch_size=8, k=4, l_h=4, kernel=3, seed=2, checkpoint_min=1e-9
+    )  # a checkpoint after every batch
     whole, whole_rec = train_gppn(maps, config, checkpoint=tmp_path / "a.ckpt", progress=False)
     real, calls = training.batch_loss, []
 

@@ -37,14 +37,16 @@ def test_rollout_follows_the_reference_rule_on_arbitrary_logits(corner_cutting):
     seen = set()
     for b in range(60):
         for s in range(3):
-            limit = step_limits(maps.obstacles[b : b + 1], maps.starts[b : b + 1, s], maps.goals[b : b + 1],
-                                corner_cutting)[0]
+            limit = step_limits(
+                maps.obstacles[b : b + 1], maps.starts[b : b + 1, s], maps.goals[b : b + 1], corner_cutting
+            )[0]
 
             def action_at(r, c, b=b):
                 return int(np.argmax(logits[b, :, r, c]))  # the first of tied maxima
 
-            path, term = rollout(action_at, maps.obstacles[b], maps.starts[b, s], maps.goals[b], int(limit),
-                                 corner_cutting)
+            path, term = rollout(
+                action_at, maps.obstacles[b], maps.starts[b, s], maps.goals[b], int(limit), corner_cutting
+            )
             t = b * 3 + s
             np.testing.assert_array_equal(got.paths[t], np.array(path).reshape(-1, 2))
             assert got.termination[t] == term
@@ -138,9 +140,15 @@ class Broken(nn.Module):
         raise RuntimeError("boom")
 
 
-@pytest.mark.parametrize("mode,message", [("shape", r"logits of shape \(3, 4, 8, 8\); expected \(B, 8, N, N\)"),
-                                          ("nan", "NaN logits"), ("int", "torch.int64 logits"),
-                                          ("raise", "forward failed: RuntimeError: boom")])
+@pytest.mark.parametrize(
+    "mode,message",
+    [
+        ("shape", r"logits of shape \(3, 4, 8, 8\); expected \(B, 8, N, N\)"),
+        ("nan", "NaN logits"),
+        ("int", "torch.int64 logits"),
+        ("raise", "forward failed: RuntimeError: boom"),
+    ],
+)
 def test_a_planner_that_breaks_the_contract_is_refused_by_name(mode, message):
     maps = generate_maps(3, 8, seed=1, n_starts=1)
     planner = TorchPlanner(Broken(mode), "my-broken", 8)
@@ -160,11 +168,32 @@ def test_check_logits_numpy_and_sizes():
 
 def test_cli_refuses_a_broken_planner_with_exit_2(tmp_path, capsys):
     (tmp_path / "bad.py").write_text("import torch\n\ndef make(size):\n    return torch.nn.Conv2d(1, 4, 1)\n")
-    generate = ["maps", "generate", "--n", "3", "--size", "8", "--seed", "1", "--out", str(tmp_path / "m.npz"),
-                "--quiet"]
+    generate = [
+        "maps",
+        "generate",
+        "--n",
+        "3",
+        "--size",
+        "8",
+        "--seed",
+        "1",
+        "--out",
+        str(tmp_path / "m.npz"),
+        "--quiet",
+    ]
     assert main(generate) == 0
-    code = main(["plan", "--maps", str(tmp_path / "m.npz"), "--out", str(tmp_path / "p.npz"), "--quiet",
-                 "--planner", f"{tmp_path / 'bad.py'}:make"])
+    code = main(
+        [
+            "plan",
+            "--maps",
+            str(tmp_path / "m.npz"),
+            "--out",
+            str(tmp_path / "p.npz"),
+            "--quiet",
+            "--planner",
+            f"{tmp_path / 'bad.py'}:make",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "bad.py:make" in err and "Traceback" not in err
 

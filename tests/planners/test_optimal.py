@@ -63,8 +63,9 @@ def test_paths_equal_brute_force_shortest_paths(corner_cutting):
     for b in range(len(maps)):
         obs = maps.obstacles[b].tolist()
         for s in range(3):
-            want, cost = brute_path(obs, tuple(map(int, maps.starts[b, s])), tuple(map(int, maps.goals[b])),
-                                    corner_cutting)
+            want, cost = brute_path(
+                obs, tuple(map(int, maps.starts[b, s])), tuple(map(int, maps.goals[b])), corner_cutting
+            )
             np.testing.assert_array_equal(result.paths[b * 3 + s], np.array(want))
             assert cost == pytest.approx(maps.expert_costs[b, s], abs=1e-9)
 

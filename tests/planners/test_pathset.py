@@ -22,8 +22,14 @@ def planned():
 
 
 def fields(ps: PathSet) -> dict:
-    return {"path_cells": ps.paths.cells, "path_offsets": ps.paths.offsets, "reached": ps.reached,
-            "termination": ps.termination, "n_starts": np.array(ps.n_starts), "size": np.array(ps.size)}
+    return {
+        "path_cells": ps.paths.cells,
+        "path_offsets": ps.paths.offsets,
+        "reached": ps.reached,
+        "termination": ps.termination,
+        "n_starts": np.array(ps.n_starts),
+        "size": np.array(ps.size),
+    }
 
 
 def test_round_trip(planned, tmp_path):
@@ -40,8 +46,10 @@ def test_round_trip(planned, tmp_path):
 @pytest.mark.parametrize(
     "change, match",
     [
-        (lambda f: f.update(termination=np.where(f["termination"] == "goal", "arrived", f["termination"])),
-         "termination"),
+        (
+            lambda f: f.update(termination=np.where(f["termination"] == "goal", "arrived", f["termination"])),
+            "termination",
+        ),
         (lambda f: f.update(reached=~f["reached"]), "reached"),
         (lambda f: f.update(path_offsets=f["path_offsets"][:-1]), "path_offsets"),
         (lambda f: f.update(path_cells=f["path_cells"] + 20), "path_cells"),
@@ -77,8 +85,18 @@ def test_cli_plan(planned, tmp_path, capsys):
     maps, ps = planned
     maps.save(tmp_path / "maps.npz")
     save_vin(planning_vin(16, seed=4), tmp_path / "w.pt")
-    code = main(["plan", "--maps", str(tmp_path / "maps.npz"), "--out", str(tmp_path / "paths.npz"),
-                 "--weights", str(tmp_path / "w.pt"), "--json"])
+    code = main(
+        [
+            "plan",
+            "--maps",
+            str(tmp_path / "maps.npz"),
+            "--out",
+            str(tmp_path / "paths.npz"),
+            "--weights",
+            str(tmp_path / "w.pt"),
+            "--json",
+        ]
+    )
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["paths"] == 36

@@ -59,10 +59,10 @@ def test_factory_returning_something_else_is_refused(tmp_path):
 
 def test_the_shipped_example_plans_from_the_cli(tmp_path, capsys):
     maps_file, out = tmp_path / "m.npz", tmp_path / "p.npz"
-    assert main(["maps", "generate", "--n", "4", "--size", "12", "--seed", "3", "--out", str(maps_file),
-                 "--quiet"]) == 0
-    assert main(["plan", "--maps", str(maps_file), "--out", str(out), "--planner", f"{EXAMPLE}:make",
-                 "--json"]) == 0
+    assert (
+        main(["maps", "generate", "--n", "4", "--size", "12", "--seed", "3", "--out", str(maps_file), "--quiet"]) == 0
+    )
+    assert main(["plan", "--maps", str(maps_file), "--out", str(out), "--planner", f"{EXAMPLE}:make", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["planner"]["name"].endswith("my_planner.py:make") and summary["paths"] == 4 * 7
     paths = PathSet.load(out)
@@ -86,10 +86,13 @@ def test_the_shipped_example_plans_from_the_cli(tmp_path, capsys):
 
 def test_plan_optimal_and_vin_from_the_cli(tmp_path, capsys):
     maps_file = tmp_path / "m.npz"
-    assert main(["maps", "generate", "--n", "5", "--size", "28", "--seed", "3", "--out", str(maps_file),
-                 "--quiet"]) == 0
-    assert main(["plan", "--maps", str(maps_file), "--out", str(tmp_path / "o.npz"), "--planner", "optimal",
-                 "--json"]) == 0
+    assert (
+        main(["maps", "generate", "--n", "5", "--size", "28", "--seed", "3", "--out", str(maps_file), "--quiet"]) == 0
+    )
+    assert (
+        main(["plan", "--maps", str(maps_file), "--out", str(tmp_path / "o.npz"), "--planner", "optimal", "--json"])
+        == 0
+    )
     optimal = json.loads(capsys.readouterr().out)
     assert optimal["reached"] == 1.0 and optimal["planner"]["weights_sha256"] is None
     assert main(["plan", "--maps", str(maps_file), "--out", str(tmp_path / "v.npz"), "--json"]) == 0

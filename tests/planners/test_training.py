@@ -110,8 +110,9 @@ def test_init_continues_from_given_weights(tmp_path):
     first, _ = train_vin(maps, TrainConfig(**TINY), progress=False)
     save_vin(first, tmp_path / "first.pt")
     # with a vanishing learning rate, continued training stays at the starting weights, whatever the seed
-    same, rec = train_vin(maps, TrainConfig(**{**TINY, "lr": 1e-12, "seed": 5}, init=str(tmp_path / "first.pt")),
-                          progress=False)
+    same, rec = train_vin(
+        maps, TrainConfig(**{**TINY, "lr": 1e-12, "seed": 5}, init=str(tmp_path / "first.pt")), progress=False
+    )
     assert rec["init_sha256"] == weights_checksum(tmp_path / "first.pt")
     for key, value in first.state_dict().items():
         torch.testing.assert_close(same.state_dict()[key], value)
@@ -124,8 +125,23 @@ def test_cli_train_writes_weights_and_record(tmp_path, capsys):
     maps = generate_maps(12, 8, seed=9, n_starts=2)
     maps.save(tmp_path / "maps.npz")
     out = tmp_path / "w.pt"
-    args = ["vin", "train", "--data", str(tmp_path / "maps.npz"), "--out", str(out), "--epochs", "1",
-            "--batch-size", "4", "--val-fraction", "0.25", "--seed", "2", "--quiet"]
+    args = [
+        "vin",
+        "train",
+        "--data",
+        str(tmp_path / "maps.npz"),
+        "--out",
+        str(out),
+        "--epochs",
+        "1",
+        "--batch-size",
+        "4",
+        "--val-fraction",
+        "0.25",
+        "--seed",
+        "2",
+        "--quiet",
+    ]
     assert main(args) == 0
     record = json.loads(out.with_suffix(".json").read_text())
     for key in ("command", "seed", "data", "epochs", "wall_time_s", "hardware", "train_config"):

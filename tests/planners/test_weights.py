@@ -26,8 +26,14 @@ def test_state_dict_layout_and_shapes(size, k):
     model = VIN(VINConfig(k=k))
     shapes = {name: tuple(t.shape) for name, t in model.state_dict().items()}
     # DESIGN.md: h 3x3 2->150 with bias, r 1x1 150->1, q 3x3 1->10, w 10x1x3x3, fc 10->8 (the ports' layout).
-    assert shapes == {"h.weight": (150, 2, 3, 3), "h.bias": (150,), "r.weight": (1, 150, 1, 1),
-                      "q.weight": (10, 1, 3, 3), "w": (10, 1, 3, 3), "fc.weight": (8, 10)}
+    assert shapes == {
+        "h.weight": (150, 2, 3, 3),
+        "h.bias": (150,),
+        "r.weight": (1, 150, 1, 1),
+        "q.weight": (10, 1, 3, 3),
+        "w": (10, 1, 3, 3),
+        "fc.weight": (8, 10),
+    }
     assert set(shapes) == set(STATE_KEYS)
     maps = generate_maps(3, size, seed=1, n_starts=1)
     x = make_input(maps.obstacles, maps.goals)
@@ -75,8 +81,14 @@ def test_roundtrip_keeps_weights_config_and_record(tmp_path):
 def test_loads_a_port_style_plain_state_dict(tmp_path):
     torch.manual_seed(0)
     # The ports use other widths too (e.g. l_h=150, l_q=10 at 28x28; smaller in examples): infer them from shapes.
-    state = {"h.weight": torch.randn(20, 2, 3, 3), "h.bias": torch.randn(20), "r.weight": torch.randn(1, 20, 1, 1),
-             "q.weight": torch.randn(6, 1, 3, 3), "w": torch.randn(6, 1, 3, 3), "fc.weight": torch.randn(8, 6)}
+    state = {
+        "h.weight": torch.randn(20, 2, 3, 3),
+        "h.bias": torch.randn(20),
+        "r.weight": torch.randn(1, 20, 1, 1),
+        "q.weight": torch.randn(6, 1, 3, 3),
+        "w": torch.randn(6, 1, 3, 3),
+        "fc.weight": torch.randn(8, 6),
+    }
     torch.save(state, tmp_path / "port.pth")
     model = load_vin(tmp_path / "port.pth", size=16)
     assert model.config == VINConfig(k=20, l_i=2, l_h=20, l_q=6, n_actions=8)
@@ -109,8 +121,14 @@ def bad_files(tmp_path):
     blob = (tmp_path / "good.pt").read_bytes()
     (tmp_path / "truncated.pt").write_bytes(blob[: len(blob) // 2])
     state = {k: v.clone() for k, v in good.state_dict().items()}
-    torch.save({"format": WEIGHTS_FORMAT, "config": good.config.to_dict(),
-                "state_dict": {**state, "fc.weight": torch.zeros(8, 7)}}, tmp_path / "shape.pt")
+    torch.save(
+        {
+            "format": WEIGHTS_FORMAT,
+            "config": good.config.to_dict(),
+            "state_dict": {**state, "fc.weight": torch.zeros(8, 7)},
+        },
+        tmp_path / "shape.pt",
+    )
     torch.save({"format": "vinadv.vin/9", "config": {}, "state_dict": state}, tmp_path / "version.pt")
     torch.save({k: v for k, v in state.items() if k != "w"}, tmp_path / "missing_key.pt")
     torch.save({**state, "extra": torch.zeros(1)}, tmp_path / "extra_key.pt")

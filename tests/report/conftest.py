@@ -50,8 +50,23 @@ def evaluated(base_db, tmp_path_factory):
     folder = tmp_path_factory.mktemp("evaluated")
     shutil.copy(path, folder / "e.db")
     url = f"sqlite:///{folder / 'e.db'}"
-    assert main(["evaluate", "--db", url, "--run", str(ids[0]), "--classifiers", "svm,rule,hausdorff,hybrid",
-                 "--sizes", "0.5", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "evaluate",
+                "--db",
+                url,
+                "--run",
+                str(ids[0]),
+                "--classifiers",
+                "svm,rule,hausdorff,hybrid",
+                "--sizes",
+                "0.5",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     out = folder / "report"
     assert main(["report", "--db", url, "--run", str(ids[0]), "--out", str(out), "--quiet"]) == 0
     return url, ids, out

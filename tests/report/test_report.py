@@ -90,8 +90,10 @@ def test_report_of_two_runs_has_every_section_and_matches_the_database(db_copy, 
         for label in ("UrP", "FP", "DP", "UcP", "invalid"):
             assert int(row[label]) == counts.get(label, 0)
         assert int(row["pairs"]) == sum(counts.values())
-        assert int(row["successful"]) == _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND attack",
-                                               r=run_id)[0][0]
+        assert (
+            int(row["successful"])
+            == _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND attack", r=run_id)[0][0]
+        )
         total = sum(counts.values())
         assert f"{counts.get('DP', 0):,} ({100 * counts.get('DP', 0) / total:.1f}%)" in page
     assert [table4["paper"][k] for k in ("UrP", "FP", "DP", "UcP")] == ["1632", "204", "1076", "2088"]
@@ -121,13 +123,26 @@ def test_report_of_two_runs_has_every_section_and_matches_the_database(db_copy, 
 
 def test_evaluate_stores_rows_that_the_report_shows(evaluated):
     url, (saliency, _), out = evaluated
-    rows = _sql(url, "SELECT classifier, training, train_fraction, train_size, test_size, metrics, curves "
-                     "FROM evaluations WHERE run_id = :r ORDER BY id", r=saliency)
+    rows = _sql(
+        url,
+        "SELECT classifier, training, train_fraction, train_size, test_size, metrics, curves "
+        "FROM evaluations WHERE run_id = :r ORDER BY id",
+        r=saliency,
+    )
     jobs = sorted((r[0], r[1], r[2]) for r in rows)
-    assert jobs == sorted([("svm", "balanced", 1.0), ("svm", "imbalanced", 1.0), ("svm", "balanced", 0.5),
-                           ("hausdorff", "balanced", 1.0), ("hausdorff", "imbalanced", 1.0),
-                           ("hausdorff", "balanced", 0.5), ("rule", "none", 1.0), ("hybrid", "balanced", 1.0),
-                           ("hybrid", "imbalanced", 1.0)])
+    assert jobs == sorted(
+        [
+            ("svm", "balanced", 1.0),
+            ("svm", "imbalanced", 1.0),
+            ("svm", "balanced", 0.5),
+            ("hausdorff", "balanced", 1.0),
+            ("hausdorff", "imbalanced", 1.0),
+            ("hausdorff", "balanced", 0.5),
+            ("rule", "none", 1.0),
+            ("hybrid", "balanced", 1.0),
+            ("hybrid", "imbalanced", 1.0),
+        ]
+    )
     n_fp = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label = 'FP'", r=saliency)[0][0]
     n_dp = _sql(url, "SELECT COUNT(*) FROM map_pairs WHERE run_id = :r AND label = 'DP'", r=saliency)[0][0]
     # 7:3 stratified: scikit-learn puts ceil(0.3 n) pairs in the test split, classes in proportion
@@ -161,11 +176,15 @@ def test_evaluate_stores_rows_that_the_report_shows(evaluated):
     table5 = {(row["classifier"], row["setting"]): row for row in _rows(out / "table5_training_time.csv")}
     assert float(table5[("svm", "baseline")]["paper_s"]) == 46.0
     assert float(table5[("hausdorff", "baseline")]["training_s"]) == pytest.approx(
-        stored[("hausdorff", "balanced")]["training_s"])
+        stored[("hausdorff", "balanced")]["training_s"]
+    )
     fig8 = _rows(out / "fig8_accuracy_vs_size.csv")
     assert sorted((r["classifier"], r["setting"], float(r["fraction"])) for r in fig8) == [
-        ("hausdorff", "baseline", 0.5), ("hausdorff", "baseline", 1.0), ("svm", "baseline", 0.5),
-        ("svm", "baseline", 1.0)]
+        ("hausdorff", "baseline", 0.5),
+        ("hausdorff", "baseline", 1.0),
+        ("svm", "baseline", 0.5),
+        ("svm", "baseline", 1.0),
+    ]
     table7 = {row["method"]: row for row in _rows(out / "table7_processing_time.csv")}
     # the hybrid's time for 100 pairs: the stored evaluation's measurement on the paper's mix
     five = stored[("hybrid", "balanced")]["five_way"]
@@ -178,14 +197,39 @@ def test_evaluate_stores_rows_that_the_report_shows(evaluated):
 def test_run_with_report_runs_the_comparison_in_both_settings(report_weights, tmp_path, capsys):
     db = f"sqlite:///{tmp_path / 'one.db'}"
     out = tmp_path / "rep"
-    assert main(["run", "--n", "80", "--size", str(SIZE), "--attack", "saliency", "--seed", "4", "--shard-size", "80",
-                 "--weights", report_weights, "--db", db, "--report", str(out), "--json", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "--n",
+                "80",
+                "--size",
+                str(SIZE),
+                "--attack",
+                "saliency",
+                "--seed",
+                "4",
+                "--shard-size",
+                "80",
+                "--weights",
+                report_weights,
+                "--db",
+                db,
+                "--report",
+                str(out),
+                "--json",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     summary = json.loads(capsys.readouterr().out)
     assert summary["report"] == str(out) and summary["comparison"] == "stored"
     page = _check_complete(out, evaluated=True)
     assert f"vinadv report: run {summary['run_id']}" in page
-    assert {row["run"]: int(row["pairs"]) for row in _rows(out / "table4_categories.csv")}[str(summary["run_id"])] \
-        == summary["pairs"]
+    assert {row["run"]: int(row["pairs"]) for row in _rows(out / "table4_categories.csv")}[
+        str(summary["run_id"])
+    ] == summary["pairs"]
     # every classifier in the paper's setting and ours, the networks with their epochs capped (the page says so)
     stored = _sql(db, "SELECT DISTINCT classifier, setting FROM evaluations WHERE run_id = :r", r=summary["run_id"])
     # (the distances and the rule have no setting: compared once)
@@ -203,8 +247,29 @@ def test_run_with_report_runs_the_comparison_in_both_settings(report_weights, tm
 def test_run_with_report_and_no_evaluate_skips_the_comparison(report_weights, tmp_path, capsys):
     db = f"sqlite:///{tmp_path / 'two.db'}"
     out = tmp_path / "rep"
-    assert main(["run", "--n", "30", "--size", str(SIZE), "--attack", "key-points", "--weights", report_weights,
-                 "--db", db, "--report", str(out), "--no-evaluate", "--json", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "--n",
+                "30",
+                "--size",
+                str(SIZE),
+                "--attack",
+                "key-points",
+                "--weights",
+                report_weights,
+                "--db",
+                db,
+                "--report",
+                str(out),
+                "--no-evaluate",
+                "--json",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     summary = json.loads(capsys.readouterr().out)
     assert summary["comparison"] == "skipped"
     _check_complete(out, evaluated=False)
@@ -222,12 +287,21 @@ def test_main_run_is_the_first_of_runs_and_each_runs_evaluation_is_shown(evaluat
     # the main run has no comparison; the other's stored one is shown, its files prefixed with its id
     prefix = f"run{saliency}_"
     links = _parse(out / "index.html").links
-    for name in ("table5_training_time.csv", "table6_accuracy.csv", "classifier_metrics.csv",
-                 "fig9_roc_pr_baseline.png", "fig8_accuracy_vs_size.png"):
+    for name in (
+        "table5_training_time.csv",
+        "table6_accuracy.csv",
+        "classifier_metrics.csv",
+        "fig9_roc_pr_baseline.png",
+        "fig8_accuracy_vs_size.png",
+    ):
         assert prefix + name in links and (out / (prefix + name)).is_file()
     assert not (out / "table6_accuracy.csv").exists()
-    stored = _sql(url, "SELECT metrics FROM evaluations WHERE run_id = :r AND classifier = 'svm' AND training = "
-                       "'balanced' AND train_fraction = 1.0", r=saliency)[0][0]
+    stored = _sql(
+        url,
+        "SELECT metrics FROM evaluations WHERE run_id = :r AND classifier = 'svm' AND training = "
+        "'balanced' AND train_fraction = 1.0",
+        r=saliency,
+    )[0][0]
     stored = json.loads(stored) if isinstance(stored, str) else stored
     table6 = {(row["classifier"], row["setting"]): row for row in _rows(out / f"{prefix}table6_accuracy.csv")}
     assert float(table6[("svm", "baseline")]["accuracy_balanced"]) == pytest.approx(stored["accuracy"])
@@ -236,8 +310,23 @@ def test_main_run_is_the_first_of_runs_and_each_runs_evaluation_is_shown(evaluat
     assert [row["run"] for row in _rows(out / "table4_categories.csv")] == [str(near_path), str(saliency), "paper"]
     # --run names the main run whatever the order of --runs
     out2 = tmp_path / "cmp2"
-    assert main(["report", "--db", url, "--run", str(saliency), "--runs", f"{near_path},{saliency}", "--out",
-                 str(out2), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "report",
+                "--db",
+                url,
+                "--run",
+                str(saliency),
+                "--runs",
+                f"{near_path},{saliency}",
+                "--out",
+                str(out2),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     assert f"vinadv report: run {saliency} (saliency)" in (out2 / "index.html").read_text()
     assert (out2 / "table6_accuracy.csv").is_file()
     assert [row["run"] for row in _rows(out2 / "table4_categories.csv")] == [str(saliency), str(near_path), "paper"]
@@ -257,7 +346,7 @@ def test_a_run_labelled_by_a_classifier_is_marked_in_table4(db_copy, tmp_path):
     assert table4[str(saliency)]["labelled_by"] == "rule"
     assert table4[str(model_run)]["labelled_by"] == "svm-model"
     page = index.read_text()
-    table = page[page.index("Table 4: the distribution"):]
+    table = page[page.index("Table 4: the distribution") :]
     table = table[: table.index("</table>")]
     marked = {int(row.split(" ", 1)[0]) for row in table.split("<tr><td>")[2:] if "†" in row}
     assert marked == {model_run}

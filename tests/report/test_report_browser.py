@@ -67,8 +67,14 @@ def _open_and_check(url: str, screenshot: Path, chromium: str) -> dict:
             page.screenshot(path=str(screenshot), full_page=True)
         finally:
             browser.close()
-    return {"errors": errors, "failed": failed, "bad_status": bad_status, "images": images, "sections": sections,
-            "widths": widths}
+    return {
+        "errors": errors,
+        "failed": failed,
+        "bad_status": bad_status,
+        "images": images,
+        "sections": sections,
+        "widths": widths,
+    }
 
 
 @pytest.mark.parametrize("via", ["http", "file"])

@@ -24,8 +24,14 @@ from vinadv.store import Store
 
 TOL = 1e-6  # the runs' harm tolerance (the default)
 HARMS = ("harmful", "harmless", "invalid")
-FILES = ("harm_label_x_harm.csv", "harm_regret_changes.csv", "harm_regret_histogram.csv", "fig_harm_regret.png",
-         "fig_harm_harmless_FP.png", "fig_harm_harmful_DP.png")
+FILES = (
+    "harm_label_x_harm.csv",
+    "harm_regret_changes.csv",
+    "harm_regret_histogram.csv",
+    "fig_harm_regret.png",
+    "fig_harm_harmless_FP.png",
+    "fig_harm_harmful_DP.png",
+)
 
 
 def _sql(url: str, query: str, **params) -> list:
@@ -70,8 +76,12 @@ def test_label_x_harm_and_regret_changes_match_the_stored_rows(db_copy, tmp_path
         total = sum(counts[(label, h)] for h in HARMS)
         assert [int(row[h]) for h in HARMS] == [counts[(label, h)] for h in HARMS]
         assert int(row["pairs"]) == total
-        cells = "".join(f"<td>{counts[(label, h)]:,} ({100 * counts[(label, h)] / total:.1f}%)</td>" if total
-                        else f"<td>{counts[(label, h)]:,} (—)</td>" for h in HARMS)
+        cells = "".join(
+            f"<td>{counts[(label, h)]:,} ({100 * counts[(label, h)] / total:.1f}%)</td>"
+            if total
+            else f"<td>{counts[(label, h)]:,} (—)</td>"
+            for h in HARMS
+        )
         assert f"<tr><td>{label}</td>{cells}<td>{total:,}</td></tr>" in page
     assert counts[("FP", "harmless")] and counts[("DP", "harmful")]  # the run has both kinds of example
     valid = sum(n for (_, harm), n in counts.items() if harm != "invalid")
@@ -107,27 +117,37 @@ def test_examples_are_harmless_fp_and_harmful_dp_pairs_with_their_expert_paths(d
     assert list(data.examples) == ["harmless FP", "harmful DP"] and list(data.example_figures) == list(data.examples)
     for kind, shown in data.examples.items():
         harm, label = kind.split()
-        first = _sql(url, "SELECT pair_index FROM map_pairs WHERE run_id = :r AND label = :l AND harm = :h "
-                          "ORDER BY pair_index", r=saliency, l=label, h=harm)[:HARM_EXAMPLES_SHOWN]
+        first = _sql(
+            url,
+            "SELECT pair_index FROM map_pairs WHERE run_id = :r AND label = :l AND harm = :h ORDER BY pair_index",
+            r=saliency,
+            l=label,
+            h=harm,
+        )[:HARM_EXAMPLES_SHOWN]
         assert [e.pair_index for e in shown] == [p for (p,) in first] and shown
         for e in shown:
             map_o, map_a, path_o, path_a, start, goal, stored_label, stored_harm, opt_o, opt_a = _sql(
-                url, "SELECT map_o, map_a, path_o, path_a, start, goal, label, harm, opt_cost_o, opt_cost_a "
-                     "FROM map_pairs WHERE run_id = :r AND pair_index = :p", r=saliency, p=e.pair_index)[0]
+                url,
+                "SELECT map_o, map_a, path_o, path_a, start, goal, label, harm, opt_cost_o, opt_cost_a "
+                "FROM map_pairs WHERE run_id = :r AND pair_index = :p",
+                r=saliency,
+                p=e.pair_index,
+            )[0]
             assert (stored_label, stored_harm) == (e.label, e.harm) == (label, harm)
             start, goal = (tuple(int(v) for v in cell.split(",")) for cell in (start, goal))
             expert_o = optimal_path(parse_map(map_o), start, goal, True)  # the runs cut corners (the default)
             expert_a = optimal_path(parse_map(map_a), start, goal, True)
             assert e.expert_path_o == tuple(expert_o) and e.expert_path_a == tuple(expert_a)
-            for oracle, mine, stored in ((path_cost(expert_o), e.expert_cost_o, opt_o),
-                                         (path_cost(expert_a), e.expert_cost_a, opt_a)):
+            for oracle, mine, stored in (
+                (path_cost(expert_o), e.expert_cost_o, opt_o),
+                (path_cost(expert_a), e.expert_cost_a, opt_a),
+            ):
                 assert math.isclose(oracle, mine, abs_tol=1e-9) and math.isclose(oracle, stored, abs_tol=1e-9)
             planner_o, planner_a = parse_path(path_o), parse_path(path_a)
             assert planner_o[-1] == planner_a[-1] == goal  # FP and DP: both paths reach the goal
             regret_o = path_cost(planner_o) - path_cost(expert_o)
             regret_a = path_cost(planner_a) - path_cost(expert_a)
-            assert math.isclose(regret_o, e.regret_o, abs_tol=1e-9) and math.isclose(regret_a, e.regret_a,
-                                                                                      abs_tol=1e-9)
+            assert math.isclose(regret_o, e.regret_o, abs_tol=1e-9) and math.isclose(regret_a, e.regret_a, abs_tol=1e-9)
             assert (regret_a > regret_o + TOL) == (harm == "harmful")
     page = _section((tmp_path / "index.html").read_text())
     for kind, shown in data.examples.items():
@@ -140,8 +160,9 @@ def _drop_harm(url: str, run_id: int, below: int | None = None) -> None:
     """Empty the harm columns of the run's pairs (those with a pair index below `below`, if given), as a vinadv
     from before harm left them."""
     where = "" if below is None else f" AND pair_index < {int(below)}"
-    _sql(url, f"UPDATE map_pairs SET {', '.join(f'{c} = NULL' for c in HARM_COLUMNS)} WHERE run_id = :r{where}",
-         r=run_id)
+    _sql(
+        url, f"UPDATE map_pairs SET {', '.join(f'{c} = NULL' for c in HARM_COLUMNS)} WHERE run_id = :r{where}", r=run_id
+    )
 
 
 def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path):
@@ -158,8 +179,9 @@ def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path):
     _drop_harm(url, near_path, below=30)
     out = tmp_path / "part"
     _harm_only(url, near_path, out)
-    missing = _sql(url, "SELECT label, COUNT(*) FROM map_pairs WHERE run_id = :r AND harm IS NULL GROUP BY label",
-                   r=near_path)
+    missing = _sql(
+        url, "SELECT label, COUNT(*) FROM map_pairs WHERE run_id = :r AND harm IS NULL GROUP BY label", r=near_path
+    )
     table = {row["label"]: row for row in _csv(out / "harm_label_x_harm.csv")}
     assert sum(n for _, n in missing) > 0
     for label, row in table.items():

@@ -39,10 +39,12 @@ def test_robustness_section_shows_every_stored_benchmark(db_copy, report_weights
         assert f"{100 * d['overall'][0]['harmful_rate']:.1f}%" in table
     with open(out / "robustness.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
-    expected = [(d["id"], name, f) for d in made
-                for name, by_k in (*((n, s["by_obstacles"]) for n, s in d["strategies"].items()),
-                                   ("worst case", d["overall"]))
-                for f in by_k]
+    expected = [
+        (d["id"], name, f)
+        for d in made
+        for name, by_k in (*((n, s["by_obstacles"]) for n, s in d["strategies"].items()), ("worst case", d["overall"]))
+        for f in by_k
+    ]
     assert len(rows) == len(expected)
     for row, (bid, name, f) in zip(rows, expected):
         assert (int(row["benchmark"]), row["strategy"], int(row["k"])) == (bid, name, f["k"])

@@ -86,9 +86,10 @@ def test_fp_and_dp_examples_give_dh_dv_and_what_makes_a_fork(evaluated):
     assert {label for _, label, *_ in listed} == {"FP", "DP"}  # the run has both, and the page lists both
     with sa.create_engine(url).connect() as conn:
         for pair, label, dh, dv, by in listed:
-            path_o, path_a, stored = conn.execute(sa.text(
-                "SELECT path_o, path_a, label FROM map_pairs WHERE run_id = :r AND pair_index = :p"),
-                {"r": saliency, "p": int(pair)}).one()
+            path_o, path_a, stored = conn.execute(
+                sa.text("SELECT path_o, path_a, label FROM map_pairs WHERE run_id = :r AND pair_index = :p"),
+                {"r": saliency, "p": int(pair)},
+            ).one()
             assert stored == label
             assert (int(dh), int(dv)) == _oracle_distances(path_o, path_a)
             t = 2  # round(4 * 12 / 28)

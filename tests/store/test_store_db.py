@@ -29,24 +29,40 @@ def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
     rows = []
     for i in range(len(records)):
         score = float(records.score[i])
-        rows.append((
-            run_id, int(records.pair_index[i]), map_text(records.obstacles_o[i]), map_text(records.obstacles_a[i]),
-            path_text(paths_o[i]), path_text(paths_a[i]), str(records.label[i]), bool(records.attack[i]),
-            "{},{}".format(*records.starts[i]), "{},{}".format(*records.goals[i]), "{},{}".format(*records.added[i, 0]),
-            str(records.label_source[i]), None if np.isnan(score) else score,
-            str(records.term_o[i]), str(records.term_a[i]),
-            None if records.dh[i] < 0 else int(records.dh[i]), None if records.dv[i] < 0 else int(records.dv[i]),
-            *[None if math.isnan(getattr(records, c)[i]) else float(getattr(records, c)[i]) for c in HARM_FLOATS],
-            records.expert_label[i], records.harm[i],
-            ";".join("{},{}".format(*c) for c in records.added[i, 1:].tolist()) or None,  # NULL: one obstacle
-        ))
+        rows.append(
+            (
+                run_id,
+                int(records.pair_index[i]),
+                map_text(records.obstacles_o[i]),
+                map_text(records.obstacles_a[i]),
+                path_text(paths_o[i]),
+                path_text(paths_a[i]),
+                str(records.label[i]),
+                bool(records.attack[i]),
+                "{},{}".format(*records.starts[i]),
+                "{},{}".format(*records.goals[i]),
+                "{},{}".format(*records.added[i, 0]),
+                str(records.label_source[i]),
+                None if np.isnan(score) else score,
+                str(records.term_o[i]),
+                str(records.term_a[i]),
+                None if records.dh[i] < 0 else int(records.dh[i]),
+                None if records.dv[i] < 0 else int(records.dv[i]),
+                *[None if math.isnan(getattr(records, c)[i]) else float(getattr(records, c)[i]) for c in HARM_FLOATS],
+                records.expert_label[i],
+                records.harm[i],
+                ";".join("{},{}".format(*c) for c in records.added[i, 1:].tolist()) or None,  # NULL: one obstacle
+            )
+        )
     return sorted(rows, key=lambda r: r[1])
 
 
 def _raw_rows(url: str) -> list[tuple]:
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
-    cols = ("run_id pair_index map_o map_a path_o path_a label attack start goal added_obstacle label_source "
-            "score term_o term_a dh dv").split() + [*HARM_FLOATS, "expert_label", "harm", "added_more"]
+    cols = (
+        "run_id pair_index map_o map_a path_o path_a label attack start goal added_obstacle label_source "
+        "score term_o term_a dh dv"
+    ).split() + [*HARM_FLOATS, "expert_label", "harm", "added_more"]
     with engine.connect() as conn:
         table = schema.map_pairs  # not reflected: a reflected MySQL DOUBLE reads back as a 10-digit Decimal
         rows = conn.execute(sa.select(*[table.c[c] for c in cols]).order_by(table.c.pair_index)).all()
@@ -57,8 +73,9 @@ def _raw_rows(url: str) -> list[tuple]:
 def test_write_read_round_trip_matches_oracle(db_url):
     records = random_records(300, size=11, seed=1)
     with Store.open(db_url) as store:
-        run_id = store.create_run("rt", config={"n": 300, "size": 11}, seed=7, attack="near-path",
-                                  classifier="rule", weights_checksum="abc")
+        run_id = store.create_run(
+            "rt", config={"n": 300, "size": 11}, seed=7, attack="near-path", classifier="rule", weights_checksum="abc"
+        )
         assert store.write_pairs(run_id, records, batch_size=128) == 300
         back = store.read_pairs(run_id)
         assert back.equals(records)
@@ -130,8 +147,9 @@ def test_killed_writer_resumes_with_every_pair_exactly_once(db_url):
     n, batch = 2000, 50
     with Store.open(db_url) as store:  # create the schema up front so the child only writes
         pass
-    child = subprocess.Popen([sys.executable, "-c", _WRITER, db_url, str(n)], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE)
+    child = subprocess.Popen(
+        [sys.executable, "-c", _WRITER, db_url, str(n)], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
     try:
         with Store.open(db_url) as store:
             deadline = time.monotonic() + 120
@@ -151,8 +169,7 @@ def test_killed_writer_resumes_with_every_pair_exactly_once(db_url):
         assert 300 <= partial < n
         assert partial % batch == 0  # whole batches only: a batch is all-or-nothing
     # resume: the same writer again, skipping what is stored
-    done = subprocess.run([sys.executable, "-c", _WRITER, db_url, str(n)], capture_output=True, text=True,
-                          timeout=300)
+    done = subprocess.run([sys.executable, "-c", _WRITER, db_url, str(n)], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     with Store.open(db_url) as store:
         assert store.count_pairs(run_id) == n
@@ -213,10 +230,13 @@ def test_missing_column_is_refused(sqlite_url):
         Store.open(sqlite_url)
 
 
-@pytest.mark.parametrize("url", [
-    "mysql+pymysql://root:s3cret@127.0.0.1:1/test",
-    "postgresql+psycopg://postgres:s3cret@127.0.0.1:1/test",
-])
+@pytest.mark.parametrize(
+    "url",
+    [
+        "mysql+pymysql://root:s3cret@127.0.0.1:1/test",
+        "postgresql+psycopg://postgres:s3cret@127.0.0.1:1/test",
+    ],
+)
 def test_unreachable_server_is_a_clear_error(url):
     with pytest.raises(InputError) as err:
         Store.open(url)

@@ -6,9 +6,18 @@ import sqlalchemy as sa
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
 
-ROW = dict(batch="b1", classifier="svm", setting="baseline", training="balanced", train_fraction=1.0,
-           train_size=12, test_size=6, seed=3, metrics={"accuracy": 0.75, "per_class": {"FP": {"f1": 0.5}}},
-           curves={"roc": {"fpr": [0.0, 1.0], "tpr": [0.0, 1.0]}})
+ROW = dict(
+    batch="b1",
+    classifier="svm",
+    setting="baseline",
+    training="balanced",
+    train_fraction=1.0,
+    train_size=12,
+    test_size=6,
+    seed=3,
+    metrics={"accuracy": 0.75, "per_class": {"FP": {"f1": 0.5}}},
+    curves={"roc": {"fpr": [0.0, 1.0], "tpr": [0.0, 1.0]}},
+)
 
 
 def test_rows_round_trip_on_every_backend(db_url):

@@ -136,8 +136,11 @@ def test_new_database_has_the_harm_index_and_the_harm_filter_reads_it(sqlite_url
         run_id = store.create_run("r")
         store.write_pairs(run_id, random_records(200, size=7, seed=2))
         seen = []
-        sa.event.listen(store.engine, "before_cursor_execute",
-                        lambda conn, cursor, statement, params, context, many: seen.append((statement, params)))
+        sa.event.listen(
+            store.engine,
+            "before_cursor_execute",
+            lambda conn, cursor, statement, params, context, many: seen.append((statement, params)),
+        )
         store.page_pairs(run_id, harm="harmful", after=50, limit=5)
         statement, params = seen[-1]
         with store.engine.connect() as conn:

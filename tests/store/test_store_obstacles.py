@@ -18,8 +18,12 @@ from vinadv.store.synthetic import random_records
 def _rows(url: str, run_id: int) -> list[tuple]:
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     with engine.connect() as conn:
-        rows = conn.execute(sa.text(f"SELECT pair_index, added_obstacle, added_more FROM map_pairs "
-                                    f"WHERE run_id = {int(run_id)} ORDER BY pair_index")).all()
+        rows = conn.execute(
+            sa.text(
+                f"SELECT pair_index, added_obstacle, added_more FROM map_pairs "
+                f"WHERE run_id = {int(run_id)} ORDER BY pair_index"
+            )
+        ).all()
     engine.dispose()
     return [tuple(r) for r in rows]
 

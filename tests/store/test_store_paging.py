@@ -23,10 +23,19 @@ def filled(tmp_path):
     store.close()
 
 
-@pytest.mark.parametrize("filters", [
-    {}, {"label": "FP"}, {"label": "invalid"}, {"attack": True}, {"attack": False}, {"label_source": "svm"},
-    {"label": "DP", "label_source": "rule"}, {"label": "UcP", "attack": True},
-])
+@pytest.mark.parametrize(
+    "filters",
+    [
+        {},
+        {"label": "FP"},
+        {"label": "invalid"},
+        {"attack": True},
+        {"attack": False},
+        {"label_source": "svm"},
+        {"label": "DP", "label_source": "rule"},
+        {"label": "UcP", "attack": True},
+    ],
+)
 @pytest.mark.parametrize("limit", [1, 7, 500])
 def test_page_pairs_forward_and_back(filled, filters, limit):
     store, ids, all_records = filled

@@ -55,12 +55,15 @@ def _text_file(path: Path) -> None:
     path.write_text("run,pair\n1,2\n")
 
 
-@pytest.mark.parametrize("make, message", [
-    (_foreign_sqlite, "not a vinadv database"),
-    (_other_version, "schema version '999'"),
-    (_not_sqlite, "not a database"),
-    (_text_file, "not a database"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (_foreign_sqlite, "not a vinadv database"),
+        (_other_version, "schema version '999'"),
+        (_not_sqlite, "not a database"),
+        (_text_file, "not a database"),
+    ],
+)
 @pytest.mark.parametrize("how", ["create", "read", "readonly"])
 def test_refused_sqlite_file_is_left_byte_identical(tmp_path, make, message, how):
     folder = tmp_path / "db"

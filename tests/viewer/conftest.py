@@ -25,16 +25,29 @@ def crafted_records() -> PairRecords:
     added = np.array([[2, 3], [3, 2], [2, 2]])
     obstacles_a[np.arange(3), added[:, 0], added[:, 1]] = True
     path_o = [[(1, 1), (2, 2), (3, 3), (4, 4)], [(1, 1), (2, 2), (3, 3), (4, 4)], [(1, 1), (1, 2)]]
-    path_a = [[(1, 1), (1, 2), (1, 3), (1, 4), (2, 4), (3, 4), (4, 4)],
-              [(1, 1), (2, 1), (3, 1), (4, 2), (4, 3), (4, 4)], [(1, 1), (1, 2)]]
+    path_a = [
+        [(1, 1), (1, 2), (1, 3), (1, 4), (2, 4), (3, 4), (4, 4)],
+        [(1, 1), (2, 1), (3, 1), (4, 2), (4, 3), (4, 4)],
+        [(1, 1), (1, 2)],
+    ]
 
     return PairRecords(
-        pair_index=[10, 20, 30], obstacles_o=obstacles_o, obstacles_a=obstacles_a,
-        starts=[[1, 1]] * 3, goals=[[4, 4]] * 3, added=added,
-        path_o=PackedPaths.pack(path_o), path_a=PackedPaths.pack(path_a),
-        label=["FP", "DP", "invalid"], attack=[True, False, False],
-        term_o=["goal", "goal", "collision"], term_a=["goal", "goal", "collision"],
-        label_source=["svm", "svm", "rule"], score=[0.9, np.nan, np.nan], dh=[3, 1, -1], dv=[0, 2, -1],
+        pair_index=[10, 20, 30],
+        obstacles_o=obstacles_o,
+        obstacles_a=obstacles_a,
+        starts=[[1, 1]] * 3,
+        goals=[[4, 4]] * 3,
+        added=added,
+        path_o=PackedPaths.pack(path_o),
+        path_a=PackedPaths.pack(path_a),
+        label=["FP", "DP", "invalid"],
+        attack=[True, False, False],
+        term_o=["goal", "goal", "collision"],
+        term_a=["goal", "goal", "collision"],
+        label_source=["svm", "svm", "rule"],
+        score=[0.9, np.nan, np.nan],
+        dh=[3, 1, -1],
+        dv=[0, 2, -1],
     )
 
 

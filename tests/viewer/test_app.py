@@ -66,17 +66,20 @@ def test_grid_pages_cover_every_pair_in_order(client, db):
     assert _all_pages(client, crafted_id) == [10, 20, 30]
 
 
-@pytest.mark.parametrize("query,mask", [
-    ("label=FP", lambda r: r.label == "FP"),
-    ("label=invalid", lambda r: r.label == "invalid"),
-    ("attack=yes", lambda r: r.attack),
-    ("attack=no", lambda r: ~r.attack),
-    ("source=svm", lambda r: r.label_source == "svm"),
-    ("label=UrP&source=rule", lambda r: (r.label == "UrP") & (r.label_source == "rule")),
-    ("label=DP&attack=yes", lambda r: np.zeros(len(r), bool)),
-    ("harm=harmful", lambda r: r.harm == "harmful"),
-    ("harm=harmless&label=FP", lambda r: (r.harm == "harmless") & (r.label == "FP")),
-])
+@pytest.mark.parametrize(
+    "query,mask",
+    [
+        ("label=FP", lambda r: r.label == "FP"),
+        ("label=invalid", lambda r: r.label == "invalid"),
+        ("attack=yes", lambda r: r.attack),
+        ("attack=no", lambda r: ~r.attack),
+        ("source=svm", lambda r: r.label_source == "svm"),
+        ("label=UrP&source=rule", lambda r: (r.label == "UrP") & (r.label_source == "rule")),
+        ("label=DP&attack=yes", lambda r: np.zeros(len(r), bool)),
+        ("harm=harmful", lambda r: r.harm == "harmful"),
+        ("harm=harmless&label=FP", lambda r: (r.harm == "harmless") & (r.label == "FP")),
+    ],
+)
 def test_grid_filters(client, db, query, mask):
     run_id, records = db[1]["random"]
     assert _all_pages(client, run_id, query) == records.pair_index[mask(records)].tolist()
@@ -102,7 +105,10 @@ def test_grid_row_values_match_records(client, db):
     run_id, records = db[1]["crafted"]
     rows = client.get(f"/api/runs/{run_id}/pairs").get_json()["pairs"]
     assert [(r["label"], r["label_source"], r["score"], r["dh"], r["dv"], r["attack"]) for r in rows] == [
-        ("FP", "svm", 0.9, 3, 0, True), ("DP", "svm", None, 1, 2, False), ("invalid", "rule", None, None, None, False)]
+        ("FP", "svm", 0.9, 3, 0, True),
+        ("DP", "svm", None, 1, 2, False),
+        ("invalid", "rule", None, None, None, False),
+    ]
 
 
 def test_filter_form_redirect(client, db):
@@ -124,8 +130,16 @@ def test_grid_empty_result(client, db):
 def test_pair_page_shows_labels_distances_images(client, db):
     run_id, _ = db[1]["crafted"]
     html = client.get(f"/pairs/{run_id}/10").get_data(as_text=True)
-    for text in ("FP", "0.900", "3 / 0", f"/img/{run_id}/10/original.png", f"/img/{run_id}/10/adversarial.png",
-                 f"/img/{run_id}/10/pathimage.png", 'id="next-pair"', "svm"):
+    for text in (
+        "FP",
+        "0.900",
+        "3 / 0",
+        f"/img/{run_id}/10/original.png",
+        f"/img/{run_id}/10/adversarial.png",
+        f"/img/{run_id}/10/pathimage.png",
+        'id="next-pair"',
+        "svm",
+    ):
         assert text in html
     assert 'id="prev-pair"' not in html  # the first pair
 
@@ -183,7 +197,7 @@ def test_grid_page_filtered_by_harm_lists_those_pairs_with_their_harm_and_regret
     html = client.get(f"/runs/{run_id}/pairs?harm=harmless&size=20").get_data(as_text=True)
     order = np.argsort(records.pair_index)
     rows = order[records.harm[order] == "harmless"][:20]
-    body = html.split('<tbody>', 1)[1].split("</tbody>", 1)[0]
+    body = html.split("<tbody>", 1)[1].split("</tbody>", 1)[0]
     assert [int(i) for i in re.findall(r'class="pair-link"[^>]*>(\d+)<', body)] == records.pair_index[rows].tolist()
     assert body.count("<td>harmless</td>") == len(rows) == 20
     for row in rows:
@@ -247,8 +261,9 @@ def test_label_post_stores_annotation_and_moves_on(client, store, db):
     run_id, records = db[1]["random"]
     fp = records.pair_index[records.label == "FP"].tolist()
     token = csrf_from(client.get(f"/pairs/{run_id}/{fp[0]}?label=FP").get_data(as_text=True))
-    response = client.post(f"/pairs/{run_id}/{fp[0]}/label?label=FP",
-                           data={"csrf_token": token, "label": "DP", "annotator": "alice"})
+    response = client.post(
+        f"/pairs/{run_id}/{fp[0]}/label?label=FP", data={"csrf_token": token, "label": "DP", "annotator": "alice"}
+    )
     assert response.status_code == 303
     assert response.headers["Location"].endswith(f"/pairs/{run_id}/{fp[1]}?label=FP")
     assert "vinadv_annotator=alice" in response.headers["Set-Cookie"]
@@ -276,12 +291,26 @@ def test_label_last_pair_stays_and_default_annotator(client, store, db):
 # --------------------------------------------------------------------------------------------- bad input
 
 
-@pytest.mark.parametrize("url", [
-    "/runs/999/pairs", "/pairs/999/0", "/img/999/0/original.png", "/api/runs/999/pairs", "/api/pairs/999/0",
-    "/pairs/{run}/5", "/pairs/{run}/99999999", "/img/{run}/5/original.png", "/api/pairs/{run}/5",
-    "/img/{run}/10/other.png", "/pairs/{run}/99999999999999999999999", "/runs/99999999999999999999999/pairs",
-    "/runs/abc/pairs", "/pairs/{run}/-1", "/nowhere",
-])
+@pytest.mark.parametrize(
+    "url",
+    [
+        "/runs/999/pairs",
+        "/pairs/999/0",
+        "/img/999/0/original.png",
+        "/api/runs/999/pairs",
+        "/api/pairs/999/0",
+        "/pairs/{run}/5",
+        "/pairs/{run}/99999999",
+        "/img/{run}/5/original.png",
+        "/api/pairs/{run}/5",
+        "/img/{run}/10/other.png",
+        "/pairs/{run}/99999999999999999999999",
+        "/runs/99999999999999999999999/pairs",
+        "/runs/abc/pairs",
+        "/pairs/{run}/-1",
+        "/nowhere",
+    ],
+)
 def test_unknown_ids_are_404(client, db, url):
     run_id, _ = db[1]["crafted"]
     response = client.get(url.format(run=run_id))
@@ -290,12 +319,26 @@ def test_unknown_ids_are_404(client, db, url):
         assert response.is_json and response.get_json()["status"] == 404
 
 
-@pytest.mark.parametrize("query,needle", [
-    ("after=abc", "after"), ("after=-3", "after"), ("after=1.5", "after"), ("before=%EF%BC%91", "before"),
-    ("size=0", "size"), ("size=100000", "size"), ("size=", None), ("label=XX", "label"), ("label=fp", "label"),
-    ("attack=maybe", "attack"), ("colour=red", "colour"), ("after=1&before=5", "at most one"),
-    ("label=FP&label=DP", "more than once"), ("after=99999999999999999999", "after"), ("source=%01", "source"),
-])
+@pytest.mark.parametrize(
+    "query,needle",
+    [
+        ("after=abc", "after"),
+        ("after=-3", "after"),
+        ("after=1.5", "after"),
+        ("before=%EF%BC%91", "before"),
+        ("size=0", "size"),
+        ("size=100000", "size"),
+        ("size=", None),
+        ("label=XX", "label"),
+        ("label=fp", "label"),
+        ("attack=maybe", "attack"),
+        ("colour=red", "colour"),
+        ("after=1&before=5", "at most one"),
+        ("label=FP&label=DP", "more than once"),
+        ("after=99999999999999999999", "after"),
+        ("source=%01", "source"),
+    ],
+)
 def test_malformed_grid_params_are_400(client, db, query, needle):
     run_id, _ = db[1]["random"]
     html = client.get(f"/runs/{run_id}/pairs?{query}")
@@ -307,9 +350,18 @@ def test_malformed_grid_params_are_400(client, db, query, needle):
     assert api.status_code == 400 and needle in api.get_json()["message"]
 
 
-@pytest.mark.parametrize("url", ["/?x=1", "/pairs/{run}/10?after=1", "/api/pairs/{run}/10?x=1",
-                                 "/img/{run}/10/original.png?x=1", "/pairs", "/pairs?run=abc",
-                                 "/pairs/{run}/10?label=X"])
+@pytest.mark.parametrize(
+    "url",
+    [
+        "/?x=1",
+        "/pairs/{run}/10?after=1",
+        "/api/pairs/{run}/10?x=1",
+        "/img/{run}/10/original.png?x=1",
+        "/pairs",
+        "/pairs?run=abc",
+        "/pairs/{run}/10?label=X",
+    ],
+)
 def test_other_malformed_params_are_400(client, db, url):
     run_id, _ = db[1]["crafted"]
     assert client.get(url.format(run=run_id)).status_code == 400
@@ -337,20 +389,33 @@ def test_forged_posts_are_refused(client, app, store, db):
     other = app.test_client()
     assert other.post(url, data={"label": "FP", "csrf_token": token}).status_code == 403
     # the right token, but posted from another site
-    assert client.post(url, data={"label": "FP", "csrf_token": token},
-                       headers={"Origin": "http://evil.example"}).status_code == 403
+    assert (
+        client.post(
+            url, data={"label": "FP", "csrf_token": token}, headers={"Origin": "http://evil.example"}
+        ).status_code
+        == 403
+    )
     # labels change only by POST
     assert client.get(url + "?label=FP").status_code == 405
     assert store.read_annotations(run_id) == []
     # and the right token works
-    assert client.post(url, data={"label": "FP", "csrf_token": token},
-                       headers={"Origin": "http://localhost"}).status_code == 303
+    assert (
+        client.post(url, data={"label": "FP", "csrf_token": token}, headers={"Origin": "http://localhost"}).status_code
+        == 303
+    )
 
 
-@pytest.mark.parametrize("form,status", [
-    ({"label": "invalid"}, 400), ({"label": "XX"}, 400), ({}, 400), ({"label": "FP", "annotator": "<script>"}, 400),
-    ({"label": "FP", "annotator": "x" * 65}, 400), ({"label": "FP", "extra": "1"}, 400),
-])
+@pytest.mark.parametrize(
+    "form,status",
+    [
+        ({"label": "invalid"}, 400),
+        ({"label": "XX"}, 400),
+        ({}, 400),
+        ({"label": "FP", "annotator": "<script>"}, 400),
+        ({"label": "FP", "annotator": "x" * 65}, 400),
+        ({"label": "FP", "extra": "1"}, 400),
+    ],
+)
 def test_bad_label_forms_are_400(client, store, db, form, status):
     run_id, _ = db[1]["crafted"]
     token = _token(client, run_id)

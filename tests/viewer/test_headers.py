@@ -16,8 +16,17 @@ def _assert_headers(response):
 
 def test_security_headers_on_every_kind_of_response(client, db):
     run_id = db[1]["random"][0]
-    for url in ("/", f"/runs/{run_id}/pairs", f"/pairs/{run_id}/0", f"/img/{run_id}/0/original.png",
-                "/static/viewer.css", "/no/such/page", f"/api/pairs/{run_id}/0", "/api/runs", "/api/nothing"):
+    for url in (
+        "/",
+        f"/runs/{run_id}/pairs",
+        f"/pairs/{run_id}/0",
+        f"/img/{run_id}/0/original.png",
+        "/static/viewer.css",
+        "/no/such/page",
+        f"/api/pairs/{run_id}/0",
+        "/api/runs",
+        "/api/nothing",
+    ):
         response = client.get(url)
         _assert_headers(response)
     _assert_headers(client.post(f"/pairs/{run_id}/0/label", data={"label": "FP"}))  # refused: no CSRF token
@@ -35,8 +44,9 @@ def test_read_only_store_is_browsed_and_labelling_refused(db):
         client = app.test_client()
         page = client.get(f"/pairs/{run_id}/0")
         assert page.status_code == 200
-        response = client.post(f"/pairs/{run_id}/0/label", data={"label": "FP", "annotator": "me",
-                                                                  "csrf_token": csrf_from(page.get_data(as_text=True))})
+        response = client.post(
+            f"/pairs/{run_id}/0/label",
+            data={"label": "FP", "annotator": "me", "csrf_token": csrf_from(page.get_data(as_text=True))},
+        )
         assert response.status_code == 403 and b"read-only" in response.get_data()
         assert store.read_annotations(run_id) == []
-

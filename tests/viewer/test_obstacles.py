@@ -24,7 +24,7 @@ def test_pair_page_json_and_image_show_every_added_obstacle(tmp_path):
         assert body["added_cells"] == records.added[2].tolist() and body["added"] == records.added[2, 0].tolist()
         html = client.get(f"/pairs/{run_id}/2").get_data(as_text=True)
         assert "added obstacles" in html
-        shown = html[html.index('id="added"'):].split("</span>")[0]
+        shown = html[html.index('id="added"') :].split("</span>")[0]
         assert all(str(cell) in shown for cell in records.added[2].tolist())
         image = client.get(f"/img/{run_id}/2/adversarial.png")
         assert image.status_code == 200 and image.mimetype == "image/png"

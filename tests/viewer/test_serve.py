@@ -12,10 +12,21 @@ from vinadv.cli import main
 from vinadv.viewer.app import is_loopback
 
 
-@pytest.mark.parametrize("host,expected", [
-    ("127.0.0.1", True), ("127.4.5.6", True), ("localhost", True), ("::1", True), ("[::1]", True),
-    ("0.0.0.0", False), ("::", False), ("192.168.1.10", False), ("example.org", False), ("10.0.0.1", False),
-])
+@pytest.mark.parametrize(
+    "host,expected",
+    [
+        ("127.0.0.1", True),
+        ("127.4.5.6", True),
+        ("localhost", True),
+        ("::1", True),
+        ("[::1]", True),
+        ("0.0.0.0", False),
+        ("::", False),
+        ("192.168.1.10", False),
+        ("example.org", False),
+        ("10.0.0.1", False),
+    ],
+)
 def test_is_loopback(host, expected):
     assert is_loopback(host) is expected
 
@@ -67,8 +78,9 @@ def test_serve_runs_on_loopback(db, monkeypatch, capsys):
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    thread = threading.Thread(target=main, args=(["serve", "--db", db[0], "--port", str(port), "--quiet"],),
-                              daemon=True)
+    thread = threading.Thread(
+        target=main, args=(["serve", "--db", db[0], "--port", str(port), "--quiet"],), daemon=True
+    )
     thread.start()
     for _ in range(400):
         if "server" in made or not thread.is_alive():

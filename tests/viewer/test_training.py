@@ -16,20 +16,32 @@ def _ann(i, pair, label, who):
     return {"id": i, "pair_index": pair, "label": label, "annotator": who}
 
 
-@pytest.mark.parametrize("annotations,expected", [
-    ([], ([], [])),
-    ([_ann(1, 5, "FP", "a")], ([5], ["FP"])),
-    # one annotator changes their mind: the latest counts
-    ([_ann(1, 5, "FP", "a"), _ann(2, 5, "DP", "a")], ([5], ["DP"])),
-    # two against one
-    ([_ann(1, 5, "FP", "a"), _ann(2, 5, "FP", "b"), _ann(3, 5, "DP", "c")], ([5], ["FP"])),
-    # a tie: the most recent annotation among the tied labels
-    ([_ann(1, 5, "FP", "a"), _ann(2, 5, "DP", "b")], ([5], ["DP"])),
-    ([_ann(2, 5, "FP", "a"), _ann(1, 5, "DP", "b")], ([5], ["FP"])),
-    # one person labelling a pair many times counts once
-    ([_ann(1, 7, "DP", "a"), _ann(2, 7, "DP", "a"), _ann(3, 7, "DP", "a"), _ann(4, 7, "FP", "b"),
-      _ann(5, 7, "FP", "c"), _ann(6, 3, "UcP", "a")], ([3, 7], ["UcP", "FP"])),
-])
+@pytest.mark.parametrize(
+    "annotations,expected",
+    [
+        ([], ([], [])),
+        ([_ann(1, 5, "FP", "a")], ([5], ["FP"])),
+        # one annotator changes their mind: the latest counts
+        ([_ann(1, 5, "FP", "a"), _ann(2, 5, "DP", "a")], ([5], ["DP"])),
+        # two against one
+        ([_ann(1, 5, "FP", "a"), _ann(2, 5, "FP", "b"), _ann(3, 5, "DP", "c")], ([5], ["FP"])),
+        # a tie: the most recent annotation among the tied labels
+        ([_ann(1, 5, "FP", "a"), _ann(2, 5, "DP", "b")], ([5], ["DP"])),
+        ([_ann(2, 5, "FP", "a"), _ann(1, 5, "DP", "b")], ([5], ["FP"])),
+        # one person labelling a pair many times counts once
+        (
+            [
+                _ann(1, 7, "DP", "a"),
+                _ann(2, 7, "DP", "a"),
+                _ann(3, 7, "DP", "a"),
+                _ann(4, 7, "FP", "b"),
+                _ann(5, 7, "FP", "c"),
+                _ann(6, 3, "UcP", "a"),
+            ],
+            ([3, 7], ["UcP", "FP"]),
+        ),
+    ],
+)
 def test_resolve_human_labels(annotations, expected):
     pairs, labels = resolve_human_labels(annotations)
     assert pairs.tolist() == expected[0] and labels.tolist() == expected[1]
@@ -63,8 +75,25 @@ def test_classify_train_on_human_labels(db, tmp_path, capsys):
         store.add_annotations(run_id, list(range(0, 12)), ["FP", "DP"] * 6, "alice")
         store.add_annotations(run_id, [20, 21], ["UcP", "UrP"], "bob")
     out = tmp_path / "human.model"
-    code = main(["classify", "train", "--labels", "human", "--db", url, "--run", str(run_id), "--model",
-                 "hausdorff", "--out", str(out), "--test-fraction", "0.25", "--json"])
+    code = main(
+        [
+            "classify",
+            "train",
+            "--labels",
+            "human",
+            "--db",
+            url,
+            "--run",
+            str(run_id),
+            "--model",
+            "hausdorff",
+            "--out",
+            str(out),
+            "--test-fraction",
+            "0.25",
+            "--json",
+        ]
+    )
     assert code == 0, capsys.readouterr().err
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert summary["labels"] == "human" and summary["n_pairs"] == 14
@@ -79,10 +108,44 @@ def test_classify_train_human_needs_run_and_labels(db, tmp_path, capsys):
     model = str(tmp_path / "m.model")
     assert main(["classify", "train", "--labels", "human", "--db", url, "--model", "svm", "--out", model]) == 2
     assert "--run" in capsys.readouterr().err
-    assert main(["classify", "train", "--labels", "human", "--db", url, "--run", str(run_id), "--model", "svm",
-                 "--out", model]) == 2
+    assert (
+        main(
+            [
+                "classify",
+                "train",
+                "--labels",
+                "human",
+                "--db",
+                url,
+                "--run",
+                str(run_id),
+                "--model",
+                "svm",
+                "--out",
+                model,
+            ]
+        )
+        == 2
+    )
     assert "no human labels" in capsys.readouterr().err
-    assert main(["classify", "train", "--labels", "human", "--db", str(tmp_path / "none.db"), "--run", "1",
-                 "--model", "svm", "--out", model]) == 2
+    assert (
+        main(
+            [
+                "classify",
+                "train",
+                "--labels",
+                "human",
+                "--db",
+                str(tmp_path / "none.db"),
+                "--run",
+                "1",
+                "--model",
+                "svm",
+                "--out",
+                model,
+            ]
+        )
+        == 2
+    )
     assert main(["classify", "train", "--model", "svm", "--out", model]) == 2
     assert "--pairs is required" in capsys.readouterr().err

@@ -95,9 +95,18 @@ class PairSet(PathPairs):
         if not isinstance(params, dict):
             raise r.fail("params", "must be a JSON object")
         return cls(
-            obstacles_o=obs_o, obstacles_a=obs_a, starts=starts, goals=goals, added=added, map_index=map_index,
-            path_o=paths["o"], path_a=paths["a"], term_o=terms["o"], term_a=terms["a"],
-            strategy=str(r.scalar("strategy", "U")), params=params,
+            obstacles_o=obs_o,
+            obstacles_a=obs_a,
+            starts=starts,
+            goals=goals,
+            added=added,
+            map_index=map_index,
+            path_o=paths["o"],
+            path_a=paths["a"],
+            term_o=terms["o"],
+            term_a=terms["a"],
+            strategy=str(r.scalar("strategy", "U")),
+            params=params,
             corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
         )
 

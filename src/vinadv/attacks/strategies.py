@@ -190,15 +190,34 @@ class Attack:
                 plans = planner.plan_batch(current, starts, goals, corner_cutting)
                 calls += b
             valid = valid_cells(current, starts, goals, corner_cutting) & alive[:, None, None]
-            ctx = AttackContext(current, starts, goals, valid, plans, planner, self._rng(step, first_map, obstacles),
-                                base_obstacles=obstacles, base=base, added=chosen)
+            ctx = AttackContext(
+                current,
+                starts,
+                goals,
+                valid,
+                plans,
+                planner,
+                self._rng(step, first_map, obstacles),
+                base_obstacles=obstacles,
+                base=base,
+                added=chosen,
+            )
             scores = np.where(valid, self.candidate_scores(ctx), -np.inf)
             alive &= np.isfinite(scores).any(axis=(1, 2))
             # a step before the last keeps the strongest candidate of each map, whatever the strategy
             map_idx, cells, rank = _top_candidates(scores, self._evaluated_per_map())
             desc = f"attack {self.name}" + (f", obstacle {step + 1}/{self.obstacles}" if self.obstacles > 1 else "")
-            kept = self._evaluate(ctx, map_idx, cells, rank, corner_cutting, strength, progress and desc,
-                                  keep=self.per_map if last else 1, ranked=self.ranked or not last)
+            kept = self._evaluate(
+                ctx,
+                map_idx,
+                cells,
+                rank,
+                corner_cutting,
+                strength,
+                progress and desc,
+                keep=self.per_map if last else 1,
+                ranked=self.ranked or not last,
+            )
             calls += len(map_idx)
             kept.params = {**kept.params, "planner": planner.spec()}  # which planner the attacks were found on
             steps.append(kept)
@@ -222,8 +241,9 @@ class Attack:
             return self.per_map or None
         return self.budget
 
-    def _evaluate(self, ctx, map_idx, cells, rank, corner_cutting, strength, progress, keep: int,
-                  ranked: bool) -> PairSet:
+    def _evaluate(
+        self, ctx, map_idx, cells, rank, corner_cutting, strength, progress, keep: int, ranked: bool
+    ) -> PairSet:
         """The pairs of the candidates `(map_idx, cells, rank)`: with `ranked`, the `keep` strongest of each map
         (all with `keep` 0), else all. `progress`: a progress bar's description, or False."""
         # chunks of about EVAL_CHUNK candidates, split at map boundaries so a map's candidates are judged together
@@ -238,10 +258,19 @@ class Attack:
         parts = []
         for lo, hi in spans:
             if hi > lo:
-                parts.append(self._evaluate_chunk(ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi],
-                                                  corner_cutting, strength, keep, ranked))
-        return PairSet.concat(parts, size=ctx.obstacles.shape[1], strategy=self.name, params=self.params(),
-                              corner_cutting=corner_cutting, n_added=ctx.added.shape[1] + 1)
+                parts.append(
+                    self._evaluate_chunk(
+                        ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi], corner_cutting, strength, keep, ranked
+                    )
+                )
+        return PairSet.concat(
+            parts,
+            size=ctx.obstacles.shape[1],
+            strategy=self.name,
+            params=self.params(),
+            corner_cutting=corner_cutting,
+            n_added=ctx.added.shape[1] + 1,
+        )
 
     def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength, keep, ranked) -> PairSet:
         obstacles_a = ctx.obstacles[map_idx].copy()
@@ -276,10 +305,16 @@ def _make_pairs(ctx: AttackContext, map_idx, cells, obstacles_a, planned: PlanRe
     """The pairs (original map, searched map + cell): the original map's path against the new one's."""
     added = np.concatenate([ctx.added[map_idx], cells.astype(np.int64)[:, None, :]], axis=1)
     return PairSet(
-        obstacles_o=ctx.base_obstacles[map_idx], obstacles_a=obstacles_a, starts=ctx.starts[map_idx],
-        goals=ctx.goals[map_idx], added=added, map_index=map_idx.astype(np.int64),
-        path_o=ctx.base.paths.take(map_idx), path_a=planned.paths,
-        term_o=ctx.base.termination_names[map_idx], term_a=planned.termination_names,
+        obstacles_o=ctx.base_obstacles[map_idx],
+        obstacles_a=obstacles_a,
+        starts=ctx.starts[map_idx],
+        goals=ctx.goals[map_idx],
+        added=added,
+        map_index=map_idx.astype(np.int64),
+        path_o=ctx.base.paths.take(map_idx),
+        path_a=planned.paths,
+        term_o=ctx.base.termination_names[map_idx],
+        term_a=planned.termination_names,
         corner_cutting=corner_cutting,
     )
 
@@ -339,8 +374,10 @@ class KeyPointsAttack(Attack):
         # tier 2: the two cells beside each diagonal move (the corners it cuts), in [2, 3)
         diag = same & (move[:, 0] != 0) & (move[:, 1] != 0)
         frac = 1.0 - pos / np.maximum(lengths[owner], 1)
-        for corner in (np.stack([cells[:, 0] + move[:, 0], cells[:, 1]], 1),
-                       np.stack([cells[:, 0], cells[:, 1] + move[:, 1]], 1)):
+        for corner in (
+            np.stack([cells[:, 0] + move[:, 0], cells[:, 1]], 1),
+            np.stack([cells[:, 0], cells[:, 1] + move[:, 1]], 1),
+        ):
             sel = diag & ~on_path[owner, corner[:, 0].clip(0, n - 1), corner[:, 1].clip(0, n - 1)]
             np.maximum.at(scores, (owner[sel], corner[sel, 0], corner[sel, 1]), 2.0 + 0.999 * frac[sel])
         # tier 1 (highest): the cells where the path turns, earlier turns first, in [3, 4)
@@ -416,8 +453,9 @@ STRATEGIES: dict[str, type[Attack]] = {
 }
 
 
-def make_attack(name: str, per_map: int = 1, seed: int = 0, budget: int = 8, radius: int = 2,
-                obstacles: int = 1) -> Attack:
+def make_attack(
+    name: str, per_map: int = 1, seed: int = 0, budget: int = 8, radius: int = 2, obstacles: int = 1
+) -> Attack:
     """The strategy `name` with its parameters (those it does not use are ignored); `obstacles`: K, the cells
     added per pair (greedily, see the module doc)."""
     if name not in STRATEGIES:

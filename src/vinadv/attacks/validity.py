@@ -42,8 +42,11 @@ def _reachable(obstacles, blocked_r, blocked_c, sr, sc, gr, gc, corner_cutting, 
             if nr == blocked_r and nc == blocked_c:
                 continue
             if not corner_cutting and deltas[a, 0] != 0 and deltas[a, 1] != 0:
-                if obstacles[nr, c] or obstacles[r, nc] or (nr == blocked_r and c == blocked_c) or (
-                    r == blocked_r and nc == blocked_c
+                if (
+                    obstacles[nr, c]
+                    or obstacles[r, nc]
+                    or (nr == blocked_r and c == blocked_c)
+                    or (r == blocked_r and nc == blocked_c)
                 ):
                     continue
             seen[nr, nc] = True
@@ -61,8 +64,19 @@ def _mark_separators(obstacles, starts, goals, cells, offsets, corner_cutting, d
         # the path's first and last cells are the start and the goal, which are never candidates
         for i in range(offsets[b] + 1, offsets[b + 1] - 1):
             r, c = cells[i, 0], cells[i, 1]
-            if not _reachable(obstacles[b], r, c, starts[b, 0], starts[b, 1], goals[b, 0], goals[b, 1],
-                              corner_cutting, deltas, seen, queue):
+            if not _reachable(
+                obstacles[b],
+                r,
+                c,
+                starts[b, 0],
+                starts[b, 1],
+                goals[b, 0],
+                goals[b, 1],
+                corner_cutting,
+                deltas,
+                seen,
+                queue,
+            ):
                 separator[b, r, c] = True
 
 
@@ -86,8 +100,16 @@ def valid_cells(
         return valid
     costs, paths = expert_paths(obstacles, goals, starts[:, None, :], corner_cutting)
     separator = np.zeros_like(valid)
-    _mark_separators(obstacles, starts, goals, paths.cells.astype(np.int64), paths.offsets, bool(corner_cutting),
-                     ACTION_DELTAS, separator)
+    _mark_separators(
+        obstacles,
+        starts,
+        goals,
+        paths.cells.astype(np.int64),
+        paths.offsets,
+        bool(corner_cutting),
+        ACTION_DELTAS,
+        separator,
+    )
     valid &= ~separator
     # a start that cannot reach its goal has no valid cell at all (the map is not a solvable map)
     valid[~np.isfinite(costs[:, 0])] = False
@@ -100,8 +122,19 @@ def _reachable_all(obstacles, starts, goals, corner_cutting, deltas, out):
     for b in numba.prange(obstacles.shape[0]):
         seen = np.empty((n, m), dtype=np.bool_)
         queue = np.empty(n * m, dtype=np.int64)
-        out[b] = _reachable(obstacles[b], -1, -1, starts[b, 0], starts[b, 1], goals[b, 0], goals[b, 1],
-                            corner_cutting, deltas, seen, queue)
+        out[b] = _reachable(
+            obstacles[b],
+            -1,
+            -1,
+            starts[b, 0],
+            starts[b, 1],
+            goals[b, 0],
+            goals[b, 1],
+            corner_cutting,
+            deltas,
+            seen,
+            queue,
+        )
 
 
 def valid_additions(

@@ -78,8 +78,12 @@ class PathPairBatch(Columns):
             per_cell = transform if transform.ndim == 0 else np.repeat(transform, paths.lengths)
             return PackedPaths(transform_cells(paths.cells, self.size, per_cell), paths.offsets)
 
-        return PathPairBatch(path_o=move(self.path_o), path_a=move(self.path_a),
-                             goals=transform_cells(self.goals, self.size, transform), size=self.size)
+        return PathPairBatch(
+            path_o=move(self.path_o),
+            path_a=move(self.path_a),
+            goals=transform_cells(self.goals, self.size, transform),
+            size=self.size,
+        )
 
     def fingerprint(self) -> str:
         """SHA-256 of the pairs' contents: tells whether two batches hold the same pairs."""

@@ -80,7 +80,8 @@ def harm_summary(table: dict[str, dict[str, int]]) -> dict:
     counts = {value: sum(row[value] for row in table.values()) for value in HARMS}
     valid = counts["harmful"] + counts["harmless"]
     return {
-        "harm_counts": counts, "harmful": counts["harmful"],
+        "harm_counts": counts,
+        "harmful": counts["harmful"],
         "harmful_rate": counts["harmful"] / valid if valid else None,
         "label_x_harm": {label: dict(row) for label, row in table.items()},
     }
@@ -90,8 +91,7 @@ def cross_table(labels, harm) -> dict[str, dict[str, int]]:
     """Pairs per (paper label, harm): `{label: {harm: count}}`, every label and harm value present."""
     labels = np.asarray(labels)
     harm = np.asarray(harm)
-    return {label: {value: int(np.sum((labels == label) & (harm == value))) for value in HARMS}
-            for label in LABELS}
+    return {label: {value: int(np.sum((labels == label) & (harm == value))) for value in HARMS} for label in LABELS}
 
 
 def harm_decision(labels, regret_o, regret_a, opt_cost_a, tol: float = DEFAULT_TOL, rtol: float = 0.0) -> np.ndarray:
@@ -171,9 +171,26 @@ def pair_harm(
     dv = np.zeros(n, dtype=np.int64)
     if n:
         flat_o, flat_a = (m.reshape(n, -1).view(np.uint8) for m in (obstacles_o, obstacles_a))
-        _harm_kernel(obstacles_o, obstacles_a, flat_o, flat_a, starts, goals, bool(corner_cutting), ACTION_DELTAS,
-                     ACTION_COSTS, expert_o is not None, given_cost, given_cells, given_offsets, opt_o, opt_a, code,
-                     dh, dv)
+        _harm_kernel(
+            obstacles_o,
+            obstacles_a,
+            flat_o,
+            flat_a,
+            starts,
+            goals,
+            bool(corner_cutting),
+            ACTION_DELTAS,
+            ACTION_COSTS,
+            expert_o is not None,
+            given_cost,
+            given_cells,
+            given_offsets,
+            opt_o,
+            opt_a,
+            code,
+            dh,
+            dv,
+        )
     expert_label = np.where(is_fork(dh, dv, t), "FP", "DP").astype("<U7")
     expert_label[code == _E_UCP] = "UcP"
     expert_label[code == _E_URP] = "UrP"
@@ -186,9 +203,16 @@ def pair_harm(
     regret_o = cost_o - opt_o
     regret_a = cost_a - opt_a
     return PairHarm(
-        opt_cost_o=opt_o, opt_cost_a=opt_a, cost_o=cost_o, cost_a=cost_a, regret_o=regret_o, regret_a=regret_a,
-        expert_label=expert_label, harm=harm_decision(labels, regret_o, regret_a, opt_a, tol, rtol),
-        tol=float(tol), rtol=float(rtol),
+        opt_cost_o=opt_o,
+        opt_cost_a=opt_a,
+        cost_o=cost_o,
+        cost_a=cost_a,
+        regret_o=regret_o,
+        regret_a=regret_a,
+        expert_label=expert_label,
+        harm=harm_decision(labels, regret_o, regret_a, opt_a, tol, rtol),
+        tol=float(tol),
+        rtol=float(rtol),
     )
 
 
@@ -199,12 +223,22 @@ def check_tolerances(tol: float, rtol: float, names=("harm_tolerance", "harm_rto
             raise InputError(f"{name}: must be a finite number >= 0, got {value}", name)
 
 
-def pairset_harm(pairs, labels: np.ndarray, *, tol: float = DEFAULT_TOL, rtol: float = 0.0, t: int | None = None,
-                 expert_o=None) -> PairHarm:
+def pairset_harm(
+    pairs, labels: np.ndarray, *, tol: float = DEFAULT_TOL, rtol: float = 0.0, t: int | None = None, expert_o=None
+) -> PairHarm:
     """`pair_harm` of a `vinadv.attacks.pairs.PairSet`-like object (read by field name) and its labels."""
     return pair_harm(
-        pairs.obstacles_o, pairs.obstacles_a, pairs.starts, pairs.goals, pairs.path_o, pairs.path_a, labels,
-        pairs.corner_cutting, tol=tol, rtol=rtol, t=t,
+        pairs.obstacles_o,
+        pairs.obstacles_a,
+        pairs.starts,
+        pairs.goals,
+        pairs.path_o,
+        pairs.path_a,
+        labels,
+        pairs.corner_cutting,
+        tol=tol,
+        rtol=rtol,
+        t=t,
         expert_o=expert_o,
     )
 
@@ -397,8 +431,26 @@ def _route_survives(obs_a, path, k, corner_cutting):
 
 
 @numba.njit(cache=True, parallel=True)
-def _harm_kernel(obstacles_o, obstacles_a, flat_o, flat_a, starts, goals, corner_cutting, deltas, costs, have_o,
-                 given_cost, given_cells, given_offsets, opt_o, opt_a, code, dh, dv):
+def _harm_kernel(
+    obstacles_o,
+    obstacles_a,
+    flat_o,
+    flat_a,
+    starts,
+    goals,
+    corner_cutting,
+    deltas,
+    costs,
+    have_o,
+    given_cost,
+    given_cells,
+    given_offsets,
+    opt_o,
+    opt_a,
+    code,
+    dh,
+    dv,
+):
     n_pairs, n = obstacles_o.shape[0], obstacles_o.shape[1]
     n_blocks = (n_pairs + _BLOCK - 1) // _BLOCK
     for block in numba.prange(n_blocks):
@@ -439,21 +491,25 @@ def _harm_kernel(obstacles_o, obstacles_a, flat_o, flat_a, starts, goals, corner
             else:
                 epoch += 1
                 _load_padded(obstacles_o[i], pad, w)
-                opt_o[i] = _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch,
-                                   heap_key, heap_val)
+                opt_o[i] = _search(
+                    pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch, heap_key, heap_val
+                )
                 k_o = 0
                 if opt_o[i] < np.inf:
                     k_o = _walk(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch, path_o)
-            if opt_o[i] < np.inf and _only_adds(flat_o[i], flat_a[i]) and _route_survives(
-                obstacles_a[i], path_o, k_o, corner_cutting
+            if (
+                opt_o[i] < np.inf
+                and _only_adds(flat_o[i], flat_a[i])
+                and _route_survives(obstacles_a[i], path_o, k_o, corner_cutting)
             ):
                 opt_a[i] = opt_o[i]
                 code[i] = _E_UCP
                 continue
             epoch += 1
             _load_padded(obstacles_a[i], pad, w)
-            opt_a[i] = _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch,
-                               heap_key, heap_val)
+            opt_a[i] = _search(
+                pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch, heap_key, heap_val
+            )
             if not opt_o[i] < np.inf:
                 code[i] = _E_INVALID
                 continue

@@ -40,15 +40,39 @@ def make_fp_classifier(kind: str, setting: str = "baseline", seed: int = 0, verb
     if kind == "cnn":
         if setting == "baseline":
             return CNNImageClassifier("plain", width=32, epochs=10, batch_size=64, seed=seed, verbose=verbose)
-        return CNNImageClassifier("plain", width=16, epochs=10, batch_size=64, learning_rate=3e-3,
-                                  weight_decay=1e-4, optimizer="adamw", schedule="cosine", augment=True,
-                                  encoding="split", features="cooccurrence", seed=seed, verbose=verbose)
+        return CNNImageClassifier(
+            "plain",
+            width=16,
+            epochs=10,
+            batch_size=64,
+            learning_rate=3e-3,
+            weight_decay=1e-4,
+            optimizer="adamw",
+            schedule="cosine",
+            augment=True,
+            encoding="split",
+            features="cooccurrence",
+            seed=seed,
+            verbose=verbose,
+        )
     if kind == "mlp":
         if setting == "baseline":
             return MLPImageClassifier("plain", width=512, epochs=10, batch_size=64, seed=seed, verbose=verbose)
-        return MLPImageClassifier("plain", width=64, epochs=20, batch_size=64, learning_rate=3e-3,
-                                  weight_decay=1e-4, optimizer="adamw", schedule="cosine", augment=True,
-                                  encoding="split", features="offsets", seed=seed, verbose=verbose)
+        return MLPImageClassifier(
+            "plain",
+            width=64,
+            epochs=20,
+            batch_size=64,
+            learning_rate=3e-3,
+            weight_decay=1e-4,
+            optimizer="adamw",
+            schedule="cosine",
+            augment=True,
+            encoding="split",
+            features="offsets",
+            seed=seed,
+            verbose=verbose,
+        )
     if kind in ("hausdorff", "frechet", "dtw"):
         return DistanceThresholdClassifier(kind)
     raise InputError(f"unknown classifier {kind!r}; choose from {list(FP_DP_KINDS)}")

@@ -70,9 +70,7 @@ def augmentation_plan(labels: np.ndarray, seed: int = 0, transforms=AUGMENT_TRAN
         members = np.flatnonzero(labels == cls)
         combos = len(members) * len(transforms)
         # distinct (member, transform) combinations first, repeats only when all are used
-        picks = np.concatenate(
-            [rng.permutation(combos) for _ in range(-(-need // combos))]
-        )[:need]
+        picks = np.concatenate([rng.permutation(combos) for _ in range(-(-need // combos))])[:need]
         sources.append(members[picks // len(transforms)])
         ids.append(transforms[picks % len(transforms)])
     if not sources:

@@ -24,9 +24,7 @@ def binary_metrics(y_true, y_pred, scores=None) -> dict:
     y_true = np.asarray(y_true)
     y_pred = np.asarray(y_pred)
     classes = list(FORK_OR_DETOUR)
-    precision, recall, f1, support = precision_recall_fscore_support(
-        y_true, y_pred, labels=classes, zero_division=0
-    )
+    precision, recall, f1, support = precision_recall_fscore_support(y_true, y_pred, labels=classes, zero_division=0)
     both = len(np.unique(y_true)) == 2
     result = {
         "n": int(len(y_true)),

@@ -73,8 +73,7 @@ class SVMImageClassifier(PairClassifier):
 
     kind = "svm"
 
-    def __init__(self, C: float = 1.0, gamma: str | float = "scale", encoding: str = "paper",
-                 features: str = "pixels"):
+    def __init__(self, C: float = 1.0, gamma: str | float = "scale", encoding: str = "paper", features: str = "pixels"):
         self.C = C
         self.gamma = gamma
         self.encoding = encoding
@@ -121,8 +120,12 @@ class SVMImageClassifier(PairClassifier):
 
     def _state(self):
         self._check_fitted("support_vectors_")
-        meta = {"intercept": self.intercept_, "gamma": self.gamma_, "size": self.size_,
-                "training_time_s": self.training_time_s_}
+        meta = {
+            "intercept": self.intercept_,
+            "gamma": self.gamma_,
+            "size": self.size_,
+            "training_time_s": self.training_time_s_,
+        }
         return meta, {"support_vectors": self.support_vectors_.astype(bool), "dual_coef": self.dual_coef_}
 
     @classmethod
@@ -163,17 +166,30 @@ def _build_network(kind: str, architecture: str, size: int, width: int, features
     if kind == "cnn" and architecture == "plain":
         # the usual small image CNN (two 3x3 convolutions, max pooling, dropout, a dense layer)
         return nn.Sequential(
-            nn.Conv2d(channels, width, 3, padding=1), nn.ReLU(),
-            nn.Conv2d(width, 2 * width, 3, padding=1), nn.ReLU(),
-            nn.MaxPool2d(2), nn.Dropout(0.25), nn.Flatten(),
-            nn.Linear(2 * width * (size // 2) ** 2, 128), nn.ReLU(), nn.Dropout(0.5), nn.Linear(128, 2),
+            nn.Conv2d(channels, width, 3, padding=1),
+            nn.ReLU(),
+            nn.Conv2d(width, 2 * width, 3, padding=1),
+            nn.ReLU(),
+            nn.MaxPool2d(2),
+            nn.Dropout(0.25),
+            nn.Flatten(),
+            nn.Linear(2 * width * (size // 2) ** 2, 128),
+            nn.ReLU(),
+            nn.Dropout(0.5),
+            nn.Linear(128, 2),
         )
     if kind == "cnn" and architecture == "rowcol":
         return _RowColumnCNN(size, width, channels)
     if kind == "mlp" and architecture == "plain":
         return nn.Sequential(
-            nn.Flatten(), nn.Linear(int(np.prod(shape)), width), nn.ReLU(), nn.Dropout(0.2),
-            nn.Linear(width, width), nn.ReLU(), nn.Dropout(0.2), nn.Linear(width, 2),
+            nn.Flatten(),
+            nn.Linear(int(np.prod(shape)), width),
+            nn.ReLU(),
+            nn.Dropout(0.2),
+            nn.Linear(width, width),
+            nn.ReLU(),
+            nn.Dropout(0.2),
+            nn.Linear(width, 2),
         )
     raise InputError(f"unknown {kind} architecture {architecture!r}")
 
@@ -223,10 +239,22 @@ class TorchImageClassifier(PairClassifier):
 
     kind = "abstract"
 
-    def __init__(self, architecture: str = "plain", width: int = 32, epochs: int = 10, batch_size: int = 64,
-                 learning_rate: float = 1e-3, weight_decay: float = 0.0, optimizer: str = "adam",
-                 schedule: str = "constant", augment: bool = False, encoding: str = "paper", seed: int = 0,
-                 verbose: bool = False, features: str = "pixels"):
+    def __init__(
+        self,
+        architecture: str = "plain",
+        width: int = 32,
+        epochs: int = 10,
+        batch_size: int = 64,
+        learning_rate: float = 1e-3,
+        weight_decay: float = 0.0,
+        optimizer: str = "adam",
+        schedule: str = "constant",
+        augment: bool = False,
+        encoding: str = "paper",
+        seed: int = 0,
+        verbose: bool = False,
+        features: str = "pixels",
+    ):
         self.architecture = architecture
         self.width = width
         self.epochs = epochs
@@ -350,9 +378,34 @@ class MLPImageClassifier(TorchImageClassifier):
 
     kind = "mlp"
 
-    def __init__(self, architecture: str = "plain", width: int = 512, epochs: int = 10, batch_size: int = 64,
-                 learning_rate: float = 1e-3, weight_decay: float = 0.0, optimizer: str = "adam",
-                 schedule: str = "constant", augment: bool = False, encoding: str = "paper", seed: int = 0,
-                 verbose: bool = False, features: str = "pixels"):
-        super().__init__(architecture, width, epochs, batch_size, learning_rate, weight_decay, optimizer,
-                         schedule, augment, encoding, seed, verbose, features)
+    def __init__(
+        self,
+        architecture: str = "plain",
+        width: int = 512,
+        epochs: int = 10,
+        batch_size: int = 64,
+        learning_rate: float = 1e-3,
+        weight_decay: float = 0.0,
+        optimizer: str = "adam",
+        schedule: str = "constant",
+        augment: bool = False,
+        encoding: str = "paper",
+        seed: int = 0,
+        verbose: bool = False,
+        features: str = "pixels",
+    ):
+        super().__init__(
+            architecture,
+            width,
+            epochs,
+            batch_size,
+            learning_rate,
+            weight_decay,
+            optimizer,
+            schedule,
+            augment,
+            encoding,
+            seed,
+            verbose,
+            features,
+        )

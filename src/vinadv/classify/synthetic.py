@@ -40,8 +40,9 @@ def synthetic_pairs(n: int, size: int = 28, seed: int = 0, mix: bool = False) ->
         ok = np.isfinite(costs[:, 0])
         chosen = idx[ok][: want - have]
         detours = detours.take(np.flatnonzero(ok)[: len(chosen)])
-        batches.append(PathPairBatch(path_o=maps.expert.take(chosen), path_a=detours, goals=maps.goals[chosen],
-                                     size=size))
+        batches.append(
+            PathPairBatch(path_o=maps.expert.take(chosen), path_a=detours, goals=maps.goals[chosen], size=size)
+        )
         have += len(chosen)
     batch = PathPairBatch.concat(batches, size=size)
     if mix:

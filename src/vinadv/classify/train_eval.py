@@ -28,9 +28,19 @@ def label_counts_of(labels) -> dict:
     return {str(v): int(c) for v, c in zip(values, counts)}
 
 
-def train_classifier(batch: PathPairBatch, labels: np.ndarray, *, model: str, setting: str = "baseline",
-                     threshold: int | None = None, balance: bool = False, test_fraction: float = 0.0, seed: int = 0,
-                     source: str = "pairs", verbose: bool = False) -> tuple[HybridClassifier, dict, dict]:
+def train_classifier(
+    batch: PathPairBatch,
+    labels: np.ndarray,
+    *,
+    model: str,
+    setting: str = "baseline",
+    threshold: int | None = None,
+    balance: bool = False,
+    test_fraction: float = 0.0,
+    seed: int = 0,
+    source: str = "pairs",
+    verbose: bool = False,
+) -> tuple[HybridClassifier, dict, dict]:
     """Fit an FP/DP `model` (a `make_fp_classifier` kind) inside the hybrid on the FP/DP pairs of `batch`.
 
     `labels`: `(n,)` str, one per pair (the rule's or people's); `source` names them in errors and the record.
@@ -47,11 +57,14 @@ def train_classifier(batch: PathPairBatch, labels: np.ndarray, *, model: str, se
     counts = label_counts_of(labels[fp_dp])
     need = 2 if test_fraction > 0 else 1
     if counts.get("DP", 0) < need or counts.get("FP", 0) < need:
-        raise InputError(f"{source}: training needs at least {need} FP and {need} DP pairs, "
-                         f"the file has {counts.get('FP', 0)} FP and {counts.get('DP', 0)} DP")
+        raise InputError(
+            f"{source}: training needs at least {need} FP and {need} DP pairs, "
+            f"the file has {counts.get('FP', 0)} FP and {counts.get('DP', 0)} DP"
+        )
     if test_fraction > 0:
-        train_index, test_index = train_test_split(fp_dp, test_size=test_fraction, stratify=labels[fp_dp],
-                                                   random_state=seed)
+        train_index, test_index = train_test_split(
+            fp_dp, test_size=test_fraction, stratify=labels[fp_dp], random_state=seed
+        )
         train_index, test_index = np.sort(train_index), np.sort(test_index)
     else:
         train_index, test_index = fp_dp, np.zeros(0, dtype=np.int64)
@@ -63,10 +76,19 @@ def train_classifier(batch: PathPairBatch, labels: np.ndarray, *, model: str, se
     hybrid.fit(train_batch, train_labels)
     seconds = time.perf_counter() - start
     record = {
-        "pairs": str(source), "pairs_fingerprint": batch.fingerprint(), "n_pairs": len(batch),
-        "size": batch.size, "threshold": t, "model": model, "setting": setting, "balance": bool(balance),
-        "seed": seed, "test_fraction": test_fraction, "train_counts": label_counts_of(labels[train_index]),
-        "train_counts_balanced": label_counts_of(train_labels), "test_counts": label_counts_of(labels[test_index]),
+        "pairs": str(source),
+        "pairs_fingerprint": batch.fingerprint(),
+        "n_pairs": len(batch),
+        "size": batch.size,
+        "threshold": t,
+        "model": model,
+        "setting": setting,
+        "balance": bool(balance),
+        "seed": seed,
+        "test_fraction": test_fraction,
+        "train_counts": label_counts_of(labels[train_index]),
+        "train_counts_balanced": label_counts_of(train_labels),
+        "test_counts": label_counts_of(labels[test_index]),
         "training_seconds": round(seconds, 3),
     }
     return hybrid, record, {"train_index": train_index, "test_index": test_index}
@@ -82,8 +104,9 @@ def as_hybrid(model) -> HybridClassifier | RuleClassifier:
     return hybrid
 
 
-def evaluate_classifier(model: HybridClassifier | RuleClassifier, batch: PathPairBatch, *, all_pairs: bool = False,
-                        source: str = "pairs") -> dict:
+def evaluate_classifier(
+    model: HybridClassifier | RuleClassifier, batch: PathPairBatch, *, all_pairs: bool = False, source: str = "pairs"
+) -> dict:
     """The figures of `model` (`as_hybrid` of a loaded model) on `batch`, against the rule's labels.
 
     On the file the model was trained on (same fingerprint), FP/DP figures are on its held-out split unless
@@ -117,14 +140,19 @@ def evaluate_classifier(model: HybridClassifier | RuleClassifier, batch: PathPai
     five_way = model.predict(batch.take(unseen))
     five_way_seconds = time.perf_counter() - start
     return {
-        "pairs": str(source), "kind": record.get("model", model.kind),
-        "setting": record.get("setting"), "threshold": t, "scope": scope, "fp_dp": figures,
+        "pairs": str(source),
+        "kind": record.get("model", model.kind),
+        "setting": record.get("setting"),
+        "threshold": t,
+        "scope": scope,
+        "fp_dp": figures,
         "training_time_s": getattr(model, "training_time_s_", None),
         "prediction_seconds_per_100_pairs": round(100 * predict_seconds / len(eval_index), 6),
         "five_way": {
             "n": int(len(unseen)),
             "accuracy": float(np.mean(five_way == truth[unseen])) if len(unseen) else None,
-            "truth_counts": label_counts_of(truth[unseen]), "predicted_counts": label_counts_of(five_way),
+            "truth_counts": label_counts_of(truth[unseen]),
+            "predicted_counts": label_counts_of(five_way),
             "prediction_seconds_per_100_pairs": round(100 * five_way_seconds / max(len(unseen), 1), 6),
         },
     }

@@ -41,8 +41,15 @@ RETRIES = 3
 WINDOW_PER_THREAD = 4
 
 __all__ = [
-    "INSTALL_HINT", "add_cluster_arguments", "open_cluster", "start_local_cluster", "ClusterShards",
-    "ClusterIdentify", "attack_on_cluster", "identify_on_cluster", "require_dask",
+    "INSTALL_HINT",
+    "add_cluster_arguments",
+    "open_cluster",
+    "start_local_cluster",
+    "ClusterShards",
+    "ClusterIdentify",
+    "attack_on_cluster",
+    "identify_on_cluster",
+    "require_dask",
 ]
 
 
@@ -51,8 +58,11 @@ def require_dask():
     try:
         import distributed
     except ImportError as exc:
-        raise InputError(f"workers/cluster need Dask's distributed scheduler ({exc}); install it with "
-                         f"{INSTALL_HINT}", "workers", "cluster") from None
+        raise InputError(
+            f"workers/cluster need Dask's distributed scheduler ({exc}); install it with {INSTALL_HINT}",
+            "workers",
+            "cluster",
+        ) from None
     return distributed
 
 
@@ -60,11 +70,13 @@ def add_cluster_arguments(parser, shard_size: bool = False) -> None:
     """`--cluster`, `--workers` (and with `shard_size`, `--shard-size` for commands that have none yet)."""
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--cluster", metavar="tcp://HOST:PORT", help="compute on this Dask scheduler's workers")
-    group.add_argument("--workers", type=int, metavar="N",
-                       help="compute on a local Dask cluster of N single-threaded worker processes")
+    group.add_argument(
+        "--workers", type=int, metavar="N", help="compute on a local Dask cluster of N single-threaded worker processes"
+    )
     if shard_size:
-        parser.add_argument("--shard-size", type=int, default=1000,
-                            help="with --cluster/--workers: items per task (default 1000)")
+        parser.add_argument(
+            "--shard-size", type=int, default=1000, help="with --cluster/--workers: items per task (default 1000)"
+        )
 
 
 def start_local_cluster(workers: int, **kwargs):
@@ -76,8 +88,9 @@ def start_local_cluster(workers: int, **kwargs):
 
     from vinadv.cluster.worker import SINGLE_THREAD_ENV
 
-    options = dict(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                   env=dict(SINGLE_THREAD_ENV))
+    options = dict(
+        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None, env=dict(SINGLE_THREAD_ENV)
+    )
     return LocalCluster(**{**options, **kwargs})
 
 
@@ -174,9 +187,20 @@ class ClusterShards:
             window = self.window or WINDOW_PER_THREAD * _total_threads(self.client)
             while pending and in_flight + len(arrived) < window:
                 shard = pending.pop()
-                futures.add(self.client.submit(
-                    run_shard_task, config, shard, ref, classifier, classifier_sum, label_source,
-                    key=f"vinadv-shard-{token}-{shard}", retries=self.retries, pure=False))
+                futures.add(
+                    self.client.submit(
+                        run_shard_task,
+                        config,
+                        shard,
+                        ref,
+                        classifier,
+                        classifier_sum,
+                        label_source,
+                        key=f"vinadv-shard-{token}-{shard}",
+                        retries=self.retries,
+                        pure=False,
+                    )
+                )
                 in_flight += 1
 
         submit()
@@ -224,8 +248,16 @@ def _bounds(n: int, shard_size: int) -> list[tuple[int, int]]:
     return [(lo, min(n, lo + shard_size)) for lo in range(0, n, shard_size)]
 
 
-def attack_on_cluster(client, strategy: str, options: dict, maps, planner_ref, shard_size: int = 1000,
-                      progress: bool = False, objective: str = "paper"):
+def attack_on_cluster(
+    client,
+    strategy: str,
+    options: dict,
+    maps,
+    planner_ref,
+    shard_size: int = 1000,
+    progress: bool = False,
+    objective: str = "paper",
+):
     """`Attack.attack` of every map of `maps` (first start of each) with the planner of `planner_ref` (a
     `vinadv.planners.registry.PlannerRef`), `shard_size` maps per task: the same `AttackResult` as the local
     command. `options`: `make_attack`'s keyword arguments (per_map, seed, ...); `objective`: what the ranking
@@ -238,9 +270,20 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, planner_ref, s
     attack = make_attack(strategy, **options)  # validates the options here, before anything is sent
     bounds = _bounds(len(maps), shard_size)
     futures = [
-        client.submit(attack_shard_task, strategy, options, maps.obstacles[lo:hi], maps.starts[lo:hi, 0],
-                      maps.goals[lo:hi], lo, maps.corner_cutting, planner_ref, objective, retries=RETRIES,
-                      pure=False)
+        client.submit(
+            attack_shard_task,
+            strategy,
+            options,
+            maps.obstacles[lo:hi],
+            maps.starts[lo:hi, 0],
+            maps.goals[lo:hi],
+            lo,
+            maps.corner_cutting,
+            planner_ref,
+            objective,
+            retries=RETRIES,
+            pure=False,
+        )
         for lo, hi in bounds
     ]
     parts = _gather_in_order(client, futures, progress, f"attack {strategy}", [hi - lo for lo, hi in bounds])
@@ -254,10 +297,21 @@ def attack_on_cluster(client, strategy: str, options: dict, maps, planner_ref, s
             step = part.steps[k]
             step.map_index = step.map_index + lo
             shifted.append(step)
-        steps.append(PairSet.concat(shifted, size=maps.size, n_added=k + 1, strategy=strategy, params=params,
-                                    corner_cutting=maps.corner_cutting))
-    no_valid = np.concatenate([p.no_valid_cell + lo for (lo, _), p in zip(bounds, parts)]).astype(np.int64) \
-        if parts else np.zeros(0, np.int64)
+        steps.append(
+            PairSet.concat(
+                shifted,
+                size=maps.size,
+                n_added=k + 1,
+                strategy=strategy,
+                params=params,
+                corner_cutting=maps.corner_cutting,
+            )
+        )
+    no_valid = (
+        np.concatenate([p.no_valid_cell + lo for (lo, _), p in zip(bounds, parts)]).astype(np.int64)
+        if parts
+        else np.zeros(0, np.int64)
+    )
     return AttackResult(steps[-1], no_valid, int(sum(p.planner_calls for p in parts)), steps)
 
 
@@ -265,20 +319,40 @@ class ClusterIdentify:
     """`identify.identify_and_store`'s `remote`: `identify_on_cluster` on the Dask scheduler at `address`, or on a
     local cluster of `workers`, opened when called (after the caller has checked its inputs) and closed after."""
 
-    def __init__(self, address: str | None = None, workers: int | None = None, shard_size: int = 1000,
-                 progress: bool = False):
+    def __init__(
+        self, address: str | None = None, workers: int | None = None, shard_size: int = 1000, progress: bool = False
+    ):
         self.address, self.workers, self.shard_size, self.progress = address, workers, shard_size, progress
 
-    def __call__(self, pairs, planner_ref, classifier: str | None, label_source: str, *, harm_tol: float,
-                 harm_rtol: float):
+    def __call__(
+        self, pairs, planner_ref, classifier: str | None, label_source: str, *, harm_tol: float, harm_rtol: float
+    ):
         with open_cluster(self.address, self.workers) as client:
-            return identify_on_cluster(client, pairs, planner_ref, classifier, label_source, shard_size=self.shard_size,
-                                       progress=self.progress, harm_tol=harm_tol, harm_rtol=harm_rtol)
+            return identify_on_cluster(
+                client,
+                pairs,
+                planner_ref,
+                classifier,
+                label_source,
+                shard_size=self.shard_size,
+                progress=self.progress,
+                harm_tol=harm_tol,
+                harm_rtol=harm_rtol,
+            )
 
 
-def identify_on_cluster(client, pairs, planner_ref, classifier: str | None, label_source: str,
-                        shard_size: int = 1000, progress: bool = False, *, harm_tol: float,
-                        harm_rtol: float):
+def identify_on_cluster(
+    client,
+    pairs,
+    planner_ref,
+    classifier: str | None,
+    label_source: str,
+    shard_size: int = 1000,
+    progress: bool = False,
+    *,
+    harm_tol: float,
+    harm_rtol: float,
+):
     """`identify` (after `replan` with the planner of `planner_ref`, unless None) of `pairs`, `shard_size` pairs
     per task: the same `Identification` as the local command (harm with the tolerances `harm_tol`, `harm_rtol`)."""
     import numpy as np
@@ -291,8 +365,18 @@ def identify_on_cluster(client, pairs, planner_ref, classifier: str | None, labe
     classifier_sum = None if classifier in (None, "rule") else weights_checksum(classifier)
     bounds = _bounds(len(pairs), shard_size)
     futures = [
-        client.submit(identify_shard_task, pairs.take(np.arange(lo, hi)), planner_ref, classifier, classifier_sum,
-                      label_source, harm_tol, harm_rtol, retries=RETRIES, pure=False)
+        client.submit(
+            identify_shard_task,
+            pairs.take(np.arange(lo, hi)),
+            planner_ref,
+            classifier,
+            classifier_sum,
+            label_source,
+            harm_tol,
+            harm_rtol,
+            retries=RETRIES,
+            pure=False,
+        )
         for lo, hi in bounds
     ]
     parts = _gather_in_order(client, futures, progress, "identify", [hi - lo for lo, hi in bounds])

@@ -68,15 +68,17 @@ def worker_classifier(spec: str | None, checksum: str | None):
         if checksum is not None:
             found = weights_checksum(spec)
             if found != checksum:
-                raise InputError(f"classifier file {spec} on this worker differs from the client's "
-                                 f"(sha256 {found} != {checksum})")
+                raise InputError(
+                    f"classifier file {spec} on this worker differs from the client's (sha256 {found} != {checksum})"
+                )
         return load_classifier(spec)[0]
 
     return _cached(("classifier", spec, checksum), load)
 
 
-def run_shard_task(config, shard: int, planner_ref, classifier_spec: str | None, classifier_sum: str | None,
-                   label_source: str):
+def run_shard_task(
+    config, shard: int, planner_ref, classifier_spec: str | None, classifier_sum: str | None, label_source: str
+):
     """`vinadv run`: shard `shard` of the run (`pipeline.compute_shard`), on a worker, with the planner of
     `planner_ref`; `classifier_spec` is the client's file as an absolute path."""
     from vinadv.pipeline import compute_shard
@@ -86,8 +88,17 @@ def run_shard_task(config, shard: int, planner_ref, classifier_spec: str | None,
     return compute_shard(config, shard, worker_planner(planner_ref), classifier, label_source)
 
 
-def attack_shard_task(strategy: str, options: dict, obstacles, starts, goals, first_map: int, corner_cutting: bool,
-                      planner_ref, objective: str = "paper"):
+def attack_shard_task(
+    strategy: str,
+    options: dict,
+    obstacles,
+    starts,
+    goals,
+    first_map: int,
+    corner_cutting: bool,
+    planner_ref,
+    objective: str = "paper",
+):
     """`vinadv attack` on maps `first_map .. first_map + len(obstacles)` of the file: the same pairs as attacking
     the whole file at once (map indices local to the shard; the client shifts them)."""
     from vinadv.attacks.strategies import make_attack
@@ -95,12 +106,26 @@ def attack_shard_task(strategy: str, options: dict, obstacles, starts, goals, fi
 
     single_threaded()
     attack = make_attack(strategy, **options)
-    return attack.attack(obstacles, starts, goals, worker_planner(planner_ref), corner_cutting,
-                         strength=objective_strength(objective), first_map=first_map)
+    return attack.attack(
+        obstacles,
+        starts,
+        goals,
+        worker_planner(planner_ref),
+        corner_cutting,
+        strength=objective_strength(objective),
+        first_map=first_map,
+    )
 
 
-def identify_shard_task(pairs, planner_ref, classifier_spec: str | None, classifier_sum: str | None,
-                        label_source: str, harm_tol: float, harm_rtol: float):
+def identify_shard_task(
+    pairs,
+    planner_ref,
+    classifier_spec: str | None,
+    classifier_sum: str | None,
+    label_source: str,
+    harm_tol: float,
+    harm_rtol: float,
+):
     """`vinadv identify` on a shard of pairs: plan again (with the planner of `planner_ref`, unless None), label,
     and compute the harm."""
     from vinadv.identify import identify, replan
@@ -108,8 +133,9 @@ def identify_shard_task(pairs, planner_ref, classifier_spec: str | None, classif
     single_threaded()
     if planner_ref is not None:
         pairs = replan(pairs, worker_planner(planner_ref))
-    return identify(pairs, worker_classifier(classifier_spec, classifier_sum), label_source, harm_tol=harm_tol,
-                    harm_rtol=harm_rtol)
+    return identify(
+        pairs, worker_classifier(classifier_spec, classifier_sum), label_source, harm_tol=harm_tol, harm_rtol=harm_rtol
+    )
 
 
 def _plugin_class():

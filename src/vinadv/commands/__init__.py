@@ -48,11 +48,17 @@ class LazyChoices:
 
 def add_planner_arguments(parser, weights_help: str | None = None) -> None:
     """`--planner NAME|SPEC` and `--weights FILE`: the planner a command plans with (`vinadv.planners.registry`)."""
-    parser.add_argument("--planner", default=None, metavar="NAME|SPEC",
-                        help="vin (default), gppn, optimal, or your own FILE.py:FACTORY / MODULE:FACTORY "
-                             "(see `vinadv planners`)")
-    parser.add_argument("--weights", default=None, help=weights_help or "weights file of the vin or gppn planner "
-                        "(default: the shipped weights for the map size)")
+    parser.add_argument(
+        "--planner",
+        default=None,
+        metavar="NAME|SPEC",
+        help="vin (default), gppn, optimal, or your own FILE.py:FACTORY / MODULE:FACTORY (see `vinadv planners`)",
+    )
+    parser.add_argument(
+        "--weights",
+        default=None,
+        help=weights_help or "weights file of the vin or gppn planner (default: the shipped weights for the map size)",
+    )
 
 
 #: library parameters whose flag is not `--` plus the name with dashes

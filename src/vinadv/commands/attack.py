@@ -11,17 +11,25 @@ from vinadv.commands import LazyChoices, add_planner_arguments
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("attack", help="make adversarial maps (one added obstacle, or --obstacles K) from a "
-                              "maps file, on any planner")
+    p = subparsers.add_parser(
+        "attack", help="make adversarial maps (one added obstacle, or --obstacles K) from a maps file, on any planner"
+    )
     p.add_argument("--maps", required=True, help="maps file (.npz from `vinadv maps generate`)")
-    p.add_argument("--strategy", required=True, choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
-                   metavar="STRATEGY", help="attack strategy: %(choices)s")
+    p.add_argument(
+        "--strategy",
+        required=True,
+        choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
+        metavar="STRATEGY",
+        help="attack strategy: %(choices)s",
+    )
     p.add_argument("--out", required=True, help="output pairs file (.npz)")
-    p.add_argument("--per-map", type=int, default=1,
-                   help="pairs per map (default 1; 0 with exhaustive: every valid cell)")
+    p.add_argument(
+        "--per-map", type=int, default=1, help="pairs per map (default 1; 0 with exhaustive: every valid cell)"
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--budget", type=int, default=8,
-                   help="key-points and saliency: candidates evaluated per map (default 8)")
+    p.add_argument(
+        "--budget", type=int, default=8, help="key-points and saliency: candidates evaluated per map (default 8)"
+    )
     p.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
     add_obstacles_argument(p)
     add_planner_arguments(p)
@@ -35,31 +43,51 @@ def register(subparsers) -> None:
 
 def add_obstacles_argument(parser) -> None:
     """`--obstacles K`: obstacles added per pair, greedily (DESIGN.md "Several obstacles")."""
-    parser.add_argument("--obstacles", type=int, default=1, metavar="K",
-                        help="obstacles added per pair (default 1, the paper's setting); K > 1: greedily, the "
-                             "strategy run again on the map with the cells chosen so far, keeping the strongest cell "
-                             "against the original map's path each time")
+    parser.add_argument(
+        "--obstacles",
+        type=int,
+        default=1,
+        metavar="K",
+        help="obstacles added per pair (default 1, the paper's setting); K > 1: greedily, the "
+        "strategy run again on the map with the cells chosen so far, keeping the strongest cell "
+        "against the original map's path each time",
+    )
 
 
 def add_harm_arguments(parser) -> None:
     """`--harm-tolerance`, `--harm-rtol`: the tolerances of the harm test (DESIGN.md "Harm")."""
     # 1e-6 is vinadv.classify.harm.DEFAULT_TOL, not imported: building the parser stays light (no scikit-learn)
-    parser.add_argument("--harm-tolerance", type=float, default=1e-6, metavar="ABS",
-                        help="harmful when regret_a > regret_o + ABS + REL * opt_cost_a (default 1e-6, cost units)")
-    parser.add_argument("--harm-rtol", type=float, default=0.0, metavar="REL",
-                        help="relative harm tolerance, times the adversarial map's optimal cost (default 0)")
+    parser.add_argument(
+        "--harm-tolerance",
+        type=float,
+        default=1e-6,
+        metavar="ABS",
+        help="harmful when regret_a > regret_o + ABS + REL * opt_cost_a (default 1e-6, cost units)",
+    )
+    parser.add_argument(
+        "--harm-rtol",
+        type=float,
+        default=0.0,
+        metavar="REL",
+        help="relative harm tolerance, times the adversarial map's optimal cost (default 0)",
+    )
 
 
 def add_objective_argument(parser) -> None:
     """`--objective paper|harm`: what the ranking attacks keep as the strongest candidates of a map."""
-    parser.add_argument("--objective", choices=("paper", "harm"), default="paper",
-                        help="ranking strategies (key-points, saliency, exhaustive with --per-map >= 1): keep the "
-                             "strongest by the paper's label (UrP > FP > DP > UcP, default) or by harm (UrP, then "
-                             "the largest regret_a)")
+    parser.add_argument(
+        "--objective",
+        choices=("paper", "harm"),
+        default="paper",
+        help="ranking strategies (key-points, saliency, exhaustive with --per-map >= 1): keep the "
+        "strongest by the paper's label (UrP > FP > DP > UcP, default) or by harm (UrP, then "
+        "the largest regret_a)",
+    )
 
 
-def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float,
-                   harm_table: dict | None = None) -> dict:
+def attack_summary(
+    labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float, harm_table: dict | None = None
+) -> dict:
     """The summary of labelled pairs: counts, the paper's success rate, and with `harm_table` (a
     `vinadv.classify.harm.cross_table`) the harm counts, the harmful rate and the label x harm table."""
     from vinadv.classify.harm import harm_summary
@@ -69,9 +97,14 @@ def attack_summary(labels, n_maps: int, no_valid: int, planner_calls: int, secon
     valid = len(labels) - counts["invalid"]
     success = success_count(counts)
     return {
-        "maps": n_maps, "pairs": len(labels), "maps_without_valid_cell": no_valid, "counts": counts,
-        "success_rate": success / valid if valid else None, "planner_calls": planner_calls,
-        "planner_calls_per_success": planner_calls / success if success else None, "seconds": round(seconds, 3),
+        "maps": n_maps,
+        "pairs": len(labels),
+        "maps_without_valid_cell": no_valid,
+        "counts": counts,
+        "success_rate": success / valid if valid else None,
+        "planner_calls": planner_calls,
+        "planner_calls_per_success": planner_calls / success if success else None,
+        "seconds": round(seconds, 3),
         **({} if harm_table is None else harm_summary(harm_table)),
     }
 
@@ -91,8 +124,10 @@ def print_counts(summary: dict) -> None:
         for label, row in table.items():
             print(f"{label:<14}" + "".join(f"{row[v]:>10,}" for v in values))
         rate = summary["harmful_rate"]
-        print(f"harmful rate (UrP, or a path that got worse than optimal by more than on the original map, over valid "
-              f"pairs): {'n/a' if rate is None else f'{rate:.1%}'}")
+        print(
+            f"harmful rate (UrP, or a path that got worse than optimal by more than on the original map, over valid "
+            f"pairs): {'n/a' if rate is None else f'{rate:.1%}'}"
+        )
 
 
 def cmd_attack(args: argparse.Namespace) -> int:
@@ -107,37 +142,63 @@ def cmd_attack(args: argparse.Namespace) -> int:
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
     planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
-    attack = make_attack(args.strategy, per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius,
-                         obstacles=args.obstacles)
+    attack = make_attack(
+        args.strategy,
+        per_map=args.per_map,
+        seed=args.seed,
+        budget=args.budget,
+        radius=args.radius,
+        obstacles=args.obstacles,
+    )
     t0 = time.perf_counter()
     if args.cluster is None and args.workers is None:
-        result = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, planner, maps.corner_cutting,
-                               strength=objective_strength(args.objective), progress=not args.quiet)
+        result = attack.attack(
+            maps.obstacles,
+            maps.starts[:, 0],
+            maps.goals,
+            planner,
+            maps.corner_cutting,
+            strength=objective_strength(args.objective),
+            progress=not args.quiet,
+        )
     else:
         from vinadv.cluster import attack_on_cluster
 
-        options = dict(per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius,
-                       obstacles=args.obstacles)
+        options = dict(
+            per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius, obstacles=args.obstacles
+        )
         with open_cluster(args.cluster, args.workers) as client:
             ref = PlannerRef.of(planner, args.planner, args.weights, maps.corner_cutting)
-            result = attack_on_cluster(client, args.strategy, options, maps, ref,
-                                       shard_size=args.shard_size, progress=not args.quiet,
-                                       objective=args.objective)
+            result = attack_on_cluster(
+                client,
+                args.strategy,
+                options,
+                maps,
+                ref,
+                shard_size=args.shard_size,
+                progress=not args.quiet,
+                objective=args.objective,
+            )
     elapsed = time.perf_counter() - t0
     result.pairs.save(args.out)
     ident = identify(result.pairs, harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol)
-    summary = attack_summary(ident.labels, len(maps), len(result.no_valid_cell), result.planner_calls, elapsed,
-                             harm_table=ident.harm_table())
-    summary.update(strategy=args.strategy, params=attack.params(), planner=planner.spec(), out=args.out,
-                   objective=args.objective)
+    summary = attack_summary(
+        ident.labels, len(maps), len(result.no_valid_cell), result.planner_calls, elapsed, harm_table=ident.harm_table()
+    )
+    summary.update(
+        strategy=args.strategy, params=attack.params(), planner=planner.spec(), out=args.out, objective=args.objective
+    )
     if args.json:
         print(json.dumps(summary))
     elif not args.quiet:
-        print(f"{args.strategy} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps in "
-              f"{elapsed:.1f} s -> {args.out}")
+        print(
+            f"{args.strategy} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps in "
+            f"{elapsed:.1f} s -> {args.out}"
+        )
         if result.no_valid_cell.size:
-            print(f"{len(result.no_valid_cell)} maps had no valid cell for an added obstacle; "
-                  "no pair was made for them")
+            print(
+                f"{len(result.no_valid_cell)} maps had no valid cell for an added obstacle; no pair was made for them"
+            )
         print_counts(summary)
         per = summary["planner_calls_per_success"]
         per_text = "n/a" if per is None else f"{per:.1f}"

@@ -25,22 +25,39 @@ def register(subparsers) -> None:
     train.add_argument("--pairs", default=None, help="pairs file (.npz, vinadv.pairs/1); needed with --labels rule")
     train.add_argument("--model", required=True, choices=KINDS, help="FP/DP classifier")
     train.add_argument("--out", required=True, help="output model file")
-    train.add_argument("--setting", choices=("baseline", "tuned"), default="baseline",
-                       help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
-                       "64), or tuned (row/column co-occurrence features of 'split' path images)")
-    train.add_argument("--balance", action="store_true",
-                       help="balance the training set: flipped/rotated copies of minority-class pairs")
-    train.add_argument("--test-fraction", type=float, default=0.3,
-                       help="fraction of the FP/DP pairs held out for testing (default 0.3; 0 = train on all)")
+    train.add_argument(
+        "--setting",
+        choices=("baseline", "tuned"),
+        default="baseline",
+        help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
+        "64), or tuned (row/column co-occurrence features of 'split' path images)",
+    )
+    train.add_argument(
+        "--balance",
+        action="store_true",
+        help="balance the training set: flipped/rotated copies of minority-class pairs",
+    )
+    train.add_argument(
+        "--test-fraction",
+        type=float,
+        default=0.3,
+        help="fraction of the FP/DP pairs held out for testing (default 0.3; 0 = train on all)",
+    )
     train.add_argument("--seed", type=int, default=0, help="seed of the split, augmentation and training")
-    train.add_argument("--labels", choices=("rule", "human"), default="rule",
-                       help="where training labels come from: the exact rule labeller on --pairs (default), or "
-                       "people's annotations (`vinadv serve`) of the stored pairs of --db/--run")
+    train.add_argument(
+        "--labels",
+        choices=("rule", "human"),
+        default="rule",
+        help="where training labels come from: the exact rule labeller on --pairs (default), or "
+        "people's annotations (`vinadv serve`) of the stored pairs of --db/--run",
+    )
     train.add_argument("--db", default=None, help="with --labels human: the results database (URL or SQLite file)")
-    train.add_argument("--run", default=None,
-                       help="with --labels human: the run (id or name) whose labelled pairs to use")
-    train.add_argument("--threshold", type=int, default=None,
-                       help="the rule's threshold t (default round(4 * N / 28), 4 at 28x28)")
+    train.add_argument(
+        "--run", default=None, help="with --labels human: the run (id or name) whose labelled pairs to use"
+    )
+    train.add_argument(
+        "--threshold", type=int, default=None, help="the rule's threshold t (default round(4 * N / 28), 4 at 28x28)"
+    )
     train.add_argument("--json", action="store_true", help="print a JSON summary")
     train.add_argument("--quiet", action="store_true", help="print nothing but errors")
     train.set_defaults(func=cmd_train)
@@ -51,8 +68,11 @@ def register(subparsers) -> None:
     )
     ev.add_argument("--pairs", required=True, help="pairs file (.npz, vinadv.pairs/1)")
     ev.add_argument("--model", required=True, help="model file written by `vinadv classify train`")
-    ev.add_argument("--all", action="store_true",
-                    help="evaluate on every FP/DP pair of the file, even if the model was trained on it")
+    ev.add_argument(
+        "--all",
+        action="store_true",
+        help="evaluate on every FP/DP pair of the file, even if the model was trained on it",
+    )
     ev.add_argument("--json", action="store_true", help="print the figures as JSON")
     ev.add_argument("--quiet", action="store_true", help="print nothing but errors")
     ev.set_defaults(func=cmd_eval)
@@ -91,14 +111,26 @@ def cmd_train(args: argparse.Namespace) -> int:
         batch = _load_pairs(args.pairs)
         labels = label_batch(batch, default_threshold(batch.size) if args.threshold is None else args.threshold).labels
     model, record, arrays = train_classifier(
-        batch, labels, model=args.model, setting=args.setting, threshold=args.threshold, balance=args.balance,
-        test_fraction=args.test_fraction, seed=args.seed, source=str(args.pairs), verbose=not args.quiet)
+        batch,
+        labels,
+        model=args.model,
+        setting=args.setting,
+        threshold=args.threshold,
+        balance=args.balance,
+        test_fraction=args.test_fraction,
+        seed=args.seed,
+        source=str(args.pairs),
+        verbose=not args.quiet,
+    )
     record = {**record, "labels": args.labels}
     model.save(args.out, record, arrays)
-    return emit(args, {"out": args.out, **record},
-                f"trained {args.model} ({args.setting}) on {sum(record['train_counts_balanced'].values())} "
-                f"pairs {record['train_counts_balanced']} in {record['training_seconds']:.2f} s; held out "
-                f"{len(arrays['test_index'])} {record['test_counts']}; wrote {args.out}")
+    return emit(
+        args,
+        {"out": args.out, **record},
+        f"trained {args.model} ({args.setting}) on {sum(record['train_counts_balanced'].values())} "
+        f"pairs {record['train_counts_balanced']} in {record['training_seconds']:.2f} s; held out "
+        f"{len(arrays['test_index'])} {record['test_counts']}; wrote {args.out}",
+    )
 
 
 def cmd_eval(args: argparse.Namespace) -> int:

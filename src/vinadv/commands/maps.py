@@ -20,8 +20,11 @@ def register(subparsers) -> None:
     gen.add_argument("--size", type=int, default=28, help="map side N (>= 8; default 28)")
     gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     gen.add_argument("--starts", type=int, default=7, help="starts per map (default 7)")
-    gen.add_argument("--no-corner-cutting", action="store_true",
-                     help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)")
+    gen.add_argument(
+        "--no-corner-cutting",
+        action="store_true",
+        help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
+    )
     gen.add_argument("--out", required=True, help="output maps file (.npz)")
     gen.add_argument("--json", action="store_true", help="print a JSON summary")
     gen.add_argument("--quiet", action="store_true", help="print nothing")
@@ -45,19 +48,28 @@ def cmd_generate(args: argparse.Namespace) -> int:
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     t0 = time.perf_counter()
     with tqdm(total=max(args.n, 0), unit="map", desc="maps", disable=args.quiet or args.json) as bar:
-        maps = generate_maps(args.n, args.size, args.seed, args.starts, corner_cutting=not args.no_corner_cutting,
-                             progress=bar.update)
+        maps = generate_maps(
+            args.n, args.size, args.seed, args.starts, corner_cutting=not args.no_corner_cutting, progress=bar.update
+        )
     elapsed = time.perf_counter() - t0
     maps.save(args.out)
     summary = {
-        "out": args.out, "maps": len(maps), "size": maps.size, "starts": maps.n_starts, "seed": args.seed,
-        "corner_cutting": maps.corner_cutting, "obstacle_fraction": round(obstacle_fraction(maps.obstacles), 4),
+        "out": args.out,
+        "maps": len(maps),
+        "size": maps.size,
+        "starts": maps.n_starts,
+        "seed": args.seed,
+        "corner_cutting": maps.corner_cutting,
+        "obstacle_fraction": round(obstacle_fraction(maps.obstacles), 4),
         "mean_expert_moves": round(float(maps.expert.lengths.mean() - 1), 3) if len(maps) else None,
         "seconds": round(elapsed, 3),
     }
-    return emit(args, summary,
-                f"wrote {len(maps)} maps of {maps.size}x{maps.size} ({maps.n_starts} starts each) to {args.out} "
-                f"in {elapsed:.2f} s; obstacles {summary['obstacle_fraction']:.1%}")
+    return emit(
+        args,
+        summary,
+        f"wrote {len(maps)} maps of {maps.size}x{maps.size} ({maps.n_starts} starts each) to {args.out} "
+        f"in {elapsed:.2f} s; obstacles {summary['obstacle_fraction']:.1%}",
+    )
 
 
 def cmd_show(args: argparse.Namespace) -> int:
@@ -72,11 +84,15 @@ def cmd_show(args: argparse.Namespace) -> int:
     starts = list(range(maps.n_starts)) if args.all_starts else [0]
     paths = [("expert", maps.expert_path(args.index, s)) for s in starts]
     costs = maps.expert_costs[args.index, starts]
-    title = (f"map {args.index}: expert cost {costs[0]:.2f}" if len(starts) == 1 else
-             f"map {args.index}: {len(starts)} starts, expert costs {costs.min():.2f}-{costs.max():.2f}")
+    title = (
+        f"map {args.index}: expert cost {costs[0]:.2f}"
+        if len(starts) == 1
+        else f"map {args.index}: {len(starts)} starts, expert costs {costs.min():.2f}-{costs.max():.2f}"
+    )
     fig, ax = plt.subplots(figsize=(4, 4.4))
-    draw_map(ax, maps.obstacles[args.index], maps.goals[args.index], maps.starts[args.index, starts], paths,
-             title=title)
+    draw_map(
+        ax, maps.obstacles[args.index], maps.goals[args.index], maps.starts[args.index, starts], paths, title=title
+    )
     map_legend(fig, ax)
     save_figure(fig, args.out)
     print(f"wrote {args.out}")
@@ -87,18 +103,25 @@ FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn")
 
 
 def _register_interop(sub) -> None:
-    imp = sub.add_parser("import", help="read maps of the kentsommer PyTorch port, avivt's .mat files or GPPN",
-                         description="Regroup another codebase's samples into maps and trajectories; expert costs "
-                                     "are vinadv's (diagonal cost sqrt 2). See README, 'Using data and models "
-                                     "from other VIN/GPPN code'.")
+    imp = sub.add_parser(
+        "import",
+        help="read maps of the kentsommer PyTorch port, avivt's .mat files or GPPN",
+        description="Regroup another codebase's samples into maps and trajectories; expert costs "
+        "are vinadv's (diagonal cost sqrt 2). See README, 'Using data and models "
+        "from other VIN/GPPN code'.",
+    )
     imp.add_argument("input", metavar="IN", help="the file to read (.npz for kentsommer and gppn, .mat for avivt)")
     imp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the file's layout")
     imp.add_argument("--out", required=True, help="output maps file (.npz)")
-    imp.add_argument("--split", default=None,
-                     help="kentsommer: train|test|all (default test); gppn: train|valid|test|all (default test); "
-                          "avivt: test|train layout (default: the one the file has)")
-    imp.add_argument("--starts", type=int, default=None,
-                     help="starts drawn per map where the file has none (gppn; default 7)")
+    imp.add_argument(
+        "--split",
+        default=None,
+        help="kentsommer: train|test|all (default test); gppn: train|valid|test|all (default test); "
+        "avivt: test|train layout (default: the one the file has)",
+    )
+    imp.add_argument(
+        "--starts", type=int, default=None, help="starts drawn per map where the file has none (gppn; default 7)"
+    )
     imp.add_argument("--seed", type=int, default=0, help="seed of the drawn starts (default 0)")
     imp.add_argument("--json", action="store_true", help="print a JSON summary")
     imp.add_argument("--quiet", action="store_true", help="print nothing")
@@ -108,8 +131,11 @@ def _register_interop(sub) -> None:
     exp.add_argument("maps", help="maps file (.npz)")
     exp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the layout to write")
     exp.add_argument("--out", required=True, help="output file (.npz for kentsommer and gppn, .mat for avivt)")
-    exp.add_argument("--split", default=None,
-                     help="kentsommer: train|test; gppn: train|valid|test; avivt: test|train layout (default test)")
+    exp.add_argument(
+        "--split",
+        default=None,
+        help="kentsommer: train|test; gppn: train|valid|test; avivt: test|train layout (default test)",
+    )
     exp.add_argument("--json", action="store_true", help="print a JSON summary")
     exp.set_defaults(func=cmd_export)
 
@@ -126,8 +152,10 @@ def cmd_import(args: argparse.Namespace) -> int:
         print(json.dumps(info))
     elif not args.quiet:
         padded = f", {info['maps_padded']} with fewer starts (padded, see start_counts)" if info["maps_padded"] else ""
-        print(f"wrote {info['maps']} maps of {info['size']}x{info['size']} (up to {info['starts_per_map']} starts"
-              f"{padded}) to {args.out}; expert paths: {info['expert_paths']}")
+        print(
+            f"wrote {info['maps']} maps of {info['size']}x{info['size']} (up to {info['starts_per_map']} starts"
+            f"{padded}) to {args.out}; expert paths: {info['expert_paths']}"
+        )
         for key in ("file_paths_optimal", "movement", "maps_left_out_no_start"):
             if info.get(key):
                 print(f"  {key.replace('_', ' ')}: {info[key]}")

@@ -15,8 +15,9 @@ def register(subparsers) -> None:
     p.add_argument("--maps", required=True, help="maps file (.npz, from `vinadv maps generate`)")
     p.add_argument("--out", required=True, help="output paths file (.npz, format vinadv.paths/1)")
     add_planner_arguments(p)
-    p.add_argument("--chunk-size", type=int, default=DEFAULT_CHUNK,
-                   help=f"maps per batch; bounds memory (default {DEFAULT_CHUNK})")
+    p.add_argument(
+        "--chunk-size", type=int, default=DEFAULT_CHUNK, help=f"maps per batch; bounds memory (default {DEFAULT_CHUNK})"
+    )
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.add_argument("--quiet", action="store_true", help="print nothing, no progress bar")
     p.set_defaults(func=cmd_plan)
@@ -37,20 +38,37 @@ def cmd_plan(args: argparse.Namespace) -> int:
     maps = MapSet.load(args.maps)
     planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
     t0 = time.perf_counter()
-    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts, maps.corner_cutting, args.chunk_size,
-                               progress=not (args.quiet or args.json))
+    result = planner.plan_maps(
+        maps.obstacles,
+        maps.goals,
+        maps.starts,
+        maps.corner_cutting,
+        args.chunk_size,
+        progress=not (args.quiet or args.json),
+    )
     elapsed = time.perf_counter() - t0
     k = planner.config.get("k")
-    label = " ".join([planner.name] + ([f"k={k}"] if k is not None else [])
-             + ([f"sha256={planner.checksum}"] if planner.checksum else []))
+    label = " ".join(
+        [planner.name]
+        + ([f"k={k}"] if k is not None else [])
+        + ([f"sha256={planner.checksum}"] if planner.checksum else [])
+    )
     PathSet.from_result(result, maps.n_starts, maps.size, maps.corner_cutting, model=label).save(args.out)
     counts = np.bincount(result.termination, minlength=4)
     summary = {
-        "out": args.out, "planner": planner.spec(), "maps": len(maps), "starts": maps.n_starts, "paths": len(result),
+        "out": args.out,
+        "planner": planner.spec(),
+        "maps": len(maps),
+        "starts": maps.n_starts,
+        "paths": len(result),
         "reached": round(float(result.reached.mean()), 4) if len(result) else None,
         "terminations": dict(zip(TERMINATIONS, counts.tolist())),
-        "seconds": round(elapsed, 3), "plans_per_s": round(len(result) / elapsed, 1) if elapsed > 0 else None,
+        "seconds": round(elapsed, 3),
+        "plans_per_s": round(len(result) / elapsed, 1) if elapsed > 0 else None,
     }
-    return emit(args, summary,
-                f"planned {len(result)} paths on {len(maps)} maps in {elapsed:.2f} s "
-                f"({summary['plans_per_s']} plans/s); reached {summary['reached']:.1%}; wrote {args.out}")
+    return emit(
+        args,
+        summary,
+        f"planned {len(result)} paths on {len(maps)} maps in {elapsed:.2f} s "
+        f"({summary['plans_per_s']} plans/s); reached {summary['reached']:.1%}; wrote {args.out}",
+    )

@@ -29,8 +29,10 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="print the list as JSON")
     p.set_defaults(func=cmd_planners)
 
-    ev = subparsers.add_parser("eval", help="any planner's figures in both conventions: vinadv's rollouts and "
-                               "GPPN's %%Opt/%%Suc over every free cell")
+    ev = subparsers.add_parser(
+        "eval",
+        help="any planner's figures in both conventions: vinadv's rollouts and GPPN's %%Opt/%%Suc over every free cell",
+    )
     add_planner_arguments(ev)
     add_eval_arguments(ev)
     ev.set_defaults(func=cmd_eval)
@@ -40,10 +42,15 @@ def register(subparsers) -> None:
     sub.required = True
     train = sub.add_parser("train", help="train a GPPN on a maps file (every free cell is supervised)")
     add_train_arguments(train, lr=GPPN_DEFAULTS["lr"], k_help=f"iterations (default {GPPN_DEFAULTS['k']})")
-    train.add_argument("--l-h", type=int, default=GPPN_DEFAULTS["l_h"],
-                       help=f"hidden (LSTM) channels (default {GPPN_DEFAULTS['l_h']})")
-    train.add_argument("--kernel", type=int, default=GPPN_DEFAULTS["kernel"],
-                       help=f"odd kernel of the recurrent convolution (default {GPPN_DEFAULTS['kernel']})")
+    train.add_argument(
+        "--l-h", type=int, default=GPPN_DEFAULTS["l_h"], help=f"hidden (LSTM) channels (default {GPPN_DEFAULTS['l_h']})"
+    )
+    train.add_argument(
+        "--kernel",
+        type=int,
+        default=GPPN_DEFAULTS["kernel"],
+        help=f"odd kernel of the recurrent convolution (default {GPPN_DEFAULTS['kernel']})",
+    )
     train.set_defaults(func=cmd_gppn_train, k=GPPN_DEFAULTS["k"])
 
     ev = sub.add_parser("eval", help="action accuracy and rollout figures of a GPPN")
@@ -52,14 +59,27 @@ def register(subparsers) -> None:
     ev.set_defaults(func=cmd_gppn_eval)
 
     imp = sub.add_parser("import-weights", help="a checkpoint of the GPPN authors' code as vinadv GPPN weights")
-    imp.add_argument("checkpoint", metavar="CKPT",
-                     help="the GPPN code's checkpoint (.pth: {'model', 'best_model', ...})")
-    imp.add_argument("--k", type=int, required=True,
-                     help="iterations the model was trained with (the GPPN code's --k; not in its checkpoints)")
-    imp.add_argument("--entry", choices=("best_model", "model"), default=None,
-                     help="which state dict of the checkpoint (default best_model when present)")
-    imp.add_argument("--size", type=int, default=None,
-                     help="map side the model is for (recorded; default: any, the GPPN is fully convolutional)")
+    imp.add_argument(
+        "checkpoint", metavar="CKPT", help="the GPPN code's checkpoint (.pth: {'model', 'best_model', ...})"
+    )
+    imp.add_argument(
+        "--k",
+        type=int,
+        required=True,
+        help="iterations the model was trained with (the GPPN code's --k; not in its checkpoints)",
+    )
+    imp.add_argument(
+        "--entry",
+        choices=("best_model", "model"),
+        default=None,
+        help="which state dict of the checkpoint (default best_model when present)",
+    )
+    imp.add_argument(
+        "--size",
+        type=int,
+        default=None,
+        help="map side the model is for (recorded; default: any, the GPPN is fully convolutional)",
+    )
     imp.add_argument("--out", required=True, help="output weights (.pt) for --planner gppn --weights")
     imp.add_argument("--json", action="store_true", help="print what was written as JSON")
     imp.set_defaults(func=cmd_gppn_import_weights)
@@ -73,11 +93,16 @@ def cmd_planners(args: argparse.Namespace) -> int:
         print(json.dumps({"planners": planners, "bring_your_own": "FILE.py:FACTORY or MODULE:FACTORY"}))
         return 0
     for p in planners:
-        weights = "" if p["weights"] is None else (f"  [weights {Path(p['weights']).name}"
-                                                   f"{'' if p['weights_available'] else ' not shipped'}]")
+        weights = (
+            ""
+            if p["weights"] is None
+            else (f"  [weights {Path(p['weights']).name}{'' if p['weights_available'] else ' not shipped'}]")
+        )
         print(f"{p['name']:<11} {p['description']}{weights}")
-    print("your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
-          "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (README, 'Planners')")
+    print(
+        "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
+        "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (README, 'Planners')"
+    )
     return 0
 
 
@@ -94,9 +119,15 @@ def cmd_eval(args: argparse.Namespace) -> int:
     ours = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))
     t1 = time.perf_counter()
     theirs = gppn_protocol(planner, maps)
-    metrics = {"planner": planner.spec(), "weights": args.weights or "shipped", **source, "vinadv": ours,
-               "gppn": theirs, "seconds": {"vinadv": round(t1 - t0, 2), "gppn": round(time.perf_counter() - t1, 2)},
-               "command": _command_line()}
+    metrics = {
+        "planner": planner.spec(),
+        "weights": args.weights or "shipped",
+        **source,
+        "vinadv": ours,
+        "gppn": theirs,
+        "seconds": {"vinadv": round(t1 - t0, 2), "gppn": round(time.perf_counter() - t1, 2)},
+        "command": _command_line(),
+    }
     if args.out:
         with atomic_output(args.out, "w") as fh:
             fh.write(json.dumps(metrics, indent=2) + "\n")
@@ -104,10 +135,14 @@ def cmd_eval(args: argparse.Namespace) -> int:
         print(json.dumps(metrics))
     elif not args.quiet:
         print(f"planner {planner.name}: {ours['maps']} maps of {ours['size']}x{ours['size']}")
-        print(f"  vinadv: rollout success {ours['success_rate']:.2%} of {ours['rollouts']} rollouts, optimal paths "
-              f"{ours['optimal_rate']:.2%}, action accuracy {ours['action_accuracy']:.2%}")
-        print(f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
-              f"{theirs['cells']} free cells (every Moore move costs 1)")
+        print(
+            f"  vinadv: rollout success {ours['success_rate']:.2%} of {ours['rollouts']} rollouts, optimal paths "
+            f"{ours['optimal_rate']:.2%}, action accuracy {ours['action_accuracy']:.2%}"
+        )
+        print(
+            f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
+            f"{theirs['cells']} free cells (every Moore move costs 1)"
+        )
     return 0
 
 
@@ -128,15 +163,21 @@ def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
 
     check_output_path(args.out, mkdir=True)
     model = gppn_from_checkpoint(args.checkpoint, args.k, args.entry)
-    record = {"imported_from": {**model.source, "sha256": weights_checksum(args.checkpoint)},
-              "command": _command_line(), "action_order": "reordered from GPPN's N,E,W,S,NE,NW,SE,SW"}
+    record = {
+        "imported_from": {**model.source, "sha256": weights_checksum(args.checkpoint)},
+        "command": _command_line(),
+        "action_order": "reordered from GPPN's N,E,W,S,NE,NW,SE,SW",
+    }
     if args.size is not None:
         record["size"] = args.size
     save_gppn(model, args.out, record)
     summary = {"out": args.out, "config": model.config.to_dict(), **record}
-    return emit(args, summary,
-                f"wrote {args.out}: GPPN {model.config.to_dict()} from {args.checkpoint} "
-                f"({model.source['entry']}); use --planner gppn --weights {args.out}")
+    return emit(
+        args,
+        summary,
+        f"wrote {args.out}: GPPN {model.config.to_dict()} from {args.checkpoint} "
+        f"({model.source['entry']}); use --planner gppn --weights {args.out}",
+    )
 
 
 def cmd_gppn_eval(args: argparse.Namespace) -> int:
@@ -148,6 +189,12 @@ def cmd_gppn_eval(args: argparse.Namespace) -> int:
     planner = load_planner("gppn", maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
     t0 = time.perf_counter()
     metrics = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))
-    metrics = {"planner": planner.spec(), "weights": args.weights or "shipped", **source, **metrics,
-               "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
+    metrics = {
+        "planner": planner.spec(),
+        "weights": args.weights or "shipped",
+        **source,
+        **metrics,
+        "seconds": round(time.perf_counter() - t0, 2),
+        "command": _command_line(),
+    }
     return emit_metrics(args, metrics)

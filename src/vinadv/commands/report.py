@@ -21,13 +21,23 @@ def register(subparsers) -> None:
     )
     ev.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     ev.add_argument("--run", help="run id, or run name (its latest run); default: the latest run")
-    ev.add_argument("--classifiers", default=",".join(CLASSIFIER_NAMES),
-                    help=f"comma-separated, from {','.join(CLASSIFIER_NAMES)} (default: all)")
-    ev.add_argument("--setting", choices=("baseline", "tuned"), default="baseline",
-                    help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
-                    "64), or tuned (row/column co-occurrence features of 'split' path images)")
-    ev.add_argument("--sizes", default=None,
-                    help="training set fractions for fig. 8, comma-separated in (0, 1] (default 0.1,0.2,0.4,0.6,0.8,1)")
+    ev.add_argument(
+        "--classifiers",
+        default=",".join(CLASSIFIER_NAMES),
+        help=f"comma-separated, from {','.join(CLASSIFIER_NAMES)} (default: all)",
+    )
+    ev.add_argument(
+        "--setting",
+        choices=("baseline", "tuned"),
+        default="baseline",
+        help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
+        "64), or tuned (row/column co-occurrence features of 'split' path images)",
+    )
+    ev.add_argument(
+        "--sizes",
+        default=None,
+        help="training set fractions for fig. 8, comma-separated in (0, 1] (default 0.1,0.2,0.4,0.6,0.8,1)",
+    )
     ev.add_argument("--seed", type=int, default=0, help="seed of the split, augmentation and training (default 0)")
     ev.add_argument("--json", action="store_true", help="print the stored rows' figures as JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar, no table")
@@ -42,10 +52,14 @@ def register(subparsers) -> None:
         "(table 7, measured now), the VIN's quality and the run's configuration; the paper's numbers beside ours.",
     )
     rep.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
-    rep.add_argument("--run", help="the main run to report, id or name (default: the first of --runs, else the "
-                     "latest run)")
-    rep.add_argument("--runs", help="comma-separated run ids or names to compare in table 4 and the classifier "
-                     "section (say, one per attack strategy); the first is the main run unless --run names one")
+    rep.add_argument(
+        "--run", help="the main run to report, id or name (default: the first of --runs, else the latest run)"
+    )
+    rep.add_argument(
+        "--runs",
+        help="comma-separated run ids or names to compare in table 4 and the classifier "
+        "section (say, one per attack strategy); the first is the main run unless --run names one",
+    )
     rep.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     rep.add_argument("--json", action="store_true", help="print what was written and measured as JSON")
     rep.add_argument("--quiet", action="store_true", help="print nothing but errors")
@@ -77,21 +91,26 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     sizes = parse_sizes(args.sizes)
     with Store.open(args.db, create=False) as store:
         run_id = store.resolve_run(args.run) if args.run is not None else _latest_run(store)
-        rows = evaluate_run(store, run_id, classifiers, args.setting, sizes, args.seed,
-                            progress=not (args.quiet or args.json))
+        rows = evaluate_run(
+            store, run_id, classifiers, args.setting, sizes, args.seed, progress=not (args.quiet or args.json)
+        )
     if args.json:
         print(json.dumps({"run_id": run_id, "rows": [{k: v for k, v in r.items() if k != "curves"} for r in rows]}))
     elif not args.quiet:
         print(f"run {run_id}: {len(rows)} evaluations stored (setting {args.setting}, seed {args.seed})")
-        print(f"{'classifier':<10} {'training':<10} {'pairs':>6} {'accuracy':>8} {'FP F1':>6} {'AUC':>6} "
-              f"{'AP':>6} {'train s':>8} {'s/100':>8}")
+        print(
+            f"{'classifier':<10} {'training':<10} {'pairs':>6} {'accuracy':>8} {'FP F1':>6} {'AUC':>6} "
+            f"{'AP':>6} {'train s':>8} {'s/100':>8}"
+        )
         for r in rows:
             if r["train_fraction"] < 1.0:
                 continue
             m = r["metrics"]
-            print(f"{r['classifier']:<10} {r['training']:<10} {r['train_size']:>6} {_f(m.get('accuracy'))} "
-                  f"{_f(m['per_class']['FP']['f1'], 6)} {_f(m.get('roc_auc'), 6)} {_f(m.get('average_precision'), 6)} "
-                  f"{_f(m.get('training_s'), 8, 2)} {_f(m.get('prediction_s_per_100'), 8, 4)}")
+            print(
+                f"{r['classifier']:<10} {r['training']:<10} {r['train_size']:>6} {_f(m.get('accuracy'))} "
+                f"{_f(m['per_class']['FP']['f1'], 6)} {_f(m.get('roc_auc'), 6)} {_f(m.get('average_precision'), 6)} "
+                f"{_f(m.get('training_s'), 8, 2)} {_f(m.get('prediction_s_per_100'), 8, 4)}"
+            )
         print(f"write the report: vinadv report --db {store.url} --run {run_id} --out DIR")
     return 0
 
@@ -110,8 +129,10 @@ def cmd_report(args: argparse.Namespace) -> int:
         timing = result.timing
         print(f"report of run {result.run_id}: {result.index} ({len(set(result.files))} files)")
         hybrid = timing["hybrid_svm_s"]
-        print(f"{timing['pairs']} stored pairs: rule {timing['rule_s']:.4f} s"
-              + "".join(f", hybrid+SVM ({setting}, from the evaluation) {s:.4f} s" for setting, s in hybrid.items())
-              + f" (paper 0.22 s; manual ~300 s); read from the database {timing['read_s']:.4f} s"
-              + ("" if result.evaluated else "; no classifier evaluation stored (see `vinadv evaluate`)"))
+        print(
+            f"{timing['pairs']} stored pairs: rule {timing['rule_s']:.4f} s"
+            + "".join(f", hybrid+SVM ({setting}, from the evaluation) {s:.4f} s" for setting, s in hybrid.items())
+            + f" (paper 0.22 s; manual ~300 s); read from the database {timing['read_s']:.4f} s"
+            + ("" if result.evaluated else "; no classifier evaluation stored (see `vinadv evaluate`)")
+        )
     return 0

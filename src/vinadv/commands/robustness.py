@@ -14,33 +14,58 @@ _DEFAULTS = "key-points, saliency, near-path, random"
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "robustness", help="benchmark a planner's robustness: every attack strategy on fixed held-out maps, worst "
+        "robustness",
+        help="benchmark a planner's robustness: every attack strategy on fixed held-out maps, worst "
         "case per map, 1..K added obstacles",
         description="Attack a fixed, seeded set of held-out maps with every strategy (one pair per map, 1..K "
         "obstacles added greedily), and print per strategy and worst case per map (broken if any strategy breaks "
         "it): clean success, the paper's success rate (UrP + FP), the harmful rate, the mean regret, and the harmful "
-        "rate against the number of added obstacles.")
+        "rate against the number of added obstacles.",
+    )
     add_planner_arguments(p)
     p.add_argument("--n", type=int, default=1000, help="maps (default 1000)")
-    p.add_argument("--seed", type=int, default=1000,
-                   help="seed of the maps and of the randomised strategies (default 1000: the held-out maps of the "
-                        "evaluation tables)")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=1000,
+        help="seed of the maps and of the randomised strategies (default 1000: the held-out maps of the "
+        "evaluation tables)",
+    )
     p.add_argument("--size", type=int, default=28, help="map side N (default 28)")
-    p.add_argument("--strategies", default="all", metavar="all|A,B",
-                   help=f"strategies, joined by commas (default all: {_DEFAULTS})")
-    p.add_argument("--exhaustive", action="store_true",
-                   help="also run the exhaustive search (every valid cell of every map at every step: slow)")
-    p.add_argument("--max-obstacles", type=int, default=3, metavar="K",
-                   help="the curve's largest number of added obstacles (default 3)")
-    p.add_argument("--objective", choices=("harm", "paper"), default="harm",
-                   help="what the ranking strategies keep per map: the most harmful candidate (default) or the "
-                        "strongest by the paper's label (UrP > FP > DP > UcP)")
+    p.add_argument(
+        "--strategies",
+        default="all",
+        metavar="all|A,B",
+        help=f"strategies, joined by commas (default all: {_DEFAULTS})",
+    )
+    p.add_argument(
+        "--exhaustive",
+        action="store_true",
+        help="also run the exhaustive search (every valid cell of every map at every step: slow)",
+    )
+    p.add_argument(
+        "--max-obstacles",
+        type=int,
+        default=3,
+        metavar="K",
+        help="the curve's largest number of added obstacles (default 3)",
+    )
+    p.add_argument(
+        "--objective",
+        choices=("harm", "paper"),
+        default="harm",
+        help="what the ranking strategies keep per map: the most harmful candidate (default) or the "
+        "strongest by the paper's label (UrP > FP > DP > UcP)",
+    )
     p.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map and step")
     p.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
     add_harm_arguments(p)
     p.add_argument("--db", help="store the benchmark in this database (URL or SQLite file)")
-    p.add_argument("--report", metavar="DIR", help="write a page with the benchmark (and, with --db, every one "
-                   "stored there) as a table and curves to DIR")
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        help="write a page with the benchmark (and, with --db, every one stored there) as a table and curves to DIR",
+    )
     p.add_argument("--json", action="store_true", help="print every figure as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no table")
     p.set_defaults(func=cmd_robustness)
@@ -75,18 +100,38 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
     maps = benchmark_maps(args.n, args.size, seed=args.seed)
     planner = load_planner(args.planner, args.size, weights=args.weights, corner_cutting=maps.corner_cutting)
-    result = robustness(planner, maps, strategies, args.max_obstacles, objective=args.objective, seed=args.seed,
-                        budget=args.budget, radius=args.radius, harm_tol=args.harm_tolerance,
-                        harm_rtol=args.harm_rtol, progress=not (args.quiet or args.json))
+    result = robustness(
+        planner,
+        maps,
+        strategies,
+        args.max_obstacles,
+        objective=args.objective,
+        seed=args.seed,
+        budget=args.budget,
+        radius=args.radius,
+        harm_tol=args.harm_tolerance,
+        harm_rtol=args.harm_rtol,
+        progress=not (args.quiet or args.json),
+    )
     out = result.to_dict()
     if args.db is not None:
         out["id"] = save_robustness(result, args.db)
     if args.report:
         from vinadv.report.build import robustness_report
 
-        unsaved = [] if args.db is not None else [{"id": None, "planner": result.planner["name"],
-                                                   "weights_checksum": result.planner.get("weights_sha256"),
-                                                   "settings": result.settings, "result": result.to_dict()}]
+        unsaved = (
+            []
+            if args.db is not None
+            else [
+                {
+                    "id": None,
+                    "planner": result.planner["name"],
+                    "weights_checksum": result.planner.get("weights_sha256"),
+                    "settings": result.settings,
+                    "result": result.to_dict(),
+                }
+            ]
+        )
         out["report"] = str(robustness_report(args.report, args.db, unsaved))
     return emit(args, out, lambda: print_robustness(out))
 
@@ -100,19 +145,25 @@ def print_robustness(out: dict) -> None:
     s, clean = out["settings"], out["clean"]
     planner = out["planner"]
     weights = (planner.get("weights_sha256") or "")[:12]
-    print(f"robustness of planner {planner['name']}{f' (weights {weights})' if weights else ''} on {s['n']:,} maps "
-          f"{s['size']}x{s['size']} (seed {s['maps_seed']}), kept by {s['objective']}, in {out['seconds']:.1f} s")
+    print(
+        f"robustness of planner {planner['name']}{f' (weights {weights})' if weights else ''} on {s['n']:,} maps "
+        f"{s['size']}x{s['size']} (seed {s['maps_seed']}), kept by {s['objective']}, in {out['seconds']:.1f} s"
+    )
     regret = "—" if clean["mean_regret"] is None else f"{clean['mean_regret']:.3f}"
-    print(f"clean success: {_pct(clean['success_rate'])} ({clean['reached']:,} of {clean['maps']:,} maps), mean "
-          f"regret of the reached paths {regret}")
+    print(
+        f"clean success: {_pct(clean['success_rate'])} ({clean['reached']:,} of {clean['maps']:,} maps), mean "
+        f"regret of the reached paths {regret}"
+    )
     rows = [(name, st["by_obstacles"], st["seconds"]) for name, st in out["strategies"].items()]
     rows.append(("worst case", out["overall"], out["seconds"]))
     print(f"{'one obstacle':<12}{'valid':>8}{'paper success':>15}{'harmful':>10}{'mean regret':>13}{'seconds':>9}")
     for name, by_k, sec in rows:
         f = by_k[0]
         regret = "—" if f["mean_regret"] is None else f"{f['mean_regret']:.3f}"
-        print(f"{name:<12}{f['valid']:>8,}{_pct(f['paper_success_rate']):>15}{_pct(f['harmful_rate']):>10}"
-              f"{regret:>13}{sec:>9.1f}")
+        print(
+            f"{name:<12}{f['valid']:>8,}{_pct(f['paper_success_rate']):>15}{_pct(f['harmful_rate']):>10}"
+            f"{regret:>13}{sec:>9.1f}"
+        )
     ks = [f["k"] for f in out["overall"]]
     print("harmful rate by obstacles added: " + "".join(f"{f'k = {k}':>9}" for k in ks))
     for name, by_k, _ in rows:

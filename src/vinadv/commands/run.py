@@ -22,9 +22,13 @@ def register(subparsers) -> None:
     run = subparsers.add_parser("run", help="the main job: maps -> attack -> identify -> store (-> report)")
     run.add_argument("--n", type=int, default=5000, help="maps (default 5000)")
     run.add_argument("--size", type=int, default=28, help="map side N (default 28)")
-    run.add_argument("--attack", default="near-path",
-                     choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"), metavar="STRATEGY",
-                     help="attack strategy: %(choices)s (default near-path)")
+    run.add_argument(
+        "--attack",
+        default="near-path",
+        choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
+        metavar="STRATEGY",
+        help="attack strategy: %(choices)s (default near-path)",
+    )
     run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     run.add_argument("--per-map", type=int, default=1, help="pairs per map (default 1)")
     run.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map")
@@ -39,11 +43,17 @@ def register(subparsers) -> None:
     run.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     run.add_argument("--name", help="run name (needed to --resume)")
     run.add_argument("--resume", action="store_true", help="continue the latest run called --name")
-    run.add_argument("--report", metavar="DIR", help="also write the HTML report of the run to DIR, with the "
-                     "classifier comparison (tables 5, 6, figs. 8, 9; both settings, a quick profile) run first")
-    run.add_argument("--no-evaluate", action="store_true",
-                     help="with --report: skip the classifier comparison (a shorter report, without tables 5, 6 and "
-                     "figs. 8, 9)")
+    run.add_argument(
+        "--report",
+        metavar="DIR",
+        help="also write the HTML report of the run to DIR, with the "
+        "classifier comparison (tables 5, 6, figs. 8, 9; both settings, a quick profile) run first",
+    )
+    run.add_argument(
+        "--no-evaluate",
+        action="store_true",
+        help="with --report: skip the classifier comparison (a shorter report, without tables 5, 6 and figs. 8, 9)",
+    )
     run.add_argument("--json", action="store_true", help="print the summary as JSON")
     run.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
     add_cluster_arguments(run)
@@ -54,8 +64,10 @@ def register(subparsers) -> None:
     ident.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     ident.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     add_planner_arguments(ident, weights_help="weights file of the vin or gppn planner")
-    ident.epilog = ("With --planner or --weights, both maps of every pair are planned again by that planner (the "
-                    "attacks of the file, tried on another planner: transfer); without, the file's paths are kept.")
+    ident.epilog = (
+        "With --planner or --weights, both maps of every pair are planned again by that planner (the "
+        "attacks of the file, tried on another planner: transfer); without, the file's paths are kept."
+    )
     add_harm_arguments(ident)
     ident.add_argument("--name", help="run name")
     ident.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -70,22 +82,35 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.no_evaluate and not args.report:
         raise InputError("--no-evaluate: only with --report DIR")
     config = RunConfig(
-        n=args.n, size=args.size, attack=args.attack, seed=args.seed, per_map=args.per_map, budget=args.budget,
-        radius=args.radius, corner_cutting=not args.no_corner_cutting, shard_size=args.shard_size,
-        classifier=args.classifier, planner=args.planner or "vin", weights=args.weights,
-        harm_tolerance=args.harm_tolerance, harm_rtol=args.harm_rtol,
-        objective=args.objective, obstacles=args.obstacles,
+        n=args.n,
+        size=args.size,
+        attack=args.attack,
+        seed=args.seed,
+        per_map=args.per_map,
+        budget=args.budget,
+        radius=args.radius,
+        corner_cutting=not args.no_corner_cutting,
+        shard_size=args.shard_size,
+        classifier=args.classifier,
+        planner=args.planner or "vin",
+        weights=args.weights,
+        harm_tolerance=args.harm_tolerance,
+        harm_rtol=args.harm_rtol,
+        objective=args.objective,
+        obstacles=args.obstacles,
     )
     with open_cluster(args.cluster, args.workers) as client:
-        summary = run_pipeline(config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet,
-                               **_cluster_options(client))
+        summary = run_pipeline(
+            config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet, **_cluster_options(client)
+        )
     result = summary.to_dict()
     if args.report:
         from vinadv.report import report_run
 
         t0 = time.perf_counter()
-        report = report_run(args.db, args.report, summary.run_id, evaluate=not args.no_evaluate,
-                            progress=not (args.quiet or args.json))
+        report = report_run(
+            args.db, args.report, summary.run_id, evaluate=not args.no_evaluate, progress=not (args.quiet or args.json)
+        )
         result["report"] = args.report
         result["comparison"] = report.comparison or "stored"
         result["seconds"]["report"] = round(time.perf_counter() - t0, 3)
@@ -104,20 +129,30 @@ def _cluster_options(client) -> dict:
 def _print_run(result: dict) -> None:
     from vinadv.pipeline import STAGES
 
-    print(f"run {result['run_id']} ({result['name'] or 'unnamed'}) in {result['db']}: {result['pairs']:,} pairs from "
-          f"{result['maps']:,} maps on planner {result['planner']['name']}, {result['stored']:,} stored")
+    print(
+        f"run {result['run_id']} ({result['name'] or 'unnamed'}) in {result['db']}: {result['pairs']:,} pairs from "
+        f"{result['maps']:,} maps on planner {result['planner']['name']}, {result['stored']:,} stored"
+    )
     if result["skipped_shards"]:
         print(f"resumed: {result['skipped_shards']} complete shards skipped")
     if result["maps_without_valid_cell"]:
         print(f"{result['maps_without_valid_cell']} maps had no valid cell for an added obstacle")
     print_counts(result)
     seconds = result["seconds"]
-    print("time per stage: " + ", ".join(f"{s} {seconds[s]:.2f} s" for s in (*STAGES, "report") if s in seconds)
-          + f"; wall {result['wall_seconds']:.2f} s")
+    print(
+        "time per stage: "
+        + ", ".join(f"{s} {seconds[s]:.2f} s" for s in (*STAGES, "report") if s in seconds)
+        + f"; wall {result['wall_seconds']:.2f} s"
+    )
     if "report" in result:
-        print(f"report: {result['report']}/index.html"
-              + ("" if result["comparison"] in ("stored", "skipped") else f" (no classifier comparison: "
-                 f"{result['comparison']})"))
+        print(
+            f"report: {result['report']}/index.html"
+            + (
+                ""
+                if result["comparison"] in ("stored", "skipped")
+                else f" (no classifier comparison: {result['comparison']})"
+            )
+        )
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
@@ -127,16 +162,26 @@ def cmd_identify(args: argparse.Namespace) -> int:
     remote = None
     if args.cluster is not None or args.workers is not None:
         remote = ClusterIdentify(args.cluster, args.workers, shard_size=args.shard_size, progress=not args.quiet)
-    done = identify_and_store(args.pairs, args.db, classifier=args.classifier, planner=args.planner,
-                              weights=args.weights, name=args.name,
-                              harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol, remote=remote)
+    done = identify_and_store(
+        args.pairs,
+        args.db,
+        classifier=args.classifier,
+        planner=args.planner,
+        weights=args.weights,
+        name=args.name,
+        harm_tol=args.harm_tolerance,
+        harm_rtol=args.harm_rtol,
+        remote=remote,
+    )
     ident = done.identification
     summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds, harm_table=ident.harm_table())
     summary.update(run_id=done.run_id, adversarial=int(ident.attack.sum()))
     if args.json:
         print(json.dumps(summary))
     elif not args.quiet:
-        print(f"run {done.run_id}: {len(ident):,} pairs identified in {done.seconds:.2f} s; "
-              f"{summary['adversarial']:,} successful attacks (D_adversarial)")
+        print(
+            f"run {done.run_id}: {len(ident):,} pairs identified in {done.seconds:.2f} s; "
+            f"{summary['adversarial']:,} successful attacks (D_adversarial)"
+        )
         print_counts(summary)
     return 0

@@ -19,12 +19,16 @@ def register(subparsers) -> None:
         "next/previous). Human labels go to the annotations table, beside the automatic ones. Binds to "
         "127.0.0.1; there is no login, so serving other addresses needs --allow-remote.",
     )
-    serve.add_argument("--db", default=None,
-                       help="database URL or SQLite file (default: env VINADV_DB, else vinadv.db)")
+    serve.add_argument(
+        "--db", default=None, help="database URL or SQLite file (default: env VINADV_DB, else vinadv.db)"
+    )
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     serve.add_argument("--port", type=int, default=8000, help="port (default 8000)")
-    serve.add_argument("--allow-remote", action="store_true",
-                       help="allow binding a non-loopback address (anyone who can reach it can label pairs)")
+    serve.add_argument(
+        "--allow-remote",
+        action="store_true",
+        help="allow binding a non-loopback address (anyone who can reach it can label pairs)",
+    )
     serve.add_argument("--quiet", action="store_true", help="do not log requests")
     serve.set_defaults(func=cmd_serve)
 
@@ -71,6 +75,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     # import the image renderers now (matplotlib; torch behind vinadv.classify), not on the first pair page
     import vinadv.classify.images  # noqa: F401
     import vinadv.grid.draw  # noqa: F401
+
     # bind here rather than in werkzeug, which prints and calls sys.exit(1) when the port is taken
     family = socket.AF_INET6 if ":" in args.host else socket.AF_INET
     sock = socket.socket(family, socket.SOCK_STREAM)

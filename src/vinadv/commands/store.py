@@ -14,9 +14,32 @@ from vinadv.outfile import atomic_output, check_output_path
 EXPORT_FORMAT = "vinadv.labelled_pairs/1"
 #: text columns of an exported row, in order (the paper's Table 2 first)
 EXPORT_COLUMNS = (
-    "no", "map_o", "map_a", "path_o", "path_a", "label", "attack",
-    "run_id", "pair_index", "start", "goal", "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv",
-    "opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a", "expert_label", "harm",
+    "no",
+    "map_o",
+    "map_a",
+    "path_o",
+    "path_a",
+    "label",
+    "attack",
+    "run_id",
+    "pair_index",
+    "start",
+    "goal",
+    "added_obstacle",
+    "label_source",
+    "score",
+    "term_o",
+    "term_a",
+    "dh",
+    "dv",
+    "opt_cost_o",
+    "opt_cost_a",
+    "cost_o",
+    "cost_a",
+    "regret_o",
+    "regret_a",
+    "expert_label",
+    "harm",
     "added_more",  # the obstacles added after `added_obstacle` ("r,c;r,c"), empty for a one-obstacle pair
 )
 
@@ -113,8 +136,10 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
                     row["attack"] = bool(row["attack"])
                 if writer is not None:
                     writer.writerows(
-                        [["" if r[c] is None else int(r[c]) if c == "attack" else r[c] for c in EXPORT_COLUMNS]
-                         for r in chunk]
+                        [
+                            ["" if r[c] is None else int(r[c]) if c == "attack" else r[c] for c in EXPORT_COLUMNS]
+                            for r in chunk
+                        ]
                     )
                 else:
                     stream.write("".join(json.dumps({c: r[c] for c in EXPORT_COLUMNS}) + "\n" for r in chunk))

@@ -28,17 +28,29 @@ def register(subparsers) -> None:
     ev.add_argument("--weights", default=None, help="weights file (default: the shipped weights for the map size)")
     add_eval_arguments(ev)
     ev.add_argument("--k", type=int, default=None, help="value-iteration steps for a port-style weights file")
-    ev.add_argument("--protocol", choices=("vinadv", "kentsommer", "gppn"), default="vinadv",
-                    help="measure as vinadv (default), the kentsommer port's test.py, or GPPN (%%Opt/%%Suc over every "
-                         "free cell); see README, 'Using data and models from other VIN/GPPN code'")
-    ev.add_argument("--prior", type=float, default=None,
-                    help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)")
+    ev.add_argument(
+        "--protocol",
+        choices=("vinadv", "kentsommer", "gppn"),
+        default="vinadv",
+        help="measure as vinadv (default), the kentsommer port's test.py, or GPPN (%%Opt/%%Suc over every "
+        "free cell); see README, 'Using data and models from other VIN/GPPN code'",
+    )
+    ev.add_argument(
+        "--prior",
+        type=float,
+        default=None,
+        help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)",
+    )
     ev.set_defaults(func=cmd_eval)
 
     exw = sub.add_parser("export-weights", help="write VIN weights as a plain state dict for the PyTorch ports")
     exw.add_argument("weights", metavar="W", help="weights file (.pt)")
-    exw.add_argument("--format", required=True, choices=("state-dict",),
-                     help="state-dict: exactly the keys h.weight h.bias r.weight q.weight w fc.weight")
+    exw.add_argument(
+        "--format",
+        required=True,
+        choices=("state-dict",),
+        help="state-dict: exactly the keys h.weight h.bias r.weight q.weight w fc.weight",
+    )
     exw.add_argument("--out", required=True, help="output file (.pth)")
     exw.add_argument("--json", action="store_true", help="print the keys and shapes as JSON")
     exw.set_defaults(func=cmd_export_weights)
@@ -49,36 +61,71 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
     train.add_argument("--data", required=True, help="maps file (.npz, from `vinadv maps generate`)")
     train.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
     train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
-    train.add_argument("--lr", type=float, default=lr,
-                       help=f"peak RMSprop learning rate, cosine-decayed (default {lr})")
+    train.add_argument(
+        "--lr", type=float, default=lr, help=f"peak RMSprop learning rate, cosine-decayed (default {lr})"
+    )
     train.add_argument("--batch-size", type=int, default=32, help="maps per batch (default 32)")
-    train.add_argument("--warmup", type=int, default=None, metavar="STEPS",
-                       help="linear learning-rate warm-up over the first STEPS optimizer steps "
-                            "(default: 5%% of all steps, at most 200)")
+    train.add_argument(
+        "--warmup",
+        type=int,
+        default=None,
+        metavar="STEPS",
+        help="linear learning-rate warm-up over the first STEPS optimizer steps "
+        "(default: 5%% of all steps, at most 200)",
+    )
     train.add_argument("--val-fraction", type=float, default=0.05, help="maps held out for validation (default 0.05)")
     train.add_argument("--seed", type=int, default=0, help="seed for initialisation, split and shuffling (default 0)")
     train.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
     train.add_argument("--k", type=int, default=None, help=k_help)
     train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
-    train.add_argument("--time-limit", type=float, default=None, metavar="MIN",
-                       help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)")
-    train.add_argument("--init", metavar="WEIGHTS", help="start from these weights (continue a training) instead of "
-                       "a fresh initialisation")
+    train.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="MIN",
+        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
+    )
+    train.add_argument(
+        "--init",
+        metavar="WEIGHTS",
+        help="start from these weights (continue a training) instead of a fresh initialisation",
+    )
     train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
     adv = train.add_argument_group("adversarial training (vinadv.hardening)")
-    adv.add_argument("--adversarial", action="store_true",
-                     help="before each epoch, attack training maps with the current model and add the adversarial "
-                          "maps of the harmful pairs to the training maps")
-    adv.add_argument("--adv-maps", type=int, default=1000, metavar="M",
-                     help="training maps attacked before each epoch (default 1000)")
-    adv.add_argument("--adv-strategy", choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
-                     default="exhaustive", metavar="STRATEGY",
-                     help="attack strategy: %(choices)s (default exhaustive: each map's worst single obstacle)")
+    adv.add_argument(
+        "--adversarial",
+        action="store_true",
+        help="before each epoch, attack training maps with the current model and add the adversarial "
+        "maps of the harmful pairs to the training maps",
+    )
+    adv.add_argument(
+        "--adv-maps",
+        type=int,
+        default=1000,
+        metavar="M",
+        help="training maps attacked before each epoch (default 1000)",
+    )
+    adv.add_argument(
+        "--adv-strategy",
+        choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
+        default="exhaustive",
+        metavar="STRATEGY",
+        help="attack strategy: %(choices)s (default exhaustive: each map's worst single obstacle)",
+    )
     adv.add_argument("--adv-budget", type=int, default=8, help="key-points/saliency: candidates per map (default 8)")
-    adv.add_argument("--adv-objective", choices=("harm", "paper"), default="harm",
-                     help="what the attack keeps as a map's strongest pair (default harm)")
-    adv.add_argument("--adv-start", type=int, default=None, metavar="EPOCH",
-                     help="first epoch (1-based) before which maps are attacked (default 1 with --init, else 2)")
+    adv.add_argument(
+        "--adv-objective",
+        choices=("harm", "paper"),
+        default="harm",
+        help="what the attack keeps as a map's strongest pair (default harm)",
+    )
+    adv.add_argument(
+        "--adv-start",
+        type=int,
+        default=None,
+        metavar="EPOCH",
+        help="first epoch (1-based) before which maps are attacked (default 1 with --init, else 2)",
+    )
     train.add_argument("--quiet", action="store_true", help="no progress bar or per-epoch lines")
     train.add_argument("--json", action="store_true", help="print the training record as JSON")
 
@@ -128,9 +175,20 @@ def train_config(args: argparse.Namespace, **extra):
     """The `TrainConfig` of a `train` command's shared options (`add_train_arguments`), plus `extra` fields."""
     from vinadv.planners.training import TrainConfig
 
-    config = TrainConfig(epochs=args.epochs, lr=args.lr, batch_size=args.batch_size, val_fraction=args.val_fraction,
-                         seed=args.seed, device=args.device, k=args.k, time_limit_min=args.time_limit,
-                         init=args.init, warmup_steps=args.warmup, adversarial=adversarial_config(args), **extra)
+    config = TrainConfig(
+        epochs=args.epochs,
+        lr=args.lr,
+        batch_size=args.batch_size,
+        val_fraction=args.val_fraction,
+        seed=args.seed,
+        device=args.device,
+        k=args.k,
+        time_limit_min=args.time_limit,
+        init=args.init,
+        warmup_steps=args.warmup,
+        adversarial=adversarial_config(args),
+        **extra,
+    )
     config.validate()
     return config
 
@@ -145,8 +203,13 @@ def adversarial_config(args: argparse.Namespace) -> dict | None:
     for flag, value in (("--adv-maps", args.adv_maps), ("--adv-budget", args.adv_budget), ("--adv-start", start)):
         if value < 1:  # checked here, in flags (strategy and objective are argparse choices)
             raise InputError(f"{flag} must be >= 1, got {value}")
-    config = AdversarialConfig(maps_per_epoch=args.adv_maps, strategy=args.adv_strategy, budget=args.adv_budget,
-                               objective=args.adv_objective, start_epoch=start - 1)
+    config = AdversarialConfig(
+        maps_per_epoch=args.adv_maps,
+        strategy=args.adv_strategy,
+        budget=args.adv_budget,
+        objective=args.adv_objective,
+        start_epoch=start - 1,
+    )
     config.validate()
     return config.to_dict()
 
@@ -178,8 +241,14 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
         "command": _command_line(),
         "vinadv": __version__,
         "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "data": {"path": str(args.data), "sha256": weights_checksum(args.data), "maps": len(maps), "size": maps.size,
-                 "seed": int(maps.seed), "corner_cutting": bool(maps.corner_cutting)},
+        "data": {
+            "path": str(args.data),
+            "sha256": weights_checksum(args.data),
+            "maps": len(maps),
+            "size": maps.size,
+            "seed": int(maps.seed),
+            "corner_cutting": bool(maps.corner_cutting),
+        },
     }
     log = None if args.quiet or args.json else (lambda line: print(line, flush=True))
     augment = None
@@ -187,16 +256,28 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
         from vinadv.hardening import AdversarialConfig, AdversarialMaps
 
         augment = AdversarialMaps(maps, AdversarialConfig(**config.adversarial), seed=config.seed)
-    model, record = train(maps, config, checkpoint=checkpoint, resume=args.resume,
-                          progress=not (args.quiet or args.json), record=record, log=log, augment=augment)
+    model, record = train(
+        maps,
+        config,
+        checkpoint=checkpoint,
+        resume=args.resume,
+        progress=not (args.quiet or args.json),
+        record=record,
+        log=log,
+        augment=augment,
+    )
     record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     save(model, out, record)
     record_path = out.with_suffix(".json")
     with atomic_output(record_path, "w") as fh:
         fh.write(json.dumps(record, indent=2) + "\n")
     checkpoint.unlink(missing_ok=True)
-    return emit(args, record, f"wrote {out} and {record_path}: {record['epochs_done']} epochs in "
-                f"{record['wall_time_s']:.0f} s, val action accuracy {record['epochs'][-1]['val_action_accuracy']}")
+    return emit(
+        args,
+        record,
+        f"wrote {out} and {record_path}: {record['epochs_done']} epochs in "
+        f"{record['wall_time_s']:.0f} s, val action accuracy {record['epochs'][-1]['val_action_accuracy']}",
+    )
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
@@ -210,8 +291,10 @@ def cmd_eval(args: argparse.Namespace) -> int:
     model = load_vin(args.weights, size=maps.size, k=args.k)
     trained = model.record.get("size")
     if trained is not None and trained != maps.size:
-        raise InputError(f"{model.weights_path}: weights were trained on {trained}x{trained} maps, "
-                         f"the maps are {maps.size}x{maps.size}")
+        raise InputError(
+            f"{model.weights_path}: weights were trained on {trained}x{trained} maps, "
+            f"the maps are {maps.size}x{maps.size}"
+        )
     data_seed = model.record.get("data", {}).get("seed")
     if data_seed is not None and data_seed == maps.seed and not args.quiet:
         print(f"vinadv: warning: these maps use seed {maps.seed}, the seed of the training data", file=sys.stderr)
@@ -220,8 +303,14 @@ def cmd_eval(args: argparse.Namespace) -> int:
         raise InputError("--prior applies to --protocol kentsommer only")
     metrics = evaluate_protocol(model, maps, args.protocol, args.prior, progress=not (args.quiet or args.json))
     weights_path = args.weights or f"shipped:{default_weights_path(maps.size).name}"
-    metrics = {"weights": weights_path, "weights_sha256": weights_checksum(model.weights_path), **source, **metrics,
-               "seconds": round(time.perf_counter() - t0, 2), "command": _command_line()}
+    metrics = {
+        "weights": weights_path,
+        "weights_sha256": weights_checksum(model.weights_path),
+        **source,
+        **metrics,
+        "seconds": round(time.perf_counter() - t0, 2),
+        "command": _command_line(),
+    }
     return emit_metrics(args, metrics)
 
 
@@ -247,8 +336,10 @@ def _print_protocol_metrics(m: dict) -> None:
     print(f"{m['maps']} maps of {m['size']}x{m['size']}, measured as {m['protocol']} ({m['weights']})")
     if m["protocol"] == "kentsommer":
         print(f"  rollout success   {_pct(m['success_rate'])} of {m['rollouts']} (goal prior {m['prior']:g})")
-        print(f"  action accuracy   {_pct(m['action_accuracy_single_label'])} single-label, "
-              f"{m['trajectory_states']} trajectory states")
+        print(
+            f"  action accuracy   {_pct(m['action_accuracy_single_label'])} single-label, "
+            f"{m['trajectory_states']} trajectory states"
+        )
     else:
         print(f"  %Opt              {_pct(m['percent_optimal'])} of {m['cells']} free cells (diagonal cost 1)")
         print(f"  %Suc              {_pct(m['percent_success'])}")
@@ -279,11 +370,21 @@ def cmd_export_weights(args: argparse.Namespace) -> int:
             state = None
         if state is None:
             raise
-        raise InputError(f"{args.weights}: a GPPN-style checkpoint; vinadv's VIN cannot represent it: "
-                         + "; ".join(gppn_vin_gaps(state))) from None
+        raise InputError(
+            f"{args.weights}: a GPPN-style checkpoint; vinadv's VIN cannot represent it: "
+            + "; ".join(gppn_vin_gaps(state))
+        ) from None
     shapes = export_state_dict(model, args.out)
-    summary = {"out": args.out, "format": args.format, "k": model.config.k,
-               "keys": {k: list(v) for k, v in shapes.items()}, "torch": torch.__version__}
-    return emit(args, summary,
-                f"wrote {args.out}: plain state dict {', '.join(shapes)} (k = {model.config.k} is not stored: "
-                f"the ports take it as an option)")
+    summary = {
+        "out": args.out,
+        "format": args.format,
+        "k": model.config.k,
+        "keys": {k: list(v) for k, v in shapes.items()},
+        "torch": torch.__version__,
+    }
+    return emit(
+        args,
+        summary,
+        f"wrote {args.out}: plain state dict {', '.join(shapes)} (k = {model.config.k} is not stored: "
+        f"the ports take it as an option)",
+    )

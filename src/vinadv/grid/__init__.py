@@ -14,7 +14,20 @@ from vinadv.grid.shortest_paths import (
 )
 
 __all__ = [
-    "ACTION_COSTS", "ACTION_DELTAS", "ACTION_NAMES", "N_ACTIONS", "MAPS_FORMAT", "MapSet",
-    "default_obstacle_params", "expert_paths", "first_optimal_action", "generate_maps", "obstacle_fraction",
-    "optimal_actions", "PackedPaths", "PathPairs", "shortest_distances", "valid_moves",
+    "ACTION_COSTS",
+    "ACTION_DELTAS",
+    "ACTION_NAMES",
+    "N_ACTIONS",
+    "MAPS_FORMAT",
+    "MapSet",
+    "default_obstacle_params",
+    "expert_paths",
+    "first_optimal_action",
+    "generate_maps",
+    "obstacle_fraction",
+    "optimal_actions",
+    "PackedPaths",
+    "PathPairs",
+    "shortest_distances",
+    "valid_moves",
 ]

@@ -8,9 +8,7 @@ import numpy as np
 
 ACTION_NAMES = ("N", "S", "E", "W", "NE", "NW", "SE", "SW")
 #: (d_row, d_col) of each action, shape (8, 2).
-ACTION_DELTAS = np.array(
-    [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)], dtype=np.int64
-)
+ACTION_DELTAS = np.array([(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)], dtype=np.int64)
 #: cost of each action: 1 orthogonal, sqrt(2) diagonal, shape (8,).
 ACTION_COSTS = np.array([1.0, 1.0, 1.0, 1.0] + [math.sqrt(2.0)] * 4)
 N_ACTIONS = 8

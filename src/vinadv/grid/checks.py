@@ -109,12 +109,21 @@ def check_paths(
         check((cells[offsets[:-1]] != np.asarray(starts)).any(axis=1), "does not start at its start")
     if goals is not None and reached is not None:
         at_goal = (cells[offsets[1:] - 1] == np.asarray(goals)).all(axis=1)
-        check(at_goal != np.asarray(reached, dtype=bool), "disagrees with its termination: a path reaches the goal "
-              "exactly when its last cell is the goal")
+        check(
+            at_goal != np.asarray(reached, dtype=bool),
+            "disagrees with its termination: a path reaches the goal exactly when its last cell is the goal",
+        )
 
 
-def check_maps(where, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, expert: PackedPaths,
-               corner_cutting: bool = True, start_counts: np.ndarray | None = None) -> None:
+def check_maps(
+    where,
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    starts: np.ndarray,
+    expert: PackedPaths,
+    corner_cutting: bool = True,
+    start_counts: np.ndarray | None = None,
+) -> None:
     """A maps file's content: `obstacles (n, N, N)`, `goals (n, 2)`, `starts (n, S, 2)`, `expert` paths (n*S);
     `start_counts (n,)`: map i's slots from `start_counts[i]` on are padding (a start on the goal, see `MapSet`)."""
     n, size = len(obstacles), obstacles.shape[-1] if obstacles.ndim == 3 else 0
@@ -126,21 +135,50 @@ def check_maps(where, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarr
     idx = np.arange(n)
     _check(obstacles[idx, goals[:, 0], goals[:, 1]], where, "goals", "has a goal on an obstacle", "map")
     if s:
-        _check(obstacles[idx[:, None], starts[..., 0], starts[..., 1]].any(axis=1), where, "starts",
-               "has a start on an obstacle", "map")
+        _check(
+            obstacles[idx[:, None], starts[..., 0], starts[..., 1]].any(axis=1),
+            where,
+            "starts",
+            "has a start on an obstacle",
+            "map",
+        )
         real = np.ones((n, s), bool) if start_counts is None else np.arange(s)[None, :] < start_counts[:, None]
-        _check(((starts == goals[:, None, :]).all(axis=2) & real).any(axis=1), where, "starts",
-               "has a start on the goal", "map")
+        _check(
+            ((starts == goals[:, None, :]).all(axis=2) & real).any(axis=1),
+            where,
+            "starts",
+            "has a start on the goal",
+            "map",
+        )
         # padded slots sort last and out of the way of the real starts' duplicates
         flat = np.sort(np.where(real, starts[..., 0] * size + starts[..., 1], size * size + np.arange(s)), axis=1)
         _check((np.diff(flat, axis=1) == 0).any(axis=1), where, "starts", "has the same start twice", "map")
-    check_paths(where, "expert_cells", expert, size, obstacles=obstacles,
-                owner=np.repeat(idx, s), starts=starts.reshape(-1, 2), goals=np.repeat(goals, s, axis=0),
-                reached=np.ones(n * s, dtype=bool), corner_cutting=corner_cutting, what="path")
+    check_paths(
+        where,
+        "expert_cells",
+        expert,
+        size,
+        obstacles=obstacles,
+        owner=np.repeat(idx, s),
+        starts=starts.reshape(-1, 2),
+        goals=np.repeat(goals, s, axis=0),
+        reached=np.ones(n * s, dtype=bool),
+        corner_cutting=corner_cutting,
+        what="path",
+    )
 
 
-def check_pairs(where, obstacles_o: np.ndarray, obstacles_a: np.ndarray, starts: np.ndarray, goals: np.ndarray,
-                added: np.ndarray, paths: dict, terms: dict, corner_cutting: bool = True) -> None:
+def check_pairs(
+    where,
+    obstacles_o: np.ndarray,
+    obstacles_a: np.ndarray,
+    starts: np.ndarray,
+    goals: np.ndarray,
+    added: np.ndarray,
+    paths: dict,
+    terms: dict,
+    corner_cutting: bool = True,
+) -> None:
     """A pairs file's content: maps `(n, N, N)`, `starts`/`goals` `(n, 2)`, `added` `(n, K, 2)` (or `(n, 2)`, K = 1),
     `paths[side]` (`PackedPaths`) and `terms[side] (n,)` termination names for side "o" (original map) and "a"
     (adversarial map). The added cells of a pair are K distinct cells, free on the original map, none the start or
@@ -158,15 +196,34 @@ def check_pairs(where, obstacles_o: np.ndarray, obstacles_a: np.ndarray, starts:
     _check((starts == goals).all(axis=1), where, "starts", "has a start on its goal", "pair")
     _check((added == starts[:, None]).all(axis=2).any(axis=1), where, "added", "is on the start", "pair")
     _check((added == goals[:, None]).all(axis=2).any(axis=1), where, "added", "is on the goal", "pair")
-    _check(obstacles_o[idx[:, None], added[..., 0], added[..., 1]].any(axis=1), where, "added",
-           "is already an obstacle on the original map", "pair")
+    _check(
+        obstacles_o[idx[:, None], added[..., 0], added[..., 1]].any(axis=1),
+        where,
+        "added",
+        "is already an obstacle on the original map",
+        "pair",
+    )
     flat = np.sort(added[..., 0] * size + added[..., 1], axis=1)
     _check((np.diff(flat, axis=1) == 0).any(axis=1), where, "added", "has the same cell twice", "pair")
     expected = obstacles_o.copy()
     expected[idx[:, None], added[..., 0], added[..., 1]] = True
-    _check((obstacles_a != expected).any(axis=(1, 2)), where, "obstacles_a",
-           "is not obstacles_o plus exactly the cells 'added'", "pair")
+    _check(
+        (obstacles_a != expected).any(axis=(1, 2)),
+        where,
+        "obstacles_a",
+        "is not obstacles_o plus exactly the cells 'added'",
+        "pair",
+    )
     for side, obstacles in (("o", obstacles_o), ("a", obstacles_a)):
-        check_paths(where, f"path_{side}_cells", paths[side], size, obstacles=obstacles, starts=starts,
-                    goals=goals, reached=np.asarray(terms[side]) == "goal", corner_cutting=corner_cutting,
-                    what="pair")
+        check_paths(
+            where,
+            f"path_{side}_cells",
+            paths[side],
+            size,
+            obstacles=obstacles,
+            starts=starts,
+            goals=goals,
+            reached=np.asarray(terms[side]) == "goal",
+            corner_cutting=corner_cutting,
+            what="pair",
+        )

@@ -44,8 +44,16 @@ def draw_map(
             ax.add_patch(plt.Rectangle((c - 0.5, r - 0.5), 1, 1, color="#ff7f0e", label=label))
     if start is not None:
         starts = np.asarray(start).reshape(-1, 2)
-        ax.plot(starts[:, 1], starts[:, 0], "o", color="#2ca02c", ms=8, mec="k", ls="none",
-                label="start" if len(starts) == 1 else "starts")
+        ax.plot(
+            starts[:, 1],
+            starts[:, 0],
+            "o",
+            color="#2ca02c",
+            ms=8,
+            mec="k",
+            ls="none",
+            label="start" if len(starts) == 1 else "starts",
+        )
     if goal is not None:
         ax.plot(goal[1], goal[0], "*", color="#d62728", ms=13, mec="k", label="goal")
     ax.set_xlim(-0.5, n - 0.5)
@@ -67,8 +75,11 @@ def map_legend(fig, axes, **kwargs) -> None:
         from matplotlib.layout_engine import ConstrainedLayoutEngine
 
         # under constrained layout an "outside" legend gets its own room; else it hangs below the axes
-        place = ({"loc": "outside lower center"} if isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
-                 else {"loc": "lower center", "bbox_to_anchor": (0.5, -0.02)})
+        place = (
+            {"loc": "outside lower center"}
+            if isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
+            else {"loc": "lower center", "bbox_to_anchor": (0.5, -0.02)}
+        )
         options = {**place, "ncol": min(len(handles), 5), "fontsize": 8, "frameon": False, **kwargs}
         fig.legend(list(handles.values()), list(handles), **options)
 

@@ -83,15 +83,24 @@ def check_limits(n: int, size: int, n_starts: int, max_obs: int) -> None:
         largest = math.isqrt(avail // 2 // WORK_BYTES_PER_CELL)
         while largest > MIN_SIZE and work(largest, default_obstacle_params(largest)[0]) > avail // 2:
             largest -= 1 + largest // 16
-        raise InputError(f"size {size}: generating one {size}x{size} map needs {_gib(work(size, max_obs))} of memory "
-                         f"({size * size:,} cells, {max_obs:,} placement attempts), more than half the {_gib(avail)} "
-                         f"available; the limit here is about size {largest}", "size", "size")
+        raise InputError(
+            f"size {size}: generating one {size}x{size} map needs {_gib(work(size, max_obs))} of memory "
+            f"({size * size:,} cells, {max_obs:,} placement attempts), more than half the {_gib(avail)} "
+            f"available; the limit here is about size {largest}",
+            "size",
+            "size",
+        )
     need = n * map_bytes(size, n_starts)
     if need > avail // 2:
         fits = avail // 2 // map_bytes(size, n_starts)
-        raise InputError(f"n {n:,}: {n:,} maps of {size}x{size} need about {_gib(need)} of memory, more than half "
-                         f"the {_gib(avail)} available; the limit here is about n {fits:,} per file (make several "
-                         "files with different seed)", "n", "n", "seed")
+        raise InputError(
+            f"n {n:,}: {n:,} maps of {size}x{size} need about {_gib(need)} of memory, more than half "
+            f"the {_gib(avail)} available; the limit here is about n {fits:,} per file (make several "
+            "files with different seed)",
+            "n",
+            "n",
+            "seed",
+        )
 
 
 def _gib(n_bytes: int) -> str:
@@ -148,8 +157,16 @@ def _paint_shapes(attempts, is_disc, top, left, height, width, radius, goals, ou
                         out[b, i, j] = True
 
 
-def _generate_chunk(seed: tuple[int, ...], chunk: int, size: int, n_starts: int, corner_cutting: bool, max_obs: int,
-                    max_size: int, count: int):
+def _generate_chunk(
+    seed: tuple[int, ...],
+    chunk: int,
+    size: int,
+    n_starts: int,
+    corner_cutting: bool,
+    max_obs: int,
+    max_size: int,
+    count: int,
+):
     """Chunk `chunk` of the stream: its `count` maps, less those without `n_starts` eligible starts, with their
     expert paths (computed here, so that no chunk's distance maps outlive it)."""
     rng = np.random.default_rng([*seed, chunk])
@@ -211,8 +228,9 @@ def generate_maps(
         if progress is not None and len(part[0]):
             progress(min(len(part[0]), n - (have - len(part[0]))))
         if chunk * count > 64 * CHUNK and have == 0:
-            raise InputError(f"could not place {n_starts} starts on any {size}x{size} map; use fewer (n_starts)",
-                             "n_starts")
+            raise InputError(
+                f"could not place {n_starts} starts on any {size}x{size} map; use fewer (n_starts)", "n_starts"
+            )
     if parts:
         obstacles, goals, starts, costs = (np.concatenate(x)[:n] for x in zip(*(p[:4] for p in parts)))
         expert = PackedPaths.concat([p[4] for p in parts]).take(slice(0, n * n_starts))

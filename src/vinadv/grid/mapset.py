@@ -99,8 +99,9 @@ class MapSet:
         counts = r.array("start_counts", "i", 1, (n,)).astype(np.int64) if r.has("start_counts") else None
         if counts is not None and n and (counts.min() < 1 or counts.max() > s):
             raise r.fail("start_counts", f"has a count outside 1..{s} (the starts per map)")
-        check_maps(r.path, obstacles, goals, starts, expert, bool(r.scalar("corner_cutting", "b", default=True)),
-                   counts)
+        check_maps(
+            r.path, obstacles, goals, starts, expert, bool(r.scalar("corner_cutting", "b", default=True)), counts
+        )
         return cls(
             obstacles=obstacles.astype(bool),
             goals=goals,

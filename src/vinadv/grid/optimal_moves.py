@@ -16,14 +16,21 @@ from vinadv.grid.shortest_paths import heap_pop, heap_push
 __all__ = ["optimal_moves", "optimal_moves_kernel"]
 
 
-def optimal_moves(obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, map_index: np.ndarray,
-                  corner_cutting: bool = True) -> np.ndarray:
+def optimal_moves(
+    obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, map_index: np.ndarray, corner_cutting: bool = True
+) -> np.ndarray:
     """Moves of an optimal path from `starts (R, 2)` to the goal of map `map_index (R,)`: `(R,)` int64, -1 where
     the goal cannot be reached. obstacles `(B, N, N)` bool, goals `(B, 2)`."""
     out = np.empty(len(starts), dtype=np.int64)
-    optimal_moves_kernel(np.ascontiguousarray(obstacles, dtype=bool), np.ascontiguousarray(goals, dtype=np.int64),
-                         np.ascontiguousarray(starts, dtype=np.int64).reshape(-1, 2),
-                         np.ascontiguousarray(map_index, dtype=np.int64), bool(corner_cutting), ACTION_DELTAS, out)
+    optimal_moves_kernel(
+        np.ascontiguousarray(obstacles, dtype=bool),
+        np.ascontiguousarray(goals, dtype=np.int64),
+        np.ascontiguousarray(starts, dtype=np.int64).reshape(-1, 2),
+        np.ascontiguousarray(map_index, dtype=np.int64),
+        bool(corner_cutting),
+        ACTION_DELTAS,
+        out,
+    )
     return out
 
 

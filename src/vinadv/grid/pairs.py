@@ -79,8 +79,9 @@ class PathPairs(Columns):
         # an empty part says nothing about K: it joins parts of any K
         counts = {p.n_added for p in parts if len(p)} | ({n_added} if n_added is not None else set())
         if len(counts) > 1:
-            raise InputError(f"{cls.__name__}.concat: pairs with different numbers of added obstacles "
-                             f"{sorted(counts)}", "obstacles")
+            raise InputError(
+                f"{cls.__name__}.concat: pairs with different numbers of added obstacles {sorted(counts)}", "obstacles"
+            )
         if len(parts) > 1:
             parts = [p for p in parts if len(p)] or parts[:1]
         return super().concat(parts, **settings)
@@ -90,14 +91,18 @@ class PathPairs(Columns):
         """No pairs, on `size x size` maps, of `n_added` added obstacles; `settings`: the other fields of a
         subclass."""
         if size is None:
-            raise InputError(f"{cls.__name__}.concat: no parts; pass size= (the map side) for an empty result",
-                             "size")
+            raise InputError(f"{cls.__name__}.concat: no parts; pass size= (the map side) for an empty result", "size")
         return cls(
-            obstacles_o=np.zeros((0, size, size), bool), obstacles_a=np.zeros((0, size, size), bool),
-            starts=np.zeros((0, 2), np.int64), goals=np.zeros((0, 2), np.int64),
+            obstacles_o=np.zeros((0, size, size), bool),
+            obstacles_a=np.zeros((0, size, size), bool),
+            starts=np.zeros((0, 2), np.int64),
+            goals=np.zeros((0, 2), np.int64),
             added=np.zeros((0, n_added, 2), np.int64),
-            path_o=PackedPaths.empty(), path_a=PackedPaths.empty(),
-            term_o=np.zeros(0, "<U10"), term_a=np.zeros(0, "<U10"), **settings,
+            path_o=PackedPaths.empty(),
+            path_a=PackedPaths.empty(),
+            term_o=np.zeros(0, "<U10"),
+            term_a=np.zeros(0, "<U10"),
+            **settings,
         )
 
     @property
@@ -127,8 +132,9 @@ def added_column(value, name: str, n: int) -> np.ndarray:
     if arr.ndim == 2:
         arr = arr.reshape(len(arr), 1, *arr.shape[1:])
     if arr.ndim != 3 or arr.shape[0] != n or arr.shape[2] != 2 or arr.shape[1] < 1:
-        raise InputError(f"{name}: expected shape ({n}, K, 2) with K >= 1 (or ({n}, 2) for one obstacle), got "
-                         f"{np.shape(value)}")
+        raise InputError(
+            f"{name}: expected shape ({n}, K, 2) with K >= 1 (or ({n}, 2) for one obstacle), got {np.shape(value)}"
+        )
     if arr.size and not np.issubdtype(arr.dtype, np.integer):
         raise InputError(f"{name}: expected integers, got {arr.dtype}")
     return arr.astype(np.int64, copy=False)
@@ -142,4 +148,3 @@ def int_column(value, name: str, shape: tuple) -> np.ndarray:
     if arr.size and not np.issubdtype(arr.dtype, np.integer):
         raise InputError(f"{name}: expected integers, got {arr.dtype}")
     return arr.astype(np.int64, copy=False)
-

@@ -183,4 +183,3 @@ class PackedPaths:
         check_cells_in_grid(reader, f"{prefix}_cells", cells, size)
         check_offsets(reader, f"{prefix}_offsets", offsets, n, len(cells))
         return cls(cells, offsets)
-

@@ -120,9 +120,7 @@ def _dijkstra_one(obstacles, gr, gc, corner_cutting, deltas, costs, dist, moves)
 @numba.njit(cache=True, parallel=True)
 def _dijkstra_batch(obstacles, goals, corner_cutting, deltas, costs, dist, moves):
     for b in numba.prange(obstacles.shape[0]):
-        _dijkstra_one(
-            obstacles[b], goals[b, 0], goals[b, 1], corner_cutting, deltas, costs, dist[b], moves[b]
-        )
+        _dijkstra_one(obstacles[b], goals[b, 0], goals[b, 1], corner_cutting, deltas, costs, dist[b], moves[b])
 
 
 def shortest_distances(

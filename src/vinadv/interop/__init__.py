@@ -7,5 +7,12 @@ imports it. Conventions of each layout are in `vinadv.interop.maps` and in READM
 from vinadv.interop.checkpoints import export_state_dict, gppn_vin_gaps, read_checkpoint
 from vinadv.interop.maps import FORMATS, export_maps, import_maps, read_maps
 
-__all__ = ["FORMATS", "export_maps", "export_state_dict", "gppn_vin_gaps", "import_maps", "read_checkpoint",
-           "read_maps"]
+__all__ = [
+    "FORMATS",
+    "export_maps",
+    "export_state_dict",
+    "gppn_vin_gaps",
+    "import_maps",
+    "read_checkpoint",
+    "read_maps",
+]

@@ -105,9 +105,11 @@ def gppn_vin_gaps(state: dict[str, torch.Tensor]) -> list[str]:
     missing = [key for key in GPPN_VIN_KEYS if key not in state]
     if missing:
         return [f"not a GPPN VIN: keys {missing} missing (has {sorted(state)[:8]})"]
-    gaps = ["input polarity: GPPN's maze channel is 1 = free and its h layer zero-pads it, so outside the grid "
-            "reads as wall; vinadv's VIN takes 1 = obstacle with zero padding (outside = free), so border cells "
-            "differ and no weight change makes the two equal"]
+    gaps = [
+        "input polarity: GPPN's maze channel is 1 = free and its h layer zero-pads it, so outside the grid "
+        "reads as wall; vinadv's VIN takes 1 = obstacle with zero padding (outside = free), so border cells "
+        "differ and no weight change makes the two equal"
+    ]
     f = int(state["h.weight"].shape[-1])
     if f != 3:
         gaps.append(f"kernel size f = {f}: vinadv's VIN has 3x3 h, q and w kernels only")
@@ -118,8 +120,21 @@ def gppn_vin_gaps(state: dict[str, torch.Tensor]) -> list[str]:
     return gaps
 
 
-GPPN_KEYS = ("hid.weight", "hid.bias", "h0.weight", "h0.bias", "c0.weight", "c0.bias", "conv.weight", "conv.bias",
-             "lstm.weight_ih", "lstm.weight_hh", "lstm.bias_ih", "lstm.bias_hh", "policy.weight")
+GPPN_KEYS = (
+    "hid.weight",
+    "hid.bias",
+    "h0.weight",
+    "h0.bias",
+    "c0.weight",
+    "c0.bias",
+    "conv.weight",
+    "conv.bias",
+    "lstm.weight_ih",
+    "lstm.weight_hh",
+    "lstm.bias_ih",
+    "lstm.bias_hh",
+    "policy.weight",
+)
 
 
 def gppn_from_checkpoint(path: str | os.PathLike, k: int, which: str | None = None):
@@ -139,12 +154,15 @@ def gppn_from_checkpoint(path: str | os.PathLike, k: int, which: str | None = No
     if missing:
         raise InputError(f"{path}: not a GPPN checkpoint: keys {missing} missing (has {sorted(state)[:8]})")
     if int(state["hid.weight"].shape[1]) != 2:
-        raise InputError(f"{path}: a GPPN for 3-D mazes ({int(state['hid.weight'].shape[1])} input channels); "
-                         "vinadv plans on 2-D grids")
+        raise InputError(
+            f"{path}: a GPPN for 3-D mazes ({int(state['hid.weight'].shape[1])} input channels); "
+            "vinadv plans on 2-D grids"
+        )
     n_actions = int(state["policy.weight"].shape[0])
     if n_actions != 8:
-        raise InputError(f"{path}: a GPPN with {n_actions} actions (GPPN's 'news' mechanism?); vinadv plans with "
-                         "8 moves")
+        raise InputError(
+            f"{path}: a GPPN with {n_actions} actions (GPPN's 'news' mechanism?); vinadv plans with 8 moves"
+        )
     config = GPPNConfig(k=int(k), l_h=int(state["hid.weight"].shape[0]), f=int(state["conv.weight"].shape[-1]))
     config.validate()
     state = {key: state[key].to(torch.float32) for key in GPPN_KEYS}
@@ -155,8 +173,9 @@ def gppn_from_checkpoint(path: str | os.PathLike, k: int, which: str | None = No
     try:
         model.load_state_dict(state)
     except RuntimeError as exc:
-        raise InputError(f"{path}: weights do not fit a GPPN of {config.to_dict()} "
-                         f"({str(exc).splitlines()[0]})") from None
+        raise InputError(
+            f"{path}: weights do not fit a GPPN of {config.to_dict()} ({str(exc).splitlines()[0]})"
+        ) from None
     model.eval()
     model.source = {"checkpoint": str(path), "entry": meta["entry"]}
     return model

@@ -116,8 +116,9 @@ def _load_mat(path: str) -> _Arrays:
 # ---------------------------------------------------------------------------------------------------------- import
 
 
-def read_maps(path: str | os.PathLike, format: str, split: str | None = None, starts: int | None = None,
-              seed: int = 0) -> tuple[MapSet, dict]:
+def read_maps(
+    path: str | os.PathLike, format: str, split: str | None = None, starts: int | None = None, seed: int = 0
+) -> tuple[MapSet, dict]:
     """Read maps in another codebase's layout: `(MapSet, info)`; `info` says what was found and done.
 
     Args:
@@ -147,16 +148,16 @@ def read_maps(path: str | os.PathLike, format: str, split: str | None = None, st
     return maps, {"format": format, "file": path, **info}
 
 
-def import_maps(path: str | os.PathLike, format: str, split: str | None = None, starts: int | None = None,
-                seed: int = 0) -> MapSet:
+def import_maps(
+    path: str | os.PathLike, format: str, split: str | None = None, starts: int | None = None, seed: int = 0
+) -> MapSet:
     """`read_maps` without the info dict."""
     return read_maps(path, format, split, starts, seed)[0]
 
 
 def _no_starts_option(f: _Arrays, starts: int | None) -> None:
     if starts is not None:
-        raise InputError(f"{f.path}: has its own trajectories, whose first cells are the starts; "
-                         f"starts cannot be set")
+        raise InputError(f"{f.path}: has its own trajectories, whose first cells are the starts; starts cannot be set")
 
 
 def _new_rows(rows: np.ndarray) -> np.ndarray:
@@ -169,8 +170,16 @@ def _new_rows(rows: np.ndarray) -> np.ndarray:
     return new
 
 
-def _decode_images(f: _Arrays, image_name: str, image: np.ndarray, value_name: str, value: np.ndarray,
-                   one_is_free: bool, goal_value: float, background: tuple[float, ...]):
+def _decode_images(
+    f: _Arrays,
+    image_name: str,
+    image: np.ndarray,
+    value_name: str,
+    value: np.ndarray,
+    one_is_free: bool,
+    goal_value: float,
+    background: tuple[float, ...],
+):
     """Obstacles `(k, s, s)` bool and goals `(k, 2)` from map images `(k, s, s)` and goal images `(k, s, s)`."""
     if image.size and not np.isin(image, (0, 1)).all():
         raise f.fail(image_name, "has values other than 0 and 1")
@@ -210,8 +219,15 @@ def _regroup(states: np.ndarray, labels: np.ndarray, new_map: np.ndarray):
     return first, cells, offsets
 
 
-def _from_trajectories(f: _Arrays, cells_name: str, obstacles: np.ndarray, goals: np.ndarray,
-                       traj_map: np.ndarray, cells: np.ndarray, offsets: np.ndarray) -> tuple[MapSet, dict]:
+def _from_trajectories(
+    f: _Arrays,
+    cells_name: str,
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    traj_map: np.ndarray,
+    cells: np.ndarray,
+    offsets: np.ndarray,
+) -> tuple[MapSet, dict]:
     """A MapSet whose starts are the first cells of the given trajectories (`traj_map` non-decreasing)."""
     n, size = obstacles.shape[0], obstacles.shape[1]
     t = len(offsets) - 1
@@ -246,13 +262,26 @@ def _from_trajectories(f: _Arrays, cells_name: str, obstacles: np.ndarray, goals
     slot = traj_map * s + rank
     source[slot[optimal]] = n * s + np.flatnonzero(optimal)
     expert = PackedPaths.concat([own, theirs]).take(source)
-    maps = MapSet(obstacles=obstacles, goals=goals, starts=starts, expert_costs=costs, expert=expert,
-                  corner_cutting=True, seed=-1,
-                  start_counts=counts.astype(np.int64) if n and counts.min() < s else None)
-    info = {"maps": n, "size": size, "trajectories": t, "starts_per_map": s,
-            "maps_padded": int((counts < s).sum()), "file_paths_optimal": int(optimal.sum()),
-            "expert_paths": "the file's own where optimal under vinadv's model (diagonal cost sqrt 2), "
-                            "vinadv's Dijkstra for the others"}
+    maps = MapSet(
+        obstacles=obstacles,
+        goals=goals,
+        starts=starts,
+        expert_costs=costs,
+        expert=expert,
+        corner_cutting=True,
+        seed=-1,
+        start_counts=counts.astype(np.int64) if n and counts.min() < s else None,
+    )
+    info = {
+        "maps": n,
+        "size": size,
+        "trajectories": t,
+        "starts_per_map": s,
+        "maps_padded": int((counts < s).sum()),
+        "file_paths_optimal": int(optimal.sum()),
+        "expert_paths": "the file's own where optimal under vinadv's model (diagonal cost sqrt 2), "
+        "vinadv's Dijkstra for the others",
+    }
     return maps, info
 
 
@@ -272,12 +301,25 @@ def _with_drawn_starts(obstacles: np.ndarray, goals: np.ndarray, k: int, seed: i
     starts[pad] = np.repeat(goals[:, None, :], k, axis=1)[pad]
     obstacles, goals, starts, dist, counts = obstacles[keep], goals[keep], starts[keep], dist[keep], counts[keep]
     costs, expert = expert_paths_from(dist, obstacles, goals, starts)
-    maps = MapSet(obstacles=obstacles, goals=goals, starts=starts, expert_costs=costs, expert=expert,
-                  corner_cutting=True, seed=int(seed),
-                  start_counts=counts.astype(np.int64) if len(counts) and counts.min() < k else None)
-    info = {"maps": int(keep.sum()), "size": size, "starts_per_map": k, "starts_seed": int(seed),
-            "maps_padded": int((counts < k).sum()), "maps_left_out_no_start": int((~keep).sum()),
-            "expert_paths": "vinadv's own (Dijkstra, diagonal cost sqrt 2), from starts drawn with the seed"}
+    maps = MapSet(
+        obstacles=obstacles,
+        goals=goals,
+        starts=starts,
+        expert_costs=costs,
+        expert=expert,
+        corner_cutting=True,
+        seed=int(seed),
+        start_counts=counts.astype(np.int64) if len(counts) and counts.min() < k else None,
+    )
+    info = {
+        "maps": int(keep.sum()),
+        "size": size,
+        "starts_per_map": k,
+        "starts_seed": int(seed),
+        "maps_padded": int((counts < k).sum()),
+        "maps_left_out_no_start": int((~keep).sum()),
+        "expert_paths": "vinadv's own (Dijkstra, diagonal cost sqrt 2), from starts drawn with the seed",
+    }
     return maps, info
 
 
@@ -301,8 +343,16 @@ def _read_kentsommer(f: _Arrays, split: str, starts: int | None) -> tuple[MapSet
     for names, x, states, labels in parts:
         new_map = _new_rows(x)
         images = x[new_map]
-        obstacles, goals = _decode_images(f, names[0], images[:, 0], names[0], images[:, 1], one_is_free=False,
-                                          goal_value=GOAL_VALUE, background=(0, -1))
+        obstacles, goals = _decode_images(
+            f,
+            names[0],
+            images[:, 0],
+            names[0],
+            images[:, 1],
+            one_is_free=False,
+            goal_value=GOAL_VALUE,
+            background=(0, -1),
+        )
         first, cells, offsets = _regroup(states, labels, new_map)
         obstacles_l.append(obstacles)
         goals_l.append(goals)
@@ -312,9 +362,15 @@ def _read_kentsommer(f: _Arrays, split: str, starts: int | None) -> tuple[MapSet
         n_before += len(obstacles)
     offsets = np.r_[0, np.cumsum(np.concatenate(lengths_l))].astype(np.int64)
     cells_name = "/".join(f"arr_{first + i}" for first in KENTSOMMER_SPLITS[split] for i in (1, 2, 3))
-    maps, info = _from_trajectories(f, f"{cells_name} (S1, S2, labels)", np.concatenate(obstacles_l),
-                                    np.concatenate(goals_l), np.concatenate(map_l).astype(np.int64),
-                                    np.concatenate(cells_l), offsets)
+    maps, info = _from_trajectories(
+        f,
+        f"{cells_name} (S1, S2, labels)",
+        np.concatenate(obstacles_l),
+        np.concatenate(goals_l),
+        np.concatenate(map_l).astype(np.int64),
+        np.concatenate(cells_l),
+        offsets,
+    )
     return maps, {"split": split, "samples": int(sum(len(p[3]) for p in parts)), **info}
 
 
@@ -350,13 +406,20 @@ def _read_avivt(f: _Arrays, split: str | None, starts: int | None, seed: int) ->
         # MATLAB unrolls column-major: a row of all_im_data is the map's columns one after another.
         images = im[new_map].reshape(-1, s, s, order="F")
         values = value[new_map].reshape(-1, s, s, order="F")
-        obstacles, goals = _decode_images(f, "all_im_data", images, "all_value_data", values, one_is_free=True,
-                                          goal_value=GOAL_VALUE, background=(-1, 0))
+        obstacles, goals = _decode_images(
+            f,
+            "all_im_data",
+            images,
+            "all_value_data",
+            values,
+            one_is_free=True,
+            goal_value=GOAL_VALUE,
+            background=(-1, 0),
+        )
         lengths = np.array([len(p) for p in cells_list], dtype=np.int64)
         offsets = np.r_[0, np.cumsum(lengths)].astype(np.int64)
         cells = f.integers("all_states_xy", np.concatenate(cells_list), 1, s) - 1 if n else np.zeros((0, 2), int)
-        maps, info = _from_trajectories(f, "all_states_xy", obstacles, goals, np.cumsum(new_map) - 1, cells,
-                                        offsets)
+        maps, info = _from_trajectories(f, "all_states_xy", obstacles, goals, np.cumsum(new_map) - 1, cells, offsets)
         return maps, {"layout": "test", **info}
     if f.has("im_data"):
         _no_starts_option(f, starts)
@@ -367,21 +430,36 @@ def _read_avivt(f: _Arrays, split: str | None, starts: int | None, seed: int) ->
         states = f.integers("state_xy_data", f.get("state_xy_data", 2, (m, 2)), 0, s - 1)
         labels = f.integers("label_data", f.get("label_data", 2, (m, 1))[:, 0], 0, 7)
         new_map = _new_rows(np.concatenate([im, value], axis=1))
-        obstacles, goals = _decode_images(f, "im_data", im[new_map].reshape(-1, s, s), "value_data",
-                                          value[new_map].reshape(-1, s, s), one_is_free=True,
-                                          goal_value=GOAL_VALUE, background=(0, -1))
+        obstacles, goals = _decode_images(
+            f,
+            "im_data",
+            im[new_map].reshape(-1, s, s),
+            "value_data",
+            value[new_map].reshape(-1, s, s),
+            one_is_free=True,
+            goal_value=GOAL_VALUE,
+            background=(0, -1),
+        )
         first, cells, offsets = _regroup(states, labels, new_map)
-        maps, info = _from_trajectories(f, "state_xy_data with label_data", obstacles, goals,
-                                        np.cumsum(new_map)[first] - 1, cells, offsets)
+        maps, info = _from_trajectories(
+            f, "state_xy_data with label_data", obstacles, goals, np.cumsum(new_map)[first] - 1, cells, offsets
+        )
         return maps, {"layout": "train", "samples": m, **info}
     # Only the batched arrays: their states are shuffled in batches of 10, so trajectories cannot be recovered.
     im = f.get("batch_im_data", 2)
     s = _side(f, "batch_im_data", im.shape[1])
     value = f.get("batch_value_data", 2, (im.shape[0], s * s))
     new_map = _new_rows(np.concatenate([im, value], axis=1))
-    obstacles, goals = _decode_images(f, "batch_im_data", im[new_map].reshape(-1, s, s), "batch_value_data",
-                                      value[new_map].reshape(-1, s, s), one_is_free=True, goal_value=GOAL_VALUE,
-                                      background=(0, -1))
+    obstacles, goals = _decode_images(
+        f,
+        "batch_im_data",
+        im[new_map].reshape(-1, s, s),
+        "batch_value_data",
+        value[new_map].reshape(-1, s, s),
+        one_is_free=True,
+        goal_value=GOAL_VALUE,
+        background=(0, -1),
+    )
     maps, info = _with_drawn_starts(obstacles, goals, 7 if starts is None else starts, seed)
     return maps, {"layout": "train (batched arrays only: shuffled states, starts drawn)", **info}
 
@@ -396,18 +474,22 @@ def _read_gppn(f: _Arrays, split: str, starts: int | None, seed: int) -> tuple[M
             raise f.fail(names[0], f"has shape {mazes.shape}, expected (n, M, M) mazes")
         goal_maps = f.get(names[1], 4, (n, None, m, m))
         if goal_maps.shape[1] != 1:
-            raise f.fail(names[1], f"has {goal_maps.shape[1]} orientations; vinadv plans without orientation "
-                                   f"(O = 1 only)")
+            raise f.fail(
+                names[1], f"has {goal_maps.shape[1]} orientations; vinadv plans without orientation (O = 1 only)"
+            )
         policies = f.get(names[2], 5, (n, None, 1, m, m))
         if policies.shape[1] == 4:
-            raise f.fail(names[2], "has 4 actions (GPPN's 'news' mechanism); vinadv plans with 8 moves only "
-                                   "(--moves 4 is not supported)")
+            raise f.fail(
+                names[2],
+                "has 4 actions (GPPN's 'news' mechanism); vinadv plans with 8 moves only (--moves 4 is not supported)",
+            )
         if policies.shape[1] != 8:
             raise f.fail(names[2], f"has {policies.shape[1]} actions, expected 8 (GPPN's 'moore' mechanism)")
         if not np.isin(goal_maps, (0, 1)).all():
             raise f.fail(names[1], "has values other than 0 and 1 (GPPN: 1.0 at the goal)")
-        obstacles, goals = _decode_images(f, names[0], mazes, names[1], goal_maps[:, 0], one_is_free=True,
-                                          goal_value=1, background=(0,))
+        obstacles, goals = _decode_images(
+            f, names[0], mazes, names[1], goal_maps[:, 0], one_is_free=True, goal_value=1, background=(0,)
+        )
         if not np.isin(policies, (0, 1)).all():
             raise f.fail(names[2], "has values other than 0 and 1 (one-hot optimal actions)")
         # GPPN's policy, in vinadv's action order: every action it takes at a cell that can reach the goal must be
@@ -415,14 +497,20 @@ def _read_gppn(f: _Arrays, split: str, starts: int | None, seed: int) -> tuple[M
         ours = np.moveaxis(policies[:, :, 0], 1, -1)[..., np.argsort(GPPN_TO_VINADV)].astype(bool)
         reachable = np.isfinite(shortest_distances(obstacles, goals)[0])
         if np.any(ours & ~valid_moves(obstacles) & reachable[..., None]):
-            raise f.fail(names[2], "takes an action into a wall or off the grid (is the action order or the "
-                                   "maze polarity different?)")
+            raise f.fail(
+                names[2],
+                "takes an action into a wall or off the grid (is the action order or the maze polarity different?)",
+            )
         obstacles_l.append(obstacles)
         goals_l.append(goals)
     obstacles, goals = np.concatenate(obstacles_l), np.concatenate(goals_l)
     maps, info = _with_drawn_starts(obstacles, goals, 7 if starts is None else starts, seed)
-    return maps, {"split": split, "movement": "GPPN's diagonal cost 1 replaced by vinadv's sqrt 2 for the expert "
-                                            "paths; GPPN's policies are checked, not used", **info}
+    return maps, {
+        "split": split,
+        "movement": "GPPN's diagonal cost 1 replaced by vinadv's sqrt 2 for the expert "
+        "paths; GPPN's policies are checked, not used",
+        **info,
+    }
 
 
 # ---------------------------------------------------------------------------------------------------------- export
@@ -461,8 +549,15 @@ def unit_cost_distances(obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
     dist = np.empty(obstacles.shape)
     moves = np.empty(obstacles.shape, dtype=np.int32)
     if len(obstacles):
-        _dijkstra_batch(obstacles, np.ascontiguousarray(goals, np.int64), True, ACTION_DELTAS,
-                        np.ones(len(ACTION_DELTAS)), dist, moves)
+        _dijkstra_batch(
+            obstacles,
+            np.ascontiguousarray(goals, np.int64),
+            True,
+            ACTION_DELTAS,
+            np.ones(len(ACTION_DELTAS)),
+            dist,
+            moves,
+        )
     return dist
 
 
@@ -504,12 +599,18 @@ def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str |
     path.parent.mkdir(parents=True, exist_ok=True)
     s = maps.size
     if format == "gppn":
-        arrays = [np.zeros((0, s, s), np.float32), np.zeros((0, 1, s, s), np.float32),
-                  np.zeros((0, 8, 1, s, s), np.float32)] * 3
+        arrays = [
+            np.zeros((0, s, s), np.float32),
+            np.zeros((0, 1, s, s), np.float32),
+            np.zeros((0, 8, 1, s, s), np.float32),
+        ] * 3
         at = {"train": 0, "valid": 3, "test": 6}[split]
         idx = np.arange(len(maps))
-        arrays[at : at + 3] = [(~maps.obstacles).astype(np.float32), _goal_images(maps, idx, 0, 1, np.float32)[:, None],
-                               _unit_cost_policies(maps)]
+        arrays[at : at + 3] = [
+            (~maps.obstacles).astype(np.float32),
+            _goal_images(maps, idx, 0, 1, np.float32)[:, None],
+            _unit_cost_policies(maps),
+        ]
         with open(path, "wb") as fh:
             np.savez_compressed(fh, *arrays)
         return {"format": format, "out": str(path), "split": split, "maps": len(maps)}
@@ -536,9 +637,17 @@ def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str |
             cells[row, 0] = (maps.expert[k] + 1).astype(small)
         data = {"all_im_data": free, "all_value_data": value, "all_states_xy": cells}
     else:
-        data = {"im_data": (~maps.obstacles[map_of_step]).reshape(len(states), -1).astype(np.uint8),
-                "value_data": _goal_images(maps, map_of_step, 0, GOAL_VALUE, np.uint8).reshape(len(states), -1),
-                "state_xy_data": states.astype(small), "label_data": labels[:, None].astype(np.uint8)}
+        data = {
+            "im_data": (~maps.obstacles[map_of_step]).reshape(len(states), -1).astype(np.uint8),
+            "value_data": _goal_images(maps, map_of_step, 0, GOAL_VALUE, np.uint8).reshape(len(states), -1),
+            "state_xy_data": states.astype(small),
+            "label_data": labels[:, None].astype(np.uint8),
+        }
     scipy.io.savemat(str(path), data, do_compression=True)
-    return {"format": format, "out": str(path), "split": split, "maps": len(maps),
-            "rows" if split == "test" else "samples": len(traj_map) if split == "test" else len(states)}
+    return {
+        "format": format,
+        "out": str(path),
+        "split": split,
+        "maps": len(maps),
+        "rows" if split == "test" else "samples": len(traj_map) if split == "test" else len(states),
+    }

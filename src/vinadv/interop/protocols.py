@@ -35,8 +35,9 @@ PROTOCOLS = ("vinadv", "kentsommer", "gppn")
 PORT_TEST_PRIOR = -1.0
 
 
-def argmax_actions(model: VIN, obstacles: np.ndarray, goals: np.ndarray, prior: float = 0.0,
-                   batch_size: int = 128) -> np.ndarray:
+def argmax_actions(
+    model: VIN, obstacles: np.ndarray, goals: np.ndarray, prior: float = 0.0, batch_size: int = 128
+) -> np.ndarray:
     """The argmax action of every cell, `(n, N, N)` int64; the goal channel is 10 at the goal, `prior` elsewhere."""
     out = []
     model.eval()
@@ -81,10 +82,16 @@ def kentsommer_protocol(model: VIN, maps: MapSet, prior: float = PORT_TEST_PRIOR
         moving = (step < limit) & (pos != goal)
         pos = np.where(moving, succ[traj_map, pos], pos)
     reached = pos == goal
-    return {"protocol": "kentsommer", "prior": float(prior), "maps": len(maps), "size": size,
-            "rollouts": len(real), "success_rate": float(reached.mean()) if len(real) else float("nan"),
-            "action_accuracy_single_label": float(hit.mean()) if len(hit) else float("nan"),
-            "trajectory_states": int(len(hit))}
+    return {
+        "protocol": "kentsommer",
+        "prior": float(prior),
+        "maps": len(maps),
+        "size": size,
+        "rollouts": len(real),
+        "success_rate": float(reached.mean()) if len(real) else float("nan"),
+        "action_accuracy_single_label": float(hit.mean()) if len(hit) else float("nan"),
+        "trajectory_states": int(len(hit)),
+    }
 
 
 def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_size: int = 256) -> np.ndarray:
@@ -92,8 +99,10 @@ def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_siz
     from vinadv.planners.interface import as_planner
 
     planner = as_planner(planner, obstacles.shape[1])
-    out = [np.argmax(planner.logits(obstacles[i : i + batch_size], goals[i : i + batch_size]), axis=1)
-           for i in range(0, len(obstacles), batch_size)]
+    out = [
+        np.argmax(planner.logits(obstacles[i : i + batch_size], goals[i : i + batch_size]), axis=1)
+        for i in range(0, len(obstacles), batch_size)
+    ]
     return np.concatenate(out) if out else np.zeros(obstacles.shape, np.int64)
 
 
@@ -115,13 +124,19 @@ def gppn_protocol(planner, maps: MapSet) -> dict:
     opt = unit_cost_distances(maps.obstacles, maps.goals).reshape(n, size * size)
     optimal = free & (~np.isfinite(opt) | (reached & (length == opt)))
     open_cells = free.sum(axis=1)
-    return {"protocol": "gppn", "maps": n, "size": size, "cells": int(open_cells.sum()),
-            "percent_optimal": float((optimal.sum(axis=1) / open_cells).mean()) if n else float("nan"),
-            "percent_success": float(((free & reached).sum(axis=1) / open_cells).mean()) if n else float("nan")}
+    return {
+        "protocol": "gppn",
+        "maps": n,
+        "size": size,
+        "cells": int(open_cells.sum()),
+        "percent_optimal": float((optimal.sum(axis=1) / open_cells).mean()) if n else float("nan"),
+        "percent_success": float(((free & reached).sum(axis=1) / open_cells).mean()) if n else float("nan"),
+    }
 
 
-def evaluate_protocol(model: VIN, maps: MapSet, protocol: str, prior: float | None = None,
-                      progress: bool = False) -> dict:
+def evaluate_protocol(
+    model: VIN, maps: MapSet, protocol: str, prior: float | None = None, progress: bool = False
+) -> dict:
     """`model`'s figures on `maps` measured by `protocol` ('vinadv', 'kentsommer' or 'gppn')."""
     if protocol not in PROTOCOLS:
         raise InputError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")

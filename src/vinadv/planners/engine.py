@@ -54,9 +54,22 @@ def action_maps(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndar
     goals = np.ascontiguousarray(goals, dtype=np.int64)
     p = FoldedVIN.from_model(model)
     actions = np.empty(obstacles.shape, dtype=np.int8)
-    over_maps(len(obstacles), lambda lo, hi: _action_maps_kernel(
-        obstacles[lo:hi], goals[lo:hi], p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k, REL_MARGIN,
-        actions[lo:hi]))
+    over_maps(
+        len(obstacles),
+        lambda lo, hi: _action_maps_kernel(
+            obstacles[lo:hi],
+            goals[lo:hi],
+            p.reward_w,
+            p.reward_b,
+            p.goal_value,
+            p.q_w,
+            p.w,
+            p.fc,
+            p.k,
+            REL_MARGIN,
+            actions[lo:hi],
+        ),
+    )
     return actions
 
 
@@ -150,9 +163,18 @@ def _conv3x3(x, w, bias, out, width, p0, length):
     u0, u1, u2 = x[p0 - width - 1 :], x[p0 - 1 :], x[p0 + width - 1 :]
     o = out[p0 : p0 + length]
     for t in range(length):
-        o[t] = (bias + w[0, 0] * u0[t] + w[0, 1] * u0[t + 1] + w[0, 2] * u0[t + 2]
-                + w[1, 0] * u1[t] + w[1, 1] * u1[t + 1] + w[1, 2] * u1[t + 2]
-                + w[2, 0] * u2[t] + w[2, 1] * u2[t + 1] + w[2, 2] * u2[t + 2])
+        o[t] = (
+            bias
+            + w[0, 0] * u0[t]
+            + w[0, 1] * u0[t + 1]
+            + w[0, 2] * u0[t + 2]
+            + w[1, 0] * u1[t]
+            + w[1, 1] * u1[t + 1]
+            + w[1, 2] * u1[t + 2]
+            + w[2, 0] * u2[t]
+            + w[2, 1] * u2[t + 1]
+            + w[2, 2] * u2[t + 2]
+        )
 
 
 @numba.njit(cache=True, nogil=True)
@@ -199,22 +221,32 @@ def _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n):
             out = best if c % 2 == 0 else best2
             dst = out[p0 : p0 + length]
             rq = reward_q[c, p0 : p0 + length]
-            w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
-            w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
-            w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
+            w00 = w[c, 0, 0]
+            w01 = w[c, 0, 1]
+            w02 = w[c, 0, 2]  # noqa: E702
+            w10 = w[c, 1, 0]
+            w11 = w[c, 1, 1]
+            w12 = w[c, 1, 2]  # noqa: E702
+            w20 = w[c, 2, 0]
+            w21 = w[c, 2, 1]
+            w22 = w[c, 2, 2]  # noqa: E702
             if not last:
                 for t in range(length):
-                    a = ((rq[t] + w00 * x0[t] + w01 * y0[t] + w02 * z0[t])
-                         + (w10 * x1[t] + w11 * y1[t] + w12 * z1[t])
-                         + (w20 * x2[t] + w21 * y2[t] + w22 * z2[t]))
+                    a = (
+                        (rq[t] + w00 * x0[t] + w01 * y0[t] + w02 * z0[t])
+                        + (w10 * x1[t] + w11 * y1[t] + w12 * z1[t])
+                        + (w20 * x2[t] + w21 * y2[t] + w22 * z2[t])
+                    )
                     b = src[t]
                     dst[t] = a if a > b else b
             else:  # the same sums, kept: the final q (a branch inside the loop would stop it vectorising)
                 qc = q[c, p0 : p0 + length]
                 for t in range(length):
-                    qc[t] = ((rq[t] + w00 * x0[t] + w01 * y0[t] + w02 * z0[t])
-                             + (w10 * x1[t] + w11 * y1[t] + w12 * z1[t])
-                             + (w20 * x2[t] + w21 * y2[t] + w22 * z2[t]))
+                    qc[t] = (
+                        (rq[t] + w00 * x0[t] + w01 * y0[t] + w02 * z0[t])
+                        + (w10 * x1[t] + w11 * y1[t] + w12 * z1[t])
+                        + (w20 * x2[t] + w21 * y2[t] + w22 * z2[t])
+                    )
             src = dst
         if not last:
             _publish(out, v, vm, vp, n)
@@ -266,8 +298,26 @@ def _decide(q, fc, n, rel_margin, actions):
 
 
 @numba.njit(cache=True, nogil=True)
-def _plan_kernel(lo, hi, obstacles, goals, starts, reward_w, reward_b, goal_value, q_w, w, fc, k, rel_margin,
-                 corner_cutting, deltas, cells, lengths, terms):
+def _plan_kernel(
+    lo,
+    hi,
+    obstacles,
+    goals,
+    starts,
+    reward_w,
+    reward_b,
+    goal_value,
+    q_w,
+    w,
+    fc,
+    k,
+    rel_margin,
+    corner_cutting,
+    deltas,
+    cells,
+    lengths,
+    terms,
+):
     """Maps lo..hi-1: value map, then the rollouts of the map's S starts (rollout b * S + s), deciding the action
     of a cell only when a rollout stands on it. cells: `(B * S, N * N, 2)`; writes lengths and terms `(B * S,)`."""
     n, lq, n_starts = obstacles.shape[1], q_w.shape[0], starts.shape[1]
@@ -280,8 +330,24 @@ def _plan_kernel(lo, hi, obstacles, goals, starts, reward_w, reward_b, goal_valu
         _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n)
         margin = _margin(q, fc, n, rel_margin)
         for s in range(n_starts):
-            _rollout(obstacles, goals, starts, b, s, q, fc, margin, logits, no_actions, corner_cutting, deltas, stamp,
-                     cells, lengths, terms)
+            _rollout(
+                obstacles,
+                goals,
+                starts,
+                b,
+                s,
+                q,
+                fc,
+                margin,
+                logits,
+                no_actions,
+                corner_cutting,
+                deltas,
+                stamp,
+                cells,
+                lengths,
+                terms,
+            )
 
 
 @numba.njit(cache=True, nogil=True)
@@ -293,13 +359,30 @@ def _redo_kernel(rollouts, map_of, actions, obstacles, goals, starts, corner_cut
     q, fc, logits = np.empty((0, 0), dtype=np.float32), np.empty((0, 0)), np.empty(0)  # unused: actions are given
     for i in range(len(rollouts)):
         b, s = rollouts[i] // n_starts, rollouts[i] % n_starts
-        _rollout(obstacles, goals, starts, b, s, q, fc, 0.0, logits, actions[map_of[i]], corner_cutting, deltas,
-                 stamp, cells, lengths, terms)
+        _rollout(
+            obstacles,
+            goals,
+            starts,
+            b,
+            s,
+            q,
+            fc,
+            0.0,
+            logits,
+            actions[map_of[i]],
+            corner_cutting,
+            deltas,
+            stamp,
+            cells,
+            lengths,
+            terms,
+        )
 
 
 @numba.njit(cache=True, nogil=True)
-def _rollout(obstacles, goals, starts, b, s, q, fc, margin, logits, actions, corner_cutting, deltas, stamp, cells,
-             lengths, terms):
+def _rollout(
+    obstacles, goals, starts, b, s, q, fc, margin, logits, actions, corner_cutting, deltas, stamp, cells, lengths, terms
+):
     """Rollout t = b * S + s (DESIGN.md's rule, as `reference.rollout`) into cells[t], lengths[t], terms[t]. The
     action of a cell: `actions[r, c]` when `actions` is not empty, else `_action_at` on the map's q (UNDECIDED on
     a near tie ends the rollout, to be re-done).
@@ -394,8 +477,14 @@ def plan_maps(
 
         chunks = tqdm(chunks, unit="chunk", desc="planning")
     parts = [
-        _plan_chunk(obstacles[i : i + chunk_size], goals[i : i + chunk_size], starts[i : i + chunk_size], model,
-                    corner_cutting, stats if stats is not None else {})
+        _plan_chunk(
+            obstacles[i : i + chunk_size],
+            goals[i : i + chunk_size],
+            starts[i : i + chunk_size],
+            model,
+            corner_cutting,
+            stats if stats is not None else {},
+        )
         for i in chunks
     ]
     return PlanResult.concat(parts)
@@ -409,15 +498,46 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
     cells = np.empty((b * s, n * n, 2), dtype=np.int16)
     lengths = np.empty(b * s, dtype=np.int64)
     terms = np.empty(b * s, dtype=np.int8)
-    over_maps(b, lambda lo, hi: _plan_kernel(
-        lo, hi, obstacles, goals, starts, p.reward_w, p.reward_b, p.goal_value, p.q_w, p.w, p.fc, p.k, REL_MARGIN,
-        bool(corner_cutting), ACTION_DELTAS, cells, lengths, terms))
+    over_maps(
+        b,
+        lambda lo, hi: _plan_kernel(
+            lo,
+            hi,
+            obstacles,
+            goals,
+            starts,
+            p.reward_w,
+            p.reward_b,
+            p.goal_value,
+            p.q_w,
+            p.w,
+            p.fc,
+            p.k,
+            REL_MARGIN,
+            bool(corner_cutting),
+            ACTION_DELTAS,
+            cells,
+            lengths,
+            terms,
+        ),
+    )
     undecided = np.flatnonzero(terms == UNDECIDED)
     if len(undecided):  # rare: a rollout that stepped on a near tie is re-done with the reference's own decisions
         maps, map_of = np.unique(undecided // s, return_inverse=True)
         actions = exact_actions(model, obstacles[maps], goals[maps])
-        _redo_kernel(undecided, map_of, actions, obstacles, goals, starts, bool(corner_cutting), ACTION_DELTAS,
-                     cells, lengths, terms)
+        _redo_kernel(
+            undecided,
+            map_of,
+            actions,
+            obstacles,
+            goals,
+            starts,
+            bool(corner_cutting),
+            ACTION_DELTAS,
+            cells,
+            lengths,
+            terms,
+        )
         stats["near_tie_maps"] = stats.get("near_tie_maps", 0) + len(maps)
     stats["near_tie_rollouts"] = stats.get("near_tie_rollouts", 0) + len(undecided)
     return PlanResult.from_buffers(cells, lengths, terms)

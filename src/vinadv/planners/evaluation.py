@@ -24,8 +24,9 @@ from vinadv.vocabulary import TERMINATIONS
 MultiStartPlanner = Callable[[np.ndarray, np.ndarray, np.ndarray, VIN, bool], PlanResult]
 
 
-def action_accuracy_counts(model: VIN, obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True,
-                           batch_size: int = 256) -> tuple[int, int]:
+def action_accuracy_counts(
+    model: VIN, obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True, batch_size: int = 256
+) -> tuple[int, int]:
     """`(correct, cells)`: supervised cells (free, reachable, not the goal) whose argmax action is optimal."""
     correct, cells = 0, 0
     model.eval()
@@ -39,8 +40,9 @@ def action_accuracy_counts(model: VIN, obstacles: np.ndarray, goals: np.ndarray,
     return correct, cells
 
 
-def accuracy_counts_from_logits(logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray,
-                                corner_cutting: bool = True) -> tuple[int, int]:
+def accuracy_counts_from_logits(
+    logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+) -> tuple[int, int]:
     """`(correct, cells)` for logits `(B, N, N, A)` of the maps `obstacles (B, N, N)`, `goals (B, 2)`."""
     dist, _ = shortest_distances(obstacles, goals, corner_cutting)
     optimal = optimal_actions(dist, obstacles, corner_cutting)
@@ -84,16 +86,22 @@ def rollout_metrics(result: PlanResult, expert_costs: np.ndarray, mask: np.ndarr
     }
 
 
-def evaluate_vin(model: VIN, maps: MapSet, planner: MultiStartPlanner | None = None, batch_size: int = 256,
-                 progress: bool = False) -> dict:
+def evaluate_vin(
+    model: VIN, maps: MapSet, planner: MultiStartPlanner | None = None, batch_size: int = 256, progress: bool = False
+) -> dict:
     """All figures for `model` on `maps` (rollouts from every start). `planner` defaults to the engine."""
     planner = planner or _engine_planner
 
     def counts(obs, goals):
         return action_accuracy_counts(model, obs, goals, maps.corner_cutting, batch_size)
 
-    return _evaluate(maps, counts, lambda obs, goals, starts: planner(obs, goals, starts, model, maps.corner_cutting),
-                     batch_size, progress)
+    return _evaluate(
+        maps,
+        counts,
+        lambda obs, goals, starts: planner(obs, goals, starts, model, maps.corner_cutting),
+        batch_size,
+        progress,
+    )
 
 
 def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> dict:
@@ -104,9 +112,13 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
         logits = planner.logits(obs, goals).transpose(0, 2, 3, 1)
         return accuracy_counts_from_logits(logits, obs, goals, maps.corner_cutting)
 
-    return _evaluate(maps, counts, lambda obs, goals, starts: planner.plan_maps(obs, goals, starts,
-                                                                                maps.corner_cutting),
-                     batch_size, progress)
+    return _evaluate(
+        maps,
+        counts,
+        lambda obs, goals, starts: planner.plan_maps(obs, goals, starts, maps.corner_cutting),
+        batch_size,
+        progress,
+    )
 
 
 def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> dict:

@@ -62,23 +62,33 @@ def _forward(lo, hi, q_r, w, k, q_out, v_saved, arg_saved):
             arg[:] = 0.0
             for c in range(lq):
                 r = rq[c, p0 : p0 + length]
-                w00 = w[c, 0, 0]; w01 = w[c, 0, 1]; w02 = w[c, 0, 2]  # noqa: E702
-                w10 = w[c, 1, 0]; w11 = w[c, 1, 1]; w12 = w[c, 1, 2]  # noqa: E702
-                w20 = w[c, 2, 0]; w21 = w[c, 2, 1]; w22 = w[c, 2, 2]  # noqa: E702
+                w00 = w[c, 0, 0]
+                w01 = w[c, 0, 1]
+                w02 = w[c, 0, 2]  # noqa: E702
+                w10 = w[c, 1, 0]
+                w11 = w[c, 1, 1]
+                w12 = w[c, 1, 2]  # noqa: E702
+                w20 = w[c, 2, 0]
+                w21 = w[c, 2, 1]
+                w22 = w[c, 2, 2]  # noqa: E702
                 if t == k:
                     out = q_out[b, c]
                     for i in range(n):
                         for j in range(n):
                             x = i * width + j
-                            out[i, j] = ((r[x] + w00 * u0[x] + w01 * u0[x + 1] + w02 * u0[x + 2])
-                                         + (w10 * u1[x] + w11 * u1[x + 1] + w12 * u1[x + 2])
-                                         + (w20 * u2[x] + w21 * u2[x + 1] + w22 * u2[x + 2]))
+                            out[i, j] = (
+                                (r[x] + w00 * u0[x] + w01 * u0[x + 1] + w02 * u0[x + 2])
+                                + (w10 * u1[x] + w11 * u1[x + 1] + w12 * u1[x + 2])
+                                + (w20 * u2[x] + w21 * u2[x + 1] + w22 * u2[x + 2])
+                            )
                 else:
                     cf = q_r.dtype.type(c)
                     for x in range(length):
-                        a = ((r[x] + w00 * u0[x] + w01 * u0[x + 1] + w02 * u0[x + 2])
-                             + (w10 * u1[x] + w11 * u1[x + 1] + w12 * u1[x + 2])
-                             + (w20 * u2[x] + w21 * u2[x + 1] + w22 * u2[x + 2]))
+                        a = (
+                            (r[x] + w00 * u0[x] + w01 * u0[x + 1] + w02 * u0[x + 2])
+                            + (w10 * u1[x] + w11 * u1[x + 1] + w12 * u1[x + 2])
+                            + (w20 * u2[x] + w21 * u2[x + 1] + w22 * u2[x + 2])
+                        )
                         greater = a > best[x]
                         arg[x] += (cf - arg[x]) * greater
                         best[x] = np.maximum(best[x], a)

@@ -115,8 +115,10 @@ def save_gppn(model: GPPN, path: str | os.PathLike, record: dict | None = None) 
     os.replace(tmp, path)
 
 
-_AUTHORS_HINT = ("a checkpoint of the GPPN authors' code is converted by `vinadv gppn import-weights CKPT --k K --out "
-                 "gppn.pt` (their checkpoints do not store k)")
+_AUTHORS_HINT = (
+    "a checkpoint of the GPPN authors' code is converted by `vinadv gppn import-weights CKPT --k K --out "
+    "gppn.pt` (their checkpoints do not store k)"
+)
 
 
 def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
@@ -127,8 +129,10 @@ def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
     if path is None:
         path = default_gppn_path(size)
         if not path.exists():
-            raise InputError(f"no shipped GPPN weights for {size}x{size} maps ({path}); train some with "
-                             f"`vinadv gppn train` and pass --weights")
+            raise InputError(
+                f"no shipped GPPN weights for {size}x{size} maps ({path}); train some with "
+                f"`vinadv gppn train` and pass --weights"
+            )
     name = str(path)
     if not os.path.exists(name):
         raise InputError(f"{name}: no such weights file")
@@ -150,4 +154,3 @@ def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
     model.record = data.get("record") or {}
     model.weights_path = name
     return model
-

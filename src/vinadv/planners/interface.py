@@ -45,13 +45,16 @@ def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
     else:
         raise PlannerError(f"planner {name!r} returned {type(logits).__name__}; expected a (B, 8, N, N) float array")
     if logits.shape != (b, N_ACTIONS, n, n):
-        raise PlannerError(f"planner {name!r} returned logits of shape {tuple(logits.shape)}; expected "
-                           f"(B, 8, N, N) = ({b}, {N_ACTIONS}, {n}, {n})")
+        raise PlannerError(
+            f"planner {name!r} returned logits of shape {tuple(logits.shape)}; expected "
+            f"(B, 8, N, N) = ({b}, {N_ACTIONS}, {n}, {n})"
+        )
     if logits.dtype not in (np.float32, np.float64):
         logits = logits.astype(np.float32)
     if np.isnan(logits).any():
-        raise PlannerError(f"planner {name!r} returned NaN logits (on {int(np.isnan(logits).any(axis=(1, 2, 3)).sum())}"
-                           f" of {b} maps)")
+        raise PlannerError(
+            f"planner {name!r} returned NaN logits (on {int(np.isnan(logits).any(axis=(1, 2, 3)).sum())} of {b} maps)"
+        )
     return logits
 
 
@@ -118,8 +121,15 @@ class Planner(ABC):
         raw = self.policy_logits(obstacles, goals)
         return check_logits(self.name, raw, obstacles.shape[0], obstacles.shape[1])
 
-    def plan_maps(self, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True,
-                  chunk_size: int = DEFAULT_CHUNK, progress: bool = False) -> PlanResult:
+    def plan_maps(
+        self,
+        obstacles: np.ndarray,
+        goals: np.ndarray,
+        starts: np.ndarray,
+        corner_cutting: bool = True,
+        chunk_size: int = DEFAULT_CHUNK,
+        progress: bool = False,
+    ) -> PlanResult:
         """Paths from `starts (B, S, 2)`: path `b * S + s` from start `s` of map `b`, `chunk_size` maps at a time."""
         obstacles, goals, starts = _check_multi(obstacles, goals, starts)
         self._check_size(obstacles)
@@ -132,12 +142,16 @@ class Planner(ABC):
         parts = []
         for i in chunks:
             sl = slice(i, i + chunk_size)
-            parts.append(rollout_logits(self.logits(obstacles[sl], goals[sl]), obstacles[sl], goals[sl], starts[sl],
-                                        corner_cutting))
+            parts.append(
+                rollout_logits(
+                    self.logits(obstacles[sl], goals[sl]), obstacles[sl], goals[sl], starts[sl], corner_cutting
+                )
+            )
         return PlanResult.concat(parts)
 
-    def plan_batch(self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray,
-                   corner_cutting: bool = True) -> PlanResult:
+    def plan_batch(
+        self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+    ) -> PlanResult:
         """One path per map: `starts (B, 2)`; same paths as `plan_maps` with one start per map."""
         obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
         return self.plan_maps(obstacles, goals, starts[:, None, :], corner_cutting)
@@ -170,8 +184,16 @@ class TorchPlanner(Planner):
     so `forward` must not change the module's state. `module` stays available for gradient-based attacks.
     """
 
-    def __init__(self, module: nn.Module, name: str, size: int, checksum: str | None = None,
-                 config: dict | None = None, batch_size: int = 64, device: str | torch.device = "cpu"):
+    def __init__(
+        self,
+        module: nn.Module,
+        name: str,
+        size: int,
+        checksum: str | None = None,
+        config: dict | None = None,
+        batch_size: int = 64,
+        device: str | torch.device = "cpu",
+    ):
         if not isinstance(module, nn.Module):
             raise PlannerError(f"planner {name!r}: expected a torch.nn.Module, got {type(module).__name__}")
         self.module, self.name, self.size = module, name, int(size)
@@ -206,8 +228,9 @@ class TorchPlanner(Planner):
                     try:
                         raw = self.module(obs, g)
                     except Exception as exc:  # a user's module: say which planner failed, in one line
-                        raise PlannerError(f"planner {self.name!r}: forward failed: {type(exc).__name__}: "
-                                           f"{exc}") from None
+                        raise PlannerError(
+                            f"planner {self.name!r}: forward failed: {type(exc).__name__}: {exc}"
+                        ) from None
                     out[sl] = check_logits(self.name, raw, obs.shape[0], n)
 
         if self.device.type != "cpu":
@@ -262,14 +285,22 @@ class VINPlanner(TorchPlanner):
                 out[i : i + self.batch_size] = self.vin.q_values(x).max(dim=1).values.numpy()
         return out
 
-    def plan_maps(self, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True,
-                  chunk_size: int | None = None, progress: bool = False) -> PlanResult:
+    def plan_maps(
+        self,
+        obstacles: np.ndarray,
+        goals: np.ndarray,
+        starts: np.ndarray,
+        corner_cutting: bool = True,
+        chunk_size: int | None = None,
+        progress: bool = False,
+    ) -> PlanResult:
         from vinadv.planners import engine
 
         obstacles, goals, starts = _check_multi(obstacles, goals, starts)
         self._check_size(obstacles)
-        return engine.plan_maps(obstacles, goals, starts, self.vin, corner_cutting,
-                                chunk_size or engine.DEFAULT_CHUNK, progress)
+        return engine.plan_maps(
+            obstacles, goals, starts, self.vin, corner_cutting, chunk_size or engine.DEFAULT_CHUNK, progress
+        )
 
 
 def as_planner(planner, size: int) -> Planner:
@@ -284,5 +315,6 @@ def as_planner(planner, size: int) -> Planner:
         return VINPlanner(planner, size)
     if isinstance(planner, nn.Module):  # a module with the bring-your-own contract (a GPPN, say)
         return TorchPlanner(planner, type(planner).__name__.lower(), size)
-    raise PlannerError(f"planner: expected a Planner, a VIN or a torch.nn.Module, got {type(planner).__name__}",
-                       "planner")
+    raise PlannerError(
+        f"planner: expected a Planner, a VIN or a torch.nn.Module, got {type(planner).__name__}", "planner"
+    )

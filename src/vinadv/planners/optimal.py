@@ -57,9 +57,18 @@ class OptimalPlanner(Planner):
         dist, _ = shortest_distances(obstacles, np.asarray(goals, dtype=np.int64), self.corner_cutting)
         return np.where(np.isfinite(dist), -dist, np.nan)
 
-    def plan_maps(self, obstacles, goals, starts, corner_cutting: bool = True, chunk_size: int | None = None,
-                  progress: bool = False):
+    def plan_maps(
+        self,
+        obstacles,
+        goals,
+        starts,
+        corner_cutting: bool = True,
+        chunk_size: int | None = None,
+        progress: bool = False,
+    ):
         if bool(corner_cutting) != self.corner_cutting:  # the logits follow the planner's own move rule
-            raise InputError(f"planner 'optimal' was made with corner_cutting={self.corner_cutting}, "
-                             f"the maps use corner_cutting={bool(corner_cutting)}")
+            raise InputError(
+                f"planner 'optimal' was made with corner_cutting={self.corner_cutting}, "
+                f"the maps use corner_cutting={bool(corner_cutting)}"
+            )
         return super().plan_maps(obstacles, goals, starts, corner_cutting, chunk_size or DEFAULT_CHUNK, progress)

@@ -51,21 +51,32 @@ class PathSet(Columns):
         return self.paths[i * self.n_starts + s]
 
     @classmethod
-    def from_result(cls, result: PlanResult, n_starts: int, size: int, corner_cutting: bool = True,
-                    model: str = "") -> PathSet:
-        return cls(paths=result.paths, termination=result.termination_names, n_starts=int(n_starts),
-                   size=int(size), corner_cutting=bool(corner_cutting), model=model)
+    def from_result(
+        cls, result: PlanResult, n_starts: int, size: int, corner_cutting: bool = True, model: str = ""
+    ) -> PathSet:
+        return cls(
+            paths=result.paths,
+            termination=result.termination_names,
+            n_starts=int(n_starts),
+            size=int(size),
+            corner_cutting=bool(corner_cutting),
+            model=model,
+        )
 
     def save(self, path: str | os.PathLike) -> None:
-        save_npz(path, PATHS_FORMAT, {
-            **self.paths.to_fields("path"),
-            "reached": self.reached,
-            "termination": np.asarray(self.termination, dtype=str),
-            "n_starts": np.array(int(self.n_starts)),
-            "size": np.array(int(self.size)),
-            "corner_cutting": np.array(bool(self.corner_cutting)),
-            "model": np.array(str(self.model)),
-        })
+        save_npz(
+            path,
+            PATHS_FORMAT,
+            {
+                **self.paths.to_fields("path"),
+                "reached": self.reached,
+                "termination": np.asarray(self.termination, dtype=str),
+                "n_starts": np.array(int(self.n_starts)),
+                "size": np.array(int(self.size)),
+                "corner_cutting": np.array(bool(self.corner_cutting)),
+                "model": np.array(str(self.model)),
+            },
+        )
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> PathSet:
@@ -87,6 +98,11 @@ class PathSet(Columns):
         if not np.array_equal(reached, termination == "goal"):
             raise r.fail("reached", "disagrees with 'termination' (reached means termination == 'goal')")
         check_paths(r.path, "path_cells", paths, size)
-        return cls(paths=paths, termination=termination.astype(str), n_starts=n_starts, size=size,
-                   corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
-                   model=str(r.scalar("model", "U", default="")))
+        return cls(
+            paths=paths,
+            termination=termination.astype(str),
+            n_starts=n_starts,
+            size=size,
+            corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
+            model=str(r.scalar("model", "U", default="")),
+        )

@@ -103,8 +103,9 @@ def plan_reference(
     paths, terms = [], []
     for b in range(len(obstacles)):
         x = make_input(obstacles[b : b + 1], goals[b : b + 1])
-        path, term = rollout(torch_action_at(model, x), obstacles[b], starts[b], goals[b], int(limits[b]),
-                             corner_cutting)
+        path, term = rollout(
+            torch_action_at(model, x), obstacles[b], starts[b], goals[b], int(limits[b]), corner_cutting
+        )
         paths.append(np.array(path, dtype=np.int16).reshape(-1, 2))
         terms.append(term)
     return PlanResult.from_paths(paths, np.array(terms, dtype=np.int8))

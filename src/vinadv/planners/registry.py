@@ -32,15 +32,20 @@ class PlannerInfo:
     def to_dict(self, size: int = 28) -> dict:
         """Name, description, the shipped weights for `size x size` maps (None: no weights) and whether present."""
         path = default_weights(self.name, size)
-        return {**asdict(self), "weights": None if path is None else str(path),
-                "weights_available": None if path is None else path.exists()}
+        return {
+            **asdict(self),
+            "weights": None if path is None else str(path),
+            "weights_available": None if path is None else path.exists(),
+        }
 
 
 REGISTRY = {
-    "vin": PlannerInfo("vin", "Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine "
-                       "(default)"),
-    "vin_robust": PlannerInfo("vin_robust", "the VIN, adversarially trained (vinadv.hardening; `vin train "
-                              "--adversarial`)"),
+    "vin": PlannerInfo(
+        "vin", "Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine (default)"
+    ),
+    "vin_robust": PlannerInfo(
+        "vin_robust", "the VIN, adversarially trained (vinadv.hardening; `vin train --adversarial`)"
+    ),
     "gppn": PlannerInfo("gppn", "Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, 8 actions"),
     "optimal": PlannerInfo("optimal", "exact shortest paths (Dijkstra, lowest action index on ties): the control"),
 }
@@ -69,8 +74,9 @@ def list_planners(size: int = 28) -> list[dict]:
     return [info.to_dict(size) for info in REGISTRY.values()]
 
 
-def load_planner(spec: str | None, size: int, weights: str | None = None, corner_cutting: bool = True,
-                 device: str = "cpu") -> Planner:
+def load_planner(
+    spec: str | None, size: int, weights: str | None = None, corner_cutting: bool = True, device: str = "cpu"
+) -> Planner:
     """The planner named or specified by `spec` (None: `vin`) for `size x size` maps.
 
     Args:
@@ -93,8 +99,10 @@ def load_planner(spec: str | None, size: int, weights: str | None = None, corner
 
         path = default_weights("vin_robust", size)
         if not path.exists():
-            raise PlannerError(f"no shipped adversarially trained VIN for {size}x{size} maps ({path}); make one with "
-                               "`vinadv vin train --adversarial` and load it as planner 'vin' with those weights")
+            raise PlannerError(
+                f"no shipped adversarially trained VIN for {size}x{size} maps ({path}); make one with "
+                "`vinadv vin train --adversarial` and load it as planner 'vin' with those weights"
+            )
         planner = VINPlanner(load_vin(path, size=size), size=size)
         planner.name = "vin_robust"
         return planner
@@ -105,18 +113,26 @@ def load_planner(spec: str | None, size: int, weights: str | None = None, corner
         model = load_gppn(weights, size=size)
         trained = model.record.get("size")
         if trained is not None and trained != size:
-            raise PlannerError(f"{model.weights_path}: GPPN weights trained on {trained}x{trained} maps, "
-                               f"the maps are {size}x{size}")
-        return TorchPlanner(model, "gppn", size, checksum=weights_checksum(model.weights_path),
-                            config=model.config.to_dict(), device=device)
+            raise PlannerError(
+                f"{model.weights_path}: GPPN weights trained on {trained}x{trained} maps, the maps are {size}x{size}"
+            )
+        return TorchPlanner(
+            model,
+            "gppn",
+            size,
+            checksum=weights_checksum(model.weights_path),
+            config=model.config.to_dict(),
+            device=device,
+        )
     if spec == "optimal":
         from vinadv.planners.optimal import OptimalPlanner
 
         return OptimalPlanner(size, corner_cutting)
     if ":" in spec:
         return load_custom(spec, size, device)
-    raise PlannerError(f"unknown planner {spec!r}: use one of {', '.join(REGISTRY)}, or FILE.py:FACTORY / "
-                       f"MODULE:FACTORY for your own")
+    raise PlannerError(
+        f"unknown planner {spec!r}: use one of {', '.join(REGISTRY)}, or FILE.py:FACTORY / MODULE:FACTORY for your own"
+    )
 
 
 def _is_file(source: str) -> bool:
@@ -150,8 +166,9 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         try:
             module = importlib.import_module(source)
         except Exception as exc:
-            raise PlannerError(f"planner {spec!r}: cannot import module {source!r}: {type(exc).__name__}: {exc}") \
-                from None
+            raise PlannerError(
+                f"planner {spec!r}: cannot import module {source!r}: {type(exc).__name__}: {exc}"
+            ) from None
         if getattr(module, "__file__", None):
             source_sha = weights_checksum(module.__file__)
     factory = getattr(module, factory_name, None)
@@ -164,12 +181,18 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
     import torch
 
     if not isinstance(net, torch.nn.Module):
-        raise PlannerError(f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, "
-                           f"expected a torch.nn.Module")
+        raise PlannerError(
+            f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, expected a torch.nn.Module"
+        )
     net = net.to(device)
-    return TorchPlanner(net, spec, size, checksum=state_checksum(net),
-                        config={"source": source, "factory": factory_name, "source_sha256": source_sha},
-                        device=device)
+    return TorchPlanner(
+        net,
+        spec,
+        size,
+        checksum=state_checksum(net),
+        config={"source": source, "factory": factory_name, "source_sha256": source_sha},
+        device=device,
+    )
 
 
 @dataclass(frozen=True)
@@ -195,10 +218,13 @@ class PlannerRef:
         return cls(spec, weights, int(planner.size), bool(corner_cutting), planner.checksum)
 
     def load(self, device: str = "cpu") -> Planner:
-        planner = load_planner(self.spec, self.size, weights=self.weights, corner_cutting=self.corner_cutting,
-                               device=device)
+        planner = load_planner(
+            self.spec, self.size, weights=self.weights, corner_cutting=self.corner_cutting, device=device
+        )
         if planner.checksum != self.checksum:
-            raise PlannerError(f"planner {self.spec!r} (weights {self.weights or 'shipped'}) here has checksum "
-                               f"{planner.checksum}, the client's has {self.checksum}; workers need the same planner "
-                               "files at the same paths")
+            raise PlannerError(
+                f"planner {self.spec!r} (weights {self.weights or 'shipped'}) here has checksum "
+                f"{planner.checksum}, the client's has {self.checksum}; workers need the same planner "
+                "files at the same paths"
+            )
         return planner

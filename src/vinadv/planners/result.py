@@ -30,8 +30,10 @@ class PlanResult(Columns):
     def __post_init__(self) -> None:
         self.termination = np.asarray(self.termination, dtype=np.int8)
         if not isinstance(self.paths, PackedPaths) or self.termination.shape != (len(self.paths),):
-            raise InputError(f"PlanResult: expected PackedPaths and one termination per path, got {self.paths!r} "
-                             f"and termination of shape {self.termination.shape}")
+            raise InputError(
+                f"PlanResult: expected PackedPaths and one termination per path, got {self.paths!r} "
+                f"and termination of shape {self.termination.shape}"
+            )
 
     @classmethod
     def empty(cls) -> PlanResult:

@@ -18,8 +18,9 @@ from vinadv.grid.shortest_paths import shortest_distances
 from vinadv.planners.result import COLLISION, GOAL, LOOP, STEP_LIMIT, PlanResult
 
 
-def multi_start_limits(obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray,
-                       corner_cutting: bool) -> np.ndarray:
+def multi_start_limits(
+    obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool
+) -> np.ndarray:
     """Step limits `(B, S)` int64 of rollouts from `starts (B, S, 2)`: 2 L, L the optimal move count (N * N where
     the goal cannot be reached), as `vinadv.planners.result.step_limits` for one start."""
     b, n = obstacles.shape[0], obstacles.shape[1]
@@ -60,8 +61,9 @@ def _rollout_kernel(logits, obstacles, goals, starts, limits, corner_cutting, de
                     if logits[b, k, r, c] > best:
                         best = logits[b, k, r, c]
                         a = k
-                term, r, c, length = rollout_step(obstacles, b, t, r, c, a, corner_cutting, deltas, stamp, cells,
-                                                  length)
+                term, r, c, length = rollout_step(
+                    obstacles, b, t, r, c, a, corner_cutting, deltas, stamp, cells, length
+                )
                 if term != MOVED:
                     break
             lengths[t] = length
@@ -93,8 +95,14 @@ def rollout_step(obstacles, b, t, r, c, a, corner_cutting, deltas, stamp, cells,
     return MOVED, nr, nc, length + 1
 
 
-def rollout_logits(logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray,
-                   corner_cutting: bool = True, limits: np.ndarray | None = None) -> PlanResult:
+def rollout_logits(
+    logits: np.ndarray,
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    starts: np.ndarray,
+    corner_cutting: bool = True,
+    limits: np.ndarray | None = None,
+) -> PlanResult:
     """Paths from `starts (B, S, 2)` following the argmax of `logits (B, 8, N, N)` (one map per map).
 
     Args:
@@ -119,6 +127,7 @@ def rollout_logits(logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray,
     lengths = np.empty(b * s, dtype=np.int64)
     terms = np.empty(b * s, dtype=np.int8)
     if b * s:
-        _rollout_kernel(logits, obstacles, goals, starts, limits, bool(corner_cutting), ACTION_DELTAS, cells,
-                        lengths, terms)
+        _rollout_kernel(
+            logits, obstacles, goals, starts, limits, bool(corner_cutting), ACTION_DELTAS, cells, lengths, terms
+        )
     return PlanResult.from_buffers(cells, lengths, terms)

@@ -14,8 +14,9 @@ from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.planners.vin import VIN, VINConfig, default_k
 
 
-def planning_vin(size: int = 28, seed: int = 0, noise: float = 0.3, gamma: float = 0.9, penalty: float = 4.0,
-                 k: int | None = None) -> VIN:
+def planning_vin(
+    size: int = 28, seed: int = 0, noise: float = 0.3, gamma: float = 0.9, penalty: float = 4.0, k: int | None = None
+) -> VIN:
     """A VIN that plans, with relative random noise `noise` on all weights (`torch.manual_seed(seed)`)."""
     torch.manual_seed(seed)
     model = VIN(VINConfig(k=default_k(size) if k is None else k))

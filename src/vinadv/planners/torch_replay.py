@@ -76,8 +76,12 @@ def conv_modes(n: int, l_out: int, l_in: int = 1, bias: bool = False) -> np.ndar
             w = rng.standard_normal((l_out, l_in, 3, 3)).astype(np.float32)
             b = rng.standard_normal(l_out).astype(np.float32) if bias else None
             with torch.no_grad():
-                want = F.conv2d(torch.from_numpy(v)[None], torch.from_numpy(w),
-                                None if b is None else torch.from_numpy(b), padding=1)[0].numpy()
+                want = F.conv2d(
+                    torch.from_numpy(v)[None],
+                    torch.from_numpy(w),
+                    None if b is None else torch.from_numpy(b),
+                    padding=1,
+                )[0].numpy()
             flat_v = to_flat(v)
             for fused, ok in ((True, fused_ok), (False, plain_ok)):
                 out = np.empty((l_out, flat_v.shape[1]), np.float32)
@@ -103,8 +107,9 @@ def sum_order(n: int, l_h: int) -> tuple[bool, int] | None:
             w = rng.standard_normal(l_h).astype(np.float32)
             with torch.no_grad():
                 want = F.conv2d(torch.from_numpy(h)[None], torch.from_numpy(w)[None, :, None, None])[0, 0].numpy()
-            candidates = [(fused, split) for fused, split in candidates
-                          if np.array_equal(_sum_channels(h, w, fused, split), want)]
+            candidates = [
+                (fused, split) for fused, split in candidates if np.array_equal(_sum_channels(h, w, fused, split), want)
+            ]
         _orders[key] = candidates[0] if len(candidates) == 1 else None
     return _orders[key]
 
@@ -127,9 +132,15 @@ class _Weights:
         def get(t: torch.Tensor) -> np.ndarray:
             return np.ascontiguousarray(t.detach().cpu().numpy(), dtype=np.float32)
 
-        return cls(h=get(model.h.weight), h_bias=get(model.h.bias), r=get(model.r.weight[0, :, 0, 0]),
-                   q=get(model.q.weight), w=get(model.w), fc=model.fc.weight.detach().to(torch.float64).numpy(),
-                   k=int(model.config.k))
+        return cls(
+            h=get(model.h.weight),
+            h_bias=get(model.h.bias),
+            r=get(model.r.weight[0, :, 0, 0]),
+            q=get(model.q.weight),
+            w=get(model.w),
+            fc=model.fc.weight.detach().to(torch.float64).numpy(),
+            k=int(model.config.k),
+        )
 
 
 def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:

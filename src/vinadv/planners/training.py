@@ -134,8 +134,9 @@ def cell_logits(model: torch.nn.Module, obstacles: np.ndarray, goals: np.ndarray
     return model(obs, torch.from_numpy(np.asarray(goals, dtype=np.int64)).to(device)).permute(0, 2, 3, 1)
 
 
-def batch_loss(model: torch.nn.Module, obstacles: np.ndarray, goals: np.ndarray, bits: np.ndarray,
-               device: torch.device):
+def batch_loss(
+    model: torch.nn.Module, obstacles: np.ndarray, goals: np.ndarray, bits: np.ndarray, device: torch.device
+):
     """Loss, number of supervised cells and number whose argmax is optimal, for one batch of maps."""
     logits = cell_logits(model, obstacles, goals, device)
     mask = bits_to_mask(torch.from_numpy(bits).to(device), logits.shape[-1])
@@ -202,8 +203,9 @@ class _State:
     augment_rounds: list = field(default_factory=list)
 
 
-def evaluate_loss(model: torch.nn.Module, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int,
-                  device: torch.device) -> dict:
+def evaluate_loss(
+    model: torch.nn.Module, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int, device: torch.device
+) -> dict:
     """Loss and action accuracy over the maps `idx` (cell-weighted), without gradients."""
     total_loss, cells, correct = 0.0, 0, 0
     model.eval()
@@ -251,8 +253,9 @@ def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, dict
     if config.init:
         from vinadv.planners.gppn import load_gppn
 
-        options["record"] = _start_from(model, load_gppn(config.init, size=maps.size), config.init,
-                                        options.get("record"))
+        options["record"] = _start_from(
+            model, load_gppn(config.init, size=maps.size), config.init, options.get("record")
+        )
     return train_model(model, maps, config, gppn_config.to_dict(), **options)
 
 
@@ -261,8 +264,9 @@ def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: di
     from vinadv.planners.weights import weights_checksum
 
     if start.config != model.config:
-        raise InputError(f"init {path}: its {type(start).__name__} ({start.config}) is not the one to train "
-                         f"({model.config})", "init")
+        raise InputError(
+            f"init {path}: its {type(start).__name__} ({start.config}) is not the one to train ({model.config})", "init"
+        )
     model.load_state_dict(start.state_dict())
     return {**(record or {}), "init_sha256": weights_checksum(path)}
 
@@ -339,15 +343,23 @@ def train_model(
             found = augment(model, epoch, train_idx)
             new_obs, new_goals, info = found if found is not None else (None, None, {})
             if new_obs is not None and len(new_obs):
-                state.added_obstacles = new_obs if state.added_obstacles is None else np.concatenate(
-                    [state.added_obstacles, new_obs])
-                state.added_goals = new_goals if state.added_goals is None else np.concatenate(
-                    [state.added_goals, new_goals])
+                state.added_obstacles = (
+                    new_obs if state.added_obstacles is None else np.concatenate([state.added_obstacles, new_obs])
+                )
+                state.added_goals = (
+                    new_goals if state.added_goals is None else np.concatenate([state.added_goals, new_goals])
+                )
                 obstacles = np.concatenate([obstacles, new_obs])
                 goals = np.concatenate([goals, new_goals])
                 bits = np.concatenate([bits, action_bits(new_obs, new_goals, maps.corner_cutting)])
-            state.augment_rounds.append({"epoch": epoch + 1, "added": 0 if new_obs is None else len(new_obs),
-                                         "added_total": len(obstacles) - len(maps), **info})
+            state.augment_rounds.append(
+                {
+                    "epoch": epoch + 1,
+                    "added": 0 if new_obs is None else len(new_obs),
+                    "added_total": len(obstacles) - len(maps),
+                    **info,
+                }
+            )
             if log:
                 log(f"epoch {epoch + 1}: {state.augment_rounds[-1]}")
         model.train()
@@ -412,8 +424,13 @@ def train_model(
             if log:
                 log(stopped)
             break
-    rec.update(epochs=state.epochs, epochs_done=state.epoch, wall_time_s=round(state.wall_s, 1), steps=state.step,
-               stopped_early=stopped)
+    rec.update(
+        epochs=state.epochs,
+        epochs_done=state.epoch,
+        wall_time_s=round(state.wall_s, 1),
+        steps=state.step,
+        stopped_early=stopped,
+    )
     if augment is not None:
         rec.update(augment_rounds=state.augment_rounds, added_maps=len(obstacles) - len(maps))
     model = model.to("cpu").eval()
@@ -430,23 +447,23 @@ def _lr_at(step: int, total: int, config: TrainConfig) -> float:
 def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -> None:
     with atomic_output(path, "wb", mkdir=True) as fh:
         torch.save(
-        {
-            "format": CHECKPOINT_FORMAT,
-            "model": {k: v.detach().cpu() for k, v in model.state_dict().items()},
-            "optimizer": optimizer.state_dict(),
-            "train_config": config.to_dict(),
-            "data_sha256": rec.get("data", {}).get("sha256"),
-            "epoch": state.epoch,
-            "step": state.step,
-            "wall_s": state.wall_s,
-            "epochs": state.epochs,
-            "partial": state.partial,
-            "augment_rounds": state.augment_rounds,
-            "added_obstacles": None if state.added_obstacles is None else torch.from_numpy(state.added_obstacles),
-            "added_goals": None if state.added_goals is None else torch.from_numpy(state.added_goals),
-        },
-        fh,
-    )
+            {
+                "format": CHECKPOINT_FORMAT,
+                "model": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+                "optimizer": optimizer.state_dict(),
+                "train_config": config.to_dict(),
+                "data_sha256": rec.get("data", {}).get("sha256"),
+                "epoch": state.epoch,
+                "step": state.step,
+                "wall_s": state.wall_s,
+                "epochs": state.epochs,
+                "partial": state.partial,
+                "augment_rounds": state.augment_rounds,
+                "added_obstacles": None if state.added_obstacles is None else torch.from_numpy(state.added_obstacles),
+                "added_goals": None if state.added_goals is None else torch.from_numpy(state.added_goals),
+            },
+            fh,
+        )
 
 
 def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> _State:
@@ -460,11 +477,25 @@ def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> 
     saved = dict(ck.get("train_config", {}))
     now = config.to_dict()
     defaults = TrainConfig().to_dict()  # checkpoints older than a key hold its default
-    for key in ("planner", "lr", "lr_final_fraction", "batch_size", "val_fraction", "seed", "k", "l_h", "l_q",
-                "kernel", "epochs", "adversarial"):
+    for key in (
+        "planner",
+        "lr",
+        "lr_final_fraction",
+        "batch_size",
+        "val_fraction",
+        "seed",
+        "k",
+        "l_h",
+        "l_q",
+        "kernel",
+        "epochs",
+        "adversarial",
+    ):
         if saved.get(key, defaults[key]) != now.get(key):
-            raise InputError(f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {now.get(key)!r}; "
-                             f"use the same options to resume, or remove the checkpoint")
+            raise InputError(
+                f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {now.get(key)!r}; "
+                f"use the same options to resume, or remove the checkpoint"
+            )
     data_sha = rec.get("data", {}).get("sha256")
     if data_sha is not None and ck.get("data_sha256") not in (None, data_sha):
         raise InputError(f"{path}: checkpoint was made on other data (checksum differs); remove it to start over")
@@ -474,8 +505,13 @@ def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> 
     except (RuntimeError, KeyError, ValueError) as exc:
         raise InputError(f"{path}: checkpoint does not match the model ({exc})") from None
     added_obs, added_goals = ck.get("added_obstacles"), ck.get("added_goals")
-    return _State(epoch=int(ck["epoch"]), step=int(ck["step"]), wall_s=float(ck["wall_s"]), epochs=list(ck["epochs"]),
-                  partial=list(ck.get("partial", [0.0, 0, 0])),
-                  added_obstacles=None if added_obs is None else added_obs.numpy(),
-                  added_goals=None if added_goals is None else added_goals.numpy(),
-                  augment_rounds=list(ck.get("augment_rounds", [])))
+    return _State(
+        epoch=int(ck["epoch"]),
+        step=int(ck["step"]),
+        wall_s=float(ck["wall_s"]),
+        epochs=list(ck["epochs"]),
+        partial=list(ck.get("partial", [0.0, 0, 0])),
+        added_obstacles=None if added_obs is None else added_obs.numpy(),
+        added_goals=None if added_goals is None else added_goals.numpy(),
+        augment_rounds=list(ck.get("augment_rounds", [])),
+    )

@@ -116,8 +116,10 @@ def load_vin(path: str | os.PathLike | None = None, size: int = 28, k: int | Non
     if path is None:
         path = default_weights_path(size)
         if not path.exists():
-            raise InputError(f"no shipped VIN weights for {size}x{size} maps ({path}); train some with "
-                             f"`vinadv vin train` and pass --weights")
+            raise InputError(
+                f"no shipped VIN weights for {size}x{size} maps ({path}); train some with "
+                f"`vinadv vin train` and pass --weights"
+            )
     model, record = read_weights(path, size=size, k=k)
     model.record = record
     model.weights_path = str(path)
@@ -129,8 +131,10 @@ def _unreadable(name: str, exc: Exception) -> str:
     which would let the file run code: never repeated)."""
     text = str(exc)
     if "Unsupported global" in text or "Unsupported class" in text or "GLOBAL" in text:
-        return (f"{name}: holds Python objects, not only tensors and plain values; refused (weights files are "
-                "loaded without running code)")
+        return (
+            f"{name}: holds Python objects, not only tensors and plain values; refused (weights files are "
+            "loaded without running code)"
+        )
     kind = "a zip archive, but not one torch wrote" if zipfile.is_zipfile(name) else "damaged or another kind of file"
     return f"{name}: not a vinadv/PyTorch weights file ({kind})"
 
@@ -145,11 +149,15 @@ def _check_planner_shapes(name: str, state: dict, config: VINConfig) -> None:
         if got.shape[axis] != want:
             expected = list(got.shape)
             expected[axis] = want
-            raise InputError(f"{name}: '{key}' has shape {tuple(got.shape)}, expected {tuple(expected)} "
-                             f"(the planner has {want} {'input channels' if axis else 'actions'})")
+            raise InputError(
+                f"{name}: '{key}' has shape {tuple(got.shape)}, expected {tuple(expected)} "
+                f"(the planner has {want} {'input channels' if axis else 'actions'})"
+            )
     if config.l_i != VINConfig.l_i or config.n_actions != len(ACTION_DELTAS):
-        raise InputError(f"{name}: config has l_i={config.l_i}, n_actions={config.n_actions}; the planner needs "
-                         f"l_i={VINConfig.l_i}, n_actions={len(ACTION_DELTAS)}")
+        raise InputError(
+            f"{name}: config has l_i={config.l_i}, n_actions={config.n_actions}; the planner needs "
+            f"l_i={VINConfig.l_i}, n_actions={len(ACTION_DELTAS)}"
+        )
 
 
 def _config_from_dict(name: str, raw: dict[str, Any]) -> VINConfig:
@@ -172,10 +180,13 @@ def _config_from_state(name: str, state: dict, k: int) -> VINConfig:
             raise InputError(f"{name}: state dict entry '{key}' is not a tensor")
     h, fc = state["h.weight"], state["fc.weight"]
     if h.ndim != 4 or fc.ndim != 2:
-        raise InputError(f"{name}: 'h.weight' has shape {tuple(h.shape)} and 'fc.weight' {tuple(fc.shape)}; "
-                         f"expected 4 and 2 dimensions")
-    return VINConfig(k=int(k), l_i=int(h.shape[1]), l_h=int(h.shape[0]), l_q=int(fc.shape[1]),
-                     n_actions=int(fc.shape[0]))
+        raise InputError(
+            f"{name}: 'h.weight' has shape {tuple(h.shape)} and 'fc.weight' {tuple(fc.shape)}; "
+            f"expected 4 and 2 dimensions"
+        )
+    return VINConfig(
+        k=int(k), l_i=int(h.shape[1]), l_h=int(h.shape[0]), l_q=int(fc.shape[1]), n_actions=int(fc.shape[0])
+    )
 
 
 def _check_state(name: str, state: dict, model: VIN) -> None:
@@ -189,7 +200,9 @@ def _check_state(name: str, state: dict, model: VIN) -> None:
         if not isinstance(got, torch.Tensor):
             raise InputError(f"{name}: state dict entry '{key}' is not a tensor")
         if tuple(got.shape) != tuple(want.shape):
-            raise InputError(f"{name}: '{key}' has shape {tuple(got.shape)}, expected {tuple(want.shape)} "
-                             f"for config {model.config.to_dict()}")
+            raise InputError(
+                f"{name}: '{key}' has shape {tuple(got.shape)}, expected {tuple(want.shape)} "
+                f"for config {model.config.to_dict()}"
+            )
         if not torch.is_floating_point(got) or not torch.isfinite(got).all():
             raise InputError(f"{name}: '{key}' is not a finite float tensor")

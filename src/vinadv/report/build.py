@@ -33,18 +33,26 @@ class ReportResult:
     comparison: str | None = None  # why `report_run` ran no comparison, if it did not
 
     def to_dict(self) -> dict:
-        return {"index": str(self.index), "run_id": self.run_id, "runs": self.runs, "files": self.files,
-                "timing": self.timing, "vin": self.vin, "evaluated": self.evaluated, "comparison": self.comparison}
+        return {
+            "index": str(self.index),
+            "run_id": self.run_id,
+            "runs": self.runs,
+            "files": self.files,
+            "timing": self.timing,
+            "vin": self.vin,
+            "evaluated": self.evaluated,
+            "comparison": self.comparison,
+        }
 
 
-def write_report(db: str | None, out_dir, run_id: int | str | None = None,
-                 runs: list[int | str] | None = None) -> Path:
+def write_report(db: str | None, out_dir, run_id: int | str | None = None, runs: list[int | str] | None = None) -> Path:
     """Write the report to `out_dir` (see `build_report`); return the path of `index.html`."""
     return build_report(db, out_dir, run_id=run_id, runs=runs).index
 
 
-def build_report(db: str | None, out_dir, run_id: int | str | None = None,
-                 runs: list[int | str] | None = None) -> ReportResult:
+def build_report(
+    db: str | None, out_dir, run_id: int | str | None = None, runs: list[int | str] | None = None
+) -> ReportResult:
     """Write the report of the main run to `out_dir` and return what was written and measured.
 
     Runs are ids or names (`Store.resolve_run`). The main run is `run_id`, else the first of `runs`, else the
@@ -63,12 +71,22 @@ def build_report(db: str | None, out_dir, run_id: int | str | None = None,
     index = render_report(data, out)
     vin, timing = data.sections["vin"], data.sections["timing"]
     return ReportResult(
-        index=index, run_id=ctx.run_id, runs=ctx.compare, files=[*data.files(), "style.css"],
-        timing={"pairs": timing.pairs, "counts": timing.counts, "read_s": timing.read_s, "rule_s": timing.rule_s,
-                "hybrid_svm_s": {setting: s for setting, _, s in timing.hybrid}},
-        vin={"source": vin.source, **{k: vin.metrics.get(k) for k in ("success_rate", "optimal_rate",
-                                                                       "action_accuracy")},
-             "run_original_reached": vin.reached / vin.total if vin.total else None},
+        index=index,
+        run_id=ctx.run_id,
+        runs=ctx.compare,
+        files=[*data.files(), "style.css"],
+        timing={
+            "pairs": timing.pairs,
+            "counts": timing.counts,
+            "read_s": timing.read_s,
+            "rule_s": timing.rule_s,
+            "hybrid_svm_s": {setting: s for setting, _, s in timing.hybrid},
+        },
+        vin={
+            "source": vin.source,
+            **{k: vin.metrics.get(k) for k in ("success_rate", "optimal_rate", "action_accuracy")},
+            "run_original_reached": vin.reached / vin.total if vin.total else None,
+        },
         evaluated=any(ev.main for ev in data.sections["classifiers"].evaluations),
     )
 

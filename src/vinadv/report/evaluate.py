@@ -93,16 +93,19 @@ def load_run_pairs(store, run_id: int, seed: int = 0, max_other: int = MAX_OTHER
     return RunPairs(batch, truth, records.pair_index, len(fp_dp), t)
 
 
-def split_fp_dp(truth: np.ndarray, seed: int = 0, test_fraction: float = TEST_FRACTION,
-                source: str = "run") -> tuple[np.ndarray, np.ndarray]:
+def split_fp_dp(
+    truth: np.ndarray, seed: int = 0, test_fraction: float = TEST_FRACTION, source: str = "run"
+) -> tuple[np.ndarray, np.ndarray]:
     """Stratified train/test split of the FP/DP positions of `truth`: `(train, test)` sorted int64 indices."""
     from sklearn.model_selection import train_test_split
 
     fp_dp = np.flatnonzero(np.isin(truth, FORK_OR_DETOUR))
     n_fp, n_dp = int(np.sum(truth == "FP")), int(np.sum(truth == "DP"))
     if n_fp < 2 or n_dp < 2:
-        raise InputError(f"{source} has {n_fp} FP and {n_dp} DP pairs; the classifier comparison needs at least 2 "
-                         "of each (a larger --n, or another attack strategy)")
+        raise InputError(
+            f"{source} has {n_fp} FP and {n_dp} DP pairs; the classifier comparison needs at least 2 "
+            "of each (a larger --n, or another attack strategy)"
+        )
     train, test = train_test_split(fp_dp, test_size=test_fraction, stratify=truth[fp_dp], random_state=seed)
     return np.sort(train), np.sort(test)
 
@@ -171,8 +174,9 @@ def _score(model, batch: PathPairBatch) -> np.ndarray:
     return model.decision_function(batch)
 
 
-def evaluate_model(model, data: RunPairs, train: np.ndarray, test: np.ndarray, balanced: bool, seed: int = 0,
-                   curves: bool = True) -> tuple[dict, dict | None, int]:
+def evaluate_model(
+    model, data: RunPairs, train: np.ndarray, test: np.ndarray, balanced: bool, seed: int = 0, curves: bool = True
+) -> tuple[dict, dict | None, int]:
     """Fit `model` on the pairs `train` (balanced by augmentation if asked), test on `test`.
 
     Returns `(metrics, curves or None, training set size)`.
@@ -258,9 +262,17 @@ def parse_sizes(text: str | Sequence[float] | None) -> list[float]:
     return sorted(set(values) | {1.0})
 
 
-def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, setting: str = "baseline",
-                 sizes: Sequence[float] = DEFAULT_SIZES, seed: int = 0, progress: bool = False,
-                 write: bool = True, max_epochs: int | None = None) -> list[dict]:
+def evaluate_run(
+    store,
+    run_id: int,
+    classifiers: Sequence[str] = CLASSIFIERS,
+    setting: str = "baseline",
+    sizes: Sequence[float] = DEFAULT_SIZES,
+    seed: int = 0,
+    progress: bool = False,
+    write: bool = True,
+    max_epochs: int | None = None,
+) -> list[dict]:
     """Run the comparison on the stored run `run_id` of `store` and (with `write`) store its rows.
 
     `max_epochs` caps the CNN's and MLP's epochs (None: the setting's, 10 or 20); each row's metrics record the
@@ -295,8 +307,9 @@ def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, s
             bar.set_postfix_str(f"{kind} {training} {fraction:g}")
         subset = train if fraction >= 1.0 else nested_fraction(train, data.truth, fraction, seed)
         model = _make(kind, setting, seed, data.t, max_epochs)
-        metrics, curves, train_size = evaluate_model(model, data, subset, test, training == "balanced", seed,
-                                                     curves=fraction >= 1.0)
+        metrics, curves, train_size = evaluate_model(
+            model, data, subset, test, training == "balanced", seed, curves=fraction >= 1.0
+        )
         if hasattr(model, "epochs"):
             metrics["epochs"] = int(model.epochs)
         if kind in ("hybrid", "rule"):
@@ -304,11 +317,20 @@ def evaluate_run(store, run_id: int, classifiers: Sequence[str] = CLASSIFIERS, s
         if kind == "rule":  # nothing is trained
             metrics["training_s"] = 0.0
             train_size = 0
-        rows.append({
-            "batch": batch_id, "classifier": kind, "setting": setting,
-            "training": training, "train_fraction": float(fraction), "train_size": int(train_size),
-            "test_size": int(len(test)), "seed": int(seed), "metrics": _jsonable(metrics), "curves": curves,
-        })
+        rows.append(
+            {
+                "batch": batch_id,
+                "classifier": kind,
+                "setting": setting,
+                "training": training,
+                "train_fraction": float(fraction),
+                "train_size": int(train_size),
+                "test_size": int(len(test)),
+                "seed": int(seed),
+                "metrics": _jsonable(metrics),
+                "curves": curves,
+            }
+        )
         if bar is not None:
             bar.update(1)
     if bar is not None:
@@ -340,9 +362,15 @@ QUICK_MAX_EPOCHS = 2
 SETTINGLESS = ("hausdorff", "frechet", "dtw", "rule")
 
 
-def compare_for_report(store, run_id: int, settings: Sequence[str] = SETTINGS, sizes: Sequence[float] = QUICK_SIZES,
-                       max_epochs: int | None = QUICK_MAX_EPOCHS, seed: int = 0,
-                       progress: bool = False) -> tuple[list[dict], str | None]:
+def compare_for_report(
+    store,
+    run_id: int,
+    settings: Sequence[str] = SETTINGS,
+    sizes: Sequence[float] = QUICK_SIZES,
+    max_epochs: int | None = QUICK_MAX_EPOCHS,
+    seed: int = 0,
+    progress: bool = False,
+) -> tuple[list[dict], str | None]:
     """The classifier comparison of `run_id` in each of `settings` (the settingless classifiers in the first only),
     stored; `(rows, None)`, or `(rows so far, reason)` when the run cannot be compared (fewer than 2 FP or DP
     pairs: nothing to split)."""
@@ -350,8 +378,7 @@ def compare_for_report(store, run_id: int, settings: Sequence[str] = SETTINGS, s
     for k, setting in enumerate(settings):
         kinds = [c for c in CLASSIFIERS if k == 0 or c not in SETTINGLESS]
         try:
-            rows += evaluate_run(store, run_id, kinds, setting, sizes, seed, progress=progress,
-                                 max_epochs=max_epochs)
+            rows += evaluate_run(store, run_id, kinds, setting, sizes, seed, progress=progress, max_epochs=max_epochs)
         except InputError as exc:
             if "at least 2" not in str(exc):
                 raise
@@ -390,9 +417,13 @@ def planner_quality(config: dict, checksum: str | None, size: int) -> tuple[dict
     if checksum and planner.checksum != checksum:
         return {}, f"not available: planner {name!r} here is not the one the run used (its checksum differs)"
     if path is not None:
-        for candidate in (path.with_suffix(".metrics.json"), path.with_name(path.stem + "_metrics.json"),
-                          path.with_name(path.stem + "-metrics.json"), path.with_name(path.name + ".metrics.json"),
-                          path.with_suffix(".json")):
+        for candidate in (
+            path.with_suffix(".metrics.json"),
+            path.with_name(path.stem + "_metrics.json"),
+            path.with_name(path.stem + "-metrics.json"),
+            path.with_name(path.name + ".metrics.json"),
+            path.with_suffix(".json"),
+        ):
             if candidate.exists():
                 try:
                     data = json.loads(candidate.read_text())
@@ -413,9 +444,11 @@ def planner_quality(config: dict, checksum: str | None, size: int) -> tuple[dict
     metrics = evaluate_planner(planner, maps)
     seconds = time.perf_counter() - start
     weights = "" if path is None else f", weights {path.name}"
-    return metrics, (f"quick evaluation of planner {name!r} while writing this report: {QUICK_EVAL_MAPS} fresh "
-                     f"{size}x{size} maps (seed {QUICK_EVAL_SEED}), {maps.n_starts} starts each{weights}, "
-                     f"{seconds:.1f} s")
+    return metrics, (
+        f"quick evaluation of planner {name!r} while writing this report: {QUICK_EVAL_MAPS} fresh "
+        f"{size}x{size} maps (seed {QUICK_EVAL_SEED}), {maps.n_starts} starts each{weights}, "
+        f"{seconds:.1f} s"
+    )
 
 
 def _find_metrics(data) -> dict | None:

@@ -23,8 +23,13 @@ from vinadv.outfile import atomic_output  # noqa: E402
 from vinadv.vocabulary import STRENGTH_ORDER  # noqa: E402
 
 CATEGORY_ORDER = STRENGTH_ORDER[:-1]  # UrP, FP, DP, UcP: the paper's fig. 3 and table 4 order (invalid last)
-CATEGORY_NAMES = {"UrP": "Unreached Path", "FP": "Fork Path", "DP": "Detour Path", "UcP": "Unchanged Path",
-                  "invalid": "invalid (original path fails)"}
+CATEGORY_NAMES = {
+    "UrP": "Unreached Path",
+    "FP": "Fork Path",
+    "DP": "Detour Path",
+    "UcP": "Unchanged Path",
+    "invalid": "invalid (original path fails)",
+}
 FORMATS = ("png", "svg")
 
 
@@ -59,12 +64,23 @@ def map_pair(records, i: int, stem: Path, with_paths: bool, distances=None) -> l
     fig, axes = plt.subplots(1, 2, figsize=(7, 3.6))
     o, a = _paths(records, i)
     label = records.label[i]
-    draw_map(axes[0], records.obstacles_o[i], records.goals[i], records.starts[i],
-             paths=[("original", o)] if with_paths else (),
-             title="(a) original path" if with_paths else "(a) the normal map")
-    draw_map(axes[1], records.obstacles_a[i], records.goals[i], records.starts[i],
-             paths=[("adversarial", a)] if with_paths else (), added=records.added[i],
-             title="(b) adversarial path" if with_paths else "(b) the adversarial map (+1 obstacle, orange)")
+    draw_map(
+        axes[0],
+        records.obstacles_o[i],
+        records.goals[i],
+        records.starts[i],
+        paths=[("original", o)] if with_paths else (),
+        title="(a) original path" if with_paths else "(a) the normal map",
+    )
+    draw_map(
+        axes[1],
+        records.obstacles_a[i],
+        records.goals[i],
+        records.starts[i],
+        paths=[("adversarial", a)] if with_paths else (),
+        added=records.added[i],
+        title="(b) adversarial path" if with_paths else "(b) the adversarial map (+1 obstacle, orange)",
+    )
     extra = _distances(distances) if with_paths else ""
     fig.suptitle(f"pair {records.pair_index[i]} ({label}{'; ' + extra if extra else ''})", fontsize=9)
     map_legend(fig, axes)
@@ -78,8 +94,9 @@ def example_pairs(records, stem: Path, columns: int = 4, distances=None) -> list
     columns = max(1, min(columns, n))
     rows = -(-n // columns)
     # constrained: the distances under an adversarial map stay clear of the title of the map below
-    fig, axes = plt.subplots(2 * rows, columns, figsize=(2.3 * columns, 4.8 * rows), squeeze=False,
-                             layout="constrained")
+    fig, axes = plt.subplots(
+        2 * rows, columns, figsize=(2.3 * columns, 4.8 * rows), squeeze=False, layout="constrained"
+    )
     for ax in axes.ravel():
         ax.axis("off")
     for i in range(n):
@@ -87,11 +104,23 @@ def example_pairs(records, stem: Path, columns: int = 4, distances=None) -> list
         o, a = _paths(records, i)
         axes[r, c].axis("on")
         axes[r + 1, c].axis("on")
-        draw_map(axes[r, c], records.obstacles_o[i], records.goals[i], records.starts[i], paths=[("original", o)],
-                 title=f"pair {records.pair_index[i]}: original")
-        draw_map(axes[r + 1, c], records.obstacles_a[i], records.goals[i], records.starts[i],
-                 paths=[("original", o), ("adversarial", a)], added=records.added[i],
-                 title=f"adversarial ({records.label[i]})")
+        draw_map(
+            axes[r, c],
+            records.obstacles_o[i],
+            records.goals[i],
+            records.starts[i],
+            paths=[("original", o)],
+            title=f"pair {records.pair_index[i]}: original",
+        )
+        draw_map(
+            axes[r + 1, c],
+            records.obstacles_a[i],
+            records.goals[i],
+            records.starts[i],
+            paths=[("original", o), ("adversarial", a)],
+            added=records.added[i],
+            title=f"adversarial ({records.label[i]})",
+        )
         if distances is not None:  # below the map: a second title line would run into the map above
             axes[r + 1, c].set_xlabel(_distances(distances[i]), fontsize=8)
     map_legend(fig, axes)
@@ -113,11 +142,23 @@ def categories(examples: dict, stem: Path, distances: dict | None = None) -> lis
             continue
         records, i = examples[label]
         o, a = _paths(records, i)
-        draw_map(column[0], records.obstacles_o[i], records.goals[i], records.starts[i], paths=[("original", o)],
-                 title=f"({'abcd'[c]}) the {label}")
-        draw_map(column[1], records.obstacles_a[i], records.goals[i], records.starts[i],
-                 paths=[("adversarial", a)], added=records.added[i],
-                 title=_distances((distances or {}).get(label)) or None)
+        draw_map(
+            column[0],
+            records.obstacles_o[i],
+            records.goals[i],
+            records.starts[i],
+            paths=[("original", o)],
+            title=f"({'abcd'[c]}) the {label}",
+        )
+        draw_map(
+            column[1],
+            records.obstacles_a[i],
+            records.goals[i],
+            records.starts[i],
+            paths=[("adversarial", a)],
+            added=records.added[i],
+            title=_distances((distances or {}).get(label)) or None,
+        )
         image = render_path_images(records.path_o.take([i]), records.path_a.take([i]), records.size)[0]
         column[2].imshow(image, interpolation="nearest")
         column[2].set_xticks([])
@@ -142,18 +183,31 @@ def harm_pairs(records, examples, stem: Path, per_row: int = 2) -> list[str]:
     per_row = max(1, min(per_row, n))
     rows = -(-n // per_row)
     # constrained layout, and room for a title above and the costs below every (square) map
-    fig, axes = plt.subplots(rows, 2 * per_row, figsize=(2.6 * 2 * per_row, 3.4 * rows), squeeze=False,
-                             layout="constrained")
+    fig, axes = plt.subplots(
+        rows, 2 * per_row, figsize=(2.6 * 2 * per_row, 3.4 * rows), squeeze=False, layout="constrained"
+    )
     for ax in axes.ravel():
         ax.axis("off")
     for i, e in enumerate(examples):
         left, right = axes[i // per_row, 2 * (i % per_row)], axes[i // per_row, 2 * (i % per_row) + 1]
         o, a = _paths(records, i)
         for ax, obstacles, paths, added, title, costs in (
-            (left, records.obstacles_o[i], [("expert", np.array(e.expert_path_o)), ("original", o)], None,
-             f"pair {e.pair_index}: original", (e.cost_o, e.opt_cost_o, e.regret_o)),
-            (right, records.obstacles_a[i], [("expert", np.array(e.expert_path_a)), ("adversarial", a)],
-             records.added[i], f"adversarial ({e.label}, {e.harm})", (e.cost_a, e.opt_cost_a, e.regret_a)),
+            (
+                left,
+                records.obstacles_o[i],
+                [("expert", np.array(e.expert_path_o)), ("original", o)],
+                None,
+                f"pair {e.pair_index}: original",
+                (e.cost_o, e.opt_cost_o, e.regret_o),
+            ),
+            (
+                right,
+                records.obstacles_a[i],
+                [("expert", np.array(e.expert_path_a)), ("adversarial", a)],
+                records.added[i],
+                f"adversarial ({e.label}, {e.harm})",
+                (e.cost_a, e.opt_cost_a, e.regret_a),
+            ),
         ):
             ax.axis("on")
             draw_map(ax, obstacles, records.goals[i], records.starts[i], paths=paths, added=added, title=title)
@@ -168,8 +222,9 @@ def regret_histogram(edges: np.ndarray, counts: dict[str, dict[str, np.ndarray]]
     ({label: {harm: pairs per bin (len(edges) - 1,)}}), the harm values stacked, bins `(edges[k], edges[k + 1]]`,
     a log count axis (most pairs sit in the bin of 0) and a dashed line at the harm tolerance `tol`."""
     labels = list(counts)
-    fig, axes = plt.subplots(1, len(labels), figsize=(4.4 * len(labels), 3.2), sharex=True, sharey=True,
-                             squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(
+        1, len(labels), figsize=(4.4 * len(labels), 3.2), sharex=True, sharey=True, squeeze=False, layout="constrained"
+    )
     widths = np.diff(edges)
     colours = {"harmful": "#d62728", "harmless": "#7f7f7f"}
     for ax, label in zip(axes[0], labels):
@@ -178,8 +233,18 @@ def regret_histogram(edges: np.ndarray, counts: dict[str, dict[str, np.ndarray]]
             part = counts[label].get(harm)
             if part is None or not part.any():
                 continue
-            ax.bar(edges[:-1], part, widths, bottom=bottom, align="edge", color=colour, edgecolor="white",
-                   linewidth=0.5, label=harm, log=True)
+            ax.bar(
+                edges[:-1],
+                part,
+                widths,
+                bottom=bottom,
+                align="edge",
+                color=colour,
+                edgecolor="white",
+                linewidth=0.5,
+                label=harm,
+                log=True,
+            )
             bottom = bottom + part
         ax.axvline(tol, color="k", ls="--", lw=1, label=f"tolerance ({tol:g})")
         ax.set_title(f"{label} pairs ({int(bottom.sum()):,})", fontsize=9)
@@ -189,8 +254,9 @@ def regret_histogram(edges: np.ndarray, counts: dict[str, dict[str, np.ndarray]]
     for ax in axes[0]:
         for handle, name in zip(*ax.get_legend_handles_labels()):
             handles.setdefault(name, handle)
-    fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=len(handles), fontsize=8,
-               frameon=False)
+    fig.legend(
+        list(handles.values()), list(handles), loc="outside lower center", ncol=len(handles), fontsize=8, frameon=False
+    )
     return save(fig, stem)
 
 
@@ -220,8 +286,13 @@ def accuracy_vs_size(points: dict, stem: Path) -> list[str]:
     colours = {kind: f"C{k}" for k, kind in enumerate(sorted({kind for kind, _ in points}))}
     for (kind, setting), values in sorted(points.items()):
         values = sorted(values)
-        ax.plot([100 * v[0] for v in values], [v[2] for v in values], "o-" if setting == "baseline" else "s--",
-                color=colours[kind], label=f"{kind} ({setting})")
+        ax.plot(
+            [100 * v[0] for v in values],
+            [v[2] for v in values],
+            "o-" if setting == "baseline" else "s--",
+            color=colours[kind],
+            label=f"{kind} ({setting})",
+        )
     ax.set_xlabel("training set used (% of the 70% split, balanced)")
     ax.set_ylabel("test accuracy")
     ax.set_ylim(0, 1.02)
@@ -238,22 +309,28 @@ def roc_pr_curves(curves: dict, stem: Path) -> list[str]:
 
     fig, axes = plt.subplots(2, 2, figsize=(10, 9), layout="constrained")  # titles clear of the x labels above
     axes = axes.ravel()
-    panels = [("pr", "imbalanced", "(a) PR curve, imbalanced training"),
-              ("pr", "balanced", "(b) PR curve, balanced training"),
-              ("roc", "imbalanced", "(c) ROC curve, imbalanced training"),
-              ("roc", "balanced", "(d) ROC curve, balanced training")]
+    panels = [
+        ("pr", "imbalanced", "(a) PR curve, imbalanced training"),
+        ("pr", "balanced", "(b) PR curve, balanced training"),
+        ("roc", "imbalanced", "(c) ROC curve, imbalanced training"),
+        ("roc", "balanced", "(d) ROC curve, balanced training"),
+    ]
     for ax, (kind, training, title) in zip(axes, panels):
         drawn = 0
         for name, (points, auc, ap) in sorted(curves.get(training, {}).items()):
             if not points:
                 continue
             if kind == "roc":
-                RocCurveDisplay(fpr=np.asarray(points["roc"]["fpr"]), tpr=np.asarray(points["roc"]["tpr"]),
-                                roc_auc=auc, name=name).plot(ax=ax)
+                RocCurveDisplay(
+                    fpr=np.asarray(points["roc"]["fpr"]), tpr=np.asarray(points["roc"]["tpr"]), roc_auc=auc, name=name
+                ).plot(ax=ax)
             else:
-                PrecisionRecallDisplay(precision=np.asarray(points["pr"]["precision"]),
-                                       recall=np.asarray(points["pr"]["recall"]), average_precision=ap,
-                                       name=name).plot(ax=ax)
+                PrecisionRecallDisplay(
+                    precision=np.asarray(points["pr"]["precision"]),
+                    recall=np.asarray(points["pr"]["recall"]),
+                    average_precision=ap,
+                    name=name,
+                ).plot(ax=ax)
             drawn += 1
         if not drawn:
             ax.text(0.5, 0.5, "no curve stored", ha="center", va="center", transform=ax.transAxes)

@@ -59,20 +59,28 @@ def counts(values) -> str:
 
 
 def _environment() -> jinja2.Environment:
-    env = jinja2.Environment(loader=jinja2.PackageLoader("vinadv.report", "templates"),
-                             autoescape=jinja2.select_autoescape(default=True), undefined=jinja2.StrictUndefined,
-                             trim_blocks=True, lstrip_blocks=True)
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("vinadv.report", "templates"),
+        autoescape=jinja2.select_autoescape(default=True),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
     env.filters.update(num=num, pct=pct, seconds=seconds, counts=counts)
-    env.globals.update(share=share, fmt_seconds=seconds, paper=paper, CATEGORY_ORDER=CATEGORY_ORDER,
-                       ALL_LABELS=ALL_LABELS)
+    env.globals.update(
+        share=share, fmt_seconds=seconds, paper=paper, CATEGORY_ORDER=CATEGORY_ORDER, ALL_LABELS=ALL_LABELS
+    )
     return env
 
 
 def render_page(data: ReportData) -> str:
     """The HTML of `index.html` for `data`."""
     sections = [(sid, title) for sid, title in PAGE_SECTIONS if sid in data.sections or sid == "files"]
-    return _environment().get_template("report.html").render(
-        data=data, s=data.sections, sections=sections, files=data.files(), stylesheet=STYLESHEET)
+    return (
+        _environment()
+        .get_template("report.html")
+        .render(data=data, s=data.sections, sections=sections, files=data.files(), stylesheet=STYLESHEET)
+    )
 
 
 def write_tables(data: ReportData, out: Path) -> None:
@@ -100,9 +108,18 @@ def render_robustness_page(data, out: Path, url: str | None = None) -> Path:
     css = (resources.files("vinadv.report") / "templates" / STYLESHEET).read_text(encoding="utf-8")
     with atomic_output(out / STYLESHEET, "w", encoding="utf-8") as fh:
         fh.write(css)
-    page = _environment().get_template("robustness.html").render(
-        d=data, url=url, version=__version__, generated=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
-        files=files, stylesheet=STYLESHEET)
+    page = (
+        _environment()
+        .get_template("robustness.html")
+        .render(
+            d=data,
+            url=url,
+            version=__version__,
+            generated=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+            files=files,
+            stylesheet=STYLESHEET,
+        )
+    )
     index = out / "index.html"
     with atomic_output(index, "w", encoding="utf-8") as fh:
         fh.write(page)

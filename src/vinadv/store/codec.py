@@ -87,8 +87,9 @@ def decode_maps(texts: Sequence[str], size: int | None = None) -> np.ndarray:
         return np.zeros((n, 0, 0), dtype=bool)
     if (lengths != size * (size + 1) - 1).any():
         bad = int(np.flatnonzero(lengths != size * (size + 1) - 1)[0])
-        raise InputError(f"map {bad}: {lengths[bad]} characters, expected {size * (size + 1) - 1} for a "
-                         f"{size}x{size} map")
+        raise InputError(
+            f"map {bad}: {lengths[bad]} characters, expected {size * (size + 1) - 1} for a {size}x{size} map"
+        )
     full = np.full((n, size * (size + 1)), _SEMI, dtype=np.uint8)
     full[:, :-1] = buf[:, : size * (size + 1) - 1]
     full = full.reshape(n, size, size + 1)

@@ -83,8 +83,19 @@ class PairRecords(PathPairs):
             self.no = int_column(self.no, "PairRecords.no", (n,))
 
     @classmethod
-    def from_pairs(cls, pairs: PathPairs, *, label, attack, label_source="rule", score=None, dh=None, dv=None,
-                   pair_index=None, harm=None) -> PairRecords:
+    def from_pairs(
+        cls,
+        pairs: PathPairs,
+        *,
+        label,
+        attack,
+        label_source="rule",
+        score=None,
+        dh=None,
+        dv=None,
+        pair_index=None,
+        harm=None,
+    ) -> PairRecords:
         """Records of `pairs` (a `PairSet`, any `PathPairs`) plus their labels; `pair_index` defaults to `0..n-1`.
 
         `harm`: a `vinadv.classify.harm.PairHarm`-like object (read by field name), or None (the harm columns stay
@@ -92,10 +103,21 @@ class PairRecords(PathPairs):
         """
         return cls(
             pair_index=np.arange(len(pairs)) if pair_index is None else pair_index,
-            obstacles_o=pairs.obstacles_o, obstacles_a=pairs.obstacles_a,
-            starts=pairs.starts, goals=pairs.goals, added=pairs.added, path_o=pairs.path_o, path_a=pairs.path_a,
-            label=label, attack=attack, term_o=pairs.term_o, term_a=pairs.term_a,
-            label_source=label_source, score=score, dh=dh, dv=dv,
+            obstacles_o=pairs.obstacles_o,
+            obstacles_a=pairs.obstacles_a,
+            starts=pairs.starts,
+            goals=pairs.goals,
+            added=pairs.added,
+            path_o=pairs.path_o,
+            path_a=pairs.path_a,
+            label=label,
+            attack=attack,
+            term_o=pairs.term_o,
+            term_a=pairs.term_a,
+            label_source=label_source,
+            score=score,
+            dh=dh,
+            dv=dv,
             **({} if harm is None else {name: getattr(harm, name) for name in HARM_COLUMNS}),
         )
 

@@ -217,7 +217,8 @@ class Store:
                 self._upgrade()
             else:  # read-only use: nothing changes, the columns it lacks read as NULL
                 self._absent_columns = frozenset(UPGRADE_COLUMNS) - {
-                    c["name"] for c in sa.inspect(self.engine).get_columns(map_pairs.name)}
+                    c["name"] for c in sa.inspect(self.engine).get_columns(map_pairs.name)
+                }
         if self.readonly:
             return
         with self.engine.connect() as conn:
@@ -271,18 +272,31 @@ class Store:
         not a number (`resolve_run` reads a number as a run id): InputError otherwise."""
         if name is not None:
             if not name.strip() or name.strip().isdigit():
-                raise InputError(f"name: {name!r} cannot be a run name (a name needs a letter; numbers are run ids)",
-                                 "name")
+                raise InputError(
+                    f"name: {name!r} cannot be a run name (a name needs a letter; numbers are run ids)", "name"
+                )
             found = self.find_run(name)
             if found is not None:
-                raise InputError(f"name: run {found} in database {self.url} is already called {name!r}; "
-                                 "continue it with resume, or choose another name", "name", "resume", "name")
+                raise InputError(
+                    f"name: run {found} in database {self.url} is already called {name!r}; "
+                    "continue it with resume, or choose another name",
+                    "name",
+                    "resume",
+                    "name",
+                )
         with self.engine.begin() as conn:
             result = conn.execute(
                 runs.insert().values(
-                    name=name, created=_utcnow(), config=config, seed=None if seed is None else int(seed),
-                    weights_checksum=weights_checksum, attack=attack, classifier=classifier,
-                    version=version, timings=None, status=status,
+                    name=name,
+                    created=_utcnow(),
+                    config=config,
+                    seed=None if seed is None else int(seed),
+                    weights_checksum=weights_checksum,
+                    attack=attack,
+                    classifier=classifier,
+                    version=version,
+                    timings=None,
+                    status=status,
                 )
             )
             return int(result.inserted_primary_key[0])
@@ -345,11 +359,7 @@ class Store:
         if not with_counts:
             with self.engine.connect() as conn:
                 return [dict(r) for r in conn.execute(sa.select(runs).order_by(runs.c.id)).mappings()]
-        counts = (
-            sa.select(map_pairs.c.run_id, sa.func.count().label("n_pairs"))
-            .group_by(map_pairs.c.run_id)
-            .subquery()
-        )
+        counts = sa.select(map_pairs.c.run_id, sa.func.count().label("n_pairs")).group_by(map_pairs.c.run_id).subquery()
         query = (
             sa.select(runs, sa.func.coalesce(counts.c.n_pairs, 0).label("n_pairs"))
             .select_from(runs.outerjoin(counts, counts.c.run_id == runs.c.id))
@@ -396,8 +406,10 @@ class Store:
         """
         run_id = int(run_id)
         if self._absent_columns:
-            raise InputError(f"database {self.url}: an older schema version opened without create; "
-                             "open it with create to upgrade it before writing")
+            raise InputError(
+                f"database {self.url}: an older schema version opened without create; "
+                "open it with create to upgrade it before writing"
+            )
         # strictly increasing, as jobs write them, means no duplicates: the sort of np.unique only otherwise
         increasing = bool((np.diff(records.pair_index) > 0).all())
         if not increasing and len(np.unique(records.pair_index)) != len(records):
@@ -462,14 +474,14 @@ class Store:
         pair_indices: np.ndarray | None = None,
     ) -> PairRecords:
         """The run's stored pairs, ordered by pair index, decoded back into arrays."""
-        query = self._pairs_query(run_id, successful_only=successful_only, labels=labels,
-                                  pair_indices=pair_indices)
+        query = self._pairs_query(run_id, successful_only=successful_only, labels=labels, pair_indices=pair_indices)
         with self.engine.connect() as conn:
             rows = conn.execute(query).all()
         return decode_rows(rows)
 
-    def iter_pair_rows(self, run_id: int, *, successful_only: bool = False,
-                       chunk: int = 10_000) -> Iterator[list[dict]]:
+    def iter_pair_rows(
+        self, run_id: int, *, successful_only: bool = False, chunk: int = 10_000
+    ) -> Iterator[list[dict]]:
         """The run's stored rows as text, ordered by pair index, in chunks of dicts (streamed; for export)."""
         query = self._pairs_query(run_id, successful_only=successful_only)
         with self.engine.connect() as conn:
@@ -491,9 +503,11 @@ class Store:
 
     def count_pairs(self, run_id: int) -> int:
         with self.engine.connect() as conn:
-            return int(conn.execute(
-                sa.select(sa.func.count()).select_from(map_pairs).where(map_pairs.c.run_id == int(run_id))
-            ).scalar_one())
+            return int(
+                conn.execute(
+                    sa.select(sa.func.count()).select_from(map_pairs).where(map_pairs.c.run_id == int(run_id))
+                ).scalar_one()
+            )
 
     def label_counts(self, run_id: int) -> dict[str, int]:
         """Stored pairs per label, every label present (0 where none), in DESIGN.md order."""
@@ -545,8 +559,13 @@ class Store:
         """The run's annotations (of `pair_indices` only, if given), oldest first: dicts with id, pair_index,
         label, annotator, created."""
         query = (
-            sa.select(annotations.c.id, annotations.c.pair_index, annotations.c.label,
-                      annotations.c.annotator, annotations.c.created)
+            sa.select(
+                annotations.c.id,
+                annotations.c.pair_index,
+                annotations.c.label,
+                annotations.c.annotator,
+                annotations.c.created,
+            )
             .where(annotations.c.run_id == int(run_id))
             .order_by(annotations.c.id)
         )
@@ -569,8 +588,18 @@ class Store:
             return 0
         self._ensure_table(evaluations)
         now = _utcnow()
-        keys = ("batch", "classifier", "setting", "training", "train_fraction", "train_size", "test_size", "seed",
-                "metrics", "curves")
+        keys = (
+            "batch",
+            "classifier",
+            "setting",
+            "training",
+            "train_fraction",
+            "train_size",
+            "test_size",
+            "seed",
+            "metrics",
+            "curves",
+        )
         values = [{"run_id": int(run_id), "created": now, **{k: row.get(k) for k in keys}} for row in rows]
         with self.engine.begin() as conn:
             conn.execute(evaluations.insert(), values)
@@ -581,22 +610,34 @@ class Store:
         with self.engine.connect() as conn:
             if not sa.inspect(conn).has_table(evaluations.name):
                 return []
-            rows = conn.execute(
-                sa.select(evaluations).where(evaluations.c.run_id == int(run_id)).order_by(evaluations.c.id)
-            ).mappings().all()
+            rows = (
+                conn.execute(
+                    sa.select(evaluations).where(evaluations.c.run_id == int(run_id)).order_by(evaluations.c.id)
+                )
+                .mappings()
+                .all()
+            )
         return [dict(r) for r in rows]
 
     # ------------------------------------------------------------------------------------- robustness
 
-    def add_robustness(self, planner: str, weights_checksum: str | None, settings: dict, result: dict,
-                       version: str = __version__) -> int:
+    def add_robustness(
+        self, planner: str, weights_checksum: str | None, settings: dict, result: dict, version: str = __version__
+    ) -> int:
         """Store one robustness benchmark (`vinadv robustness`): the planner's name and weights checksum, the
         benchmark's settings and its figures (`vinadv.robustness.RobustnessResult.to_dict()`), JSON; return its id."""
         self._ensure_table(robustness)
         with self.engine.begin() as conn:
-            row = conn.execute(robustness.insert().values(
-                created=_utcnow(), planner=str(planner), weights_checksum=weights_checksum, settings=settings,
-                result=result, version=version))
+            row = conn.execute(
+                robustness.insert().values(
+                    created=_utcnow(),
+                    planner=str(planner),
+                    weights_checksum=weights_checksum,
+                    settings=settings,
+                    result=result,
+                    version=version,
+                )
+            )
             return int(row.inserted_primary_key[0])
 
     def read_robustness(self, ids: Sequence[int] | None = None) -> list[dict]:
@@ -651,10 +692,23 @@ class Store:
         (run_id, <filter>, pair_index) indexes every page is one index range read, however deep.
         """
         c = map_pairs.c
-        harm_columns = [sa.null().label(name) if name in self._absent_columns else c[name]
-                        for name in ("harm", "regret_o", "regret_a")]
-        query = sa.select(c.pair_index, c.label, c.attack, c.label_source, c.score, c.dh, c.dv,
-                          c.term_o, c.term_a, c.added_obstacle, *harm_columns).where(c.run_id == int(run_id))
+        harm_columns = [
+            sa.null().label(name) if name in self._absent_columns else c[name]
+            for name in ("harm", "regret_o", "regret_a")
+        ]
+        query = sa.select(
+            c.pair_index,
+            c.label,
+            c.attack,
+            c.label_source,
+            c.score,
+            c.dh,
+            c.dv,
+            c.term_o,
+            c.term_a,
+            c.added_obstacle,
+            *harm_columns,
+        ).where(c.run_id == int(run_id))
         if label is not None:
             query = query.where(c.label == label)
         if attack is not None:
@@ -680,8 +734,9 @@ class Store:
         """Stored pairs per label of every run, in one query: {run_id: {label: n}} (every label present)."""
         with self.engine.connect() as conn:
             rows = conn.execute(
-                sa.select(map_pairs.c.run_id, map_pairs.c.label, sa.func.count())
-                .group_by(map_pairs.c.run_id, map_pairs.c.label)
+                sa.select(map_pairs.c.run_id, map_pairs.c.label, sa.func.count()).group_by(
+                    map_pairs.c.run_id, map_pairs.c.label
+                )
             ).all()
         counts: dict[int, dict[str, int]] = {}
         for run_id, label, k in rows:
@@ -691,9 +746,11 @@ class Store:
     def label_sources(self, run_id: int) -> list[str]:
         """The distinct label sources of the run's pairs, sorted."""
         with self.engine.connect() as conn:
-            rows = conn.execute(
-                sa.select(map_pairs.c.label_source).where(map_pairs.c.run_id == int(run_id)).distinct()
-            ).scalars().all()
+            rows = (
+                conn.execute(sa.select(map_pairs.c.label_source).where(map_pairs.c.run_id == int(run_id)).distinct())
+                .scalars()
+                .all()
+            )
         return sorted(rows)
 
     # ------------------------------------------------------------------------------- reads for the report
@@ -724,7 +781,6 @@ class Store:
             ).all()
         return {str(term): int(k) for term, k in sorted(rows)}
 
-
     def harm_counts(self, run_id: int) -> dict[str, dict[str | None, int]]:
         """Stored pairs per (paper label, harm), in one GROUP BY: `{label: {harm: n}}`, only the combinations
         present. Harm None: not computed (NULL: a pair stored before vinadv kept harm, or every pair of a
@@ -732,17 +788,16 @@ class Store:
         c = map_pairs.c
         keys = (c.label,) if "harm" in self._absent_columns else (c.label, c.harm)
         with self.engine.connect() as conn:
-            rows = conn.execute(
-                sa.select(*keys, sa.func.count()).where(c.run_id == int(run_id)).group_by(*keys)
-            ).all()
+            rows = conn.execute(sa.select(*keys, sa.func.count()).where(c.run_id == int(run_id)).group_by(*keys)).all()
         counts: dict[str, dict[str | None, int]] = {}
         for row in rows:
             harm = row[1] if len(keys) == 2 else None
             counts.setdefault(str(row[0]), {})[harm] = int(row[-1])
         return counts
 
-    def regret_changes(self, run_id: int, labels: Sequence[str] = FORK_OR_DETOUR
-                       ) -> dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]:
+    def regret_changes(
+        self, run_id: int, labels: Sequence[str] = FORK_OR_DETOUR
+    ) -> dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]:
         """What the attack added to the planner's regret, `regret_a - regret_o` (cost units), over the run's pairs
         with a label of `labels` whose two regrets are stored, as one GROUP BY (the report's histogram):
         `{(label, harm): (changes (k,) float64 ascending, pairs (k,) int64)}`, only the groups present.
@@ -753,17 +808,26 @@ class Store:
         if self._absent_columns & {"harm", "regret_o", "regret_a"}:
             return {}
         change = sa.func.round((c.regret_a - c.regret_o) * _MICRO).label("change")
-        query = (sa.select(c.label, c.harm, change, sa.func.count())
-                 .where(c.run_id == int(run_id), c.label.in_(list(labels)), c.harm.is_not(None),
-                        c.regret_o.is_not(None), c.regret_a.is_not(None))
-                 .group_by(c.label, c.harm, change))
+        query = (
+            sa.select(c.label, c.harm, change, sa.func.count())
+            .where(
+                c.run_id == int(run_id),
+                c.label.in_(list(labels)),
+                c.harm.is_not(None),
+                c.regret_o.is_not(None),
+                c.regret_a.is_not(None),
+            )
+            .group_by(c.label, c.harm, change)
+        )
         with self.engine.connect() as conn:
             rows = conn.execute(query).all()
         groups: dict[tuple[str, str], list] = {}
         for label, harm, value, k in rows:
             groups.setdefault((str(label), str(harm)), []).append((float(value) / _MICRO, int(k)))
-        return {key: (np.array([v for v, _ in part], dtype=np.float64), np.array([k for _, k in part], np.int64))
-                for key, part in ((key, sorted(part)) for key, part in sorted(groups.items()))}
+        return {
+            key: (np.array([v for v, _ in part], dtype=np.float64), np.array([k for _, k in part], np.int64))
+            for key, part in ((key, sorted(part)) for key, part in sorted(groups.items()))
+        }
 
 
 def _sqlite_pragmas(dbapi_conn, _record) -> None:
@@ -827,15 +891,49 @@ def _one_line_error(shown: str):
 
 #: columns read back, in order (`decode_rows` relies on it)
 PAIR_COLUMNS = (
-    "no", "pair_index", "map_o", "map_a", "path_o", "path_a", "label", "attack", "start", "goal",
-    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv", *HARM_COLUMNS, MORE_ADDED_COLUMN,
+    "no",
+    "pair_index",
+    "map_o",
+    "map_a",
+    "path_o",
+    "path_a",
+    "label",
+    "attack",
+    "start",
+    "goal",
+    "added_obstacle",
+    "label_source",
+    "score",
+    "term_o",
+    "term_a",
+    "dh",
+    "dv",
+    *HARM_COLUMNS,
+    MORE_ADDED_COLUMN,
 )
 
 
 #: columns written by `encode_rows`, in order
 INSERT_COLUMNS = (
-    "run_id", "pair_index", "map_o", "map_a", "path_o", "path_a", "label", "attack", "start", "goal",
-    "added_obstacle", "label_source", "score", "term_o", "term_a", "dh", "dv", *HARM_COLUMNS, MORE_ADDED_COLUMN,
+    "run_id",
+    "pair_index",
+    "map_o",
+    "map_a",
+    "path_o",
+    "path_a",
+    "label",
+    "attack",
+    "start",
+    "goal",
+    "added_obstacle",
+    "label_source",
+    "score",
+    "term_o",
+    "term_a",
+    "dh",
+    "dv",
+    *HARM_COLUMNS,
+    MORE_ADDED_COLUMN,
 )
 
 
@@ -851,8 +949,10 @@ def _driver_insert_sql(dialect: sa.Dialect, rows: int = 1) -> str | None:
     prep = dialect.identifier_preparer
     names = ", ".join(prep.quote(name) for name in INSERT_COLUMNS)
     sqlite_null = {"dh": "-1", "dv": "-1", MORE_ADDED_COLUMN: "''"} if dialect.name == "sqlite" else {}
-    values = [f"NULLIF({marker}, {sqlite_null[name]})" if name in sqlite_null else marker  # see encode_rows
-              for name in INSERT_COLUMNS]
+    values = [
+        f"NULLIF({marker}, {sqlite_null[name]})" if name in sqlite_null else marker  # see encode_rows
+        for name in INSERT_COLUMNS
+    ]
     group = f"({', '.join(values)})"
     return f"INSERT INTO {prep.format_table(map_pairs)} ({names}) VALUES {', '.join([group] * rows)}"
 
@@ -914,8 +1014,10 @@ def _encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, 
         "term_a": records.term_a[rows].tolist(),
         "dh": nullable(dh, dh < 0),
         "dv": nullable(dv, dv < 0),
-        **{name: nullable(getattr(records, name)[rows], np.isnan(getattr(records, name)[rows]))
-           for name in HARM_FLOAT_COLUMNS},
+        **{
+            name: nullable(getattr(records, name)[rows], np.isnan(getattr(records, name)[rows]))
+            for name in HARM_FLOAT_COLUMNS
+        },
         "expert_label": records.expert_label[rows].tolist(),  # None = NULL
         "harm": records.harm[rows].tolist(),
         MORE_ADDED_COLUMN: _encode_more_added(records.added[rows], "" if sqlite else None),
@@ -941,8 +1043,10 @@ def _decode_added(first: Sequence[str], more: Sequence[str | None]) -> np.ndarra
     cells, offsets = codec.decode_paths(["" if m is None else m for m in more])
     counts = np.diff(offsets)
     if (counts != counts[0]).any():
-        raise InputError(f"map_pairs: rows with different numbers of added obstacles ({sorted(set(counts + 1))}) "
-                         "in one read; read one run at a time")
+        raise InputError(
+            f"map_pairs: rows with different numbers of added obstacles ({sorted(set(counts + 1))}) "
+            "in one read; read one run at a time"
+        )
     rest = cells.astype(np.int64).reshape(len(first_cells), int(counts[0]), 2)
     return np.concatenate([first_cells, rest], axis=1)
 

@@ -11,8 +11,9 @@ from vinadv.store.schema import HARM_FLOAT_COLUMNS
 from vinadv.vocabulary import HARMS, LABELS, TERMINATIONS, is_success
 
 
-def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, first_index: int = 0,
-                   n_added: int = 1) -> PairRecords:
+def random_records(
+    n: int, size: int = 28, seed: int = 0, max_path: int = 80, first_index: int = 0, n_added: int = 1
+) -> PairRecords:
     """n random pairs on `size` x `size` maps, `n_added` added cells each; paths of 0..max_path random cells; some
     NULL scores and dh/dv."""
     rng = np.random.default_rng(seed)
@@ -38,11 +39,22 @@ def random_records(n: int, size: int = 28, seed: int = 0, max_path: int = 80, fi
     harm = np.array([None, *HARMS], dtype=object)[rng.integers(0, len(HARMS) + 1, n)]
     return PairRecords(
         pair_index=first_index + np.arange(n),
-        obstacles_o=obstacles_o, obstacles_a=obstacles_a,
-        starts=rng.integers(0, size, (n, 2)), goals=rng.integers(0, size, (n, 2)), added=added,
-        path_o=path_o, path_a=path_a, label=label, attack=is_success(label),
+        obstacles_o=obstacles_o,
+        obstacles_a=obstacles_a,
+        starts=rng.integers(0, size, (n, 2)),
+        goals=rng.integers(0, size, (n, 2)),
+        added=added,
+        path_o=path_o,
+        path_a=path_a,
+        label=label,
+        attack=is_success(label),
         term_o=np.array(TERMINATIONS, dtype=object)[rng.integers(0, 4, n)],
         term_a=np.array(TERMINATIONS, dtype=object)[rng.integers(0, 4, n)],
         label_source=np.array(["rule", "svm"], dtype=object)[rng.integers(0, 2, n)],
-        score=score, dh=dh, dv=dv, **costs, expert_label=expert_label, harm=harm,
+        score=score,
+        dh=dh,
+        dv=dv,
+        **costs,
+        expert_label=expert_label,
+        harm=harm,
     )

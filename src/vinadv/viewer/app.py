@@ -58,9 +58,11 @@ MAX_PAGE_SIZE = 500
 ANNOTATOR_COOKIE = "vinadv_annotator"
 DEFAULT_ANNOTATOR = "anonymous"
 #: the pages use their own scripts, styles and images only (the templates hold no inline script or style)
-CONTENT_SECURITY_POLICY = ("default-src 'self'; img-src 'self' data:; style-src 'self'; "
-                           "script-src 'self'; object-src 'none'; base-uri 'none'; form-action 'self'; "
-                           "frame-ancestors 'none'")
+CONTENT_SECURITY_POLICY = (
+    "default-src 'self'; img-src 'self' data:; style-src 'self'; "
+    "script-src 'self'; object-src 'none'; base-uri 'none'; form-action 'self'; "
+    "frame-ancestors 'none'"
+)
 _ANNOTATOR_RE = re.compile(r"^[\w .@+\-]{1,64}$")
 _MAX_ID = 2**63 - 1
 _COUNTS_TTL_S = 10.0
@@ -69,8 +71,13 @@ _FILTER_PARAMS = ("label", "attack", "source", "harm")
 _GRID_PARAMS = frozenset(_FILTER_PARAMS + ("after", "before", "size"))
 
 
-def create_app(store: Store, *, secret_key: bytes | str | None = None, allow_remote: bool = False,
-               image_cache_bytes: int = 64 * 2**20) -> Flask:
+def create_app(
+    store: Store,
+    *,
+    secret_key: bytes | str | None = None,
+    allow_remote: bool = False,
+    image_cache_bytes: int = 64 * 2**20,
+) -> Flask:
     """The viewer app over an open `store`. `secret_key` signs the session cookie (random per process if
     None, so sessions end with the server); `allow_remote` lifts the loopback-only Host check."""
     app = Flask(__name__)
@@ -82,9 +89,16 @@ def create_app(store: Store, *, secret_key: bytes | str | None = None, allow_rem
     )
     app.json.sort_keys = False
     app.extensions["vinadv"] = state = _ViewerState(store, image_cache_bytes)
-    app.jinja_env.globals.update(LABELS=LABELS, HUMAN_LABELS=HUMAN_LABELS, LABEL_KEYS=LABEL_KEYS, HARMS=HARMS,
-                                 fmt_score=_fmt_score, fmt_dist=_fmt_dist, fmt_cost=_fmt_cost,
-                                 csrf_token=_csrf_token)
+    app.jinja_env.globals.update(
+        LABELS=LABELS,
+        HUMAN_LABELS=HUMAN_LABELS,
+        LABEL_KEYS=LABEL_KEYS,
+        HARMS=HARMS,
+        fmt_score=_fmt_score,
+        fmt_dist=_fmt_dist,
+        fmt_cost=_fmt_cost,
+        csrf_token=_csrf_token,
+    )
 
     @app.before_request
     def _check_host():
@@ -93,8 +107,11 @@ def create_app(store: Store, *, secret_key: bytes | str | None = None, allow_rem
         host = request.host
         host = host[: host.find("]") + 1] if host.startswith("[") else host.rsplit(":", 1)[0]
         if host.lower() not in _LOOPBACK_NAMES:
-            abort(400, description=f"Host {request.host!r} refused: this server only answers on loopback "
-                                   "addresses (start it with --allow-remote to serve other hosts)")
+            abort(
+                400,
+                description=f"Host {request.host!r} refused: this server only answers on loopback "
+                "addresses (start it with --allow-remote to serve other hosts)",
+            )
         return None
 
     @app.after_request
@@ -139,8 +156,15 @@ def create_app(store: Store, *, secret_key: bytes | str | None = None, allow_rem
         filters = _filters()
         pair = state.pair_json(run_id, pair_index)
         nav = state.neighbours(run_id, pair_index, filters)
-        return render_template("pair.html", run=run, pair=pair, filters=filters, nav=nav,
-                               filter_query=_filter_query(filters), annotator=_annotator_from_cookie())
+        return render_template(
+            "pair.html",
+            run=run,
+            pair=pair,
+            filters=filters,
+            nav=nav,
+            filter_query=_filter_query(filters),
+            annotator=_annotator_from_cookie(),
+        )
 
     @app.post("/pairs/<int:run_id>/<int:pair_index>/label")
     def label_pair(run_id: int, pair_index: int):
@@ -193,8 +217,12 @@ def create_app(store: Store, *, secret_key: bytes | str | None = None, allow_rem
         state.require_run(run_id)
         grid = state.grid(run_id)
         return jsonify(
-            run_id=run_id, filters=grid["filters"], size=grid["size"], pairs=grid["pairs"],
-            next_after=grid["next_after"], prev_before=grid["prev_before"],
+            run_id=run_id,
+            filters=grid["filters"],
+            size=grid["size"],
+            pairs=grid["pairs"],
+            next_after=grid["next_after"],
+            prev_before=grid["prev_before"],
         )
 
     @app.get("/api/pairs/<int:run_id>/<int:pair_index>")
@@ -242,8 +270,17 @@ class _ViewerState:
             n = sum(c.values())
             valid = n - c["invalid"]
             successes = sum(c[lab] for lab in SUCCESS_LABELS)
-            out.append({**run, "planner": run_planner(run), "counts": c, "n_pairs": n, "n_valid": valid,
-                        "n_success": successes, "success_rate": successes / valid if valid else None})
+            out.append(
+                {
+                    **run,
+                    "planner": run_planner(run),
+                    "counts": c,
+                    "n_pairs": n,
+                    "n_valid": valid,
+                    "n_success": successes,
+                    "success_rate": successes / valid if valid else None,
+                }
+            )
         return out
 
     def require_run(self, run_id: int) -> dict:
@@ -293,8 +330,9 @@ class _ViewerState:
         size = _int_param("size", default=DEFAULT_PAGE_SIZE)
         if not 1 <= size <= MAX_PAGE_SIZE:
             raise BadRequest(f"size: must be 1 to {MAX_PAGE_SIZE}, got {size}")
-        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"],
-                  harm=filters["harm"])
+        kw = dict(
+            label=filters["label"], attack=filters["attack"], label_source=filters["source"], harm=filters["harm"]
+        )
         rows = self.store.page_pairs(run_id, after=after, before=before, limit=size + 1, **kw)
         if before is not None:
             has_prev = len(rows) > size
@@ -303,21 +341,28 @@ class _ViewerState:
         else:
             has_next = len(rows) > size
             rows = rows[:size]
-            has_prev = bool(rows) and after is not None and bool(
-                self.store.page_pairs(run_id, before=rows[0]["pair_index"], limit=1, **kw))
+            has_prev = (
+                bool(rows)
+                and after is not None
+                and bool(self.store.page_pairs(run_id, before=rows[0]["pair_index"], limit=1, **kw))
+            )
         humans = self.human_labels(run_id, [r["pair_index"] for r in rows])
         pairs = [_pair_row_json(r, humans.get(r["pair_index"], [])) for r in rows]
         return {
-            "filters": filters, "size": size, "pairs": pairs,
+            "filters": filters,
+            "size": size,
+            "pairs": pairs,
             "next_after": rows[-1]["pair_index"] if has_next else None,
             "prev_before": rows[0]["pair_index"] if has_prev else None,
-            "filter_query": _filter_query(filters), "page_query": _page_query(filters, size),
+            "filter_query": _filter_query(filters),
+            "page_query": _page_query(filters, size),
             "sources": self.sources(run_id),
         }
 
     def neighbours(self, run_id: int, pair_index: int, filters: dict) -> dict:
-        kw = dict(label=filters["label"], attack=filters["attack"], label_source=filters["source"],
-                  harm=filters["harm"])
+        kw = dict(
+            label=filters["label"], attack=filters["attack"], label_source=filters["source"], harm=filters["harm"]
+        )
         nxt = self.store.page_pairs(run_id, after=pair_index, limit=1, **kw)
         prv = self.store.page_pairs(run_id, before=pair_index, limit=1, **kw)
         return {"next": nxt[0]["pair_index"] if nxt else None, "prev": prv[0]["pair_index"] if prv else None}
@@ -328,22 +373,35 @@ class _ViewerState:
             return out
         for a in self.store.read_annotations(run_id, pair_indices=pair_indices):
             out.setdefault(int(a["pair_index"]), []).append(
-                {"label": a["label"], "annotator": a["annotator"], "created": a["created"].isoformat() + "Z"})
+                {"label": a["label"], "annotator": a["annotator"], "created": a["created"].isoformat() + "Z"}
+            )
         return out
 
     def pair_json(self, run_id: int, pair_index: int) -> dict:
         r = self.require_pair(run_id, pair_index)
         o, a = r.path_o[0], r.path_a[0]
         return {
-            "run_id": run_id, "pair_index": pair_index, "no": int(r.no[0]), "size": r.size,
-            "label": r.label[0], "attack": bool(r.attack[0]), "label_source": r.label_source[0],
-            "score": _none_if_nan(r.score[0]), "dh": _none_if_negative(r.dh[0]), "dv": _none_if_negative(r.dv[0]),
-            "term_o": r.term_o[0], "term_a": r.term_a[0],
+            "run_id": run_id,
+            "pair_index": pair_index,
+            "no": int(r.no[0]),
+            "size": r.size,
+            "label": r.label[0],
+            "attack": bool(r.attack[0]),
+            "label_source": r.label_source[0],
+            "score": _none_if_nan(r.score[0]),
+            "dh": _none_if_negative(r.dh[0]),
+            "dv": _none_if_negative(r.dv[0]),
+            "term_o": r.term_o[0],
+            "term_a": r.term_a[0],
             **{name: _none_if_nan(float(getattr(r, name)[0])) for name in HARM_FLOAT_FIELDS},
-            "expert_label": r.expert_label[0], "harm": r.harm[0],
-            "start": r.starts[0].tolist(), "goal": r.goals[0].tolist(), "added": r.added[0, 0].tolist(),
+            "expert_label": r.expert_label[0],
+            "harm": r.harm[0],
+            "start": r.starts[0].tolist(),
+            "goal": r.goals[0].tolist(),
+            "added": r.added[0, 0].tolist(),
             "added_cells": r.added[0].tolist(),  # every added obstacle, in the order added (`added`: the first)
-            "path_o": o.tolist(), "path_a": a.tolist(),
+            "path_o": o.tolist(),
+            "path_a": a.tolist(),
             "map_o": ["".join("1" if v else "0" for v in row) for row in r.obstacles_o[0]],
             "map_a": ["".join("1" if v else "0" for v in row) for row in r.obstacles_a[0]],
             "human_labels": self.human_labels(run_id, [pair_index]).get(pair_index, []),
@@ -357,8 +415,10 @@ class _ViewerState:
 def _only_params(allowed: set) -> None:
     unknown = sorted(set(request.args) - set(allowed))
     if unknown:
-        raise BadRequest(f"unknown query parameter {unknown[0]!r}"
-                         + (f"; allowed: {', '.join(sorted(allowed))}" if allowed else "; this page takes none"))
+        raise BadRequest(
+            f"unknown query parameter {unknown[0]!r}"
+            + (f"; allowed: {', '.join(sorted(allowed))}" if allowed else "; this page takes none")
+        )
     for name in request.args:
         if len(request.args.getlist(name)) > 1:
             raise BadRequest(f"query parameter {name!r} given more than once")
@@ -467,11 +527,19 @@ def _none_if_negative(value) -> int | None:
 
 def _pair_row_json(row: dict, humans: list[dict]) -> dict:
     return {
-        "pair_index": int(row["pair_index"]), "label": row["label"], "attack": bool(row["attack"]),
-        "label_source": row["label_source"], "score": _none_if_nan(row["score"]),
-        "dh": _none_if_negative(row["dh"]), "dv": _none_if_negative(row["dv"]),
-        "term_o": row["term_o"], "term_a": row["term_a"], "human_labels": humans,
-        "harm": row["harm"], "regret_o": _none_if_nan(row["regret_o"]), "regret_a": _none_if_nan(row["regret_a"]),
+        "pair_index": int(row["pair_index"]),
+        "label": row["label"],
+        "attack": bool(row["attack"]),
+        "label_source": row["label_source"],
+        "score": _none_if_nan(row["score"]),
+        "dh": _none_if_negative(row["dh"]),
+        "dv": _none_if_negative(row["dv"]),
+        "term_o": row["term_o"],
+        "term_a": row["term_a"],
+        "human_labels": humans,
+        "harm": row["harm"],
+        "regret_o": _none_if_nan(row["regret_o"]),
+        "regret_a": _none_if_nan(row["regret_a"]),
     }
 
 
@@ -482,11 +550,19 @@ def run_planner(run: dict) -> str:
 
 def _run_json(run: dict) -> dict:
     return {
-        "id": int(run["id"]), "name": run["name"], "created": run["created"].isoformat() + "Z",
-        "status": run["status"], "attack": run["attack"], "planner": run["planner"], "classifier": run["classifier"],
+        "id": int(run["id"]),
+        "name": run["name"],
+        "created": run["created"].isoformat() + "Z",
+        "status": run["status"],
+        "attack": run["attack"],
+        "planner": run["planner"],
+        "classifier": run["classifier"],
         "seed": run["seed"],
-        "n_pairs": run["n_pairs"], "counts": run["counts"], "n_valid": run["n_valid"],
-        "n_success": run["n_success"], "success_rate": run["success_rate"],
+        "n_pairs": run["n_pairs"],
+        "counts": run["counts"],
+        "n_valid": run["n_valid"],
+        "n_success": run["n_success"],
+        "success_rate": run["success_rate"],
     }
 
 

@@ -47,8 +47,9 @@ def human_training_set(store, run_id: int) -> tuple[PathPairBatch, np.ndarray, n
     store.run_info(run_id)  # InputError naming the run when there is none
     pair_indices, labels = resolve_human_labels(store.read_annotations(run_id))
     if len(pair_indices) == 0:
-        raise InputError(f"run_id {run_id}: no human labels in database {store.url} (label pairs with `vinadv serve`)",
-                         "run_id")
+        raise InputError(
+            f"run_id {run_id}: no human labels in database {store.url} (label pairs with `vinadv serve`)", "run_id"
+        )
     records = store.read_pairs(run_id, pair_indices=pair_indices)
     if len(records) != len(pair_indices):  # an annotation of a pair that is not stored (deleted, other db)
         keep = np.isin(pair_indices, records.pair_index)
