@@ -913,28 +913,8 @@ PAIR_COLUMNS = (
 )
 
 
-#: columns written by `encode_rows`, in order
-INSERT_COLUMNS = (
-    "run_id",
-    "pair_index",
-    "map_o",
-    "map_a",
-    "path_o",
-    "path_a",
-    "label",
-    "attack",
-    "start",
-    "goal",
-    "added_obstacle",
-    "label_source",
-    "score",
-    "term_o",
-    "term_a",
-    "dh",
-    "dv",
-    *HARM_COLUMNS,
-    MORE_ADDED_COLUMN,
-)
+#: columns written by `encode_rows`, in order: those read back, with the run instead of the row number
+INSERT_COLUMNS = ("run_id", *PAIR_COLUMNS[1:])
 
 
 def _driver_insert_sql(dialect: sa.Dialect, rows: int = 1) -> str | None:
