@@ -47,6 +47,9 @@ SLOW = (
     "tests/attacks/test_obstacles.py::test_every_k_obstacle_pair_keeps_the_rules",
     "tests/attacks/test_obstacles.py::test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search",
     "tests/test_robustness.py::test_exhaustive_harmful_rate_is_the_share_of_maps_some_single_cell_harms",
+    # 2-thread PyTorch beside a busy core, and a fresh interpreter
+    "tests/planners/test_torch_replay.py::test_replay_kernel_is_q_values_bit_for_bit[2-threads",
+    "tests/planners/test_batching.py::test_torch_keeps_its_threads_after_numba_parallel_kernels",
 )
 
 
