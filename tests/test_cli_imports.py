@@ -52,3 +52,10 @@ def test_a_command_still_checks_its_choices():
         timeout=300,
     )
     assert done.returncode == 2 and "near-path" in done.stderr and "nope" in done.stderr
+
+
+def test_a_run_with_the_rule_labeller_does_without_scikit_learn(tmp_path):
+    # every command imports only what it uses: the rule labeller is plain Numba, the classifiers bring scikit-learn
+    names = imported_modules("run", "--n", "20", "--db", str(tmp_path / "r.db"), "--quiet")
+    assert "torch" in names and "sqlalchemy" in names  # the run did happen
+    assert "sklearn" not in names and "matplotlib" not in names and "flask" not in names

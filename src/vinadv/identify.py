@@ -11,33 +11,34 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from vinadv.attacks.pairs import PairSet
-from vinadv.classify import (
-    HybridClassifier,
-    PairClassifier,
-    PathPairBatch,
-    RuleClassifier,
-    label_batch,
-    load_model,
-    path_distances,
-)
+from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_table, pairset_harm
+from vinadv.classify.rule import label_batch, path_distances
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
 from vinadv.planners.interface import Planner, as_planner
 from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
 
+if TYPE_CHECKING:  # scikit-learn comes with it; the rule labeller needs none
+    from vinadv.classify.base import PairClassifier
+
 BUILTIN_CLASSIFIERS = ("rule",)
 
 
-def load_classifier(spec: str | os.PathLike | None) -> tuple[PairClassifier, str]:
-    """A five-way classifier and its name from `spec`: None or 'rule' (the exact rule labeller), or a model
-    file written by `vinadv classify train` (an FP/DP model runs inside the paper's hybrid)."""
+def load_classifier(spec: str | os.PathLike | None) -> tuple[PairClassifier | None, str]:
+    """A five-way classifier and its name from `spec`: None or 'rule' give `(None, "rule")`, the exact rule labeller
+    (which `identify` runs without a classifier object, so the rule needs no scikit-learn); a model file written by
+    `vinadv classify train` gives the model (an FP/DP model inside the paper's hybrid)."""
     if spec is None or str(spec) == "rule":
-        return RuleClassifier(), "rule"
+        return None, "rule"
+    from vinadv.classify.base import load_model
+    from vinadv.classify.hybrid import HybridClassifier, RuleClassifier
+
     if not os.path.exists(spec):
         raise InputError(
             f"classifier {spec}: neither a built-in classifier ({', '.join(BUILTIN_CLASSIFIERS)}) "
@@ -137,13 +138,14 @@ def identify(
     harm_rtol: float = 0.0,
     expert_o=None,
 ) -> Identification:
-    """Label every pair of `pairs` with `classifier` (default: the exact rule labeller) and compute its harm
+    """Label every pair of `pairs` with `classifier` (None: the exact rule labeller) and compute its harm
     (tolerances `harm_tol`, `harm_rtol`; `expert_o`: the original maps' expert data if already computed, see
     `vinadv.classify.harm.pair_harm`)."""
-    classifier = classifier or RuleClassifier()
     batch = PathPairBatch.from_pairs(pairs)
-    if isinstance(classifier, RuleClassifier):
-        result = label_batch(batch, classifier.t)  # exact: no classifier score
+    if classifier is not None:  # a classifier object means scikit-learn is loaded already
+        from vinadv.classify.hybrid import RuleClassifier
+    if classifier is None or isinstance(classifier, RuleClassifier):
+        result = label_batch(batch, getattr(classifier, "t", None))  # exact: no classifier score
         labels, dh, dv, score = result.labels, result.dh, result.dv, np.full(len(pairs), np.nan)
     else:
         labels = np.asarray(classifier.predict(batch)).astype("<U7")

@@ -2,71 +2,52 @@
 
 Input everywhere: path pairs (`PathPairBatch`, or two `vinadv.grid.paths.PackedPaths`). Label names come from
 `vinadv.vocabulary`, flips and rotations from `vinadv.grid.dihedral`.
+
+The names below are imported from their modules when first used, so that importing one module of the package (the
+rule labeller, harm) does not load scikit-learn and PyTorch with the classifiers (`vinadv run` with the rule labeller
+needs neither of them for labelling).
 """
 
-from vinadv.classify.base import MODEL_FORMAT, PairClassifier, load_model, save_model
-from vinadv.classify.batch import PathPairBatch
-from vinadv.classify.cooccurrence import FEATURES, cooccurrence, image_features, offset_cooccurrence
-from vinadv.classify.features import PathFeatures, path_features, reaches_goal
-from vinadv.classify.hybrid import (
-    FP_DP_KINDS,
-    HybridClassifier,
-    RuleClassifier,
-    make_fp_classifier,
-)
-from vinadv.classify.images import (
-    AUGMENT_TRANSFORMS,
-    augmentation_plan,
-    balance_batch,
-    balance_images,
-    render_batch,
-    render_path_images,
-)
-from vinadv.classify.metrics import binary_metrics
-from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
-from vinadv.classify.rule import PairLabels, default_threshold, is_fork, label_batch, label_pairs, path_distances
-from vinadv.classify.similarity import (
-    DistanceThresholdClassifier,
-    dtw_distances,
-    frechet_distances,
-    hausdorff_distances,
-)
+import importlib
 
-__all__ = [
-    "AUGMENT_TRANSFORMS",
-    "CNNImageClassifier",
-    "DistanceThresholdClassifier",
-    "FEATURES",
-    "FP_DP_KINDS",
-    "HybridClassifier",
-    "MLPImageClassifier",
-    "MODEL_FORMAT",
-    "PairClassifier",
-    "PairLabels",
-    "PathFeatures",
-    "PathPairBatch",
-    "RuleClassifier",
-    "SVMImageClassifier",
-    "augmentation_plan",
-    "balance_batch",
-    "balance_images",
-    "binary_metrics",
-    "cooccurrence",
-    "default_threshold",
-    "dtw_distances",
-    "frechet_distances",
-    "hausdorff_distances",
-    "image_features",
-    "is_fork",
-    "label_batch",
-    "label_pairs",
-    "load_model",
-    "make_fp_classifier",
-    "offset_cooccurrence",
-    "path_distances",
-    "path_features",
-    "reaches_goal",
-    "render_batch",
-    "render_path_images",
-    "save_model",
-]
+#: every public name of the package and the module that defines it
+_EXPORTS = {
+    **dict.fromkeys(("MODEL_FORMAT", "PairClassifier", "load_model", "save_model"), "base"),
+    **dict.fromkeys(("PathPairBatch",), "batch"),
+    **dict.fromkeys(("FEATURES", "cooccurrence", "image_features", "offset_cooccurrence"), "cooccurrence"),
+    **dict.fromkeys(("PathFeatures", "path_features", "reaches_goal"), "features"),
+    **dict.fromkeys(("FP_DP_KINDS", "HybridClassifier", "RuleClassifier", "make_fp_classifier"), "hybrid"),
+    **dict.fromkeys(
+        (
+            "AUGMENT_TRANSFORMS",
+            "augmentation_plan",
+            "balance_batch",
+            "balance_images",
+            "render_batch",
+            "render_path_images",
+        ),
+        "images",
+    ),
+    **dict.fromkeys(("binary_metrics",), "metrics"),
+    **dict.fromkeys(("CNNImageClassifier", "MLPImageClassifier", "SVMImageClassifier"), "models"),
+    **dict.fromkeys(
+        ("PairLabels", "default_threshold", "is_fork", "label_batch", "label_pairs", "path_distances"), "rule"
+    ),
+    **dict.fromkeys(
+        ("DistanceThresholdClassifier", "dtw_distances", "frechet_distances", "hausdorff_distances"), "similarity"
+    ),
+}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'vinadv.classify' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"vinadv.classify.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return __all__

@@ -28,6 +28,16 @@ FP_DP_CLASSES = np.array(FORK_OR_DETOUR)
 _REGISTRY: dict[str, type] = {}
 
 
+def _registry() -> dict[str, type]:
+    """Every model kind: the classes register themselves when their modules are imported (done here, at first use,
+    since the package imports its modules lazily)."""
+    import vinadv.classify.hybrid
+    import vinadv.classify.models
+    import vinadv.classify.similarity  # noqa: F401
+
+    return _REGISTRY
+
+
 def register_kind(*kinds: str):
     """Class decorator: the model kinds a class saves and loads."""
 
@@ -137,7 +147,7 @@ def _model_from_archive(path: Path, archive: dict, expected: type | None) -> Pai
     if fmt != MODEL_FORMAT:
         raise InputError(f"{path}: model format {fmt!r}; this vinadv reads {MODEL_FORMAT!r} only")
     kind = str(archive["kind"])
-    cls = _REGISTRY.get(kind)
+    cls = _registry().get(kind)
     if cls is None:
         raise InputError(f"{path}: unknown model kind {kind!r}; known kinds: {sorted(_REGISTRY)}")
     if expected is not None and not issubclass(cls, expected):
@@ -156,7 +166,7 @@ def _model_from_archive(path: Path, archive: dict, expected: type | None) -> Pai
 
 def model_from_state(header: dict, arrays: dict) -> PairClassifier:
     """Rebuild a model from `_pack_state` output (used to nest one model inside another)."""
-    cls = _REGISTRY.get(header["kind"])
+    cls = _registry().get(header["kind"])
     if cls is None:
         raise InputError(f"unknown model kind {header['kind']!r}; known kinds: {sorted(_REGISTRY)}")
     return cls._from_state(header["kind"], header["params"], header["meta"], arrays)
