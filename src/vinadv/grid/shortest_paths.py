@@ -171,9 +171,29 @@ def first_optimal_action(optimal: np.ndarray) -> np.ndarray:
     return first
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _first_optimal_move(dist, obstacles, r, c, corner_cutting, deltas, costs):
+    """The lowest-index optimal action at `(r, c)` (as `first_optimal_action(optimal_actions(...))` there), -1 if
+    none: at the goal, an obstacle or an unreachable cell."""
+    d = dist[r, c]
+    if not (d > 0.0 and d < np.inf):
+        return -1
+    n, m = obstacles.shape
+    for a in range(deltas.shape[0]):
+        nr, nc = r + deltas[a, 0], c + deltas[a, 1]
+        if nr < 0 or nr >= n or nc < 0 or nc >= m or obstacles[nr, nc]:
+            continue
+        if not corner_cutting and deltas[a, 0] != 0 and deltas[a, 1] != 0 and (obstacles[nr, c] or obstacles[r, nc]):
+            continue
+        if abs(dist[nr, nc] + costs[a] - d) <= COST_TOL:
+            return a
+    return -1
+
+
 @numba.njit(cache=True)
-def _follow_policy(actions, starts, goals, deltas, lengths, cells, fill):
-    # Two passes share this code: with fill False only `lengths` is written.
+def _follow_policy(dist, obstacles, corner_cutting, starts, goals, deltas, costs, lengths, cells, fill):
+    # Two passes share this code: with fill False only `lengths` is written. The action at each cell is found
+    # there, so only the path's cells are looked at.
     n_maps, n_starts = starts.shape[0], starts.shape[1]
     pos = 0
     for b in range(n_maps):
@@ -189,7 +209,7 @@ def _follow_policy(actions, starts, goals, deltas, lengths, cells, fill):
                 count += 1
                 if r == goals[b, 0] and c == goals[b, 1]:
                     break
-                a = actions[b, r, c]
+                a = _first_optimal_move(dist[b], obstacles[b], r, c, corner_cutting, deltas, costs)
                 if a < 0:
                     break
                 r += deltas[a, 0]
@@ -219,14 +239,15 @@ def expert_paths_from(
     """`expert_paths` for distances already computed by `shortest_distances`."""
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
-    actions = np.ascontiguousarray(first_optimal_action(optimal_actions(dist, obstacles, corner_cutting)))
+    dist = np.ascontiguousarray(dist, dtype=np.float64)
+    obstacles = np.ascontiguousarray(obstacles, dtype=np.bool_)
     b, s = starts.shape[:2]
     lengths = np.zeros(b * s, dtype=np.int64)
-    dummy = np.zeros((0, 2), dtype=np.int16)
-    _follow_policy(actions, starts, goals, ACTION_DELTAS, lengths, dummy, False)
+    walk = (dist, obstacles, bool(corner_cutting), starts, goals, ACTION_DELTAS, ACTION_COSTS, lengths)
+    _follow_policy(*walk, np.zeros((0, 2), dtype=np.int16), False)
     offsets = np.zeros(b * s + 1, dtype=np.int64)
     np.cumsum(lengths, out=offsets[1:])
     cells = np.empty((offsets[-1], 2), dtype=np.int16)
-    _follow_policy(actions, starts, goals, ACTION_DELTAS, lengths, cells, True)
+    _follow_policy(*walk, cells, True)
     costs = dist[np.arange(b)[:, None], starts[..., 0], starts[..., 1]]
     return costs, PackedPaths(cells, offsets)
