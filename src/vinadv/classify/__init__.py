@@ -10,33 +10,27 @@ needs neither of them for labelling).
 
 import importlib
 
-#: every public name of the package and the module that defines it
-_EXPORTS = {
-    **dict.fromkeys(("MODEL_FORMAT", "PairClassifier", "load_model", "save_model"), "base"),
-    **dict.fromkeys(("PathPairBatch",), "batch"),
-    **dict.fromkeys(("FEATURES", "cooccurrence", "image_features", "offset_cooccurrence"), "cooccurrence"),
-    **dict.fromkeys(("PathFeatures", "path_features", "reaches_goal"), "features"),
-    **dict.fromkeys(("FP_DP_KINDS", "HybridClassifier", "RuleClassifier", "make_fp_classifier"), "hybrid"),
-    **dict.fromkeys(
-        (
-            "AUGMENT_TRANSFORMS",
-            "augmentation_plan",
-            "balance_batch",
-            "balance_images",
-            "render_batch",
-            "render_path_images",
-        ),
-        "images",
+#: the package's public names, by the module that defines them
+_MODULES = {
+    "base": ("MODEL_FORMAT", "PairClassifier", "load_model", "save_model"),
+    "batch": ("PathPairBatch",),
+    "cooccurrence": ("FEATURES", "cooccurrence", "image_features", "offset_cooccurrence"),
+    "features": ("PathFeatures", "path_features", "reaches_goal"),
+    "hybrid": ("FP_DP_KINDS", "HybridClassifier", "RuleClassifier", "make_fp_classifier"),
+    "images": (
+        "AUGMENT_TRANSFORMS",
+        "augmentation_plan",
+        "balance_batch",
+        "balance_images",
+        "render_batch",
+        "render_path_images",
     ),
-    **dict.fromkeys(("binary_metrics",), "metrics"),
-    **dict.fromkeys(("CNNImageClassifier", "MLPImageClassifier", "SVMImageClassifier"), "models"),
-    **dict.fromkeys(
-        ("PairLabels", "default_threshold", "is_fork", "label_batch", "label_pairs", "path_distances"), "rule"
-    ),
-    **dict.fromkeys(
-        ("DistanceThresholdClassifier", "dtw_distances", "frechet_distances", "hausdorff_distances"), "similarity"
-    ),
+    "metrics": ("binary_metrics",),
+    "models": ("CNNImageClassifier", "MLPImageClassifier", "SVMImageClassifier"),
+    "rule": ("PairLabels", "default_threshold", "is_fork", "label_batch", "label_pairs", "path_distances"),
+    "similarity": ("DistanceThresholdClassifier", "dtw_distances", "frechet_distances", "hausdorff_distances"),
 }
+_EXPORTS = {name: module for module, names in _MODULES.items() for name in names}
 __all__ = sorted(_EXPORTS)
 
 
