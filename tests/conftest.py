@@ -55,13 +55,16 @@ SLOW = (
 
 def pytest_collection_modifyitems(config, items) -> None:
     for item in items:
-        if item.nodeid.startswith(SLOW):
+        # the database servers' variants too: the quick selection checks every backend test on SQLite
+        on_server = getattr(item, "callspec", None) is not None and item.callspec.params.get("db_url") in SERVERS
+        if item.nodeid.startswith(SLOW) or on_server:
             item.add_marker(pytest.mark.slow)
 
 
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"
 POSTGRES_DEFAULT = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 BACKENDS = ("sqlite", "mysql", "postgres")
+SERVERS = BACKENDS[1:]
 
 
 def _server(env: str, default: str) -> sa.Engine:
