@@ -21,6 +21,7 @@ import torch
 from torch import nn
 
 from vinadv.grid import generate_maps
+from vinadv.planners.batching import set_torch_threads
 from vinadv.planners.gppn import GPPN, GPPNConfig, input_maps
 from vinadv.planners.training import batch_loss, optimal_action_bits
 
@@ -79,7 +80,7 @@ def main() -> None:
     bits = optimal_action_bits(maps)
     rows = []
     for threads in args.threads:
-        torch.set_num_threads(threads)
+        set_torch_threads(threads)  # torch's and Numba's: a Numba kernel would reset torch's otherwise
         for l_h in args.l_h:
             for k in args.k:
                 torch.manual_seed(0)
