@@ -19,6 +19,16 @@ from vinadv.vocabulary import FORK_OR_DETOUR, LABELS
 
 FP_DP_KINDS = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw")
 SETTINGS = ("baseline", "tuned")
+#: the tuned setting's training options, shared by its CNN and MLP
+TUNED_TRAINING = dict(
+    batch_size=64,
+    learning_rate=3e-3,
+    weight_decay=1e-4,
+    optimizer="adamw",
+    schedule="cosine",
+    augment=True,
+    encoding="split",
+)
 
 
 def make_fp_classifier(kind: str, setting: str = "baseline", seed: int = 0, verbose: bool = False) -> PairClassifier:
@@ -41,37 +51,13 @@ def make_fp_classifier(kind: str, setting: str = "baseline", seed: int = 0, verb
         if setting == "baseline":
             return CNNImageClassifier("plain", width=32, epochs=10, batch_size=64, seed=seed, verbose=verbose)
         return CNNImageClassifier(
-            "plain",
-            width=16,
-            epochs=10,
-            batch_size=64,
-            learning_rate=3e-3,
-            weight_decay=1e-4,
-            optimizer="adamw",
-            schedule="cosine",
-            augment=True,
-            encoding="split",
-            features="cooccurrence",
-            seed=seed,
-            verbose=verbose,
+            "plain", width=16, epochs=10, features="cooccurrence", seed=seed, verbose=verbose, **TUNED_TRAINING
         )
     if kind == "mlp":
         if setting == "baseline":
             return MLPImageClassifier("plain", width=512, epochs=10, batch_size=64, seed=seed, verbose=verbose)
         return MLPImageClassifier(
-            "plain",
-            width=64,
-            epochs=20,
-            batch_size=64,
-            learning_rate=3e-3,
-            weight_decay=1e-4,
-            optimizer="adamw",
-            schedule="cosine",
-            augment=True,
-            encoding="split",
-            features="offsets",
-            seed=seed,
-            verbose=verbose,
+            "plain", width=64, epochs=20, features="offsets", seed=seed, verbose=verbose, **TUNED_TRAINING
         )
     if kind in ("hausdorff", "frechet", "dtw"):
         return DistanceThresholdClassifier(kind)
