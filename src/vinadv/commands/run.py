@@ -101,7 +101,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(
-            config, db=args.db, name=args.name, resume=args.resume, progress=not args.quiet, **_cluster_options(client)
+            config,
+            db=args.db,
+            name=args.name,
+            resume=args.resume,
+            progress=not (args.quiet or args.json),
+            **_cluster_options(client),
         )
     result = summary.to_dict()
     if args.report:
@@ -161,7 +166,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     remote = None
     if args.cluster is not None or args.workers is not None:
-        remote = ClusterIdentify(args.cluster, args.workers, shard_size=args.shard_size, progress=not args.quiet)
+        remote = ClusterIdentify(
+            args.cluster, args.workers, shard_size=args.shard_size, progress=not (args.quiet or args.json)
+        )
     done = identify_and_store(
         args.pairs,
         args.db,
