@@ -33,7 +33,7 @@ from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
 from vinadv.grid.columns import Columns
 from vinadv.grid.paths import PackedPaths
-from vinadv.grid.shortest_paths import COST_TOL, heap_pop, heap_push
+from vinadv.grid.shortest_paths import COST_TOL, heap_pop, heap_push, legal_move
 from vinadv.vocabulary import HARMS, LABELS
 
 #: default absolute tolerance of the harm test (cost units: one orthogonal move = 1)
@@ -277,24 +277,10 @@ def _reached_costs_kernel(cells, offsets, goals, out):
 # --------------------------------------------------------------------------------------------- the kernel
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _legal(obs, r, c, dr, dc, corner_cutting):
-    """Whether the move (r, c) -> (r + dr, c + dc) is legal on `obs` (the origin is not checked)."""
-    n = obs.shape[0]
-    nr = r + dr
-    nc = c + dc
-    if nr < 0 or nr >= n or nc < 0 or nc >= n or obs[nr, nc]:
-        return False
-    if not corner_cutting and dr != 0 and dc != 0:
-        if obs[nr, c] or obs[r, nc]:
-            return False
-    return True
-
-
 @numba.njit(cache=True, nogil=True)
 def _load_padded(obs, pad, w):
     """Copy the map `obs` (N, N) into the interior of `pad`, a flat `(N + 2)^2` map whose one-cell border is
-    obstacle: moves then need no bounds checks, and off-grid counts as an obstacle, as for `_legal`."""
+    obstacle: moves then need no bounds checks, and off-grid counts as an obstacle, as for `legal_move`."""
     n = obs.shape[0]
     for r in range(n):
         base = (r + 1) * w + 1
@@ -304,7 +290,7 @@ def _load_padded(obs, pad, w):
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _padded_legal(pad, p, a, step, side_r, side_c, corner_cutting):
-    """Whether action `a` from the cell `p` of the padded flat map is legal (as `_legal`)."""
+    """Whether action `a` from the cell `p` of the padded flat map is legal (as `legal_move`)."""
     if pad[p + step[a]]:
         return False
     if not corner_cutting and side_r[a] != 0 and side_c[a] != 0:
@@ -425,7 +411,7 @@ def _route_survives(obs_a, path, k, corner_cutting):
         if i > 0:
             pr = path[i - 1, 0]
             pc = path[i - 1, 1]
-            if not _legal(obs_a, pr, pc, r - pr, c - pc, corner_cutting):
+            if not legal_move(obs_a, pr, pc, r - pr, c - pc, corner_cutting):
                 return False
     return True
 

@@ -172,20 +172,25 @@ def first_optimal_action(optimal: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def legal_move(obstacles, r, c, dr, dc, corner_cutting):
+    """Whether the move (r, c) -> (r + dr, c + dc) is legal on `obstacles` (N, M) (as `valid_moves`; the origin is
+    not checked)."""
+    nr, nc = r + dr, c + dc
+    if nr < 0 or nr >= obstacles.shape[0] or nc < 0 or nc >= obstacles.shape[1] or obstacles[nr, nc]:
+        return False
+    return corner_cutting or dr == 0 or dc == 0 or not (obstacles[nr, c] or obstacles[r, nc])
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def _first_optimal_move(dist, obstacles, r, c, corner_cutting, deltas, costs):
     """The lowest-index optimal action at `(r, c)` (as `first_optimal_action(optimal_actions(...))` there), -1 if
     none: at the goal, an obstacle or an unreachable cell."""
     d = dist[r, c]
     if not (d > 0.0 and d < np.inf):
         return -1
-    n, m = obstacles.shape
     for a in range(deltas.shape[0]):
-        nr, nc = r + deltas[a, 0], c + deltas[a, 1]
-        if nr < 0 or nr >= n or nc < 0 or nc >= m or obstacles[nr, nc]:
-            continue
-        if not corner_cutting and deltas[a, 0] != 0 and deltas[a, 1] != 0 and (obstacles[nr, c] or obstacles[r, nc]):
-            continue
-        if abs(dist[nr, nc] + costs[a] - d) <= COST_TOL:
+        dr, dc = deltas[a, 0], deltas[a, 1]
+        if legal_move(obstacles, r, c, dr, dc, corner_cutting) and abs(dist[r + dr, c + dc] + costs[a] - d) <= COST_TOL:
             return a
     return -1
 
