@@ -34,13 +34,9 @@ def single_threaded() -> None:
         return
     for name, value in SINGLE_THREAD_ENV.items():
         os.environ.setdefault(name, value)  # before numba/torch first import in this process
-    import numba
-    import torch
+    from vinadv.planners.batching import set_threads, set_torch_threads
 
-    torch.set_num_threads(1)
-    numba.set_num_threads(1)
-    from vinadv.planners.batching import set_threads
-
+    set_torch_threads(1)
     set_threads(1)  # the planners' own thread pool over maps (sized from the CPU affinity)
     _THREAD_STATE.done = True
 
