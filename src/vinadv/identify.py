@@ -142,9 +142,12 @@ def identify(
     (tolerances `harm_tol`, `harm_rtol`; `expert_o`: the original maps' expert data if already computed, see
     `vinadv.classify.harm.pair_harm`)."""
     batch = PathPairBatch.from_pairs(pairs)
-    if classifier is not None:  # a classifier object means scikit-learn is loaded already
+    exact_rule = classifier is None
+    if not exact_rule:  # a classifier object: scikit-learn is loaded already
         from vinadv.classify.hybrid import RuleClassifier
-    if classifier is None or isinstance(classifier, RuleClassifier):
+
+        exact_rule = isinstance(classifier, RuleClassifier)
+    if exact_rule:
         result = label_batch(batch, getattr(classifier, "t", None))  # exact: no classifier score
         labels, dh, dv, score = result.labels, result.dh, result.dv, np.full(len(pairs), np.nan)
     else:
