@@ -15,7 +15,7 @@ The shapes are painted one by one over their bounding boxes (compiled with Numba
 original vectorised formulation (every attempt tested against every cell), so the maps are those it made.
 
 Limits (InputError naming them, before any work): a size where one map's working memory (~`WORK_BYTES_PER_CELL`
-bytes per cell: distances, optimal actions, start keys) exceeds half the available memory (about 9,000x9,000 with
+bytes per cell, measured with tracemalloc) exceeds half the available memory (about 9,000x9,000 with
 24 GiB available), and an `n` whose maps would take more than half the available memory (the output is held in
 memory).
 """
