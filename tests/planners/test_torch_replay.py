@@ -1,16 +1,20 @@
 """PyTorch's value map replayed: bit for bit against `VIN.q_values` and `conv2d`, and the policy against the ports'."""
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 import torch
 import torch.nn.functional as F
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from vinadv.grid import generate_maps
 from vinadv.planners import torch_replay
 from vinadv.planners.flat import from_flat, layout, to_flat
 from vinadv.planners.reference import torch_action_at
 from vinadv.planners.testing import planning_vin, random_vin
-from vinadv.planners.torch_replay import conv_modes, exact_actions, replay_q_values, sum_order
+from vinadv.planners.torch_replay import conv_modes, exact_actions, fc_order, replay_q_values, sum_order
 from vinadv.planners.vin import make_input
 
 
@@ -24,7 +28,14 @@ def torch_threads(request):
 
 @pytest.fixture
 def fresh_settings(monkeypatch):
-    for name, empty in [("_modes", {}), ("_orders", {}), ("_verified", {}), ("_failed", set())]:
+    for name, empty in [
+        ("_modes", {}),
+        ("_orders", {}),
+        ("_verified", {}),
+        ("_failed", set()),
+        ("_fc_orders", {}),
+        ("_fc_verified", {}),
+    ]:
         monkeypatch.setattr(torch_replay, name, empty)
 
 
@@ -184,3 +195,88 @@ def test_replay_calls_no_torch_once_verified(monkeypatch):
     monkeypatch.setattr(type(model), "q_values", no_torch)
     got = exact_actions(model, maps.obstacles[3:], maps.goals[3:])
     assert got.shape == (3, 16, 16) and (got >= 0).all()
+
+
+@pytest.mark.parametrize("l_q", [4, 10, 16, 33])
+def test_fc_order_reproduces_linear_bit_for_bit(l_q, torch_threads, fresh_settings):
+    order = fc_order(l_q, 8)
+    if order is None:  # allowed (PyTorch's own fc is used then), but not for the VIN's width on this machine
+        assert l_q != 10, "no summation tree found for the VIN's fc"
+        return
+    rng = np.random.default_rng(l_q)
+    for scale in np.logspace(-4, 4, 200):
+        q = (scale * rng.standard_normal(l_q)).astype(np.float32)
+        w = rng.standard_normal((8, l_q)).astype(np.float32)
+        with torch.no_grad():
+            want = F.linear(torch.from_numpy(q)[None], torch.from_numpy(w))[0].numpy()
+        np.testing.assert_array_equal(bits(torch_replay._replay_fc(w, q, *order)), bits(want))
+
+
+def float32_nearest(x: Fraction) -> np.float32:
+    """The float32 nearest to the exact rational x, ties to even: an oracle by exact comparison."""
+    guess = np.float32(float(x))
+    candidates = [np.nextafter(guess, np.float32(-np.inf)), guess, np.nextafter(guess, np.float32(np.inf))]
+    dist = [abs(Fraction(float(c)) - x) for c in candidates]
+    best = min(dist)
+    ties = [c for c, d in zip(candidates, dist) if d == best]
+    return ties[0] if len(ties) == 1 else next(c for c in ties if int(np.array(c).view(np.int32)) % 2 == 0)
+
+
+finite32 = st.floats(width=32, allow_nan=False, allow_infinity=False, min_value=-(2.0**60), max_value=2.0**60)
+
+
+@settings(max_examples=400, deadline=None)
+@given(finite32, finite32, finite32)
+def test_fma32_rounds_once(a, b, c):
+    a, b, c = np.float32(a), np.float32(b), np.float32(c)
+    exact = Fraction(float(a)) * Fraction(float(b)) + Fraction(float(c))
+    assert torch_replay._fma32(a, b, c) == float32_nearest(exact)
+
+
+def test_fma32_on_halfway_sums():
+    # a * b + c = 1 + 2^-24 + 2^-70: float64 drops the tail and lands halfway between 1 and 1 + 2^-23, where
+    # rounding twice picks the even 1; one rounding of the exact value gives 1 + 2^-23
+    a, b = np.float32(-(2.0**-12) * (1 + 2.0**-23)), np.float32(2.0**-12 * (1 - 2.0**-23))
+    c = np.float32(1 + 2.0**-23)
+    assert np.float32(float(a) * float(b) + float(c)) == np.float32(1.0)  # the double rounding avoided
+    exact = Fraction(float(a)) * Fraction(float(b)) + Fraction(float(c))
+    assert torch_replay._fma32(a, b, c) == float32_nearest(exact) == np.float32(1 + 2.0**-23)
+
+
+def test_fc_replay_calls_no_torch_once_verified(monkeypatch, fresh_settings):
+    # fc rows all alike: every cell is a near tie, decided by the replayed fc (PyTorch only for the first checks)
+    model = planning_vin(16, seed=6).eval()
+    with torch.no_grad():
+        model.fc.weight[:] = model.fc.weight[3].clone()
+    maps = generate_maps(3, 16, seed=1, n_starts=1)
+    exact_actions(model, maps.obstacles[:1], maps.goals[:1])
+    assert fc_order(10, 8) is None or torch_replay._fc_verified[(10, 8, torch.get_num_threads())] > 0
+
+    def no_torch(*args, **kwargs):
+        raise AssertionError("PyTorch's fc called for a verified setting")
+
+    if fc_order(10, 8) is not None:
+        monkeypatch.setattr(type(model.fc), "forward", no_torch)
+    assert (exact_actions(model, maps.obstacles[1:], maps.goals[1:]) == 0).all()
+
+
+def test_failed_fc_verification_turns_the_fc_replay_off(monkeypatch, fresh_settings):
+    model = planning_vin(16, seed=6).eval()
+    with torch.no_grad():
+        model.fc.weight[:] = model.fc.weight[3].clone()
+        model.fc.weight[5] *= 1.0000001  # one action a little stronger: ties no longer hide a wrong replay
+    maps = generate_maps(2, 16, seed=1, n_starts=1)
+    x = make_input(maps.obstacles[:1], maps.goals[:1])
+    with torch.no_grad():
+        ports = torch_action_at(model, x, model.q_values(x))
+    real = torch_replay._replay_fc
+
+    def wrong(w, q, tree, fused):
+        out = real(w, q, tree, fused)
+        out[0] = np.float32(np.inf)  # action 0 always wins
+        return out
+
+    monkeypatch.setattr(torch_replay, "_replay_fc", wrong)
+    fast = exact_actions(model, maps.obstacles[:1], maps.goals[:1])[0]
+    assert all(fast[r, c] == ports(r, c) for r in range(16) for c in range(16))
+    assert fc_order(10, 8) is None or torch_replay._fc_verified[(10, 8, torch.get_num_threads())] < 0

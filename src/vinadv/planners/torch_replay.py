@@ -26,8 +26,13 @@ exact). So the only PyTorch calls are those checks, a few per setting and proces
 reference planner runs under (PyTorch's own float32 results depend on its thread count).
 
 `exact_actions` then decides every cell of a map from that value map: in float64 where the two best logits are
-further apart than any float32 evaluation of `fc` could move them (a rigorous bound), else with PyTorch's `fc` at
-the cell, a (1, l_q) x (l_q, A) product, as the reference computes it (rare: a few cells in thousands of maps).
+further apart than any float32 evaluation of `fc` could move them (a rigorous bound), else (rare: about 50 cells in
+a 5,000-map run) with `fc` at the cell replayed as PyTorch computes it, a (1, l_q) x (l_q, A) product whose sum
+follows a fixed tree that is neither a chain nor any textbook order (MKL on 1 and 2 threads, l_q = 10: three
+products chained, then four lanes, then the lanes summed in halves). `fc_order` reads that tree off PyTorch with
+exact probes (a +B and a -B product cancel exactly and a 1 survives only if the two meet before it) and decides
+on random data whether the products are fused into the adds; the first `VERIFY_CELLS` cells of each setting are
+also compared with PyTorch's own `fc`.
 """
 
 from __future__ import annotations
@@ -42,12 +47,16 @@ import torch.nn.functional as F
 from vinadv.planners.flat import from_flat, layout, to_flat, zero_row_gaps
 from vinadv.planners.vin import VIN, make_input
 
-__all__ = ["best_and_gap", "conv_modes", "exact_actions", "replay_q_values", "sum_order"]
+__all__ = ["best_and_gap", "conv_modes", "exact_actions", "fc_order", "replay_q_values", "sum_order"]
 
 #: maps per setting whose replayed value map is compared with `VIN.q_values` before the replay is trusted alone
 VERIFY_MAPS = 2
+#: near-tie cells per setting whose replayed `fc` logits are compared with PyTorch's before the replay is trusted
+VERIFY_CELLS = 2
 #: random convolutions `conv_modes` compares
 PROBES = 16
+#: the widest `fc` (l_q) whose summation tree `fc_order` measures (its probes grow as l_q^3 / A); wider ones: PyTorch
+MAX_FC_WIDTH = 64
 _FLOAT32_UNIT_ROUNDOFF = 2.0**-24
 
 # (N, out channels, in channels, bias, torch threads) -> per-channel fused flags; (N, l_h, torch threads) ->
@@ -57,6 +66,9 @@ _orders: dict[tuple[int, int, int], tuple[bool, int] | None] = {}
 # (N, l_h, l_q, torch threads): maps checked whole against VIN.q_values; settings where one differed
 _verified: dict[tuple[int, int, int, int], int] = {}
 _failed: set[tuple[int, int, int, int]] = set()
+# (l_q, actions, torch threads) -> (summation tree, fused) of `fc`, None where none reproduces PyTorch; cells checked
+_fc_orders: dict[tuple[int, int, int], tuple[tuple, bool] | None] = {}
+_fc_verified: dict[tuple[int, int, int], int] = {}
 
 
 def conv_modes(n: int, l_out: int, l_in: int = 1, bias: bool = False) -> np.ndarray | None:
@@ -117,7 +129,7 @@ def sum_order(n: int, l_h: int) -> tuple[bool, int] | None:
 @dataclass(frozen=True)
 class _Weights:
     """A VIN's float32 weights as numpy arrays, read once per batch of maps: h `(l_h, l_i, 3, 3)` and its bias,
-    r `(l_h,)`, q and w `(l_q, 1, 3, 3)`; fc `(A, l_q)` float64 for the certain decisions."""
+    r `(l_h,)`, q and w `(l_q, 1, 3, 3)`; fc `(A, l_q)` float64 for the certain decisions and `fc32` as it is."""
 
     h: np.ndarray
     h_bias: np.ndarray
@@ -125,6 +137,7 @@ class _Weights:
     q: np.ndarray
     w: np.ndarray
     fc: np.ndarray
+    fc32: np.ndarray
     k: int
 
     @classmethod
@@ -139,6 +152,7 @@ class _Weights:
             q=get(model.q.weight),
             w=get(model.w),
             fc=model.fc.weight.detach().to(torch.float64).numpy(),
+            fc32=get(model.fc.weight),
             k=int(model.config.k),
         )
 
@@ -152,7 +166,7 @@ def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
 def exact_actions(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
     """The reference's action at every cell (argmax of PyTorch's logits, lowest index on ties), `(M, N, N)` int8,
     for obstacles `(M, N, N)` bool and goals `(M, 2)`: the replayed value map (`replay_q_values`), each cell
-    decided in float64 where that is certain, else by PyTorch's `fc` at the cell."""
+    decided in float64 where that is certain, else by `fc` at the cell as PyTorch computes it (`_fc_action`)."""
     p = _Weights.of(model)
     x = make_input(obstacles, np.asarray(goals)).numpy()
     gamma = p.fc.shape[1] * _FLOAT32_UNIT_ROUNDOFF
@@ -160,20 +174,136 @@ def exact_actions(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.nd
     for m in range(len(x)):  # per map: compiled loops (PyTorch only for a setting's first checks)
         q = _q_values(model, p, x[m])
         _certain_actions(q, p.fc, gamma, out[m])
-        unsure = np.argwhere(out[m] < 0)
-        if len(unsure):
-            q_t = torch.from_numpy(q[None])
-            for row, col in unsure:
-                out[m, row, col] = _torch_action(model, q_t, int(row), int(col))
+        for row, col in np.argwhere(out[m] < 0):
+            out[m, row, col] = _fc_action(model, p, q[:, row, col])
     return out
 
 
-def _torch_action(model: VIN, q: torch.Tensor, row: int, col: int) -> int:
-    """The reference's decision at one cell: `fc` on `q[arange(1), :, row, col]` as `VIN.forward` picks it, argmax
-    with the lowest index on ties (`np.argmax`)."""
+def _fc_action(model: VIN, p: _Weights, q: np.ndarray) -> int:
+    """The reference's decision at one cell with value vector `q (l_q,)` float32: PyTorch's `fc` logits, replayed
+    where its summation order is known and verified, argmax with the lowest index on ties (`np.argmax`)."""
+    setting = (p.fc.shape[1], p.fc.shape[0], torch.get_num_threads())
+    order = fc_order(p.fc.shape[1], p.fc.shape[0])
+    if order is None or _fc_verified.get(setting, 0) < 0:
+        return int(np.argmax(_torch_fc(model, q)))
+    logits = _replay_fc(p.fc32, q, *order)
+    if _fc_verified.get(setting, 0) < VERIFY_CELLS:
+        want = _torch_fc(model, q)
+        if not np.array_equal(logits.view(np.int32), want.view(np.int32)):
+            _fc_verified[setting] = -1  # never trusted again in this process
+            return int(np.argmax(want))
+        _fc_verified[setting] = _fc_verified.get(setting, 0) + 1
+    return int(np.argmax(logits))
+
+
+def _torch_fc(model: VIN, q: np.ndarray) -> np.ndarray:
+    """`model.fc` on one value vector `(l_q,)`, as `VIN.forward` applies it: `(A,)` float32."""
     with torch.no_grad():
-        logits = model.fc(q[torch.arange(1), :, torch.tensor([row]), torch.tensor([col])])
-    return int(np.argmax(logits[0].numpy()))
+        return model.fc(torch.from_numpy(np.ascontiguousarray(q, dtype=np.float32))[None])[0].numpy()
+
+
+def fc_order(l_q: int, n_actions: int) -> tuple[tuple, bool] | None:
+    """How PyTorch's `F.linear((1, l_q), (A, l_q))` (the VIN's `fc` at one cell) sums the l_q products of each
+    logit: `(tree, fused)`, a binary tree over the product indices (nested pairs, leaves ints) and whether each add
+    with a product beside it is a fused multiply-add (the product of the higher index, where both are products);
+    None if no such tree reproduces PyTorch bit for bit. Measured once per (l_q, A, PyTorch threads).
+
+    The tree comes from exact probes: with products +B, -B and 1 at indices i, j and k (B = 2^30, where 1 is below
+    half an ulp) the logit is 1 exactly when i and j meet before k, else 0; those relations give every subtree."""
+    key = (l_q, n_actions, torch.get_num_threads())
+    if key not in _fc_orders:
+        _fc_orders[key] = _measure_fc_order(l_q, n_actions)
+    return _fc_orders[key]
+
+
+def _linear(q: np.ndarray, w: np.ndarray) -> np.ndarray:
+    with torch.no_grad():
+        return F.linear(torch.from_numpy(q)[None], torch.from_numpy(w))[0].numpy()
+
+
+def _measure_fc_order(l_q: int, n_actions: int) -> tuple[tuple, bool] | None:
+    if l_q > MAX_FC_WIDTH:
+        return None
+    big = np.float32(2.0**30)
+    ones = np.ones(l_q, np.float32)
+    # the leaves under the subtree where i and j meet: i, j and every k that does not survive their cancelling;
+    # one probe per logit (each logit is summed on its own; a wrong tree fails the random check below anyway)
+    subtrees = {frozenset([k]) for k in range(l_q)} | {frozenset(range(l_q))}
+    for i in range(l_q):
+        for j in range(i + 1, l_q):
+            members, others = {i, j}, [k for k in range(l_q) if k not in (i, j)]
+            for lo in range(0, len(others), n_actions):
+                ks = others[lo : lo + n_actions]
+                w = np.zeros((n_actions, l_q), np.float32)
+                w[:, i], w[:, j] = big, -big
+                w[np.arange(len(ks)), ks] = 1.0
+                logits = _linear(ones, w)[: len(ks)]
+                if not np.all((logits == 0.0) | (logits == 1.0)):
+                    return None
+                members.update(k for k, y in zip(ks, logits) if y == 0.0)
+            subtrees.add(frozenset(members))
+    tree = _build_tree(frozenset(range(l_q)), subtrees)
+    if tree is None:
+        return None
+    rng = np.random.default_rng(2)
+    probes = [
+        (
+            (scale * rng.standard_normal(l_q)).astype(np.float32),
+            rng.standard_normal((n_actions, l_q)).astype(np.float32),
+        )
+        for scale in np.logspace(-2, 2, PROBES)
+    ]
+    found = [
+        fused
+        for fused in (True, False)
+        if all(np.array_equal(_replay_fc(w, q, tree, fused), _linear(q, w)) for q, w in probes)
+    ]
+    return (tree, found[0]) if len(found) == 1 else None
+
+
+def _build_tree(leaves: frozenset, subtrees: set[frozenset]):
+    """The binary tree whose subtrees' leaf sets are `subtrees` under `leaves`, as nested pairs; None if they are not
+    the subtrees of one binary tree."""
+    if len(leaves) == 1:
+        return next(iter(leaves))
+    inside = [t for t in subtrees if t < leaves]
+    children = [t for t in inside if not any(t < u for u in inside)]
+    if len(children) != 2 or children[0] | children[1] != leaves or children[0] & children[1]:
+        return None
+    first, second = sorted(children, key=min)
+    left, right = _build_tree(first, subtrees), _build_tree(second, subtrees)
+    return None if left is None or right is None else (left, right)
+
+
+def _replay_fc(w: np.ndarray, q: np.ndarray, tree, fused: bool) -> np.ndarray:
+    """The logits `w (A, l_q) @ q (l_q,)` in float32, summed along `tree` (`fc_order`): `(A,)` float32."""
+
+    def value(node, a):
+        if isinstance(node, int):
+            return np.float32(w[a, node] * q[node])
+        left, right = node
+        if fused and (isinstance(left, int) or isinstance(right, int)):
+            leaf, other = (right, left) if isinstance(right, int) else (left, right)
+            return _fma32(w[a, leaf], q[leaf], value(other, a))
+        return np.float32(value(left, a) + value(right, a))
+
+    return np.array([value(tree, a) for a in range(w.shape[0])], dtype=np.float32)
+
+
+def _fma32(a: np.float32, b: np.float32, c: np.float32) -> np.float32:
+    """a * b + c rounded once to float32 (a fused multiply-add): the float64 product is exact, the float64 sum is
+    made exact by its rounding error (TwoSum), and only a sum landing exactly halfway between two float32 needs
+    that error to round the right way."""
+    p, c = float(a) * float(b), float(c)
+    s = p + c
+    t = s - p
+    err = (p - (s - t)) + (c - t)
+    r = np.float32(s)
+    if err != 0.0 and float(r) != s:
+        other = np.nextafter(r, np.float32(np.inf) if s > float(r) else np.float32(-np.inf))
+        if abs(float(other) - s) == abs(float(r) - s):  # s is a tie between r and other: the error decides
+            r = other if (err > 0) == (float(other) > s) else r
+    return np.float32(r)
 
 
 def _q_values(model: VIN, p: _Weights, x: np.ndarray) -> np.ndarray:
