@@ -5,7 +5,7 @@ import pytest
 
 from tests.grid.oracle import brute_distances
 from vinadv.attacks.pairs import PairSet
-from vinadv.attacks.strategies import STRATEGIES, make_attack
+from vinadv.attacks.strategies import STRATEGIES, make_attack, within_distance
 from vinadv.attacks.validity import valid_cells
 from vinadv.classify import label_pairs
 from vinadv.errors import InputError
@@ -88,6 +88,33 @@ def test_valid_cells_match_brute_force(maps):
                 assert valid[i, r, c] == expected, (i, r, c)
 
 
+@pytest.mark.parametrize("corner_cutting", [True, False], ids=["corner-cutting", "no-corner-cutting"])
+def test_valid_cells_match_brute_force_on_dense_maps(corner_cutting):
+    # dense small maps: many cells are the only way through (the generated maps have few)
+    rng = np.random.default_rng(11)
+    n = 7
+    obstacles = rng.random((150, n, n)) < 0.45
+    starts, goals = rng.integers(0, n, (150, 2)), rng.integers(0, n, (150, 2))
+    idx = np.arange(150)
+    obstacles[idx, starts[:, 0], starts[:, 1]] = False
+    obstacles[idx, goals[:, 0], goals[:, 1]] = False
+    valid = valid_cells(obstacles, starts, goals, corner_cutting)
+    separators = 0
+    for i in range(150):
+        start, goal = tuple(starts[i]), tuple(goals[i])
+        solvable = math.isfinite(brute_distances(obstacles[i].tolist(), goal, corner_cutting)[start][0])
+        for r in range(n):
+            for c in range(n):
+                expected = solvable and not obstacles[i, r, c] and (r, c) not in (start, goal)
+                if expected:
+                    blocked = obstacles[i].copy()
+                    blocked[r, c] = True
+                    expected = math.isfinite(brute_distances(blocked.tolist(), goal, corner_cutting)[start][0])
+                    separators += not expected
+                assert valid[i, r, c] == expected, (i, r, c)
+    assert separators > 50  # the maps do exercise the separators
+
+
 def corridor_map():
     """A 1-wide corridor from start to goal: every free cell but the two ends disconnects them."""
     obstacles = np.ones((1, 8, 8), dtype=bool)
@@ -147,3 +174,15 @@ def test_bad_parameters():
         make_attack("random", per_map=-1)
     with pytest.raises(InputError, match="^budget must be"):
         make_attack("saliency", budget=0)
+
+
+@pytest.mark.parametrize("radius", [0, 1, 2, 5])
+def test_within_distance_is_the_chebyshev_neighbourhood(radius):
+    rng = np.random.default_rng(radius)
+    mask = rng.random((4, 9, 9)) < 0.08
+    before = mask.copy()
+    got = within_distance(mask, radius)
+    assert (mask == before).all()
+    for b, r, c in np.ndindex(mask.shape):  # brute force: any marked cell at most `radius` king moves away
+        want = any(mask[b, i, j] for i in range(9) for j in range(9) if max(abs(i - r), abs(j - c)) <= radius)
+        assert got[b, r, c] == want, (b, r, c)

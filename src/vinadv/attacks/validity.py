@@ -1,9 +1,13 @@
 """Which cells may take an added obstacle (DESIGN.md): a free cell, not the start or the goal, and only where the
 goal stays reachable from the start.
 
-Only a cell on *every* start-goal path can disconnect them, so only the cells of one path (the expert path)
-need a reachability check; every other free cell is valid without one. Each check is a breadth-first search
-with that cell blocked, compiled with Numba and run in parallel over maps.
+Only a cell on *every* start-goal path can disconnect them. Where diagonal moves may cut corners (the default),
+an added obstacle removes just its cell from the move graph, and those cells are the cut vertices between start
+and goal: one depth-first search from the start per map finds them all (Tarjan's low links: an ancestor v of the
+goal in the search tree separates them exactly when the subtree holding the goal has no edge climbing above v).
+Without corner cutting an obstacle also removes the diagonal moves past its corners, so there each cell of one
+start-goal path (the expert path) is checked by a breadth-first search with it blocked. Both are compiled with
+Numba and run in parallel over maps.
 
 K obstacles (`valid_additions`): K distinct cells, each free on the original map and neither the start nor the
 goal, with the goal still reachable from the start once all K are added. Adding obstacles only removes paths, so a
@@ -18,6 +22,7 @@ import numpy as np
 
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.shortest_paths import expert_paths
+from vinadv.planners.batching import over_maps
 
 
 @numba.njit(cache=True, nogil=True)
@@ -80,6 +85,72 @@ def _mark_separators(obstacles, starts, goals, cells, offsets, corner_cutting, d
                 separator[b, r, c] = True
 
 
+@numba.njit(cache=True, nogil=True)
+def _cut_vertices(obstacles, sr, sc, gr, gc, deltas, disc, low, parent, stack, moves, separator):
+    """Mark in `separator (N, N)` the cells whose removal disconnects the goal from the start, where moves join any
+    two free neighbours (corner cutting); False if the goal is not reachable. disc, low, parent, stack, moves:
+    `(N * N,)` int64 scratch."""
+    n, m = obstacles.shape
+    disc[:] = -1
+    s, t = sr * m + sc, gr * m + gc
+    disc[s], low[s], parent[s] = 0, 0, -1
+    clock, top = 1, 0
+    stack[0], moves[0] = s, 0
+    while top >= 0:  # iterative DFS; moves[top]: the next action to try from stack[top]
+        u = stack[top]
+        a = moves[top]
+        if a < deltas.shape[0]:
+            moves[top] = a + 1
+            r = u // m
+            nr, nc = r + deltas[a, 0], u - r * m + deltas[a, 1]
+            if nr < 0 or nr >= n or nc < 0 or nc >= m or obstacles[nr, nc]:
+                continue
+            v = nr * m + nc
+            if disc[v] < 0:
+                disc[v], low[v], parent[v] = clock, clock, u
+                clock += 1
+                top += 1
+                stack[top], moves[top] = v, 0
+            elif v != parent[u]:
+                low[u] = min(low[u], disc[v])
+        else:
+            top -= 1
+            if top >= 0:
+                low[stack[top]] = min(low[stack[top]], low[u])
+    if disc[t] < 0:
+        return False
+    if t == s:
+        return True
+    child, v = t, parent[t]
+    while v != s:  # the goal's ancestors: v separates when nothing below `child` climbs above v
+        if low[child] >= disc[v]:
+            separator[v // m, v - (v // m) * m] = True
+        child, v = v, parent[v]
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def _cut_vertices_batch(lo, hi, obstacles, starts, goals, deltas, separator, reachable):
+    size = obstacles.shape[1] * obstacles.shape[2]
+    disc, low, parent = np.empty(size, np.int64), np.empty(size, np.int64), np.empty(size, np.int64)
+    stack, moves = np.empty(size, np.int64), np.empty(size, np.int64)
+    for b in range(lo, hi):
+        reachable[b] = _cut_vertices(
+            obstacles[b],
+            starts[b, 0],
+            starts[b, 1],
+            goals[b, 0],
+            goals[b, 1],
+            deltas,
+            disc,
+            low,
+            parent,
+            stack,
+            moves,
+            separator[b],
+        )
+
+
 def valid_cells(
     obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
 ) -> np.ndarray:
@@ -98,21 +169,29 @@ def valid_cells(
     valid[idx, goals[:, 0], goals[:, 1]] = False
     if b == 0:
         return valid
-    costs, paths = expert_paths(obstacles, goals, starts[:, None, :], corner_cutting)
     separator = np.zeros_like(valid)
-    _mark_separators(
-        obstacles,
-        starts,
-        goals,
-        paths.cells.astype(np.int64),
-        paths.offsets,
-        bool(corner_cutting),
-        ACTION_DELTAS,
-        separator,
-    )
+    if corner_cutting:
+        reachable = np.zeros(b, dtype=bool)
+        over_maps(
+            b,
+            lambda lo, hi: _cut_vertices_batch(lo, hi, obstacles, starts, goals, ACTION_DELTAS, separator, reachable),
+        )
+    else:
+        costs, paths = expert_paths(obstacles, goals, starts[:, None, :], corner_cutting)
+        reachable = np.isfinite(costs[:, 0])
+        _mark_separators(
+            obstacles,
+            starts,
+            goals,
+            paths.cells.astype(np.int64),
+            paths.offsets,
+            bool(corner_cutting),
+            ACTION_DELTAS,
+            separator,
+        )
     valid &= ~separator
     # a start that cannot reach its goal has no valid cell at all (the map is not a solvable map)
-    valid[~np.isfinite(costs[:, 0])] = False
+    valid[~reachable] = False
     return valid
 
 
