@@ -6,7 +6,10 @@ An unreachable server skips its tests, except under `CI=true`, where it fails th
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
+import tempfile
 import uuid
 
 import pytest
@@ -20,6 +23,11 @@ from vinadv.planners.batching import set_torch_threads
 # get one too, or their first launch would put torch back on two (`set_torch_threads`). Commands the tests start in
 # subprocesses keep the defaults.
 set_torch_threads(1)
+
+# The near-tie replay keeps what it measured of PyTorch on disk (`torch_replay.cache_path`): the tests, and the
+# commands they start, keep theirs in a folder of their own, so they neither trust the user's nor leave one behind.
+os.environ["VINADV_CACHE_DIR"] = tempfile.mkdtemp(prefix="vinadv-test-cache-")
+atexit.register(shutil.rmtree, os.environ["VINADV_CACHE_DIR"], True)
 
 #: Tests left out of `make test-fast` (`pytest -m "not slow"`), by node id prefix: the ones that start Dask
 #: clusters or a browser, train networks or classifiers, or run the whole pipeline; together they take most of the
@@ -43,6 +51,7 @@ SLOW = (
     "tests/test_faults.py::test_export_into_a_broken_pipe_ends_quietly",
     "tests/store/test_store_db.py::test_killed_writer_resumes_with_every_pair_exactly_once",
     "tests/test_cli_imports.py::test_a_command_still_checks_its_choices",
+    "tests/test_cli_imports.py::test_a_vin_run_needs_no_pytorch_once_the_replay_settings_are_kept",
     "tests/planners/test_gppn_training.py",
     "tests/attacks/test_obstacles.py::test_every_k_obstacle_pair_keeps_the_rules",
     "tests/attacks/test_obstacles.py::test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search",

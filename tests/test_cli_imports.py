@@ -1,6 +1,7 @@
 """`vinadv --help`, `--version` and the help of commands that need no heavy library import none of them: the parser
 is built from light modules (behaviour, not timing: which modules a fresh interpreter loaded)."""
 
+import json
 import subprocess
 import sys
 
@@ -57,5 +58,17 @@ def test_a_command_still_checks_its_choices():
 def test_a_run_with_the_rule_labeller_does_without_scikit_learn(tmp_path):
     # every command imports only what it uses: the rule labeller is plain Numba, the classifiers bring scikit-learn
     names = imported_modules("run", "--n", "20", "--db", str(tmp_path / "r.db"), "--quiet")
-    assert "torch" in names and "sqlalchemy" in names  # the run did happen
+    assert "sqlalchemy" in names and "numba" in names  # the run did happen
     assert "sklearn" not in names and "matplotlib" not in names and "flask" not in names
+
+
+def test_a_vin_run_needs_no_pytorch_once_the_replay_settings_are_kept(tmp_path, monkeypatch):
+    # the first run measures PyTorch's arithmetic for the near-tie replay and keeps it; the next loads no PyTorch
+    monkeypatch.setenv("VINADV_CACHE_DIR", str(tmp_path / "cache"))
+    first = imported_modules("run", "--n", "2000", "--db", str(tmp_path / "a.db"), "--quiet")
+    assert "torch" in first
+    kept = json.loads((tmp_path / "cache" / "torch_replay.json").read_text())["machines"]
+    (entries,) = kept.values()
+    assert {"conv_modes", "sum_order", "fc_order", "q_verified", "fc_verified", "default_threads"} <= set(entries)
+    second = imported_modules("run", "--n", "2000", "--seed", "1", "--db", str(tmp_path / "b.db"), "--quiet")
+    assert "sqlalchemy" in second and "torch" not in second

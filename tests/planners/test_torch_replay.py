@@ -1,5 +1,6 @@
 """PyTorch's value map replayed: bit for bit against `VIN.q_values` and `conv2d`, and the policy against the ports'."""
 
+import json
 from fractions import Fraction
 
 import numpy as np
@@ -28,6 +29,9 @@ def torch_threads(request):
 
 @pytest.fixture
 def fresh_settings(monkeypatch):
+    """Nothing measured yet, in memory or on disk (and nothing kept there)."""
+    monkeypatch.setenv(torch_replay.CACHE_ENV, "")
+    monkeypatch.setattr(torch_replay, "_disk", None)
     for name, empty in [
         ("_modes", {}),
         ("_orders", {}),
@@ -35,6 +39,7 @@ def fresh_settings(monkeypatch):
         ("_failed", set()),
         ("_fc_orders", {}),
         ("_fc_verified", {}),
+        ("_fc_failed", set()),
     ]:
         monkeypatch.setattr(torch_replay, name, empty)
 
@@ -279,4 +284,77 @@ def test_failed_fc_verification_turns_the_fc_replay_off(monkeypatch, fresh_setti
     monkeypatch.setattr(torch_replay, "_replay_fc", wrong)
     fast = exact_actions(model, maps.obstacles[:1], maps.goals[:1])[0]
     assert all(fast[r, c] == ports(r, c) for r in range(16) for c in range(16))
-    assert fc_order(10, 8) is None or torch_replay._fc_verified[(10, 8, torch.get_num_threads())] < 0
+    assert fc_order(10, 8) is None or (10, 8, torch.get_num_threads()) in torch_replay._fc_failed
+
+
+PLAN_WITHOUT_TORCH = """
+import sys
+import numpy as np
+
+class NoTorch:
+    def find_spec(self, name, path=None, target=None):
+        if name == "torch" or name.startswith("torch."):
+            raise ImportError("PyTorch must not be loaded")
+
+if sys.argv[1] == "blocked":
+    sys.meta_path.insert(0, NoTorch())
+from vinadv.grid import generate_maps
+from vinadv.planners import engine
+from vinadv.planners.weights import load_vin_weights
+
+maps = generate_maps(300, 28, seed=4, n_starts=1)
+stats = {}
+result = engine.plan_maps(maps.obstacles, maps.goals, maps.starts, load_vin_weights(None, 28), stats=stats)
+np.savez(sys.argv[2], cells=result.paths.cells, offsets=result.paths.offsets, terms=result.termination)
+print(stats["near_tie_maps"])
+"""
+
+
+def test_a_process_without_pytorch_plans_what_pytorch_would(tmp_path):
+    # the first process measures PyTorch's arithmetic and keeps it; the second plans without PyTorch, near ties
+    # included, and gets the paths of the engine checked against PyTorch in this process (same thread count)
+    import os
+    import subprocess
+    import sys
+
+    from vinadv.planners import engine
+    from vinadv.planners.weights import load_vin_weights
+
+    env = {**os.environ, "VINADV_CACHE_DIR": str(tmp_path / "cache"), "OMP_NUM_THREADS": "1"}
+    runs = {}
+    for mode in ("measure", "blocked"):
+        done = subprocess.run(
+            [sys.executable, "-c", PLAN_WITHOUT_TORCH, mode, str(tmp_path / f"{mode}.npz")],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=600,
+        )
+        assert done.returncode == 0, done.stderr[-3000:]
+        runs[mode] = (int(done.stdout.split()[-1]), np.load(tmp_path / f"{mode}.npz"))
+    near_ties, blocked = runs["blocked"]
+    assert near_ties > 0  # the near-tie replay did run without PyTorch
+    maps = generate_maps(300, 28, seed=4, n_starts=1)
+    with_torch = engine.plan_maps(maps.obstacles, maps.goals, maps.starts, load_vin_weights(None, 28))
+    assert torch.get_num_threads() == 1
+    np.testing.assert_array_equal(blocked["cells"], with_torch.paths.cells)
+    np.testing.assert_array_equal(blocked["offsets"], with_torch.paths.offsets)
+    np.testing.assert_array_equal(blocked["terms"], with_torch.termination)
+
+
+def test_kept_settings_are_per_machine_key(fresh_settings, monkeypatch, tmp_path):
+    monkeypatch.setenv(torch_replay.CACHE_ENV, str(tmp_path))
+    model = planning_vin(16, seed=7).eval()
+    maps = generate_maps(4, 16, seed=3, n_starts=1)
+    exact_actions(model, maps.obstacles, maps.goals)
+    kept = json.loads(torch_replay.cache_path().read_text())
+    assert list(kept["machines"]) == [torch_replay.machine_key()]
+    before = torch_replay.machine_key()
+    torch_replay.machine_key.cache_clear()
+    monkeypatch.setenv("MKL_CBWR", "COMPATIBLE")  # MKL's results may change: nothing measured applies
+    try:
+        assert torch_replay.machine_key() != before
+    finally:
+        monkeypatch.delenv("MKL_CBWR")
+        torch_replay.machine_key.cache_clear()
+    assert torch_replay.machine_key() == before

@@ -44,8 +44,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-import torch
-from scipy.ndimage import maximum_filter
 
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import valid_cells
@@ -344,8 +342,25 @@ class NearPathAttack(Attack):
         return {"per_map": self.per_map, "radius": self.radius, "seed": self.seed, "obstacles": self.obstacles}
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
-        near = maximum_filter(ctx.path_mask(), size=(1, 2 * self.radius + 1, 2 * self.radius + 1), mode="constant")
+        near = within_distance(ctx.path_mask(), self.radius)
         return np.where(near, ctx.rng.random(ctx.obstacles.shape), -np.inf)
+
+
+def within_distance(mask: np.ndarray, radius: int) -> np.ndarray:
+    """Cells within `radius` king moves (Chebyshev distance) of a True cell of the same map: `(B, N, N)` bool for
+    `mask (B, N, N)` bool. A square's dilation is one along the rows, then one along the columns (SciPy's
+    `maximum_filter` gives the same but takes longer to import than a whole `vinadv run` spends here)."""
+    out = mask.copy()
+    for axis in (1, 2):
+        grown = out.copy()
+        for shift in range(1, radius + 1):
+            lead = [slice(None)] * 3
+            lag = [slice(None)] * 3
+            lead[axis], lag[axis] = slice(shift, None), slice(None, -shift)
+            grown[tuple(lead)] |= out[tuple(lag)]
+            grown[tuple(lag)] |= out[tuple(lead)]
+        out = grown
+    return out
 
 
 class KeyPointsAttack(Attack):
@@ -364,7 +379,7 @@ class KeyPointsAttack(Attack):
         # tier 3: other cells next to the path, by the steepest value change to a neighbour, in [1, 2)
         value = ctx.planner.value_maps(ctx.obstacles, ctx.goals)
         steep = _steepness(value, ctx.obstacles)
-        near = maximum_filter(on_path, size=(1, 3, 3), mode="constant") & ~on_path
+        near = within_distance(on_path, 1) & ~on_path
         scale = np.maximum(steep.reshape(b, -1).max(axis=1), 1e-12)[:, None, None]
         scores = np.where(near, 1.0 + 0.999 * steep / scale, scores)
         # moves of the path: move k goes from cell k to cell k + 1 of the same path
@@ -411,6 +426,8 @@ class SaliencyAttack(Attack):
         module = ctx.planner.differentiable
         if module is None:  # no gradients (the `optimal` control): rank as key-points does
             return KeyPointsAttack.candidate_scores(self, ctx)
+        import torch  # here only: the other strategies run without PyTorch
+
         device = getattr(ctx.planner, "device", torch.device("cpu"))
         module.eval()
         b = len(ctx.obstacles)

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-import torch
 
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.optimal_moves import optimal_moves_kernel
@@ -36,7 +35,7 @@ from vinadv.planners.result import (
 )
 from vinadv.planners.rollout import MOVED, rollout_step
 from vinadv.planners.torch_replay import best_and_gap, exact_actions
-from vinadv.planners.vin import GOAL_VALUE, VIN
+from vinadv.planners.vin_weights import GOAL_VALUE, VINWeights, as_vin_weights
 
 __all__ = ["DEFAULT_CHUNK", "PlanResult", "TERMINATIONS", "plan_batch", "plan_maps", "action_maps"]
 
@@ -45,14 +44,14 @@ REL_MARGIN = 5e-6
 UNDECIDED = -1  # rollout code: stepped on an uncertain cell, to be re-done with torch's logits
 
 
-def action_maps(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+def action_maps(model: VINWeights, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
     """Action of every cell, `(B, N, N)` int8 in 0..7, or -1 (uncertain) where the two best logits are a near tie.
 
     Runs the compiled value iteration (`_action_maps_kernel`) in parallel over maps.
     """
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
-    p = FoldedVIN.from_model(model)
+    p = FoldedVIN.from_weights(as_vin_weights(model))
     actions = np.empty(obstacles.shape, dtype=np.int8)
     over_maps(
         len(obstacles),
@@ -86,8 +85,8 @@ class FoldedVIN:
         self.goal_value = goal_value
 
     @classmethod
-    def from_model(cls, model: VIN) -> FoldedVIN:
-        sd = {name: t.detach().to(torch.float64).cpu().numpy() for name, t in model.state_dict().items()}
+    def from_weights(cls, weights: VINWeights) -> FoldedVIN:
+        sd = {name: np.asarray(a, dtype=np.float64) for name, a in weights.state.items()}
         r = sd["r.weight"][0, :, 0, 0]  # (l_h,)
         return cls(
             reward_w=np.ascontiguousarray(np.einsum("h,hcij->cij", r, sd["h.weight"])),
@@ -95,7 +94,7 @@ class FoldedVIN:
             q_w=np.ascontiguousarray(sd["q.weight"][:, 0]),
             w=np.ascontiguousarray(sd["w"][:, 0], dtype=np.float32),
             fc=np.ascontiguousarray(sd["fc.weight"]),
-            k=int(model.config.k),
+            k=int(weights.config.k),
             goal_value=float(GOAL_VALUE),
         )
 
@@ -428,7 +427,7 @@ def plan_batch(
     obstacles: np.ndarray,
     starts: np.ndarray,
     goals: np.ndarray,
-    model: VIN,
+    model: VINWeights,
     corner_cutting: bool = True,
     chunk_size: int = DEFAULT_CHUNK,
     progress: bool = False,
@@ -438,7 +437,7 @@ def plan_batch(
     Args:
         obstacles: `(B, N, N)` bool, True = obstacle.
         starts, goals: `(B, 2)` int `(row, col)`.
-        model: a `VIN`. corner_cutting: whether a diagonal move may pass between two obstacles.
+        model: `VINWeights` or a PyTorch `VIN`. corner_cutting: whether a diagonal move may pass between two obstacles.
         chunk_size: maps per chunk (bounds memory). progress: show a tqdm bar over chunks.
 
     Returns:
@@ -452,7 +451,7 @@ def plan_maps(
     obstacles: np.ndarray,
     goals: np.ndarray,
     starts: np.ndarray,
-    model: VIN,
+    model: VINWeights,
     corner_cutting: bool = True,
     chunk_size: int = DEFAULT_CHUNK,
     progress: bool = False,
@@ -469,7 +468,7 @@ def plan_maps(
         raise ValueError(f"starts has shape {starts.shape}, expected ({len(obstacles)}, S, 2)")
     for s in range(starts.shape[1]):
         check_plan_inputs(obstacles, starts[:, s], goals)
-    model.eval()
+    weights = as_vin_weights(model)  # a PyTorch VIN is read now, once for the whole batch
     chunk_size = max(1, int(chunk_size))
     chunks = range(0, len(obstacles), chunk_size)
     if progress:
@@ -481,7 +480,7 @@ def plan_maps(
             obstacles[i : i + chunk_size],
             goals[i : i + chunk_size],
             starts[i : i + chunk_size],
-            model,
+            weights,
             corner_cutting,
             stats if stats is not None else {},
         )
@@ -490,10 +489,10 @@ def plan_maps(
     return PlanResult.concat(parts)
 
 
-def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanResult:
+def _plan_chunk(obstacles, goals, starts, weights: VINWeights, corner_cutting, stats) -> PlanResult:
     b, s = starts.shape[0], starts.shape[1]
     n = obstacles.shape[1]
-    p = FoldedVIN.from_model(model)
+    p = FoldedVIN.from_weights(weights)
     # a rollout never visits a cell twice, so N * N cells bound its length (np.empty: untouched pages cost nothing)
     cells = np.empty((b * s, n * n, 2), dtype=np.int16)
     lengths = np.empty(b * s, dtype=np.int64)
@@ -524,7 +523,7 @@ def _plan_chunk(obstacles, goals, starts, model, corner_cutting, stats) -> PlanR
     undecided = np.flatnonzero(terms == UNDECIDED)
     if len(undecided):  # rare: a rollout that stepped on a near tie is re-done with the reference's own decisions
         maps, map_of = np.unique(undecided // s, return_inverse=True)
-        actions = exact_actions(model, obstacles[maps], goals[maps])
+        actions = exact_actions(weights, obstacles[maps], goals[maps])
         _redo_kernel(
             undecided,
             map_of,

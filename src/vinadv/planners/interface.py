@@ -8,22 +8,30 @@ own way as long as the paths are the same: the VIN keeps its exact engine (`VINP
 
 Every planner's logits pass `check_logits`: a planner that returns another shape, a non-float type or NaN is
 refused with a `PlannerError` (an `InputError`: the planner is the user's input) naming it.
+
+PyTorch is imported by the planners that run it, when they run it: the VIN plans from NumPy weights
+(`vinadv.planners.vin_weights`) and a process that only plans with it never loads PyTorch.
 """
 
 from __future__ import annotations
 
 import hashlib
+import sys
 from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING
 
 import numpy as np
-import torch
-from torch import nn
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
 from vinadv.planners.batching import over_maps, torch_threads
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
+from vinadv.planners.vin_weights import VINWeights
+
+if TYPE_CHECKING:  # PyTorch is loaded only by the planners that run it
+    import torch
+    from torch import nn
 
 #: maps per chunk of `plan_maps`: bounds the memory of the logits (B * 8 * N * N floats) and of the path buffers.
 DEFAULT_CHUNK = 1024
@@ -35,7 +43,8 @@ class PlannerError(InputError):
 
 def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
     """`logits` as a float32/float64 NumPy array `(b, 8, n, n)` without NaN; else a `PlannerError` naming `name`."""
-    if isinstance(logits, torch.Tensor):
+    torch = sys.modules.get("torch")  # without PyTorch loaded, nothing is a tensor
+    if torch is not None and isinstance(logits, torch.Tensor):
         if not torch.is_floating_point(logits):
             raise PlannerError(f"planner {name!r} returned {logits.dtype} logits; expected a float tensor")
         logits = logits.detach().to("cpu", torch.float32).numpy()
@@ -60,6 +69,8 @@ def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
 
 def state_checksum(module: nn.Module) -> str:
     """SHA-256 (hex) of a module's state dict: names, dtypes, shapes and bytes, in name order."""
+    import torch
+
     h = hashlib.sha256()
     for key, value in sorted(module.state_dict().items()):
         t = value.detach().to("cpu").contiguous()
@@ -110,6 +121,8 @@ class Planner(ABC):
         (`max_a log_softmax(logits)`, its confidence). The VIN answers its value map `max_a q`, `optimal` minus
         the exact cost-to-go.
         """
+        import torch
+
         logits = torch.from_numpy(self.logits(obstacles, goals))
         return torch.log_softmax(logits.double(), dim=1).max(dim=1).values.numpy()
 
@@ -194,6 +207,9 @@ class TorchPlanner(Planner):
         batch_size: int = 64,
         device: str | torch.device = "cpu",
     ):
+        import torch
+        from torch import nn
+
         if not isinstance(module, nn.Module):
             raise PlannerError(f"planner {name!r}: expected a torch.nn.Module, got {type(module).__name__}")
         self.module, self.name, self.size = module, name, int(size)
@@ -215,6 +231,8 @@ class TorchPlanner(Planner):
         return self.module
 
     def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        import torch
+
         self.module.eval()
         b, n = obstacles.shape[0], obstacles.shape[1]
         out = np.empty((b, N_ACTIONS, n, n), dtype=np.float32)
@@ -241,48 +259,74 @@ class TorchPlanner(Planner):
         return out
 
 
-class VINPolicy(nn.Module):
-    """A `VIN` behind the bring-your-own contract: `forward(obstacles (B,N,N) float, goals (B,2) int64)` ->
-    `(B, 8, N, N)` logits (`VIN.action_logits` with the channels first)."""
+class VINPlanner(Planner):
+    """The VIN: paths from the exact engine (`vinadv.planners.engine`, the same paths as re-running the network at
+    every step), not the generic rollout; logits, value maps and gradients from the PyTorch `VIN`.
 
-    def __init__(self, vin):
-        super().__init__()
-        self.vin = vin
-
-    def forward(self, obstacles: torch.Tensor, goals: torch.Tensor) -> torch.Tensor:
-        from vinadv.planners.vin import GOAL_VALUE
-
-        b = obstacles.shape[0]
-        goal_image = torch.zeros_like(obstacles)
-        goal_image[torch.arange(b, device=goals.device), goals[:, 0], goals[:, 1]] = GOAL_VALUE
-        x = torch.stack([obstacles, goal_image], dim=1)
-        return self.vin.action_logits(x).permute(0, 3, 1, 2)
-
-
-class VINPlanner(TorchPlanner):
-    """The VIN: logits from `VIN.action_logits`; paths from the exact engine (`vinadv.planners.engine`, the same
-    paths as re-running the network at every step), not the generic rollout."""
+    `vin` is `VINWeights` (from a file: planning needs no PyTorch) or a PyTorch `VIN`, read afresh at every call
+    (it may be training)."""
 
     def __init__(self, vin, size: int, checksum: str | None = None):
         from vinadv.planners.weights import weights_checksum
 
-        path = getattr(vin, "weights_path", None)
-        if checksum is None and path is not None:
-            checksum = weights_checksum(path)
-        super().__init__(VINPolicy(vin), "vin", size, checksum=checksum, config=vin.config.to_dict())
-        self.vin = vin
+        self.name, self.size = "vin", int(size)
+        self._source = vin
+        self._torch: TorchPlanner | None = None
+        path = vin.path if isinstance(vin, VINWeights) else getattr(vin, "weights_path", None)
+        if checksum is None:
+            checksum = weights_checksum(path) if path is not None else state_checksum(self.vin)
+        self._checksum = checksum
 
-    def value_maps(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+    @property
+    def weights(self) -> VINWeights:
+        """The weights as they are now (`VINWeights`)."""
+        return self._source if isinstance(self._source, VINWeights) else VINWeights.from_module(self._source)
+
+    @property
+    def vin(self):
+        """The PyTorch `VIN` (built from the weights at first use)."""
+        return self._source.module() if isinstance(self._source, VINWeights) else self._source
+
+    @property
+    def checksum(self) -> str | None:
+        return self._checksum
+
+    @property
+    def config(self) -> dict:
+        return self.weights.config.to_dict()
+
+    def _torch_planner(self) -> TorchPlanner:
+        if self._torch is None:
+            from vinadv.planners.vin import VINPolicy
+
+            self._torch = TorchPlanner(VINPolicy(self.vin), self.name, self.size, self._checksum, self.config)
+        return self._torch
+
+    @property
+    def module(self) -> nn.Module:
+        return self._torch_planner().module
+
+    @property
+    def differentiable(self) -> nn.Module:
+        return self.module
+
+    def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        return self._torch_planner().policy_logits(obstacles, goals)
+
+    def value_maps(self, obstacles: np.ndarray, goals: np.ndarray, batch_size: int = 64) -> np.ndarray:
         """The VIN's value maps `max_a q`, `(B, N, N)` float32, `batch_size` maps per forward."""
+        import torch
+
         from vinadv.planners.vin import make_input
 
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         self._check_size(obstacles)
         out = np.empty(obstacles.shape, np.float32)
+        vin = self.vin
         with torch.no_grad():
-            for i in range(0, len(obstacles), self.batch_size):
-                x = make_input(obstacles[i : i + self.batch_size], goals[i : i + self.batch_size])
-                out[i : i + self.batch_size] = self.vin.q_values(x).max(dim=1).values.numpy()
+            for i in range(0, len(obstacles), batch_size):
+                x = make_input(obstacles[i : i + batch_size], goals[i : i + batch_size])
+                out[i : i + batch_size] = vin.q_values(x).max(dim=1).values.numpy()
         return out
 
     def plan_maps(
@@ -299,22 +343,27 @@ class VINPlanner(TorchPlanner):
         obstacles, goals, starts = _check_multi(obstacles, goals, starts)
         self._check_size(obstacles)
         return engine.plan_maps(
-            obstacles, goals, starts, self.vin, corner_cutting, chunk_size or engine.DEFAULT_CHUNK, progress
+            obstacles, goals, starts, self.weights, corner_cutting, chunk_size or engine.DEFAULT_CHUNK, progress
         )
 
 
 def as_planner(planner, size: int) -> Planner:
-    """`planner` if it is a `Planner`; a `VIN` wrapped as the `vin` planner for `size x size` maps (the library
-    functions that take a planner also take a VIN, as before there were other planners); any other
+    """`planner` if it is a `Planner`; a `VIN` or `VINWeights` wrapped as the `vin` planner for `size x size` maps
+    (the library functions that take a planner also take a VIN, as before there were other planners); any other
     `torch.nn.Module` as a `TorchPlanner` named after its class."""
     if isinstance(planner, Planner):
         return planner
-    from vinadv.planners.vin import VIN
-
-    if isinstance(planner, VIN):
+    if isinstance(planner, VINWeights):
         return VINPlanner(planner, size)
-    if isinstance(planner, nn.Module):  # a module with the bring-your-own contract (a GPPN, say)
-        return TorchPlanner(planner, type(planner).__name__.lower(), size)
+    if "torch" in sys.modules:  # without PyTorch loaded, nothing is a module
+        from torch import nn
+
+        from vinadv.planners.vin import VIN
+
+        if isinstance(planner, VIN):
+            return VINPlanner(planner, size)
+        if isinstance(planner, nn.Module):  # a module with the bring-your-own contract (a GPPN, say)
+            return TorchPlanner(planner, type(planner).__name__.lower(), size)
     raise PlannerError(
         f"planner: expected a Planner, a VIN or a torch.nn.Module, got {type(planner).__name__}", "planner"
     )

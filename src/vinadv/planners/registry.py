@@ -91,11 +91,11 @@ def load_planner(
     if weights is not None and spec not in ("vin", "gppn"):  # vin_robust is vin with its own weights
         raise PlannerError(f"planner {spec!r} takes no weights file (weights={weights!r})")
     if spec == "vin":
-        from vinadv.planners.weights import load_vin
+        from vinadv.planners.weights import load_vin_weights
 
-        return VINPlanner(load_vin(weights, size=size), size=size)
+        return VINPlanner(load_vin_weights(weights, size=size), size=size)
     if spec == "vin_robust":
-        from vinadv.planners.weights import load_vin
+        from vinadv.planners.weights import load_vin_weights
 
         path = default_weights("vin_robust", size)
         if not path.exists():
@@ -103,7 +103,7 @@ def load_planner(
                 f"no shipped adversarially trained VIN for {size}x{size} maps ({path}); make one with "
                 "`vinadv vin train --adversarial` and load it as planner 'vin' with those weights"
             )
-        planner = VINPlanner(load_vin(path, size=size), size=size)
+        planner = VINPlanner(load_vin_weights(path, size=size), size=size)
         planner.name = "vin_robust"
         return planner
     if spec == "gppn":

@@ -23,7 +23,12 @@ are also compared whole with `VIN.q_values`. If a check fails, that setting uses
 exact). So the only PyTorch calls are those checks, a few per setting and process.
 
 "Bit for bit" means: equal to what PyTorch computes with the caller's `torch.get_num_threads()`, the setting the
-reference planner runs under (PyTorch's own float32 results depend on its thread count).
+reference planner runs under (PyTorch's own float32 results depend on its thread count); in a process that has not
+loaded PyTorch, with the thread count PyTorch starts with there.
+
+What was measured and checked is kept on disk per machine (`cache_path()`, keyed by `machine_key()`: PyTorch's
+version, the CPU, the cores and the BLAS/OpenMP environment variables), so a later process replays without loading
+PyTorch at all: `vinadv run` with the VIN then never imports it. Delete the file to measure again.
 
 `exact_actions` then decides every cell of a map from that value map: in float64 where the two best logits are
 further apart than any float32 evaluation of `fc` could move them (a rigorous bound), else (rare: about 50 cells in
@@ -37,17 +42,33 @@ also compared with PyTorch's own `fc`.
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import importlib.metadata
+import json
+import os
+import platform
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 import numba
 import numpy as np
-import torch
-import torch.nn.functional as F
 
 from vinadv.planners.flat import from_flat, layout, to_flat, zero_row_gaps
-from vinadv.planners.vin import VIN, make_input
+from vinadv.planners.vin_weights import VINWeights, as_vin_weights, input_array
 
-__all__ = ["best_and_gap", "conv_modes", "exact_actions", "fc_order", "replay_q_values", "sum_order"]
+__all__ = [
+    "best_and_gap",
+    "cache_path",
+    "conv_modes",
+    "exact_actions",
+    "fc_order",
+    "machine_key",
+    "replay_q_values",
+    "sum_order",
+    "torch_threads_now",
+]
 
 #: maps per setting whose replayed value map is compared with `VIN.q_values` before the replay is trusted alone
 VERIFY_MAPS = 2
@@ -59,8 +80,23 @@ PROBES = 16
 MAX_FC_WIDTH = 64
 _FLOAT32_UNIT_ROUNDOFF = 2.0**-24
 
-# (N, out channels, in channels, bias, torch threads) -> per-channel fused flags; (N, l_h, torch threads) ->
-# (fused, split); None where no replay reproduces PyTorch
+#: environment variable naming the folder of the measured settings ("" keeps nothing on disk)
+CACHE_ENV = "VINADV_CACHE_DIR"
+CACHE_FORMAT = "vinadv.torch-replay-cache/1"
+#: environment variables that can change PyTorch's (MKL's, OpenMP's) float32 results or its thread count
+_ENVIRONMENT = (
+    "OMP_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "MKL_CBWR",
+    "MKL_ENABLE_INSTRUCTIONS",
+    "MKL_DEBUG_CPU_TYPE",
+    "MKL_DYNAMIC",
+    "OMP_DYNAMIC",
+    "ATEN_CPU_CAPABILITY",
+)
+
+# In memory, per process. (N, out channels, in channels, bias, torch threads) -> per-channel fused flags;
+# (N, l_h, torch threads) -> (fused, split); None where no replay reproduces PyTorch
 _modes: dict[tuple[int, int, int, bool, int], np.ndarray | None] = {}
 _orders: dict[tuple[int, int, int], tuple[bool, int] | None] = {}
 # (N, l_h, l_q, torch threads): maps checked whole against VIN.q_values; settings where one differed
@@ -69,6 +105,133 @@ _failed: set[tuple[int, int, int, int]] = set()
 # (l_q, actions, torch threads) -> (summation tree, fused) of `fc`, None where none reproduces PyTorch; cells checked
 _fc_orders: dict[tuple[int, int, int], tuple[tuple, bool] | None] = {}
 _fc_verified: dict[tuple[int, int, int], int] = {}
+_fc_failed: set[tuple[int, int, int]] = set()
+# this machine's entries of the cache file, `{kind: {key: value}}`, read at the first use
+_disk: dict[str, dict] | None = None
+
+
+def cache_path() -> Path | None:
+    """The file keeping the measured settings: `$VINADV_CACHE_DIR/torch_replay.json`, else under
+    `$XDG_CACHE_HOME/vinadv` or `~/.cache/vinadv`; None when `VINADV_CACHE_DIR` is set empty (nothing kept)."""
+    folder = os.environ.get(CACHE_ENV)
+    if folder is None:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        folder = os.path.join(base, "vinadv")
+    return Path(folder) / "torch_replay.json" if folder else None
+
+
+@functools.cache
+def machine_key() -> str:
+    """What PyTorch's float32 results may depend on besides the thread count, hashed: PyTorch's version (which fixes
+    the MKL it ships), the CPU's model and instruction sets, the cores this process may use and the BLAS/OpenMP
+    environment variables."""
+    model, flags = platform.processor(), ""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                name, _, value = line.partition(":")
+                if name.strip() == "model name" and not flags:
+                    model = value.strip()
+                elif name.strip() in ("flags", "Features"):
+                    flags = value.strip()
+                    break
+    except OSError:
+        pass
+    try:
+        torch_version = importlib.metadata.version("torch")
+    except importlib.metadata.PackageNotFoundError:
+        torch_version = None
+    parts = [
+        torch_version,
+        platform.machine(),
+        model,
+        flags,
+        len(os.sched_getaffinity(0)),
+        {name: os.environ.get(name) for name in _ENVIRONMENT},
+    ]
+    return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()[:24]
+
+
+def _disk_entries() -> dict[str, dict]:
+    global _disk
+    if _disk is None:
+        data = _read_cache()
+        _disk = data["machines"].get(machine_key(), {})
+    return _disk
+
+
+def _read_cache() -> dict:
+    path = cache_path()
+    try:
+        data = json.loads(path.read_text()) if path is not None else None
+    except (OSError, ValueError):
+        data = None
+    ok = isinstance(data, dict) and data.get("format") == CACHE_FORMAT and isinstance(data.get("machines"), dict)
+    return data if ok else {"format": CACHE_FORMAT, "machines": {}}
+
+
+def _recall(kind: str, key: tuple) -> tuple[bool, object]:
+    """`(True, value)` if `kind` was measured for `key` on this machine, else `(False, None)`."""
+    entries = _disk_entries().get(kind, {})
+    name = ",".join(map(str, key))
+    return name in entries, entries.get(name)
+
+
+def _remember(kind: str, key: tuple, value) -> None:
+    """Keep a measurement (JSON value) for this machine, in memory and in the cache file (merged with what other
+    processes wrote there; a file that cannot be written costs time later, never correctness)."""
+    _disk_entries().setdefault(kind, {})[",".join(map(str, key))] = value
+    path = cache_path()
+    if path is None:
+        return
+    data = _read_cache()
+    mine = data["machines"].setdefault(machine_key(), {})
+    for name, entries in _disk_entries().items():
+        mine.setdefault(name, {}).update(entries)
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_text(json.dumps(data, sort_keys=True))
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
+def _measured(kind: str, key: tuple, measure, decode=lambda value: value):
+    """The value of `kind` for `key`: kept on disk for this machine, else `measure()` (with PyTorch) and kept."""
+    found, value = _recall(kind, key)
+    if not found:
+        value = measure()
+        _remember(kind, key, value)
+    return None if value is None else decode(value)
+
+
+def torch_threads_now() -> int:
+    """PyTorch's intra-op thread count: `torch.get_num_threads()` once PyTorch is loaded; before that, the count it
+    starts with on this machine (read once, kept on disk)."""
+    if "torch" in sys.modules:
+        return sys.modules["torch"].get_num_threads()
+
+    def first_count() -> int:
+        import torch
+
+        return torch.get_num_threads()
+
+    return int(_measured("default_threads", (), first_count))
+
+
+def _trusted(kind: str, setting: tuple, counts: dict, needed: int) -> bool:
+    """Whether a setting's checks are done: `needed` checks passed in this process, or before on this machine."""
+    if counts.get(setting, 0) < needed and _recall(kind, setting)[0]:
+        counts[setting] = needed
+    return counts.get(setting, 0) >= needed
+
+
+def _passed(kind: str, setting: tuple, counts: dict, needed: int) -> None:
+    """One check of a setting passed; with the `needed`-th, the setting is trusted on this machine from now on."""
+    counts[setting] = counts.get(setting, 0) + 1
+    if counts[setting] == needed:
+        _remember(kind, setting, True)
 
 
 def conv_modes(n: int, l_out: int, l_in: int = 1, bias: bool = False) -> np.ndarray | None:
@@ -79,30 +242,39 @@ def conv_modes(n: int, l_out: int, l_in: int = 1, bias: bool = False) -> np.ndar
 
     Several probes at scales from 1e-2 to 1e2: a BLAS may treat a few cells apart (seen: MKL on 2 threads at 9x9 and
     13x13 rounds two cells of the unfused channels otherwise), and one probe can round them alike by chance."""
-    key = (n, l_out, l_in, bias, torch.get_num_threads())
+    key = (n, l_out, l_in, bias, torch_threads_now())
     if key not in _modes:
-        rng = np.random.default_rng(0)
-        fused_ok, plain_ok = np.ones(l_out, bool), np.ones(l_out, bool)
-        for scale in np.logspace(-2, 2, PROBES):
-            v = (scale * rng.standard_normal((l_in, n, n))).astype(np.float32)
-            w = rng.standard_normal((l_out, l_in, 3, 3)).astype(np.float32)
-            b = rng.standard_normal(l_out).astype(np.float32) if bias else None
-            with torch.no_grad():
-                want = F.conv2d(
-                    torch.from_numpy(v)[None],
-                    torch.from_numpy(w),
-                    None if b is None else torch.from_numpy(b),
-                    padding=1,
-                )[0].numpy()
-            flat_v = to_flat(v)
-            for fused, ok in ((True, fused_ok), (False, plain_ok)):
-                out = np.empty((l_out, flat_v.shape[1]), np.float32)
-                _conv_chains(flat_v, w, n, np.full(l_out, fused), out)
-                got = _add_bias(from_flat(out, n), b)
-                ok &= (got == want).reshape(l_out, -1).all(axis=1)
-        # a channel that both chains reproduce would leave its mode unknown; random data makes that vanishingly rare
-        _modes[key] = fused_ok if np.all(fused_ok ^ plain_ok) else None
+        _modes[key] = _measured(
+            "conv_modes", key, lambda: _measure_conv_modes(n, l_out, l_in, bias), lambda v: np.array(v, dtype=bool)
+        )
     return _modes[key]
+
+
+def _measure_conv_modes(n: int, l_out: int, l_in: int, bias: bool) -> list[bool] | None:
+    import torch
+    import torch.nn.functional as F
+
+    rng = np.random.default_rng(0)
+    fused_ok, plain_ok = np.ones(l_out, bool), np.ones(l_out, bool)
+    for scale in np.logspace(-2, 2, PROBES):
+        v = (scale * rng.standard_normal((l_in, n, n))).astype(np.float32)
+        w = rng.standard_normal((l_out, l_in, 3, 3)).astype(np.float32)
+        b = rng.standard_normal(l_out).astype(np.float32) if bias else None
+        with torch.no_grad():
+            want = F.conv2d(
+                torch.from_numpy(v)[None],
+                torch.from_numpy(w),
+                None if b is None else torch.from_numpy(b),
+                padding=1,
+            )[0].numpy()
+        flat_v = to_flat(v)
+        for fused, ok in ((True, fused_ok), (False, plain_ok)):
+            out = np.empty((l_out, flat_v.shape[1]), np.float32)
+            _conv_chains(flat_v, w, n, np.full(l_out, fused), out)
+            got = _add_bias(from_flat(out, n), b)
+            ok &= (got == want).reshape(l_out, -1).all(axis=1)
+    # a channel that both chains reproduce would leave its mode unknown; random data makes that vanishingly rare
+    return fused_ok.tolist() if np.all(fused_ok ^ plain_ok) else None
 
 
 def sum_order(n: int, l_h: int) -> tuple[bool, int] | None:
@@ -110,26 +282,33 @@ def sum_order(n: int, l_h: int) -> tuple[bool, int] | None:
     K = l_h) sums its l_h products: `(fused, split)`, a chain over k = 0 .. split - 1 and one over split .. l_h - 1
     (split 0: a single chain), added; None if no such order reproduces it bit for bit. Seen: MKL on 1 thread, one
     unfused chain; on 2 threads, fused chains split at 128. Measured once per (N, l_h, PyTorch threads)."""
-    key = (n, l_h, torch.get_num_threads())
+    key = (n, l_h, torch_threads_now())
     if key not in _orders:
-        candidates = [(fused, split) for fused in (True, False) for split in (0, 64, 128, 256, 512) if split < l_h]
-        rng = np.random.default_rng(1)
-        for scale in np.logspace(-2, 2, PROBES // 4):
-            h = (scale * rng.standard_normal((l_h, n, n))).astype(np.float32)
-            w = rng.standard_normal(l_h).astype(np.float32)
-            with torch.no_grad():
-                want = F.conv2d(torch.from_numpy(h)[None], torch.from_numpy(w)[None, :, None, None])[0, 0].numpy()
-            candidates = [
-                (fused, split) for fused, split in candidates if np.array_equal(_sum_channels(h, w, fused, split), want)
-            ]
-        _orders[key] = candidates[0] if len(candidates) == 1 else None
+        _orders[key] = _measured("sum_order", key, lambda: _measure_sum_order(n, l_h), tuple)
     return _orders[key]
+
+
+def _measure_sum_order(n: int, l_h: int) -> list | None:
+    import torch
+    import torch.nn.functional as F
+
+    candidates = [(fused, split) for fused in (True, False) for split in (0, 64, 128, 256, 512) if split < l_h]
+    rng = np.random.default_rng(1)
+    for scale in np.logspace(-2, 2, PROBES // 4):
+        h = (scale * rng.standard_normal((l_h, n, n))).astype(np.float32)
+        w = rng.standard_normal(l_h).astype(np.float32)
+        with torch.no_grad():
+            want = F.conv2d(torch.from_numpy(h)[None], torch.from_numpy(w)[None, :, None, None])[0, 0].numpy()
+        candidates = [
+            (fused, split) for fused, split in candidates if np.array_equal(_sum_channels(h, w, fused, split), want)
+        ]
+    return list(candidates[0]) if len(candidates) == 1 else None
 
 
 @dataclass(frozen=True)
 class _Weights:
-    """A VIN's float32 weights as numpy arrays, read once per batch of maps: h `(l_h, l_i, 3, 3)` and its bias,
-    r `(l_h,)`, q and w `(l_q, 1, 3, 3)`; fc `(A, l_q)` float64 for the certain decisions and `fc32` as it is."""
+    """A VIN's float32 weights as the replay reads them: h `(l_h, l_i, 3, 3)` and its bias, r `(l_h,)`, q and w
+    `(l_q, 1, 3, 3)`; fc `(A, l_q)` float64 for the certain decisions and `fc32` as it is; `vin` the weights."""
 
     h: np.ndarray
     h_bias: np.ndarray
@@ -139,67 +318,70 @@ class _Weights:
     fc: np.ndarray
     fc32: np.ndarray
     k: int
+    vin: VINWeights
 
     @classmethod
-    def of(cls, model: VIN) -> _Weights:
-        def get(t: torch.Tensor) -> np.ndarray:
-            return np.ascontiguousarray(t.detach().cpu().numpy(), dtype=np.float32)
-
+    def of(cls, weights: VINWeights) -> _Weights:
+        state = {key: np.ascontiguousarray(value, dtype=np.float32) for key, value in weights.state.items()}
         return cls(
-            h=get(model.h.weight),
-            h_bias=get(model.h.bias),
-            r=get(model.r.weight[0, :, 0, 0]),
-            q=get(model.q.weight),
-            w=get(model.w),
-            fc=model.fc.weight.detach().to(torch.float64).numpy(),
-            fc32=get(model.fc.weight),
-            k=int(model.config.k),
+            h=state["h.weight"],
+            h_bias=state["h.bias"],
+            r=state["r.weight"][0, :, 0, 0].copy(),
+            q=state["q.weight"],
+            w=state["w"],
+            fc=state["fc.weight"].astype(np.float64),
+            fc32=state["fc.weight"],
+            k=int(weights.config.k),
+            vin=weights,
         )
 
 
-def replay_q_values(model: VIN, x: torch.Tensor) -> np.ndarray:
-    """`model.q_values(x)[0]` for one map `x (1, l_i, N, N)`, bit for bit (with the caller's PyTorch threads):
-    `(l_q, N, N)` float32."""
-    return _q_values(model, _Weights.of(model), x[0].numpy())
+def replay_q_values(model, x) -> np.ndarray:
+    """`model.q_values(x)[0]` for one map `x (1, l_i, N, N)` (array or tensor), bit for bit (with the caller's
+    PyTorch threads), for a `VIN` or `VINWeights`: `(l_q, N, N)` float32."""
+    return _q_values(_Weights.of(as_vin_weights(model)), np.asarray(x[0], dtype=np.float32))
 
 
-def exact_actions(model: VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+def exact_actions(model, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
     """The reference's action at every cell (argmax of PyTorch's logits, lowest index on ties), `(M, N, N)` int8,
-    for obstacles `(M, N, N)` bool and goals `(M, 2)`: the replayed value map (`replay_q_values`), each cell
-    decided in float64 where that is certain, else by `fc` at the cell as PyTorch computes it (`_fc_action`)."""
-    p = _Weights.of(model)
-    x = make_input(obstacles, np.asarray(goals)).numpy()
+    for a `VIN` or `VINWeights`, obstacles `(M, N, N)` bool and goals `(M, 2)`: the replayed value map
+    (`replay_q_values`), each cell decided in float64 where that is certain, else by `fc` at the cell as PyTorch
+    computes it (`_fc_action`)."""
+    p = _Weights.of(as_vin_weights(model))
+    x = input_array(obstacles, np.asarray(goals))
     gamma = p.fc.shape[1] * _FLOAT32_UNIT_ROUNDOFF
     out = np.empty(np.shape(obstacles), dtype=np.int8)
     for m in range(len(x)):  # per map: compiled loops (PyTorch only for a setting's first checks)
-        q = _q_values(model, p, x[m])
+        q = _q_values(p, x[m])
         _certain_actions(q, p.fc, gamma, out[m])
         for row, col in np.argwhere(out[m] < 0):
-            out[m, row, col] = _fc_action(model, p, q[:, row, col])
+            out[m, row, col] = _fc_action(p, q[:, row, col])
     return out
 
 
-def _fc_action(model: VIN, p: _Weights, q: np.ndarray) -> int:
+def _fc_action(p: _Weights, q: np.ndarray) -> int:
     """The reference's decision at one cell with value vector `q (l_q,)` float32: PyTorch's `fc` logits, replayed
     where its summation order is known and verified, argmax with the lowest index on ties (`np.argmax`)."""
-    setting = (p.fc.shape[1], p.fc.shape[0], torch.get_num_threads())
+    setting = (p.fc.shape[1], p.fc.shape[0], torch_threads_now())
     order = fc_order(p.fc.shape[1], p.fc.shape[0])
-    if order is None or _fc_verified.get(setting, 0) < 0:
-        return int(np.argmax(_torch_fc(model, q)))
+    if order is None or setting in _fc_failed:
+        return int(np.argmax(_torch_fc(p.vin, q)))
     logits = _replay_fc(p.fc32, q, *order)
-    if _fc_verified.get(setting, 0) < VERIFY_CELLS:
-        want = _torch_fc(model, q)
+    if not _trusted("fc_verified", setting, _fc_verified, VERIFY_CELLS):
+        want = _torch_fc(p.vin, q)
         if not np.array_equal(logits.view(np.int32), want.view(np.int32)):
-            _fc_verified[setting] = -1  # never trusted again in this process
+            _fc_failed.add(setting)
             return int(np.argmax(want))
-        _fc_verified[setting] = _fc_verified.get(setting, 0) + 1
+        _passed("fc_verified", setting, _fc_verified, VERIFY_CELLS)
     return int(np.argmax(logits))
 
 
-def _torch_fc(model: VIN, q: np.ndarray) -> np.ndarray:
-    """`model.fc` on one value vector `(l_q,)`, as `VIN.forward` applies it: `(A,)` float32."""
+def _torch_fc(weights: VINWeights, q: np.ndarray) -> np.ndarray:
+    """PyTorch's `fc` on one value vector `(l_q,)`, as `VIN.forward` applies it: `(A,)` float32."""
+    import torch
+
     with torch.no_grad():
-        return model.fc(torch.from_numpy(np.ascontiguousarray(q, dtype=np.float32))[None])[0].numpy()
+        return weights.module().fc(torch.from_numpy(np.ascontiguousarray(q, dtype=np.float32))[None])[0].numpy()
 
 
 def fc_order(l_q: int, n_actions: int) -> tuple[tuple, bool] | None:
@@ -210,13 +392,25 @@ def fc_order(l_q: int, n_actions: int) -> tuple[tuple, bool] | None:
 
     The tree comes from exact probes: with products +B, -B and 1 at indices i, j and k (B = 2^30, where 1 is below
     half an ulp) the logit is 1 exactly when i and j meet before k, else 0; those relations give every subtree."""
-    key = (l_q, n_actions, torch.get_num_threads())
+    key = (l_q, n_actions, torch_threads_now())
     if key not in _fc_orders:
-        _fc_orders[key] = _measure_fc_order(l_q, n_actions)
+        _fc_orders[key] = _measured("fc_order", key, lambda: _measure_fc_order(l_q, n_actions), _tree_of)
     return _fc_orders[key]
 
 
+def _tree_of(value) -> tuple[tuple, bool]:
+    """`(tree, fused)` back from JSON lists."""
+
+    def tree(node):
+        return node if isinstance(node, int) else tuple(tree(child) for child in node)
+
+    return tree(value[0]), bool(value[1])
+
+
 def _linear(q: np.ndarray, w: np.ndarray) -> np.ndarray:
+    import torch
+    import torch.nn.functional as F
+
     with torch.no_grad():
         return F.linear(torch.from_numpy(q)[None], torch.from_numpy(w))[0].numpy()
 
@@ -306,15 +500,15 @@ def _fma32(a: np.float32, b: np.float32, c: np.float32) -> np.float32:
     return np.float32(r)
 
 
-def _q_values(model: VIN, p: _Weights, x: np.ndarray) -> np.ndarray:
+def _q_values(p: _Weights, x: np.ndarray) -> np.ndarray:
     """q of one map `x (l_i, N, N)` float32: replayed where the setting's chains are known and verified, else
     `VIN.q_values` itself. `(l_q, N, N)` float32."""
     l_i, n = x.shape[0], x.shape[-1]
     l_h, l_q = p.h.shape[0], p.q.shape[0]
     h_modes, q_modes, order = conv_modes(n, l_h, l_i, bias=True), conv_modes(n, l_q), sum_order(n, l_h)
-    setting = (n, l_h, l_q, torch.get_num_threads())
+    setting = (n, l_h, l_q, torch_threads_now())
     if h_modes is None or q_modes is None or order is None or setting in _failed:
-        return _torch_q_values(model, x)
+        return _torch_q_values(p.vin, x)
     flat_x = to_flat(x)
     h = np.empty((l_h, flat_x.shape[1]), dtype=np.float32)
     _conv_chains(flat_x, p.h, n, h_modes, h)
@@ -323,18 +517,20 @@ def _q_values(model: VIN, p: _Weights, x: np.ndarray) -> np.ndarray:
     _conv_chains(to_flat(r[None]), p.q, n, q_modes, q)
     _replay_kernel(q, p.w, p.k, n, q_modes)
     q = from_flat(q, n)
-    if _verified.get(setting, 0) < VERIFY_MAPS:
-        want = _torch_q_values(model, x)
+    if not _trusted("q_verified", setting, _verified, VERIFY_MAPS):
+        want = _torch_q_values(p.vin, x)
         if not np.array_equal(q.view(np.int32), want.view(np.int32)):
             _failed.add(setting)
             return want
-        _verified[setting] = _verified.get(setting, 0) + 1
+        _passed("q_verified", setting, _verified, VERIFY_MAPS)
     return q
 
 
-def _torch_q_values(model: VIN, x: np.ndarray) -> np.ndarray:
+def _torch_q_values(weights: VINWeights, x: np.ndarray) -> np.ndarray:
+    import torch
+
     with torch.no_grad():
-        return model.q_values(torch.from_numpy(np.ascontiguousarray(x))[None])[0].numpy()
+        return weights.module().q_values(torch.from_numpy(np.ascontiguousarray(x))[None])[0].numpy()
 
 
 def _add_bias(x: np.ndarray, bias: np.ndarray | None) -> np.ndarray:

@@ -9,40 +9,20 @@ The value map does not depend on the agent's cell, so `action_logits` returns th
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-
 import numpy as np
 import torch
 import torch.nn.functional as F
 from torch import nn
 
-GOAL_VALUE = 10.0
-#: value-iteration steps k for the map sizes of the VIN paper; other sizes use `default_k`.
-K_BY_SIZE = {8: 10, 16: 20, 28: 36}
+from vinadv.planners.vin_weights import GOAL_VALUE, K_BY_SIZE, VINConfig, default_k, input_array
 
-
-def default_k(size: int) -> int:
-    """k for an N x N map: 10, 20, 36 at 8, 16, 28 (the VIN paper), else about 1.3 N (enough to cross the map)."""
-    return K_BY_SIZE.get(size, int(np.ceil(1.3 * size)))
-
-
-@dataclass(frozen=True)
-class VINConfig:
-    """Hyper-parameters: k value-iteration steps, l_i input channels, l_h hidden channels, l_q q channels."""
-
-    k: int = 36
-    l_i: int = 2
-    l_h: int = 150
-    l_q: int = 10
-    n_actions: int = 8
-
-    def to_dict(self) -> dict:
-        return asdict(self)
+__all__ = ["GOAL_VALUE", "K_BY_SIZE", "VIN", "VINConfig", "VINPolicy", "default_k", "make_input"]
 
 
 class VIN(nn.Module):
-    def __init__(self, config: VINConfig = VINConfig()):
+    def __init__(self, config: VINConfig | None = None):
         super().__init__()
+        config = VINConfig() if config is None else config
         self.config = config
         self.h = nn.Conv2d(config.l_i, config.l_h, 3, padding=1, bias=True)
         self.r = nn.Conv2d(config.l_h, 1, 1, bias=False)
@@ -75,11 +55,22 @@ class VIN(nn.Module):
         return self.fc(picked)
 
 
+class VINPolicy(nn.Module):
+    """A `VIN` behind the bring-your-own contract: `forward(obstacles (B,N,N) float, goals (B,2) int64)` ->
+    `(B, 8, N, N)` logits (`VIN.action_logits` with the channels first)."""
+
+    def __init__(self, vin: VIN):
+        super().__init__()
+        self.vin = vin
+
+    def forward(self, obstacles: torch.Tensor, goals: torch.Tensor) -> torch.Tensor:
+        b = obstacles.shape[0]
+        goal_image = torch.zeros_like(obstacles)
+        goal_image[torch.arange(b, device=goals.device), goals[:, 0], goals[:, 1]] = GOAL_VALUE
+        x = torch.stack([obstacles, goal_image], dim=1)
+        return self.vin.action_logits(x).permute(0, 3, 1, 2)
+
+
 def make_input(obstacles: np.ndarray, goals: np.ndarray) -> torch.Tensor:
-    """VIN input `(B, 2, N, N)` float32 from obstacles `(B, N, N)` bool and goals `(B, 2)`."""
-    obstacles = np.asarray(obstacles, dtype=bool)
-    b = len(obstacles)
-    x = np.zeros((b, 2) + obstacles.shape[1:], dtype=np.float32)
-    x[:, 0] = obstacles
-    x[np.arange(b), 1, goals[:, 0], goals[:, 1]] = GOAL_VALUE
-    return torch.from_numpy(x)
+    """VIN input `(B, 2, N, N)` float32 tensor from obstacles `(B, N, N)` bool and goals `(B, 2)` (`input_array`)."""
+    return torch.from_numpy(input_array(obstacles, goals))

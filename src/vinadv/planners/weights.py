@@ -6,7 +6,9 @@ where `record` is the training record (command, seed, data checksum, metrics...)
 the common PyTorch ports (`torch.save(net.state_dict(), ...)`, keys `h.weight h.bias r.weight q.weight w fc.weight`)
 loads too: `l_i`, `l_h`, `l_q` and the action count come from the tensor shapes, `k` from the map size (or `k=`).
 
-Files are always read with `torch.load(weights_only=True)`: a weights file cannot run code.
+Files are read without running code: by `vinadv.planners.torchfile` (no PyTorch; tensors and plain values only),
+and what it cannot read by `torch.load(weights_only=True)`. `load_vin_weights` gives NumPy weights for the planning
+engine; `load_vin` the PyTorch `VIN`.
 """
 
 from __future__ import annotations
@@ -18,16 +20,27 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
-import torch
+import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.outfile import atomic_output
-from vinadv.planners.vin import VIN, VINConfig, default_k
+from vinadv.planners.torchfile import read_torch_file
+from vinadv.planners.vin_weights import STATE_KEYS, VINConfig, VINWeights, default_k
 
 WEIGHTS_FORMAT = "vinadv.vin/1"
-STATE_KEYS = ("h.weight", "h.bias", "r.weight", "q.weight", "w", "fc.weight")
 WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
+__all__ = [
+    "STATE_KEYS",
+    "WEIGHTS_DIR",
+    "WEIGHTS_FORMAT",
+    "default_weights_path",
+    "load_vin",
+    "load_vin_weights",
+    "read_weights",
+    "save_vin",
+    "weights_checksum",
+]
 
 
 def default_weights_path(size: int = 28) -> Path:
@@ -44,11 +57,13 @@ def weights_checksum(path: str | os.PathLike) -> str:
     return h.hexdigest()
 
 
-def save_vin(model: VIN, path: str | os.PathLike, record: dict | None = None) -> None:
-    """Write `model` (float32 state dict on CPU) with its config and `record` to `path`, atomically.
+def save_vin(model, path: str | os.PathLike, record: dict | None = None) -> None:
+    """Write `model` (a `VIN`; float32 state dict on CPU) with its config and `record` to `path`, atomically.
 
     `record` must hold only JSON-like values (dict, list, str, int, float, bool, None).
     """
+    import torch
+
     # Through JSON: the record must load under weights_only=True (plain types only; torch.__version__, for one,
     # is a str subclass that the safe loader refuses).
     try:
@@ -66,18 +81,26 @@ def save_vin(model: VIN, path: str | os.PathLike, record: dict | None = None) ->
         torch.save(payload, fh)
 
 
-def read_weights(path: str | os.PathLike, size: int = 28, k: int | None = None) -> tuple[VIN, dict]:
-    """Load a weights file (either format); returns the model (eval mode, CPU) and the record (`{}` for ports).
+def load_vin_weights(path: str | os.PathLike | None = None, size: int = 28, k: int | None = None) -> VINWeights:
+    """The VIN weights in `path` (either format), or the shipped weights for `size x size` maps when None, as
+    NumPy (`VINWeights`), read without PyTorch where the file allows (`vinadv.planners.torchfile`).
 
-    Raises InputError naming the file for a missing, unreadable, corrupted or mismatched file.
+    A port-style plain state dict gets `k = default_k(size)` unless `k` is given; `k` also overrides the k of a
+    vinadv file. Raises InputError naming the file for a missing, unreadable, corrupted or mismatched file.
     """
+    if path is None:
+        path = default_weights_path(size)
+        if not path.exists():
+            raise InputError(
+                f"no shipped VIN weights for {size}x{size} maps ({path}); train some with "
+                f"`vinadv vin train` and pass --weights"
+            )
     name = str(path)
     if not os.path.exists(name):
         raise InputError(f"{name}: no such weights file")
-    try:
-        data = torch.load(name, map_location="cpu", weights_only=True)
-    except Exception as exc:  # torch raises many types for a bad file (pickle, zip, EOF, unsafe global)
-        raise InputError(_unreadable(name, exc)) from None
+    data = read_torch_file(name)
+    if data is None:
+        data = _torch_load(name)
     if not isinstance(data, dict):
         raise InputError(f"{name}: expected a dict of weights, found {type(data).__name__}")
     if "format" in data:
@@ -99,31 +122,43 @@ def read_weights(path: str | os.PathLike, size: int = 28, k: int | None = None) 
     if k is not None and k != config.k:
         config = VINConfig(**{**config.to_dict(), "k": int(k)})
     _check_planner_shapes(name, state, config)
-    model = VIN(config)
-    _check_state(name, state, model)
-    model.load_state_dict({key: state[key].to(torch.float32) for key in STATE_KEYS})
-    model.eval()
-    return model, record
+    _check_state(name, state, config)
+    arrays = {key: np.ascontiguousarray(state[key], dtype=np.float32) for key in STATE_KEYS}
+    return VINWeights(config, arrays, record, name)
 
 
-def load_vin(path: str | os.PathLike | None = None, size: int = 28, k: int | None = None) -> VIN:
-    """The VIN in `path`, or the shipped weights for `size x size` maps when `path` is None.
+def read_weights(path: str | os.PathLike, size: int = 28, k: int | None = None) -> tuple[Any, dict]:
+    """Load a weights file (either format); returns the PyTorch `VIN` (eval mode, CPU) and the record (`{}` for
+    ports). Raises InputError naming the file for a missing, unreadable, corrupted or mismatched file."""
+    weights = load_vin_weights(path, size=size, k=k)
+    return weights.module(), weights.record
 
-    A port-style plain state dict gets `k = default_k(size)` unless `k` is given; `k` also overrides the k of a
-    vinadv file. The model's `record` attribute holds the training record (`{}` for port files) and
-    `weights_path` the file it came from. Raises InputError for a missing/corrupted/mismatched file.
-    """
-    if path is None:
-        path = default_weights_path(size)
-        if not path.exists():
-            raise InputError(
-                f"no shipped VIN weights for {size}x{size} maps ({path}); train some with "
-                f"`vinadv vin train` and pass --weights"
-            )
-    model, record = read_weights(path, size=size, k=k)
-    model.record = record
-    model.weights_path = str(path)
-    return model
+
+def load_vin(path: str | os.PathLike | None = None, size: int = 28, k: int | None = None):
+    """The PyTorch `VIN` in `path`, or the shipped weights for `size x size` maps when `path` is None
+    (`load_vin_weights`, then the module). Its `record` attribute holds the training record (`{}` for port files)
+    and `weights_path` the file it came from."""
+    return load_vin_weights(path, size=size, k=k).module()
+
+
+def _torch_load(name: str) -> Any:
+    """`torch.load(weights_only=True)` with the tensors as NumPy arrays (float32 for the floating ones, so that
+    bfloat16 reads too); what `read_torch_file` could not read."""
+    import torch
+
+    try:
+        data = torch.load(name, map_location="cpu", weights_only=True)
+    except Exception as exc:  # torch raises many types for a bad file (pickle, zip, EOF, unsafe global)
+        raise InputError(_unreadable(name, exc)) from None
+
+    def arrays(value):
+        if isinstance(value, torch.Tensor):
+            return value.detach().to(torch.float32).numpy() if value.is_floating_point() else value.numpy()
+        if isinstance(value, dict):
+            return {key: arrays(v) for key, v in value.items()}
+        return value
+
+    return arrays(data)
 
 
 def _unreadable(name: str, exc: Exception) -> str:
@@ -144,7 +179,7 @@ def _check_planner_shapes(name: str, state: dict, config: VINConfig) -> None:
     one logit per move of `ACTION_DELTAS`. Other shapes are checked against the config by `_check_state`."""
     for key, axis, want in (("h.weight", 1, VINConfig.l_i), ("fc.weight", 0, len(ACTION_DELTAS))):
         got = state.get(key)
-        if not isinstance(got, torch.Tensor) or got.ndim <= axis:
+        if not isinstance(got, np.ndarray) or got.ndim <= axis:
             continue  # reported by `_check_state`
         if got.shape[axis] != want:
             expected = list(got.shape)
@@ -176,7 +211,7 @@ def _config_from_state(name: str, state: dict, k: int) -> VINConfig:
     if missing:
         raise InputError(f"{name}: not VIN weights: state dict lacks {missing} (has {sorted(map(str, state))[:8]})")
     for key in STATE_KEYS:
-        if not isinstance(state[key], torch.Tensor):
+        if not isinstance(state[key], np.ndarray):
             raise InputError(f"{name}: state dict entry '{key}' is not a tensor")
     h, fc = state["h.weight"], state["fc.weight"]
     if h.ndim != 4 or fc.ndim != 2:
@@ -189,20 +224,19 @@ def _config_from_state(name: str, state: dict, k: int) -> VINConfig:
     )
 
 
-def _check_state(name: str, state: dict, model: VIN) -> None:
-    expected = model.state_dict()
+def _check_state(name: str, state: dict, config: VINConfig) -> None:
+    expected = config.state_shapes()
     missing = [key for key in STATE_KEYS if key not in state]
     extra = [str(key) for key in state if key not in expected]
     if missing or extra:
         raise InputError(f"{name}: state dict keys do not match a VIN: missing {missing}, unexpected {extra}")
     for key, want in expected.items():
         got = state[key]
-        if not isinstance(got, torch.Tensor):
+        if not isinstance(got, np.ndarray):
             raise InputError(f"{name}: state dict entry '{key}' is not a tensor")
-        if tuple(got.shape) != tuple(want.shape):
+        if tuple(got.shape) != want:
             raise InputError(
-                f"{name}: '{key}' has shape {tuple(got.shape)}, expected {tuple(want.shape)} "
-                f"for config {model.config.to_dict()}"
+                f"{name}: '{key}' has shape {tuple(got.shape)}, expected {want} for config {config.to_dict()}"
             )
-        if not torch.is_floating_point(got) or not torch.isfinite(got).all():
+        if got.dtype.kind != "f" or not np.isfinite(got).all():
             raise InputError(f"{name}: '{key}' is not a finite float tensor")
