@@ -94,7 +94,7 @@ def read_torch_file(path: str | os.PathLike) -> object | None:
             if prefix + "byteorder" in names and archive.read(prefix + "byteorder").strip() != b"little":
                 return None
             return _Unpickler(archive.read(pickles[0]), archive, prefix).load()
-    except (_Unsupported, OSError, zipfile.BadZipFile, KeyError, pickle.UnpicklingError, EOFError, ValueError):
+    except (_Unsupported, OSError, zipfile.BadZipFile, KeyError, EOFError, ValueError, pickle.UnpicklingError):
         return None
-    except (AttributeError, TypeError, IndexError, RecursionError):  # a malformed pickle: PyTorch words it
+    except (AttributeError, TypeError, IndexError, RecursionError):  # a malformed pickle: PyTorch words its error
         return None
