@@ -11,6 +11,7 @@ import os
 import shutil
 import tempfile
 import uuid
+from collections.abc import Iterator
 
 import pytest
 import sqlalchemy as sa
@@ -101,31 +102,35 @@ def _fresh_name() -> str:
     return f"vinadv_test_{uuid.uuid4().hex[:12]}"
 
 
+def _fresh_database(server: sa.Engine) -> Iterator[str]:
+    """A fixture's body: make a fresh, empty database on `server` (a MariaDB database, or a PostgreSQL schema first
+    on the search path), yield its URL (password included) and drop it after the test."""
+    name = _fresh_name()
+    if server.dialect.name == "postgresql":
+        create, drop = f'CREATE SCHEMA "{name}"', f'DROP SCHEMA IF EXISTS "{name}" CASCADE'
+        url = server.url.update_query_dict({"options": f"-csearch_path={name}"})
+    else:
+        create, drop = f"CREATE DATABASE `{name}` CHARACTER SET utf8mb4", f"DROP DATABASE IF EXISTS `{name}`"
+        url = server.url.set(database=name)
+    with server.begin() as conn:
+        conn.execute(sa.text(create))
+    try:
+        yield url.render_as_string(hide_password=False)
+    finally:
+        with server.begin() as conn:
+            conn.execute(sa.text(drop))
+
+
 @pytest.fixture
 def mysql_url(mysql_server):
     """URL of a fresh, empty MariaDB database (dropped after the test)."""
-    name = _fresh_name()
-    with mysql_server.begin() as conn:
-        conn.execute(sa.text(f"CREATE DATABASE `{name}` CHARACTER SET utf8mb4"))
-    try:
-        yield mysql_server.url.set(database=name).render_as_string(hide_password=False)
-    finally:
-        with mysql_server.begin() as conn:
-            conn.execute(sa.text(f"DROP DATABASE IF EXISTS `{name}`"))
+    yield from _fresh_database(mysql_server)
 
 
 @pytest.fixture
 def postgres_url(postgres_server):
     """URL of a fresh, empty PostgreSQL schema (first on the search path; dropped after the test)."""
-    name = _fresh_name()
-    with postgres_server.begin() as conn:
-        conn.execute(sa.text(f'CREATE SCHEMA "{name}"'))
-    try:
-        url = postgres_server.url.update_query_dict({"options": f"-csearch_path={name}"})
-        yield url.render_as_string(hide_password=False)
-    finally:
-        with postgres_server.begin() as conn:
-            conn.execute(sa.text(f'DROP SCHEMA IF EXISTS "{name}" CASCADE'))
+    yield from _fresh_database(postgres_server)
 
 
 @pytest.fixture

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import torch
 
+from tests.cli_files import command_line
 from tests.grid.oracle import brute_distances
 from vinadv.cli import main
 from vinadv.errors import InputError
@@ -19,6 +20,8 @@ from vinadv.planners.training import TrainConfig, split_indices, train_vin
 
 SIZE = 8
 TINY = dict(epochs=2, lr=0.01, batch_size=8, val_fraction=0.25, seed=1, l_h=8, l_q=8)
+#: the `train` options of the CLI tests: adversarial training by key-points from the first epoch, the record as JSON
+ADVERSARIAL_JSON = ("--adversarial", "--adv-strategy", "key-points", "--adv-start", "1", "--json")
 
 
 def _cost(path) -> float:
@@ -121,31 +124,8 @@ def test_cli_adversarial_training_records_everything(tmp_path, capsys):
     data = tmp_path / "maps.npz"
     generate_maps(30, SIZE, seed=2, n_starts=1).save(data)
     out = tmp_path / "r.pt"
-    assert (
-        main(
-            [
-                "vin",
-                "train",
-                "--data",
-                str(data),
-                "--out",
-                str(out),
-                "--epochs",
-                "2",
-                "--batch-size",
-                "8",
-                "--adversarial",
-                "--adv-maps",
-                "10",
-                "--adv-strategy",
-                "key-points",
-                "--adv-start",
-                "1",
-                "--json",
-            ]
-        )
-        == 0
-    )
+    args = command_line("vin", "train", data=data, out=out, epochs=2, batch_size=8, adv_maps=10)
+    assert main([*args, *ADVERSARIAL_JSON]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["train_config"]["adversarial"]["maps_per_epoch"] == 10
     assert [r["epoch"] for r in record["augment_rounds"]] == [1, 2]
@@ -159,36 +139,7 @@ def test_cli_gppn_adversarial_training(tmp_path, capsys):
     data = tmp_path / "maps.npz"
     generate_maps(12, SIZE, seed=3, n_starts=1).save(data)
     out = tmp_path / "g.pt"
-    assert (
-        main(
-            [
-                "gppn",
-                "train",
-                "--data",
-                str(data),
-                "--out",
-                str(out),
-                "--epochs",
-                "1",
-                "--batch-size",
-                "4",
-                "--l-h",
-                "4",
-                "--k",
-                "4",
-                "--kernel",
-                "3",
-                "--adversarial",
-                "--adv-maps",
-                "6",
-                "--adv-strategy",
-                "key-points",
-                "--adv-start",
-                "1",
-                "--json",
-            ]
-        )
-        == 0
-    )
+    args = command_line("gppn", "train", data=data, out=out, epochs=1, batch_size=4, l_h=4, k=4, kernel=3, adv_maps=6)
+    assert main([*args, *ADVERSARIAL_JSON]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["planner"] == "gppn" and record["augment_rounds"][0]["attacked"] == 6

@@ -12,6 +12,7 @@ import pytest
 import sqlalchemy as sa
 
 from tests.classify.oracle import rule_oracle
+from tests.cli_files import command_line, generate_and_attack
 from vinadv.cli import main
 from vinadv.pipeline import RunConfig, run_pipeline
 from vinadv.store import Store
@@ -122,24 +123,8 @@ def test_result_does_not_depend_on_the_order_shards_finish(weights, sqlite_url, 
 
 def test_killed_run_resumes_with_every_pair_exactly_once(weights, tmp_path):
     db = f"sqlite:///{tmp_path / 'kill.db'}"
-    args = [
-        "run",
-        "--n",
-        "400",
-        "--size",
-        str(SIZE),
-        "--shard-size",
-        "20",
-        "--weights",
-        weights,
-        "--seed",
-        "9",
-        "--db",
-        db,
-        "--name",
-        "k",
-        "--quiet",
-    ]
+    common = command_line("run", n=400, size=SIZE, shard_size=20, weights=weights, seed=9)
+    args = [*common, "--db", db, "--name", "k", "--quiet"]
     proc = subprocess.Popen([sys.executable, "-m", "vinadv.cli", *args], env={**os.environ, "PYTHONUNBUFFERED": "1"})
     engine = sa.create_engine(db)
     deadline = time.time() + 120
@@ -161,7 +146,7 @@ def test_killed_run_resumes_with_every_pair_exactly_once(weights, tmp_path):
     assert 0 < partial < 400
     assert main([*args, "--resume"]) == 0
     clean_db = f"sqlite:///{tmp_path / 'clean.db'}"
-    assert main([*args[:-5], "--db", clean_db, "--quiet"]) == 0
+    assert main([*common, "--db", clean_db, "--quiet"]) == 0
     with Store.open(db) as resumed, Store.open(clean_db) as clean:
         rid = resumed.find_run("k")
         got = resumed.read_pairs(rid)
@@ -171,26 +156,8 @@ def test_killed_run_resumes_with_every_pair_exactly_once(weights, tmp_path):
 
 def test_resume_refuses_other_settings(weights, sqlite_url, capsys):
     run_pipeline(config(weights), db=sqlite_url, name="r", progress=False)
-    args = [
-        "run",
-        "--n",
-        "60",
-        "--size",
-        str(SIZE),
-        "--weights",
-        weights,
-        "--db",
-        sqlite_url,
-        "--name",
-        "r",
-        "--resume",
-        "--quiet",
-        "--seed",
-        "5",
-        "--shard-size",
-        "25",
-    ]
-    assert main(args) == 2
+    args = command_line("run", n=60, size=SIZE, weights=weights, db=sqlite_url, name="r", seed=5, shard_size=25)
+    assert main([*args, "--resume", "--quiet"]) == 2
     assert "other settings (seed)" in capsys.readouterr().err
 
 
@@ -230,29 +197,7 @@ def test_bad_inputs_exit_2_and_leave_data_untouched(weights, sqlite_url, tmp_pat
 
 
 def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
-    maps = tmp_path / "maps.npz"
-    pairs = tmp_path / "pairs.npz"
-    assert (
-        main(["maps", "generate", "--n", "30", "--size", str(SIZE), "--starts", "1", "--out", str(maps), "--quiet"])
-        == 0
-    )
-    assert (
-        main(
-            [
-                "attack",
-                "--maps",
-                str(maps),
-                "--strategy",
-                "key-points",
-                "--out",
-                str(pairs),
-                "--weights",
-                weights,
-                "--json",
-            ]
-        )
-        == 0
-    )
+    _, pairs = generate_and_attack(tmp_path, weights, n=30, size=SIZE, strategy="key-points", options=("--json",))
     summary = json.loads(capsys.readouterr().out)
     assert summary["pairs"] == sum(summary["counts"].values())
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--json"]) == 0
@@ -293,31 +238,13 @@ def test_run_of_several_obstacles_stores_every_added_cell_and_resume_compares_it
         )
         expected.append(pairs.added)
     assert got.added.shape == (summary.n_pairs, 2, 2) and np.array_equal(got.added, np.concatenate(expected))
-    args = [
-        "run",
-        "--n",
-        "30",
-        "--size",
-        str(SIZE),
-        "--weights",
-        weights,
-        "--db",
-        sqlite_url,
-        "--name",
-        "k2",
-        "--attack",
-        "key-points",
-        "--seed",
-        "4",
-        "--shard-size",
-        "25",
-        "--resume",
-        "--quiet",
-    ]
-    assert main([*args, "--obstacles", "3"]) == 2
+    args = command_line(
+        "run", n=30, size=SIZE, weights=weights, db=sqlite_url, name="k2", attack="key-points", seed=4, shard_size=25
+    )
+    assert main([*args, "--resume", "--quiet", "--obstacles", "3"]) == 2
     assert "other settings (obstacles)" in capsys.readouterr().err
-    assert main([*args, "--obstacles", "2"]) == 0
-    assert main([*args[:-2], "--obstacles", "0"]) == 2
+    assert main([*args, "--resume", "--quiet", "--obstacles", "2"]) == 0
+    assert main([*args, "--obstacles", "0"]) == 2
     assert "--obstacles must be >= 1" in capsys.readouterr().err
 
 
@@ -339,29 +266,8 @@ def test_a_run_stored_before_several_obstacles_resumes_as_one_obstacle(weights, 
 def test_attack_and_identify_keep_every_added_obstacle(weights, tmp_path, sqlite_url, capsys):
     from vinadv.attacks.pairs import PairSet
 
-    maps, pairs = tmp_path / "maps.npz", tmp_path / "pairs.npz"
-    assert (
-        main(["maps", "generate", "--n", "20", "--size", str(SIZE), "--starts", "1", "--out", str(maps), "--quiet"])
-        == 0
-    )
-    assert (
-        main(
-            [
-                "attack",
-                "--maps",
-                str(maps),
-                "--strategy",
-                "near-path",
-                "--obstacles",
-                "3",
-                "--out",
-                str(pairs),
-                "--weights",
-                weights,
-                "--quiet",
-            ]
-        )
-        == 0
+    maps, pairs = generate_and_attack(
+        tmp_path, weights, n=20, size=SIZE, strategy="near-path", options=("--obstacles", "3", "--quiet")
     )
     made = PairSet.load(pairs)
     assert made.added.shape == (len(made), 3, 2) and made.params["obstacles"] == 3

@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -112,20 +112,13 @@ def replan(pairs: PairSet, planner: Planner) -> PairSet:
     planner = as_planner(planner, pairs.size)
     o = planner.plan_batch(pairs.obstacles_o, pairs.starts, pairs.goals, pairs.corner_cutting)
     a = planner.plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals, pairs.corner_cutting)
-    return PairSet(
-        obstacles_o=pairs.obstacles_o,
-        obstacles_a=pairs.obstacles_a,
-        starts=pairs.starts,
-        goals=pairs.goals,
-        added=pairs.added,
-        map_index=pairs.map_index,
+    return replace(
+        pairs,
         path_o=o.paths,
         path_a=a.paths,
         term_o=o.termination_names,
         term_a=a.termination_names,
-        strategy=pairs.strategy,
         params=dict(pairs.params),
-        corner_cutting=pairs.corner_cutting,
     )
 
 

@@ -14,6 +14,7 @@ import pytest
 
 pytest.importorskip("distributed")
 
+from tests.cli_files import command_line, generate_and_attack  # noqa: E402
 from vinadv.attacks.pairs import PairSet  # noqa: E402
 from vinadv.cli import main  # noqa: E402
 from vinadv.cluster import ClusterShards, start_local_cluster  # noqa: E402
@@ -109,19 +110,7 @@ def test_cli_run_with_a_local_cluster_of_its_own(weights, tmp_path):
 def test_cli_run_with_cluster_address_matches_the_local_cli_run(weights, cluster, tmp_path):
     local, _ = cluster
     common = [
-        "run",
-        "--n",
-        "60",
-        "--size",
-        str(SIZE),
-        "--shard-size",
-        "20",
-        "--weights",
-        weights,
-        "--seed",
-        "3",
-        "--attack",
-        "key-points",
+        *command_line("run", n=60, size=SIZE, shard_size=20, weights=weights, seed=3, attack="key-points"),
         "--quiet",
     ]
     assert main([*common, "--db", str(tmp_path / "a.db")]) == 0
@@ -234,28 +223,7 @@ def test_attack_on_the_cluster_writes_the_same_pairs_file(weights, cluster, tmp_
 
 def test_identify_on_the_cluster_stores_the_same_labels(weights, cluster, tmp_path):
     local, _ = cluster
-    maps, pairs = tmp_path / "maps.npz", tmp_path / "pairs.npz"
-    assert (
-        main(["maps", "generate", "--n", "50", "--size", str(SIZE), "--starts", "1", "--out", str(maps), "--quiet"])
-        == 0
-    )
-    assert (
-        main(
-            [
-                "attack",
-                "--maps",
-                str(maps),
-                "--strategy",
-                "key-points",
-                "--out",
-                str(pairs),
-                "--weights",
-                weights,
-                "--quiet",
-            ]
-        )
-        == 0
-    )
+    _, pairs = generate_and_attack(tmp_path, weights, n=50, size=SIZE, strategy="key-points")
     other = tmp_path / "other.pt"
     save_vin(planning_vin(SIZE, seed=3, noise=0.3), other)  # re-plan with another planner on the workers
     for db, extra in (("a.db", []), ("b.db", ["--cluster", local.scheduler_address, "--shard-size", "7"])):

@@ -6,6 +6,7 @@ import shutil
 import numpy as np
 import pytest
 
+from tests.cli_files import command_line
 from tests.interop.test_protocols import brute_gppn_figures
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
@@ -35,20 +36,7 @@ def maps_file(tmp_path_factory):
 def test_attack_on_the_optimal_planner_is_never_harmful(maps_file, tmp_path, capsys):
     out = tmp_path / "p.npz"
     assert (
-        main(
-            [
-                "attack",
-                "--maps",
-                maps_file,
-                "--strategy",
-                "exhaustive",
-                "--planner",
-                "optimal",
-                "--out",
-                str(out),
-                "--json",
-            ]
-        )
+        main([*command_line("attack", maps=maps_file, strategy="exhaustive", planner="optimal", out=out), "--json"])
         == 0
     )
     summary = json.loads(capsys.readouterr().out)
@@ -62,23 +50,8 @@ def test_attack_on_the_optimal_planner_is_never_harmful(maps_file, tmp_path, cap
 
 def test_identify_with_another_planner_replans_and_records_both(weights, maps_file, tmp_path, capsys):
     pairs_file = tmp_path / "p.npz"
-    assert (
-        main(
-            [
-                "attack",
-                "--maps",
-                maps_file,
-                "--strategy",
-                "key-points",
-                "--weights",
-                weights,
-                "--out",
-                str(pairs_file),
-                "--quiet",
-            ]
-        )
-        == 0
-    )
+    attack = command_line("attack", maps=maps_file, strategy="key-points", weights=weights, out=pairs_file)
+    assert main([*attack, "--quiet"]) == 0
     db = str(tmp_path / "t.db")
     assert main(["identify", "--pairs", str(pairs_file), "--db", db, "--planner", "optimal", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
@@ -113,22 +86,7 @@ def test_resume_refuses_the_same_planner_with_other_weights(weights, tmp_path, c
     mine = tmp_path / "w.pt"
     shutil.copy(weights, mine)
     db = str(tmp_path / "r.db")
-    common = [
-        "run",
-        "--n",
-        "20",
-        "--size",
-        str(SIZE),
-        "--shard-size",
-        "10",
-        "--db",
-        db,
-        "--name",
-        "k",
-        "--quiet",
-        "--weights",
-        str(mine),
-    ]
+    common = [*command_line("run", n=20, size=SIZE, shard_size=10, db=db, name="k", weights=mine), "--quiet"]
     assert main(common) == 0
     save_vin(planning_vin(SIZE, seed=3, noise=0.1), mine)  # the same file name, other weights
     capsys.readouterr()
@@ -168,27 +126,8 @@ def test_report_and_viewer_show_the_runs_planner(tmp_path):
     from vinadv.viewer.app import create_app
 
     db = str(tmp_path / "r.db")
-    assert (
-        main(
-            [
-                "run",
-                "--n",
-                "20",
-                "--size",
-                str(SIZE),
-                "--shard-size",
-                "10",
-                "--db",
-                db,
-                "--planner",
-                "optimal",
-                "--attack",
-                "key-points",
-                "--quiet",
-            ]
-        )
-        == 0
-    )
+    run = command_line("run", n=20, size=SIZE, shard_size=10, db=db, planner="optimal", attack="key-points")
+    assert main([*run, "--quiet"]) == 0
     html = write_report(db, tmp_path / "rep").read_text()
     assert "<td>planner</td><td>optimal</td>" in html
     assert "quick evaluation of planner &#39;optimal&#39;" in html  # its quality, not the VIN's

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 import sqlalchemy as sa
+from tests.cli_files import command_line
 from tests.report.conftest import SIZE
 
 from vinadv.cli import main
@@ -197,32 +198,10 @@ def test_evaluate_stores_rows_that_the_report_shows(evaluated):
 def test_run_with_report_runs_the_comparison_in_both_settings(report_weights, tmp_path, capsys):
     db = f"sqlite:///{tmp_path / 'one.db'}"
     out = tmp_path / "rep"
-    assert (
-        main(
-            [
-                "run",
-                "--n",
-                "80",
-                "--size",
-                str(SIZE),
-                "--attack",
-                "saliency",
-                "--seed",
-                "4",
-                "--shard-size",
-                "80",
-                "--weights",
-                report_weights,
-                "--db",
-                db,
-                "--report",
-                str(out),
-                "--json",
-                "--quiet",
-            ]
-        )
-        == 0
+    run = command_line(
+        "run", n=80, size=SIZE, attack="saliency", seed=4, shard_size=80, weights=report_weights, db=db, report=out
     )
+    assert main([*run, "--json", "--quiet"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["report"] == str(out) and summary["comparison"] == "stored"
     page = _check_complete(out, evaluated=True)
@@ -247,29 +226,8 @@ def test_run_with_report_runs_the_comparison_in_both_settings(report_weights, tm
 def test_run_with_report_and_no_evaluate_skips_the_comparison(report_weights, tmp_path, capsys):
     db = f"sqlite:///{tmp_path / 'two.db'}"
     out = tmp_path / "rep"
-    assert (
-        main(
-            [
-                "run",
-                "--n",
-                "30",
-                "--size",
-                str(SIZE),
-                "--attack",
-                "key-points",
-                "--weights",
-                report_weights,
-                "--db",
-                db,
-                "--report",
-                str(out),
-                "--no-evaluate",
-                "--json",
-                "--quiet",
-            ]
-        )
-        == 0
-    )
+    run = command_line("run", n=30, size=SIZE, attack="key-points", weights=report_weights, db=db, report=out)
+    assert main([*run, "--no-evaluate", "--json", "--quiet"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["comparison"] == "skipped"
     _check_complete(out, evaluated=False)

@@ -3,13 +3,23 @@ pairs they belong to, and `vinadv classify train --labels human`."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from tests.cli_files import command_line
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.store import Store
 from vinadv.viewer.training import human_training_set, resolve_human_labels
+
+
+def train_on_human_labels(db: str, run: int, model: str, out: str | Path, *options: str) -> int:
+    """The exit status of `vinadv classify train --labels human` of a `model` on run `run` of `db`, written to
+    `out`, with more `options`."""
+    args = command_line("classify", "train", labels="human", db=db, run=run, model=model, out=out)
+    return main([*args, *options])
 
 
 def _ann(i, pair, label, who):
@@ -75,25 +85,7 @@ def test_classify_train_on_human_labels(db, tmp_path, capsys):
         store.add_annotations(run_id, list(range(0, 12)), ["FP", "DP"] * 6, "alice")
         store.add_annotations(run_id, [20, 21], ["UcP", "UrP"], "bob")
     out = tmp_path / "human.model"
-    code = main(
-        [
-            "classify",
-            "train",
-            "--labels",
-            "human",
-            "--db",
-            url,
-            "--run",
-            str(run_id),
-            "--model",
-            "hausdorff",
-            "--out",
-            str(out),
-            "--test-fraction",
-            "0.25",
-            "--json",
-        ]
-    )
+    code = train_on_human_labels(url, run_id, "hausdorff", out, "--test-fraction", "0.25", "--json")
     assert code == 0, capsys.readouterr().err
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert summary["labels"] == "human" and summary["n_pairs"] == 14
@@ -108,44 +100,8 @@ def test_classify_train_human_needs_run_and_labels(db, tmp_path, capsys):
     model = str(tmp_path / "m.model")
     assert main(["classify", "train", "--labels", "human", "--db", url, "--model", "svm", "--out", model]) == 2
     assert "--run" in capsys.readouterr().err
-    assert (
-        main(
-            [
-                "classify",
-                "train",
-                "--labels",
-                "human",
-                "--db",
-                url,
-                "--run",
-                str(run_id),
-                "--model",
-                "svm",
-                "--out",
-                model,
-            ]
-        )
-        == 2
-    )
+    assert train_on_human_labels(url, run_id, "svm", model) == 2
     assert "no human labels" in capsys.readouterr().err
-    assert (
-        main(
-            [
-                "classify",
-                "train",
-                "--labels",
-                "human",
-                "--db",
-                str(tmp_path / "none.db"),
-                "--run",
-                "1",
-                "--model",
-                "svm",
-                "--out",
-                model,
-            ]
-        )
-        == 2
-    )
+    assert train_on_human_labels(str(tmp_path / "none.db"), 1, "svm", model) == 2
     assert main(["classify", "train", "--model", "svm", "--out", model]) == 2
     assert "--pairs is required" in capsys.readouterr().err

@@ -262,16 +262,7 @@ def _from_trajectories(
     slot = traj_map * s + rank
     source[slot[optimal]] = n * s + np.flatnonzero(optimal)
     expert = PackedPaths.concat([own, theirs]).take(source)
-    maps = MapSet(
-        obstacles=obstacles,
-        goals=goals,
-        starts=starts,
-        expert_costs=costs,
-        expert=expert,
-        corner_cutting=True,
-        seed=-1,
-        start_counts=counts.astype(np.int64) if n and counts.min() < s else None,
-    )
+    maps = _padded_map_set(obstacles, goals, starts, costs, expert, counts, s, seed=-1)
     info = {
         "maps": n,
         "size": size,
@@ -283,6 +274,30 @@ def _from_trajectories(
         "vinadv's Dijkstra for the others",
     }
     return maps, info
+
+
+def _padded_map_set(
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    starts: np.ndarray,
+    costs: np.ndarray,
+    expert: PackedPaths,
+    counts: np.ndarray,
+    per_map: int,
+    seed: int,
+) -> MapSet:
+    """The MapSet (corner cutting allowed) of imported maps whose map i has `counts[i]` real starts of `per_map`:
+    `start_counts` marks the padding where some map has fewer."""
+    return MapSet(
+        obstacles=obstacles,
+        goals=goals,
+        starts=starts,
+        expert_costs=costs,
+        expert=expert,
+        corner_cutting=True,
+        seed=seed,
+        start_counts=counts.astype(np.int64) if len(counts) and counts.min() < per_map else None,
+    )
 
 
 def _with_drawn_starts(obstacles: np.ndarray, goals: np.ndarray, k: int, seed: int) -> tuple[MapSet, dict]:
@@ -301,16 +316,7 @@ def _with_drawn_starts(obstacles: np.ndarray, goals: np.ndarray, k: int, seed: i
     starts[pad] = np.repeat(goals[:, None, :], k, axis=1)[pad]
     obstacles, goals, starts, dist, counts = obstacles[keep], goals[keep], starts[keep], dist[keep], counts[keep]
     costs, expert = expert_paths_from(dist, obstacles, goals, starts)
-    maps = MapSet(
-        obstacles=obstacles,
-        goals=goals,
-        starts=starts,
-        expert_costs=costs,
-        expert=expert,
-        corner_cutting=True,
-        seed=int(seed),
-        start_counts=counts.astype(np.int64) if len(counts) and counts.min() < k else None,
-    )
+    maps = _padded_map_set(obstacles, goals, starts, costs, expert, counts, k, seed=int(seed))
     info = {
         "maps": int(keep.sum()),
         "size": size,
@@ -381,6 +387,32 @@ def _side(f: _Arrays, name: str, cells: int) -> int:
     return s
 
 
+def _avivt_maps(
+    f: _Arrays,
+    prefix: str,
+    im: np.ndarray,
+    value: np.ndarray,
+    s: int,
+    order: str = "C",
+    background: tuple[float, ...] = (0, -1),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The maps of avivt's sample rows: `im` and `value` (the arrays `{prefix}im_data` and `{prefix}value_data`,
+    one `(s * s)` map image (1 = free) and goal image a row, unrolled in `order`). Returns which rows start a new
+    map `(m,)` bool, and the obstacles `(k, s, s)` and goals `(k, 2)` of those k maps."""
+    new_map = _new_rows(np.concatenate([im, value], axis=1))
+    obstacles, goals = _decode_images(
+        f,
+        f"{prefix}im_data",
+        im[new_map].reshape(-1, s, s, order=order),
+        f"{prefix}value_data",
+        value[new_map].reshape(-1, s, s, order=order),
+        one_is_free=True,
+        goal_value=GOAL_VALUE,
+        background=background,
+    )
+    return new_map, obstacles, goals
+
+
 def _read_avivt(f: _Arrays, split: str | None, starts: int | None, seed: int) -> tuple[MapSet, dict]:
     if split is None:
         split = "test" if f.has("all_im_data") else "train"
@@ -402,20 +434,8 @@ def _read_avivt(f: _Arrays, split: str | None, starts: int | None, seed: int) ->
             if p.ndim != 2 or p.shape[1] != 2 or p.dtype.kind not in "iuf":
                 raise f.fail("all_states_xy", f"holds a path of shape {p.shape}, expected (L, 2) cells")
             cells_list.append(p)
-        new_map = _new_rows(np.concatenate([im, value], axis=1))
         # MATLAB unrolls column-major: a row of all_im_data is the map's columns one after another.
-        images = im[new_map].reshape(-1, s, s, order="F")
-        values = value[new_map].reshape(-1, s, s, order="F")
-        obstacles, goals = _decode_images(
-            f,
-            "all_im_data",
-            images,
-            "all_value_data",
-            values,
-            one_is_free=True,
-            goal_value=GOAL_VALUE,
-            background=(-1, 0),
-        )
+        new_map, obstacles, goals = _avivt_maps(f, "all_", im, value, s, order="F", background=(-1, 0))
         lengths = np.array([len(p) for p in cells_list], dtype=np.int64)
         offsets = np.r_[0, np.cumsum(lengths)].astype(np.int64)
         cells = f.integers("all_states_xy", np.concatenate(cells_list), 1, s) - 1 if n else np.zeros((0, 2), int)
@@ -429,17 +449,7 @@ def _read_avivt(f: _Arrays, split: str | None, starts: int | None, seed: int) ->
         value = f.get("value_data", 2, (m, s * s))
         states = f.integers("state_xy_data", f.get("state_xy_data", 2, (m, 2)), 0, s - 1)
         labels = f.integers("label_data", f.get("label_data", 2, (m, 1))[:, 0], 0, 7)
-        new_map = _new_rows(np.concatenate([im, value], axis=1))
-        obstacles, goals = _decode_images(
-            f,
-            "im_data",
-            im[new_map].reshape(-1, s, s),
-            "value_data",
-            value[new_map].reshape(-1, s, s),
-            one_is_free=True,
-            goal_value=GOAL_VALUE,
-            background=(0, -1),
-        )
+        new_map, obstacles, goals = _avivt_maps(f, "", im, value, s)
         first, cells, offsets = _regroup(states, labels, new_map)
         maps, info = _from_trajectories(
             f, "state_xy_data with label_data", obstacles, goals, np.cumsum(new_map)[first] - 1, cells, offsets
@@ -449,17 +459,7 @@ def _read_avivt(f: _Arrays, split: str | None, starts: int | None, seed: int) ->
     im = f.get("batch_im_data", 2)
     s = _side(f, "batch_im_data", im.shape[1])
     value = f.get("batch_value_data", 2, (im.shape[0], s * s))
-    new_map = _new_rows(np.concatenate([im, value], axis=1))
-    obstacles, goals = _decode_images(
-        f,
-        "batch_im_data",
-        im[new_map].reshape(-1, s, s),
-        "batch_value_data",
-        value[new_map].reshape(-1, s, s),
-        one_is_free=True,
-        goal_value=GOAL_VALUE,
-        background=(0, -1),
-    )
+    _, obstacles, goals = _avivt_maps(f, "batch_", im, value, s)
     maps, info = _with_drawn_starts(obstacles, goals, 7 if starts is None else starts, seed)
     return maps, {"layout": "train (batched arrays only: shuffled states, starts drawn)", **info}
 

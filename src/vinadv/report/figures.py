@@ -50,6 +50,14 @@ def _paths(records, i: int) -> tuple[np.ndarray, np.ndarray]:
     return o, a
 
 
+def _draw_pair(axes, records, i: int, paths_o, paths_a, title_o: str, title_a: str | None) -> None:
+    """Pair `i` of `records` on two axes: the original map with the `(label, cells)` paths `paths_o` on `axes[0]`,
+    the adversarial map (its added obstacles marked) with `paths_a` on `axes[1]`."""
+    goal, start = records.goals[i], records.starts[i]
+    draw_map(axes[0], records.obstacles_o[i], goal, start, paths=paths_o, title=title_o)
+    draw_map(axes[1], records.obstacles_a[i], goal, start, paths=paths_a, added=records.added[i], title=title_a)
+
+
 def _distances(pair) -> str:
     """`dh 6, dv 2 (t 4)` of an `ExamplePair` (with 'FP by dh' when a distance over t makes it a fork)."""
     if pair is None or pair.label not in ("FP", "DP"):
@@ -64,22 +72,14 @@ def map_pair(records, i: int, stem: Path, with_paths: bool, distances=None) -> l
     fig, axes = plt.subplots(1, 2, figsize=(7, 3.6))
     o, a = _paths(records, i)
     label = records.label[i]
-    draw_map(
-        axes[0],
-        records.obstacles_o[i],
-        records.goals[i],
-        records.starts[i],
-        paths=[("original", o)] if with_paths else (),
-        title="(a) original path" if with_paths else "(a) the normal map",
-    )
-    draw_map(
-        axes[1],
-        records.obstacles_a[i],
-        records.goals[i],
-        records.starts[i],
-        paths=[("adversarial", a)] if with_paths else (),
-        added=records.added[i],
-        title="(b) adversarial path" if with_paths else "(b) the adversarial map (+1 obstacle, orange)",
+    _draw_pair(
+        axes,
+        records,
+        i,
+        [("original", o)] if with_paths else (),
+        [("adversarial", a)] if with_paths else (),
+        "(a) original path" if with_paths else "(a) the normal map",
+        "(b) adversarial path" if with_paths else "(b) the adversarial map (+1 obstacle, orange)",
     )
     extra = _distances(distances) if with_paths else ""
     fig.suptitle(f"pair {records.pair_index[i]} ({label}{'; ' + extra if extra else ''})", fontsize=9)
@@ -104,22 +104,14 @@ def example_pairs(records, stem: Path, columns: int = 4, distances=None) -> list
         o, a = _paths(records, i)
         axes[r, c].axis("on")
         axes[r + 1, c].axis("on")
-        draw_map(
-            axes[r, c],
-            records.obstacles_o[i],
-            records.goals[i],
-            records.starts[i],
-            paths=[("original", o)],
-            title=f"pair {records.pair_index[i]}: original",
-        )
-        draw_map(
-            axes[r + 1, c],
-            records.obstacles_a[i],
-            records.goals[i],
-            records.starts[i],
-            paths=[("original", o), ("adversarial", a)],
-            added=records.added[i],
-            title=f"adversarial ({records.label[i]})",
+        _draw_pair(
+            axes[r : r + 2, c],
+            records,
+            i,
+            [("original", o)],
+            [("original", o), ("adversarial", a)],
+            f"pair {records.pair_index[i]}: original",
+            f"adversarial ({records.label[i]})",
         )
         if distances is not None:  # below the map: a second title line would run into the map above
             axes[r + 1, c].set_xlabel(_distances(distances[i]), fontsize=8)
@@ -142,22 +134,14 @@ def categories(examples: dict, stem: Path, distances: dict | None = None) -> lis
             continue
         records, i = examples[label]
         o, a = _paths(records, i)
-        draw_map(
-            column[0],
-            records.obstacles_o[i],
-            records.goals[i],
-            records.starts[i],
-            paths=[("original", o)],
-            title=f"({'abcd'[c]}) the {label}",
-        )
-        draw_map(
-            column[1],
-            records.obstacles_a[i],
-            records.goals[i],
-            records.starts[i],
-            paths=[("adversarial", a)],
-            added=records.added[i],
-            title=_distances((distances or {}).get(label)) or None,
+        _draw_pair(
+            column[:2],
+            records,
+            i,
+            [("original", o)],
+            [("adversarial", a)],
+            f"({'abcd'[c]}) the {label}",
+            _distances((distances or {}).get(label)) or None,
         )
         image = render_path_images(records.path_o.take([i]), records.path_a.take([i]), records.size)[0]
         column[2].imshow(image, interpolation="nearest")

@@ -14,7 +14,7 @@ import jinja2
 
 from vinadv.outfile import atomic_output
 from vinadv.report import paper
-from vinadv.report.gather import ALL_LABELS, CATEGORY_ORDER, SECTIONS, ReportData
+from vinadv.report.gather import ALL_LABELS, CATEGORY_ORDER, SECTIONS, ReportData, Table
 
 STYLESHEET = "style.css"
 #: the page's sections in order, `(id, heading)`: the gathered ones and the list of files
@@ -83,12 +83,17 @@ def render_page(data: ReportData) -> str:
     )
 
 
+def _write_table(table: Table, out: Path) -> None:
+    """`table` as the CSV file `out / table.name`: its header, then its rows (None as an empty field)."""
+    with atomic_output(out / table.name, "w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(table.header)
+        writer.writerows([["" if v is None else v for v in row] for row in table.rows])
+
+
 def write_tables(data: ReportData, out: Path) -> None:
     for table in data.tables():
-        with atomic_output(out / table.name, "w", newline="") as fh:
-            writer = csv.writer(fh)
-            writer.writerow(table.header)
-            writer.writerows([["" if v is None else v for v in row] for row in table.rows])
+        _write_table(table, out)
 
 
 def render_robustness_page(data, out: Path, url: str | None = None) -> Path:
@@ -101,10 +106,7 @@ def render_robustness_page(data, out: Path, url: str | None = None) -> Path:
     out = Path(out)
     files = sorted({*([data.table.name] if data.table else []), *(data.figure.files if data.figure else ())})
     if data.table is not None:
-        with atomic_output(out / data.table.name, "w", newline="") as fh:
-            writer = csv.writer(fh)
-            writer.writerow(data.table.header)
-            writer.writerows([["" if v is None else v for v in row] for row in data.table.rows])
+        _write_table(data.table, out)
     css = (resources.files("vinadv.report") / "templates" / STYLESHEET).read_text(encoding="utf-8")
     with atomic_output(out / STYLESHEET, "w", encoding="utf-8") as fh:
         fh.write(css)

@@ -509,28 +509,24 @@ class Store:
                 ).scalar_one()
             )
 
+    def _group_counts(self, run_id: int, *keys: sa.ColumnElement) -> list[sa.Row]:
+        """The run's stored pairs counted per value of the `map_pairs` columns `keys`, in one GROUP BY: rows
+        `(*values, count)`, one per combination present."""
+        with self.engine.connect() as conn:
+            return conn.execute(
+                sa.select(*keys, sa.func.count()).where(map_pairs.c.run_id == int(run_id)).group_by(*keys)
+            ).all()
+
     def label_counts(self, run_id: int) -> dict[str, int]:
         """Stored pairs per label, every label present (0 where none), in DESIGN.md order."""
-        with self.engine.connect() as conn:
-            rows = conn.execute(
-                sa.select(map_pairs.c.label, sa.func.count())
-                .where(map_pairs.c.run_id == int(run_id))
-                .group_by(map_pairs.c.label)
-            ).all()
         counts = {label: 0 for label in LABELS}
-        counts.update({label: int(k) for label, k in rows})
+        counts.update({label: int(k) for label, k in self._group_counts(run_id, map_pairs.c.label)})
         return counts
 
     def attack_counts(self, run_id: int) -> dict[bool, int]:
         """Stored pairs per attack outcome: {True: successful, False: not}."""
-        with self.engine.connect() as conn:
-            rows = conn.execute(
-                sa.select(map_pairs.c.attack, sa.func.count())
-                .where(map_pairs.c.run_id == int(run_id))
-                .group_by(map_pairs.c.attack)
-            ).all()
         counts = {True: 0, False: 0}
-        counts.update({bool(a): int(k) for a, k in rows})
+        counts.update({bool(a): int(k) for a, k in self._group_counts(run_id, map_pairs.c.attack)})
         return counts
 
     # -------------------------------------------------------------------------------------- annotations
@@ -774,11 +770,7 @@ class Store:
         {termination: n}, only those present, sorted by name."""
         if side not in ("o", "a"):
             raise InputError(f"side: {side!r} is not 'o' or 'a'")
-        column = map_pairs.c[f"term_{side}"]
-        with self.engine.connect() as conn:
-            rows = conn.execute(
-                sa.select(column, sa.func.count()).where(map_pairs.c.run_id == int(run_id)).group_by(column)
-            ).all()
+        rows = self._group_counts(run_id, map_pairs.c[f"term_{side}"])
         return {str(term): int(k) for term, k in sorted(rows)}
 
     def harm_counts(self, run_id: int) -> dict[str, dict[str | None, int]]:
@@ -787,10 +779,8 @@ class Store:
         version-1 database opened read-only)."""
         c = map_pairs.c
         keys = (c.label,) if "harm" in self._absent_columns else (c.label, c.harm)
-        with self.engine.connect() as conn:
-            rows = conn.execute(sa.select(*keys, sa.func.count()).where(c.run_id == int(run_id)).group_by(*keys)).all()
         counts: dict[str, dict[str | None, int]] = {}
-        for row in rows:
+        for row in self._group_counts(run_id, *keys):
             harm = row[1] if len(keys) == 2 else None
             counts.setdefault(str(row[0]), {})[harm] = int(row[-1])
         return counts
