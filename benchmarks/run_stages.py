@@ -60,6 +60,12 @@ def child(record: str, argv: list[str]) -> int:
     return code
 
 
+def run_argv(n: int, size: int, db: str) -> list[str]:
+    """The measured command, `vinadv run` near-path with the rule labeller into `db`, as `vinadv` arguments."""
+    options = {"--n": n, "--size": size, "--attack": "near-path", "--classifier": "rule", "--db": db}
+    return ["run", *(str(word) for option in options.items() for word in option), "--json", "--quiet"]
+
+
 def measure(n: int, size: int, workdir: str) -> dict:
     """Run the command as a child process and the engine on its plans; all figures in seconds."""
     import numpy as np
@@ -69,21 +75,7 @@ def measure(n: int, size: int, workdir: str) -> dict:
     from vinadv.planners.weights import load_vin
 
     record = os.path.join(workdir, "plans.npz")
-    argv = [
-        "run",
-        "--n",
-        str(n),
-        "--size",
-        str(size),
-        "--attack",
-        "near-path",
-        "--classifier",
-        "rule",
-        "--db",
-        os.path.join(workdir, "run.sqlite"),
-        "--json",
-        "--quiet",
-    ]
+    argv = run_argv(n, size, os.path.join(workdir, "run.sqlite"))
     t0 = time.time()
     done = subprocess.run([sys.executable, __file__, "--child", record, "--", *argv], capture_output=True, text=True)
     t_exit = time.time()

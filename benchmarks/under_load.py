@@ -18,28 +18,13 @@ import sys
 import tempfile
 import time
 
+from run_stages import run_argv  # the same command (this folder is on the path of a script run here)
+
 BUSY = "import time\nend = time.time() + {limit}\nwhile time.time() < end:\n    pass\n"
 
 
 def run_once(n: int, size: int, db: str) -> dict:
-    argv = [
-        sys.executable,
-        "-m",
-        "vinadv.cli",
-        "run",
-        "--n",
-        str(n),
-        "--size",
-        str(size),
-        "--attack",
-        "near-path",
-        "--classifier",
-        "rule",
-        "--db",
-        db,
-        "--json",
-        "--quiet",
-    ]
+    argv = [sys.executable, "-m", "vinadv.cli", *run_argv(n, size, db)]
     t0 = time.perf_counter()
     done = subprocess.run(argv, capture_output=True, text=True)
     wall = time.perf_counter() - t0
