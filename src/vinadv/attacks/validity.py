@@ -26,8 +26,11 @@ from vinadv.planners.batching import over_maps
 
 
 @numba.njit(cache=True, nogil=True)
-def _reachable(obstacles, blocked_r, blocked_c, sr, sc, gr, gc, corner_cutting, deltas, seen, queue):
+def _reachable(obstacles, blocked_r, blocked_c, start, goal, corner_cutting, deltas, seen, queue):
+    """Whether a breadth-first search from `start` reaches `goal` with the cell (blocked_r, blocked_c) blocked too.
+    start, goal: `(2,)`; seen `(N, N)` bool and queue `(N * N,)` int64 scratch."""
     n, m = obstacles.shape
+    sr, sc, gr, gc = start[0], start[1], goal[0], goal[1]
     seen[:, :] = False
     seen[sr, sc] = True
     queue[0] = sr * m + sc
@@ -69,30 +72,18 @@ def _mark_separators(obstacles, starts, goals, cells, offsets, corner_cutting, d
         # the path's first and last cells are the start and the goal, which are never candidates
         for i in range(offsets[b] + 1, offsets[b + 1] - 1):
             r, c = cells[i, 0], cells[i, 1]
-            if not _reachable(
-                obstacles[b],
-                r,
-                c,
-                starts[b, 0],
-                starts[b, 1],
-                goals[b, 0],
-                goals[b, 1],
-                corner_cutting,
-                deltas,
-                seen,
-                queue,
-            ):
+            if not _reachable(obstacles[b], r, c, starts[b], goals[b], corner_cutting, deltas, seen, queue):
                 separator[b, r, c] = True
 
 
 @numba.njit(cache=True, nogil=True)
-def _cut_vertices(obstacles, sr, sc, gr, gc, deltas, disc, low, parent, stack, moves, separator):
+def _cut_vertices(obstacles, start, goal, deltas, disc, low, parent, stack, moves, separator):
     """Mark in `separator (N, N)` the cells whose removal disconnects the goal from the start, where moves join any
     two free neighbours (corner cutting); False if the goal is not reachable. disc, low, parent, stack, moves:
     `(N * N,)` int64 scratch."""
     n, m = obstacles.shape
     disc[:] = -1
-    s, t = sr * m + sc, gr * m + gc
+    s, t = start[0] * m + start[1], goal[0] * m + goal[1]
     disc[s], low[s], parent[s] = 0, 0, -1
     clock, top = 1, 0
     stack[0], moves[0] = s, 0
@@ -136,18 +127,7 @@ def _cut_vertices_batch(lo, hi, obstacles, starts, goals, deltas, separator, rea
     stack, moves = np.empty(size, np.int64), np.empty(size, np.int64)
     for b in range(lo, hi):
         reachable[b] = _cut_vertices(
-            obstacles[b],
-            starts[b, 0],
-            starts[b, 1],
-            goals[b, 0],
-            goals[b, 1],
-            deltas,
-            disc,
-            low,
-            parent,
-            stack,
-            moves,
-            separator[b],
+            obstacles[b], starts[b], goals[b], deltas, disc, low, parent, stack, moves, separator[b]
         )
 
 
@@ -201,19 +181,7 @@ def _reachable_all(obstacles, starts, goals, corner_cutting, deltas, out):
     for b in numba.prange(obstacles.shape[0]):
         seen = np.empty((n, m), dtype=np.bool_)
         queue = np.empty(n * m, dtype=np.int64)
-        out[b] = _reachable(
-            obstacles[b],
-            -1,
-            -1,
-            starts[b, 0],
-            starts[b, 1],
-            goals[b, 0],
-            goals[b, 1],
-            corner_cutting,
-            deltas,
-            seen,
-            queue,
-        )
+        out[b] = _reachable(obstacles[b], -1, -1, starts[b], goals[b], corner_cutting, deltas, seen, queue)
 
 
 def valid_additions(
