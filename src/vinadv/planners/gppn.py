@@ -126,16 +126,9 @@ def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
 
     Sets `record` (the training record) and `weights_path` on the model. Raises InputError naming the file.
     """
-    if path is None:
-        path = default_gppn_path(size)
-        if not path.exists():
-            raise InputError(
-                f"no shipped GPPN weights for {size}x{size} maps ({path}); train some with "
-                f"`vinadv gppn train` and pass --weights"
-            )
-    name = str(path)
-    if not os.path.exists(name):
-        raise InputError(f"{name}: no such weights file")
+    from vinadv.planners.weights import weights_file
+
+    name = weights_file(path, default_gppn_path(size), "GPPN", size)
     try:
         data = torch.load(name, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises many types for a bad file

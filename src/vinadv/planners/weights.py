@@ -40,6 +40,7 @@ __all__ = [
     "read_weights",
     "save_vin",
     "weights_checksum",
+    "weights_file",
 ]
 
 
@@ -55,6 +56,22 @@ def weights_checksum(path: str | os.PathLike) -> str:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+def weights_file(path: str | os.PathLike | None, shipped: Path, planner: str, size: int) -> str:
+    """The weights file to read: `path`, or the `shipped` weights of `planner` for `size x size` maps when None.
+    Raises InputError naming a missing file (and, for shipped weights, how to make some)."""
+    if path is None:
+        if not shipped.exists():
+            raise InputError(
+                f"no shipped {planner} weights for {size}x{size} maps ({shipped}); train some with "
+                f"`vinadv {planner.lower()} train` and pass --weights"
+            )
+        path = shipped
+    name = str(path)
+    if not os.path.exists(name):
+        raise InputError(f"{name}: no such weights file")
+    return name
 
 
 def save_vin(model, path: str | os.PathLike, record: dict | None = None) -> None:
@@ -88,16 +105,7 @@ def load_vin_weights(path: str | os.PathLike | None = None, size: int = 28, k: i
     A port-style plain state dict gets `k = default_k(size)` unless `k` is given; `k` also overrides the k of a
     vinadv file. Raises InputError naming the file for a missing, unreadable, corrupted or mismatched file.
     """
-    if path is None:
-        path = default_weights_path(size)
-        if not path.exists():
-            raise InputError(
-                f"no shipped VIN weights for {size}x{size} maps ({path}); train some with "
-                f"`vinadv vin train` and pass --weights"
-            )
-    name = str(path)
-    if not os.path.exists(name):
-        raise InputError(f"{name}: no such weights file")
+    name = weights_file(path, default_weights_path(size), "VIN", size)
     data = read_torch_file(name)
     if data is None:
         data = _torch_load(name)
