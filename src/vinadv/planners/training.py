@@ -219,28 +219,21 @@ def evaluate_loss(
     return {"loss": total_loss / max(cells, 1), "action_accuracy": correct / max(cells, 1), "cells": cells}
 
 
-def train_vin(
-    maps: MapSet,
-    config: TrainConfig,
-    checkpoint: str | os.PathLike | None = None,
-    resume: bool = False,
-    progress: bool = True,
-    record: dict | None = None,
-    log: Callable[[str], None] | None = None,
-    augment: Augment | None = None,
-) -> tuple[VIN, dict]:
-    """Train a VIN on `maps`; returns the model (CPU, eval mode) and the training record (see `train_model`)."""
+def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, dict]:
+    """Train a VIN on `maps`; `options` and the result as `train_model`'s (the model on the CPU, in eval mode, and
+    the training record). `config.init` names a VIN weights file to start from."""
     config.validate()
     torch.manual_seed(config.seed)
     vin_config = VINConfig(k=config.k or default_k(maps.size), l_h=config.l_h, l_q=config.l_q)
     model = VIN(vin_config)
+    record = options.get("record")
     if config.init:
         from vinadv.planners.weights import load_vin
 
         record = _start_from(model, load_vin(config.init, size=maps.size, k=vin_config.k), config.init, record)
     cpu = resolve_device(config.device).type == "cpu"
-    record = {**(record or {}), "value_iteration": "compiled (vinadv.planners.fast_vi)" if cpu else "torch"}
-    return train_model(model, maps, config, vin_config.to_dict(), checkpoint, resume, progress, record, log, augment)
+    options["record"] = {**(record or {}), "value_iteration": "compiled (vinadv.planners.fast_vi)" if cpu else "torch"}
+    return train_model(model, maps, config, vin_config.to_dict(), **options)
 
 
 def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, dict]:
