@@ -64,13 +64,13 @@ def _forward(lo, hi, q_r, w, k, q_out, v_saved, arg_saved):
                 r = rq[c, p0 : p0 + length]
                 w00 = w[c, 0, 0]
                 w01 = w[c, 0, 1]
-                w02 = w[c, 0, 2]  # noqa: E702
+                w02 = w[c, 0, 2]
                 w10 = w[c, 1, 0]
                 w11 = w[c, 1, 1]
-                w12 = w[c, 1, 2]  # noqa: E702
+                w12 = w[c, 1, 2]
                 w20 = w[c, 2, 0]
                 w21 = w[c, 2, 1]
-                w22 = w[c, 2, 2]  # noqa: E702
+                w22 = w[c, 2, 2]
                 if t == k:
                     out = q_out[b, c]
                     for i in range(n):
