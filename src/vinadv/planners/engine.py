@@ -19,6 +19,8 @@ of every cell (uncertain: -1), for inspection and benchmarks.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numba
 import numpy as np
 
@@ -37,6 +39,9 @@ from vinadv.planners.rollout import MOVED, rollout_step
 from vinadv.planners.torch_replay import best_and_gap, exact_actions
 from vinadv.planners.vin_weights import GOAL_VALUE, VINWeights, as_vin_weights
 
+if TYPE_CHECKING:
+    from vinadv.planners.vin import VIN
+
 __all__ = ["DEFAULT_CHUNK", "PlanResult", "TERMINATIONS", "plan_batch", "plan_maps", "action_maps"]
 
 #: a cell is uncertain when its two best logits are closer than REL_MARGIN * (logit scale of its map).
@@ -44,7 +49,7 @@ REL_MARGIN = 5e-6
 UNDECIDED = -1  # rollout code: stepped on an uncertain cell, to be re-done with torch's logits
 
 
-def action_maps(model: VINWeights, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+def action_maps(model: VINWeights | VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
     """Action of every cell, `(B, N, N)` int8 in 0..7, or -1 (uncertain) where the two best logits are a near tie.
 
     Runs the compiled value iteration (`_action_maps_kernel`) in parallel over maps.
@@ -427,7 +432,7 @@ def plan_batch(
     obstacles: np.ndarray,
     starts: np.ndarray,
     goals: np.ndarray,
-    model: VINWeights,
+    model: VINWeights | VIN,
     corner_cutting: bool = True,
     chunk_size: int = DEFAULT_CHUNK,
     progress: bool = False,
@@ -451,7 +456,7 @@ def plan_maps(
     obstacles: np.ndarray,
     goals: np.ndarray,
     starts: np.ndarray,
-    model: VINWeights,
+    model: VINWeights | VIN,
     corner_cutting: bool = True,
     chunk_size: int = DEFAULT_CHUNK,
     progress: bool = False,
