@@ -51,12 +51,16 @@ import platform
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
 
 from vinadv.planners.flat import from_flat, layout, to_flat, zero_row_gaps
 from vinadv.planners.vin_weights import VINWeights, as_vin_weights, input_array
+
+if TYPE_CHECKING:
+    from vinadv.planners.vin import VIN
 
 __all__ = [
     "best_and_gap",
@@ -336,13 +340,13 @@ class _Weights:
         )
 
 
-def replay_q_values(model, x) -> np.ndarray:
+def replay_q_values(model: VINWeights | VIN, x) -> np.ndarray:
     """`model.q_values(x)[0]` for one map `x (1, l_i, N, N)` (array or tensor), bit for bit (with the caller's
     PyTorch threads), for a `VIN` or `VINWeights`: `(l_q, N, N)` float32."""
     return _q_values(_Weights.of(as_vin_weights(model)), np.asarray(x[0], dtype=np.float32))
 
 
-def exact_actions(model, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+def exact_actions(model: VINWeights | VIN, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
     """The reference's action at every cell (argmax of PyTorch's logits, lowest index on ties), `(M, N, N)` int8,
     for a `VIN` or `VINWeights`, obstacles `(M, N, N)` bool and goals `(M, 2)`: the replayed value map
     (`replay_q_values`), each cell decided in float64 where that is certain, else by `fc` at the cell as PyTorch
