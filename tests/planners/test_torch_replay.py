@@ -344,17 +344,19 @@ def test_a_process_without_pytorch_plans_what_pytorch_would(tmp_path):
 
 def test_kept_settings_are_per_machine_key(fresh_settings, monkeypatch, tmp_path):
     monkeypatch.setenv(torch_replay.CACHE_ENV, str(tmp_path))
-    model = planning_vin(16, seed=7).eval()
-    maps = generate_maps(4, 16, seed=3, n_starts=1)
-    exact_actions(model, maps.obstacles, maps.goals)
-    kept = json.loads(torch_replay.cache_path().read_text())
-    assert list(kept["machines"]) == [torch_replay.machine_key()]
-    before = torch_replay.machine_key()
-    torch_replay.machine_key.cache_clear()
-    monkeypatch.setenv("MKL_CBWR", "COMPATIBLE")  # MKL's results may change: nothing measured applies
+    monkeypatch.delenv("MKL_CBWR", raising=False)
+    torch_replay.machine_key.cache_clear()  # the key of this test's environment (others may have changed it)
     try:
+        model = planning_vin(16, seed=7).eval()
+        maps = generate_maps(4, 16, seed=3, n_starts=1)
+        exact_actions(model, maps.obstacles, maps.goals)
+        kept = json.loads(torch_replay.cache_path().read_text())
+        before = torch_replay.machine_key()
+        assert list(kept["machines"]) == [before]
+        torch_replay.machine_key.cache_clear()
+        assert torch_replay.machine_key() == before
+        torch_replay.machine_key.cache_clear()
+        monkeypatch.setenv("MKL_CBWR", "COMPATIBLE")  # MKL's results may change: nothing measured applies
         assert torch_replay.machine_key() != before
     finally:
-        monkeypatch.delenv("MKL_CBWR")
         torch_replay.machine_key.cache_clear()
-    assert torch_replay.machine_key() == before
