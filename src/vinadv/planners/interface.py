@@ -293,7 +293,7 @@ class VINPlanner(Planner):
 
     @property
     def config(self) -> dict:
-        return self.weights.config.to_dict()
+        return self._source.config.to_dict()  # a VIN and VINWeights both carry it: no copy of the weights
 
     def _torch_planner(self) -> TorchPlanner:
         if self._torch is None:
