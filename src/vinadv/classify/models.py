@@ -234,7 +234,8 @@ class TorchImageClassifier(PairClassifier):
     flip/rotation of the square per training batch. `encoding`: the path image encoding ('paper' or 'split').
     `features`: what the network sees of each image, computed batch by batch after augmentation: 'pixels' (the
     image, `(3, N, N)`), 'cooccurrence' (`(2, N, N)` maps) or 'offsets' (`(2, 2N - 1)`, MLP only); see
-    `vinadv.classify.cooccurrence`. `seed` fixes initialisation and batch order.
+    `vinadv.classify.cooccurrence`. `seed` fixes initialisation and batch order. The parameters after
+    `architecture` are keyword-only.
     """
 
     kind = "abstract"
@@ -242,6 +243,7 @@ class TorchImageClassifier(PairClassifier):
     def __init__(
         self,
         architecture: str = "plain",
+        *,
         width: int = 32,
         epochs: int = 10,
         batch_size: int = 64,
@@ -378,34 +380,6 @@ class MLPImageClassifier(TorchImageClassifier):
 
     kind = "mlp"
 
-    def __init__(
-        self,
-        architecture: str = "plain",
-        width: int = 512,
-        epochs: int = 10,
-        batch_size: int = 64,
-        learning_rate: float = 1e-3,
-        weight_decay: float = 0.0,
-        optimizer: str = "adam",
-        schedule: str = "constant",
-        augment: bool = False,
-        encoding: str = "paper",
-        seed: int = 0,
-        verbose: bool = False,
-        features: str = "pixels",
-    ):
-        super().__init__(
-            architecture,
-            width,
-            epochs,
-            batch_size,
-            learning_rate,
-            weight_decay,
-            optimizer,
-            schedule,
-            augment,
-            encoding,
-            seed,
-            verbose,
-            features,
-        )
+    # The same parameters with a wider default: scikit-learn reads the parameters and their defaults from
+    # `__init__`'s signature, which `partialmethod` keeps (with `width` 512).
+    __init__ = functools.partialmethod(TorchImageClassifier.__init__, width=512)
