@@ -12,36 +12,16 @@ from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 
 EXPORT_FORMAT = "vinadv.labelled_pairs/1"
-#: text columns of an exported row, in order (the paper's Table 2 first)
-EXPORT_COLUMNS = (
-    "no",
-    "map_o",
-    "map_a",
-    "path_o",
-    "path_a",
-    "label",
-    "attack",
-    "run_id",
-    "pair_index",
-    "start",
-    "goal",
-    "added_obstacle",
-    "label_source",
-    "score",
-    "term_o",
-    "term_a",
-    "dh",
-    "dv",
-    "opt_cost_o",
-    "opt_cost_a",
-    "cost_o",
-    "cost_a",
-    "regret_o",
-    "regret_a",
-    "expert_label",
-    "harm",
-    "added_more",  # the obstacles added after `added_obstacle` ("r,c;r,c"), empty for a one-obstacle pair
-)
+#: the first text columns of an exported row: the paper's Table 2, then the attack flag, the run and the pair index
+LEADING_COLUMNS = ("no", "map_o", "map_a", "path_o", "path_a", "label", "attack", "run_id", "pair_index")
+
+
+def export_columns() -> tuple[str, ...]:
+    """The text columns of an exported row, in order: `LEADING_COLUMNS`, then every other column the store reads
+    back (`PAIR_COLUMNS`), in the store's order."""
+    from vinadv.store.store import PAIR_COLUMNS  # imported here so `vinadv --help` stays fast
+
+    return (*LEADING_COLUMNS, *(name for name in PAIR_COLUMNS if name not in LEADING_COLUMNS))
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -124,11 +104,12 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
 
     total = store.count_pairs(run_id)
     n = 0
+    columns = export_columns()
     target = atomic_output(out, "w", newline="", encoding="utf-8") if out else contextlib.nullcontext(sys.stdout)
     with target as stream:
         writer = csv.writer(stream) if fmt == "csv" else None
         if writer is not None:
-            writer.writerow(EXPORT_COLUMNS)
+            writer.writerow(columns)
         with tqdm(total=total, unit="pair", disable=quiet or out is None, file=sys.stderr) as bar:
             for chunk in store.iter_pair_rows(run_id, successful_only=successful_only):
                 for row in chunk:
@@ -136,13 +117,10 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
                     row["attack"] = bool(row["attack"])
                 if writer is not None:
                     writer.writerows(
-                        [
-                            ["" if r[c] is None else int(r[c]) if c == "attack" else r[c] for c in EXPORT_COLUMNS]
-                            for r in chunk
-                        ]
+                        [["" if r[c] is None else int(r[c]) if c == "attack" else r[c] for c in columns] for r in chunk]
                     )
                 else:
-                    stream.write("".join(json.dumps({c: r[c] for c in EXPORT_COLUMNS}) + "\n" for r in chunk))
+                    stream.write("".join(json.dumps({c: r[c] for c in columns}) + "\n" for r in chunk))
                 n += len(chunk)
                 bar.update(len(chunk))
     return n
