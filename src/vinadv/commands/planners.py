@@ -10,12 +10,11 @@ from pathlib import Path
 from vinadv.commands import add_planner_arguments, emit
 from vinadv.commands.vin import (
     _command_line,
-    _set_threads,
     add_eval_arguments,
     add_train_arguments,
     emit_metrics,
-    eval_maps,
     run_training,
+    start_eval,
 )
 
 #: GPPN defaults at 28x28, chosen by benchmarks/gppn_training.py on the 2-core CPU (README, "Planners"): a 5x5
@@ -112,8 +111,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.planners.evaluation import evaluate_planner
     from vinadv.planners.registry import load_planner
 
-    _set_threads(args.threads)
-    maps, source = eval_maps(args)
+    maps, source = start_eval(args)
     planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
     t0 = time.perf_counter()
     ours = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))
@@ -184,17 +182,8 @@ def cmd_gppn_eval(args: argparse.Namespace) -> int:
     from vinadv.planners.evaluation import evaluate_planner
     from vinadv.planners.registry import load_planner
 
-    _set_threads(args.threads)
-    maps, source = eval_maps(args)
+    maps, source = start_eval(args)
     planner = load_planner("gppn", maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
     t0 = time.perf_counter()
     metrics = evaluate_planner(planner, maps, progress=not (args.quiet or args.json))
-    metrics = {
-        "planner": planner.spec(),
-        "weights": args.weights or "shipped",
-        **source,
-        **metrics,
-        "seconds": round(time.perf_counter() - t0, 2),
-        "command": _command_line(),
-    }
-    return emit_metrics(args, metrics)
+    return emit_metrics(args, {"planner": planner.spec(), "weights": args.weights or "shipped"}, source, metrics, t0)

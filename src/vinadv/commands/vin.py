@@ -8,6 +8,7 @@ import json
 import math
 import shlex
 import sys
+import time
 from pathlib import Path
 
 from vinadv.commands import LazyChoices, emit
@@ -131,7 +132,7 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
 
 
 def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
-    """The options of every `eval` command: the maps (a maps file, or N maps generated on the fly: `eval_maps`),
+    """The options of every `eval` command: the maps (a maps file, or N maps generated on the fly: `start_eval`),
     torch threads and where the figures go."""
     src = ev.add_mutually_exclusive_group(required=True)
     src.add_argument("--data", help="maps file (.npz)")
@@ -145,11 +146,13 @@ def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
     ev.add_argument("--json", action="store_true", help="print the figures as JSON")
 
 
-def eval_maps(args: argparse.Namespace):
-    """`(MapSet, source)`: the maps of `add_eval_arguments`' options and a record of where they came from."""
+def start_eval(args: argparse.Namespace):
+    """Start an `eval` command from `add_eval_arguments`' options: set the torch threads (`--threads`), then
+    return `(MapSet, source)`, the maps and a record of where they came from."""
     from vinadv.grid.generator import generate_maps
     from vinadv.grid.mapset import MapSet
 
+    _set_threads(args.threads)
     if args.data is not None:
         return MapSet.load(args.data), {"data": args.data}
     if args.n < 1:
@@ -281,13 +284,10 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    import time
-
     from vinadv.interop.protocols import evaluate_protocol
     from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
 
-    _set_threads(args.threads)
-    maps, source = eval_maps(args)
+    maps, source = start_eval(args)
     model = load_vin(args.weights, size=maps.size, k=args.k)
     trained = model.record.get("size")
     if trained is not None and trained != maps.size:
@@ -303,19 +303,16 @@ def cmd_eval(args: argparse.Namespace) -> int:
         raise InputError("--prior applies to --protocol kentsommer only")
     metrics = evaluate_protocol(model, maps, args.protocol, args.prior, progress=not (args.quiet or args.json))
     weights_path = args.weights or f"shipped:{default_weights_path(maps.size).name}"
-    metrics = {
-        "weights": weights_path,
-        "weights_sha256": weights_checksum(model.weights_path),
-        **source,
-        **metrics,
-        "seconds": round(time.perf_counter() - t0, 2),
-        "command": _command_line(),
-    }
-    return emit_metrics(args, metrics)
+    measured = {"weights": weights_path, "weights_sha256": weights_checksum(model.weights_path)}
+    return emit_metrics(args, measured, source, metrics, t0)
 
 
-def emit_metrics(args: argparse.Namespace, metrics: dict) -> int:
-    """Write an `eval` command's figures to `--out`, and print them as JSON (`--json`) or as text."""
+def emit_metrics(args: argparse.Namespace, measured: dict, source: dict, figures: dict, started: float) -> int:
+    """Write an `eval` command's record to `--out`, and print it as JSON (`--json`) or as text. The record: what
+    was measured (`measured`), where the maps came from (`source`), the `figures`, the seconds since `started`
+    (a `time.perf_counter()` reading) and the command line."""
+    seconds = round(time.perf_counter() - started, 2)
+    metrics = {**measured, **source, **figures, "seconds": seconds, "command": _command_line()}
     if args.out:
         with atomic_output(args.out, "w") as fh:
             fh.write(json.dumps(metrics, indent=2) + "\n")
