@@ -16,7 +16,7 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.interop import read_checkpoint
 from vinadv.planners.testing import planning_vin
-from vinadv.planners.vin import VIN, VINConfig, make_input
+from vinadv.planners.vin import VINConfig, make_input
 from vinadv.planners.weights import default_weights_path, save_vin
 
 
@@ -98,8 +98,7 @@ def test_export_shipped_weights(tmp_path):
     )
     plain = torch.load(tmp_path / "p.pth", weights_only=True)
     # a default VIN's layout, which tests/planners/test_weights.py holds to the ports' (150 hidden, 10 q channels)
-    default_layout = {k: tuple(v.shape) for k, v in VIN(VINConfig()).state_dict().items()}
-    assert {k: tuple(v.shape) for k, v in plain.items()} == default_layout
+    assert {k: tuple(v.shape) for k, v in plain.items()} == VINConfig().state_shapes()
 
 
 def gppn_vin_state(f=3, l_h=150, l_q=600, actions=8, as_numpy=False):
