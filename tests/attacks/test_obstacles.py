@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.fault_files import read_npz, rewrite_npz
-from tests.grid.oracle import brute_distances
+from tests.grid.oracle import brute_distances, reachable
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.attacks.validity import valid_additions, valid_cells
@@ -34,10 +34,6 @@ def model():
 @pytest.fixture(scope="module")
 def maps():
     return generate_maps(24, SIZE, seed=5, n_starts=1)
-
-
-def reachable(obstacles, start, goal) -> bool:
-    return math.isfinite(brute_distances(np.asarray(obstacles).tolist(), tuple(goal))[tuple(start)][0])
 
 
 def oracle_valid(obstacles, start, goal, cells) -> bool:

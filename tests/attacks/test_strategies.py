@@ -1,9 +1,7 @@
-import math
-
 import numpy as np
 import pytest
 
-from tests.grid.oracle import brute_distances
+from tests.grid.oracle import reachable
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES, make_attack, within_distance
 from vinadv.attacks.validity import valid_cells
@@ -26,10 +24,6 @@ def model():
 @pytest.fixture(scope="module")
 def maps():
     return generate_maps(40, SIZE, seed=3, n_starts=1)
-
-
-def reachable(obstacles, start, goal) -> bool:
-    return math.isfinite(brute_distances(obstacles.tolist(), goal)[tuple(start)][0])
 
 
 def assert_valid(pairs: PairSet, maps):
@@ -102,14 +96,14 @@ def test_valid_cells_match_brute_force_on_dense_maps(corner_cutting):
     separators = 0
     for i in range(150):
         start, goal = tuple(starts[i]), tuple(goals[i])
-        solvable = math.isfinite(brute_distances(obstacles[i].tolist(), goal, corner_cutting)[start][0])
+        solvable = reachable(obstacles[i], start, goal, corner_cutting)
         for r in range(n):
             for c in range(n):
                 expected = solvable and not obstacles[i, r, c] and (r, c) not in (start, goal)
                 if expected:
                     blocked = obstacles[i].copy()
                     blocked[r, c] = True
-                    expected = math.isfinite(brute_distances(blocked.tolist(), goal, corner_cutting)[start][0])
+                    expected = reachable(blocked, start, goal, corner_cutting)
                     separators += not expected
                 assert valid[i, r, c] == expected, (i, r, c)
     assert separators > 50  # the maps do exercise the separators

@@ -39,3 +39,9 @@ def brute_distances(obstacles, goal, corner_cutting=True):
                         best[(r, c)] = (cost + step, moves + 1)
                         changed = True
     return best
+
+
+def reachable(obstacles, start, goal, corner_cutting=True) -> bool:
+    """Whether `start` reaches `goal` on `obstacles` (rows of bools: nested lists or a 2-D array)."""
+    rows = [[bool(cell) for cell in row] for row in obstacles]
+    return math.isfinite(brute_distances(rows, tuple(goal), corner_cutting)[tuple(start)][0])
