@@ -55,13 +55,19 @@ class PairClassifier(ClassifierMixin, BaseEstimator):
 
     kind = "abstract"
 
-    def _check_y(self, X, y) -> np.ndarray:
+    @staticmethod
+    def _label_array(X, y, classes: tuple[str, ...]) -> tuple[np.ndarray, list[str]]:
+        """`y` as an array of one label per pair of `X` (else an InputError), and its labels not in `classes`,
+        sorted (each classifier words that error itself)."""
         y = np.asarray(y)
         if y.ndim != 1 or len(y) != len(X):
             raise InputError(f"{len(y)} labels for {len(X)} path pairs")
-        bad = set(np.unique(y).tolist()) - set(FORK_OR_DETOUR)
+        return y, sorted(set(np.unique(y).tolist()) - set(classes))
+
+    def _check_y(self, X, y) -> np.ndarray:
+        y, bad = self._label_array(X, y, FORK_OR_DETOUR)
         if bad:
-            raise InputError(f"FP/DP classifiers take the labels 'DP' and 'FP' only, got {sorted(bad)}")
+            raise InputError(f"FP/DP classifiers take the labels 'DP' and 'FP' only, got {bad}")
         if len(np.unique(y)) < 2:
             raise InputError("training needs pairs of both classes, FP and DP")
         self.classes_ = FP_DP_CLASSES.copy()

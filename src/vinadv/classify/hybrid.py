@@ -72,12 +72,9 @@ def _check_batch(X) -> PathPairBatch:
 
 class _FiveWay(PairClassifier):
     def _check_labels(self, X, y) -> np.ndarray:
-        y = np.asarray(y)
-        if y.ndim != 1 or len(y) != len(X):
-            raise InputError(f"{len(y)} labels for {len(X)} path pairs")
-        bad = set(np.unique(y).tolist()) - set(LABELS)
+        y, bad = self._label_array(X, y, LABELS)
         if bad:
-            raise InputError(f"unknown labels {sorted(bad)}; labels are {list(LABELS)}")
+            raise InputError(f"unknown labels {bad}; labels are {list(LABELS)}")
         self.classes_ = np.array(LABELS)
         return y
 
