@@ -142,14 +142,11 @@ def cmd_attack(args: argparse.Namespace) -> int:
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
     planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
-    attack = make_attack(
-        args.strategy,
-        per_map=args.per_map,
-        seed=args.seed,
-        budget=args.budget,
-        radius=args.radius,
-        obstacles=args.obstacles,
+    # `make_attack`'s options, kept: on a cluster every worker builds its own attack from them
+    options = dict(
+        per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius, obstacles=args.obstacles
     )
+    attack = make_attack(args.strategy, **options)
     t0 = time.perf_counter()
     if args.cluster is None and args.workers is None:
         result = attack.attack(
@@ -164,9 +161,6 @@ def cmd_attack(args: argparse.Namespace) -> int:
     else:
         from vinadv.cluster import attack_on_cluster
 
-        options = dict(
-            per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius, obstacles=args.obstacles
-        )
         with open_cluster(args.cluster, args.workers) as client:
             ref = PlannerRef.of(planner, args.planner, args.weights, maps.corner_cutting)
             result = attack_on_cluster(
