@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
 from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments
+from vinadv.commands import LazyChoices, add_planner_arguments, emit
 
 
 def register(subparsers) -> None:
@@ -182,9 +181,8 @@ def cmd_attack(args: argparse.Namespace) -> int:
     summary.update(
         strategy=args.strategy, params=attack.params(), planner=planner.spec(), out=args.out, objective=args.objective
     )
-    if args.json:
-        print(json.dumps(summary))
-    elif not args.quiet:
+
+    def report() -> None:
         print(
             f"{args.strategy} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps in "
             f"{elapsed:.1f} s -> {args.out}"
@@ -197,4 +195,5 @@ def cmd_attack(args: argparse.Namespace) -> int:
         per = summary["planner_calls_per_success"]
         per_text = "n/a" if per is None else f"{per:.1f}"
         print(f"planner calls: {result.planner_calls:,} ({per_text} per successful attack)")
-    return 0
+
+    return emit(args, summary, report)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
 from vinadv.cluster import add_cluster_arguments, open_cluster
@@ -183,12 +182,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
     ident = done.identification
     summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds, harm_table=ident.harm_table())
     summary.update(run_id=done.run_id, adversarial=int(ident.attack.sum()))
-    if args.json:
-        print(json.dumps(summary))
-    elif not args.quiet:
+
+    def report() -> None:
         print(
             f"run {done.run_id}: {len(ident):,} pairs identified in {done.seconds:.2f} s; "
             f"{summary['adversarial']:,} successful attacks (D_adversarial)"
         )
         print_counts(summary)
-    return 0
+
+    return emit(args, summary, report)
