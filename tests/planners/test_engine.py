@@ -8,7 +8,7 @@ from vinadv.errors import InputError
 from vinadv.grid import generate_maps, shortest_distances
 from vinadv.planners.engine import TERMINATIONS, action_maps, plan_batch, plan_maps
 from vinadv.planners.reference import plan_reference
-from vinadv.planners.testing import planning_vin, random_vin
+from vinadv.planners.testing import exact_vin, planning_vin, random_vin
 from vinadv.planners.vin import VIN, VINConfig, make_input
 
 E, W = 2, 3
@@ -185,3 +185,18 @@ def test_production_code_never_imports_the_reference_planner():
             ):
                 importers.append(str(path.relative_to(root)))
     assert importers == []
+
+
+def test_exact_value_iteration_weights_plan_optimal_paths():
+    # An independent oracle for the engine and the rollout: VIN weights set to exact value iteration must follow
+    # Dijkstra's costs from every start whose goal is within k moves.
+    maps = generate_maps(60, 16, seed=8, n_starts=5)
+    k = 20
+    result = plan_maps(maps.obstacles, maps.goals, maps.starts, exact_vin(16, k=k))
+    dist, moves = shortest_distances(maps.obstacles, maps.goals)
+    b = np.repeat(np.arange(len(maps.goals)), maps.starts.shape[1])
+    rows, cols = maps.starts[..., 0].ravel(), maps.starts[..., 1].ravel()
+    within = moves[b, rows, cols] <= k
+    assert within.mean() > 0.95
+    assert result.reached[within].all()
+    np.testing.assert_allclose(result.paths.costs()[within], dist[b, rows, cols][within], atol=1e-9)

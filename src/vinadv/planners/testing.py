@@ -3,15 +3,16 @@
 `planning_vin` hand-sets a VIN that does plan (reward -penalty on obstacles and +1 per goal-image unit, q channel a =
 reward + gamma * value of the a-th neighbour, fc = identity on the first 8 channels) and adds random noise to every
 weight, so paths are long and varied (goal, collision, loop and step-limit endings all occur) and logits have no
-structure a hand-written engine could exploit by accident.
+structure a hand-written engine could exploit by accident. `exact_vin` sets a VIN to exact value iteration on
+DESIGN.md's move costs, with no noise: the architecture's best case, which plans optimal paths.
 """
 
 from __future__ import annotations
 
 import torch
 
-from vinadv.grid.actions import ACTION_DELTAS
-from vinadv.planners.vin import VIN, VINConfig, default_k
+from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
+from vinadv.planners.vin import GOAL_VALUE, VIN, VINConfig, default_k
 
 
 def planning_vin(
@@ -38,3 +39,33 @@ def random_vin(size: int = 28, seed: int = 0, k: int | None = None) -> VIN:
     """PyTorch's default initialisation (`torch.manual_seed(seed)`): short paths, mostly collisions."""
     torch.manual_seed(seed)
     return VIN(VINConfig(k=default_k(size) if k is None else k))
+
+
+def exact_vin(size: int = 28, k: int | None = None, obstacle_cost: float = 1e7, tie_cost: float = 1e-4) -> VIN:
+    """A VIN whose weights are exact value iteration on DESIGN.md's moves and costs (corner cutting allowed).
+
+    Reward `r` = -1 on free cells, -`obstacle_cost` on obstacles, 0 at the goal; q channel a (a < 8) = `cost_a * r`
+    at the cell + `tie_cost * r` at its a-th neighbour + the neighbour's value, so q_a = -cost_a - tie_cost + v(next)
+    into a free cell and about -`obstacle_cost * tie_cost` into an obstacle; channels 8 and 9 stay put (free at the
+    goal, -1000 elsewhere), which keeps the goal's value at 0. After k steps `v` = -(optimal cost to the goal) -
+    `tie_cost` * (moves - 1) on every cell within k moves of the goal, and fc = identity on the first 8 channels: the
+    greedy rollout follows an optimal path (`tie_cost` only orders paths of equal cost by their moves; it is below
+    every cost difference of paths under 40 moves). Shows that the VIN can represent an optimal planner, so what a
+    trained VIN lacks is training, not capacity.
+    """
+    model = VIN(VINConfig(k=default_k(size) if k is None else k))
+    with torch.no_grad():
+        for p in model.parameters():
+            p.zero_()
+        model.h.weight[0, 0, 1, 1] = 1.0  # h0: obstacle image
+        model.h.weight[1, 1, 1, 1] = 1.0  # h1: goal image (GOAL_VALUE at the goal)
+        model.h.bias[2] = 1.0  # h2: 1 everywhere
+        model.r.weight[0, :3, 0, 0] = torch.tensor([1.0 - obstacle_cost, 1.0 / GOAL_VALUE, -1.0])
+        for a, (dr, dc) in enumerate(ACTION_DELTAS):
+            model.q.weight[a, 0, 1, 1] = float(ACTION_COSTS[a])
+            model.q.weight[a, 0, 1 + dr, 1 + dc] = tie_cost
+            model.w[a, 0, 1 + dr, 1 + dc] = 1.0
+            model.fc.weight[a, a] = 1.0
+        model.q.weight[8:, 0, 1, 1] = 1000.0
+        model.w[8:, 0, 1, 1] = 1.0
+    return model
