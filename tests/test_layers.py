@@ -1,0 +1,80 @@
+"""Data flows one way (grid -> planners -> attacks -> classify -> identify -> store/report), and the packages import
+each other in one order: no import circle between them and no reaching back upstream, counting the imports inside
+functions too (they run all the same). The store is a sink that knows only grids and the vocabulary, so the stages
+that hand it their results (identify, robustness, pipeline) may import it."""
+
+import ast
+from pathlib import Path
+
+import vinadv
+
+SOURCE = Path(vinadv.__file__).parent
+
+#: each top-level module or package of vinadv and its layer: a module may import only lower layers and its own package
+LAYERS = {
+    "vinadv": 0,
+    "errors": 0,
+    "vocabulary": 1,
+    "outfile": 1,
+    "npzfile": 2,
+    "grid": 3,
+    "planners": 4,
+    "interop": 5,
+    "attacks": 5,
+    "classify": 5,
+    "identify": 6,
+    "store": 4,
+    "hardening": 7,
+    "robustness": 8,
+    "pipeline": 8,
+    "report": 9,
+    "viewer": 9,
+    "cluster": 9,
+    "commands": 10,
+    "cli": 11,
+}
+
+
+def imported_vinadv_names(path: Path) -> set[str]:
+    """`vinadv.X` names imported anywhere in the file (module level or inside functions)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            modules = [node.module] if node.module != "vinadv" else [f"vinadv.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Import):
+            modules = [a.name for a in node.names]
+        else:
+            continue
+        for module in modules:
+            parts = module.split(".")
+            if parts[0] == "vinadv":
+                # `from vinadv import __version__` imports the package itself
+                names.add(parts[1] if len(parts) > 1 and parts[1] in LAYERS else "vinadv")
+    return names
+
+
+def part_of(path: Path) -> str:
+    rel = path.relative_to(SOURCE)
+    return rel.parts[0] if len(rel.parts) > 1 else ("vinadv" if rel.stem == "__init__" else rel.stem)
+
+
+def test_every_module_has_a_layer():
+    parts = {part_of(p) for p in SOURCE.rglob("*.py")}
+    assert parts == set(LAYERS)
+
+
+def test_no_module_imports_its_own_layer_or_above():
+    upstream_imports = []
+    for path in sorted(SOURCE.rglob("*.py")):
+        own = part_of(path)
+        for name in imported_vinadv_names(path) - {own}:
+            if LAYERS[name] >= LAYERS[own]:
+                upstream_imports.append(f"{path.relative_to(SOURCE)} imports vinadv.{name}")
+    assert not upstream_imports, upstream_imports
+
+
+def test_relative_imports_are_not_used():
+    # the layer check reads absolute imports only
+    for path in SOURCE.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        assert not [n for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.level], path
