@@ -48,10 +48,11 @@ def exact_vin(size: int = 28, k: int | None = None, obstacle_cost: float = 1e7, 
     at the cell + `tie_cost * r` at its a-th neighbour + the neighbour's value, so q_a = -cost_a - tie_cost + v(next)
     into a free cell and about -`obstacle_cost * tie_cost` into an obstacle; channels 8 and 9 stay put (free at the
     goal, -1000 elsewhere), which keeps the goal's value at 0. After k steps `v` = -(optimal cost to the goal) -
-    `tie_cost` * (moves - 1) on every cell within k moves of the goal, and fc = identity on the first 8 channels: the
-    greedy rollout follows an optimal path (`tie_cost` only orders paths of equal cost by their moves; it is below
-    every cost difference of paths under 40 moves). Shows that the VIN can represent an optimal planner, so what a
-    trained VIN lacks is training, not capacity.
+    `tie_cost` * (moves - 1) on every cell whose optimal cost is below k (the first value estimate is about -1 on every
+    free cell, so a walk of k moves that never meets the goal scores about -(k + 1): cells further than that are not
+    resolved), and fc = identity on the first 8 channels: the greedy rollout follows an optimal path (`tie_cost` only
+    orders paths of equal cost by their moves; it is below every cost difference of paths under 40 moves). Shows that
+    the VIN can represent an optimal planner, so what a trained VIN lacks is training, not capacity.
     """
     model = VIN(VINConfig(k=default_k(size) if k is None else k))
     with torch.no_grad():
