@@ -23,6 +23,14 @@ def register(subparsers) -> None:
 
     train = sub.add_parser("train", help="train a VIN on a maps file (every free cell is supervised)")
     add_train_arguments(train, lr=0.005, k_help="value-iteration steps (default: 10/20/36 at 8/16/28)")
+    train.add_argument(
+        "--vi-init",
+        choices=("default", "shift"),
+        default="default",
+        help="how a fresh VIN's value iteration starts: default (PyTorch's initialisation, the paper's VIN) or shift "
+        "(each q channel reads one neighbour's value, fc the identity: learns the shortest-path recursion itself; "
+        "README, 'Adversarial training')",
+    )
     train.set_defaults(func=cmd_train)
 
     ev = sub.add_parser("eval", help="action accuracy and rollout figures of a VIN")
@@ -221,7 +229,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from vinadv.planners.training import train_vin
     from vinadv.planners.weights import save_vin
 
-    return run_training(args, train_config(args), train_vin, save_vin)
+    return run_training(args, train_config(args, vi_init=args.vi_init), train_vin, save_vin)
 
 
 def run_training(args: argparse.Namespace, config, train, save) -> int:

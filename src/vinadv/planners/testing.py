@@ -12,7 +12,7 @@ from __future__ import annotations
 import torch
 
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
-from vinadv.planners.vin import GOAL_VALUE, VIN, VINConfig, default_k
+from vinadv.planners.vin import GOAL_VALUE, VIN, VINConfig, default_k, init_shift_kernels
 
 
 def planning_vin(
@@ -58,6 +58,7 @@ def exact_vin(size: int = 28, k: int | None = None, obstacle_cost: float = 1e7, 
     with torch.no_grad():
         for p in model.parameters():
             p.zero_()
+        init_shift_kernels(model)
         model.h.weight[0, 0, 1, 1] = 1.0  # h0: obstacle image
         model.h.weight[1, 1, 1, 1] = 1.0  # h1: goal image (GOAL_VALUE at the goal)
         model.h.bias[2] = 1.0  # h2: 1 everywhere
@@ -65,8 +66,5 @@ def exact_vin(size: int = 28, k: int | None = None, obstacle_cost: float = 1e7, 
         for a, (dr, dc) in enumerate(ACTION_DELTAS):
             model.q.weight[a, 0, 1, 1] = float(ACTION_COSTS[a])
             model.q.weight[a, 0, 1 + dr, 1 + dc] = tie_cost
-            model.w[a, 0, 1 + dr, 1 + dc] = 1.0
-            model.fc.weight[a, a] = 1.0
         model.q.weight[8:, 0, 1, 1] = 1000.0
-        model.w[8:, 0, 1, 1] = 1.0
     return model

@@ -31,7 +31,7 @@ from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
 from vinadv.planners import fast_vi
 from vinadv.planners.gppn import GPPN, GPPNConfig
-from vinadv.planners.vin import VIN, VINConfig, default_k, make_input
+from vinadv.planners.vin import VI_INITS, VIN, VINConfig, default_k, init_shift_kernels, make_input
 
 CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
 _BITS = 1 << np.arange(8, dtype=np.uint16)
@@ -66,6 +66,9 @@ class TrainConfig:
     checkpoint_min: float | None = 10.0
     # adversarial training's settings (`vinadv.hardening.AdversarialConfig.to_dict()`), None: plain training
     adversarial: dict | None = None
+    # how a fresh VIN's value-iteration kernels start (`vin.VI_INITS`): 'default' (PyTorch's, the paper's VIN) or
+    # 'shift' (`vin.init_shift_kernels`)
+    vi_init: str = "default"
 
     def validate(self) -> None:
         if self.epochs < 1:
@@ -78,6 +81,16 @@ class TrainConfig:
             raise InputError(f"val_fraction must be in [0, 1), got {self.val_fraction}", "val_fraction")
         if self.warmup_steps is not None and self.warmup_steps < 0:
             raise InputError(f"warmup_steps must be >= 0, got {self.warmup_steps}", "warmup_steps")
+        if self.vi_init not in VI_INITS:
+            raise InputError(f"vi_init must be one of {', '.join(VI_INITS)}, got {self.vi_init!r}", "vi_init")
+        if self.vi_init != "default" and self.planner != "vin":
+            raise InputError(f"vi_init {self.vi_init!r} is the VIN's, not the {self.planner}'s", "vi_init")
+        if self.vi_init != "default" and self.init:
+            raise InputError(
+                f"vi_init {self.vi_init!r} starts a fresh VIN and init continues from weights: give one of them",
+                "vi_init",
+                "init",
+            )
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -226,6 +239,8 @@ def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, dict]:
     torch.manual_seed(config.seed)
     vin_config = VINConfig(k=config.k or default_k(maps.size), l_h=config.l_h, l_q=config.l_q)
     model = VIN(vin_config)
+    if config.vi_init == "shift":
+        init_shift_kernels(model)
     record = options.get("record")
     if config.init:
         from vinadv.planners.weights import load_vin
