@@ -2,8 +2,8 @@
 
 `load_planner(spec, size, ...)` gives a `Planner` for:
 - `vin` (default): the VIN and its exact engine; weights from `weights=` or the shipped `vin{N}.pt`.
-- `vin_robust`: the same VIN architecture with the shipped adversarially trained weights `vin{N}_robust.pt`
-  (`vinadv.hardening`).
+- `vin_robust`: the same VIN architecture with the shipped weights `vin{N}_robust.pt`, trained from the shift start
+  (`vinadv.planners.vin.init_shift_kernels`) with adversarial rounds (`vinadv.hardening`).
 - `gppn`: the Gated Path Planning Network; weights from `weights=` or the shipped `gppn{N}.pt`.
 - `optimal`: exact shortest paths (the control: what a perfect planner does).
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
@@ -44,7 +44,8 @@ REGISTRY = {
         "vin", "Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine (default)"
     ),
     "vin_robust": PlannerInfo(
-        "vin_robust", "the VIN, adversarially trained (vinadv.hardening; `vin train --adversarial`)"
+        "vin_robust",
+        "the VIN, trained from the shift start and adversarially (`vin train --vi-init shift --adversarial`)",
     ),
     "gppn": PlannerInfo("gppn", "Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, 8 actions"),
     "optimal": PlannerInfo("optimal", "exact shortest paths (Dijkstra, lowest action index on ties): the control"),
