@@ -32,6 +32,10 @@ def test_export_csv_matches_oracle(stored, tmp_path):
     assert main(["export", "--db", url, "--run", str(run_id), "--format", "csv", "--out", str(out), "--quiet"]) == 0
     rows = list(csv.DictReader(out.open()))
     assert [int(r["pair_index"]) for r in rows] == list(range(40))
+    # the format's columns, in order (vinadv.labelled_pairs/1: Table 2's first; one-obstacle readers rely on it)
+    header = "no map_o map_a path_o path_a label attack run_id pair_index start goal added_obstacle label_source score"
+    header += " term_o term_a dh dv opt_cost_o opt_cost_a cost_o cost_a regret_o regret_a expert_label harm added_more"
+    assert list(rows[0]) == header.split()
     paths_a = records.path_a.unpack()
     for i, row in enumerate(rows):
         assert row["map_o"] == map_text(records.obstacles_o[i])
