@@ -80,7 +80,7 @@ def init_shift_kernels(model: VIN) -> VIN:
     channel a as action a. `h`, `r` and `q` keep their initialisation: the rewards and move costs are learned.
 
     With the default initialisation the VIN has to find this structure itself and settles for an approximation of it
-    (the paper's VIN: 96.8% action accuracy, 87% optimal paths); started here it learns the recursion in a few epochs.
+    (`vin28.pt`: 96.8% action accuracy, 87% optimal paths); started here it learns the recursion in a few epochs.
     """
     n_actions = len(ACTION_DELTAS)
     if model.config.n_actions != n_actions or model.config.l_q < n_actions:
