@@ -25,8 +25,9 @@ def register(subparsers) -> None:
     add_train_arguments(train, lr=0.005, k_help="value-iteration steps (default: 10/20/36 at 8/16/28)")
     train.add_argument(
         "--vi-init",
-        choices=("default", "shift"),
+        choices=LazyChoices("vinadv.planners.vin", "VI_INITS"),
         default="default",
+        metavar="INIT",
         help="how a fresh VIN's value iteration starts: default (PyTorch's initialisation, the paper's VIN) or shift "
         "(each q channel reads one neighbour's value, fc the identity: learns the shortest-path recursion itself; "
         "README, 'Adversarial training')",
