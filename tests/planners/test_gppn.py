@@ -1,4 +1,5 @@
-"""GPPN: the forward against a plain implementation of the published equations, the weights file, the keys."""
+"""GPPN: the forward against a plain implementation of the published equations, the weights file, the keys,
+widening."""
 
 import numpy as np
 import pytest
@@ -7,7 +8,7 @@ import torch
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.interop.checkpoints import GPPN_KEYS
-from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn, save_gppn
+from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn, save_gppn, widen_gppn
 
 
 def plain_gppn(model: GPPN, free: torch.Tensor, goal_map: torch.Tensor) -> torch.Tensor:
@@ -94,3 +95,64 @@ def test_bad_files_are_refused(tmp_path):
         load_gppn(tmp_path / "vin.pt")
     with pytest.raises(InputError, match="kernel f must be odd"):
         GPPN(GPPNConfig(f=4))
+
+
+def _random_gppn(k: int, l_h: int, f: int, seed: int) -> GPPN:
+    torch.manual_seed(seed)
+    model = GPPN(GPPNConfig(k=k, l_h=l_h, f=f)).double()
+    with torch.no_grad():  # larger weights than the default start, so a wrong split would show in the logits
+        for p in model.parameters():
+            p.mul_(3.0)
+    return model
+
+
+@pytest.mark.parametrize("old,new", [(4, 4), (4, 6), (4, 8), (3, 11)])
+def test_widening_without_noise_keeps_the_logits(old, new):
+    model = _random_gppn(k=7, l_h=old, f=3, seed=new)
+    wide = widen_gppn(model, new, noise=0.0, seed=1).double()
+    assert wide.config == GPPNConfig(k=7, l_h=new, f=3)
+    maps = generate_maps(5, 12, seed=3, n_starts=1)
+    obstacles, goals = torch.from_numpy(maps.obstacles.astype(np.float64)), torch.from_numpy(maps.goals)
+    goal_map = torch.zeros_like(obstacles)
+    goal_map[np.arange(5), maps.goals[:, 0], maps.goals[:, 1]] = 1.0
+    with torch.no_grad():
+        want = plain_gppn(model, 1.0 - obstacles, goal_map)
+        torch.testing.assert_close(plain_gppn(wide, 1.0 - obstacles, goal_map), want, rtol=1e-5, atol=1e-5)
+        torch.testing.assert_close(wide(obstacles, goals), want, rtol=1e-5, atol=1e-5)
+
+
+def test_widening_with_noise_changes_only_the_added_channels_incoming_weights():
+    model = _random_gppn(k=5, l_h=4, f=3, seed=0)
+    plain, noisy = widen_gppn(model, 7, noise=0.0, seed=2), widen_gppn(model, 7, noise=0.01, seed=2)
+    a, b = plain.state_dict(), noisy.state_dict()
+    for key in ("conv.weight", "conv.bias", "policy.weight"):  # read the channels: split, no noise
+        torch.testing.assert_close(a[key], b[key])
+    for key in ("hid.weight", "h0.weight", "c0.weight", "lstm.weight_hh", "lstm.bias_ih"):
+        rows_a = a[key].reshape(-1, 7, *a[key].shape[1:])  # (gate blocks, channels, ...)
+        rows_b = b[key].reshape(-1, 7, *b[key].shape[1:])
+        torch.testing.assert_close(rows_b[:, :4], rows_a[:, :4], msg=key)  # the old channels keep their weights
+        assert not torch.equal(rows_b[:, 4:], rows_a[:, 4:]), key
+    maps = generate_maps(4, 10, seed=1, n_starts=1)
+    obstacles, goals = torch.from_numpy(maps.obstacles.astype(np.float32)), torch.from_numpy(maps.goals)
+    with torch.no_grad():
+        base, moved = model.float()(obstacles, goals), noisy(obstacles, goals)
+    assert 0 < float((base - moved).abs().max()) < 0.5
+
+
+def test_widening_refuses_a_narrower_width_and_bad_noise(tmp_path, capsys):
+    model = GPPN(GPPNConfig(k=3, l_h=4, f=3))
+    with pytest.raises(InputError, match="l_h must be at least the model's width 4 to widen it, got 3") as err:
+        widen_gppn(model, 3)
+    assert err.value.parameters == ("l_h",)
+    for noise in (-0.1, float("nan")):
+        with pytest.raises(InputError, match="noise must be >= 0"):
+            widen_gppn(model, 6, noise=noise)
+    from vinadv.cli import main
+
+    save_gppn(model, tmp_path / "g.pt")
+    assert main(["gppn", "widen", str(tmp_path / "g.pt"), "--l-h", "2", "--out", str(tmp_path / "w.pt")]) == 2
+    assert "--l-h must be at least" in capsys.readouterr().err
+    assert not (tmp_path / "w.pt").exists()
+    assert main(["gppn", "widen", str(tmp_path / "g.pt"), "--l-h", "6", "--out", str(tmp_path / "w.pt"), "--json"]) == 0
+    wide = load_gppn(tmp_path / "w.pt")
+    assert wide.config.l_h == 6 and wide.record["widened_from"]["config"]["l_h"] == 4

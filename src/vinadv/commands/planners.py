@@ -57,6 +57,24 @@ def register(subparsers) -> None:
     add_eval_arguments(ev)
     ev.set_defaults(func=cmd_gppn_eval)
 
+    widen = sub.add_parser(
+        "widen",
+        help="a wider GPPN computing the same function (Net2WiderNet), to continue training with more channels",
+    )
+    widen.add_argument("weights", metavar="WEIGHTS", help="the GPPN weights to widen (.pt)")
+    widen.add_argument("--l-h", type=int, required=True, help="hidden (LSTM) channels of the wide model")
+    widen.add_argument(
+        "--noise",
+        type=float,
+        default=1e-3,
+        help="noise on the added channels' incoming weights, relative to each weight's std, so training can tell "
+        "the copies apart (default 0.001; 0 keeps the logits equal)",
+    )
+    widen.add_argument("--seed", type=int, default=0, help="seed for the channels copied and the noise (default 0)")
+    widen.add_argument("--out", required=True, help="output weights (.pt); continue with `gppn train --init OUT`")
+    widen.add_argument("--json", action="store_true", help="print what was written as JSON")
+    widen.set_defaults(func=cmd_gppn_widen)
+
     imp = sub.add_parser("import-weights", help="a checkpoint of the GPPN authors' code as vinadv GPPN weights")
     imp.add_argument(
         "checkpoint", metavar="CKPT", help="the GPPN code's checkpoint (.pth: {'model', 'best_model', ...})"
@@ -151,6 +169,35 @@ def cmd_gppn_train(args: argparse.Namespace) -> int:
 
     config = train_config(args, planner="gppn", l_h=args.l_h, kernel=args.kernel)
     return run_training(args, config, train_gppn, save_gppn)
+
+
+def cmd_gppn_widen(args: argparse.Namespace) -> int:
+    from vinadv.outfile import check_output_path
+    from vinadv.planners.gppn import load_gppn, save_gppn, widen_gppn
+    from vinadv.planners.weights import weights_checksum
+
+    check_output_path(args.out, mkdir=True)
+    model = load_gppn(args.weights)
+    wide = widen_gppn(model, args.l_h, noise=args.noise, seed=args.seed)
+    record = {
+        "widened_from": {
+            "path": str(args.weights),
+            "sha256": weights_checksum(args.weights),
+            "config": model.config.to_dict(),
+            "record": model.record,
+        },
+        "noise": args.noise,
+        "seed": args.seed,
+        "command": _command_line(),
+    }
+    save_gppn(wide, args.out, record)
+    summary = {"out": args.out, "config": wide.config.to_dict(), "from": args.weights, "noise": args.noise}
+    return emit(
+        args,
+        summary,
+        f"wrote {args.out}: GPPN {wide.config.to_dict()} widened from {args.weights} (l_h {model.config.l_h}); "
+        f"continue with `vinadv gppn train --init {args.out} --l-h {args.l_h}`",
+    )
 
 
 def cmd_gppn_import_weights(args: argparse.Namespace) -> int:

@@ -91,6 +91,66 @@ class GPPN(nn.Module):
         return self.policy(h)
 
 
+def widen_gppn(model: GPPN, l_h: int, noise: float = 1e-3, seed: int = 0) -> GPPN:
+    """A GPPN of width `l_h` computing the same function as `model` (Net2WiderNet, Chen et al. 2016).
+
+    Each new channel copies an old one (the first `model.config.l_h` keep their place, the others copy old channels
+    drawn at random, each at most once while there are fewer new than old), in every layer at once: `hid`, `h0`,
+    `c0` and the LSTM's four gates. Whatever reads a copied channel (`h0`, `c0`, `conv`, the LSTM's recurrent
+    weights, `policy`) reads each copy with the old weight divided by the number of copies, so every hidden state
+    of the wide model is the old one with its channels repeated, and the logits are the same.
+
+    Copies would stay identical under training, so `noise` > 0 adds Gaussian noise of `noise` times each weight
+    tensor's standard deviation to the incoming weights of the added channels only: the logits then move a little
+    (measured in the tests) and training can tell the copies apart. Returns a new model in eval mode.
+    """
+    old = model.config.l_h
+    if l_h < old:
+        raise InputError(f"l_h must be at least the model's width {old} to widen it, got {l_h}", "l_h")
+    if not noise >= 0:
+        raise InputError(f"noise must be >= 0, got {noise}", "noise")
+    rng = torch.Generator().manual_seed(seed)
+    extra = l_h - old
+    if extra <= old:
+        picks = torch.randperm(old, generator=rng)[:extra]
+    else:
+        picks = torch.randint(old, (extra,), generator=rng)
+    source = torch.cat([torch.arange(old), picks])  # new channel -> the old channel it copies
+    copies = torch.bincount(source, minlength=old).to(torch.float32)[source]  # (l_h,) copies of each one's source
+
+    def rows(w: torch.Tensor, blocks: int = 1) -> torch.Tensor:  # output channels (in `blocks` gate blocks)
+        w = w.reshape(blocks, old, *w.shape[1:])[:, source]
+        added = w[:, old:]
+        if noise and added.numel():
+            scale = noise * float(w.std()) if w.numel() > 1 else noise
+            w[:, old:] = added + scale * torch.randn(added.shape, generator=rng)
+        return w.reshape(blocks * l_h, *w.shape[2:])
+
+    def cols(w: torch.Tensor) -> torch.Tensor:  # input channels: split the old weight over the copies
+        shape = (1, l_h) + (1,) * (w.dim() - 2)
+        return w[:, source] / copies.reshape(shape)
+
+    sd = {k: v.detach().clone() for k, v in model.state_dict().items()}
+    new = {
+        "hid.weight": rows(sd["hid.weight"]),
+        "hid.bias": rows(sd["hid.bias"]),
+        "h0.weight": rows(cols(sd["h0.weight"])),
+        "h0.bias": rows(sd["h0.bias"]),
+        "c0.weight": rows(cols(sd["c0.weight"])),
+        "c0.bias": rows(sd["c0.bias"]),
+        "conv.weight": cols(sd["conv.weight"]),
+        "conv.bias": sd["conv.bias"],
+        "lstm.weight_ih": rows(sd["lstm.weight_ih"], 4),
+        "lstm.weight_hh": rows(cols(sd["lstm.weight_hh"]), 4),
+        "lstm.bias_ih": rows(sd["lstm.bias_ih"], 4),
+        "lstm.bias_hh": rows(sd["lstm.bias_hh"], 4),
+        "policy.weight": cols(sd["policy.weight"]),
+    }
+    wide = GPPN(GPPNConfig(**{**model.config.to_dict(), "l_h": l_h}))
+    wide.load_state_dict(new)
+    return wide.eval()
+
+
 def input_maps(obstacles: torch.Tensor, goals: torch.Tensor) -> torch.Tensor:
     """`(B, 2, N, N)`: free cells (1 - obstacles) and the one-hot goal map, as the published code's input."""
     b = obstacles.shape[0]
