@@ -106,6 +106,15 @@ def test_eval_gives_both_conventions(maps_file, tmp_path, capsys):
     suc, opt = brute_gppn_figures(maps, actions)
     assert figures["gppn"]["percent_success"] == pytest.approx(suc)
     assert figures["gppn"]["percent_optimal"] == pytest.approx(opt)
+    # by optimal moves: every start of the file in its bucket (the expert path's cells - 1 moves)
+    moves = np.array([len(maps.expert[i]) - 1 for i in range(len(maps.expert))])
+    rows = figures["vinadv"]["by_length"]
+    assert [r["rollouts"] for r in rows] == [
+        int(((moves >= lo) & (moves <= hi)).sum()) for lo, hi in (r["moves"] for r in rows)
+    ]
+    assert sum(r["rollouts"] for r in rows) == len(moves) and all(r["success_rate"] == 1.0 for r in rows)
+    assert main(["eval", "--planner", "optimal", "--data", maps_file]) == 0
+    assert f"by optimal moves  {rows[0]['moves'][0]}-{rows[0]['moves'][1]}: 100.00% of" in capsys.readouterr().out
 
 
 def test_bad_planner_exits_2(maps_file, tmp_path, capsys):

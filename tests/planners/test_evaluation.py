@@ -5,13 +5,16 @@ import math
 import numpy as np
 import pytest
 import torch
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tests.grid.oracle import brute_distances, legal
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths
-from vinadv.planners.evaluation import action_accuracy_counts, evaluate_vin, rollout_metrics
+from vinadv.planners.evaluation import LENGTH_BUCKET, action_accuracy_counts, evaluate_vin, rollout_metrics
 from vinadv.planners.result import COLLISION, GOAL, LOOP, PlanResult
 from vinadv.planners.vin import VIN, VINConfig
+from vinadv.vocabulary import TERMINATIONS
 
 N_, S_, E_, W_ = 0, 1, 2, 3
 SQ2 = math.sqrt(2)
@@ -90,6 +93,23 @@ def test_constant_east_policy_reaches_collides_and_hits_the_step_limit():
     m = evaluate_vin(constant_vin(E_), maps)
     assert m["terminations"] == {"goal": 1, "collision": 2, "loop": 0, "step_limit": 1}
     assert m["success_rate"] == 0.25 and m["optimal_rate"] == 0.25 and m["mean_extra_cost"] == 0.0
+    # optimal moves 4, 5 (two rows, five columns), 1 and 4: buckets 0-4 (three rollouts) and 5-9 (one)
+    assert m["by_length"] == [
+        {
+            "moves": [0, 4],
+            "rollouts": 3,
+            "success_rate": 1 / 3,
+            "optimal_rate": 1 / 3,
+            "terminations": {"goal": 1, "collision": 1, "loop": 0, "step_limit": 1},
+        },
+        {
+            "moves": [5, 9],
+            "rollouts": 1,
+            "success_rate": 0.0,
+            "optimal_rate": 0.0,
+            "terminations": {"goal": 0, "collision": 1, "loop": 0, "step_limit": 0},
+        },
+    ]
     # action accuracy by brute force: the share of free, reachable, non-goal cells where E is optimal
     hits = cells = 0
     for i in range(len(maps)):
@@ -129,3 +149,31 @@ def test_ties_go_to_the_lowest_action_index():
     assert correct == want and cells == 35
     m = evaluate_vin(model, maps)
     assert m["success_rate"] == 1.0 and m["optimal_rate"] == 1.0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 3), st.integers(0, 40), st.booleans(), st.booleans()), max_size=40))
+def test_by_length_against_a_plain_count(rows):
+    """`by_length` against a per-path Python count: (termination, optimal moves, optimal cost?, kept?) per path."""
+    paths = [np.array([(0, 0), (0, 1)]) for _ in rows]  # cost 1 each
+    result = PlanResult.from_paths(paths, np.array([t for t, *_ in rows], dtype=np.int8))
+    costs = np.array([1.0 if opt else 2.0 for _, _, opt, _ in rows])
+    moves = np.array([m for _, m, _, _ in rows], dtype=np.int64)
+    mask = np.array([keep for *_, keep in rows], dtype=bool)
+    got = rollout_metrics(result, costs, mask, moves)["by_length"]
+    want = {}
+    for t, m, opt, keep in rows:
+        if keep:
+            row = want.setdefault(m // LENGTH_BUCKET, {"n": 0, "ok": 0, "opt": 0, "ends": [0, 0, 0, 0]})
+            row["n"] += 1
+            row["ok"] += t == GOAL
+            row["opt"] += t == GOAL and opt
+            row["ends"][t] += 1
+    assert [r["moves"][0] // LENGTH_BUCKET for r in got] == sorted(want)
+    for r in got:
+        w = want[r["moves"][0] // LENGTH_BUCKET]
+        assert r["moves"][1] - r["moves"][0] == LENGTH_BUCKET - 1
+        assert r["rollouts"] == w["n"] and r["terminations"] == dict(zip(TERMINATIONS, w["ends"]))
+        assert r["success_rate"] == pytest.approx(w["ok"] / w["n"])
+        assert r["optimal_rate"] == pytest.approx(w["opt"] / w["n"])
+    assert "by_length" not in rollout_metrics(result, costs, mask)

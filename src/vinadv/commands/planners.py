@@ -12,6 +12,7 @@ from vinadv.commands.vin import (
     _command_line,
     add_eval_arguments,
     add_train_arguments,
+    by_length_text,
     emit_metrics,
     run_training,
     start_eval,
@@ -159,6 +160,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
             f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
             f"{theirs['cells']} free cells (every Moore move costs 1)"
         )
+        print(by_length_text(ours))
     return 0
 
 

@@ -8,6 +8,7 @@ import json
 import math
 import shlex
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -359,6 +360,21 @@ def _print_metrics(m: dict) -> None:
     print(f"  optimal paths     {_pct(m['optimal_rate'])} (of reached: {_pct(m['optimal_rate_of_reached'])})")
     print(f"  mean extra cost   {m['mean_extra_cost']:.4f} (relative {_pct(m['mean_extra_cost_relative'])})")
     print(f"  terminations      {terms}")
+    print(by_length_text(m))
+
+
+def by_length_text(m: dict) -> str:
+    """Rollout metrics `m`'s success by the optimal path's move count (`by_length`), wrapped lines."""
+    rows = [f"{r['moves'][0]}-{r['moves'][1]}: {_pct(r['success_rate'])} of {r['rollouts']}" for r in m["by_length"]]
+    # non-breaking spaces inside a row, so the lines break between rows only
+    text = textwrap.fill(
+        ", ".join(r.replace(" ", "\xa0") for r in rows),
+        118,
+        initial_indent="  by optimal moves  ",
+        subsequent_indent=" " * 20,
+        break_on_hyphens=False,
+    )
+    return text.replace("\xa0", " ")
 
 
 def cmd_export_weights(args: argparse.Namespace) -> int:

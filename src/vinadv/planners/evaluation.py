@@ -62,10 +62,21 @@ def _engine_planner(obstacles, goals, starts, model, corner_cutting) -> PlanResu
     return engine.plan_batch(obstacles[idx], starts.reshape(-1, 2), goals[idx], model, corner_cutting)
 
 
-def rollout_metrics(result: PlanResult, expert_costs: np.ndarray, mask: np.ndarray | None = None) -> dict:
+#: width, in moves of the optimal path, of the buckets of `rollout_metrics`' `by_length`
+LENGTH_BUCKET = 5
+
+
+def rollout_metrics(
+    result: PlanResult,
+    expert_costs: np.ndarray,
+    mask: np.ndarray | None = None,
+    expert_moves: np.ndarray | None = None,
+) -> dict:
     """Rollout figures from a `PlanResult` and the expert (optimal) cost of each path `(B,)`.
 
     `mask` `(B,)` bool, if given, keeps only those paths (a MapSet's padded start slots are left out).
+    `expert_moves` `(B,)`, if given, the optimal path's move count L of each path: the figures then also come
+    `by_length`, in buckets of `LENGTH_BUCKET` moves (where a planner fails: long paths take more decisions).
     """
     keep = np.ones(len(result), dtype=bool) if mask is None else np.asarray(mask, dtype=bool).reshape(-1)
     expert_costs = np.asarray(expert_costs, dtype=np.float64).reshape(-1)[keep]
@@ -75,6 +86,10 @@ def rollout_metrics(result: PlanResult, expert_costs: np.ndarray, mask: np.ndarr
     optimal = reached & (np.abs(costs - expert_costs) <= COST_TOL)
     extra = costs[reached] - expert_costs[reached]
     names = result.termination_names[keep]
+    by_length = {}
+    if expert_moves is not None:
+        moves = np.asarray(expert_moves, dtype=np.int64).reshape(-1)[keep]
+        by_length = {"by_length": _by_length(moves, reached, optimal, result.termination[keep])}
     return {
         "rollouts": int(n),
         "success_rate": float(reached.mean()) if n else float("nan"),
@@ -83,7 +98,29 @@ def rollout_metrics(result: PlanResult, expert_costs: np.ndarray, mask: np.ndarr
         "mean_extra_cost": float(extra.mean()) if len(extra) else float("nan"),
         "mean_extra_cost_relative": float((extra / expert_costs[reached]).mean()) if len(extra) else float("nan"),
         "terminations": {t: int((names == t).sum()) for t in TERMINATIONS},
+        **by_length,
     }
+
+
+def _by_length(moves: np.ndarray, reached: np.ndarray, optimal: np.ndarray, termination: np.ndarray) -> list[dict]:
+    """One row per non-empty bucket of `LENGTH_BUCKET` optimal moves: rollouts, success, optimal paths and the
+    terminations, counted with `bincount` over the buckets."""
+    bucket = moves // LENGTH_BUCKET
+    size = int(bucket.max()) + 1 if len(bucket) else 0
+    n = np.bincount(bucket, minlength=size)
+    ok = np.bincount(bucket, weights=reached, minlength=size)
+    opt = np.bincount(bucket, weights=optimal, minlength=size)
+    ends = {t: np.bincount(bucket, weights=termination == i, minlength=size) for i, t in enumerate(TERMINATIONS)}
+    return [
+        {
+            "moves": [int(b * LENGTH_BUCKET), int((b + 1) * LENGTH_BUCKET - 1)],
+            "rollouts": int(n[b]),
+            "success_rate": float(ok[b] / n[b]),
+            "optimal_rate": float(opt[b] / n[b]),
+            "terminations": {t: int(ends[t][b]) for t in TERMINATIONS},
+        }
+        for b in np.flatnonzero(n)
+    ]
 
 
 def evaluate_vin(
@@ -146,5 +183,6 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> di
         "action_accuracy": correct / cells if cells else float("nan"),
         "action_cells": cells,
     }
-    metrics.update(rollout_metrics(result, maps.expert_costs, maps.start_mask))
+    moves = maps.expert.lengths - 1  # cells - 1: an optimal path's move count L, the same for all of them
+    metrics.update(rollout_metrics(result, maps.expert_costs, maps.start_mask, moves))
     return metrics
