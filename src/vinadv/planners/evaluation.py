@@ -86,11 +86,7 @@ def rollout_metrics(
     optimal = reached & (np.abs(costs - expert_costs) <= COST_TOL)
     extra = costs[reached] - expert_costs[reached]
     names = result.termination_names[keep]
-    by_length = {}
-    if expert_moves is not None:
-        moves = np.asarray(expert_moves, dtype=np.int64).reshape(-1)[keep]
-        by_length = {"by_length": _by_length(moves, reached, optimal, result.termination[keep])}
-    return {
+    metrics = {
         "rollouts": int(n),
         "success_rate": float(reached.mean()) if n else float("nan"),
         "optimal_rate": float(optimal.mean()) if n else float("nan"),
@@ -98,8 +94,11 @@ def rollout_metrics(
         "mean_extra_cost": float(extra.mean()) if len(extra) else float("nan"),
         "mean_extra_cost_relative": float((extra / expert_costs[reached]).mean()) if len(extra) else float("nan"),
         "terminations": {t: int((names == t).sum()) for t in TERMINATIONS},
-        **by_length,
     }
+    if expert_moves is not None:
+        moves = np.asarray(expert_moves, dtype=np.int64).reshape(-1)[keep]
+        metrics["by_length"] = _by_length(moves, reached, optimal, result.termination[keep])
+    return metrics
 
 
 def _by_length(moves: np.ndarray, reached: np.ndarray, optimal: np.ndarray, termination: np.ndarray) -> list[dict]:
