@@ -8,7 +8,9 @@ as `vinadv gppn train` does it (`vinadv.planners.training.batch_loss`). Two ways
 1. plain: the straightforward code of the published model (`nn.LSTMCell` on `(B*N*N, l_h)` rows, the hidden state
    transposed back to `(B, l_h, N, N)` for the `l_h -> 1` convolution at every step);
 2. vinadv's `GPPN`: the state stays in rows; the convolution is one matrix product and f*f shifted sums.
-Prints ms per map per step for each configuration (l_h, k, threads) and the ratio.
+Prints ms per map per step for each configuration (l_h, k, threads) and the ratio. With `--compile`, also vinadv's
+`GPPN` through `torch.compile` (`vinadv gppn train --compile`; the compilation runs in the warm-up step, untimed) and
+its speedup over the eager `GPPN`.
 """
 
 from __future__ import annotations
@@ -74,6 +76,7 @@ def main() -> None:
     ap.add_argument("--f", type=int, default=3, help="kernel of the recurrent convolution (default 3)")
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--skip-plain", action="store_true", help="time vinadv's GPPN only")
+    ap.add_argument("--compile", action="store_true", help="also time vinadv's GPPN through torch.compile")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     maps = generate_maps(args.n, args.size, seed=5, n_starts=1)
@@ -103,6 +106,10 @@ def main() -> None:
                         )
                     row["plain_ms_per_map"] = round(step_ms_per_map(PlainGPPN(model), maps, bits, args.batch_size), 2)
                     row["speedup"] = round(row["plain_ms_per_map"] / row["vinadv_ms_per_map"], 2)
+                if args.compile:
+                    compiled = torch.compile(model)
+                    row["compiled_ms_per_map"] = round(step_ms_per_map(compiled, maps, bits, args.batch_size), 2)
+                    row["compile_speedup"] = round(row["vinadv_ms_per_map"] / row["compiled_ms_per_map"], 2)
                 rows.append(row)
                 if not args.json:
                     print(" ".join(f"{key} {value}" for key, value in row.items()), flush=True)

@@ -131,3 +131,30 @@ def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatc
         torch.testing.assert_close(resumed.state_dict()[k], v, rtol=0, atol=0)
     assert rec["steps"] == whole_rec["steps"] == 10
     assert rec["epochs"][1]["train_loss"] == pytest.approx(whole_rec["epochs"][1]["train_loss"], rel=1e-6)
+
+
+@pytest.mark.slow
+def test_compiled_training_trains_the_same_weights(tmp_path):
+    torch.set_num_threads(1)
+    maps = generate_maps(24, 8, seed=7, n_starts=1)
+    config = TrainConfig(planner="gppn", epochs=2, lr=0.01, batch_size=8, k=4, l_h=4, kernel=3, seed=3)
+    eager, eager_rec = train_gppn(maps, config, checkpoint=tmp_path / "e.ckpt", progress=False)
+    compiled_config = TrainConfig(**{**config.to_dict(), "compile": True})
+    compiled, rec = train_gppn(maps, compiled_config, checkpoint=tmp_path / "c.ckpt", progress=False)
+    assert rec["train_config"]["compile"] is True and eager_rec["train_config"]["compile"] is False
+    for k, v in eager.state_dict().items():  # fused kernels round differently, nothing more
+        torch.testing.assert_close(compiled.state_dict()[k], v, rtol=1e-4, atol=1e-5)
+    for a, b in zip(eager_rec["epochs"], rec["epochs"], strict=True):
+        assert b["train_loss"] == pytest.approx(a["train_loss"], rel=1e-4)
+    # the checkpoint holds the model's own keys (not the compiled wrapper's), so eager training resumes it
+    assert set(torch.load(tmp_path / "c.ckpt", weights_only=True)["model"]) == set(eager.state_dict())
+    resumed, _ = train_gppn(maps, config, checkpoint=tmp_path / "c.ckpt", resume=True, progress=False)
+    for k, v in compiled.state_dict().items():
+        torch.testing.assert_close(resumed.state_dict()[k], v, rtol=0, atol=0)
+
+
+def test_compile_is_refused_for_the_vin():
+    with pytest.raises(InputError, match="compile is for torch planners") as err:
+        TrainConfig(planner="vin", compile=True).validate()
+    assert err.value.parameters == ("compile",)
+    TrainConfig(planner="gppn", compile=True).validate()

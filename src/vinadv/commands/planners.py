@@ -51,6 +51,12 @@ def register(subparsers) -> None:
         default=GPPN_DEFAULTS["kernel"],
         help=f"odd kernel of the recurrent convolution (default {GPPN_DEFAULTS['kernel']})",
     )
+    train.add_argument(
+        "--compile",
+        action="store_true",
+        help="run training through torch.compile: the same function in fused kernels, about 1.4x faster on the CPU "
+        "(needs a C++ compiler; the first steps compile, about a minute)",
+    )
     train.set_defaults(func=cmd_gppn_train, k=GPPN_DEFAULTS["k"])
 
     ev = sub.add_parser("eval", help="action accuracy and rollout figures of a GPPN")
@@ -169,7 +175,7 @@ def cmd_gppn_train(args: argparse.Namespace) -> int:
     from vinadv.planners.gppn import save_gppn
     from vinadv.planners.training import train_gppn
 
-    config = train_config(args, planner="gppn", l_h=args.l_h, kernel=args.kernel)
+    config = train_config(args, planner="gppn", l_h=args.l_h, kernel=args.kernel, compile=args.compile)
     return run_training(args, config, train_gppn, save_gppn)
 
 

@@ -69,6 +69,9 @@ class TrainConfig:
     # how a fresh VIN's value-iteration kernels start (`vin.VI_INITS`): 'default' (PyTorch's, the paper's VIN) or
     # 'shift' (`vin.init_shift_kernels`)
     vi_init: str = "default"
+    # run the training forward and backward through `torch.compile` (a torch planner other than the VIN, whose CPU
+    # value iteration is compiled by Numba already): the same function, fused kernels (README, "GPPN")
+    compile: bool = False
 
     def validate(self) -> None:
         if self.epochs < 1:
@@ -90,6 +93,11 @@ class TrainConfig:
                 f"vi_init {self.vi_init!r} starts a fresh VIN and init continues from weights: give one of them",
                 "vi_init",
                 "init",
+            )
+        if self.compile and self.planner == "vin":
+            raise InputError(
+                "compile is for torch planners such as the GPPN; the VIN's value iteration is compiled already",
+                "compile",
             )
 
     def to_dict(self) -> dict:
@@ -336,6 +344,8 @@ def train_model(
         state = _load_checkpoint(checkpoint, model, optimizer, config, rec)
         if log:
             log(f"resumed from {checkpoint} after epoch {state.epoch}, step {state.step}")
+    # `forward` computes the logits; `model` keeps the parameters (the compiled wrapper shares them) and is saved
+    forward = torch.compile(model) if config.compile else model
     bits = optimal_action_bits(maps)
     obstacles, goals = maps.obstacles, maps.goals
     if state.added_obstacles is not None and len(state.added_obstacles):  # resumed with added maps
@@ -385,7 +395,7 @@ def train_model(
             lr = _lr_at(state.step, total_steps, config)
             for group in optimizer.param_groups:
                 group["lr"] = lr
-            loss, n, c = batch_loss(model, obstacles[b], goals[b], bits[b], device)
+            loss, n, c = batch_loss(forward, obstacles[b], goals[b], bits[b], device)
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
             grad_norm = torch.nn.utils.clip_grad_norm_(model.parameters(), config.clip_norm)
@@ -403,7 +413,7 @@ def train_model(
                 _save_checkpoint(checkpoint, model, optimizer, config, state, rec)
                 last_save = time.time()
         state.partial = [0.0, 0, 0]
-        val = evaluate_loss(model, maps, bits, val_idx, config.batch_size, device) if len(val_idx) else {}
+        val = evaluate_loss(forward, maps, bits, val_idx, config.batch_size, device) if len(val_idx) else {}
         state.epoch = epoch + 1
         state.wall_s = time.time() - started
         entry = {
