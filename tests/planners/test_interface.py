@@ -94,19 +94,25 @@ def test_generic_rollout_on_vin_logits_gives_the_engines_paths(size):
 def _planners(size):
     torch.manual_seed(0)
     gppn = GPPN(GPPNConfig(k=6, l_h=8))
+    # the averaged one sees the whole map (a 5x5 kernel, 10 steps): a mirror-symmetric patch inside a smaller view
+    # would tie two actions up to the rounding of each forward, which differs with the batch
+    wide = GPPN(GPPNConfig(k=10, l_h=8, f=5))
     with torch.no_grad():  # a wider logit spread than the default initialisation: longer, varied paths
         gppn.policy.weight.mul_(30)
+        wide.policy.weight.mul_(30)
     from vinadv.planners.registry import load_custom
+    from vinadv.planners.symmetric import DihedralAverage
 
     return [
         VINPlanner(planning_vin(size, seed=2), size=size),
         OptimalPlanner(size),
         TorchPlanner(gppn, "gppn", size),
         load_custom("examples/my_planner.py:make", size),
+        TorchPlanner(DihedralAverage(wide), "gppn+d4", size),
     ]
 
 
-@pytest.mark.parametrize("index", range(4), ids=["vin", "optimal", "gppn", "byo-example"])
+@pytest.mark.parametrize("index", range(5), ids=["vin", "optimal", "gppn", "byo-example", "gppn+d4"])
 def test_every_planner_batched_equals_one_by_one(index):
     maps = generate_maps(12, 16, seed=9, n_starts=3)
     planner = _planners(16)[index]

@@ -52,7 +52,8 @@ def add_planner_arguments(parser, weights_help: str | None = None) -> None:
         "--planner",
         default=None,
         metavar="NAME|SPEC",
-        help="vin (default), gppn, optimal, or your own FILE.py:FACTORY / MODULE:FACTORY (see `vinadv planners`)",
+        help="vin (default), gppn, optimal, or your own FILE.py:FACTORY / MODULE:FACTORY; +d4 after one averages it "
+        "over the 8 rotations and flips (see `vinadv planners`)",
     )
     parser.add_argument(
         "--weights",

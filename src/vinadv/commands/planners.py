@@ -110,11 +110,19 @@ def register(subparsers) -> None:
 
 
 def cmd_planners(args: argparse.Namespace) -> int:
-    from vinadv.planners.registry import list_planners
+    from vinadv.planners.registry import SUFFIX, list_planners
 
     planners = list_planners(args.size)
     if args.json:
-        print(json.dumps({"planners": planners, "bring_your_own": "FILE.py:FACTORY or MODULE:FACTORY"}))
+        print(
+            json.dumps(
+                {
+                    "planners": planners,
+                    "bring_your_own": "FILE.py:FACTORY or MODULE:FACTORY",
+                    "symmetric": f"NAME{SUFFIX} or SPEC{SUFFIX}: the planner averaged over the 8 rotations and flips",
+                }
+            )
+        )
         return 0
     for p in planners:
         weights = (
@@ -126,6 +134,10 @@ def cmd_planners(args: argparse.Namespace) -> int:
     print(
         "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
         "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (README, 'Planners')"
+    )
+    print(
+        f"symmetric:  any of these but optimal with {SUFFIX} (gppn{SUFFIX}): averaged over the 8 rotations and flips "
+        "of the map, 8 forwards"
     )
     return 0
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.grid.actions import ACTION_DELTAS
 
 NAMES = ("identity", "rot90", "rot180", "rot270", "flip_h", "flip_v", "transpose", "antitranspose")
 #: (transpose, flip rows, flip columns) of each transform id, applied in that order.
@@ -27,6 +28,8 @@ STEPS = (
     (True, True, True),
 )
 _STEPS = np.array(STEPS, dtype=bool)  # (8, 3)
+#: the id of each transform's inverse (rot90 and rot270 undo each other; every flip and transpose undoes itself)
+INVERSE = (0, 3, 2, 1, 4, 5, 6, 7)
 
 
 def _check(transform) -> np.ndarray:
@@ -48,6 +51,17 @@ def transform_cells(cells: np.ndarray, size: int, transform) -> np.ndarray:
     r = np.where(steps[:, 1], last - r, r)
     c = np.where(steps[:, 2], last - c, c)
     return np.stack([r, c], axis=1)
+
+
+def transform_actions(transform: int) -> np.ndarray:
+    """`(8,)` int64: entry `a` is the action whose move is action `a`'s move under transform id `transform`
+    (moves in `vinadv.grid.actions`' order), so a policy on a transformed map reads action `perm[a]` at a cell
+    where the original map's policy reads `a`."""
+    transpose, flip_rows, flip_cols = STEPS[int(_check(transform))]
+    moved = ACTION_DELTAS[:, ::-1] if transpose else ACTION_DELTAS
+    moved = moved * np.array([-1 if flip_rows else 1, -1 if flip_cols else 1])
+    match = np.all(moved[:, None, :] == ACTION_DELTAS[None, :, :], axis=-1)  # (8, 8): moved a == action b
+    return match.argmax(axis=1)
 
 
 def transform_grids(grids, transform: int, axes: tuple[int, int] = (1, 2)):

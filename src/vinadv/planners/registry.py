@@ -9,6 +9,8 @@
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
   `forward(obstacles, goals)` takes obstacles as 0/1 float32 `(B, N, N)` and goals as int64 `(B, 2)` and returns
   `(B, 8, N, N)` logits in DESIGN.md's action order. Its source file and weights are checksummed for run records.
+- any of these but `optimal` with `+d4` after it (`gppn+d4`, `file.py:factory+d4`): that planner averaged over the
+  8 rotations and flips of the map (`vinadv.planners.symmetric`), an exactly equivariant planner at 8 forwards.
 """
 
 from __future__ import annotations
@@ -51,6 +53,8 @@ REGISTRY = {
     "optimal": PlannerInfo("optimal", "exact shortest paths (Dijkstra, lowest action index on ties): the control"),
 }
 DEFAULT_PLANNER = "vin"
+#: after a planner's name or spec: that planner averaged over the 8 symmetries of the grid (`load_symmetric`)
+SUFFIX = "+d4"
 
 
 def default_weights(name: str, size: int) -> Path | None:
@@ -89,6 +93,8 @@ def load_planner(
     Raises `PlannerError` (an `InputError`) naming the spec for anything that cannot be loaded.
     """
     spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
+    if spec.endswith(SUFFIX):
+        return load_symmetric(spec, size, weights, corner_cutting, device)
     if weights is not None and spec not in ("vin", "gppn"):  # vin_robust is vin with its own weights
         raise PlannerError(f"planner {spec!r} takes no weights file (weights={weights!r})")
     if spec == "vin":
@@ -133,6 +139,30 @@ def load_planner(
         return load_custom(spec, size, device)
     raise PlannerError(
         f"unknown planner {spec!r}: use one of {', '.join(REGISTRY)}, or FILE.py:FACTORY / MODULE:FACTORY for your own"
+    )
+
+
+def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str) -> TorchPlanner:
+    """`BASE+d4`: the planner `BASE` averaged over the grid's 8 symmetries (`vinadv.planners.symmetric`); its run
+    records keep the base planner's weights checksum and add `"average": "d4"` to its config."""
+    from vinadv.planners.symmetric import DihedralAverage
+
+    base_spec = spec[: -len(SUFFIX)].strip()
+    if not base_spec or base_spec.endswith(SUFFIX):
+        raise PlannerError(f"planner {spec!r}: {SUFFIX} follows one planner name or spec, once (e.g. gppn{SUFFIX})")
+    base = load_planner(base_spec, size, weights=weights, corner_cutting=corner_cutting, device=device)
+    module = base.differentiable
+    if module is None:
+        raise PlannerError(
+            f"planner {spec!r}: {base.name!r} has no torch module to average ({SUFFIX} takes vin, gppn or your own)"
+        )
+    return TorchPlanner(
+        DihedralAverage(module).to(device),
+        f"{base.name}{SUFFIX}",
+        size,
+        checksum=base.checksum,
+        config={**base.config, "average": "d4"},
+        device=device,
     )
 
 
