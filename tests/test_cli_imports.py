@@ -7,6 +7,8 @@ import sys
 
 import pytest
 
+from tests.needs import MODELLED_CPU, cpu_vendor
+
 HEAVY = ("torch", "numba", "sklearn", "sqlalchemy", "scipy", "matplotlib", "distributed", "flask")
 
 
@@ -69,6 +71,9 @@ def test_a_vin_run_needs_no_pytorch_once_the_replay_settings_are_kept(tmp_path, 
     assert "torch" in first
     kept = json.loads((tmp_path / "cache" / "torch_replay.json").read_text())["machines"]
     (entries,) = kept.values()
-    assert {"conv_modes", "sum_order", "fc_order", "q_verified", "fc_verified", "default_threads"} <= set(entries)
+    assert {"conv_modes", "sum_order", "fc_order", "default_threads"} <= set(entries)
+    # where this CPU's BLAS order is not modelled (an Intel Xeon's MKL), nothing is verified and PyTorch stays in use
+    replayed = {"q_verified", "fc_verified"} <= set(entries)
+    assert replayed or not MODELLED_CPU, f"the replay was not verified on a modelled CPU ({cpu_vendor()})"
     second = imported_modules("run", "--n", "2000", "--seed", "1", "--db", str(tmp_path / "b.db"), "--quiet")
-    assert "sqlalchemy" in second and "torch" not in second
+    assert "sqlalchemy" in second and ("torch" in second) == (not replayed)

@@ -10,6 +10,7 @@ import torch.nn.functional as F
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.needs import MODELLED_CPU, cpu_vendor
 from vinadv.grid import generate_maps
 from vinadv.planners import torch_replay
 from vinadv.planners.flat import from_flat, layout, to_flat
@@ -42,21 +43,6 @@ def fresh_settings(monkeypatch):
         ("_fc_failed", set()),
     ]:
         monkeypatch.setattr(torch_replay, name, empty)
-
-
-def cpu_vendor() -> str:
-    try:
-        with open("/proc/cpuinfo") as fh:
-            return next((line.split(":", 1)[1].strip() for line in fh if line.startswith("vendor_id")), "")
-    except OSError:
-        return ""
-
-
-#: The BLAS kernels whose summation orders `torch_replay` models were read off MKL on AMD EPYC. Elsewhere (seen: MKL's
-#: AVX-512 kernels on an Intel Xeon) the r layer's and fc's sums may follow no modelled order; the replay then uses
-#: PyTorch itself, exact and slower, which the bit-for-bit tests check all the same. There, the tests of the replay
-#: itself are skipped; on AMD they must find the orders.
-MODELLED_CPU = cpu_vendor() == "AuthenticAMD"
 
 
 def require_replay(found: bool, what: str) -> None:
@@ -362,6 +348,9 @@ def test_a_process_without_pytorch_plans_what_pytorch_would(tmp_path):
         )
         assert done.returncode == 0, done.stderr[-3000:]
         runs[mode] = (int(done.stdout.split()[-1]), np.load(tmp_path / f"{mode}.npz"))
+        if mode == "measure":
+            (kept,) = json.loads((tmp_path / "cache" / "torch_replay.json").read_text())["machines"].values()
+            require_replay("q_verified" in kept, "a verified replay of the value map")
     near_ties, blocked = runs["blocked"]
     assert near_ties > 0  # the near-tie replay did run without PyTorch
     maps = generate_maps(300, 28, seed=4, n_starts=1)
