@@ -42,6 +42,29 @@ def test_a_short_training_lowers_the_loss_and_resumes(tmp_path):
     assert evaluate_loss(model, maps, bits, val, 8, torch.device("cpu"))["cells"] > 0
 
 
+def test_init_may_change_the_iterations_but_not_the_weights_shapes(tmp_path):
+    from vinadv.planners.gppn import GPPN, GPPNConfig, save_gppn
+    from vinadv.planners.weights import weights_checksum
+
+    torch.set_num_threads(1)
+    maps = generate_maps(16, 10, seed=3, n_starts=1)
+    start = GPPN(GPPNConfig(k=6, l_h=8, f=3))
+    save_gppn(start, tmp_path / "k6.pt")
+    # k is a number of iterations, not a weight: a vanishing learning rate keeps the k = 6 weights at k = 9
+    config = TrainConfig(planner="gppn", epochs=1, lr=1e-12, batch_size=8, k=9, l_h=8, kernel=3, seed=2)
+    model, record = train_gppn(
+        maps, TrainConfig(**{**config.to_dict(), "init": str(tmp_path / "k6.pt")}), progress=False
+    )
+    assert model.config.k == 9 and record["init_k"] == 6
+    assert record["init_sha256"] == weights_checksum(tmp_path / "k6.pt")
+    for key, value in start.state_dict().items():
+        torch.testing.assert_close(model.state_dict()[key], value)
+    for other in (GPPNConfig(k=6, l_h=12, f=3), GPPNConfig(k=9, l_h=8, f=5)):
+        save_gppn(GPPN(other), tmp_path / "other.pt")
+        with pytest.raises(InputError, match="^init .*other.pt"):
+            train_gppn(maps, TrainConfig(**{**config.to_dict(), "init": str(tmp_path / "other.pt")}), progress=False)
+
+
 def test_cli_train_eval_plan(tmp_path, capsys):
     data, weights = tmp_path / "train.npz", tmp_path / "g.pt"
     assert main(["maps", "generate", "--n", "24", "--size", "10", "--seed", "4", "--out", str(data), "--quiet"]) == 0

@@ -19,7 +19,7 @@ import os
 import platform
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -276,15 +276,19 @@ def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, dict
 
 
 def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: dict | None) -> dict:
-    """Load `start`'s weights (read from `path`, `--init`) into `model`; the record gains their checksum."""
+    """Load `start`'s weights (read from `path`, `--init`) into `model`; the record gains their checksum (and
+    their k where it differs: the iterations are not weights, so training may go on with more or fewer)."""
     from vinadv.planners.weights import weights_checksum
 
-    if start.config != model.config:
+    if replace(start.config, k=model.config.k) != model.config:
         raise InputError(
             f"init {path}: its {type(start).__name__} ({start.config}) is not the one to train ({model.config})", "init"
         )
     model.load_state_dict(start.state_dict())
-    return {**(record or {}), "init_sha256": weights_checksum(path)}
+    rec = {**(record or {}), "init_sha256": weights_checksum(path)}
+    if start.config.k != model.config.k:
+        rec["init_k"] = start.config.k
+    return rec
 
 
 def train_model(
