@@ -6,7 +6,7 @@ Prints, measured in one run on the same random records (`vinadv.store.synthetic.
 - encode only: PairRecords -> row tuples (the vectorised text encoding of maps, paths and cells), in the form
   `Store.write_pairs` sends to SQLite;
 - sqlite3 ceiling: the bare `sqlite3` driver inserting the already-encoded rows into the same schema with the same
-  pragmas and the same statements as `Store.write_pairs` (`_SQLITE_ROWS_PER_STATEMENT` rows per INSERT), one
+  pragmas and the same statements as `Store.write_pairs` (`SQLITE_ROWS_PER_STATEMENT` rows per INSERT), one
   transaction per batch: what SQLite itself costs, with no encoding;
 - write / read rows/s of `Store.write_pairs` / `Store.read_pairs` for each database (a fresh SQLite file, a fresh
   MariaDB database, a fresh PostgreSQL schema; dropped afterwards). A server that cannot be reached is skipped,
@@ -33,7 +33,8 @@ from pathlib import Path
 import sqlalchemy as sa
 
 from vinadv.store import Store
-from vinadv.store.store import _SQLITE_ROWS_PER_STATEMENT, DEFAULT_BATCH, _driver_insert_sql, encode_rows
+from vinadv.store.codec import driver_insert_sql, encode_rows
+from vinadv.store.pairs import DEFAULT_BATCH, SQLITE_ROWS_PER_STATEMENT
 from vinadv.store.synthetic import random_records
 
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"
@@ -134,9 +135,9 @@ def main(argv: list[str] | None = None) -> int:
         trial = iter(range(10**9))
         # bare sqlite3 on the same schema, pragmas and statements: the ceiling without encoding or SQLAlchemy
         limit = sqlite3.connect(":memory:").getlimit(sqlite3.SQLITE_LIMIT_VARIABLE_NUMBER)
-        k = max(1, min(_SQLITE_ROWS_PER_STATEMENT, limit // len(rows[0])))  # as `Store._insert_sqlite` chooses
-        sql_one = _driver_insert_sql(sa.create_engine("sqlite://").dialect)
-        sql_k = _driver_insert_sql(sa.create_engine("sqlite://").dialect, rows=k)
+        k = max(1, min(SQLITE_ROWS_PER_STATEMENT, limit // len(rows[0])))  # as `Store._insert_sqlite` chooses
+        sql_one = driver_insert_sql(sa.create_engine("sqlite://").dialect)
+        sql_k = driver_insert_sql(sa.create_engine("sqlite://").dialect, rows=k)
         batches = [_statements(rows[lo : lo + args.batch], k) for lo in range(0, len(rows), args.batch)]
 
         opened: list[sqlite3.Connection] = []

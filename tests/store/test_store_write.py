@@ -10,9 +10,8 @@ import numpy as np
 import pytest
 
 from tests.store.test_store_db import HARM_FLOATS, _oracle_rows, _raw_rows
-from vinadv.store import Store
-from vinadv.store import store as store_module
-from vinadv.store.store import INSERT_COLUMNS, encode_rows
+from vinadv.store import Store, codec, pairs
+from vinadv.store.codec import INSERT_COLUMNS, encode_rows
 from vinadv.store.synthetic import random_records
 
 
@@ -48,8 +47,8 @@ def test_encode_rows_match_oracle(lo, hi, n_added):
 @pytest.mark.parametrize(("chunk", "per_statement"), [(100, 7), (2048, 256)])
 def test_sqlite_statements_and_chunks_store_the_oracle_rows(sqlite_url, monkeypatch, chunk, per_statement):
     # batches of 1100 and 200 rows: whole statements, and the one-row statements of each chunk's rest
-    monkeypatch.setattr(store_module, "_ROW_CHUNK", chunk)
-    monkeypatch.setattr(store_module, "_SQLITE_ROWS_PER_STATEMENT", per_statement)
+    monkeypatch.setattr(pairs, "ROW_CHUNK", chunk)
+    monkeypatch.setattr(pairs, "SQLITE_ROWS_PER_STATEMENT", per_statement)
     records = random_records(1300, size=9, seed=12)
     with Store.open(sqlite_url) as store:
         run_id = store.create_run("chunks")
@@ -75,8 +74,8 @@ def test_sqlite_statements_respect_the_parameter_limit(sqlite_url):
 def test_a_batch_failing_midway_leaves_none_of_its_rows(db_url, monkeypatch):
     # chunks of 50 rows call encode_paths twice each; the 13th call is in batch 2's third chunk, after two of
     # its chunks were inserted: batch 1 stays, batch 2 is rolled back whole
-    monkeypatch.setattr(store_module, "_ROW_CHUNK", 50)
-    real, calls = store_module.codec.encode_paths, []
+    monkeypatch.setattr(pairs, "ROW_CHUNK", 50)
+    real, calls = codec.encode_paths, []
 
     def failing(*args, **kwargs):
         calls.append(1)
@@ -84,13 +83,13 @@ def test_a_batch_failing_midway_leaves_none_of_its_rows(db_url, monkeypatch):
             raise RuntimeError("encoding failed")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(store_module.codec, "encode_paths", failing)
+    monkeypatch.setattr(codec, "encode_paths", failing)
     records = random_records(500, size=7, seed=14)
     with Store.open(db_url) as store:
         run_id = store.create_run("fails")
         with pytest.raises(RuntimeError, match="encoding failed"):
             store.write_pairs(run_id, records, batch_size=200)
         assert np.array_equal(store.stored_indices(run_id), np.arange(200))
-        monkeypatch.setattr(store_module.codec, "encode_paths", real)
+        monkeypatch.setattr(codec, "encode_paths", real)
         assert store.write_pairs(run_id, records, batch_size=200) == 300  # the resume writes the rest
         assert store.read_pairs(run_id).equals(records)

@@ -19,7 +19,7 @@ LEADING_COLUMNS = ("no", "map_o", "map_a", "path_o", "path_a", "label", "attack"
 def export_columns() -> tuple[str, ...]:
     """The text columns of an exported row, in order: `LEADING_COLUMNS`, then every other column the store reads
     back (`PAIR_COLUMNS`), in the store's order."""
-    from vinadv.store.store import PAIR_COLUMNS  # imported here so `vinadv --help` stays fast
+    from vinadv.store.codec import PAIR_COLUMNS  # imported here so `vinadv --help` stays fast
 
     return (*LEADING_COLUMNS, *(name for name in PAIR_COLUMNS if name not in LEADING_COLUMNS))
 

@@ -8,16 +8,26 @@ Encoding and decoding work on whole batches with NumPy byte arrays, so there is 
 Encoding writes a column, a cache-sized chunk at a time, as one ASCII text and cuts that into the strings (maps
 by one slice each, paths by `str.split`); cells come from cached tables of ready-made strings and tokens.
 Decoding reads fixed-width `S` arrays padded with NUL.
+
+Rows: `encode_rows` turns `PairRecords` into `map_pairs` parameter tuples (`INSERT_COLUMNS`), `decode_rows` turns
+rows read back (`PAIR_COLUMNS`) into `PairRecords`; `driver_insert_sql` is the plain INSERT statement they fit.
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.grid.paths import PackedPaths
+from vinadv.store.records import PairRecords
+from vinadv.store.schema import HARM_COLUMNS, HARM_FLOAT_COLUMNS, MORE_ADDED_COLUMN, map_pairs
+
+if TYPE_CHECKING:
+    import sqlalchemy as sa
 
 _ZERO, _COMMA, _SEMI, _NEWLINE = ord("0"), ord(","), ord(";"), ord("\n")
 _MAX_DIGITS = 5  # int16 cells: at most 32767
@@ -274,3 +284,183 @@ def _is_path(text: str) -> bool:
         if len(parts) != 2 or not all(p.isdigit() and p.isascii() and 0 < len(p) <= _MAX_DIGITS for p in parts):
             return False
     return True
+
+
+# ------------------------------------------------------------------------------------ rows
+
+#: columns read back, in order (`decode_rows` relies on it)
+PAIR_COLUMNS = (
+    "no",
+    "pair_index",
+    "map_o",
+    "map_a",
+    "path_o",
+    "path_a",
+    "label",
+    "attack",
+    "start",
+    "goal",
+    "added_obstacle",
+    "label_source",
+    "score",
+    "term_o",
+    "term_a",
+    "dh",
+    "dv",
+    *HARM_COLUMNS,
+    MORE_ADDED_COLUMN,
+)
+
+
+#: columns written by `encode_rows`, in order: those read back, with the run instead of the row number
+INSERT_COLUMNS = ("run_id", *PAIR_COLUMNS[1:])
+
+
+def driver_insert_sql(dialect: sa.Dialect, rows: int = 1) -> str | None:
+    """A plain `INSERT INTO map_pairs (...) VALUES (?, ...)` of `rows` rows (flat parameters, row after row) in the
+    driver's positional paramstyle, or None.
+
+    For SQLite it takes `encode_rows(..., sqlite=True)` rows (dh and dv as `NULLIF(?, -1)`, added_more as
+    `NULLIF(?, '')`)."""
+    marker = {"qmark": "?", "format": "%s", "pyformat": "%s"}.get(dialect.paramstyle)
+    if marker is None:
+        return None
+    prep = dialect.identifier_preparer
+    names = ", ".join(prep.quote(name) for name in INSERT_COLUMNS)
+    sqlite_null = {"dh": "-1", "dv": "-1", MORE_ADDED_COLUMN: "''"} if dialect.name == "sqlite" else {}
+    values = [
+        f"NULLIF({marker}, {sqlite_null[name]})" if name in sqlite_null else marker  # see encode_rows
+        for name in INSERT_COLUMNS
+    ]
+    group = f"({', '.join(values)})"
+    return f"INSERT INTO {prep.format_table(map_pairs)} ({names}) VALUES {', '.join([group] * rows)}"
+
+
+def encode_rows(
+    run_id: int, records: PairRecords, lo: int = 0, hi: int | None = None, *, sqlite: bool = False
+) -> list[tuple]:
+    """Records `lo:hi` (default all) -> parameter tuples in `INSERT_COLUMNS` order, text columns encoded in bulk.
+
+    NULLs are None and `attack` a bool, unless `sqlite`: then rows take SQLite's native form, holding only ints,
+    floats and strs, which the sqlite3 module binds without looking for an adapter (it does for any other value,
+    bool and None included: ~0.5 us each): `attack` 0/1, a NULL score a NaN (SQLite stores a NaN as NULL), a NULL
+    dh/dv -1 (`driver_insert_sql` wraps them in `NULLIF(?, -1)`), a NULL harm cost a NaN, a NULL added_more ''
+    (`NULLIF(?, '')`).
+    """
+    return list(zip(*encode_columns(run_id, records, lo, hi, sqlite)))
+
+
+def encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, sqlite: bool) -> list:
+    """The `INSERT_COLUMNS` of records `lo:hi`, one list of n values each.
+
+    Reads the row range through views (no copy of the records, unlike `PairRecords.subset`).
+    """
+    hi = len(records) if hi is None else min(hi, len(records))
+    lo = min(max(lo, 0), hi)
+    n = hi - lo
+    rows = slice(lo, hi)
+
+    def path(side: str) -> list[str]:
+        paths = getattr(records, f"path_{side}")
+        offsets = paths.offsets[lo : hi + 1]
+        cells = paths.cells[offsets[0] : offsets[-1]]
+        return encode_paths(cells, offsets - offsets[0])
+
+    def nullable(values: np.ndarray, null: np.ndarray) -> list:
+        if sqlite:
+            return values.tolist()  # NaN and -1 stand for NULL (see `encode_rows`)
+        out = values.astype(object)
+        out[null] = None
+        return out.tolist()
+
+    score, dh, dv = records.score[rows], records.dh[rows], records.dv[rows]
+    attack = records.attack[rows]
+    columns = {
+        "run_id": [int(run_id)] * n,
+        "pair_index": records.pair_index[rows].tolist(),
+        "map_o": encode_maps(records.obstacles_o[rows]),
+        "map_a": encode_maps(records.obstacles_a[rows]),
+        "path_o": path("o"),
+        "path_a": path("a"),
+        "label": records.label[rows].tolist(),
+        "attack": (attack.astype(np.int64) if sqlite else attack).tolist(),
+        "start": encode_cells(records.starts[rows]),
+        "goal": encode_cells(records.goals[rows]),
+        "added_obstacle": encode_cells(records.added[rows, 0]),
+        "label_source": records.label_source[rows].tolist(),
+        "score": nullable(score, np.isnan(score)),
+        "term_o": records.term_o[rows].tolist(),
+        "term_a": records.term_a[rows].tolist(),
+        "dh": nullable(dh, dh < 0),
+        "dv": nullable(dv, dv < 0),
+        **{
+            name: nullable(getattr(records, name)[rows], np.isnan(getattr(records, name)[rows]))
+            for name in HARM_FLOAT_COLUMNS
+        },
+        "expert_label": records.expert_label[rows].tolist(),  # None = NULL
+        "harm": records.harm[rows].tolist(),
+        MORE_ADDED_COLUMN: _encode_more_added(records.added[rows], "" if sqlite else None),
+    }
+    assert tuple(columns) == INSERT_COLUMNS
+    return list(columns.values())
+
+
+def _encode_more_added(added: np.ndarray, null) -> list:
+    """`added_more` of `added (n, K, 2)`: the cells after the first as path text, `null` for every row when K = 1."""
+    n, k = added.shape[:2]
+    if k == 1:
+        return [null] * n
+    return encode_paths(added[:, 1:].reshape(-1, 2), np.arange(n + 1, dtype=np.int64) * (k - 1))
+
+
+def _decode_added(first: Sequence[str], more: Sequence[str | None]) -> np.ndarray:
+    """`(n, K, 2)` added cells from `added_obstacle` and `added_more` texts (None: none after the first); every row
+    must add as many cells (InputError otherwise: read one run's pairs at a time)."""
+    first_cells = decode_cells(first).reshape(-1, 1, 2)
+    if all(m is None for m in more):
+        return first_cells
+    cells, offsets = decode_paths(["" if m is None else m for m in more])
+    counts = np.diff(offsets)
+    if (counts != counts[0]).any():
+        raise InputError(
+            f"map_pairs: rows with different numbers of added obstacles ({sorted(set(counts + 1))}) "
+            "in one read; read one run at a time"
+        )
+    rest = cells.astype(np.int64).reshape(len(first_cells), int(counts[0]), 2)
+    return np.concatenate([first_cells, rest], axis=1)
+
+
+def decode_rows(rows: Sequence) -> PairRecords:
+    """Rows of `PAIR_COLUMNS` -> PairRecords (text columns decoded in bulk)."""
+    cols = list(zip(*rows)) if rows else [()] * len(PAIR_COLUMNS)
+    col = dict(zip(PAIR_COLUMNS, cols))
+    path_o = decode_paths(col["path_o"])
+    path_a = decode_paths(col["path_a"])
+    map_o = decode_maps(col["map_o"])
+    map_a = decode_maps(col["map_a"], size=map_o.shape[-1] if len(rows) else None)
+
+    def nullable(values, fill, dtype):
+        return np.array([fill if v is None else v for v in values], dtype=dtype).reshape(-1)
+
+    return PairRecords(
+        no=np.array(col["no"], dtype=np.int64).reshape(-1),
+        pair_index=np.array(col["pair_index"], dtype=np.int64).reshape(-1),
+        obstacles_o=map_o,
+        obstacles_a=map_a,
+        starts=decode_cells(col["start"]).reshape(-1, 2),
+        goals=decode_cells(col["goal"]).reshape(-1, 2),
+        added=_decode_added(col["added_obstacle"], col[MORE_ADDED_COLUMN]),
+        path_o=PackedPaths(*path_o),
+        path_a=PackedPaths(*path_a),
+        label=np.array(col["label"], dtype=object),
+        attack=np.array([bool(a) for a in col["attack"]], dtype=bool),
+        term_o=np.array(col["term_o"], dtype=object),
+        term_a=np.array(col["term_a"], dtype=object),
+        label_source=np.array(col["label_source"], dtype=object),
+        score=nullable(col["score"], np.nan, np.float64),
+        dh=nullable(col["dh"], -1, np.int64),
+        dv=nullable(col["dv"], -1, np.int64),
+        **{name: nullable(col[name], np.nan, np.float64) for name in HARM_FLOAT_COLUMNS},
+        expert_label=np.array(col["expert_label"], dtype=object),
+        harm=np.array(col["harm"], dtype=object),
+    )

@@ -1,0 +1,272 @@
+"""The connection under a `Store`: database URLs, engines, schema checks and upgrades.
+
+URLs: `--db` or env `VINADV_DB`, else the SQLite file `vinadv.db`. A plain file path means SQLite. MySQL/MariaDB
+via PyMySQL (`mysql+pymysql://root@127.0.0.1:3306/test`), PostgreSQL via psycopg 3
+(`postgresql+psycopg://postgres@127.0.0.1:5432/test`).
+
+SQLite runs with `journal_mode=WAL, synchronous=NORMAL`: a crash of the process never corrupts or half-writes a
+transaction; a power loss may lose the last committed ones. New SQLite files use 32 KiB pages.
+
+Refusal: a database is checked before anything is written to it (WAL is switched on, tables are created only once
+the check passed), so a refused database (foreign tables, another schema version, not a database) is left
+byte-identical. `readonly=True` opens it without any write (SQLite `mode=ro`; a WAL file on a read-only file system
+as `immutable`). A database error while reading or writing (full disk, read-only file, corrupted file, lost
+server) is raised as `OutputError` (an InputError) naming the database in one line.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+import sqlite3
+import urllib.parse
+from pathlib import Path
+
+import sqlalchemy as sa
+from sqlalchemy import exc as sa_exc
+
+from vinadv.errors import InputError, OutputError, first_line
+from vinadv.store.schema import (
+    ADDITIVE_TABLES,
+    SCHEMA_VERSION,
+    TABLES,
+    UPGRADABLE_VERSIONS,
+    UPGRADE_COLUMNS,
+    map_pairs,
+    meta_table,
+    metadata,
+)
+
+DEFAULT_DB = "vinadv.db"
+ENV_DB = "VINADV_DB"
+_CONNECT_TIMEOUT_S = 5
+
+
+def resolve_url(db: str | None = None) -> str:
+    """The database URL: `db`, else env `VINADV_DB`, else `vinadv.db`; a plain path becomes `sqlite:///PATH`."""
+    db = db or os.environ.get(ENV_DB) or DEFAULT_DB
+    if "://" in db:
+        return db
+    return "sqlite:///" + str(Path(db).expanduser().resolve())
+
+
+def safe_url(url: str | sa.URL) -> str:
+    """The URL with its password hidden, for messages."""
+    try:
+        return sa.make_url(url).render_as_string(hide_password=True)
+    except Exception:
+        return "<unparseable database URL>"
+
+
+def utcnow() -> dt.datetime:
+    """Now, as the store's timestamps are written: UTC without a time zone, whole seconds."""
+    return dt.datetime.now(dt.UTC).replace(tzinfo=None, microsecond=0)
+
+
+class Database:
+    """What every part of a `Store` shares: the engine, the URL (password hidden) and what the schema check found.
+
+    `absent_columns`: the `UPGRADE_COLUMNS` an older database opened read-only lacks (they read as NULL).
+    """
+
+    def __init__(
+        self, engine: sa.Engine, url: str, readonly: bool = False, *, absent_columns: frozenset[str] = frozenset()
+    ) -> None:
+        self.engine = engine
+        self.url = safe_url(url)
+        self.readonly = readonly
+        self.sqlite = engine.dialect.name == "sqlite"  # rows in SQLite's native form (see `codec.encode_rows`)
+        self.absent_columns = frozenset(absent_columns)
+
+    def ensure_table(self, table: sa.Table) -> None:
+        """Create `table` unless the database has it (an additive table, see `schema.ADDITIVE_TABLES`)."""
+        with self.engine.begin() as conn:
+            table.create(conn, checkfirst=True)
+
+
+def open_engine(url: str, *, create: bool = True, readonly: bool = False) -> tuple[sa.Engine, frozenset[str]]:
+    """An engine on the database at `url` (a URL, see `resolve_url`) whose schema passed `check_schema`, and the
+    columns it lacks (see `Database.absent_columns`). InputError, naming the database, when it cannot be used."""
+    create = create and not readonly
+    shown = safe_url(url)
+    try:
+        parsed = sa.make_url(url)
+    except sa_exc.ArgumentError as exc:
+        raise InputError(f"db: not a database URL: {shown} ({exc})", "db") from None
+    backend = parsed.get_backend_name()
+    connect_args: dict = {}
+    if backend == "sqlite":
+        path = parsed.database
+        if path and path != ":memory:" and not path.startswith("file:"):
+            if not create and not Path(path).exists():
+                raise InputError(f"database {shown}: no such file")
+            if not Path(path).parent.exists():
+                raise InputError(f"database {shown}: directory {Path(path).parent} does not exist")
+    elif backend in ("mysql", "mariadb"):
+        connect_args["connect_timeout"] = _CONNECT_TIMEOUT_S
+        if parsed.query.get("charset") is None:
+            parsed = parsed.update_query_dict({"charset": "utf8mb4"})
+    elif backend == "postgresql":
+        connect_args["connect_timeout"] = _CONNECT_TIMEOUT_S
+    options: dict = {}
+    if backend == "sqlite" and readonly and parsed.database not in (None, "", ":memory:"):
+        options["creator"] = _sqlite_reader(parsed.database)
+    try:
+        engine = sa.create_engine(parsed, connect_args=connect_args, pool_pre_ping=backend != "sqlite", **options)
+    except (sa_exc.ArgumentError, sa_exc.NoSuchModuleError, ImportError) as exc:
+        raise InputError(f"database {shown}: cannot use this URL: {exc}") from None
+    if backend == "sqlite":
+        sa.event.listen(engine, "connect", _sqlite_pragmas)
+    sa.event.listen(engine, "handle_error", _one_line_error(shown))
+    try:
+        absent = check_schema(engine, shown, create=create, readonly=readonly)
+    except InputError:
+        engine.dispose()
+        raise
+    except sa_exc.DBAPIError as exc:
+        engine.dispose()
+        raise InputError(f"cannot connect to database {shown}: {_error_line(exc)}") from None
+    except UnicodeDecodeError:
+        # a damaged SQLite file whose error text is no longer UTF-8: sqlite3 cannot even decode the message
+        engine.dispose()
+        raise InputError(f"database {shown}: a damaged file (SQLite's own error message is not text)") from None
+    return engine, absent
+
+
+def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool) -> frozenset[str]:
+    """Check the database's schema before anything is written to it; return the `UPGRADE_COLUMNS` it lacks (only
+    when opened without `create`: with it, an older version is upgraded, see `upgrade`).
+
+    An empty database gets the tables when `create` (else InputError); one with foreign tables of our names, of
+    another schema version or with missing tables or columns is refused with InputError naming it (`shown`)."""
+    sqlite = engine.dialect.name == "sqlite"
+    with engine.connect() as conn:
+        present = set(sa.inspect(conn).get_table_names())
+    ours = {t.name for t in TABLES}
+    if not present & ours:
+        if not create:
+            raise InputError(f"database {shown}: no vinadv tables (nothing stored there yet)")
+        with engine.begin() as conn:
+            if sqlite:
+                # page size first: it takes effect only before the first table is written, and not in WAL mode
+                conn.exec_driver_sql("PRAGMA page_size=32768")
+                conn.exec_driver_sql("PRAGMA journal_mode=WAL")
+            metadata.create_all(conn)
+            conn.execute(meta_table.insert(), [{"key": "schema_version", "value": SCHEMA_VERSION}])
+        return frozenset()
+    if meta_table.name not in present:
+        raise InputError(
+            f"database {shown}: has tables {sorted(present & ours)} but no {meta_table.name} table; "
+            "not a vinadv database (refusing to touch it)"
+        )
+    with engine.connect() as conn:
+        version = conn.execute(
+            sa.select(meta_table.c.value).where(meta_table.c.key == "schema_version")
+        ).scalar_one_or_none()
+        if version not in (SCHEMA_VERSION, *UPGRADABLE_VERSIONS):
+            raise InputError(
+                f"database {shown}: schema version {version!r}, this vinadv needs {SCHEMA_VERSION!r}; "
+                "use another database (refusing to touch it)"
+            )
+        inspector = sa.inspect(conn)
+        for table in TABLES:
+            if table.name not in present and table in ADDITIVE_TABLES:
+                continue  # created below (or, read-only, treated as empty)
+            if table.name not in present:
+                raise InputError(f"database {shown}: wrong schema: table {table.name} is missing")
+            have = {c["name"] for c in inspector.get_columns(table.name)}
+            missing = {c.name for c in table.columns} - have
+            if version in UPGRADABLE_VERSIONS and table is map_pairs:
+                missing -= set(UPGRADE_COLUMNS)  # added by `upgrade`
+            if missing:
+                raise InputError(f"database {shown}: wrong schema: table {table.name} lacks columns {sorted(missing)}")
+    absent: frozenset[str] = frozenset()
+    if version in UPGRADABLE_VERSIONS:
+        if create:
+            upgrade(engine)
+        else:  # read-only use: nothing changes, the columns it lacks read as NULL
+            absent = frozenset(UPGRADE_COLUMNS) - {c["name"] for c in sa.inspect(engine).get_columns(map_pairs.name)}
+    if readonly:
+        return absent
+    with engine.connect() as conn:
+        if sqlite and conn.exec_driver_sql("PRAGMA journal_mode").scalar() != "wal":
+            conn.exec_driver_sql("PRAGMA journal_mode=WAL")  # a vinadv file written by another tool
+    missing_additive = [t for t in ADDITIVE_TABLES if t.name not in present]
+    if missing_additive and create:
+        # an older version-1 database: add the new tables (nothing existing changes)
+        with engine.begin() as conn:
+            for table in missing_additive:
+                table.create(conn, checkfirst=True)
+    return absent
+
+
+def upgrade(engine: sa.Engine) -> None:
+    """Schema version 1 or 2 -> 3: add the `UPGRADE_COLUMNS` the database lacks (the harm columns, `added_more`;
+    all nullable, existing rows read them as NULL), then record the new version. Only the missing columns are
+    added, so an upgrade cut short (MySQL commits each ALTER on its own) is finished by the next open."""
+    prep = engine.dialect.identifier_preparer
+    with engine.begin() as conn:
+        have = {c["name"] for c in sa.inspect(conn).get_columns(map_pairs.name)}
+        for name in UPGRADE_COLUMNS:
+            if name not in have:
+                kind = map_pairs.c[name].type.compile(dialect=engine.dialect)
+                table, column = prep.format_table(map_pairs), prep.quote(name)
+                conn.execute(sa.text(f"ALTER TABLE {table} ADD COLUMN {column} {kind}"))
+        conn.execute(meta_table.update().where(meta_table.c.key == "schema_version").values(value=SCHEMA_VERSION))
+
+
+def _error_line(exc: BaseException) -> str:
+    """The first line of a database error: the driver's own message (SQLAlchemy's wrapper adds the statement)."""
+    return first_line(getattr(exc, "orig", None) or exc)
+
+
+def _sqlite_pragmas(dbapi_conn, _record) -> None:
+    """Per-connection settings only: nothing here writes to the file (a database is checked before any write).
+
+    The file's own settings are made once, by `check_schema` when it creates the tables: 32 KiB pages (large
+    pages hold many ~2 KB rows (maps + paths) each: 16 KiB gave a ~30% smaller file and faster inserts than 4 KiB,
+    32 KiB another ~10% less CPU per inserted row than 16 KiB, 64 KiB no better) and journal_mode=WAL (readers
+    don't block the writer; a crash leaves whole commits)."""
+    cursor = dbapi_conn.cursor()
+    cursor.execute("PRAGMA synchronous=NORMAL")  # safe in WAL against process crashes; fsync at checkpoints
+    cursor.execute("PRAGMA foreign_keys=ON")
+    cursor.execute("PRAGMA busy_timeout=30000")
+    cursor.close()
+
+
+def _sqlite_reader(path: str):
+    """A connect function opening the SQLite file `path` read-only (`mode=ro`): never a write, no file created.
+
+    A WAL database needs its `-shm` file, which SQLite cannot create in a read-only folder or file system; there
+    the file is opened `immutable` (nobody can write it then)."""
+    uri = "file:" + urllib.parse.quote(str(Path(path).expanduser().resolve())) + "?mode=ro"
+
+    def connect() -> sqlite3.Connection:
+        try:
+            conn = sqlite3.connect(uri, uri=True, check_same_thread=False)
+            conn.execute("SELECT count(*) FROM sqlite_master").fetchone()
+            return conn
+        except sqlite3.OperationalError:
+            if os.access(Path(path).parent, os.W_OK):
+                raise
+        return sqlite3.connect(uri + "&immutable=1", uri=True, check_same_thread=False)
+
+    return connect
+
+
+#: DBAPI errors that come from the database's state or its file (full disk, read-only or corrupted file, lost
+#: server, lock timeout), not from vinadv's statements: raised as one-line `OutputError`s naming the database
+_FAULTS = (sa_exc.OperationalError, sa_exc.InternalError)
+
+
+def _one_line_error(shown: str):
+    """A `handle_error` listener: a fault of the database (see `_FAULTS`) becomes an `OutputError` naming it,
+    without SQLAlchemy's multi-line text (the statement and its parameters: maps and paths)."""
+
+    def handle(context) -> Exception | None:
+        exc = context.sqlalchemy_exception
+        if context.connection is None or not (isinstance(exc, _FAULTS) or type(exc) is sa_exc.DatabaseError):
+            return None  # connect errors: `open_engine` words them; integrity/programming errors are bugs
+        return OutputError(f"database {shown}: {_error_line(exc)}")
+
+    return handle

@@ -1,0 +1,89 @@
+"""Benchmark results kept in a `Store`: classifier evaluations of a run (`evaluations`) and robustness benchmarks
+of planners (`robustness`). Both tables are additive: created on first write, read as empty where missing."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import sqlalchemy as sa
+
+from vinadv import __version__
+from vinadv.store.connection import utcnow
+from vinadv.store.runs import RunQueries
+from vinadv.store.schema import evaluations, robustness
+
+
+class EvaluationQueries(RunQueries):
+    """Add and read evaluations and robustness benchmarks (a part of `Store`; an evaluation needs its run)."""
+
+    def add_evaluations(self, run_id: int, rows: Sequence[dict]) -> int:
+        """Store classifier evaluations of a run (`vinadv evaluate`), all in one transaction; return how many.
+
+        Each row: classifier, setting, training ('balanced'|'imbalanced'), train_fraction, train_size,
+        test_size, seed, metrics (JSON dict), curves (JSON dict or None), batch (id shared by one call).
+        """
+        self.run_info(run_id)  # InputError for an unknown run
+        if not rows:
+            return 0
+        self.ensure_table(evaluations)
+        now = utcnow()
+        keys = (
+            "batch",
+            "classifier",
+            "setting",
+            "training",
+            "train_fraction",
+            "train_size",
+            "test_size",
+            "seed",
+            "metrics",
+            "curves",
+        )
+        values = [{"run_id": int(run_id), "created": now, **{k: row.get(k) for k in keys}} for row in rows]
+        with self.engine.begin() as conn:
+            conn.execute(evaluations.insert(), values)
+        return len(values)
+
+    def read_evaluations(self, run_id: int) -> list[dict]:
+        """The run's stored evaluations, oldest first (`[]` when none, or when the table does not exist yet)."""
+        with self.engine.connect() as conn:
+            if not sa.inspect(conn).has_table(evaluations.name):
+                return []
+            rows = (
+                conn.execute(
+                    sa.select(evaluations).where(evaluations.c.run_id == int(run_id)).order_by(evaluations.c.id)
+                )
+                .mappings()
+                .all()
+            )
+        return [dict(r) for r in rows]
+
+    def add_robustness(
+        self, planner: str, weights_checksum: str | None, settings: dict, result: dict, version: str = __version__
+    ) -> int:
+        """Store one robustness benchmark (`vinadv robustness`): the planner's name and weights checksum, the
+        benchmark's settings and its figures (`vinadv.robustness.RobustnessResult.to_dict()`), JSON; return its id."""
+        self.ensure_table(robustness)
+        with self.engine.begin() as conn:
+            row = conn.execute(
+                robustness.insert().values(
+                    created=utcnow(),
+                    planner=str(planner),
+                    weights_checksum=weights_checksum,
+                    settings=settings,
+                    result=result,
+                    version=version,
+                )
+            )
+            return int(row.inserted_primary_key[0])
+
+    def read_robustness(self, ids: Sequence[int] | None = None) -> list[dict]:
+        """The stored robustness benchmarks (of `ids` only, if given), oldest first: dicts of the table's columns
+        (`[]` when none, or when the table does not exist yet)."""
+        with self.engine.connect() as conn:
+            if not sa.inspect(conn).has_table(robustness.name):
+                return []
+            query = sa.select(robustness).order_by(robustness.c.id)
+            if ids is not None:
+                query = query.where(robustness.c.id.in_([int(i) for i in ids]))
+            return [dict(r) for r in conn.execute(query).mappings().all()]

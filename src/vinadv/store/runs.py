@@ -1,0 +1,140 @@
+"""The runs of a `Store`: one row per job (`runs`), and how many of its shards are completely stored."""
+
+from __future__ import annotations
+
+import sqlalchemy as sa
+
+from vinadv import __version__
+from vinadv.errors import InputError
+from vinadv.store.connection import Database, utcnow
+from vinadv.store.schema import map_pairs, meta_table, runs
+
+
+class RunQueries(Database):
+    """Create, find and finish runs (a part of `Store`)."""
+
+    def create_run(
+        self,
+        name: str | None = None,
+        *,
+        config: dict | None = None,
+        seed: int | None = None,
+        weights_checksum: str | None = None,
+        attack: str | None = None,
+        classifier: str | None = None,
+        version: str = __version__,
+        status: str = "running",
+    ) -> int:
+        """Insert a run and return its id. A `name` is unique in a database (`--resume` finds a run by it) and
+        not a number (`resolve_run` reads a number as a run id): InputError otherwise."""
+        if name is not None:
+            if not name.strip() or name.strip().isdigit():
+                raise InputError(
+                    f"name: {name!r} cannot be a run name (a name needs a letter; numbers are run ids)", "name"
+                )
+            found = self.find_run(name)
+            if found is not None:
+                raise InputError(
+                    f"name: run {found} in database {self.url} is already called {name!r}; "
+                    "continue it with resume, or choose another name",
+                    "name",
+                    "resume",
+                    "name",
+                )
+        with self.engine.begin() as conn:
+            result = conn.execute(
+                runs.insert().values(
+                    name=name,
+                    created=utcnow(),
+                    config=config,
+                    seed=None if seed is None else int(seed),
+                    weights_checksum=weights_checksum,
+                    attack=attack,
+                    classifier=classifier,
+                    version=version,
+                    timings=None,
+                    status=status,
+                )
+            )
+            return int(result.inserted_primary_key[0])
+
+    def find_run(self, name: str) -> int | None:
+        """The id of the latest run called `name` (for `--resume`), or None."""
+        with self.engine.connect() as conn:
+            found = conn.execute(
+                sa.select(runs.c.id).where(runs.c.name == name).order_by(runs.c.id.desc()).limit(1)
+            ).scalar_one_or_none()
+        return None if found is None else int(found)
+
+    def resolve_run(self, ref: str | int, param: str = "run_id") -> int:
+        """The id of the run `ref` names: the one rule for every run reference. A number is a run id (a run name is
+        never a number, see `create_run`), anything else a run name (its latest run). InputError (naming the
+        parameter `param`) when there is no such run."""
+        text = str(ref).strip()
+        if text.isdigit():
+            found = None
+            if int(text) < 2**63:  # a larger number is no id (and no SQL integer)
+                with self.engine.connect() as conn:
+                    found = conn.execute(sa.select(runs.c.id).where(runs.c.id == int(text))).scalar_one_or_none()
+            if found is None:
+                raise InputError(f"{param}: no run {text} in database {self.url}", param)
+            return int(text)
+        found = self.find_run(text) if text else None
+        if found is None:
+            raise InputError(f"{param}: no run named {text!r} in database {self.url} (give a run id or name)", param)
+        return found
+
+    def run_info(self, run_id: int) -> dict:
+        """The run's row as a dict; `InputError` when there is no such run."""
+        with self.engine.connect() as conn:
+            row = conn.execute(sa.select(runs).where(runs.c.id == int(run_id))).mappings().one_or_none()
+        if row is None:
+            raise InputError(f"run_id: no run {run_id} in database {self.url}", "run_id")
+        return dict(row)
+
+    def list_runs(self, with_counts: bool = True) -> list[dict]:
+        """All runs, oldest first, each with its stored pair count (`n_pairs`) unless `with_counts` is False
+        (counting reads every pair's index entry: ~0.1 s per million pairs on SQLite)."""
+        if not with_counts:
+            with self.engine.connect() as conn:
+                return [dict(r) for r in conn.execute(sa.select(runs).order_by(runs.c.id)).mappings()]
+        counts = sa.select(map_pairs.c.run_id, sa.func.count().label("n_pairs")).group_by(map_pairs.c.run_id).subquery()
+        query = (
+            sa.select(runs, sa.func.coalesce(counts.c.n_pairs, 0).label("n_pairs"))
+            .select_from(runs.outerjoin(counts, counts.c.run_id == runs.c.id))
+            .order_by(runs.c.id)
+        )
+        with self.engine.connect() as conn:
+            return [dict(r) for r in conn.execute(query).mappings()]
+
+    def finish_run(self, run_id: int, timings: dict | None = None, status: str = "done") -> None:
+        """Record the run's timings (seconds per stage) and final status."""
+        with self.engine.begin() as conn:
+            updated = conn.execute(
+                runs.update().where(runs.c.id == int(run_id)).values(timings=timings, status=status)
+            ).rowcount
+        if updated != 1:
+            raise InputError(f"run_id: no run {run_id} in database {self.url}", "run_id")
+
+    def shards_done(self, run_id: int) -> int:
+        """How many shards of the run are completely stored, from shard 0 on (0 when none recorded)."""
+        with self.engine.connect() as conn:
+            value = conn.execute(
+                sa.select(meta_table.c.value).where(meta_table.c.key == _shards_key(run_id))
+            ).scalar_one_or_none()
+        return int(value) if value is not None else 0
+
+    def set_shards_done(self, run_id: int, shards: int) -> None:
+        """Record that shards `0 .. shards-1` of the run are completely stored (`--resume` skips them)."""
+        key = _shards_key(run_id)
+        with self.engine.begin() as conn:
+            updated = conn.execute(
+                meta_table.update().where(meta_table.c.key == key).values(value=str(int(shards)))
+            ).rowcount
+            if not updated:
+                conn.execute(meta_table.insert().values(key=key, value=str(int(shards))))
+
+
+def _shards_key(run_id: int) -> str:
+    """The `vinadv_meta` key of a run's stored-shard count (in the meta table: no schema change)."""
+    return f"run:{int(run_id)}:shards_done"
