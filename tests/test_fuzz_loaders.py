@@ -282,12 +282,38 @@ def test_plain_state_dict_with_wrong_input_channels_names_key_and_shapes(valid, 
     assert "'h.weight'" in message and "(150, 3, 3, 3)" in message and "(150, 2, 3, 3)" in message
 
 
-def test_database_that_is_a_vinadv_file_with_mangled_rows(valid, tmp_path):
-    """Text columns changed behind vinadv's back (a map of the wrong length): an InputError, not a traceback."""
+@pytest.mark.parametrize(
+    ("mangle", "message"),
+    [
+        ("map_o = '0101'", "map 2: 4 characters, expected 29 for a 5x5 map"),
+        ("path_a = 'x,y'", "path 2: not 'row,col' cells joined by ';': 'x,y'"),
+        ("map_o = '0101', path_a = 'x,y'", "path 2: not 'row,col' cells joined by ';': 'x,y'"),
+    ],
+    ids=["map", "path", "both"],
+)
+def test_database_that_is_a_vinadv_file_with_mangled_rows(valid, tmp_path, mangle, message):
+    """Text columns changed behind vinadv's back (a map of the wrong length, a path that is no cells): reading the
+    run refuses it every time, in one line naming the column and the row, and never a wrong read; the other rows
+    still read right, and a read-only open leaves the file byte-identical."""
+    from vinadv.store import Store
+
     path = tmp_path / "mangled.db"
     path.write_bytes(valid["database"].read_bytes())
     conn = sqlite3.connect(path)
-    conn.execute("UPDATE map_pairs SET map_o = '0101', path_a = 'x,y' WHERE pair_index = 2")
+    conn.execute(f"UPDATE map_pairs SET {mangle} WHERE pair_index = 2")
     conn.commit()
     conn.close()
-    _only_input_errors(_load_database, path)
+    with Store.open(str(valid["database"]), readonly=True) as store:
+        (run,) = store.list_runs()
+        intact = store.read_pairs(run["id"], pair_indices=[0, 1, 3, 4, 5])
+    assert len(intact) == 5
+    before = path.read_bytes()
+    with Store.open(str(path), readonly=True) as store:
+        with pytest.raises(InputError) as err:
+            store.read_pairs(run["id"])
+        assert store.read_pairs(run["id"], pair_indices=[0, 1, 3, 4, 5]).equals(intact)
+    assert str(err.value) == message
+    assert path.read_bytes() == before
+    with pytest.raises(InputError) as err:  # the loader every command goes through says the same
+        _load_database(path)
+    assert str(err.value) == message
