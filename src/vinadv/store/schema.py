@@ -16,8 +16,8 @@ Version 2 adds the harm columns of `map_pairs` (`HARM_COLUMNS`, all nullable: DE
 `added_more` (nullable): the obstacles a pair adds after the first (`added_obstacle`), for pairs of several added
 obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair, so those rows are stored as before. A
 database of an older version (`UPGRADABLE_VERSIONS`) gains the columns it lacks (`UPGRADE_COLUMNS`) on open
-(`ALTER TABLE ... ADD COLUMN`, see `Store`), opened read-only it reads them as NULL; any other version is refused
-untouched.
+(`ALTER TABLE ... ADD COLUMN`, see `connection.upgrade`), opened read-only it reads them as NULL; any other version
+is refused untouched.
 
 Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
 VARCHAR would cap both.
