@@ -141,7 +141,7 @@ def _register_interop(sub) -> None:
 
 
 def cmd_import(args: argparse.Namespace) -> int:
-    from vinadv.interop.maps import read_maps
+    from vinadv.interop.formats import read_maps
 
     if args.starts is not None and args.starts < 1:
         raise InputError(f"--starts must be >= 1, got {args.starts}")
@@ -164,7 +164,7 @@ def cmd_import(args: argparse.Namespace) -> int:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from vinadv.grid import MapSet
-    from vinadv.interop.maps import export_maps
+    from vinadv.interop.formats import export_maps
 
     maps = MapSet.load(args.maps)
     summary = export_maps(maps, args.out, args.format, split=args.split)

@@ -27,7 +27,8 @@ import torch
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.mapset import MapSet
-from vinadv.interop.maps import expert_steps, unit_cost_distances
+from vinadv.interop.formats.gppn import unit_cost_distances
+from vinadv.interop.formats.samples import expert_steps
 from vinadv.planners.evaluation import evaluate_vin
 from vinadv.planners.vin import VIN, make_input
 

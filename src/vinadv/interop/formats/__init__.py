@@ -1,0 +1,107 @@
+"""Maps of other VIN/GPPN code read into a MapSet and written back out, one module per layout.
+
+The layouts (conventions checked against the real files in README.md, "Using data and models from other VIN/GPPN
+code"): `kentsommer` (the common PyTorch port, `.npz`), `avivt` (the VIN authors' `.mat`) and `gppn` (`.npz`); each
+module's docstring says what its arrays hold. `FORMATS` maps a layout's name to its `Format`: what `read_maps` and
+`export_maps` dispatch on. What the layouts share (samples regrouped into maps and trajectories, the file's expert
+paths reconciled with vinadv's, drawn starts) is in `vinadv.interop.formats.samples`.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from vinadv.errors import InputError
+from vinadv.grid.mapset import MapSet
+from vinadv.interop.formats import avivt, gppn, kentsommer
+
+
+@dataclass(frozen=True)
+class Format:
+    """One foreign layout of maps.
+
+    Attributes:
+        read: `read(path, split, starts, seed) -> (MapSet, info)`; `split` None is the layout's default.
+        write: `write(maps, path, split) -> counts` (a dict: maps and what else was written), `split` checked.
+        splits: the splits `read` takes; `write` takes them but `all`.
+    """
+
+    read: Callable[[str, str | None, int | None, int], tuple[MapSet, dict]]
+    write: Callable[[MapSet, Path, str], dict]
+    splits: tuple[str, ...]
+
+    @property
+    def export_splits(self) -> tuple[str, ...]:
+        """The splits `write` takes: the ones read, but `all`."""
+        return tuple(s for s in self.splits if s != "all")
+
+
+FORMATS: dict[str, Format] = {
+    "kentsommer": Format(kentsommer.read, kentsommer.write, tuple(kentsommer.SPLITS)),
+    "avivt": Format(avivt.read, avivt.write, avivt.SPLITS),
+    "gppn": Format(gppn.read, gppn.write, tuple(gppn.SPLITS)),
+}
+
+
+def _format(format: str) -> Format:
+    if format not in FORMATS:
+        raise InputError(f"format must be one of {', '.join(FORMATS)}, got {format!r}")
+    return FORMATS[format]
+
+
+def read_maps(
+    path: str | os.PathLike, format: str, split: str | None = None, starts: int | None = None, seed: int = 0
+) -> tuple[MapSet, dict]:
+    """Read maps in another codebase's layout: `(MapSet, info)`; `info` says what was found and done.
+
+    Args:
+        format: 'kentsommer', 'avivt' or 'gppn'.
+        split: kentsommer train|test|all (default test); gppn train|valid|test|all (default test); avivt
+            train|test, the layout (default: the one the file has).
+        starts: starts per map where the file has none (gppn, avivt's batched-only layout; default 7); files
+            with trajectories take theirs and refuse `starts`.
+        seed: seed of the drawn starts.
+
+    Raises InputError naming the file and array for a missing array, a wrong shape, other polarity, a goal value
+    or label out of range, or a path that is not a legal move sequence to the goal.
+    """
+    layout = _format(format)
+    if split is not None and split not in layout.splits:
+        raise InputError(f"split must be one of {', '.join(layout.splits)} for format {format}, got {split!r}")
+    if starts is not None and starts < 1:
+        raise InputError(f"starts must be >= 1, got {starts}")
+    path = str(path)
+    maps, info = layout.read(path, split, starts, seed)
+    return maps, {"format": format, "file": path, **info}
+
+
+def import_maps(
+    path: str | os.PathLike, format: str, split: str | None = None, starts: int | None = None, seed: int = 0
+) -> MapSet:
+    """`read_maps` without the info dict."""
+    return read_maps(path, format, split, starts, seed)[0]
+
+
+def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str | None = None) -> dict:
+    """Write `maps` in another codebase's layout; returns a summary dict.
+
+    kentsommer: the samples (every step of every real start's expert path) go to `split` (train|test, default
+    test), the other split is written empty; goal prior 10 at the goal, 0 elsewhere. avivt: `split` test (default)
+    writes the test layout (one row per real start), train the per-sample training arrays (no batched arrays).
+    gppn: the mazes go to `split` (train|valid|test, default test), the others are empty; the policies are
+    GPPN's (diagonal cost 1).
+    """
+    layout = _format(format)
+    split = split or "test"
+    if split not in layout.export_splits:
+        allowed = ", ".join(layout.export_splits)
+        raise InputError(f"split must be one of {allowed} to export format {format}, got {split!r}")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return {"format": format, "out": str(path), "split": split, **layout.write(maps, path, split)}
+
+
+__all__ = ["FORMATS", "Format", "export_maps", "import_maps", "read_maps"]
