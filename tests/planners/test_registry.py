@@ -108,3 +108,41 @@ def test_planners_command(capsys):
     assert main(["planners"]) == 0
     text = capsys.readouterr().out
     assert "optimal" in text and "FILE.py:FACTORY" in text
+
+
+def test_a_registered_planner_is_loaded_listed_and_refused_twice(monkeypatch):
+    from vinadv.planners import registry
+    from vinadv.planners.optimal import OptimalPlanner
+
+    monkeypatch.setattr(registry, "REGISTRY", dict(registry.REGISTRY))
+    calls = []
+
+    def load(size, weights, corner_cutting, device):
+        calls.append((size, weights, corner_cutting, device))
+        return OptimalPlanner(size, corner_cutting)
+
+    registry.register("mine", description="my planner", load=load)
+    planner = load_planner("mine", 12, corner_cutting=False)
+    assert isinstance(planner, OptimalPlanner) and calls == [(12, None, False, "cpu")]
+    assert list_planners(12)[-1] == {
+        "name": "mine",
+        "description": "my planner",
+        "weights": None,
+        "weights_available": None,
+    }
+    with pytest.raises(PlannerError, match="planner 'mine' takes no weights file"):
+        load_planner("mine", 12, weights="w.pt")
+    with pytest.raises(InputError, match="'mine': a planner of that name is already registered"):
+        registry.register("mine", description="again", load=load)
+    for bad in ("my:planner", "mine+d4", " mine2", ""):
+        with pytest.raises(InputError, match="would not read as a planner name"):
+            registry.register(bad, description="bad", load=load)
+
+
+def test_registering_the_planners_imports_no_pytorch():
+    import subprocess
+    import sys
+
+    code = "import sys, vinadv.planners.registry as r; assert r.REGISTRY['gppn']; print('torch' in sys.modules)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
+    assert done.stdout.strip() == "False"

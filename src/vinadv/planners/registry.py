@@ -18,60 +18,171 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import sys
-from dataclasses import asdict, dataclass
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
+from vinadv.errors import InputError
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
+
+#: `load(size, weights, corner_cutting, device)`: a registered planner for `size x size` maps
+Loader = Callable[[int, str | None, bool, str], Planner]
 
 
 @dataclass(frozen=True)
 class PlannerInfo:
-    """One registered planner: its name and what it is."""
+    """One registered planner: its name, what it is, how to load it and where its shipped weights are.
+
+    Attributes:
+        load: `load(size, weights, corner_cutting, device) -> Planner`; `weights` is None unless `takes_weights`.
+        default_weights: `default_weights(size) -> Path`, the shipped weights for `size x size` maps; None: a
+            planner without weights.
+        takes_weights: whether `load_planner(..., weights=FILE)` may give it another weights file.
+    """
 
     name: str
     description: str
+    load: Loader
+    default_weights: Callable[[int], Path] | None = None
+    takes_weights: bool = False
 
     def to_dict(self, size: int = 28) -> dict:
         """Name, description, the shipped weights for `size x size` maps (None: no weights) and whether present."""
-        path = default_weights(self.name, size)
+        path = None if self.default_weights is None else self.default_weights(size)
         return {
-            **asdict(self),
+            "name": self.name,
+            "description": self.description,
             "weights": None if path is None else str(path),
             "weights_available": None if path is None else path.exists(),
         }
 
 
-REGISTRY = {
-    "vin": PlannerInfo(
-        "vin", "Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine (default)"
-    ),
-    "vin_robust": PlannerInfo(
-        "vin_robust",
-        "the VIN, trained from the shift start and adversarially (`vin train --vi-init shift --adversarial`)",
-    ),
-    "gppn": PlannerInfo("gppn", "Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, 8 actions"),
-    "optimal": PlannerInfo("optimal", "exact shortest paths (Dijkstra, lowest action index on ties): the control"),
-}
+#: the registered planners by name, in the order `vinadv planners` lists them
+REGISTRY: dict[str, PlannerInfo] = {}
 DEFAULT_PLANNER = "vin"
 #: after a planner's name or spec: that planner averaged over the 8 symmetries of the grid (`load_symmetric`)
 SUFFIX = "+d4"
 
 
+def register(
+    name: str,
+    *,
+    description: str,
+    load: Loader,
+    default_weights: Callable[[int], Path] | None = None,
+    takes_weights: bool = False,
+) -> PlannerInfo:
+    """Register planner `name`: `load_planner(name, ...)` calls `load`, `default_weights(name, size)` calls
+    `default_weights(size)`. Registering imports nothing: the loaders import their planner's modules (PyTorch) when
+    called. Refuses a name already registered, or one that a spec would read otherwise (`:`, the `+d4` suffix)."""
+    if name in REGISTRY:
+        raise InputError(f"name {name!r}: a planner of that name is already registered", "name")
+    if not name or name != name.strip() or ":" in name or name.endswith(SUFFIX):
+        raise InputError(
+            f"name {name!r} would not read as a planner name: no ':', no {SUFFIX} at its end, no spaces around it",
+            "name",
+        )
+    info = PlannerInfo(name, description, load, default_weights, takes_weights)
+    REGISTRY[name] = info
+    return info
+
+
+def _vin_weights_path(size: int) -> Path:
+    from vinadv.planners.weights import default_weights_path
+
+    return default_weights_path(size)
+
+
+def _vin_robust_weights_path(size: int) -> Path:
+    from vinadv.planners.weights import WEIGHTS_DIR
+
+    return WEIGHTS_DIR / f"vin{int(size)}_robust.pt"
+
+
+def _gppn_weights_path(size: int) -> Path:
+    from vinadv.planners.gppn import default_gppn_path
+
+    return default_gppn_path(size)
+
+
+def _load_vin(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+    from vinadv.planners.weights import load_vin_weights
+
+    return VINPlanner(load_vin_weights(weights, size=size), size=size)
+
+
+def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+    from vinadv.planners.weights import load_vin_weights
+
+    path = _vin_robust_weights_path(size)
+    if not path.exists():
+        raise PlannerError(
+            f"no shipped adversarially trained VIN for {size}x{size} maps ({path}); make one with "
+            "`vinadv vin train --adversarial` and load it as planner 'vin' with those weights"
+        )
+    planner = VINPlanner(load_vin_weights(path, size=size), size=size)
+    planner.name = "vin_robust"
+    return planner
+
+
+def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+    from vinadv.planners.gppn import load_gppn
+    from vinadv.planners.weights import weights_checksum
+
+    model = load_gppn(weights, size=size)
+    trained = model.record.get("size")
+    if trained is not None and trained != size:
+        raise PlannerError(
+            f"{model.weights_path}: GPPN weights trained on {trained}x{trained} maps, the maps are {size}x{size}"
+        )
+    return TorchPlanner(
+        model,
+        "gppn",
+        size,
+        checksum=weights_checksum(model.weights_path),
+        config=model.config.to_dict(),
+        device=device,
+    )
+
+
+def _load_optimal(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+    from vinadv.planners.optimal import OptimalPlanner
+
+    return OptimalPlanner(size, corner_cutting)
+
+
+register(
+    "vin",
+    description="Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine (default)",
+    load=_load_vin,
+    default_weights=_vin_weights_path,
+    takes_weights=True,
+)
+register(
+    "vin_robust",  # the VIN with its own weights: no other weights file (that is planner 'vin' with weights)
+    description="the VIN, trained from the shift start and adversarially (`vin train --vi-init shift --adversarial`)",
+    load=_load_vin_robust,
+    default_weights=_vin_robust_weights_path,
+)
+register(
+    "gppn",
+    description="Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, 8 actions",
+    load=_load_gppn,
+    default_weights=_gppn_weights_path,
+    takes_weights=True,
+)
+register(
+    "optimal",
+    description="exact shortest paths (Dijkstra, lowest action index on ties): the control",
+    load=_load_optimal,
+)
+
+
 def default_weights(name: str, size: int) -> Path | None:
-    """The shipped weights file of planner `name` for `size x size` maps; None for a planner without weights."""
-    if name == "vin":
-        from vinadv.planners.weights import default_weights_path
-
-        return default_weights_path(size)
-    if name == "vin_robust":
-        from vinadv.planners.weights import WEIGHTS_DIR
-
-        return WEIGHTS_DIR / f"vin{int(size)}_robust.pt"
-    if name == "gppn":
-        from vinadv.planners.gppn import default_gppn_path
-
-        return default_gppn_path(size)
-    return None
+    """The shipped weights file of planner `name` for `size x size` maps; None for a planner without weights (or
+    one not registered)."""
+    info = REGISTRY.get(name)
+    return None if info is None or info.default_weights is None else info.default_weights(size)
 
 
 def list_planners(size: int = 28) -> list[dict]:
@@ -95,46 +206,11 @@ def load_planner(
     spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
     if spec.endswith(SUFFIX):
         return load_symmetric(spec, size, weights, corner_cutting, device)
-    if weights is not None and spec not in ("vin", "gppn"):  # vin_robust is vin with its own weights
+    info = REGISTRY.get(spec)
+    if weights is not None and (info is None or not info.takes_weights):
         raise PlannerError(f"planner {spec!r} takes no weights file (weights={weights!r})")
-    if spec == "vin":
-        from vinadv.planners.weights import load_vin_weights
-
-        return VINPlanner(load_vin_weights(weights, size=size), size=size)
-    if spec == "vin_robust":
-        from vinadv.planners.weights import load_vin_weights
-
-        path = default_weights("vin_robust", size)
-        if not path.exists():
-            raise PlannerError(
-                f"no shipped adversarially trained VIN for {size}x{size} maps ({path}); make one with "
-                "`vinadv vin train --adversarial` and load it as planner 'vin' with those weights"
-            )
-        planner = VINPlanner(load_vin_weights(path, size=size), size=size)
-        planner.name = "vin_robust"
-        return planner
-    if spec == "gppn":
-        from vinadv.planners.gppn import load_gppn
-        from vinadv.planners.weights import weights_checksum
-
-        model = load_gppn(weights, size=size)
-        trained = model.record.get("size")
-        if trained is not None and trained != size:
-            raise PlannerError(
-                f"{model.weights_path}: GPPN weights trained on {trained}x{trained} maps, the maps are {size}x{size}"
-            )
-        return TorchPlanner(
-            model,
-            "gppn",
-            size,
-            checksum=weights_checksum(model.weights_path),
-            config=model.config.to_dict(),
-            device=device,
-        )
-    if spec == "optimal":
-        from vinadv.planners.optimal import OptimalPlanner
-
-        return OptimalPlanner(size, corner_cutting)
+    if info is not None:
+        return info.load(size, weights, corner_cutting, device)
     if ":" in spec:
         return load_custom(spec, size, device)
     raise PlannerError(
