@@ -22,6 +22,7 @@ from vinadv.classify.rule import label_batch, path_distances
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
 from vinadv.planners.interface import Planner, as_planner
+from vinadv.planners.spec import PlannerSpec
 from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
 
 if TYPE_CHECKING:  # scikit-learn comes with it; the rule labeller needs none
@@ -187,7 +188,7 @@ def objective_strength(objective: str):
     return OBJECTIVES[objective]
 
 
-#: the key of a run's stored config holding its planner's `Planner.spec()` (name, size, config, weights checksum)
+#: the key of a run's stored config holding its planner's `Planner.spec()` (a `PlannerSpec`)
 PLANNER_SPEC = "planner_spec"
 
 
@@ -239,8 +240,9 @@ def identify_and_store(
         ref = None if replanner is None else PlannerRef.of(replanner, planner, weights, pairs.corner_cutting)
         ident = remote(pairs, ref, classifier, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
     elapsed = time.perf_counter() - t0
-    attack_planner = pairs.params.get("planner")  # the spec of the planner that made the file (vinadv >= 0.2)
-    used = replanner.spec() if replanner is not None else attack_planner
+    # the spec of the planner that made the file (vinadv >= 0.2)
+    attack_planner: PlannerSpec | None = pairs.params.get("planner")
+    used: PlannerSpec | None = replanner.spec() if replanner is not None else attack_planner
     with Store.open(db) as store:
         run_id = store.create_run(
             name,

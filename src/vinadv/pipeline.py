@@ -29,6 +29,7 @@ from vinadv.grid.generator import generate_maps
 from vinadv.identify import PLANNER_SPEC, Identification, identify, load_classifier, objective_strength
 from vinadv.planners.interface import Planner
 from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
+from vinadv.planners.spec import PlannerSpec
 from vinadv.vocabulary import LABEL_STRENGTH, success_count
 
 STAGES = ("generate", "attack", "identify", "store")
@@ -151,7 +152,7 @@ class RunSummary:
     run_id: int
     name: str | None
     db: str
-    planner: dict = field(default_factory=dict)
+    planner: PlannerSpec
     n_maps: int = 0
     n_pairs: int = 0
     stored: int = 0

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.planners.spec import PlannerSpec
 from vinadv.vocabulary import SUCCESS_LABELS
 
 #: the strategies run by default; `exhaustive` only on request (it plans every valid cell of every map)
@@ -178,7 +179,7 @@ class RobustnessResult:
         seconds: wall time of the whole benchmark.
     """
 
-    planner: dict
+    planner: PlannerSpec
     settings: dict
     clean: dict
     strategies: dict[str, StrategyResult]
@@ -365,7 +366,7 @@ def save_robustness(result: RobustnessResult, db: str | None) -> int:
 
     with Store.open(db) as store:
         return store.add_robustness(
-            result.planner["name"], result.planner.get("weights_sha256"), result.settings, result.to_dict()
+            result.planner["name"], result.planner["weights_sha256"], result.settings, result.to_dict()
         )
 
 

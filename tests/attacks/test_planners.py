@@ -6,14 +6,17 @@ import torch
 
 from tests.attacks.test_strategies import assert_valid
 from tests.grid.oracle import brute_distances
+from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES, AttackContext, KeyPointsAttack, SaliencyAttack, make_attack
 from vinadv.attacks.validity import valid_cells
+from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.identify import identify, rule_strength
 from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, as_planner
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.registry import load_custom
+from vinadv.planners.spec import is_planner_spec
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input
 
@@ -51,7 +54,7 @@ def test_every_strategy_runs_on_every_planner(strategy, planner_name, maps):
     pairs = result.pairs
     assert len(pairs) > 0
     assert_valid(pairs, maps)
-    assert pairs.params["planner"] == planner.spec()
+    assert pairs.params["planner"] == planner.spec() and is_planner_spec(planner.spec())
     # the adversarial paths are the planner's own paths on the adversarial maps
     again = planner.plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals)
     assert again.paths == pairs.path_a
@@ -146,3 +149,20 @@ def test_as_planner():
     assert as_planner(optimal, SIZE) is optimal
     with pytest.raises(PlannerError, match="planner"):
         as_planner("vin", SIZE)
+
+
+def test_the_planner_spec_survives_the_pairs_file_and_a_mangled_one_is_refused(maps, tmp_path):
+    planner = OptimalPlanner(SIZE)
+    pairs = (
+        make_attack("random", per_map=1, seed=5, budget=4)
+        .attack(maps.obstacles, maps.starts[:, 0], maps.goals, planner)
+        .pairs
+    )
+    pairs.save(tmp_path / "p.npz")
+    assert PairSet.load(tmp_path / "p.npz").params["planner"] == planner.spec()
+    spec = planner.spec()
+    for bad in ("optimal", {**spec, "size": "10"}, {k: v for k, v in spec.items() if k != "weights_sha256"}):
+        pairs.params = {**pairs.params, "planner": bad}
+        pairs.save(tmp_path / "bad.npz")
+        with pytest.raises(InputError, match="field 'params' has a 'planner' that is not a planner spec"):
+            PairSet.load(tmp_path / "bad.npz")

@@ -16,6 +16,7 @@ from vinadv.grid.checks import check_pairs
 from vinadv.grid.pairs import PathPairs, int_column
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
+from vinadv.planners.spec import is_planner_spec
 from vinadv.vocabulary import TERMINATIONS
 
 PAIRS_FORMAT = "vinadv.pairs/1"
@@ -94,6 +95,8 @@ class PairSet(PathPairs):
         params = r.json("params")
         if not isinstance(params, dict):
             raise r.fail("params", "must be a JSON object")
+        if "planner" in params and not is_planner_spec(params["planner"]):  # vinadv < 0.2 wrote none
+            raise r.fail("params", "has a 'planner' that is not a planner spec (name, size, config, weights_sha256)")
         return cls(
             obstacles_o=obs_o,
             obstacles_a=obs_a,

@@ -27,6 +27,7 @@ from vinadv.grid.actions import N_ACTIONS
 from vinadv.planners.batching import over_maps, torch_threads
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
+from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin_weights import VINWeights
 
 if TYPE_CHECKING:  # PyTorch is loaded only by the planners that run it
@@ -104,9 +105,9 @@ class Planner(ABC):
         """Hyper-parameters worth recording (JSON values)."""
         return {}
 
-    def spec(self) -> dict:
+    def spec(self) -> PlannerSpec:
         """What a run records about the planner: name, size, config and weights checksum."""
-        return {"name": self.name, "size": int(self.size), "config": self.config, "weights_sha256": self.checksum}
+        return PlannerSpec(name=self.name, size=int(self.size), config=self.config, weights_sha256=self.checksum)
 
     @property
     def differentiable(self) -> nn.Module | None:
