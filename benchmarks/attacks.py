@@ -15,7 +15,7 @@ import time
 from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.grid import generate_maps
 from vinadv.identify import identify, rule_strength
-from vinadv.planners.weights import load_vin
+from vinadv.planners.vin.weights import load_vin
 from vinadv.vocabulary import LABEL_STRENGTH, label_counts, success_count
 
 PAPER = {"invalid": None, "UcP": 2088, "DP": 1076, "FP": 204, "UrP": 1632}

@@ -40,7 +40,7 @@ def make_pairs(n_maps: int, attack: str, seed: int = 0):
     """Real attack pairs on generated maps, and the generator's expert paths of each pair's original map."""
     from vinadv.attacks.strategies import make_attack
     from vinadv.grid.generator import generate_maps
-    from vinadv.planners.weights import load_vin
+    from vinadv.planners.vin.weights import load_vin
 
     maps = generate_maps(n_maps, 28, seed=seed, n_starts=1)
     result = make_attack(attack, per_map=1, seed=seed).attack(

@@ -27,10 +27,10 @@ import torch
 
 from vinadv.grid import generate_maps
 from vinadv.planners.batching import N_THREADS
-from vinadv.planners.engine import action_maps, plan_batch
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input
+from vinadv.planners.vin.engine import action_maps, plan_batch
 
 
 def cpu_clock_hz() -> float:
@@ -41,7 +41,7 @@ def cpu_clock_hz() -> float:
 
 def load_model(size: int, weights: str | None):
     try:
-        from vinadv.planners.weights import load_vin
+        from vinadv.planners.vin.weights import load_vin
 
         return load_vin(weights, size=size), weights or "shipped"
     except Exception:

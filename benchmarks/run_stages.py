@@ -71,8 +71,8 @@ def measure(n: int, size: int, workdir: str) -> dict:
     import numpy as np
     import torch
 
-    from vinadv.planners.engine import plan_batch
-    from vinadv.planners.weights import load_vin
+    from vinadv.planners.vin.engine import plan_batch
+    from vinadv.planners.vin.weights import load_vin
 
     record = os.path.join(workdir, "plans.npz")
     argv = run_argv(n, size, os.path.join(workdir, "run.sqlite"))

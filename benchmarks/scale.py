@@ -27,14 +27,14 @@ TARGET_PAIRS = 10_000_000
 
 
 def _weights(args, tmp: Path) -> str:
-    from vinadv.planners.weights import default_weights_path
+    from vinadv.planners.vin.weights import default_weights_path
 
     if args.weights:
         return args.weights
     if default_weights_path(args.size).exists():
         return str(default_weights_path(args.size))
     from vinadv.planners.testing import planning_vin
-    from vinadv.planners.weights import save_vin
+    from vinadv.planners.vin.weights import save_vin
 
     path = tmp / f"vin{args.size}.pt"
     save_vin(planning_vin(args.size, seed=0, noise=0.1), path)

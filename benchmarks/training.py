@@ -5,8 +5,8 @@
 One training step = forward over every cell of a batch of maps, the optimal-set loss, backward and an RMSprop
 step, as `vinadv vin train` does it. Two ways of computing the same function and gradients:
 1. plain PyTorch: `VIN.action_logits` (the h and r convolutions, then k steps of conv + max as separate ops);
-2. vinadv's CPU path (`vinadv.planners.fast_vi`): h and r folded into one convolution and the k-step loop as one
-   compiled autograd function whose backward follows only the argmax channel.
+2. vinadv's CPU path (`vinadv.planners.vin.value_iteration`): h and r folded into one convolution and the k-step loop
+   as one compiled autograd function whose backward follows only the argmax channel.
 Prints ms per map per step for each and the ratio. Weights: the shipped ones for the size if present.
 """
 
@@ -20,9 +20,8 @@ import time
 import torch
 
 from vinadv.grid import generate_maps
-from vinadv.planners import fast_vi
 from vinadv.planners.training import bits_to_mask, optimal_action_bits, optimal_set_loss
-from vinadv.planners.vin import VIN, VINConfig, default_k, make_input
+from vinadv.planners.vin import VIN, VINConfig, default_k, make_input, value_iteration
 
 
 def main() -> None:
@@ -42,7 +41,7 @@ def main() -> None:
         return model.q_values(x)
 
     def q_fast(x):
-        return fast_vi.q_values(model, x)
+        return value_iteration.q_values(model, x)
 
     def epoch(q_values) -> float:
         optimizer = torch.optim.RMSprop(model.parameters(), lr=1e-6, eps=1e-6)  # tiny: weights barely move
@@ -85,7 +84,7 @@ def main() -> None:
 
 
 def _model(size: int) -> VIN:
-    from vinadv.planners.weights import default_weights_path, load_vin
+    from vinadv.planners.vin.weights import default_weights_path, load_vin
 
     path = default_weights_path(size)
     if path.exists():

@@ -46,10 +46,10 @@ SLOW = (
     "tests/test_readme.py",
     # the slowest of the rest (pytest --durations, 2-core machine): subprocesses killed or starved on purpose,
     # the largest float64 gradient check
-    "tests/planners/test_fast_vi.py::test_values_and_gradients_equal_torch_float64",
-    "tests/planners/test_fast_vi.py::test_float32_close_to_torch_and_batch_split_between_threads",
+    "tests/planners/vin/test_value_iteration.py::test_values_and_gradients_equal_torch_float64",
+    "tests/planners/vin/test_value_iteration.py::test_float32_close_to_torch_and_batch_split_between_threads",
     "tests/planners/test_torch_replay.py::test_a_process_without_pytorch_plans_what_pytorch_would",
-    "tests/planners/test_engine.py::test_identical_to_reference_odd_sizes",
+    "tests/planners/vin/test_engine.py::test_identical_to_reference_odd_sizes",
     "tests/test_cli_imports.py::test_a_run_with_the_rule_labeller_does_without_scikit_learn",
     "tests/test_faults.py::test_full_disk_during_a_run_is_one_line_with_the_resume_hint",
     "tests/test_faults.py::test_kill_inside_a_transaction_then_resume_stores_every_pair_once",
@@ -153,7 +153,7 @@ def planning_weights(tmp_path_factory):
     """`planning_weights(size)`: the path (str) of a weights file of `planning_vin(size, seed=2, noise=0.1)`, a VIN
     that plans well on small maps; written once per size and session."""
     from vinadv.planners.testing import planning_vin
-    from vinadv.planners.weights import save_vin
+    from vinadv.planners.vin.weights import save_vin
 
     made: dict[int, str] = {}
 

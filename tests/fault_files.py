@@ -34,8 +34,8 @@ def write_maps(path: Path) -> Path:
 
 
 def write_paths(path: Path) -> Path:
-    from vinadv.planners.engine import plan_maps
     from vinadv.planners.pathset import PathSet
+    from vinadv.planners.vin.engine import plan_maps
 
     maps = _maps(3)
     result = plan_maps(maps.obstacles, maps.goals, maps.starts, _model(), maps.corner_cutting)
@@ -55,7 +55,7 @@ def write_pairs(path: Path) -> Path:
 
 
 def write_weights(path: Path) -> Path:
-    from vinadv.planners.weights import save_vin
+    from vinadv.planners.vin.weights import save_vin
 
     save_vin(_model(), path)
     return path

@@ -57,7 +57,7 @@ def _load_pairs(path):
 
 def _load_weights(path):
     from vinadv.planners.testing import planning_vin  # noqa: F401 (torch is loaded anyway)
-    from vinadv.planners.weights import read_weights
+    from vinadv.planners.vin.weights import read_weights
 
     model, _ = read_weights(path, size=10)
     with torch.no_grad():  # the loaded model must run: a shape that only fails in conv2d is a loader bug
@@ -254,7 +254,7 @@ def test_weights_mutations_give_input_errors(valid, tmp_path):
 
 
 def test_random_bytes_as_weights_say_what_the_file_is_not(tmp_path):
-    from vinadv.planners.weights import read_weights
+    from vinadv.planners.vin.weights import read_weights
 
     path = tmp_path / "noise.pt"
     path.write_bytes(np.random.default_rng(0).bytes(4096))
@@ -270,7 +270,7 @@ def test_random_bytes_as_weights_say_what_the_file_is_not(tmp_path):
 
 
 def test_plain_state_dict_with_wrong_input_channels_names_key_and_shapes(valid, tmp_path):
-    from vinadv.planners.weights import read_weights
+    from vinadv.planners.vin.weights import read_weights
 
     state = dict(torch.load(valid["weights"], weights_only=True)["state_dict"])
     state["h.weight"] = torch.zeros(150, 3, 3, 3)

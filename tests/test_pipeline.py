@@ -219,7 +219,7 @@ def test_run_of_several_obstacles_stores_every_added_cell_and_resume_compares_it
     from vinadv.attacks.strategies import make_attack
     from vinadv.grid import generate_maps
     from vinadv.identify import objective_strength
-    from vinadv.planners.weights import load_vin
+    from vinadv.planners.vin.weights import load_vin
 
     summary = run_pipeline(
         config(weights, n=30, attack="key-points", obstacles=2), db=sqlite_url, name="k2", progress=False

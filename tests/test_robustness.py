@@ -18,7 +18,7 @@ from vinadv.identify import objective_strength
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.registry import load_planner
 from vinadv.planners.testing import planning_vin
-from vinadv.planners.weights import save_vin
+from vinadv.planners.vin.weights import save_vin
 from vinadv.robustness import (
     MapOutcomes,
     benchmark_maps,

@@ -20,7 +20,7 @@ from vinadv.cli import main  # noqa: E402
 from vinadv.cluster import ClusterShards, start_local_cluster  # noqa: E402
 from vinadv.pipeline import RunConfig, compute_shard, run_pipeline  # noqa: E402
 from vinadv.planners.testing import planning_vin  # noqa: E402
-from vinadv.planners.weights import load_vin, save_vin  # noqa: E402
+from vinadv.planners.vin.weights import load_vin, save_vin  # noqa: E402
 from vinadv.store import Store  # noqa: E402
 
 SIZE = 12

@@ -15,7 +15,8 @@ from vinadv.identify import replan
 from vinadv.pipeline import PLANNER_SPEC
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.testing import planning_vin
-from vinadv.planners.weights import save_vin, weights_checksum
+from vinadv.planners.vin.weights import save_vin
+from vinadv.planners.weights import weights_checksum
 from vinadv.store import Store
 
 SIZE = 10

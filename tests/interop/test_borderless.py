@@ -10,10 +10,10 @@ from tests.interop.conftest import borderless
 from vinadv.attacks.strategies import make_attack
 from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps, shortest_distances
-from vinadv.planners.engine import plan_maps
 from vinadv.planners.evaluation import evaluate_vin
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.testing import planning_vin
+from vinadv.planners.vin.engine import plan_maps
 
 
 @pytest.fixture(scope="module")

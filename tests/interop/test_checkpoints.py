@@ -17,7 +17,7 @@ from vinadv.errors import InputError
 from vinadv.interop import read_checkpoint
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import VINConfig, make_input
-from vinadv.planners.weights import default_weights_path, save_vin
+from vinadv.planners.vin.weights import default_weights_path, save_vin
 
 
 class PortVIN(nn.Module):
@@ -97,7 +97,7 @@ def test_export_shipped_weights(tmp_path):
         == 0
     )
     plain = torch.load(tmp_path / "p.pth", weights_only=True)
-    # a default VIN's layout, which tests/planners/test_weights.py holds to the ports' (150 hidden, 10 q channels)
+    # a default VIN's layout, which tests/planners/vin/test_weights.py holds to the ports' (150 hidden, 10 q channels)
     assert {k: tuple(v.shape) for k, v in plain.items()} == VINConfig().state_shapes()
 
 

@@ -9,7 +9,6 @@ from torch import nn
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
-from vinadv.planners.engine import plan_maps as engine_plan_maps
 from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, check_logits
 from vinadv.planners.optimal import OptimalPlanner
@@ -18,6 +17,7 @@ from vinadv.planners.result import step_limits
 from vinadv.planners.rollout import rollout_logits
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input
+from vinadv.planners.vin.engine import plan_maps as engine_plan_maps
 
 
 def assert_same(a, b):

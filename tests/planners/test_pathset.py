@@ -9,9 +9,9 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.npzfile import save_npz
-from vinadv.planners.engine import plan_maps
 from vinadv.planners.pathset import PATHS_FORMAT, PathSet
 from vinadv.planners.testing import planning_vin
+from vinadv.planners.vin.engine import plan_maps
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +80,7 @@ def test_wrong_format_and_garbage(planned, tmp_path):
 
 
 def test_cli_plan(planned, tmp_path, capsys):
-    from vinadv.planners.weights import save_vin
+    from vinadv.planners.vin.weights import save_vin
 
     maps, ps = planned
     maps.save(tmp_path / "maps.npz")

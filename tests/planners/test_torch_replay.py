@@ -13,11 +13,11 @@ from hypothesis import strategies as st
 from tests.needs import MODELLED_CPU, cpu_vendor
 from vinadv.grid import generate_maps
 from vinadv.planners import torch_replay
-from vinadv.planners.flat import from_flat, layout, to_flat
 from vinadv.planners.reference import torch_action_at
 from vinadv.planners.testing import planning_vin, random_vin
 from vinadv.planners.torch_replay import conv_modes, exact_actions, fc_order, replay_q_values, sum_order
 from vinadv.planners.vin import make_input
+from vinadv.planners.vin.flat import from_flat, layout, to_flat
 
 
 @pytest.fixture(params=[1, 2], ids=["1-thread", "2-threads"])
@@ -138,7 +138,7 @@ def test_replay_kernel_is_q_values_bit_for_bit(size, make, torch_threads):
 
 
 def test_shipped_weights_replay_bit_for_bit(torch_threads):
-    from vinadv.planners.weights import load_vin
+    from vinadv.planners.vin.weights import load_vin
 
     model = load_vin(None, size=28).eval()
     maps = generate_maps(20, 28, seed=9, n_starts=1)
@@ -315,8 +315,8 @@ class NoTorch:
 if sys.argv[1] == "blocked":
     sys.meta_path.insert(0, NoTorch())
 from vinadv.grid import generate_maps
-from vinadv.planners import engine
-from vinadv.planners.weights import load_vin_weights
+from vinadv.planners.vin import engine
+from vinadv.planners.vin.weights import load_vin_weights
 
 maps = generate_maps(300, 28, seed=4, n_starts=1)
 stats = {}
@@ -333,8 +333,8 @@ def test_a_process_without_pytorch_plans_what_pytorch_would(tmp_path):
     import subprocess
     import sys
 
-    from vinadv.planners import engine
-    from vinadv.planners.weights import load_vin_weights
+    from vinadv.planners.vin import engine
+    from vinadv.planners.vin.weights import load_vin_weights
 
     env = {**os.environ, "VINADV_CACHE_DIR": str(tmp_path / "cache"), "OMP_NUM_THREADS": "1"}
     runs = {}

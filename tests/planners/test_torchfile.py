@@ -124,7 +124,7 @@ def test_a_view_outside_its_storage_is_refused(tmp_path):
 def test_shipped_vin_weights_load_without_pytorch():
     code = (
         "import sys\n"
-        "from vinadv.planners.weights import load_vin_weights\n"
+        "from vinadv.planners.vin.weights import load_vin_weights\n"
         "w = load_vin_weights(None, 28)\n"
         "assert 'torch' not in sys.modules, 'PyTorch loaded'\n"
         "print(w.config.l_h, w.state['h.weight'].dtype)\n"

@@ -9,7 +9,7 @@ import math
 
 from tests.report.conftest import SIZE
 
-from vinadv.planners.weights import load_vin
+from vinadv.planners.vin.weights import load_vin
 from vinadv.report import write_report
 from vinadv.robustness import benchmark_maps, robustness, save_robustness
 

@@ -229,7 +229,7 @@ def adversarial_config(args: argparse.Namespace) -> dict | None:
 
 def cmd_train(args: argparse.Namespace) -> int:
     from vinadv.planners.training import train_vin
-    from vinadv.planners.weights import save_vin
+    from vinadv.planners.vin.weights import save_vin
 
     return run_training(args, train_config(args, vi_init=args.vi_init), train_vin, save_vin)
 
@@ -295,7 +295,8 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
 
 def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.interop.protocols import evaluate_protocol
-    from vinadv.planners.weights import default_weights_path, load_vin, weights_checksum
+    from vinadv.planners.vin.weights import default_weights_path, load_vin
+    from vinadv.planners.weights import weights_checksum
 
     maps, source = start_eval(args)
     model = load_vin(args.weights, size=maps.size, k=args.k)
@@ -381,7 +382,7 @@ def cmd_export_weights(args: argparse.Namespace) -> int:
     import torch
 
     from vinadv.interop.checkpoints import export_state_dict, gppn_vin_gaps, read_checkpoint
-    from vinadv.planners.weights import load_vin
+    from vinadv.planners.vin.weights import load_vin
 
     try:
         model = load_vin(args.weights)

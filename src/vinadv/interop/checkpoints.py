@@ -21,8 +21,8 @@ import numpy as np
 import torch
 
 from vinadv.errors import InputError
-from vinadv.planners.vin import VIN
-from vinadv.planners.weights import STATE_KEYS
+from vinadv.planners.vin.arrays import STATE_KEYS
+from vinadv.planners.vin.model import VIN
 
 GPPN_VIN_KEYS = ("h.weight", "h.bias", "r.weight", "q.weight", "w", "policy.weight")
 

@@ -30,7 +30,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.interop.formats.gppn import unit_cost_distances
 from vinadv.interop.formats.samples import expert_steps
 from vinadv.planners.evaluation import evaluate_vin
-from vinadv.planners.vin import VIN, make_input
+from vinadv.planners.vin.model import VIN, make_input
 
 PROTOCOLS = ("vinadv", "kentsommer", "gppn")
 PORT_TEST_PRIOR = -1.0

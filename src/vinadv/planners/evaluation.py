@@ -2,7 +2,7 @@
 
 - action accuracy: over every free, reachable, non-goal cell of every map, the fraction where the argmax action
   (lowest index on ties) is one of the optimal actions (Dijkstra).
-- rollouts (DESIGN.md rule, by `vinadv.planners.engine`), from every start of every map:
+- rollouts (DESIGN.md rule, by `vinadv.planners.vin.engine`), from every start of every map:
   success rate (goal reached), % optimal (path cost equals the expert cost within 1e-9; an unreached path is
   not optimal), mean extra path cost of the reached paths (cost - expert cost), and the termination reasons.
 """
@@ -17,7 +17,7 @@ import torch
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
 from vinadv.planners.result import PlanResult
-from vinadv.planners.vin import VIN, make_input
+from vinadv.planners.vin.model import VIN, make_input
 from vinadv.vocabulary import TERMINATIONS
 
 #: planner(obstacles (B,N,N), goals (B,2), starts (B,S,2), model, corner_cutting) -> PlanResult, path b*S+s.
@@ -53,7 +53,7 @@ def accuracy_counts_from_logits(
 
 
 def _engine_planner(obstacles, goals, starts, model, corner_cutting) -> PlanResult:
-    from vinadv.planners import engine
+    from vinadv.planners.vin import engine
 
     if hasattr(engine, "plan_maps"):  # one value map per map, shared by its starts
         return engine.plan_maps(obstacles, goals, starts, model, corner_cutting)

@@ -10,7 +10,7 @@ Every planner's logits pass `check_logits`: a planner that returns another shape
 refused with a `PlannerError` (an `InputError`: the planner is the user's input) naming it.
 
 PyTorch is imported by the planners that run it, when they run it: the VIN plans from NumPy weights
-(`vinadv.planners.vin_weights`) and a process that only plans with it never loads PyTorch.
+(`vinadv.planners.vin.arrays`) and a process that only plans with it never loads PyTorch.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from vinadv.planners.batching import over_maps, torch_threads
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
 from vinadv.planners.spec import PlannerSpec
-from vinadv.planners.vin_weights import VINWeights
+from vinadv.planners.vin.arrays import VINWeights
 
 if TYPE_CHECKING:  # PyTorch is loaded only by the planners that run it
     import torch
@@ -261,7 +261,7 @@ class TorchPlanner(Planner):
 
 
 class VINPlanner(Planner):
-    """The VIN: paths from the exact engine (`vinadv.planners.engine`, the same paths as re-running the network at
+    """The VIN: paths from the exact engine (`vinadv.planners.vin.engine`, the same paths as re-running the network at
     every step), not the generic rollout; logits, value maps and gradients from the PyTorch `VIN`.
 
     `vin` is `VINWeights` (from a file: planning needs no PyTorch) or a PyTorch `VIN`, read afresh at every call
@@ -298,7 +298,7 @@ class VINPlanner(Planner):
 
     def _torch_planner(self) -> TorchPlanner:
         if self._torch is None:
-            from vinadv.planners.vin import VINPolicy
+            from vinadv.planners.vin.model import VINPolicy
 
             self._torch = TorchPlanner(VINPolicy(self.vin), self.name, self.size, self._checksum, self.config)
         return self._torch
@@ -318,7 +318,7 @@ class VINPlanner(Planner):
         """The VIN's value maps `max_a q`, `(B, N, N)` float32, `batch_size` maps per forward."""
         import torch
 
-        from vinadv.planners.vin import make_input
+        from vinadv.planners.vin.model import make_input
 
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         self._check_size(obstacles)
@@ -339,7 +339,7 @@ class VINPlanner(Planner):
         chunk_size: int | None = None,
         progress: bool = False,
     ) -> PlanResult:
-        from vinadv.planners import engine
+        from vinadv.planners.vin import engine
 
         obstacles, goals, starts = _check_multi(obstacles, goals, starts)
         self._check_size(obstacles)
@@ -359,7 +359,7 @@ def as_planner(planner, size: int) -> Planner:
     if "torch" in sys.modules:  # without PyTorch loaded, nothing is a module
         from torch import nn
 
-        from vinadv.planners.vin import VIN
+        from vinadv.planners.vin.model import VIN
 
         if isinstance(planner, VIN):
             return VINPlanner(planner, size)

@@ -22,7 +22,7 @@ from vinadv.planners.result import (
     check_plan_inputs,
     step_limits,
 )
-from vinadv.planners.vin import VIN, make_input
+from vinadv.planners.vin.model import VIN, make_input
 
 
 def rollout(

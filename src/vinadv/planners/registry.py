@@ -88,7 +88,7 @@ def register(
 
 
 def _vin_weights_path(size: int) -> Path:
-    from vinadv.planners.weights import default_weights_path
+    from vinadv.planners.vin.weights import default_weights_path
 
     return default_weights_path(size)
 
@@ -106,13 +106,13 @@ def _gppn_weights_path(size: int) -> Path:
 
 
 def _load_vin(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
-    from vinadv.planners.weights import load_vin_weights
+    from vinadv.planners.vin.weights import load_vin_weights
 
     return VINPlanner(load_vin_weights(weights, size=size), size=size)
 
 
 def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
-    from vinadv.planners.weights import load_vin_weights
+    from vinadv.planners.vin.weights import load_vin_weights
 
     path = _vin_robust_weights_path(size)
     if not path.exists():

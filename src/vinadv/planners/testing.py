@@ -12,7 +12,8 @@ from __future__ import annotations
 import torch
 
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
-from vinadv.planners.vin import GOAL_VALUE, VIN, VINConfig, default_k, init_shift_kernels
+from vinadv.planners.vin.arrays import GOAL_VALUE, VINConfig, default_k
+from vinadv.planners.vin.model import VIN, init_shift_kernels
 
 
 def planning_vin(

@@ -56,11 +56,11 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from vinadv.planners.flat import from_flat, layout, to_flat, zero_row_gaps
-from vinadv.planners.vin_weights import VINWeights, as_vin_weights, input_array
+from vinadv.planners.vin.arrays import VINWeights, as_vin_weights, input_array
+from vinadv.planners.vin.flat import from_flat, layout, to_flat, zero_row_gaps
 
 if TYPE_CHECKING:
-    from vinadv.planners.vin import VIN
+    from vinadv.planners.vin.model import VIN
 
 __all__ = [
     "best_and_gap",
@@ -542,7 +542,7 @@ def _add_bias(x: np.ndarray, bias: np.ndarray | None) -> np.ndarray:
     return x if bias is None else x + bias[:, None, None]
 
 
-# The chains run over the flat layout (`vinadv.planners.flat`), the taps read through views at their offsets; a real
+# The chains run over the flat layout (`vinadv.planners.vin.flat`), the taps read through views at their offsets; a real
 # cell reads zeros where it leaves the grid, as im2col does. Each chain starts from 0, as the BLAS kernels do, and
 # goes through the input channels in order, the nine taps of each in kernel order; `out` holds the running sum
 # between channels (a float32 store is exact).

@@ -29,9 +29,10 @@ from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
-from vinadv.planners import fast_vi
 from vinadv.planners.gppn import GPPN, GPPNConfig
-from vinadv.planners.vin import VI_INITS, VIN, VINConfig, default_k, init_shift_kernels, make_input
+from vinadv.planners.vin import value_iteration
+from vinadv.planners.vin.arrays import VINConfig, default_k
+from vinadv.planners.vin.model import VI_INITS, VIN, init_shift_kernels, make_input
 
 CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
 _BITS = 1 << np.arange(8, dtype=np.uint16)
@@ -149,7 +150,7 @@ def cell_logits(model: torch.nn.Module, obstacles: np.ndarray, goals: np.ndarray
     if isinstance(model, VIN):
         x = make_input(obstacles, goals).to(device)
         if device.type == "cpu":  # the compiled value-iteration loop: same function, several times faster on CPU
-            return model.fc(fast_vi.q_values(model, x).permute(0, 2, 3, 1))
+            return model.fc(value_iteration.q_values(model, x).permute(0, 2, 3, 1))
         return model.action_logits(x)
     obs = torch.from_numpy(np.asarray(obstacles, dtype=np.float32)).to(device)
     return model(obs, torch.from_numpy(np.asarray(goals, dtype=np.int64)).to(device)).permute(0, 2, 3, 1)
@@ -251,11 +252,14 @@ def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, dict]:
         init_shift_kernels(model)
     record = options.get("record")
     if config.init:
-        from vinadv.planners.weights import load_vin
+        from vinadv.planners.vin.weights import load_vin
 
         record = _start_from(model, load_vin(config.init, size=maps.size, k=vin_config.k), config.init, record)
     cpu = resolve_device(config.device).type == "cpu"
-    options["record"] = {**(record or {}), "value_iteration": "compiled (vinadv.planners.fast_vi)" if cpu else "torch"}
+    options["record"] = {
+        **(record or {}),
+        "value_iteration": "compiled (vinadv.planners.vin.value_iteration)" if cpu else "torch",
+    }
     return train_model(model, maps, config, vin_config.to_dict(), **options)
 
 

@@ -11,14 +11,14 @@ from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import VIN, VINConfig, make_input
-from vinadv.planners.weights import (
+from vinadv.planners.vin.weights import (
     STATE_KEYS,
     WEIGHTS_FORMAT,
     default_weights_path,
     load_vin,
     save_vin,
-    weights_checksum,
 )
+from vinadv.planners.weights import weights_checksum
 
 
 @pytest.mark.parametrize("size,k", [(8, 10), (16, 20), (28, 36)])

@@ -19,19 +19,9 @@ from torch import nn
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
-from vinadv.planners.vin_weights import GOAL_VALUE, K_BY_SIZE, VINConfig, default_k, input_array
+from vinadv.planners.vin.arrays import GOAL_VALUE, VINConfig, input_array
 
-__all__ = [
-    "GOAL_VALUE",
-    "K_BY_SIZE",
-    "VI_INITS",
-    "VIN",
-    "VINConfig",
-    "VINPolicy",
-    "default_k",
-    "init_shift_kernels",
-    "make_input",
-]
+__all__ = ["VI_INITS", "VIN", "VINPolicy", "init_shift_kernels", "make_input"]
 
 #: how a fresh VIN's value-iteration kernels start (`TrainConfig.vi_init`): PyTorch's default (the paper's VIN), or
 #: `init_shift_kernels`

@@ -6,10 +6,10 @@ import torch
 
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps, shortest_distances
-from vinadv.planners.engine import TERMINATIONS, action_maps, plan_batch, plan_maps
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.testing import exact_vin, planning_vin, random_vin
 from vinadv.planners.vin import VIN, VINConfig, make_input
+from vinadv.planners.vin.engine import TERMINATIONS, action_maps, plan_batch, plan_maps
 
 E, W = 2, 3
 

@@ -3,8 +3,7 @@
 import pytest
 import torch
 
-from vinadv.planners import fast_vi
-from vinadv.planners.vin import VIN, VINConfig
+from vinadv.planners.vin import VIN, VINConfig, value_iteration
 
 
 def _model(k: int, seed: int, dtype) -> VIN:
@@ -29,7 +28,7 @@ def test_values_and_gradients_equal_torch_float64(size, k):
     upstream = torch.randn(3, 6, size, size, generator=gen, dtype=torch.float64)
     q_ref = model.q_values(x)
     want = _grads(model, q_ref, upstream)
-    q = fast_vi.q_values(model, x)
+    q = value_iteration.q_values(model, x)
     got = _grads(model, q, upstream)
     torch.testing.assert_close(q, q_ref, rtol=1e-10, atol=1e-10)  # float64: only the order of the sums differs
     assert set(got) == set(want) == {"h.weight", "h.bias", "r.weight", "q.weight", "w"}
@@ -42,7 +41,7 @@ def test_float32_close_to_torch_and_batch_split_between_threads():
     x = torch.rand(9, 2, 28, 28, generator=torch.Generator().manual_seed(0))  # >= 2 maps per thread: threaded
     upstream = torch.randn(9, 6, 28, 28, generator=torch.Generator().manual_seed(1))
     want = _grads(model, model.q_values(x), upstream)
-    got = _grads(model, fast_vi.q_values(model, x), upstream)
+    got = _grads(model, value_iteration.q_values(model, x), upstream)
     for name in want:
         scale = want[name].abs().max()
         assert (got[name] - want[name]).abs().max() <= 1e-4 * scale, name
@@ -50,4 +49,4 @@ def test_float32_close_to_torch_and_batch_split_between_threads():
 
 def test_refuses_non_cpu_tensors():
     with pytest.raises(ValueError, match="CPU"):
-        fast_vi.value_iteration(torch.zeros(1, 2, 4, 4, device="meta"), torch.zeros(2, 1, 3, 3), 3)
+        value_iteration.value_iteration(torch.zeros(1, 2, 4, 4, device="meta"), torch.zeros(2, 1, 3, 3), 3)

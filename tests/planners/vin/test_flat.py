@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from vinadv.planners.flat import from_flat, layout, to_flat, zero_row_gaps
+from vinadv.planners.vin.flat import from_flat, layout, to_flat, zero_row_gaps
 
 
 @pytest.mark.parametrize("n", [8, 9, 13, 16, 28])

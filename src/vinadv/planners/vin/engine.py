@@ -27,7 +27,6 @@ import numpy as np
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.optimal_moves import optimal_moves_kernel
 from vinadv.planners.batching import DEFAULT_CHUNK, over_maps
-from vinadv.planners.flat import layout, zero_row_gaps
 from vinadv.planners.result import (
     GOAL,
     STEP_LIMIT,
@@ -37,10 +36,11 @@ from vinadv.planners.result import (
 )
 from vinadv.planners.rollout import MOVED, rollout_step
 from vinadv.planners.torch_replay import best_and_gap, exact_actions
-from vinadv.planners.vin_weights import GOAL_VALUE, VINWeights, as_vin_weights
+from vinadv.planners.vin.arrays import GOAL_VALUE, VINWeights, as_vin_weights
+from vinadv.planners.vin.flat import layout, zero_row_gaps
 
 if TYPE_CHECKING:
-    from vinadv.planners.vin import VIN
+    from vinadv.planners.vin.model import VIN
 
 __all__ = ["DEFAULT_CHUNK", "PlanResult", "TERMINATIONS", "plan_batch", "plan_maps", "action_maps"]
 
@@ -104,9 +104,9 @@ class FoldedVIN:
         )
 
 
-# The kernels work on the flat layout of `vinadv.planners.flat`. The value iteration also keeps the value map shifted
-# by one cell either way (vm[i] = v[i - 1], vp[i] = v[i + 1]): with those, every one of its loads starts on a vector
-# boundary (a 32-byte load that straddles two cache lines costs two).
+# The kernels work on the flat layout of `vinadv.planners.vin.flat`. The value iteration also keeps the value map
+# shifted by one cell either way (vm[i] = v[i - 1], vp[i] = v[i + 1]): with those, every one of its loads starts on a
+# vector boundary (a 32-byte load that straddles two cache lines costs two).
 
 
 @numba.njit(cache=True, nogil=True)

@@ -32,7 +32,7 @@ def _forward(lo, hi, q_r, w, k, q_out, v_saved, arg_saved):
     """Maps lo..hi-1. q_r (B, L, N, N), w (L, 3, 3) -> q_out (B, L, N, N) = q after k steps;
     v_saved (B, k, N+2, N+2) = zero-padded v_0..v_{k-1}; arg_saved (B, k, N, N) uint8 = argmax channel of q_t.
 
-    The loop runs as the planning engine's (`vinadv.planners.engine._value_iteration`): each padded value map
+    The loop runs as the planning engine's (`vinadv.planners.vin.engine._value_iteration`): each padded value map
     seen as one flat array, one long vector loop per channel over the whole map, the nine neighbours read through
     views at their offsets. The argmax is kept as a float channel number, updated by arithmetic (a conditional
     store would stop the loop vectorising); ties keep the lowest channel.

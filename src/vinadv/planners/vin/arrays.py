@@ -1,7 +1,7 @@
 """A VIN's hyper-parameters and weights without PyTorch: what the planning engine and its near-tie replay need.
 
 `VINWeights` holds the float32 state dict as NumPy arrays with its `VINConfig`, training record and file; the
-PyTorch `VIN` (`vinadv.planners.vin`) is built from it only when something asks for it (`VINWeights.module`:
+PyTorch `VIN` (`vinadv.planners.vin.model`) is built from it only when something asks for it (`VINWeights.module`:
 training, gradients, the generic rollout, a replay check). `vinadv run` with the VIN never imports PyTorch once
 the near-tie replay's settings are known on the machine (`vinadv.planners.torch_replay`).
 """
@@ -84,7 +84,7 @@ class VINWeights:
         if self._module is None:
             import torch
 
-            from vinadv.planners.vin import VIN
+            from vinadv.planners.vin.model import VIN
 
             vin = VIN(self.config)
             vin.load_state_dict({k: torch.from_numpy(np.array(v, dtype=np.float32)) for k, v in self.state.items()})
