@@ -25,7 +25,7 @@ from vinadv.planners.batching import set_torch_threads
 # subprocesses keep the defaults.
 set_torch_threads(1)
 
-# The near-tie replay keeps what it measured of PyTorch on disk (`torch_replay.cache_path`): the tests, and the
+# The near-tie replay keeps what it measured of PyTorch on disk (`replay.cache_path`): the tests, and the
 # commands they start, keep theirs in a folder of their own, so they neither trust the user's nor leave one behind.
 os.environ["VINADV_CACHE_DIR"] = tempfile.mkdtemp(prefix="vinadv-test-cache-")
 atexit.register(shutil.rmtree, os.environ["VINADV_CACHE_DIR"], True)
@@ -48,7 +48,7 @@ SLOW = (
     # the largest float64 gradient check
     "tests/planners/vin/test_value_iteration.py::test_values_and_gradients_equal_torch_float64",
     "tests/planners/vin/test_value_iteration.py::test_float32_close_to_torch_and_batch_split_between_threads",
-    "tests/planners/test_torch_replay.py::test_a_process_without_pytorch_plans_what_pytorch_would",
+    "tests/planners/replay/test_replay.py::test_a_process_without_pytorch_plans_what_pytorch_would",
     "tests/planners/vin/test_engine.py::test_identical_to_reference_odd_sizes",
     "tests/test_cli_imports.py::test_a_run_with_the_rule_labeller_does_without_scikit_learn",
     "tests/test_faults.py::test_full_disk_during_a_run_is_one_line_with_the_resume_hint",
@@ -62,7 +62,7 @@ SLOW = (
     "tests/attacks/test_obstacles.py::test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search",
     "tests/test_robustness.py::test_exhaustive_harmful_rate_is_the_share_of_maps_some_single_cell_harms",
     # 2-thread PyTorch beside a busy core, and a fresh interpreter
-    "tests/planners/test_torch_replay.py::test_replay_kernel_is_q_values_bit_for_bit[2-threads",
+    "tests/planners/replay/test_replay.py::test_replay_kernel_is_q_values_bit_for_bit[2-threads",
     "tests/planners/test_batching.py::test_torch_keeps_its_threads_after_numba_parallel_kernels",
 )
 

@@ -9,7 +9,7 @@ float32 PyTorch VIN at every step). The engine gets there differently, map by ma
 3. Near ties. The engine's arithmetic is not torch's, so logits differ by rounding; where the two best logits of a
    cell are closer than a margin that bounds that difference, the cell is uncertain, and a rollout that steps on
    one is re-done (same compiled rollout) with the reference's own decision at every cell of that map:
-   `torch_replay.exact_actions`, from PyTorch's value map replayed bit for bit without calling PyTorch (under
+   `replay.exact_actions`, from PyTorch's value map replayed bit for bit without calling PyTorch (under
    1 ms a map, where a batch-1 `q_values` costs ~3 ms on a quiet core and far more beside a busy one).
 
 The step limit 2L comes from an A* search (`vinadv.grid.optimal_moves`) run only for the few rollouts that get
@@ -27,6 +27,7 @@ import numpy as np
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.optimal_moves import optimal_moves_kernel
 from vinadv.planners.batching import DEFAULT_CHUNK, over_maps
+from vinadv.planners.replay import best_and_gap, exact_actions
 from vinadv.planners.result import (
     GOAL,
     STEP_LIMIT,
@@ -35,7 +36,6 @@ from vinadv.planners.result import (
     check_plan_inputs,
 )
 from vinadv.planners.rollout import MOVED, rollout_step
-from vinadv.planners.torch_replay import best_and_gap, exact_actions
 from vinadv.planners.vin.arrays import GOAL_VALUE, VINWeights, as_vin_weights
 from vinadv.planners.vin.flat import layout, zero_row_gaps
 

@@ -12,10 +12,21 @@ from hypothesis import strategies as st
 
 from tests.needs import MODELLED_CPU, cpu_vendor
 from vinadv.grid import generate_maps
-from vinadv.planners import torch_replay
 from vinadv.planners.reference import torch_action_at
+from vinadv.planners.replay import (
+    CACHE,
+    ReplayCache,
+    actions,
+    cache,
+    conv_modes,
+    exact_actions,
+    fc_order,
+    replay_q_values,
+    sum_order,
+)
+from vinadv.planners.replay.fc import fma32, replay_fc
+from vinadv.planners.replay.kernels import conv_chains, conv_fused, conv_plain, replay_kernel, sum_channels
 from vinadv.planners.testing import planning_vin, random_vin
-from vinadv.planners.torch_replay import conv_modes, exact_actions, fc_order, replay_q_values, sum_order
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.flat import from_flat, layout, to_flat
 
@@ -31,18 +42,9 @@ def torch_threads(request):
 @pytest.fixture
 def fresh_settings(monkeypatch):
     """Nothing measured yet, in memory or on disk (and nothing kept there)."""
-    monkeypatch.setenv(torch_replay.CACHE_ENV, "")
-    monkeypatch.setattr(torch_replay, "_disk", None)
-    for name, empty in [
-        ("_modes", {}),
-        ("_orders", {}),
-        ("_verified", {}),
-        ("_failed", set()),
-        ("_fc_orders", {}),
-        ("_fc_verified", {}),
-        ("_fc_failed", set()),
-    ]:
-        monkeypatch.setattr(torch_replay, name, empty)
+    monkeypatch.setenv(cache.CACHE_ENV, "")
+    for name, empty in vars(ReplayCache()).items():
+        monkeypatch.setattr(CACHE, name, empty)
 
 
 def require_replay(found: bool, what: str) -> None:
@@ -53,7 +55,7 @@ def require_replay(found: bool, what: str) -> None:
 
 
 def q_replayed_here(n: int, l_h: int = 150, l_q: int = 10, l_i: int = 2) -> bool:
-    """Whether `_q_values` replays VIN maps of side n here (every order it needs was found)."""
+    """Whether `replay_q_values` replays VIN maps of side n here (every order it needs was found)."""
     orders = (conv_modes(n, l_h, l_i, bias=True), conv_modes(n, l_q), sum_order(n, l_h))
     return all(order is not None for order in orders)
 
@@ -81,8 +83,8 @@ def test_modes_reproduce_conv2d_on_other_data(size, torch_threads):
             want = F.conv2d(torch.from_numpy(v)[None, None], torch.from_numpy(w)[:, None], padding=1)[0].numpy()
         flat = to_flat(v[None])
         fused, plain = np.zeros((10, flat.shape[1]), np.float32), np.zeros((10, flat.shape[1]), np.float32)
-        torch_replay._conv_fused(flat, w[:, None], size, fused)
-        torch_replay._conv_plain(flat, w[:, None], size, plain)
+        conv_fused(flat, w[:, None], size, fused)
+        conv_plain(flat, w[:, None], size, plain)
         got = np.where(modes[:, None, None], from_flat(fused, size), from_flat(plain, size))
         np.testing.assert_array_equal(bits(got), bits(want))
 
@@ -103,7 +105,7 @@ def test_h_modes_reproduce_the_h_layer_on_other_data(size, l_h, torch_threads):
         with torch.no_grad():
             want = F.conv2d(torch.from_numpy(x)[None], torch.from_numpy(w), torch.from_numpy(b), padding=1)[0]
         out = np.zeros((l_h, layout(size)[3]), np.float32)
-        torch_replay._conv_chains(to_flat(x), w, size, modes, out)
+        conv_chains(to_flat(x), w, size, modes, out)
         np.testing.assert_array_equal(bits(from_flat(out, size) + b[:, None, None]), bits(want.numpy()))
 
 
@@ -118,7 +120,7 @@ def test_sum_order_reproduces_the_r_layer_on_other_data(size, l_h, torch_threads
         w = rng.standard_normal(l_h).astype(np.float32)
         with torch.no_grad():
             want = F.conv2d(torch.from_numpy(h)[None], torch.from_numpy(w)[None, :, None, None])[0, 0].numpy()
-        np.testing.assert_array_equal(bits(torch_replay._sum_channels(h, w, *order)), bits(want))
+        np.testing.assert_array_equal(bits(sum_channels(h, w, *order)), bits(want))
 
 
 @pytest.mark.parametrize("size, make", [(9, planning_vin), (16, planning_vin), (16, random_vin), (28, planning_vin)])
@@ -133,7 +135,7 @@ def test_replay_kernel_is_q_values_bit_for_bit(size, make, torch_threads):
         x = make_input(maps.obstacles[i : i + 1], maps.goals[i : i + 1])
         with torch.no_grad():
             flat = to_flat(model.q(model.r(model.h(x)))[0].numpy())
-        torch_replay._replay_kernel(flat, w, model.config.k, size, modes)
+        replay_kernel(flat, w, model.config.k, size, modes)
         np.testing.assert_array_equal(bits(from_flat(flat, size)), bits(torch_q(model, x)))
 
 
@@ -151,12 +153,12 @@ def test_unknown_modes_use_q_values(fresh_settings, monkeypatch):
     model = planning_vin(16, seed=1).eval()
     maps = generate_maps(3, 16, seed=2, n_starts=1)
     x = make_input(maps.obstacles[:1], maps.goals[:1])
-    torch_replay._modes[(16, 10, 1, False, torch.get_num_threads())] = None
+    CACHE.conv_modes[(16, 10, 1, False, torch.get_num_threads())] = None
 
     def must_not_run(*args):
         raise AssertionError("replayed although the modes are unknown")
 
-    monkeypatch.setattr(torch_replay, "_replay_kernel", must_not_run)
+    monkeypatch.setattr(actions, "replay_kernel", must_not_run)
     np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))
 
 
@@ -164,17 +166,17 @@ def test_failed_verification_turns_the_replay_off(fresh_settings, monkeypatch):
     model = planning_vin(16, seed=1).eval()
     maps = generate_maps(3, 16, seed=2, n_starts=1)
     x = make_input(maps.obstacles[:1], maps.goals[:1])
-    real_kernel = torch_replay._replay_kernel
+    real_kernel = replay_kernel
 
     def off_by_one_ulp(q, *args):
         real_kernel(q, *args)
         width, p0 = layout(16)[:2]
         q.view(np.int32)[0, p0 + 5 * width + 5] += 1  # cell (5, 5)
 
-    monkeypatch.setattr(torch_replay, "_replay_kernel", off_by_one_ulp)
+    monkeypatch.setattr(actions, "replay_kernel", off_by_one_ulp)
     np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))
     require_replay(q_replayed_here(16), "value-map replay")
-    assert (16, 150, 10, torch.get_num_threads()) in torch_replay._failed
+    assert (16, 150, 10, torch.get_num_threads()) in CACHE.q_failed
 
 
 @pytest.mark.parametrize("make", [planning_vin, random_vin])
@@ -230,7 +232,7 @@ def test_fc_order_reproduces_linear_bit_for_bit(l_q, torch_threads, fresh_settin
         w = rng.standard_normal((8, l_q)).astype(np.float32)
         with torch.no_grad():
             want = F.linear(torch.from_numpy(q)[None], torch.from_numpy(w))[0].numpy()
-        np.testing.assert_array_equal(bits(torch_replay._replay_fc(w, q, *order)), bits(want))
+        np.testing.assert_array_equal(bits(replay_fc(w, q, *order)), bits(want))
 
 
 def float32_nearest(x: Fraction) -> np.float32:
@@ -251,7 +253,7 @@ finite32 = st.floats(width=32, allow_nan=False, allow_infinity=False, min_value=
 def test_fma32_rounds_once(a, b, c):
     a, b, c = np.float32(a), np.float32(b), np.float32(c)
     exact = Fraction(float(a)) * Fraction(float(b)) + Fraction(float(c))
-    assert torch_replay._fma32(a, b, c) == float32_nearest(exact)
+    assert fma32(a, b, c) == float32_nearest(exact)
 
 
 def test_fma32_on_halfway_sums():
@@ -261,7 +263,7 @@ def test_fma32_on_halfway_sums():
     c = np.float32(1 + 2.0**-23)
     assert np.float32(float(a) * float(b) + float(c)) == np.float32(1.0)  # the double rounding avoided
     exact = Fraction(float(a)) * Fraction(float(b)) + Fraction(float(c))
-    assert torch_replay._fma32(a, b, c) == float32_nearest(exact) == np.float32(1 + 2.0**-23)
+    assert fma32(a, b, c) == float32_nearest(exact) == np.float32(1 + 2.0**-23)
 
 
 def test_fc_replay_calls_no_torch_once_verified(monkeypatch, fresh_settings):
@@ -271,7 +273,7 @@ def test_fc_replay_calls_no_torch_once_verified(monkeypatch, fresh_settings):
         model.fc.weight[:] = model.fc.weight[3].clone()
     maps = generate_maps(3, 16, seed=1, n_starts=1)
     exact_actions(model, maps.obstacles[:1], maps.goals[:1])
-    assert fc_order(10, 8) is None or torch_replay._fc_verified[(10, 8, torch.get_num_threads())] > 0
+    assert fc_order(10, 8) is None or CACHE.fc_verified[(10, 8, torch.get_num_threads())] > 0
 
     def no_torch(*args, **kwargs):
         raise AssertionError("PyTorch's fc called for a verified setting")
@@ -290,17 +292,17 @@ def test_failed_fc_verification_turns_the_fc_replay_off(monkeypatch, fresh_setti
     x = make_input(maps.obstacles[:1], maps.goals[:1])
     with torch.no_grad():
         ports = torch_action_at(model, x, model.q_values(x))
-    real = torch_replay._replay_fc
+    real = replay_fc
 
     def wrong(w, q, tree, fused):
         out = real(w, q, tree, fused)
         out[0] = np.float32(np.inf)  # action 0 always wins
         return out
 
-    monkeypatch.setattr(torch_replay, "_replay_fc", wrong)
+    monkeypatch.setattr(actions, "replay_fc", wrong)
     fast = exact_actions(model, maps.obstacles[:1], maps.goals[:1])[0]
     assert all(fast[r, c] == ports(r, c) for r in range(16) for c in range(16))
-    assert fc_order(10, 8) is None or (10, 8, torch.get_num_threads()) in torch_replay._fc_failed
+    assert fc_order(10, 8) is None or (10, 8, torch.get_num_threads()) in CACHE.fc_failed
 
 
 PLAN_WITHOUT_TORCH = """
@@ -362,20 +364,20 @@ def test_a_process_without_pytorch_plans_what_pytorch_would(tmp_path):
 
 
 def test_kept_settings_are_per_machine_key(fresh_settings, monkeypatch, tmp_path):
-    monkeypatch.setenv(torch_replay.CACHE_ENV, str(tmp_path))
+    monkeypatch.setenv(cache.CACHE_ENV, str(tmp_path))
     monkeypatch.delenv("MKL_CBWR", raising=False)
-    torch_replay.machine_key.cache_clear()  # the key of this test's environment (others may have changed it)
+    cache.machine_key.cache_clear()  # the key of this test's environment (others may have changed it)
     try:
         model = planning_vin(16, seed=7).eval()
         maps = generate_maps(4, 16, seed=3, n_starts=1)
         exact_actions(model, maps.obstacles, maps.goals)
-        kept = json.loads(torch_replay.cache_path().read_text())
-        before = torch_replay.machine_key()
+        kept = json.loads(cache.cache_path().read_text())
+        before = cache.machine_key()
         assert list(kept["machines"]) == [before]
-        torch_replay.machine_key.cache_clear()
-        assert torch_replay.machine_key() == before
-        torch_replay.machine_key.cache_clear()
+        cache.machine_key.cache_clear()
+        assert cache.machine_key() == before
+        cache.machine_key.cache_clear()
         monkeypatch.setenv("MKL_CBWR", "COMPATIBLE")  # MKL's results may change: nothing measured applies
-        assert torch_replay.machine_key() != before
+        assert cache.machine_key() != before
     finally:
-        torch_replay.machine_key.cache_clear()
+        cache.machine_key.cache_clear()
