@@ -15,6 +15,7 @@ from pathlib import Path
 from vinadv.commands import LazyChoices, emit
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
+from vinadv.planners.records import RolloutMetrics, TrainingRecord
 
 
 def register(subparsers) -> None:
@@ -250,7 +251,7 @@ def run_training(args: argparse.Namespace, config, train, save) -> int:
     checkpoint = out.with_name(out.name + ".ckpt")
     if checkpoint.exists() and not args.resume:
         raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
-    record = {
+    record: TrainingRecord = {
         "command": _command_line(),
         "vinadv": __version__,
         "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
@@ -364,7 +365,7 @@ def _print_metrics(m: dict) -> None:
     print(by_length_text(m))
 
 
-def by_length_text(m: dict) -> str:
+def by_length_text(m: RolloutMetrics) -> str:
     """Rollout metrics `m`'s success by the optimal path's move count (`by_length`), wrapped lines."""
     rows = [f"{r['moves'][0]}-{r['moves'][1]}: {_pct(r['success_rate'])} of {r['rollouts']}" for r in m["by_length"]]
     # non-breaking spaces inside a row, so the lines break between rows only

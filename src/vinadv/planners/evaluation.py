@@ -1,4 +1,5 @@
-"""How good a VIN (or any planner, `evaluate_planner`) is on a set of maps: action accuracy and rollout metrics.
+"""How good a VIN (or any planner, `evaluate_planner`) is on a set of maps: action accuracy and rollout metrics
+(`PlannerMetrics`, `RolloutMetrics`: `vinadv.planners.records`).
 
 - action accuracy: over every free, reachable, non-goal cell of every map, the fraction where the argmax action
   (lowest index on ties) is one of the optimal actions (Dijkstra).
@@ -16,6 +17,7 @@ import torch
 
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
+from vinadv.planners.records import LengthBucketMetrics, PlannerMetrics, RolloutMetrics
 from vinadv.planners.result import PlanResult
 from vinadv.planners.vin.model import VIN, make_input
 from vinadv.vocabulary import TERMINATIONS
@@ -71,7 +73,7 @@ def rollout_metrics(
     expert_costs: np.ndarray,
     mask: np.ndarray | None = None,
     expert_moves: np.ndarray | None = None,
-) -> dict:
+) -> RolloutMetrics:
     """Rollout figures from a `PlanResult` and the expert (optimal) cost of each path `(B,)`.
 
     `mask` `(B,)` bool, if given, keeps only those paths (a MapSet's padded start slots are left out).
@@ -86,7 +88,7 @@ def rollout_metrics(
     optimal = reached & (np.abs(costs - expert_costs) <= COST_TOL)
     extra = costs[reached] - expert_costs[reached]
     names = result.termination_names[keep]
-    metrics = {
+    metrics: RolloutMetrics = {
         "rollouts": int(n),
         "success_rate": float(reached.mean()) if n else float("nan"),
         "optimal_rate": float(optimal.mean()) if n else float("nan"),
@@ -101,7 +103,9 @@ def rollout_metrics(
     return metrics
 
 
-def _by_length(moves: np.ndarray, reached: np.ndarray, optimal: np.ndarray, termination: np.ndarray) -> list[dict]:
+def _by_length(
+    moves: np.ndarray, reached: np.ndarray, optimal: np.ndarray, termination: np.ndarray
+) -> list[LengthBucketMetrics]:
     """One row per non-empty bucket of `LENGTH_BUCKET` optimal moves: rollouts, success, optimal paths and the
     terminations, counted with `bincount` over the buckets."""
     bucket = moves // LENGTH_BUCKET
@@ -124,7 +128,7 @@ def _by_length(moves: np.ndarray, reached: np.ndarray, optimal: np.ndarray, term
 
 def evaluate_vin(
     model: VIN, maps: MapSet, planner: MultiStartPlanner | None = None, batch_size: int = 256, progress: bool = False
-) -> dict:
+) -> PlannerMetrics:
     """All figures for `model` on `maps` (rollouts from every start). `planner` defaults to the engine."""
     planner = planner or _engine_planner
 
@@ -140,7 +144,7 @@ def evaluate_vin(
     )
 
 
-def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> dict:
+def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> PlannerMetrics:
     """All figures for any `vinadv.planners.interface.Planner` on `maps`: action accuracy from its logits, rollouts
     (from every start) by its `plan_maps`."""
 
@@ -157,7 +161,7 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
     )
 
 
-def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> dict:
+def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> PlannerMetrics:
     """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)`, `plan(obs, goals, starts)`."""
     obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
     chunks = range(0, len(maps), batch_size)
@@ -173,7 +177,8 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> di
         cells += n
         parts.append(plan(obstacles[sl], goals[sl], starts[sl]))
     result = PlanResult.concat(parts)
-    metrics = {
+    moves = maps.expert.lengths - 1  # cells - 1: an optimal path's move count L, the same for all of them
+    return {
         "maps": len(maps),
         "size": maps.size,
         "starts_per_map": maps.n_starts,
@@ -181,7 +186,5 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> di
         "corner_cutting": bool(maps.corner_cutting),
         "action_accuracy": correct / cells if cells else float("nan"),
         "action_cells": cells,
+        **rollout_metrics(result, maps.expert_costs, maps.start_mask, moves),
     }
-    moves = maps.expert.lengths - 1  # cells - 1: an optimal path's move count L, the same for all of them
-    metrics.update(rollout_metrics(result, maps.expert_costs, maps.start_mask, moves))
-    return metrics

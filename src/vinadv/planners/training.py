@@ -30,6 +30,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
 from vinadv.planners.gppn import GPPN, GPPNConfig
+from vinadv.planners.records import EpochRecord, TrainingRecord
 from vinadv.planners.vin import value_iteration
 from vinadv.planners.vin.arrays import VINConfig, default_k
 from vinadv.planners.vin.model import VI_INITS, VIN, init_shift_kernels, make_input
@@ -217,7 +218,7 @@ class _State:
     epoch: int = 0
     step: int = 0
     wall_s: float = 0.0
-    epochs: list = field(default_factory=list)
+    epochs: list[EpochRecord] = field(default_factory=list)
     partial: list = field(default_factory=lambda: [0.0, 0, 0])  # loss, cells, correct of the unfinished epoch
     # maps added by `augment` (obstacles, goals) and what each call said
     added_obstacles: np.ndarray | None = None
@@ -241,7 +242,7 @@ def evaluate_loss(
     return {"loss": total_loss / max(cells, 1), "action_accuracy": correct / max(cells, 1), "cells": cells}
 
 
-def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, dict]:
+def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, TrainingRecord]:
     """Train a VIN on `maps`; `options` and the result as `train_model`'s (the model on the CPU, in eval mode, and
     the training record). `config.init` names a VIN weights file to start from."""
     config.validate()
@@ -263,7 +264,7 @@ def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, dict]:
     return train_model(model, maps, config, vin_config.to_dict(), **options)
 
 
-def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, dict]:
+def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, TrainingRecord]:
     """Train a GPPN (`config.k` iterations, width `config.l_h`, kernel `config.kernel`) on `maps`; `options` and the
     result as `train_model`'s. `config.init` names a GPPN weights file to start from."""
     config.validate()
@@ -279,7 +280,7 @@ def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, dict
     return train_model(model, maps, config, gppn_config.to_dict(), **options)
 
 
-def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: dict | None) -> dict:
+def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: TrainingRecord | None) -> TrainingRecord:
     """Load `start`'s weights (read from `path`, `--init`) into `model`; the record gains their checksum (and
     their k where it differs: the iterations are not weights, so training may go on with more or fewer)."""
     from vinadv.planners.weights import weights_checksum
@@ -289,7 +290,7 @@ def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: di
             f"init {path}: its {type(start).__name__} ({start.config}) is not the one to train ({model.config})", "init"
         )
     model.load_state_dict(start.state_dict())
-    rec = {**(record or {}), "init_sha256": weights_checksum(path)}
+    rec: TrainingRecord = {**(record or {}), "init_sha256": weights_checksum(path)}
     if start.config.k != model.config.k:
         rec["init_k"] = start.config.k
     return rec
@@ -303,12 +304,12 @@ def train_model(
     checkpoint: str | os.PathLike | None = None,
     resume: bool = False,
     progress: bool = True,
-    record: dict | None = None,
+    record: TrainingRecord | None = None,
     log: Callable[[str], None] | None = None,
     augment: Augment | None = None,
-) -> tuple[torch.nn.Module, dict]:
+) -> tuple[torch.nn.Module, TrainingRecord]:
     """Train `model` (a `VIN`, or any module with the planner contract, see `cell_logits`) on `maps`; returns it
-    (CPU, eval mode) and the training record.
+    (CPU, eval mode) and the training record (`TrainingRecord`).
 
     With `augment` (see `Augment`), the maps it returns before an epoch join the training maps, with their own
     Dijkstra supervision, for that epoch and the rest: an epoch keeps its number of steps (so the learning-rate
@@ -332,7 +333,7 @@ def train_model(
     steps_per_epoch = math.ceil(len(train_idx) / config.batch_size)
     total_steps = steps_per_epoch * config.epochs
     state = _State()
-    rec = dict(record or {})
+    rec: TrainingRecord = dict(record or {})
     rec.update(
         format=f"vinadv.{config.planner}-training-record/1",
         planner=config.planner,
@@ -424,7 +425,7 @@ def train_model(
         val = evaluate_loss(forward, maps, bits, val_idx, config.batch_size, device) if len(val_idx) else {}
         state.epoch = epoch + 1
         state.wall_s = time.time() - started
-        entry = {
+        entry: EpochRecord = {
             "epoch": epoch + 1,
             "train_loss": loss_sum / max(cell_sum, 1),
             "train_action_accuracy": correct_sum / max(cell_sum, 1),
@@ -470,7 +471,7 @@ def _lr_at(step: int, total: int, config: TrainConfig) -> float:
     return warmup * config.lr * (f + (1 - f) * 0.5 * (1 + math.cos(math.pi * min(step, total) / max(total, 1))))
 
 
-def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -> None:
+def _save_checkpoint(path, model, optimizer, config, state: _State, rec: TrainingRecord) -> None:
     with atomic_output(path, "wb", mkdir=True) as fh:
         torch.save(
             {
@@ -492,7 +493,7 @@ def _save_checkpoint(path, model, optimizer, config, state: _State, rec: dict) -
         )
 
 
-def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: dict) -> _State:
+def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: TrainingRecord) -> _State:
     try:
         ck = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:

@@ -12,6 +12,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from vinadv.planners.records import TrainingRecord
+
 GOAL_VALUE = 10.0
 #: value-iteration steps k for the map sizes of the VIN paper; other sizes use `default_k`.
 K_BY_SIZE = {8: 10, 16: 20, 28: 36}
@@ -67,7 +69,7 @@ class VINWeights:
 
     config: VINConfig
     state: dict[str, np.ndarray]
-    record: dict = field(default_factory=dict)
+    record: TrainingRecord = field(default_factory=dict)
     path: str | None = None
     _module: object = field(default=None, repr=False)
 
