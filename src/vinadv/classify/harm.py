@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from vinadv.classify.rule import _distances_kernel, default_threshold, is_fork
+from vinadv.classify.rule import default_threshold, distances_kernel, is_fork
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
 from vinadv.grid.columns import Columns
@@ -505,7 +505,7 @@ def _harm_kernel(
             k_a = _walk(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch, path_a)
             off_o[1] = k_o
             off_a[1] = k_a
-            _distances_kernel(path_o[:k_o], off_o, path_a[:k_a], off_a, n, one_dh, one_dv)
+            distances_kernel(path_o[:k_o], off_o, path_a[:k_a], off_a, n, one_dh, one_dv)
             dh[i] = one_dh[0]
             dv[i] = one_dv[0]
             code[i] = _E_CHANGED

@@ -55,7 +55,9 @@ def _reset(cells, lo, hi, mark, ext_o, ext_a):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _distances_kernel(o_cells, o_offsets, a_cells, a_offsets, size, dh, dv):  # pragma: no cover - compiled
+def distances_kernel(o_cells, o_offsets, a_cells, a_offsets, size, dh, dv):  # pragma: no cover - compiled
+    """The rule's `(dh, dv)` of each pair of packed paths (cells and offsets of the originals and of the adversarial
+    ones, on `size x size` maps) into `dh`, `dv` `(n,)` int64: `path_distances` without its checks."""
     mark = np.zeros((size, size), dtype=np.uint8)  # bit 1: on the original path, bit 2: on the adversarial
     # Do's and Da's extents (see `_record_extent`); -1 = none yet
     ext_o = np.full((4, size), -1, np.int64)
@@ -95,7 +97,7 @@ def path_distances(path_o: PackedPaths, path_a: PackedPaths, size: int) -> tuple
         raise InputError(f"{len(path_o)} original paths but {len(path_a)} adversarial paths")
     dh = np.zeros(len(path_o), dtype=np.int64)
     dv = np.zeros(len(path_o), dtype=np.int64)
-    _distances_kernel(path_o.cells, path_o.offsets, path_a.cells, path_a.offsets, size, dh, dv)
+    distances_kernel(path_o.cells, path_o.offsets, path_a.cells, path_a.offsets, size, dh, dv)
     return dh, dv
 
 

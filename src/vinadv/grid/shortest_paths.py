@@ -118,7 +118,11 @@ def _dijkstra_one(obstacles, gr, gc, corner_cutting, deltas, costs, dist, moves)
 
 
 @numba.njit(cache=True, parallel=True)
-def _dijkstra_batch(obstacles, goals, corner_cutting, deltas, costs, dist, moves):
+def dijkstra_batch(obstacles, goals, corner_cutting, deltas, costs, dist, moves):
+    """Dijkstra from each goal, in parallel over maps, with any move costs: obstacles `(B, N, N)` bool, goals
+    `(B, 2)` int64, moves `deltas (A, 2)` costing `costs (A,)`; fills `dist (B, N, N)` float64 (inf: unreachable)
+    and `moves (B, N, N)` int32 (-1: unreachable). `shortest_distances` is it with the action costs of
+    DESIGN.md."""
     for b in numba.prange(obstacles.shape[0]):
         _dijkstra_one(obstacles[b], goals[b, 0], goals[b, 1], corner_cutting, deltas, costs, dist[b], moves[b])
 
@@ -142,7 +146,7 @@ def shortest_distances(
     dist = np.empty(obstacles.shape, dtype=np.float64)
     moves = np.empty(obstacles.shape, dtype=np.int32)
     if len(obstacles):
-        _dijkstra_batch(obstacles, goals, bool(corner_cutting), ACTION_DELTAS, ACTION_COSTS, dist, moves)
+        dijkstra_batch(obstacles, goals, bool(corner_cutting), ACTION_DELTAS, ACTION_COSTS, dist, moves)
     return dist, moves
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.shortest_paths import _dijkstra_batch, shortest_distances, valid_moves
+from vinadv.grid.shortest_paths import dijkstra_batch, shortest_distances, valid_moves
 from vinadv.interop.formats.files import ForeignArrays, load_npz
 from vinadv.interop.formats.samples import decode_images, goal_images, with_drawn_starts
 
@@ -85,7 +85,7 @@ def unit_cost_distances(obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
     dist = np.empty(obstacles.shape)
     moves = np.empty(obstacles.shape, dtype=np.int32)
     if len(obstacles):
-        _dijkstra_batch(
+        dijkstra_batch(
             obstacles,
             np.ascontiguousarray(goals, np.int64),
             True,
