@@ -3,6 +3,8 @@ written by `vinadv maps generate`, then attacked into a pairs file by `vinadv at
 
 from __future__ import annotations
 
+import contextlib
+import io
 from pathlib import Path
 
 from vinadv.cli import main
@@ -12,11 +14,13 @@ def generate_and_attack(
     folder: Path, weights: str, *, n: int, size: int, strategy: str, options: tuple[str, ...] = ("--quiet",)
 ) -> tuple[Path, Path]:
     """Write `n` maps of `size` with one start each to `folder/maps.npz` and attack them with `strategy` and the
-    planner `weights` into `folder/pairs.npz` (more `options` for `vinadv attack`); both commands must exit 0.
-    Returns the paths of the maps file and of the pairs file."""
+    planner `weights` into `folder/pairs.npz` (more `options` for `vinadv attack`); both commands must exit 0. The
+    maps command's summary is left out of standard output, the attack's prints as `options` say (`--quiet` still
+    prints it). Returns the paths of the maps file and of the pairs file."""
     maps, pairs = folder / "maps.npz", folder / "pairs.npz"
     generate = ["maps", "generate", "--n", str(n), "--size", str(size), "--starts", "1", "--out", str(maps), "--quiet"]
-    assert main(generate) == 0
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(generate) == 0
     attack = ["attack", "--maps", str(maps), "--strategy", strategy, "--out", str(pairs), "--weights", weights]
     assert main([*attack, *options]) == 0
     return maps, pairs

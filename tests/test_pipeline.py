@@ -270,6 +270,7 @@ def test_attack_and_identify_keep_every_added_obstacle(weights, tmp_path, sqlite
     maps, pairs = generate_and_attack(
         tmp_path, weights, n=20, size=SIZE, strategy="near-path", options=("--obstacles", "3", "--quiet")
     )
+    capsys.readouterr()  # the attack's summary
     made = PairSet.load(pairs)
     assert made.added.shape == (len(made), 3, 2) and made.params["obstacles"] == 3
     assert main(["identify", "--pairs", str(pairs), "--db", sqlite_url, "--weights", weights, "--json"]) == 0

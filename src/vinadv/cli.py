@@ -13,6 +13,7 @@ import os
 import sys
 
 from vinadv import __version__
+from vinadv.commands import cli_message
 from vinadv.errors import InputError, os_error_message
 
 # Order is the order of `vinadv --help`; one module per stage of the pipeline.
@@ -21,6 +22,7 @@ COMMAND_MODULES = [
     "vinadv.commands.vin",
     "vinadv.commands.plan",
     "vinadv.commands.planners",
+    "vinadv.commands.gppn",
     "vinadv.commands.attack",
     "vinadv.commands.classify",
     "vinadv.commands.run",
@@ -50,8 +52,6 @@ def main(argv: list[str] | None = None) -> int:
     try:
         code = args.func(args)
     except InputError as exc:
-        from vinadv.commands import cli_message
-
         print(f"vinadv: error: {cli_message(exc)}", file=sys.stderr)
         return 2
     except FileNotFoundError as exc:

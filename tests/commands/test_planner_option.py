@@ -53,6 +53,7 @@ def test_identify_with_another_planner_replans_and_records_both(weights, maps_fi
     pairs_file = tmp_path / "p.npz"
     attack = command_line("attack", maps=maps_file, strategy="key-points", weights=weights, out=pairs_file)
     assert main([*attack, "--quiet"]) == 0
+    capsys.readouterr()  # the attack's summary
     db = str(tmp_path / "t.db")
     assert main(["identify", "--pairs", str(pairs_file), "--db", db, "--planner", "optimal", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)

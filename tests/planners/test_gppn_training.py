@@ -98,6 +98,7 @@ def test_cli_train_eval_plan(tmp_path, capsys):
     assert record["planner"] == "gppn" and record["epochs_done"] == 2 and record["data"]["maps"] == 24
     model = load_gppn(weights)
     assert model.config.k == 6 and model.config.l_h == 6 and model.record["planner"] == "gppn"
+    capsys.readouterr()  # the two commands' results
     assert main(["gppn", "eval", "--weights", str(weights), "--n", "5", "--size", "10", "--starts", "2", "--json"]) == 0
     metrics = json.loads(capsys.readouterr().out)
     assert metrics["rollouts"] == 10 and 0 <= metrics["success_rate"] <= 1

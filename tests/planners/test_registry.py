@@ -62,6 +62,7 @@ def test_the_shipped_example_plans_from_the_cli(tmp_path, capsys):
     assert (
         main(["maps", "generate", "--n", "4", "--size", "12", "--seed", "3", "--out", str(maps_file), "--quiet"]) == 0
     )
+    capsys.readouterr()  # the maps' summary
     assert main(["plan", "--maps", str(maps_file), "--out", str(out), "--planner", f"{EXAMPLE}:make", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["planner"]["name"].endswith("my_planner.py:make") and summary["paths"] == 4 * 7
@@ -89,6 +90,7 @@ def test_plan_optimal_and_vin_from_the_cli(tmp_path, capsys):
     assert (
         main(["maps", "generate", "--n", "5", "--size", "28", "--seed", "3", "--out", str(maps_file), "--quiet"]) == 0
     )
+    capsys.readouterr()  # the maps' summary
     assert (
         main(["plan", "--maps", str(maps_file), "--out", str(tmp_path / "o.npz"), "--planner", "optimal", "--json"])
         == 0

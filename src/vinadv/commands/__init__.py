@@ -1,29 +1,21 @@
 """Subcommands of `vinadv`; each module has `register(subparsers)`.
 
 Building the parser must stay light (`vinadv --help` and `--version` import no PyTorch, Numba, scikit-learn or
-SQLAlchemy): a command module imports what its command needs inside the command's function, and reads names
-that live in heavy modules through `LazyChoices`.
+SQLAlchemy): a command module imports the vinadv modules that pull those (and NumPy) inside the command's function,
+and reads names that live in them through `LazyChoices`. `output` holds `--json`, `--quiet` and how a command prints
+its result; `training` and `evaluation` the options every `train` and every `eval` command shares.
 """
 
 from __future__ import annotations
 
-import argparse
 import importlib
-import json
 import re
-from collections.abc import Callable, Iterator
+import shlex
+import sys
+from collections.abc import Iterator
 
 from vinadv.errors import InputError
-
-
-def emit(args: argparse.Namespace, summary: dict, text: str | Callable[[], None]) -> int:
-    """End a command: `summary` as one JSON line with `--json`, else (unless `--quiet`) `text`, a line or a
-    function that prints; exit status 0."""
-    if getattr(args, "json", False):
-        print(json.dumps(summary))
-    elif not getattr(args, "quiet", False):
-        text() if callable(text) else print(text)
-    return 0
+from vinadv.planners.batching import set_torch_threads
 
 
 class LazyChoices:
@@ -78,3 +70,16 @@ def cli_message(exc: InputError) -> str:
         pattern = rf"(?<![\w-]){re.escape(parameter)}(?![\w-])"
         message = re.sub(pattern, flag(parameter).replace("\\", "\\\\"), message, count=1)
     return message
+
+
+def command_line() -> str:
+    """The command line this process was started with, as a shell would take it back (recorded in outputs)."""
+    return "vinadv " + shlex.join(sys.argv[1:])
+
+
+def set_threads(threads: int | None) -> None:
+    """Apply `--threads`: PyTorch's CPU threads (None: PyTorch's own choice)."""
+    if threads is not None:
+        if threads < 1:
+            raise InputError(f"--threads must be >= 1, got {threads}")
+        set_torch_threads(threads)

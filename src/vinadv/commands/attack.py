@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments, emit
+from vinadv.cluster import add_cluster_arguments, attack_on_cluster, open_cluster
+from vinadv.commands import LazyChoices, add_planner_arguments
+from vinadv.commands.output import add_output_options, emit, shows_progress
+from vinadv.outfile import check_output_path
 
 
 def register(subparsers) -> None:
@@ -34,8 +36,7 @@ def register(subparsers) -> None:
     add_planner_arguments(p)
     add_harm_arguments(p)
     add_objective_argument(p)
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+    add_output_options(p, json="the summary", quiet=True)
     add_cluster_arguments(p, shard_size=True)
     p.set_defaults(func=cmd_attack)
 
@@ -134,7 +135,6 @@ def cmd_attack(args: argparse.Namespace) -> int:
     from vinadv.classify.harm import check_tolerances
     from vinadv.grid.mapset import MapSet
     from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
-    from vinadv.outfile import check_output_path
     from vinadv.planners.registry import PlannerRef, load_planner
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
@@ -155,11 +155,9 @@ def cmd_attack(args: argparse.Namespace) -> int:
             planner,
             maps.corner_cutting,
             strength=objective_strength(args.objective),
-            progress=not args.quiet,
+            progress=shows_progress(args),
         )
     else:
-        from vinadv.cluster import attack_on_cluster
-
         with open_cluster(args.cluster, args.workers) as client:
             ref = PlannerRef.of(planner, args.planner, args.weights, maps.corner_cutting)
             result = attack_on_cluster(
@@ -169,7 +167,7 @@ def cmd_attack(args: argparse.Namespace) -> int:
                 maps,
                 ref,
                 shard_size=args.shard_size,
-                progress=not args.quiet,
+                progress=shows_progress(args),
                 objective=args.objective,
             )
     elapsed = time.perf_counter() - t0

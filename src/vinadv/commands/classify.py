@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from vinadv.commands import emit
+from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
 KINDS = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw")
@@ -58,8 +58,7 @@ def register(subparsers) -> None:
     train.add_argument(
         "--threshold", type=int, default=None, help="the rule's threshold t (default round(4 * N / 28), 4 at 28x28)"
     )
-    train.add_argument("--json", action="store_true", help="print a JSON summary")
-    train.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    add_output_options(train, json="the summary", quiet=True)
     train.set_defaults(func=cmd_train)
 
     ev = sub.add_parser(
@@ -73,8 +72,7 @@ def register(subparsers) -> None:
         action="store_true",
         help="evaluate on every FP/DP pair of the file, even if the model was trained on it",
     )
-    ev.add_argument("--json", action="store_true", help="print the figures as JSON")
-    ev.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    add_output_options(ev, json="the figures", quiet=True)
     ev.set_defaults(func=cmd_eval)
 
 
@@ -120,7 +118,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         test_fraction=args.test_fraction,
         seed=args.seed,
         source=str(args.pairs),
-        verbose=not args.quiet,
+        verbose=shows_progress(args),
     )
     record = {**record, "labels": args.labels}
     model.save(args.out, record, arrays)

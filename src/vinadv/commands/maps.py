@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
-from vinadv.commands import emit
+from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.errors import InputError
+from vinadv.outfile import check_output_path
 
 
 def register(subparsers) -> None:
@@ -26,8 +26,7 @@ def register(subparsers) -> None:
         help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
     )
     gen.add_argument("--out", required=True, help="output maps file (.npz)")
-    gen.add_argument("--json", action="store_true", help="print a JSON summary")
-    gen.add_argument("--quiet", action="store_true", help="print nothing")
+    add_output_options(gen, json="the summary", quiet=True)
     gen.set_defaults(func=cmd_generate)
 
     show = sub.add_parser("show", help="draw one map with its starts, goal and expert paths to an image")
@@ -40,14 +39,11 @@ def register(subparsers) -> None:
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from vinadv.grid import generate_maps, obstacle_fraction
-    from vinadv.outfile import check_output_path
 
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     t0 = time.perf_counter()
-    with tqdm(total=max(args.n, 0), unit="map", desc="maps", disable=args.quiet or args.json) as bar:
+    with progress_bar(args, total=max(args.n, 0), unit="map", desc="maps") as bar:
         maps = generate_maps(
             args.n, args.size, args.seed, args.starts, corner_cutting=not args.no_corner_cutting, progress=bar.update
         )
@@ -123,8 +119,7 @@ def _register_interop(sub) -> None:
         "--starts", type=int, default=None, help="starts drawn per map where the file has none (gppn; default 7)"
     )
     imp.add_argument("--seed", type=int, default=0, help="seed of the drawn starts (default 0)")
-    imp.add_argument("--json", action="store_true", help="print a JSON summary")
-    imp.add_argument("--quiet", action="store_true", help="print nothing")
+    add_output_options(imp, json="the summary", quiet=True)
     imp.set_defaults(func=cmd_import)
 
     exp = sub.add_parser("export", help="write a maps file in the kentsommer, avivt or GPPN layout")
@@ -136,7 +131,7 @@ def _register_interop(sub) -> None:
         default=None,
         help="kentsommer: train|test; gppn: train|valid|test; avivt: test|train layout (default test)",
     )
-    exp.add_argument("--json", action="store_true", help="print a JSON summary")
+    add_output_options(exp, json="the summary")
     exp.set_defaults(func=cmd_export)
 
 
@@ -148,9 +143,8 @@ def cmd_import(args: argparse.Namespace) -> int:
     maps, info = read_maps(args.input, args.format, split=args.split, starts=args.starts, seed=args.seed)
     maps.save(args.out)
     info = {"out": args.out, **info}
-    if args.json:
-        print(json.dumps(info))
-    elif not args.quiet:
+
+    def text() -> None:
         padded = f", {info['maps_padded']} with fewer starts (padded, see start_counts)" if info["maps_padded"] else ""
         print(
             f"wrote {info['maps']} maps of {info['size']}x{info['size']} (up to {info['starts_per_map']} starts"
@@ -159,7 +153,8 @@ def cmd_import(args: argparse.Namespace) -> int:
         for key in ("file_paths_optimal", "movement", "maps_left_out_no_start"):
             if info.get(key):
                 print(f"  {key.replace('_', ' ')}: {info[key]}")
-    return 0
+
+    return emit(args, info, text)
 
 
 def cmd_export(args: argparse.Namespace) -> int:

@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import add_planner_arguments, emit
+from vinadv.commands import add_planner_arguments
+from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
+from vinadv.outfile import check_output_path
 from vinadv.planners.batching import DEFAULT_CHUNK
 
 
@@ -18,8 +20,7 @@ def register(subparsers) -> None:
     p.add_argument(
         "--chunk-size", type=int, default=DEFAULT_CHUNK, help=f"maps per batch; bounds memory (default {DEFAULT_CHUNK})"
     )
-    p.add_argument("--json", action="store_true", help="print a JSON summary")
-    p.add_argument("--quiet", action="store_true", help="print nothing, no progress bar")
+    add_output_options(p, json="the summary", quiet=True)
     p.set_defaults(func=cmd_plan)
 
 
@@ -27,7 +28,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
     import numpy as np
 
     from vinadv.grid import MapSet
-    from vinadv.outfile import check_output_path
     from vinadv.planners.pathset import PathSet
     from vinadv.planners.registry import load_planner
     from vinadv.vocabulary import TERMINATIONS
@@ -44,7 +44,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         maps.starts,
         maps.corner_cutting,
         args.chunk_size,
-        progress=not (args.quiet or args.json),
+        progress=shows_progress(args),
     )
     elapsed = time.perf_counter() - t0
     k = planner.config.get("k")

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
+from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
 CLASSIFIER_NAMES = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw", "hybrid", "rule")
@@ -39,8 +39,7 @@ def register(subparsers) -> None:
         help="training set fractions for fig. 8, comma-separated in (0, 1] (default 0.1,0.2,0.4,0.6,0.8,1)",
     )
     ev.add_argument("--seed", type=int, default=0, help="seed of the split, augmentation and training (default 0)")
-    ev.add_argument("--json", action="store_true", help="print the stored rows' figures as JSON")
-    ev.add_argument("--quiet", action="store_true", help="no progress bar, no table")
+    add_output_options(ev, json="the stored rows' figures", quiet=True)
     ev.set_defaults(func=cmd_evaluate)
 
     rep = subparsers.add_parser(
@@ -61,8 +60,7 @@ def register(subparsers) -> None:
         "section (say, one per attack strategy); the first is the main run unless --run names one",
     )
     rep.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
-    rep.add_argument("--json", action="store_true", help="print what was written and measured as JSON")
-    rep.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    add_output_options(rep, json="what was written and measured", quiet=True)
     rep.set_defaults(func=cmd_report)
 
 
@@ -91,12 +89,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     sizes = parse_sizes(args.sizes)
     with Store.open(args.db, create=False) as store:
         run_id = store.resolve_run(args.run) if args.run is not None else _latest_run(store)
-        rows = evaluate_run(
-            store, run_id, classifiers, args.setting, sizes, args.seed, progress=not (args.quiet or args.json)
-        )
-    if args.json:
-        print(json.dumps({"run_id": run_id, "rows": [{k: v for k, v in r.items() if k != "curves"} for r in rows]}))
-    elif not args.quiet:
+        rows = evaluate_run(store, run_id, classifiers, args.setting, sizes, args.seed, progress=shows_progress(args))
+    summary = {"run_id": run_id, "rows": [{k: v for k, v in r.items() if k != "curves"} for r in rows]}
+
+    def text() -> None:
         print(f"run {run_id}: {len(rows)} evaluations stored (setting {args.setting}, seed {args.seed})")
         print(
             f"{'classifier':<10} {'training':<10} {'pairs':>6} {'accuracy':>8} {'FP F1':>6} {'AUC':>6} "
@@ -112,7 +108,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 f"{_f(m.get('training_s'), 8, 2)} {_f(m.get('prediction_s_per_100'), 8, 4)}"
             )
         print(f"write the report: vinadv report --db {store.url} --run {run_id} --out DIR")
-    return 0
+
+    return emit(args, summary, text)
 
 
 def _f(value, width: int = 8, digits: int = 3) -> str:
@@ -123,9 +120,8 @@ def cmd_report(args: argparse.Namespace) -> int:
     from vinadv.report import build_report
 
     result = build_report(args.db, args.out, run_id=args.run, runs=_run_refs(args.runs))
-    if args.json:
-        print(json.dumps(result.to_dict(), default=str))
-    elif not args.quiet:
+
+    def text() -> None:
         timing = result.timing
         print(f"report of run {result.run_id}: {result.index} ({len(set(result.files))} files)")
         hybrid = timing["hybrid_svm_s"]
@@ -135,4 +131,5 @@ def cmd_report(args: argparse.Namespace) -> int:
             + f" (paper 0.22 s; manual ~300 s); read from the database {timing['read_s']:.4f} s"
             + ("" if result.evaluated else "; no classifier evaluation stored (see `vinadv evaluate`)")
         )
-    return 0
+
+    return emit(args, result.to_dict(), text, json_default=str)

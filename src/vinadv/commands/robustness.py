@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
-from vinadv.commands import add_planner_arguments, emit
+from vinadv.commands import add_planner_arguments
 from vinadv.commands.attack import add_harm_arguments
-from vinadv.errors import InputError
+from vinadv.commands.output import add_output_options, emit, shows_progress
+from vinadv.errors import InputError, OutputError
 
 #: `vinadv.robustness.DEFAULT_STRATEGIES`, not imported: building the parser stays light
 _DEFAULTS = "key-points, saliency, near-path, random"
@@ -66,8 +68,7 @@ def register(subparsers) -> None:
         metavar="DIR",
         help="write a page with the benchmark (and, with --db, every one stored there) as a table and curves to DIR",
     )
-    p.add_argument("--json", action="store_true", help="print every figure as JSON")
-    p.add_argument("--quiet", action="store_true", help="no progress bar, no table")
+    add_output_options(p, json="every figure", quiet=True)
     p.set_defaults(func=cmd_robustness)
 
 
@@ -84,10 +85,6 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         raise InputError(f"radius must be >= 0, got {args.radius}", "radius")
     check_tolerances(args.harm_tolerance, args.harm_rtol)
     if args.report:
-        from pathlib import Path
-
-        from vinadv.errors import OutputError
-
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
     if args.db is not None:  # a database that will be refused is refused now, not after the benchmark
@@ -111,7 +108,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         radius=args.radius,
         harm_tol=args.harm_tolerance,
         harm_rtol=args.harm_rtol,
-        progress=not (args.quiet or args.json),
+        progress=shows_progress(args),
     )
     out = result.to_dict()
     if args.db is not None:

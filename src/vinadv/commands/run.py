@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.cluster import add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments, emit
+from vinadv.cluster import ClusterIdentify, ClusterShards, add_cluster_arguments, open_cluster
+from vinadv.commands import LazyChoices, add_planner_arguments
 from vinadv.commands.attack import (
     add_harm_arguments,
     add_objective_argument,
@@ -14,6 +14,7 @@ from vinadv.commands.attack import (
     attack_summary,
     print_counts,
 )
+from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
 
@@ -53,8 +54,7 @@ def register(subparsers) -> None:
         action="store_true",
         help="with --report: skip the classifier comparison (a shorter report, without tables 5, 6 and figs. 8, 9)",
     )
-    run.add_argument("--json", action="store_true", help="print the summary as JSON")
-    run.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+    add_output_options(run, json="the summary", quiet=True)
     add_cluster_arguments(run)
     run.set_defaults(func=cmd_run)
 
@@ -69,8 +69,7 @@ def register(subparsers) -> None:
     )
     add_harm_arguments(ident)
     ident.add_argument("--name", help="run name")
-    ident.add_argument("--json", action="store_true", help="print the summary as JSON")
-    ident.add_argument("--quiet", action="store_true", help="print nothing")
+    add_output_options(ident, json="the summary", quiet=True)
     add_cluster_arguments(ident, shard_size=True)
     ident.set_defaults(func=cmd_identify)
 
@@ -104,7 +103,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             db=args.db,
             name=args.name,
             resume=args.resume,
-            progress=not (args.quiet or args.json),
+            progress=shows_progress(args),
             **_cluster_options(client),
         )
     result = summary.to_dict()
@@ -113,7 +112,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
         t0 = time.perf_counter()
         report = report_run(
-            args.db, args.report, summary.run_id, evaluate=not args.no_evaluate, progress=not (args.quiet or args.json)
+            args.db, args.report, summary.run_id, evaluate=not args.no_evaluate, progress=shows_progress(args)
         )
         result["report"] = args.report
         result["comparison"] = report.comparison or "stored"
@@ -125,8 +124,6 @@ def _cluster_options(client) -> dict:
     """`run_pipeline`'s keyword arguments for computing on `client` (none: in this process)."""
     if client is None:
         return {}
-    from vinadv.cluster import ClusterShards
-
     return {"shard_results": ClusterShards(client)}
 
 
@@ -160,14 +157,11 @@ def _print_run(result: dict) -> None:
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
-    from vinadv.cluster import ClusterIdentify
     from vinadv.identify import identify_and_store
 
     remote = None
     if args.cluster is not None or args.workers is not None:
-        remote = ClusterIdentify(
-            args.cluster, args.workers, shard_size=args.shard_size, progress=not (args.quiet or args.json)
-        )
+        remote = ClusterIdentify(args.cluster, args.workers, shard_size=args.shard_size, progress=shows_progress(args))
     done = identify_and_store(
         args.pairs,
         args.db,

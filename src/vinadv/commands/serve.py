@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import logging
 import socket
-import sys
 
+from vinadv.commands.output import add_output_options, is_quiet, note
 from vinadv.errors import InputError, OutputError
 
 
@@ -29,7 +29,7 @@ def register(subparsers) -> None:
         action="store_true",
         help="allow binding a non-loopback address (anyone who can reach it can label pairs)",
     )
-    serve.add_argument("--quiet", action="store_true", help="do not log requests")
+    add_output_options(serve, quiet=True)
     serve.set_defaults(func=cmd_serve)
 
 
@@ -67,10 +67,9 @@ def cmd_serve(args: argparse.Namespace) -> int:
             raise
     except OutputError:  # a database the user may only read: browse it, labelling is off
         store, created = Store.open(args.db, readonly=True), []
-        if not args.quiet:
-            print(f"database {store.url} is read-only: browsing only, labels cannot be stored", file=sys.stderr)
-    if created and not args.quiet:
-        print(f"created indexes {', '.join(created)} (once per database)", file=sys.stderr)
+        note(args, f"database {store.url} is read-only: browsing only, labels cannot be stored")
+    if created:
+        note(args, f"created indexes {', '.join(created)} (once per database)")
     app = create_app(store, allow_remote=args.allow_remote)
     # import the image renderers now (matplotlib; torch behind vinadv.classify), not on the first pair page
     import vinadv.classify.images  # noqa: F401
@@ -90,7 +89,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         raise InputError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
     finally:
         sock.close()  # the server holds its own duplicate of the socket
-    if args.quiet:
+    if is_quiet(args):  # the request log
         logging.getLogger("werkzeug").setLevel(logging.ERROR)
     host = f"[{args.host}]" if ":" in args.host else args.host
     print(f"vinadv viewer on http://{host}:{port}/ ({store.url}); Ctrl-C stops it", flush=True)

@@ -8,6 +8,7 @@ import csv
 import json
 import sys
 
+from vinadv.commands.output import add_output_options, note, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 
@@ -37,7 +38,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--format", choices=("csv", "jsonl", "npz"), default="csv")
     p.add_argument("--successful-only", action="store_true", help="only successful attacks (UrP or FP)")
     p.add_argument("--out", default=None, help="output file (default: stdout for csv/jsonl; required for npz)")
-    p.add_argument("--quiet", action="store_true", help="no progress or summary on stderr")
+    add_output_options(p, quiet=True)
     p.set_defaults(func=run_export)
 
 
@@ -53,9 +54,8 @@ def run_export(args: argparse.Namespace) -> int:
         if args.format == "npz":
             n = _export_npz(store, run_id, args.out, args.successful_only)
         else:
-            n = _export_text(store, run_id, args.format, args.out, args.successful_only, args.quiet)
-    if not args.quiet:
-        print(f"exported {n} pairs of run {run_id} to {args.out or 'stdout'}", file=sys.stderr)
+            n = _export_text(store, run_id, args.format, args.out, args.successful_only, args)
+    note(args, f"exported {n} pairs of run {run_id} to {args.out or 'stdout'}")
     return 0
 
 
@@ -99,9 +99,7 @@ def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
     return len(records)
 
 
-def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only: bool, quiet: bool) -> int:
-    from tqdm import tqdm
-
+def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only: bool, args: argparse.Namespace) -> int:
     total = store.count_pairs(run_id)
     n = 0
     columns = export_columns()
@@ -110,7 +108,8 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
         writer = csv.writer(stream) if fmt == "csv" else None
         if writer is not None:
             writer.writerow(columns)
-        with tqdm(total=total, unit="pair", disable=quiet or out is None, file=sys.stderr) as bar:
+        # no bar while the rows themselves go to standard output
+        with progress_bar(args, hidden=out is None, total=total, unit="pair", file=sys.stderr) as bar:
             for chunk in store.iter_pair_rows(run_id, successful_only=successful_only):
                 for row in chunk:
                     row["run_id"] = run_id

@@ -1,0 +1,107 @@
+"""The options every `eval` command shares (`vin eval`, `gppn eval`, `vinadv eval`: the maps, torch threads, where
+the figures go), and how the rollout figures are recorded and printed."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import textwrap
+import time
+
+from vinadv.commands import command_line, set_threads
+from vinadv.commands.output import add_output_options, emit
+from vinadv.errors import InputError
+from vinadv.outfile import atomic_output
+from vinadv.planners.records import RolloutMetrics
+
+
+def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
+    """The options of every `eval` command: the maps (a maps file, or N maps generated on the fly: `start_eval`),
+    torch threads and where the figures go."""
+    src = ev.add_mutually_exclusive_group(required=True)
+    src.add_argument("--data", help="maps file (.npz)")
+    src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")
+    ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
+    ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
+    ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
+    add_output_options(ev, json="the figures", quiet=True)
+
+
+def start_eval(args: argparse.Namespace):
+    """Start an `eval` command from `add_eval_arguments`' options: set the torch threads (`--threads`), then
+    return `(MapSet, source)`, the maps and a record of where they came from."""
+    from vinadv.grid.generator import generate_maps
+    from vinadv.grid.mapset import MapSet
+
+    set_threads(args.threads)
+    if args.data is not None:
+        return MapSet.load(args.data), {"data": args.data}
+    if args.n < 1:
+        raise InputError(f"--n must be >= 1, got {args.n}")
+    maps = generate_maps(args.n, args.size, args.seed, args.starts)
+    return maps, {"generated": {"n": args.n, "seed": args.seed, "size": args.size}}
+
+
+def emit_metrics(args: argparse.Namespace, measured: dict, source: dict, figures: dict, started: float) -> int:
+    """Write an `eval` command's record to `--out`, and print it as JSON (`--json`) or as text. The record: what
+    was measured (`measured`), where the maps came from (`source`), the `figures`, the seconds since `started`
+    (a `time.perf_counter()` reading) and the command line."""
+    seconds = round(time.perf_counter() - started, 2)
+    metrics = {**measured, **source, **figures, "seconds": seconds, "command": command_line()}
+    write_figures(args, metrics)
+    protocol = getattr(args, "protocol", "vinadv")
+    return emit(
+        args, metrics, lambda: _print_metrics(metrics) if protocol == "vinadv" else _print_protocol_metrics(metrics)
+    )
+
+
+def write_figures(args: argparse.Namespace, figures: dict) -> None:
+    """Write an `eval` command's record `figures` as indented JSON to `--out`, where one is given."""
+    if args.out:
+        with atomic_output(args.out, "w") as fh:
+            fh.write(json.dumps(figures, indent=2) + "\n")
+
+
+def _pct(x: float) -> str:
+    return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{100 * x:.2f}%"
+
+
+def _print_protocol_metrics(m: dict) -> None:
+    print(f"{m['maps']} maps of {m['size']}x{m['size']}, measured as {m['protocol']} ({m['weights']})")
+    if m["protocol"] == "kentsommer":
+        print(f"  rollout success   {_pct(m['success_rate'])} of {m['rollouts']} (goal prior {m['prior']:g})")
+        print(
+            f"  action accuracy   {_pct(m['action_accuracy_single_label'])} single-label, "
+            f"{m['trajectory_states']} trajectory states"
+        )
+    else:
+        print(f"  %Opt              {_pct(m['percent_optimal'])} of {m['cells']} free cells (diagonal cost 1)")
+        print(f"  %Suc              {_pct(m['percent_success'])}")
+
+
+def _print_metrics(m: dict) -> None:
+    terms = ", ".join(f"{k} {v}" for k, v in m["terminations"].items())
+    print(f"{m['maps']} maps of {m['size']}x{m['size']}, {m['rollouts']} rollouts ({m['weights']})")
+    print(f"  action accuracy   {_pct(m['action_accuracy'])} of {m['action_cells']} cells")
+    print(f"  rollout success   {_pct(m['success_rate'])}")
+    print(f"  optimal paths     {_pct(m['optimal_rate'])} (of reached: {_pct(m['optimal_rate_of_reached'])})")
+    print(f"  mean extra cost   {m['mean_extra_cost']:.4f} (relative {_pct(m['mean_extra_cost_relative'])})")
+    print(f"  terminations      {terms}")
+    print(by_length_text(m))
+
+
+def by_length_text(m: RolloutMetrics) -> str:
+    """Rollout metrics `m`'s success by the optimal path's move count (`by_length`), wrapped lines."""
+    rows = [f"{r['moves'][0]}-{r['moves'][1]}: {_pct(r['success_rate'])} of {r['rollouts']}" for r in m["by_length"]]
+    # non-breaking spaces inside a row, so the lines break between rows only
+    text = textwrap.fill(
+        ", ".join(r.replace(" ", "\xa0") for r in rows),
+        118,
+        initial_indent="  by optimal moves  ",
+        subsequent_indent=" " * 20,
+        break_on_hyphens=False,
+    )
+    return text.replace("\xa0", " ")

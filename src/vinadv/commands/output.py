@@ -1,0 +1,85 @@
+"""`--json` and `--quiet`: one meaning in every command, and how a command prints its result.
+
+- `--json`: the result as one JSON line on standard output, and nothing else there (no progress bar or progress
+  lines; notes go to standard error).
+- `--quiet`: no progress bars, progress lines, logs or notes; the result itself and errors still print.
+
+A command adds the options with `add_output_options`, shows progress where `shows_progress(args)` (or through
+`progress_bar`), prints notes with `note` and ends with `emit`, which prints the result as JSON or as text.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+from typing import Any
+
+#: the help of `--quiet`, the same in every command
+QUIET_HELP = "no progress bars, progress lines, logs or notes; the result and errors still print"
+
+
+def add_output_options(parser: argparse.ArgumentParser, json: str | None = None, quiet: bool = False) -> None:
+    """Add `--json` to `parser` when `json` names what it prints ("the summary": "print the summary as JSON"), and
+    `--quiet` (`QUIET_HELP`) when `quiet`: commands that report figures take `--json`, long ones `--quiet`."""
+    if json is not None:
+        parser.add_argument("--json", action="store_true", help=f"print {json} as JSON")
+    if quiet:
+        parser.add_argument("--quiet", action="store_true", help=QUIET_HELP)
+
+
+def is_quiet(args: argparse.Namespace) -> bool:
+    """Whether `--quiet` was given (False for a command without the option)."""
+    return bool(getattr(args, "quiet", False))
+
+
+def wants_json(args: argparse.Namespace) -> bool:
+    """Whether `--json` was given (False for a command without the option)."""
+    return bool(getattr(args, "json", False))
+
+
+def shows_progress(args: argparse.Namespace) -> bool:
+    """Whether a command shows progress bars and progress lines: neither with `--quiet` nor with `--json`."""
+    return not (is_quiet(args) or wants_json(args))
+
+
+def progress_bar(args: argparse.Namespace, *, hidden: bool = False, **options: Any):
+    """A `tqdm` progress bar (`options` are tqdm's: total, unit, desc, file ...), shown where `shows_progress(args)`
+    and not `hidden` (a command's own reason, say its data going to the terminal)."""
+    from tqdm import tqdm  # tens of milliseconds, more than `vinadv --help` takes without it
+
+    return tqdm(disable=hidden or not shows_progress(args), **options)
+
+
+def progress_lines(args: argparse.Namespace) -> Callable[[str], None] | None:
+    """A function that prints one progress line (an epoch done, flushed at once), or None where
+    `shows_progress(args)` is false: the `log` argument of the library's long functions."""
+    if not shows_progress(args):
+        return None
+    return lambda line: print(line, flush=True)
+
+
+def note(args: argparse.Namespace, text: str) -> None:
+    """Print `text`, a note beside the result (a warning, something done on the way), to standard error unless
+    `--quiet`; it never mixes into the result on standard output."""
+    if not is_quiet(args):
+        print(text, file=sys.stderr)
+
+
+def emit(
+    args: argparse.Namespace,
+    result: dict,
+    text: str | Callable[[], None],
+    json_default: Callable[[Any], Any] | None = None,
+) -> int:
+    """End a command: `result` as one JSON line with `--json` (`json_default` turns values JSON cannot hold into
+    ones it can, as `json.dumps`' `default`), else `text`, a line or a function that prints; `--quiet` does not
+    hide it. Returns the exit status, 0."""
+    if wants_json(args):
+        print(json.dumps(result, default=json_default))
+    elif callable(text):
+        text()
+    else:
+        print(text)
+    return 0

@@ -1,0 +1,199 @@
+"""The options every planner's `train` command shares (`vin train`, `gppn train`), and the body of those commands:
+the options' `TrainConfig`, the training run, the weights and the training record written."""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+from pathlib import Path
+
+from vinadv import __version__
+from vinadv.commands import LazyChoices, command_line, set_threads
+from vinadv.commands.output import add_output_options, emit, progress_lines, shows_progress
+from vinadv.errors import InputError
+from vinadv.outfile import atomic_output, check_output_path
+from vinadv.planners.records import TrainingRecord
+
+
+def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) -> None:
+    """The options every planner's `train` command shares (`vin train`, `gppn train`)."""
+    train.add_argument("--data", required=True, help="maps file (.npz, from `vinadv maps generate`)")
+    train.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
+    train.add_argument(
+        "--lr", type=float, default=lr, help=f"peak RMSprop learning rate, cosine-decayed (default {lr})"
+    )
+    train.add_argument("--batch-size", type=int, default=32, help="maps per batch (default 32)")
+    train.add_argument(
+        "--warmup",
+        type=int,
+        default=None,
+        metavar="STEPS",
+        help="linear learning-rate warm-up over the first STEPS optimizer steps "
+        "(default: 5%% of all steps, at most 200)",
+    )
+    train.add_argument("--val-fraction", type=float, default=0.05, help="maps held out for validation (default 0.05)")
+    train.add_argument("--seed", type=int, default=0, help="seed for initialisation, split and shuffling (default 0)")
+    train.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
+    train.add_argument("--k", type=int, default=None, help=k_help)
+    train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
+    train.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="MIN",
+        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
+    )
+    train.add_argument(
+        "--init",
+        metavar="WEIGHTS",
+        help="start from these weights (continue a training) instead of a fresh initialisation",
+    )
+    train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    adv = train.add_argument_group("adversarial training (vinadv.hardening)")
+    adv.add_argument(
+        "--adversarial",
+        action="store_true",
+        help="before each epoch, attack training maps with the current model and add the adversarial "
+        "maps of the harmful pairs to the training maps",
+    )
+    adv.add_argument(
+        "--adv-maps",
+        type=int,
+        default=1000,
+        metavar="M",
+        help="training maps attacked before each epoch (default 1000)",
+    )
+    adv.add_argument(
+        "--adv-strategy",
+        choices=LazyChoices("vinadv.attacks.strategies", "STRATEGIES"),
+        default="exhaustive",
+        metavar="STRATEGY",
+        help="attack strategy: %(choices)s (default exhaustive: each map's worst single obstacle)",
+    )
+    adv.add_argument("--adv-budget", type=int, default=8, help="key-points/saliency: candidates per map (default 8)")
+    adv.add_argument(
+        "--adv-objective",
+        choices=("harm", "paper"),
+        default="harm",
+        help="what the attack keeps as a map's strongest pair (default harm)",
+    )
+    adv.add_argument(
+        "--adv-start",
+        type=int,
+        default=None,
+        metavar="EPOCH",
+        help="first epoch (1-based) before which maps are attacked (default 1 with --init, else 2)",
+    )
+    add_output_options(train, json="the training record", quiet=True)
+
+
+def add_compile_argument(train: argparse.ArgumentParser) -> None:
+    """`--compile`: train through torch.compile (torch planners; the VIN's value iteration is compiled already)."""
+    train.add_argument(
+        "--compile",
+        action="store_true",
+        help="run training through torch.compile: the same function in fused kernels, about 1.4x faster on the CPU "
+        "(needs a C++ compiler; the first steps compile, about a minute)",
+    )
+
+
+def train_config(args: argparse.Namespace, **extra):
+    """The `TrainConfig` of a `train` command's shared options (`add_train_arguments`), plus `extra` fields."""
+    from vinadv.planners.training import TrainConfig
+
+    config = TrainConfig(
+        epochs=args.epochs,
+        lr=args.lr,
+        batch_size=args.batch_size,
+        val_fraction=args.val_fraction,
+        seed=args.seed,
+        device=args.device,
+        k=args.k,
+        time_limit_min=args.time_limit,
+        init=args.init,
+        warmup_steps=args.warmup,
+        adversarial=adversarial_config(args),
+        **extra,
+    )
+    config.validate()
+    return config
+
+
+def adversarial_config(args: argparse.Namespace) -> dict | None:
+    """The `AdversarialConfig` of `--adversarial` and its options, as a dict (None without `--adversarial`)."""
+    if not args.adversarial:
+        return None
+    from vinadv.hardening import AdversarialConfig
+
+    start = args.adv_start if args.adv_start is not None else (1 if args.init else 2)
+    for flag, value in (("--adv-maps", args.adv_maps), ("--adv-budget", args.adv_budget), ("--adv-start", start)):
+        if value < 1:  # checked here, in flags (strategy and objective are argparse choices)
+            raise InputError(f"{flag} must be >= 1, got {value}")
+    config = AdversarialConfig(
+        maps_per_epoch=args.adv_maps,
+        strategy=args.adv_strategy,
+        budget=args.adv_budget,
+        objective=args.adv_objective,
+        start_epoch=start - 1,
+    )
+    config.validate()
+    return config.to_dict()
+
+
+def run_training(args: argparse.Namespace, config, train, save) -> int:
+    """Load the data, train with `train(maps, config, ...)` (checkpoint OUT.ckpt, `--resume`), write the weights
+    with `save(model, out, record)` and the record next to them; the body of every `train` command."""
+    from vinadv.grid.mapset import MapSet
+    from vinadv.planners.weights import weights_checksum
+
+    set_threads(args.threads)
+    check_output_path(args.out, mkdir=True)  # before hours of training: a folder in the way
+    maps = MapSet.load(args.data)
+    if len(maps) < 2:
+        raise InputError(f"{args.data}: {len(maps)} maps; training needs at least 2")
+    out = Path(args.out)
+    checkpoint = out.with_name(out.name + ".ckpt")
+    if checkpoint.exists() and not args.resume:
+        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
+    record: TrainingRecord = {
+        "command": command_line(),
+        "vinadv": __version__,
+        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "data": {
+            "path": str(args.data),
+            "sha256": weights_checksum(args.data),
+            "maps": len(maps),
+            "size": maps.size,
+            "seed": int(maps.seed),
+            "corner_cutting": bool(maps.corner_cutting),
+        },
+    }
+    augment = None
+    if config.adversarial is not None:
+        from vinadv.hardening import AdversarialConfig, AdversarialMaps
+
+        augment = AdversarialMaps(maps, AdversarialConfig(**config.adversarial), seed=config.seed)
+    model, record = train(
+        maps,
+        config,
+        checkpoint=checkpoint,
+        resume=args.resume,
+        progress=shows_progress(args),
+        record=record,
+        log=progress_lines(args),
+        augment=augment,
+    )
+    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    save(model, out, record)
+    record_path = out.with_suffix(".json")
+    with atomic_output(record_path, "w") as fh:
+        fh.write(json.dumps(record, indent=2) + "\n")
+    checkpoint.unlink(missing_ok=True)
+    return emit(
+        args,
+        record,
+        f"wrote {out} and {record_path}: {record['epochs_done']} epochs in "
+        f"{record['wall_time_s']:.0f} s, val action accuracy {record['epochs'][-1]['val_action_accuracy']}",
+    )
