@@ -8,12 +8,16 @@ import json
 import math
 import textwrap
 import time
+from typing import TYPE_CHECKING
 
 from vinadv.commands import command_line, set_threads
 from vinadv.commands.output import add_output_options, emit
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output
 from vinadv.planners.records import RolloutMetrics
+
+if TYPE_CHECKING:  # NumPy and Numba behind it: imported by the command that evaluates
+    from vinadv.grid.mapset import MapSet
 
 
 def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
@@ -30,7 +34,7 @@ def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
     add_output_options(ev, json="the figures", quiet=True)
 
 
-def start_eval(args: argparse.Namespace):
+def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:
     """Start an `eval` command from `add_eval_arguments`' options: set the torch threads (`--threads`), then
     return `(MapSet, source)`, the maps and a record of where they came from."""
     from vinadv.grid.generator import generate_maps

@@ -6,7 +6,9 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from vinadv import __version__
 from vinadv.commands import LazyChoices, command_line, set_threads
@@ -14,6 +16,9 @@ from vinadv.commands.output import add_output_options, emit, progress_lines, sho
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 from vinadv.planners.records import TrainingRecord
+
+if TYPE_CHECKING:  # PyTorch behind it: imported by the command that trains
+    from vinadv.planners.training import TrainConfig
 
 
 def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) -> None:
@@ -99,7 +104,7 @@ def add_compile_argument(train: argparse.ArgumentParser) -> None:
     )
 
 
-def train_config(args: argparse.Namespace, **extra):
+def train_config(args: argparse.Namespace, **extra: Any) -> TrainConfig:
     """The `TrainConfig` of a `train` command's shared options (`add_train_arguments`), plus `extra` fields."""
     from vinadv.planners.training import TrainConfig
 
@@ -142,7 +147,9 @@ def adversarial_config(args: argparse.Namespace) -> dict | None:
     return config.to_dict()
 
 
-def run_training(args: argparse.Namespace, config, train, save) -> int:
+def run_training(
+    args: argparse.Namespace, config: TrainConfig, train: Callable[..., tuple], save: Callable[..., None]
+) -> int:
     """Load the data, train with `train(maps, config, ...)` (checkpoint OUT.ckpt, `--resume`), write the weights
     with `save(model, out, record)` and the record next to them; the body of every `train` command."""
     from vinadv.grid.mapset import MapSet
