@@ -33,6 +33,11 @@ HARMS = ("harmful", "harmless", "invalid")
 #: same names are the `map_pairs` columns and the export fields.
 HARM_FLOAT_FIELDS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a")
 HARM_FIELDS = (*HARM_FLOAT_FIELDS, "expert_label", "harm")
+#: what the evaluation stage (`vinadv evaluate`) measures of a run besides the classifier comparison, one stored
+#: result each (`Store.add_measurement`): the planner's quality and the processing time of the paper's 100 pairs
+PLANNER_QUALITY = "planner_quality"
+TIMING = "timing"
+MEASUREMENTS = (PLANNER_QUALITY, TIMING)
 
 
 def is_success(labels) -> np.ndarray:

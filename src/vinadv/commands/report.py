@@ -1,4 +1,5 @@
-"""`vinadv evaluate` (classifier comparison on a stored run, stored) and `vinadv report` (the HTML report)."""
+"""`vinadv evaluate` (the evaluation stage on a stored run: classifier comparison, planner quality, processing
+time; stored) and `vinadv report` (the HTML report, read from the store)."""
 
 from __future__ import annotations
 
@@ -13,11 +14,14 @@ CLASSIFIER_NAMES = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw", "hybrid"
 def register(subparsers) -> None:
     ev = subparsers.add_parser(
         "evaluate",
-        help="compare FP/DP classifiers on a stored run's pairs and store the results (for `vinadv report`)",
+        help="evaluate a stored run (classifier comparison, planner quality, processing time) and store the "
+        "results (for `vinadv report`)",
         description="The paper's classifier comparison on the FP/DP pairs of a stored run (truth: the exact rule "
         "labeller): 7:3 stratified split; each classifier trained on the balanced training set (flipped/rotated "
         "copies of the minority class) and on the imbalanced one, tested on the real mix; accuracy against "
-        "training set size; ROC and PR curves. Results go to the database's `evaluations` table.",
+        "training set size; ROC and PR curves. Results go to the database's `evaluations` table. Then the "
+        "quality of the run's planner and the processing time of the paper's 100 pairs (table 7), stored with "
+        "the run.",
     )
     ev.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     ev.add_argument("--run", help="run id, or run name (its latest run); default: the latest run")
@@ -48,7 +52,8 @@ def register(subparsers) -> None:
         description="Write DIR/index.html (self-contained, relative links), PNG and SVG figures and CSV tables: "
         "example pairs (figs. 1, 2, 5), the four categories (fig. 3), the category distribution (table 4, per run "
         "with --runs), the stored classifier comparison (tables 5, 6, figs. 8, 9), processing time for 100 pairs "
-        "(table 7, measured now), the VIN's quality and the run's configuration; the paper's numbers beside ours.",
+        "(table 7), the planner's quality (both as `vinadv evaluate` stored them) and the run's configuration; the "
+        "paper's numbers beside ours.",
     )
     rep.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     rep.add_argument(
@@ -82,7 +87,8 @@ def _latest_run(store) -> int:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from vinadv.report.evaluate import CLASSIFIERS, evaluate_run, parse_list, parse_sizes
+    from vinadv.evaluation import evaluate_planner_quality, evaluate_timing
+    from vinadv.evaluation.classifiers import CLASSIFIERS, evaluate_run, parse_list, parse_sizes
     from vinadv.store import Store
 
     classifiers = parse_list(args.classifiers, CLASSIFIERS, "--classifiers")
@@ -90,7 +96,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     with Store.open(args.db, create=False) as store:
         run_id = store.resolve_run(args.run) if args.run is not None else _latest_run(store)
         rows = evaluate_run(store, run_id, classifiers, args.setting, sizes, args.seed, progress=shows_progress(args))
-    summary = {"run_id": run_id, "rows": [{k: v for k, v in r.items() if k != "curves"} for r in rows]}
+        quality = evaluate_planner_quality(store, run_id)
+        timing = evaluate_timing(store, run_id)
+    summary = {
+        "run_id": run_id,
+        "rows": [{k: v for k, v in r.items() if k != "curves"} for r in rows],
+        "planner_quality": quality,
+        "timing": timing,
+    }
 
     def text() -> None:
         print(f"run {run_id}: {len(rows)} evaluations stored (setting {args.setting}, seed {args.seed})")
@@ -107,6 +120,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 f"{_f(m['per_class']['FP']['f1'], 6)} {_f(m.get('roc_auc'), 6)} {_f(m.get('average_precision'), 6)} "
                 f"{_f(m.get('training_s'), 8, 2)} {_f(m.get('prediction_s_per_100'), 8, 4)}"
             )
+        print(f"planner quality: {quality['source']}")
+        print(
+            f"processing time of {timing['pairs']} pairs: rule {timing['rule_s']:.4f} s, "
+            f"read from the database {timing['read_s']:.4f} s"
+        )
         print(f"write the report: vinadv report --db {store.url} --run {run_id} --out DIR")
 
     return emit(args, summary, text)
@@ -125,10 +143,16 @@ def cmd_report(args: argparse.Namespace) -> int:
         timing = result.timing
         print(f"report of run {result.run_id}: {result.index} ({len(set(result.files))} files)")
         hybrid = timing["hybrid_svm_s"]
-        print(
+        measured = (
             f"{timing['pairs']} stored pairs: rule {timing['rule_s']:.4f} s"
+            if timing["pairs"] is not None
+            else "processing times not evaluated"
+        )
+        print(
+            measured
             + "".join(f", hybrid+SVM ({setting}, from the evaluation) {s:.4f} s" for setting, s in hybrid.items())
-            + f" (paper 0.22 s; manual ~300 s); read from the database {timing['read_s']:.4f} s"
+            + " (paper 0.22 s; manual ~300 s)"
+            + (f"; read from the database {timing['read_s']:.4f} s" if timing["pairs"] is not None else "")
             + ("" if result.evaluated else "; no classifier evaluation stored (see `vinadv evaluate`)")
         )
 

@@ -1,7 +1,6 @@
-"""The evaluation report (every table and figure of the paper, regenerated from a stored run) and the classifier
-comparison behind it (`vinadv evaluate`)."""
+"""The evaluation report: every table and figure of the paper, regenerated from a stored run and what the
+evaluation stage (`vinadv.evaluation`, `vinadv evaluate`) stored of it. The report reads; it computes no evaluation."""
 
-from vinadv.report.build import build_report, report_run, write_report
-from vinadv.report.evaluate import CLASSIFIERS, evaluate_run
+from vinadv.report.build import build_report, write_report
 
-__all__ = ["CLASSIFIERS", "build_report", "evaluate_run", "report_run", "write_report"]
+__all__ = ["build_report", "write_report"]

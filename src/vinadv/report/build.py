@@ -1,10 +1,11 @@
 """`vinadv report`: the paper's evaluation of a stored run as one self-contained HTML page, figures and CSV tables.
 
-`build_report(db, out_dir, run_id=None, runs=None)` gathers every section (`vinadv.report.gather`: the database
-through `Store`, computations through `vinadv.report.evaluate`) and renders it (`vinadv.report.render`: Jinja2
+`build_report(db, out_dir, run_id=None, runs=None)` gathers every section (`vinadv.report.sections`: the database
+through `Store`, what the evaluation stage stored included) and renders it (`vinadv.report.render`: Jinja2
 templates, one stylesheet, CSV files) into `out_dir`: `index.html` (relative links only, no script, no external
-resource), PNG + SVG figures and CSV tables. `report_run` first runs the classifier comparison of a fresh run (what
-`vinadv run --report` does). The paper's numbers are shown beside ours wherever the paper has one.
+resource), PNG + SVG figures and CSV tables. The report computes no evaluation: `vinadv evaluate`
+(`vinadv.evaluation`) does, and `vinadv run --report` runs it first. The paper's numbers are shown beside ours
+wherever the paper has one.
 """
 
 from __future__ import annotations
@@ -13,10 +14,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from vinadv.errors import InputError
-from vinadv.report.gather import SECTIONS, Context, gather_report
+from vinadv.report.data import Context
+from vinadv.report.sections import SECTIONS, gather_report
 from vinadv.report.render import render_report
 
-__all__ = ["SECTIONS", "ReportResult", "build_report", "report_run", "robustness_report", "write_report"]
+__all__ = ["SECTIONS", "ReportResult", "build_report", "robustness_report", "write_report"]
 
 
 @dataclass
@@ -30,7 +32,6 @@ class ReportResult:
     timing: dict = field(default_factory=dict)
     vin: dict = field(default_factory=dict)
     evaluated: bool = False
-    comparison: str | None = None  # why `report_run` ran no comparison, if it did not
 
     def to_dict(self) -> dict:
         return {
@@ -41,7 +42,6 @@ class ReportResult:
             "timing": self.timing,
             "vin": self.vin,
             "evaluated": self.evaluated,
-            "comparison": self.comparison,
         }
 
 
@@ -65,7 +65,7 @@ def build_report(
     if out.exists() and not out.is_dir():
         raise InputError(f"out_dir {out}: exists and is not a directory")
     with Store.open(db, readonly=True) as store:
-        ctx = _context(store, out, run_id, runs)
+        ctx = report_context(store, out, run_id, runs)
         out.mkdir(parents=True, exist_ok=True)
         data = gather_report(ctx)
     index = render_report(data, out)
@@ -91,23 +91,8 @@ def build_report(
     )
 
 
-def report_run(db: str | None, out_dir, run_id: int, *, evaluate: bool = True, progress: bool = False) -> ReportResult:
-    """The report of a fresh run, with its classifier comparison (`evaluate.compare_for_report`: both settings,
-    the quick profile) run and stored first unless `evaluate` is False or the run has a stored evaluation."""
-    from vinadv.report.evaluate import compare_for_report
-    from vinadv.store import Store
-
-    reason = None
-    if evaluate:
-        with Store.open(db, create=False) as store:
-            if not store.read_evaluations(run_id):
-                _, reason = compare_for_report(store, run_id, progress=progress)
-    result = build_report(db, out_dir, run_id=run_id)
-    result.comparison = reason if evaluate else "skipped"
-    return result
-
-
-def _context(store, out: Path, run_id: int | str | None, runs: list[int | str] | None) -> Context:
+def report_context(store, out: Path, run_id: int | str | None, runs: list[int | str] | None) -> Context:
+    """The `Context` of a report on the open `store` into `out` (see `build_report` for `run_id` and `runs`)."""
     listed = store.list_runs()
     if not listed:
         raise InputError(f"database {store.url}: no runs stored yet (run `vinadv run` first)")
@@ -125,7 +110,7 @@ def robustness_report(out_dir, db: str | None = None, results: list[dict] | None
     """Write the robustness page (`vinadv robustness --report DIR`) to `out_dir`: every robustness benchmark stored in
     `db` (when given), then `results`, benchmarks not stored (rows as `Store.read_robustness` returns them, `id`
     None). Return the path of `index.html`."""
-    from vinadv.report.gather import robustness_section
+    from vinadv.report.sections.robustness import robustness_section
     from vinadv.report.render import render_robustness_page
 
     out = Path(out_dir)

@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from vinadv.classify import render_path_images  # noqa: E402
+from vinadv.classify.images import render_path_images  # noqa: E402
 from vinadv.grid.draw import draw_map, map_legend  # noqa: E402
 from vinadv.outfile import atomic_output  # noqa: E402
 from vinadv.vocabulary import STRENGTH_ORDER  # noqa: E402
@@ -162,7 +162,7 @@ def _cost(value: float) -> str:
 def harm_pairs(records, examples, stem: Path, per_row: int = 2) -> list[str]:
     """The harm examples: each pair of `records` as its original map (the planner's path and the expert path) next
     to its adversarial map (likewise, the added obstacle marked), `per_row` pairs to a row, their costs and
-    regrets under the maps. `examples`: one `gather.HarmExample` per record (the expert paths, the costs)."""
+    regrets under the maps. `examples`: one `sections.harm.HarmExample` per record (the expert paths, the costs)."""
     n = len(records)
     per_row = max(1, min(per_row, n))
     rows = -(-n // per_row)

@@ -14,11 +14,12 @@ import jinja2
 
 from vinadv.outfile import atomic_output
 from vinadv.report import paper
-from vinadv.report.gather import ALL_LABELS, CATEGORY_ORDER, SECTIONS, ReportData, Table
+from vinadv.report.data import ALL_LABELS, CATEGORY_ORDER, ReportData, Table
+from vinadv.report.sections import SECTIONS
 
 STYLESHEET = "style.css"
 #: the page's sections in order, `(id, heading)`: the gathered ones and the list of files
-PAGE_SECTIONS = (*((sid, title) for sid, title, _ in SECTIONS), ("files", "Files"))
+PAGE_SECTIONS = (*((s.id, s.heading) for s in SECTIONS), ("files", "Files"))
 
 
 def num(value, digits: int = 3) -> str:
@@ -98,7 +99,7 @@ def write_tables(data: ReportData, out: Path) -> None:
 
 def render_robustness_page(data, out: Path, url: str | None = None) -> Path:
     """The robustness page of `vinadv robustness --report`: `index.html` with only the robustness section
-    (`data`: a `gather.RobustnessData`), its CSV table and the stylesheet, into `out`; return the page's path."""
+    (`data`: a `sections.robustness.RobustnessData`), its CSV table and the stylesheet, into `out`; return the page's path."""
     import time
 
     from vinadv import __version__

@@ -1,0 +1,140 @@
+"""Robustness benchmarks."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from vinadv.report.data import Context, Figure, Table
+
+#: the worst case over the strategies, as `vinadv.robustness.WORST_CASE` names it (not imported: no torch here)
+WORST_CASE = "worst case"
+
+
+@dataclass(frozen=True)
+class Benchmark:
+    """One stored robustness benchmark (`vinadv robustness`): what was measured and its figures, as stored
+    (`worst`: the worst case by k, `by_strategy`: {strategy: figures by k}; figures as `Figures.to_dict`)."""
+
+    id: int | None
+    created: str
+    planner: str
+    weights: str | None
+    n: int
+    size: int
+    maps_seed: int
+    objective: str
+    strategies: tuple[str, ...]
+    clean_success: float | None
+    clean_regret: float | None
+    worst: list[dict]
+    by_strategy: dict[str, list[dict]]
+    seconds: dict[str, float]
+
+    @property
+    def name(self) -> str:
+        """The benchmark in a legend: planner, weights (first 8 hex digits) and id."""
+        weights = f" {self.weights[:8]}" if self.weights else ""
+        return f"{self.planner}{weights}" + (f" (#{self.id})" if self.id is not None else "")
+
+
+@dataclass
+class RobustnessData:
+    """The robustness benchmarks of the database, oldest first (none: `benchmarks` empty, nothing else)."""
+
+    benchmarks: list[Benchmark]
+    table: Table | None = None
+    figure: Figure | None = None
+
+    def tables(self) -> list[Table]:
+        return [] if self.table is None else [self.table]
+
+    def figures(self) -> list[Figure]:
+        return [] if self.figure is None else [self.figure]
+
+    @property
+    def max_k(self) -> int:
+        return max([0] + [len(b.worst) for b in self.benchmarks])
+
+
+def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
+    """The robustness section of `rows`, robustness benchmarks as `Store.read_robustness` returns them (`id` None for
+    one not stored): the comparison table, its CSV (every strategy and the worst case at every k) and the curves."""
+    from vinadv.report import figures
+
+    benchmarks = []
+    for row in rows:
+        result, settings = row["result"], row["settings"]
+        benchmarks.append(
+            Benchmark(
+                id=row.get("id"),
+                created=str(row.get("created") or ""),
+                planner=str(row["planner"]),
+                weights=row.get("weights_checksum"),
+                n=int(settings["n"]),
+                size=int(settings["size"]),
+                maps_seed=int(settings["maps_seed"]),
+                objective=str(settings["objective"]),
+                strategies=tuple(settings["strategies"]),
+                clean_success=result["clean"]["success_rate"],
+                clean_regret=result["clean"]["mean_regret"],
+                worst=list(result["overall"]),
+                by_strategy={name: s["by_obstacles"] for name, s in result["strategies"].items()},
+                seconds={
+                    **{name: s["seconds"] for name, s in result["strategies"].items()},
+                    "total": result["seconds"],
+                },
+            )
+        )
+    data = RobustnessData(benchmarks=benchmarks)
+    if not benchmarks:
+        return data
+    keys = ("valid", "broken", "paper_success_rate", "harmful", "harmful_rate", "reached", "mean_regret")
+    data.table = Table(
+        "robustness.csv",
+        (
+            "benchmark",
+            "planner",
+            "weights_sha256",
+            "maps",
+            "size",
+            "maps_seed",
+            "objective",
+            "clean_success",
+            "strategy",
+            "k",
+            *keys,
+            "seconds",
+        ),
+        [
+            [
+                b.id,
+                b.planner,
+                b.weights,
+                b.n,
+                b.size,
+                b.maps_seed,
+                b.objective,
+                b.clean_success,
+                name,
+                f["k"],
+                *(f[key] for key in keys),
+                b.seconds.get(name, b.seconds["total"]),
+            ]
+            for b in benchmarks
+            for name, by_k in (*b.by_strategy.items(), (WORST_CASE, b.worst))
+            for f in by_k
+        ],
+    )
+    data.figure = Figure(
+        tuple(figures.robustness_curves([(b.name, b.worst) for b in benchmarks], out / "fig_robustness")),
+        "Robustness curves: the share of valid maps that k added obstacles make harmful (left) or break by the "
+        "paper's definition, UrP or FP (right), worst case over the strategies of each benchmark.",
+        "robustness curves",
+        880,
+    )
+    return data
+
+
+def gather(ctx: Context) -> RobustnessData:
+    return robustness_section(ctx.store.read_robustness(), ctx.out)
