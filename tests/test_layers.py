@@ -1,7 +1,12 @@
 """Data flows one way (grid -> planners -> attacks -> classify -> identify -> store/report), and the packages import
 each other in one order: no import circle between them and no reaching back upstream, counting the imports inside
 functions too (they run all the same). The store is a sink that knows only grids and the vocabulary, so the stages
-that hand it their results (identify, robustness, pipeline) may import it."""
+that hand it their results (identify, robustness, pipeline, evaluation) may import it.
+
+The report only reads: what it shows is stored (the evaluation stage computes it), so besides the layers it may not
+import the planners, the evaluation stage or classifier training; of `vinadv.classify` it may use only the exact
+rule labeller, the path pair batch, the harm summary, the path features and the path images it draws
+(`REPORT_CLASSIFY`)."""
 
 import ast
 from pathlib import Path
@@ -27,12 +32,37 @@ LAYERS = {
     "hardening": 7,
     "robustness": 8,
     "pipeline": 8,
+    "evaluation": 8,
     "report": 9,
     "viewer": 9,
     "cluster": 9,
     "commands": 10,
     "cli": 11,
 }
+
+
+#: what the report may not import though it is a lower layer: computing (planning, evaluating, training) is the
+#: evaluation stage's job
+REPORT_FORBIDDEN = ("planners", "evaluation", "attacks", "identify", "pipeline", "hardening", "robustness")
+#: the modules of `vinadv.classify` the report may import (none trains a classifier; the package itself is refused,
+#: its lazy names reach the trained models)
+REPORT_CLASSIFY = ("rule", "batch", "harm", "features", "images")
+
+
+def imported_vinadv_modules(path: Path) -> set[str]:
+    """Full `vinadv.X.Y` module names imported anywhere in the file (`from vinadv.X import Y` counts as `vinadv.X`
+    unless `vinadv.X.Y` is a module of `SOURCE`)."""
+    modules = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            for alias in node.names:
+                candidate = f"{node.module}.{alias.name}"
+                parts = candidate.split(".")[1:]
+                is_module = (SOURCE.joinpath(*parts).with_suffix(".py")).exists() or SOURCE.joinpath(*parts).is_dir()
+                modules.add(candidate if is_module else node.module)
+        elif isinstance(node, ast.Import):
+            modules.update(a.name for a in node.names)
+    return {m for m in modules if m.split(".")[0] == "vinadv"}
 
 
 def imported_vinadv_names(path: Path) -> set[str]:
@@ -78,3 +108,30 @@ def test_relative_imports_are_not_used():
     for path in SOURCE.rglob("*.py"):
         tree = ast.parse(path.read_text(encoding="utf-8"))
         assert not [n for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.level], path
+
+
+def test_the_report_only_reads():
+    reaching = []
+    for path in sorted((SOURCE / "report").rglob("*.py")):
+        for module in imported_vinadv_modules(path):
+            parts = module.split(".")
+            if len(parts) > 1 and parts[1] in REPORT_FORBIDDEN:
+                reaching.append(f"{path.relative_to(SOURCE)} imports {module}")
+            if len(parts) > 1 and parts[1] == "classify" and (len(parts) < 3 or parts[2] not in REPORT_CLASSIFY):
+                reaching.append(f"{path.relative_to(SOURCE)} imports {module}")
+    assert not reaching, reaching
+
+
+def test_the_report_check_sees_a_forbidden_import(tmp_path):
+    # the check's own oracle: each line below is one import the report may not make
+    source = tmp_path / "x.py"
+    source.write_text(
+        "from vinadv.classify import label_batch\nimport vinadv.classify.models\n"
+        "from vinadv.planners.registry import load_planner\nfrom vinadv.classify.rule import label_batch\n"
+    )
+    assert imported_vinadv_modules(source) == {
+        "vinadv.classify",
+        "vinadv.classify.models",
+        "vinadv.planners.registry",
+        "vinadv.classify.rule",
+    }

@@ -3,8 +3,10 @@ aside (`normalise_html`, `normalise_csv`).
 
 The store is built so that every CPU gives the same rows: two runs of `greedy_planner.make` (integer logits, no
 float ties) with exhaustive / key-points attacks (no gradients), and a classifier comparison read from
-`baseline/evaluations.json` (rows of `vinadv evaluate` stored once, so no classifier is trained here). The planner
-quality and processing-time sections come from the evaluation stage on that store.
+`baseline/evaluations.json` (rows of `vinadv evaluate` stored once, so no classifier is trained here). The planner's
+quality and the processing times are the evaluation stage's (`vinadv.evaluation`), run on that store. The baseline
+was frozen from the report as it was before the report stopped computing (issue 31), so the test holds that moving
+the evaluation out of the report changed nothing on the page.
 
 `baseline/` holds `index.html` and every CSV table, normalised. To re-freeze after an intended change to the page:
 `VINADV_WRITE_REPORT_BASELINE=1 pytest tests/report/test_report_baseline.py` (it rewrites the files and fails, so
@@ -22,6 +24,7 @@ from pathlib import Path
 
 import pytest
 
+from vinadv.evaluation import evaluate_planner_quality, evaluate_timing
 from vinadv.pipeline import RunConfig, run_pipeline
 from vinadv.report import build_report
 from vinadv.store import Store
@@ -77,7 +80,8 @@ def normalise_csv(text: str, tmp: Path) -> str:
 
 
 def build_store(folder: Path) -> tuple[str, list[int]]:
-    """The baseline's database in `folder`: the two runs and the stored classifier comparison of run 1."""
+    """The baseline's database in `folder`: the two runs, the stored classifier comparison of run 1 and the
+    evaluation stage's measurements of run 1."""
     url = f"sqlite:///{folder / 'baseline.db'}"
     ids = []
     for name, attack, obstacles in RUNS:
@@ -86,6 +90,8 @@ def build_store(folder: Path) -> tuple[str, list[int]]:
     rows = json.loads((BASELINE / "evaluations.json").read_text(encoding="utf-8"))
     with Store.open(url) as store:
         store.add_evaluations(ids[0], rows)
+        evaluate_planner_quality(store, ids[0])
+        evaluate_timing(store, ids[0])
     return url, ids
 
 

@@ -17,8 +17,9 @@ from tests.store.oracle import parse_map, parse_path
 from tests.store.test_store_harm import HARM_COLUMNS, HARM_INDEX
 
 from vinadv.report import write_report
-from vinadv.report.build import _context
-from vinadv.report.gather import HARM_EXAMPLES_SHOWN, gather_report
+from vinadv.report.build import report_context
+from vinadv.report.sections import gather_report
+from vinadv.report.sections.harm import HARM_EXAMPLES_SHOWN
 from vinadv.report.render import render_report
 from vinadv.store import Store
 
@@ -52,7 +53,7 @@ def _harm_only(url: str, run_id: int, out: Path):
     """The harm section alone, gathered and rendered into `out` (the whole report: the last two tests)."""
     out.mkdir(parents=True, exist_ok=True)
     with Store.open(url, readonly=True) as store:
-        data = gather_report(_context(store, out, run_id, None), order=["harm"])
+        data = gather_report(report_context(store, out, run_id, None), order=["harm"])
     render_report(data, out)
     return data.sections["harm"]
 

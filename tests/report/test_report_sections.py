@@ -10,28 +10,26 @@ import re
 import pytest
 from tests.store.oracle import parse_path
 
-from vinadv.report.build import _context
-from vinadv.report.gather import SECTIONS, gather_report
+from vinadv.report.build import report_context
+from vinadv.report.sections import SECTIONS, gather_report
 from vinadv.report.render import PAGE_SECTIONS, render_page, render_report
 from vinadv.store import Store
 
-#: sections whose data has no time measured while gathering (those differ from one gathering to the next)
-TIMELESS = ("run", "examples", "categories", "distribution", "harm", "classifiers")
 
 
 def _gather(url, out, order, runs):
     out.mkdir(parents=True, exist_ok=True)
     with Store.open(url, create=False) as store:
-        return gather_report(_context(store, out, None, runs), order=order)
+        return gather_report(report_context(store, out, None, runs), order=order)
 
 
 def test_sections_do_not_depend_on_the_order_they_are_gathered_in(evaluated, tmp_path):
     url, (saliency, near_path), _ = evaluated
-    ids = [sid for sid, _, _ in SECTIONS]
+    ids = [s.id for s in SECTIONS]
     forward = _gather(url, tmp_path / "a", ids, [saliency, near_path])
     backward = _gather(url, tmp_path / "b", ids[::-1], [saliency, near_path])
     assert list(forward.sections) == list(backward.sections) == ids
-    for sid in TIMELESS:
+    for sid in ids:  # every section: the report measures nothing itself, it reads what the evaluation stored
         assert forward.sections[sid] == backward.sections[sid], sid
     assert forward.files() == backward.files()
     # the same figure bytes whichever order wrote them (PNG: the SVGs carry matplotlib's random ids)
@@ -40,7 +38,7 @@ def test_sections_do_not_depend_on_the_order_they_are_gathered_in(evaluated, tmp
             assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
 
 
-@pytest.mark.parametrize("sid", [sid for sid, _, _ in SECTIONS])
+@pytest.mark.parametrize("sid", [s.id for s in SECTIONS])
 def test_each_section_renders_from_its_gathered_data_alone(evaluated, tmp_path, sid):
     url, (saliency, _), _ = evaluated
     data = _gather(url, tmp_path, [sid], [saliency])

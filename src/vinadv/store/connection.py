@@ -31,6 +31,7 @@ from vinadv.store.schema import (
     SCHEMA_VERSION,
     TABLES,
     UPGRADABLE_VERSIONS,
+    UPGRADE_TABLES,
     UPGRADE_COLUMNS,
     map_pairs,
     meta_table,
@@ -172,6 +173,8 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
         for table in TABLES:
             if table.name not in present and table in ADDITIVE_TABLES:
                 continue  # created below (or, read-only, treated as empty)
+            if table.name not in present and version in UPGRADABLE_VERSIONS and table in UPGRADE_TABLES:
+                continue  # created by `upgrade` (or, read-only, treated as empty)
             if table.name not in present:
                 raise InputError(f"database {shown}: wrong schema: table {table.name} is missing")
             have = {c["name"] for c in inspector.get_columns(table.name)}
@@ -201,9 +204,10 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
 
 
 def upgrade(engine: sa.Engine) -> None:
-    """Schema version 1 or 2 -> 3: add the `UPGRADE_COLUMNS` the database lacks (the harm columns, `added_more`;
-    all nullable, existing rows read them as NULL), then record the new version. Only the missing columns are
-    added, so an upgrade cut short (MySQL commits each ALTER on its own) is finished by the next open."""
+    """Schema version 1, 2 or 3 -> 4: add the `UPGRADE_COLUMNS` the database lacks (the harm columns, `added_more`;
+    all nullable, existing rows read them as NULL) and the `UPGRADE_TABLES` (`measurements`), then record the new
+    version. Only what is missing is added, so an upgrade cut short (MySQL commits each ALTER on its own) is
+    finished by the next open."""
     prep = engine.dialect.identifier_preparer
     with engine.begin() as conn:
         have = {c["name"] for c in sa.inspect(conn).get_columns(map_pairs.name)}
@@ -212,6 +216,8 @@ def upgrade(engine: sa.Engine) -> None:
                 kind = map_pairs.c[name].type.compile(dialect=engine.dialect)
                 table, column = prep.format_table(map_pairs), prep.quote(name)
                 conn.execute(sa.text(f"ALTER TABLE {table} ADD COLUMN {column} {kind}"))
+        for new_table in UPGRADE_TABLES:
+            new_table.create(conn, checkfirst=True)
         conn.execute(meta_table.update().where(meta_table.c.key == "schema_version").values(value=SCHEMA_VERSION))
 
 

@@ -1,5 +1,7 @@
-"""Benchmark results kept in a `Store`: classifier evaluations of a run (`evaluations`) and robustness benchmarks
-of planners (`robustness`). Both tables are additive: created on first write, read as empty where missing."""
+"""Benchmark results kept in a `Store`: classifier evaluations of a run (`evaluations`), the evaluation stage's
+other measurements of a run (`measurements`: planner quality, processing time) and robustness benchmarks of planners
+(`robustness`). `evaluations` and `robustness` are additive: created on first write; every one of the three reads as
+empty where missing (`measurements` in an older database opened read-only)."""
 
 from __future__ import annotations
 
@@ -8,9 +10,11 @@ from collections.abc import Sequence
 import sqlalchemy as sa
 
 from vinadv import __version__
+from vinadv.errors import InputError
 from vinadv.store.connection import utcnow
 from vinadv.store.runs import RunQueries
-from vinadv.store.schema import evaluations, robustness
+from vinadv.store.schema import evaluations, measurements, robustness
+from vinadv.vocabulary import MEASUREMENTS
 
 
 class EvaluationQueries(RunQueries):
@@ -57,6 +61,33 @@ class EvaluationQueries(RunQueries):
                 .all()
             )
         return [dict(r) for r in rows]
+
+    def add_measurement(self, run_id: int, kind: str, result: dict, version: str = __version__) -> int:
+        """Store what the evaluation stage measured of a run: `kind` one of `vinadv.vocabulary.MEASUREMENTS`,
+        `result` a JSON dict; return its row id. The newest of a run and kind is the one `read_measurement` gives."""
+        if kind not in MEASUREMENTS:
+            raise InputError(f"kind: {kind!r} not in {', '.join(MEASUREMENTS)}", "kind")
+        self.run_info(run_id)  # InputError for an unknown run
+        with self.engine.begin() as conn:
+            row = conn.execute(
+                measurements.insert().values(
+                    run_id=int(run_id), created=utcnow(), kind=kind, result=result, version=version
+                )
+            )
+            return int(row.inserted_primary_key[0])
+
+    def read_measurement(self, run_id: int, kind: str) -> dict | None:
+        """The newest stored `kind` measurement of the run (the `result` dict), None when there is none (or the
+        database predates the table)."""
+        with self.engine.connect() as conn:
+            if not sa.inspect(conn).has_table(measurements.name):
+                return None
+            return conn.execute(
+                sa.select(measurements.c.result)
+                .where(measurements.c.run_id == int(run_id), measurements.c.kind == kind)
+                .order_by(measurements.c.id.desc())
+                .limit(1)
+            ).scalar_one_or_none()
 
     def add_robustness(
         self, planner: str, weights_checksum: str | None, settings: dict, result: dict, version: str = __version__

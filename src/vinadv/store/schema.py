@@ -11,13 +11,17 @@ Tables:
   creates it in an older database instead of refusing it (`ADDITIVE_TABLES`).
 - `robustness`: robustness benchmarks of planners (`vinadv robustness` writes them, the report reads them): one row
   per benchmark, its settings and figures as JSON. Additive, as `evaluations`.
+- `measurements`: what the evaluation stage measures of a run besides the classifier comparison
+  (`vinadv.vocabulary.MEASUREMENTS`: the planner's quality, the processing time), one JSON result per row; the
+  newest row of a run and kind is the one the report shows.
 
 Version 2 adds the harm columns of `map_pairs` (`HARM_COLUMNS`, all nullable: DESIGN.md "Harm"). Version 3 adds
 `added_more` (nullable): the obstacles a pair adds after the first (`added_obstacle`), for pairs of several added
-obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair, so those rows are stored as before. A
-database of an older version (`UPGRADABLE_VERSIONS`) gains the columns it lacks (`UPGRADE_COLUMNS`) on open
-(`ALTER TABLE ... ADD COLUMN`, see `connection.upgrade`), opened read-only it reads them as NULL; any other version
-is refused untouched.
+obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair, so those rows are stored as before.
+Version 4 adds the table `measurements` (`UPGRADE_TABLES`). A database of an older version (`UPGRADABLE_VERSIONS`)
+gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`) and tables it lacks on open (see
+`connection.upgrade`); opened read-only it reads the columns as NULL and the tables as empty; any other version is
+refused untouched.
 
 Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
 VARCHAR would cap both.
@@ -33,9 +37,9 @@ from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exp
 from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
-SCHEMA_VERSION = "3"
+SCHEMA_VERSION = "4"
 #: the versions before: upgraded on open by adding the `UPGRADE_COLUMNS` they lack (nothing existing changes)
-UPGRADABLE_VERSIONS = ("1", "2")
+UPGRADABLE_VERSIONS = ("1", "2", "3")
 
 metadata = sa.MetaData()
 
@@ -156,6 +160,18 @@ robustness = sa.Table(
     sa.Index("ix_robustness_planner", "planner", "id"),
 )
 
+measurements = sa.Table(
+    "measurements",
+    metadata,
+    sa.Column("id", _BigId, primary_key=True, autoincrement=True),
+    sa.Column("run_id", _BigId, sa.ForeignKey("runs.id"), nullable=False),
+    sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive
+    sa.Column("kind", sa.String(32), nullable=False),  # `vinadv.vocabulary.MEASUREMENTS`
+    sa.Column("result", sa.JSON(), nullable=False),  # what the evaluation stage measured, as it stored it
+    sa.Column("version", sa.String(64), nullable=False),  # the vinadv that measured it
+    sa.Index("ix_measurements_run_kind", "run_id", "kind", "id"),
+)
+
 #: `map_pairs` columns added by schema version 2 (numbers first, then the two labels)
 HARM_FLOAT_COLUMNS = HARM_FLOAT_FIELDS
 HARM_COLUMNS = HARM_FIELDS
@@ -163,7 +179,9 @@ HARM_COLUMNS = HARM_FIELDS
 MORE_ADDED_COLUMN = "added_more"
 #: `map_pairs` columns added after version 1: an older database gains those it lacks on open
 UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN)
+#: tables added by schema version 4: an older database gains them on open
+UPGRADE_TABLES = (measurements,)
 
-TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness)
+TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness, measurements)
 #: tables added to the schema later: created when missing, never a reason to refuse a database
 ADDITIVE_TABLES = (evaluations, robustness)
