@@ -1,4 +1,6 @@
-"""A small stored database for the report tests: two runs (saliency and near-path) on 12x12 maps, made once."""
+"""A small stored database for the report tests, made once per session: two runs (saliency and near-path) on 12x12
+maps with the evaluation stage's measurements (planner quality, processing time), and a copy with the classifier
+comparison too (`evaluated`). The report only reads, so the tests share these and write reports from them."""
 
 from __future__ import annotations
 
@@ -6,7 +8,9 @@ import shutil
 
 import pytest
 
+from vinadv.evaluation import evaluate_planner_quality, evaluate_timing
 from vinadv.pipeline import RunConfig, run_pipeline
+from vinadv.store import Store
 
 SIZE = 12
 
@@ -18,13 +22,18 @@ def report_weights(planning_weights) -> str:
 
 @pytest.fixture(scope="session")
 def base_db(tmp_path_factory, report_weights):
-    """(SQLite path, run ids): run 1 saliency (has FP and DP pairs), run 2 near-path. Copy before writing."""
+    """(SQLite path, run ids): run 1 saliency (has FP and DP pairs), run 2 near-path, each with its planner quality
+    and processing time stored, no classifier comparison. Copy before writing."""
     path = tmp_path_factory.mktemp("report_db") / "base.db"
     url = f"sqlite:///{path}"
     ids = []
     for attack in ("saliency", "near-path"):
         config = RunConfig(n=80, size=SIZE, attack=attack, seed=4, shard_size=80, weights=report_weights)
         ids.append(run_pipeline(config, db=url, name=attack, progress=False).run_id)
+    with Store.open(url) as store:
+        for run_id in ids:
+            evaluate_planner_quality(store, run_id)
+            evaluate_timing(store, run_id)
     return path, ids
 
 
