@@ -133,12 +133,15 @@ def test_bad_planner_exits_2(maps_file, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_report_and_viewer_show_the_runs_planner(tmp_path):
+    from vinadv.evaluation import evaluate_planner_quality
     from vinadv.report import write_report
     from vinadv.viewer.app import create_app
 
     db = str(tmp_path / "r.db")
     run = command_line("run", n=20, size=SIZE, shard_size=10, db=db, planner="optimal", attack="key-points")
     assert main([*run, "--quiet"]) == 0
+    with Store.open(db) as store:  # the evaluation stage's planner quality, which the report shows
+        evaluate_planner_quality(store, store.list_runs()[-1]["id"])
     html = write_report(db, tmp_path / "rep").read_text()
     assert "<td>planner</td><td>optimal</td>" in html
     assert "quick evaluation of planner &#39;optimal&#39;" in html  # its quality, not the VIN's

@@ -18,9 +18,9 @@ from tests.store.test_store_harm import HARM_COLUMNS, HARM_INDEX
 
 from vinadv.report import write_report
 from vinadv.report.build import report_context
+from vinadv.report.render import render_report
 from vinadv.report.sections import gather_report
 from vinadv.report.sections.harm import HARM_EXAMPLES_SHOWN
-from vinadv.report.render import render_report
 from vinadv.store import Store
 
 TOL = 1e-6  # the runs' harm tolerance (the default)

@@ -8,13 +8,15 @@ import html
 import re
 
 import pytest
+import sqlalchemy as sa
 from tests.store.oracle import parse_path
 
+from vinadv.cli import main
+from vinadv.report import write_report
 from vinadv.report.build import report_context
-from vinadv.report.sections import SECTIONS, gather_report
 from vinadv.report.render import PAGE_SECTIONS, render_page, render_report
+from vinadv.report.sections import SECTIONS, gather_report
 from vinadv.store import Store
-
 
 
 def _gather(url, out, order, runs):
@@ -96,3 +98,28 @@ def test_fp_and_dp_examples_give_dh_dv_and_what_makes_a_fork(evaluated):
             else:
                 assert int(dh) <= t and int(dv) <= t
     assert "can look\nlike a detour and still be FP" in page or "look like a detour and still be FP" in page
+
+
+def _section(page: str, sid: str) -> str:
+    return page.split(f'<section id="{sid}">', 1)[1].split("</section>", 1)[0]
+
+
+def test_a_store_without_the_evaluation_says_so_until_vinadv_evaluate_stores_it(db_copy, tmp_path):
+    url, (saliency, _) = db_copy
+    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
+    with engine.begin() as conn:
+        conn.execute(sa.text("DELETE FROM measurements"))
+    engine.dispose()
+    page = write_report(url, tmp_path / "bare", run_id=saliency).read_text()
+    command = f"<code>vinadv evaluate --db {url} --run {saliency}</code>"
+    for sid in ("vin", "timing", "classifiers"):
+        assert command in _section(page, sid), sid
+    assert "Not evaluated" in _section(page, "vin") and "Source:" not in page
+    assert _section(page, "timing").count("<td>not evaluated</td>") == 2
+    table7 = (tmp_path / "bare" / "table7_processing_time.csv").read_text()
+    assert "rule,,,," in table7 and "database_read,,,," in table7
+    quiet = ["--quiet", "--db", url, "--run", str(saliency)]
+    assert main(["evaluate", *quiet, "--classifiers", "rule"]) == 0
+    page = write_report(url, tmp_path / "evaluated", run_id=saliency).read_text()
+    assert "Not evaluated" not in page and "Source: " in _section(page, "vin")
+    assert "stored pairs of run" in _section(page, "timing") and "<td>not evaluated</td>" not in page

@@ -80,7 +80,7 @@ def test_version_1_database_with_a_missing_column_is_refused_untouched(sqlite_ur
     assert columns_and_version(sqlite_url) == before
 
 
-@pytest.mark.parametrize("version", ["0", "4", "1.5"])
+@pytest.mark.parametrize("version", ["0", "5", "1.5"])
 def test_unknown_version_is_refused_and_the_file_stays_byte_identical(tmp_path, version):
     path = tmp_path / "v.db"
     url = f"sqlite:///{path}"

@@ -13,10 +13,10 @@ import time
 from pathlib import Path
 
 from vinadv.errors import InputError
+from vinadv.evaluation.classifiers import jsonable
 from vinadv.grid.generator import generate_maps
 from vinadv.planners.evaluation import evaluate_planner
 from vinadv.planners.registry import default_weights, load_planner
-from vinadv.evaluation.classifiers import jsonable
 from vinadv.vocabulary import PLANNER_QUALITY
 
 QUICK_EVAL_MAPS = 50

@@ -99,7 +99,8 @@ def write_tables(data: ReportData, out: Path) -> None:
 
 def render_robustness_page(data, out: Path, url: str | None = None) -> Path:
     """The robustness page of `vinadv robustness --report`: `index.html` with only the robustness section
-    (`data`: a `sections.robustness.RobustnessData`), its CSV table and the stylesheet, into `out`; return the page's path."""
+    (`data`: a `sections.robustness.RobustnessData`), its CSV table and the stylesheet, into `out`; return the
+    page's path."""
     import time
 
     from vinadv import __version__
