@@ -37,6 +37,18 @@ def base_db(tmp_path_factory, report_weights):
     return path, ids
 
 
+@pytest.fixture(scope="session")
+def base_report(base_db, tmp_path_factory):
+    """The report of the base database, run 1 the main run beside run 2 (the report only reads, so the database
+    itself): (URL, run ids, report folder). Read it, don't write there."""
+    from vinadv.report import write_report
+
+    path, ids = base_db
+    url = f"sqlite:///{path}"
+    index = write_report(url, tmp_path_factory.mktemp("base_report") / "rep", run_id=ids[0], runs=ids)
+    return url, ids, index.parent
+
+
 @pytest.fixture
 def db_copy(base_db, tmp_path):
     """A private copy of the base database: (URL, run ids)."""

@@ -75,10 +75,8 @@ def _check_complete(out: Path, evaluated: bool, harm: bool = True) -> str:
     return index.read_text(encoding="utf-8")
 
 
-def test_report_of_two_runs_has_every_section_and_matches_the_database(db_copy, tmp_path):
-    url, (saliency, near_path) = db_copy
-    index = write_report(url, tmp_path / "rep", run_id=saliency, runs=[saliency, near_path])
-    out = index.parent
+def test_report_of_two_runs_has_every_section_and_matches_the_database(base_report):
+    url, (saliency, near_path), out = base_report
     page = _check_complete(out, evaluated=False)
     assert f"Run {saliency}: no classifier evaluation is stored" in page
     assert f"vinadv evaluate --db {url} --run {saliency}" in page

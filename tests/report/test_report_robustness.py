@@ -52,9 +52,9 @@ def test_robustness_section_shows_every_stored_benchmark(db_copy, report_weights
         assert math.isclose(float(row["harmful_rate"]), f["harmful_rate"])
 
 
-def test_a_database_without_benchmarks_says_how_to_make_one(db_copy, tmp_path):
-    url, (run_id, _) = db_copy
-    page = write_report(url, tmp_path / "rep", run_id=run_id).read_text()
+def test_a_database_without_benchmarks_says_how_to_make_one(base_report):
+    _, _, out = base_report
+    page = (out / "index.html").read_text()
     section = page.split('<section id="robustness">', 1)[1].split("</section>", 1)[0]
     assert 'id="robustness-none"' in section and "vinadv robustness" in section
-    assert not (tmp_path / "rep" / "robustness.csv").exists()
+    assert not (out / "robustness.csv").exists()

@@ -12,7 +12,6 @@ import sqlalchemy as sa
 from tests.store.oracle import parse_path
 
 from vinadv.cli import main
-from vinadv.report import write_report
 from vinadv.report.build import report_context
 from vinadv.report.render import PAGE_SECTIONS, render_page, render_report
 from vinadv.report.sections import SECTIONS, gather_report
@@ -104,22 +103,29 @@ def _section(page: str, sid: str) -> str:
     return page.split(f'<section id="{sid}">', 1)[1].split("</section>", 1)[0]
 
 
+#: the sections that show what `vinadv evaluate` stores
+EVALUATED = ["vin", "classifiers", "timing"]
+
+
 def test_a_store_without_the_evaluation_says_so_until_vinadv_evaluate_stores_it(db_copy, tmp_path):
     url, (saliency, _) = db_copy
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     with engine.begin() as conn:
         conn.execute(sa.text("DELETE FROM measurements"))
     engine.dispose()
-    page = write_report(url, tmp_path / "bare", run_id=saliency).read_text()
+    data = _gather(url, tmp_path / "bare", EVALUATED, [saliency])
+    page = render_page(data)
     command = f"<code>vinadv evaluate --db {url} --run {saliency}</code>"
-    for sid in ("vin", "timing", "classifiers"):
+    for sid in EVALUATED:
         assert command in _section(page, sid), sid
     assert "Not evaluated" in _section(page, "vin") and "Source:" not in page
     assert _section(page, "timing").count("<td>not evaluated</td>") == 2
-    table7 = (tmp_path / "bare" / "table7_processing_time.csv").read_text()
-    assert "rule,,,," in table7 and "database_read,,,," in table7
+    rows = {row[0]: row for row in data.sections["timing"].table.rows}
+    assert rows["rule"][1:4] == rows["database_read"][1:4] == [None, None, None]
     quiet = ["--quiet", "--db", url, "--run", str(saliency)]
     assert main(["evaluate", *quiet, "--classifiers", "rule"]) == 0
-    page = write_report(url, tmp_path / "evaluated", run_id=saliency).read_text()
+    data = _gather(url, tmp_path / "evaluated", EVALUATED, [saliency])
+    page = render_page(data)
     assert "Not evaluated" not in page and "Source: " in _section(page, "vin")
     assert "stored pairs of run" in _section(page, "timing") and "<td>not evaluated</td>" not in page
+    assert data.sections["timing"].pairs == sum(data.sections["timing"].counts.values()) > 0
