@@ -8,7 +8,8 @@ quality and the processing times are the evaluation stage's (`vinadv.evaluation`
 was frozen from the report as it was before the report stopped computing (issue 31), so the test holds that moving
 the evaluation out of the report changed nothing on the page.
 
-`baseline/` holds `index.html` and every CSV table, normalised. To re-freeze after an intended change to the page:
+`baseline/` holds `index.html` and every CSV table, normalised, each as `<name>.txt` (data to compare, not a page
+or a table of the project). To re-freeze after an intended change to the page:
 `VINADV_WRITE_REPORT_BASELINE=1 pytest tests/report/test_report_baseline.py` (it rewrites the files and fails, so
 a re-freeze is never silent), then review the diff.
 """
@@ -109,13 +110,12 @@ def test_report_matches_the_frozen_baseline(tmp_path):
     build_report(url, out, run_id=ids[0], runs=ids)
     written = report_files(out, tmp_path)
     if os.environ.get("VINADV_WRITE_REPORT_BASELINE"):
-        for old in BASELINE.glob("*"):
-            if old.name != "evaluations.json":
-                old.unlink()
+        for old in BASELINE.glob("*.txt"):
+            old.unlink()
         for name, text in written.items():
-            (BASELINE / name).write_text(text, encoding="utf-8")
+            (BASELINE / f"{name}.txt").write_text(text, encoding="utf-8")
         pytest.fail(f"baseline rewritten in {BASELINE} ({len(written)} files): review the diff, then run again")
-    frozen = {p.name: p.read_text(encoding="utf-8") for p in sorted(BASELINE.glob("*")) if p.suffix != ".json"}
+    frozen = {p.stem: p.read_text(encoding="utf-8") for p in sorted(BASELINE.glob("*.txt"))}
     assert sorted(written) == sorted(frozen)
     for name in frozen:
         assert written[name] == frozen[name], name
