@@ -95,9 +95,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     sizes = parse_sizes(args.sizes)
     with Store.open(args.db, create=False) as store:
         run_id = store.resolve_run(args.run) if args.run is not None else _latest_run(store)
-        rows = evaluate_run(store, run_id, classifiers, args.setting, sizes, args.seed, progress=shows_progress(args))
+        # the measurements first: a run with too few FP/DP pairs to compare classifiers still gets them
         quality = evaluate_planner_quality(store, run_id)
         timing = evaluate_timing(store, run_id)
+        rows = evaluate_run(store, run_id, classifiers, args.setting, sizes, args.seed, progress=shows_progress(args))
     summary = {
         "run_id": run_id,
         "rows": [{k: v for k, v in r.items() if k != "curves"} for r in rows],
