@@ -15,8 +15,9 @@ from pathlib import Path
 
 from vinadv.errors import InputError
 from vinadv.report.data import Context
-from vinadv.report.render import render_report
+from vinadv.report.render import render_report, render_robustness_page
 from vinadv.report.sections import SECTIONS, gather_report
+from vinadv.report.sections.robustness import robustness_section
 
 __all__ = ["SECTIONS", "ReportResult", "build_report", "robustness_report", "write_report"]
 
@@ -110,9 +111,6 @@ def robustness_report(out_dir, db: str | None = None, results: list[dict] | None
     """Write the robustness page (`vinadv robustness --report DIR`) to `out_dir`: every robustness benchmark stored in
     `db` (when given), then `results`, benchmarks not stored (rows as `Store.read_robustness` returns them, `id`
     None). Return the path of `index.html`."""
-    from vinadv.report.render import render_robustness_page
-    from vinadv.report.sections.robustness import robustness_section
-
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(f"out_dir {out}: exists and is not a directory")

@@ -7,11 +7,13 @@ from __future__ import annotations
 import csv
 import math
 import numbers
+import time
 from importlib import resources
 from pathlib import Path
 
 import jinja2
 
+from vinadv import __version__
 from vinadv.outfile import atomic_output
 from vinadv.report import paper
 from vinadv.report.data import ALL_LABELS, CATEGORY_ORDER, ReportData, Table
@@ -101,10 +103,6 @@ def render_robustness_page(data, out: Path, url: str | None = None) -> Path:
     """The robustness page of `vinadv robustness --report`: `index.html` with only the robustness section
     (`data`: a `sections.robustness.RobustnessData`), its CSV table and the stylesheet, into `out`; return the
     page's path."""
-    import time
-
-    from vinadv import __version__
-
     out = Path(out)
     files = sorted({*([data.table.name] if data.table else []), *(data.figure.files if data.figure else ())})
     if data.table is not None:
