@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.fault_files import read_npz, rewrite_npz
-from tests.grid.oracle import brute_distances, reachable
+from tests.grid.oracle import MOVES, brute_distances, reachable
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.attacks.validity import valid_additions, valid_cells
@@ -36,7 +36,7 @@ def maps():
     return generate_maps(24, SIZE, seed=5, n_starts=1)
 
 
-def oracle_valid(obstacles, start, goal, cells) -> bool:
+def oracle_valid(obstacles, start, goal, cells, moves="octile") -> bool:
     """DESIGN.md's rule, cell by cell in plain Python: K distinct free cells, none the start or the goal, the goal
     reachable from the start with all K added."""
     cells = [tuple(c) for c in cells]
@@ -48,20 +48,20 @@ def oracle_valid(obstacles, start, goal, cells) -> bool:
     blocked = np.array(obstacles, dtype=bool)
     for r, c in cells:
         blocked[r, c] = True
-    return reachable(blocked, start, goal)
+    return reachable(blocked, start, goal, moves=moves)
 
 
 @settings(max_examples=40, deadline=None)
-@given(seed=st.integers(0, 10**6), k=st.integers(1, 5), data=st.data())
-def test_valid_additions_is_the_rule(seed, k, data):
-    maps = generate_maps(1, SIZE, seed=seed, n_starts=1)
+@given(seed=st.integers(0, 10**6), k=st.integers(1, 5), data=st.data(), moves=st.sampled_from(MOVES))
+def test_valid_additions_is_the_rule(seed, k, data, moves):
+    maps = generate_maps(1, SIZE, seed=seed, n_starts=1, moves=moves)
     obstacles, start, goal = maps.obstacles[0], maps.starts[0, 0], maps.goals[0]
     free = [tuple(c) for c in np.argwhere(~obstacles).tolist()]
     # mostly free cells (the interesting case), sometimes any cell of the grid, repeats allowed
     cell = st.one_of(st.sampled_from(free), st.tuples(st.integers(0, SIZE - 1), st.integers(0, SIZE - 1)))
     cells = data.draw(st.lists(cell, min_size=k, max_size=k))
-    got = valid_additions(obstacles[None], start[None], goal[None], np.array([cells]))
-    assert bool(got[0]) == oracle_valid(obstacles, start, goal, cells)
+    got = valid_additions(obstacles[None], start[None], goal[None], np.array([cells]), moves=moves)
+    assert bool(got[0]) == oracle_valid(obstacles, start, goal, cells, moves)
 
 
 @settings(max_examples=25, deadline=None)

@@ -82,8 +82,12 @@ def test_valid_cells_match_brute_force(maps):
                 assert valid[i, r, c] == expected, (i, r, c)
 
 
-@pytest.mark.parametrize("corner_cutting", [True, False], ids=["corner-cutting", "no-corner-cutting"])
-def test_valid_cells_match_brute_force_on_dense_maps(corner_cutting):
+@pytest.mark.parametrize(
+    "corner_cutting, moves",
+    [(True, "octile"), (False, "octile"), (True, "moore"), (True, "news")],
+    ids=["corner-cutting", "no-corner-cutting", "moore", "news"],
+)
+def test_valid_cells_match_brute_force_on_dense_maps(corner_cutting, moves):
     # dense small maps: many cells are the only way through (the generated maps have few)
     rng = np.random.default_rng(11)
     n = 7
@@ -92,18 +96,18 @@ def test_valid_cells_match_brute_force_on_dense_maps(corner_cutting):
     idx = np.arange(150)
     obstacles[idx, starts[:, 0], starts[:, 1]] = False
     obstacles[idx, goals[:, 0], goals[:, 1]] = False
-    valid = valid_cells(obstacles, starts, goals, corner_cutting)
+    valid = valid_cells(obstacles, starts, goals, corner_cutting, moves)
     separators = 0
     for i in range(150):
         start, goal = tuple(starts[i]), tuple(goals[i])
-        solvable = reachable(obstacles[i], start, goal, corner_cutting)
+        solvable = reachable(obstacles[i], start, goal, corner_cutting, moves)
         for r in range(n):
             for c in range(n):
                 expected = solvable and not obstacles[i, r, c] and (r, c) not in (start, goal)
                 if expected:
                     blocked = obstacles[i].copy()
                     blocked[r, c] = True
-                    expected = reachable(blocked, start, goal, corner_cutting)
+                    expected = reachable(blocked, start, goal, corner_cutting, moves)
                     separators += not expected
                 assert valid[i, r, c] == expected, (i, r, c)
     assert separators > 50  # the maps do exercise the separators

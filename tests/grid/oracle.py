@@ -1,11 +1,24 @@
-"""Brute-force oracles written straight from DESIGN.md, independent of vinadv's code."""
+"""Brute-force oracles written straight from DESIGN.md, independent of vinadv's code.
+
+Movement models (`moves`): "octile" (8 moves, diagonal sqrt 2), "moore" (8 moves, all cost 1), "news" (the first 4
+moves N, S, E, W, cost 1).
+"""
 
 import math
 
 DELTAS = [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)]
+MOVES = ("octile", "moore", "news")
 
 
-def legal(obstacles, r, c, a, corner_cutting=True):
+def step_cost(a, moves="octile"):
+    """What action `a` costs under `moves`."""
+    dr, dc = DELTAS[a]
+    return math.sqrt(2) if dr and dc and moves == "octile" else 1.0
+
+
+def legal(obstacles, r, c, a, corner_cutting=True, moves="octile"):
+    if moves == "news" and a >= 4:
+        return False
     n, m = len(obstacles), len(obstacles[0])
     dr, dc = DELTAS[a]
     nr, nc = r + dr, c + dc
@@ -16,7 +29,7 @@ def legal(obstacles, r, c, a, corner_cutting=True):
     return True
 
 
-def brute_distances(obstacles, goal, corner_cutting=True):
+def brute_distances(obstacles, goal, corner_cutting=True, moves="octile"):
     """Bellman-Ford over (cost, moves) pairs until nothing changes: slow and obviously right."""
     n, m = len(obstacles), len(obstacles[0])
     inf = (math.inf, -1)
@@ -31,17 +44,17 @@ def brute_distances(obstacles, goal, corner_cutting=True):
                 if obstacles[r][c]:
                     continue
                 for a, (dr, dc) in enumerate(DELTAS):
-                    if not legal(obstacles, r, c, a, corner_cutting):
+                    if not legal(obstacles, r, c, a, corner_cutting, moves):
                         continue
-                    cost, moves = best[(r + dr, c + dc)]
-                    step = math.sqrt(2) if dr and dc else 1.0
+                    cost, count = best[(r + dr, c + dc)]
+                    step = step_cost(a, moves)
                     if cost + step < best[(r, c)][0] - 1e-9:
-                        best[(r, c)] = (cost + step, moves + 1)
+                        best[(r, c)] = (cost + step, count + 1)
                         changed = True
     return best
 
 
-def reachable(obstacles, start, goal, corner_cutting=True) -> bool:
+def reachable(obstacles, start, goal, corner_cutting=True, moves="octile") -> bool:
     """Whether `start` reaches `goal` on `obstacles` (rows of bools: nested lists or a 2-D array)."""
     rows = [[bool(cell) for cell in row] for row in obstacles]
-    return math.isfinite(brute_distances(rows, tuple(goal), corner_cutting)[tuple(start)][0])
+    return math.isfinite(brute_distances(rows, tuple(goal), corner_cutting, moves)[tuple(start)][0])

@@ -16,7 +16,9 @@ from tests.fault_files import (
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.grid.checks import check_paths
 from vinadv.grid.mapset import MapSet
+from vinadv.grid.paths import PackedPaths
 from vinadv.planners.pathset import PathSet
 
 
@@ -218,3 +220,11 @@ def test_paths_jump(files, tmp_path):
     bad = rewrite_npz(files["paths"], tmp_path / "bad.npz", path_cells=cells)
     with pytest.raises(InputError, match="path_cells"):
         PathSet.load(bad)
+
+
+def test_news_paths_may_not_move_diagonally():
+    diagonal = PackedPaths.pack([np.array([[1, 1], [2, 2]])])
+    check_paths("f.npz", "path_cells", diagonal, 4, moves="moore")
+    with pytest.raises(InputError, match="not 4-neighbours .*'news' moves"):
+        check_paths("f.npz", "path_cells", diagonal, 4, moves="news")
+    check_paths("f.npz", "path_cells", PackedPaths.pack([np.array([[1, 1], [2, 1], [2, 2]])]), 4, moves="news")

@@ -7,7 +7,9 @@ and goal: one depth-first search from the start per map finds them all (Tarjan's
 goal in the search tree separates them exactly when the subtree holding the goal has no edge climbing above v).
 Without corner cutting an obstacle also removes the diagonal moves past its corners, so there each cell of one
 start-goal path (the expert path) is checked by a breadth-first search with it blocked. Both are compiled with
-Numba and run in parallel over maps.
+Numba and run in parallel over maps. They follow the map set's movement model (`vinadv.grid.moves`): reachability
+depends only on which moves exist, so `octile` and `moore` have the same valid cells, and `news` (4 moves, no
+diagonal to cut) takes the cut-vertex search over its 4 moves.
 
 K obstacles (`valid_additions`): K distinct cells, each free on the original map and neither the start nor the
 goal, with the goal still reachable from the start once all K are added. Adding obstacles only removes paths, so a
@@ -20,7 +22,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.shortest_paths import expert_paths
 from vinadv.planners.batching import over_maps
 
@@ -132,13 +134,19 @@ def _cut_vertices_batch(lo, hi, obstacles, starts, goals, deltas, separator, rea
 
 
 def valid_cells(
-    obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+    obstacles: np.ndarray,
+    starts: np.ndarray,
+    goals: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
 ) -> np.ndarray:
     """Cells where one added obstacle makes a valid adversarial map: `(B, N, N)` bool.
 
     Args:
         obstacles: `(B, N, N)` bool. starts, goals: `(B, 2)`; the goal must be reachable from the start.
+        corner_cutting, moves: the maps' move rule and movement model.
     """
+    deltas = move_model(moves).deltas
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
@@ -150,14 +158,14 @@ def valid_cells(
     if b == 0:
         return valid
     separator = np.zeros_like(valid)
-    if corner_cutting:
+    if corner_cutting or len(deltas) == 4:  # an obstacle removes only its own cell from the move graph
         reachable = np.zeros(b, dtype=bool)
         over_maps(
             b,
-            lambda lo, hi: _cut_vertices_batch(lo, hi, obstacles, starts, goals, ACTION_DELTAS, separator, reachable),
+            lambda lo, hi: _cut_vertices_batch(lo, hi, obstacles, starts, goals, deltas, separator, reachable),
         )
     else:
-        costs, paths = expert_paths(obstacles, goals, starts[:, None, :], corner_cutting)
+        costs, paths = expert_paths(obstacles, goals, starts[:, None, :], corner_cutting, moves)
         reachable = np.isfinite(costs[:, 0])
         _mark_separators(
             obstacles,
@@ -166,7 +174,7 @@ def valid_cells(
             paths.cells.astype(np.int64),
             paths.offsets,
             bool(corner_cutting),
-            ACTION_DELTAS,
+            deltas,
             separator,
         )
     valid &= ~separator
@@ -185,7 +193,12 @@ def _reachable_all(obstacles, starts, goals, corner_cutting, deltas, out):
 
 
 def valid_additions(
-    obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, added: np.ndarray, corner_cutting: bool = True
+    obstacles: np.ndarray,
+    starts: np.ndarray,
+    goals: np.ndarray,
+    added: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
 ) -> np.ndarray:
     """Whether adding the cells `added` to each map makes a valid adversarial map: `(B,)` bool.
 
@@ -194,6 +207,7 @@ def valid_additions(
         added: `(B, K, 2)` (or `(B, 2)`, K = 1) cells: valid when they are K distinct cells on the grid, each free
             on the original map and neither the start nor the goal, and the goal is reachable from the start
             (and from a start on an obstacle nothing is) with all K added.
+        corner_cutting, moves: the maps' move rule and movement model.
     """
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     starts = np.ascontiguousarray(starts, dtype=np.int64)
@@ -211,5 +225,5 @@ def valid_additions(
     blocked[idx, cells[..., 0], cells[..., 1]] = True
     reach = np.zeros(b, dtype=bool)
     if b:
-        _reachable_all(blocked, starts, goals, bool(corner_cutting), ACTION_DELTAS, reach)
+        _reachable_all(blocked, starts, goals, bool(corner_cutting), move_model(moves).deltas, reach)
     return ok & reach

@@ -6,10 +6,10 @@ path or pair, so a file that would be stored wrong is refused at the door. What 
 
 - cells: starts, goals and added obstacles on the grid; starts and goals free; a start is not its goal; the starts
   of one map distinct.
-- paths: every cell on the grid and free on its map, consecutive cells 8-neighbours (one move; without corner
-  cutting, not diagonally between obstacles), the first cell the path's start; a path that reached its goal (
-  termination `goal`) ends there and one that did not does not (DESIGN.md: it reaches the goal when its last cell
-  is the goal).
+- paths: every cell on the grid and free on its map, consecutive cells neighbours (one move of the map set's
+  movement model: 8-neighbours, 4-neighbours on `news`; without corner cutting, not diagonally between obstacles),
+  the first cell the path's start; a path that reached its goal (termination `goal`) ends there and one that did
+  not does not (DESIGN.md: it reaches the goal when its last cell is the goal).
 - pairs: the adversarial map is the original plus exactly the added cells (K >= 1), distinct, each free and
   neither the start nor the goal.
 
@@ -23,6 +23,7 @@ import os
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.paths import PackedPaths
 
 
@@ -63,12 +64,13 @@ def check_paths(
     corner_cutting: bool = True,
     what: str = "path",
     numbers: np.ndarray | None = None,
+    moves: str = DEFAULT_MOVES,
 ) -> None:
     """Check the n `paths` (their layout is checked by `PackedPaths` itself).
 
     Path i lies on map `obstacles[owner[i]]` (`owner` default: i); `starts (n, 2)`: its first cell; `goals (n, 2)`
     with `reached (n,)` bool: it ends on its goal exactly when reached. Errors name path `numbers[i]` (default i)
-    as `what`. Each check is skipped when its array is None.
+    as `what`. Each check is skipped when its array is None. `moves`: the movement model the steps must follow.
     """
     n = len(paths)
     if n <= 0:
@@ -91,8 +93,15 @@ def check_paths(
         step = cells[1:] - cells[:-1]
         move = np.ones(len(step), dtype=bool)
         move[offsets[1:-1] - 1] = False  # the last cell of a path makes no move
-        jump = move & (np.abs(step).max(axis=1) != 1)
-        check(per_path(np.append(jump, False)), "has consecutive cells that are not 8-neighbours (a jump)")
+        if move_model(moves).n_actions == 8:
+            jump = move & (np.abs(step).max(axis=1) != 1)
+            check(per_path(np.append(jump, False)), "has consecutive cells that are not 8-neighbours (a jump)")
+        else:
+            jump = move & (np.abs(step).sum(axis=1) != 1)
+            check(
+                per_path(np.append(jump, False)),
+                f"has consecutive cells that are not 4-neighbours (a jump; the file says {moves!r} moves)",
+            )
     if obstacles is not None:
         maps = path_of if owner is None else np.asarray(owner)[path_of]
         blocked = obstacles[maps, cells[:, 0], cells[:, 1]]
@@ -123,9 +132,11 @@ def check_maps(
     expert: PackedPaths,
     corner_cutting: bool = True,
     start_counts: np.ndarray | None = None,
+    moves: str = DEFAULT_MOVES,
 ) -> None:
-    """A maps file's content: `obstacles (n, N, N)`, `goals (n, 2)`, `starts (n, S, 2)`, `expert` paths (n*S);
-    `start_counts (n,)`: map i's slots from `start_counts[i]` on are padding (a start on the goal, see `MapSet`)."""
+    """A maps file's content: `obstacles (n, N, N)`, `goals (n, 2)`, `starts (n, S, 2)`, `expert` paths (n*S) made
+    of `moves`; `start_counts (n,)`: map i's slots from `start_counts[i]` on are padding (a start on the goal, see
+    `MapSet`)."""
     n, size = len(obstacles), obstacles.shape[-1] if obstacles.ndim == 3 else 0
     if n == 0:
         return
@@ -165,6 +176,7 @@ def check_maps(
         reached=np.ones(n * s, dtype=bool),
         corner_cutting=corner_cutting,
         what="path",
+        moves=moves,
     )
 
 
@@ -178,12 +190,13 @@ def check_pairs(
     paths: dict,
     terms: dict,
     corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
 ) -> None:
     """A pairs file's content: maps `(n, N, N)`, `starts`/`goals` `(n, 2)`, `added` `(n, K, 2)` (or `(n, 2)`, K = 1),
     `paths[side]` (`PackedPaths`) and `terms[side] (n,)` termination names for side "o" (original map) and "a"
-    (adversarial map). The added cells of a pair are K distinct cells, free on the original map, none the start or
-    the goal, and the adversarial map is the original plus exactly them (reachability is not checked here: see
-    `vinadv.attacks.validity.valid_additions`)."""
+    (adversarial map), made of `moves`. The added cells of a pair are K distinct cells, free on the original map,
+    none the start or the goal, and the adversarial map is the original plus exactly them (reachability is not
+    checked here: see `vinadv.attacks.validity.valid_additions`)."""
     n, size = len(obstacles_o), obstacles_o.shape[-1]
     if n == 0:
         return
@@ -226,4 +239,5 @@ def check_pairs(
             reached=np.asarray(terms[side]) == "goal",
             corner_cutting=corner_cutting,
             what="pair",
+            moves=moves,
         )

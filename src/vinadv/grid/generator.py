@@ -31,6 +31,7 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
+from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
 
@@ -166,21 +167,22 @@ def _generate_chunk(
     max_obs: int,
     max_size: int,
     count: int,
+    moves: str = DEFAULT_MOVES,
 ):
     """Chunk `chunk` of the stream: its `count` maps, less those without `n_starts` eligible starts, with their
     expert paths (computed here, so that no chunk's distance maps outlive it)."""
     rng = np.random.default_rng([*seed, chunk])
     goals = rng.integers(1, size - 1, (count, 2))
     obstacles = _draw_obstacles(rng, count, size, goals, max_obs, max_size)
-    dist, moves = shortest_distances(obstacles, goals, corner_cutting)
-    eligible = (moves >= MIN_START_MOVES).reshape(count, -1)
+    dist, counts = shortest_distances(obstacles, goals, corner_cutting, moves)
+    eligible = (counts >= MIN_START_MOVES).reshape(count, -1)
     # n_starts distinct eligible cells, uniformly: the smallest random keys among eligible cells.
     keys = np.where(eligible, rng.random(eligible.shape), np.inf)
     picks = np.argsort(keys, axis=1)[:, :n_starts]
     ok = eligible.sum(axis=1) >= n_starts
     starts = np.stack(np.divmod(picks, size), axis=-1)
     obstacles, goals, starts = obstacles[ok], goals[ok].astype(np.int64), starts[ok].astype(np.int64)
-    costs, expert = expert_paths_from(dist[ok], obstacles, goals, starts, corner_cutting)
+    costs, expert = expert_paths_from(dist[ok], obstacles, goals, starts, corner_cutting, moves)
     return obstacles, goals, starts, costs, expert
 
 
@@ -193,15 +195,19 @@ def generate_maps(
     max_obs: int | None = None,
     max_size: int | None = None,
     progress: Callable[[int], None] | None = None,
+    moves: str = DEFAULT_MOVES,
 ) -> MapSet:
-    """Generate `n` maps of `size x size` with `n_starts` starts each and their expert (optimal) paths.
+    """Generate `n` maps of `size x size` with `n_starts` starts each and their expert (optimal) paths under the
+    movement model `moves` (`vinadv.grid.moves`).
 
-    Deterministic for `(seed, size, n_starts, corner_cutting, max_obs, max_size)`; maps where fewer than
-    `n_starts` cells can reach the goal in at least 2 moves are dropped and replaced from the stream.
+    Deterministic for `(seed, size, n_starts, corner_cutting, max_obs, max_size, moves)`; maps where fewer than
+    `n_starts` cells can reach the goal in at least 2 moves are dropped and replaced from the stream. Each chunk's
+    obstacles and goals do not depend on `moves`; its starts do (2 moves of that model), and so which maps it keeps.
     `seed` may be a sequence of ints (say `(seed, shard)`) for independent streams. `progress(k)` is called with
     the number of maps each chunk added. A size or `n` that cannot fit in memory is refused (`check_limits`).
     """
     seeds = (int(seed),) if np.isscalar(seed) else tuple(int(s) for s in seed)
+    moves = check_moves(moves, corner_cutting)
     if n < 0:
         raise InputError(f"n must be >= 0, got {n}", "n")
     if size < MIN_SIZE:
@@ -221,7 +227,7 @@ def generate_maps(
     parts: list[tuple[np.ndarray, ...]] = []
     have, chunk = 0, 0
     while have < n:
-        part = _generate_chunk(seeds, chunk, size, n_starts, corner_cutting, max_obs, max_size, count)
+        part = _generate_chunk(seeds, chunk, size, n_starts, corner_cutting, max_obs, max_size, count, moves)
         parts.append(part)
         have += len(part[0])
         chunk += 1
@@ -247,6 +253,7 @@ def generate_maps(
         expert=expert,
         corner_cutting=corner_cutting,
         seed=seeds[0] if len(seeds) == 1 else -1,
+        moves=moves,
     )
 
 

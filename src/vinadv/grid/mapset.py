@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vinadv.grid.checks import check_maps
+from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 
@@ -22,10 +23,11 @@ class MapSet:
         obstacles: `(n, N, N)` bool, True = obstacle.
         goals: `(n, 2)` int64 `(row, col)`.
         starts: `(n, S, 2)` int64.
-        expert_costs: `(n, S)` float64, optimal cost from each start (1 per orthogonal, sqrt 2 per diagonal move).
+        expert_costs: `(n, S)` float64, optimal cost from each start under `moves`.
         expert: `PackedPaths` of n * S optimal paths, path `i * S + s` from start `s` of map `i` (file fields
             `expert_cells`, `expert_offsets`).
         corner_cutting: whether a diagonal move may pass between two obstacles on these maps.
+        moves: the movement model (`vinadv.grid.moves`: "octile", "moore" or "news"): the moves and their costs.
         seed: the generator seed (-1 when unknown).
         start_counts: `(n,)` int64 or None. Maps imported from other codebases may have fewer starts than others:
             map `i` then has `start_counts[i]` real starts and its slots `s >= start_counts[i]` are explicit padding
@@ -40,6 +42,10 @@ class MapSet:
     corner_cutting: bool = True
     seed: int = -1
     start_counts: np.ndarray | None = None
+    moves: str = DEFAULT_MOVES
+
+    def __post_init__(self) -> None:
+        self.moves = check_moves(self.moves, self.corner_cutting)
 
     @property
     def start_mask(self) -> np.ndarray:
@@ -99,16 +105,15 @@ class MapSet:
         counts = r.array("start_counts", "i", 1, (n,)).astype(np.int64) if r.has("start_counts") else None
         if counts is not None and n and (counts.min() < 1 or counts.max() > s):
             raise r.fail("start_counts", f"has a count outside 1..{s} (the starts per map)")
-        check_maps(
-            r.path, obstacles, goals, starts, expert, bool(r.scalar("corner_cutting", "b", default=True)), counts
-        )
+        corner_cutting = bool(r.scalar("corner_cutting", "b", default=True))
+        check_maps(r.path, obstacles, goals, starts, expert, corner_cutting, counts)
         return cls(
             obstacles=obstacles.astype(bool),
             goals=goals,
             starts=starts,
             expert_costs=costs,
             expert=expert,
-            corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
+            corner_cutting=corner_cutting,
             seed=int(r.scalar("seed", "i", default=-1)),
             start_counts=counts,
         )

@@ -1,4 +1,5 @@
-"""The optimal move count L from one start to its goal, by A*: what a rollout's step limit 2L needs.
+"""The optimal move count L from one start to its goal, by A* under a movement model: what a rollout's step limit
+2L needs.
 
 `shortest_distances` gives L for every cell of a map at once (Dijkstra from the goal); a planner needs it for
 a few starts only (a rollout needs L only once it has made more moves than a lower bound of 2L, which few do), so
@@ -10,17 +11,23 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.shortest_paths import heap_pop, heap_push
 
 __all__ = ["optimal_moves", "optimal_moves_kernel"]
 
 
 def optimal_moves(
-    obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, map_index: np.ndarray, corner_cutting: bool = True
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    starts: np.ndarray,
+    map_index: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
 ) -> np.ndarray:
-    """Moves of an optimal path from `starts (R, 2)` to the goal of map `map_index (R,)`: `(R,)` int64, -1 where
-    the goal cannot be reached. obstacles `(B, N, N)` bool, goals `(B, 2)`."""
+    """Moves of an optimal path from `starts (R, 2)` to the goal of map `map_index (R,)` under the movement model
+    `moves`: `(R,)` int64, -1 where the goal cannot be reached. obstacles `(B, N, N)` bool, goals `(B, 2)`."""
+    model = move_model(moves)
     out = np.empty(len(starts), dtype=np.int64)
     optimal_moves_kernel(
         np.ascontiguousarray(obstacles, dtype=bool),
@@ -28,19 +35,24 @@ def optimal_moves(
         np.ascontiguousarray(starts, dtype=np.int64).reshape(-1, 2),
         np.ascontiguousarray(map_index, dtype=np.int64),
         bool(corner_cutting),
-        ACTION_DELTAS,
+        model.deltas,
+        model.diagonal_cost,
         out,
     )
     return out
 
 
 @numba.njit(cache=True, nogil=True)
-def optimal_moves_kernel(obstacles, goals, starts, map_index, corner_cutting, deltas, out):
-    """A* from each start to its goal (octile heuristic, consistent), stopping at the goal: the move count of an
-    optimal path, -1 when unreachable. Costs are kept as integer pairs (a orthogonal, b diagonal moves) and compared
-    as a + b * sqrt(2): an optimal cost fixes a and b, so the move count a + b is that of every optimal path."""
+def optimal_moves_kernel(obstacles, goals, starts, map_index, corner_cutting, deltas, diagonal_cost, out):
+    """A* from each start to its goal, stopping at the goal: the move count of an optimal path, -1 when unreachable.
+
+    `deltas (A, 2)`: the model's moves (`MoveModel.deltas`); a straight move costs 1, a diagonal `diagonal_cost`
+    (`MoveModel.diagonal_cost`: sqrt 2 on octile, 1 on moore; news has no diagonal move, and its 2 makes the
+    heuristic Manhattan). The heuristic `(max - min) + min * diagonal_cost` over the row and column distances (octile,
+    Chebyshev, Manhattan distance) is consistent. Costs are kept as integer pairs (a straight, b diagonal moves) and
+    compared as a + b * diagonal_cost: on octile an optimal cost fixes a and b, on the unit-cost models the cost is
+    a + b, so the move count a + b is that of every optimal path."""
     n = obstacles.shape[1]
-    sqrt2 = np.sqrt(2.0)
     cap = 8 * n * n + 1
     heap_key = np.empty(cap)
     heap_cell = np.empty(cap, dtype=np.int64)
@@ -71,7 +83,7 @@ def optimal_moves_kernel(obstacles, goals, starts, map_index, corner_cutting, de
             if r == gr and c == gc:
                 result = g_a[cell] + g_b[cell]
                 break
-            for a in range(8):
+            for a in range(deltas.shape[0]):
                 dr, dc = deltas[a, 0], deltas[a, 1]
                 nr, nc = r + dr, c + dc
                 if nr < 0 or nr >= n or nc < 0 or nc >= n or obstacles[m, nr, nc]:
@@ -84,13 +96,13 @@ def optimal_moves_kernel(obstacles, goals, starts, map_index, corner_cutting, de
                     continue
                 na = g_a[cell] + (0 if diag else 1)
                 nbb = g_b[cell] + (1 if diag else 0)
-                g = na + nbb * sqrt2
-                if seen[nb] == stamp and g_a[nb] + g_b[nb] * sqrt2 <= g:
+                g = na + nbb * diagonal_cost
+                if seen[nb] == stamp and g_a[nb] + g_b[nb] * diagonal_cost <= g:
                     continue
                 seen[nb] = stamp
                 g_a[nb] = na
                 g_b[nb] = nbb
                 dy, dx = abs(nr - gr), abs(nc - gc)
-                key = g + (max(dy, dx) - min(dy, dx)) + min(dy, dx) * sqrt2
+                key = g + (max(dy, dx) - min(dy, dx)) + min(dy, dx) * diagonal_cost
                 size = heap_push(heap_key, heap_cell, size, key, nb)
         out[t] = result

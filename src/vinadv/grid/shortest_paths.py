@@ -1,9 +1,13 @@
-"""Exact shortest paths on 8-connected grid worlds, batched over many maps.
+"""Exact shortest paths on grid worlds under a movement model (`vinadv.grid.moves`), batched over many maps.
 
 Dijkstra from the goal (the move graph is undirected: a move needs its destination free, and, without corner
 cutting, both cells beside a diagonal too, which is symmetric), compiled with Numba and run in parallel over
-maps. Besides the cost of every cell it returns the number of moves of an optimal path: an optimal cost
-`a + b*sqrt(2)` fixes the integers `a` and `b`, so every optimal path has the same `L = a + b` moves.
+maps; the model's actions and costs are the kernel's arguments. Besides the cost of every cell it returns the
+number of moves of an optimal path, the same for every optimal path: on `octile` an optimal cost `a + b*sqrt(2)`
+fixes the integers `a` and `b`, so `L = a + b`; on `moore` and `news` every move costs 1, so `L` is the cost.
+
+Per-action outputs (`valid_moves`, `optimal_actions`) always have the 8 actions of `ACTION_DELTAS`: an action
+outside the model (a diagonal on `news`) is never legal, so action indices mean the same move in every model.
 """
 
 from __future__ import annotations
@@ -11,26 +15,29 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS, N_ACTIONS
+from vinadv.grid.actions import N_ACTIONS
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.paths import PackedPaths
 
 # Costs are sums of 1 and sqrt(2); two different sums of up to a few thousand terms differ by far more.
 COST_TOL = 1e-9
 
 
-def valid_moves(obstacles: np.ndarray, corner_cutting: bool = True) -> np.ndarray:
-    """Which of the 8 moves from each cell are legal: `(B, N, N, 8)` bool.
+def valid_moves(obstacles: np.ndarray, corner_cutting: bool = True, moves: str = DEFAULT_MOVES) -> np.ndarray:
+    """Which of the 8 actions from each cell are legal moves: `(B, N, N, 8)` bool.
 
-    A move is legal when its destination is on the grid and free; without `corner_cutting`, a diagonal move
-    also needs both orthogonal cells it passes between to be free. The origin cell itself is not checked.
+    A move is legal when it is one of the model's (`moves`), its destination is on the grid and free; without
+    `corner_cutting`, a diagonal move also needs both orthogonal cells it passes between to be free. The origin
+    cell itself is not checked.
     """
+    model = move_model(moves)
     obstacles = np.asarray(obstacles, dtype=bool)
     b, n, m = obstacles.shape
     padded = np.ones((b, n + 2, m + 2), dtype=bool)
     padded[:, 1:-1, 1:-1] = obstacles
     free = ~padded
-    out = np.empty((b, n, m, N_ACTIONS), dtype=bool)
-    for a, (dr, dc) in enumerate(ACTION_DELTAS):
+    out = np.zeros((b, n, m, N_ACTIONS), dtype=bool)
+    for a, (dr, dc) in enumerate(model.deltas):
         ok = free[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m]
         if not corner_cutting and dr != 0 and dc != 0:
             ok = ok & free[:, 1 + dr : 1 + dr + n, 1 : 1 + m] & free[:, 1 : 1 + n, 1 + dc : 1 + dc + m]
@@ -128,7 +135,7 @@ def dijkstra_batch(obstacles, goals, corner_cutting, deltas, costs, dist, moves)
 
 
 def shortest_distances(
-    obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+    obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
 ) -> tuple[np.ndarray, np.ndarray]:
     """Optimal cost-to-goal and optimal move count of every cell, for a batch of maps.
 
@@ -136,34 +143,40 @@ def shortest_distances(
         obstacles: `(B, N, N)` bool, True = obstacle.
         goals: `(B, 2)` int, `(row, col)` of each goal.
         corner_cutting: whether a diagonal move may pass between two obstacles.
+        moves: the movement model (`vinadv.grid.moves`): its moves and their costs.
 
     Returns:
         `dist (B, N, N) float64` (inf where the goal cannot be reached, obstacles included) and
-        `moves (B, N, N) int32` (moves of an optimal path, -1 where unreachable).
+        `counts (B, N, N) int32` (moves of an optimal path, -1 where unreachable).
     """
     obstacles = np.ascontiguousarray(obstacles, dtype=np.bool_)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
     dist = np.empty(obstacles.shape, dtype=np.float64)
-    moves = np.empty(obstacles.shape, dtype=np.int32)
+    model = move_model(moves)
+    counts = np.empty(obstacles.shape, dtype=np.int32)
     if len(obstacles):
-        dijkstra_batch(obstacles, goals, bool(corner_cutting), ACTION_DELTAS, ACTION_COSTS, dist, moves)
-    return dist, moves
+        dijkstra_batch(obstacles, goals, bool(corner_cutting), model.deltas, model.costs, dist, counts)
+    return dist, counts
 
 
-def optimal_actions(dist: np.ndarray, obstacles: np.ndarray, corner_cutting: bool = True) -> np.ndarray:
-    """Which actions are optimal at each cell: `(B, N, N, 8)` bool.
+def optimal_actions(
+    dist: np.ndarray, obstacles: np.ndarray, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
+) -> np.ndarray:
+    """Which actions are optimal at each cell: `(B, N, N, 8)` bool, for `dist` of `shortest_distances` (same
+    `moves`).
 
-    An action is optimal at a reachable, non-goal cell when it is legal and its cost plus the neighbour's
-    cost-to-goal equals the cell's cost-to-goal. The goal, obstacles and unreachable cells have none.
+    An action is optimal at a reachable, non-goal cell when it is a legal move of the model and its cost plus the
+    neighbour's cost-to-goal equals the cell's cost-to-goal. The goal, obstacles and unreachable cells have none.
     """
+    model = move_model(moves)
     b, n, m = dist.shape
     padded = np.full((b, n + 2, m + 2), np.inf)
     padded[:, 1:-1, 1:-1] = dist
-    legal = valid_moves(obstacles, corner_cutting)
+    legal = valid_moves(obstacles, corner_cutting, model.name)
     out = np.zeros((b, n, m, N_ACTIONS), dtype=bool)
     target = np.where(np.isfinite(dist) & (dist > 0), dist, np.nan)
-    for a, (dr, dc) in enumerate(ACTION_DELTAS):
-        via = padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m] + ACTION_COSTS[a]
+    for a, (dr, dc) in enumerate(model.deltas):
+        via = padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m] + model.costs[a]
         out[..., a] = legal[..., a] & (np.abs(via - target) <= COST_TOL)
     return out
 
@@ -227,9 +240,14 @@ def _follow_policy(dist, obstacles, corner_cutting, starts, goals, deltas, costs
 
 
 def expert_paths(
-    obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    starts: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
 ) -> tuple[np.ndarray, PackedPaths]:
-    """Optimal paths from every start to the goal (ties broken by the lowest action index).
+    """Optimal paths from every start to the goal under the movement model `moves` (ties broken by the lowest
+    action index).
 
     Args:
         obstacles: `(B, N, N)` bool. goals: `(B, 2)`. starts: `(B, S, 2)`, each able to reach its goal.
@@ -238,21 +256,27 @@ def expert_paths(
         `costs (B, S) float64`, and the paths, `PackedPaths` of B * S paths, path `b * S + s` from start `s` of
         map `b`. A start that cannot reach the goal gets cost inf and a one-cell path.
     """
-    dist, _ = shortest_distances(obstacles, goals, corner_cutting)
-    return expert_paths_from(dist, obstacles, goals, starts, corner_cutting)
+    dist, _ = shortest_distances(obstacles, goals, corner_cutting, moves)
+    return expert_paths_from(dist, obstacles, goals, starts, corner_cutting, moves)
 
 
 def expert_paths_from(
-    dist: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool = True
+    dist: np.ndarray,
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    starts: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
 ) -> tuple[np.ndarray, PackedPaths]:
-    """`expert_paths` for distances already computed by `shortest_distances`."""
+    """`expert_paths` for distances already computed by `shortest_distances` (same `moves`)."""
+    model = move_model(moves)
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
     dist = np.ascontiguousarray(dist, dtype=np.float64)
     obstacles = np.ascontiguousarray(obstacles, dtype=np.bool_)
     b, s = starts.shape[:2]
     lengths = np.zeros(b * s, dtype=np.int64)
-    walk = (dist, obstacles, bool(corner_cutting), starts, goals, ACTION_DELTAS, ACTION_COSTS, lengths)
+    walk = (dist, obstacles, bool(corner_cutting), starts, goals, model.deltas, model.costs, lengths)
     _follow_policy(*walk, np.zeros((0, 2), dtype=np.int16), False)
     offsets = np.zeros(b * s + 1, dtype=np.int64)
     np.cumsum(lengths, out=offsets[1:])

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.actions import ACTION_DELTAS, SQRT2
 from vinadv.grid.optimal_moves import optimal_moves_kernel
 from vinadv.planners.batching import DEFAULT_CHUNK, over_maps
 from vinadv.planners.replay import best_and_gap, exact_actions
@@ -409,7 +409,9 @@ def _rollout(
             break
         if length - 1 >= limit and not exact:
             moves = np.empty(1, dtype=np.int64)
-            optimal_moves_kernel(obstacles, goals, starts[b, s : s + 1], np.full(1, b), corner_cutting, deltas, moves)
+            optimal_moves_kernel(  # the engine plans octile moves (`vinadv.grid.moves`): diagonal sqrt 2
+                obstacles, goals, starts[b, s : s + 1], np.full(1, b), corner_cutting, deltas, SQRT2, moves
+            )
             limit, exact = 2 * (moves[0] if moves[0] >= 0 else n * n), True
         if length - 1 >= limit:
             term = STEP_LIMIT
