@@ -24,9 +24,10 @@ def save_npz(path: str | os.PathLike, fmt: str, arrays: Mapping[str, Any]) -> No
 
 
 class NpzReader:
-    """Checked access to the fields of one vinadv NPZ file."""
+    """Checked access to the fields of one vinadv NPZ file of format `fmt` or one of the `older` versions it still
+    reads; `format` is the one found."""
 
-    def __init__(self, path: str | os.PathLike, fmt: str):
+    def __init__(self, path: str | os.PathLike, fmt: str, older: tuple[str, ...] = ()):
         self.path = str(path)
         if not os.path.exists(self.path):
             raise InputError(f"{self.path}: no such file")
@@ -38,7 +39,8 @@ class NpzReader:
             raise InputError(f"{self.path}: not a readable .npz file ({first_line(exc)})") from None
         found = self._data.get("format")
         found = str(found) if found is not None and found.ndim == 0 else None
-        if found != fmt:
+        self.format = found
+        if found != fmt and found not in older:
             kind = fmt.split("/")[0]
             if found is None:
                 raise InputError(f"{self.path}: field 'format' missing; not a {kind} file")

@@ -1,3 +1,5 @@
+import json
+
 import numpy as np
 import pytest
 
@@ -18,6 +20,52 @@ def test_round_trip(tmp_path, maps):
         np.testing.assert_array_equal(getattr(back, field), getattr(maps, field))
     assert back.expert == maps.expert
     assert back.corner_cutting == maps.corner_cutting and back.seed == 2
+    assert back.moves == "octile" and str(np.load(tmp_path / "m.npz")["format"]) == "vinadv.maps/2"
+
+
+@pytest.mark.parametrize("moves", ["moore", "news"])
+def test_round_trip_keeps_the_movement_model(tmp_path, moves):
+    maps = generate_maps(10, 12, seed=3, n_starts=3, moves=moves)
+    maps.save(tmp_path / "m.npz")
+    back = MapSet.load(tmp_path / "m.npz")
+    assert back.moves == moves
+    np.testing.assert_array_equal(back.expert_costs, maps.expert_costs)
+    assert back.expert == maps.expert
+
+
+def test_version_1_files_read_as_octile_with_the_same_arrays(tmp_path, maps):
+    """A file written before movement models (format vinadv.maps/1, no `moves` field) reads as octile, every array
+    byte for byte what was written; a /1 file is still checked as octile (an 8-move path is no jump there)."""
+    fields = dict(np.load(_saved(tmp_path, maps)))
+    fields.pop("moves")
+    fields["format"] = np.array("vinadv.maps/1")
+    np.savez(tmp_path / "old.npz", **fields)
+    old = MapSet.load(tmp_path / "old.npz")
+    assert old.moves == "octile"
+    for field in ("obstacles", "goals", "starts", "expert_costs"):
+        assert getattr(old, field).tobytes() == getattr(maps, field).tobytes()
+    assert old.expert.cells.tobytes() == maps.expert.cells.tobytes()
+    old.save(tmp_path / "again.npz")
+    assert str(np.load(tmp_path / "again.npz")["moves"]) == "octile"
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"moves": None}, "field 'moves' is missing"),
+        ({"moves": np.array("hex")}, "field 'moves' is 'hex', expected one of octile, moore, news"),
+        ({"moves": np.array("news"), "corner_cutting": np.array(False)}, "field 'moves' is 'news' .*corner_cutting"),
+        ({"moves": np.array("news")}, "not 4-neighbours"),  # the octile expert paths move diagonally
+    ],
+)
+def test_bad_movement_models_are_refused(tmp_path, maps, change, message):
+    with pytest.raises(InputError, match=message):
+        MapSet.load(_corrupt(tmp_path, maps, **change))
+
+
+def test_news_without_corner_cutting_is_refused():
+    with pytest.raises(InputError, match="'news' has no diagonal moves"):
+        generate_maps(2, 10, moves="news", corner_cutting=False)
 
 
 def _corrupt(tmp_path, maps, **changes):
@@ -78,3 +126,22 @@ def test_cli_generate_show_and_bad_files(tmp_path, capsys):
     assert "junk.npz: not an .npz file" in capsys.readouterr().err
     assert main(["maps", "generate", "--n", "5", "--size", "4", "--out", str(out)]) == 2
     assert "vinadv: error: --size must be >= 8, got 4" in capsys.readouterr().err
+
+
+def test_cli_generate_moves(tmp_path, capsys):
+    out = tmp_path / "m.npz"
+    argv = ["maps", "generate", "--n", "4", "--size", "10", "--out", str(out)]
+    assert main([*argv, "--moves", "moore", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["moves"] == "moore" and summary["corner_cutting"] is True
+    assert MapSet.load(out).moves == "moore"
+    assert main([*argv, "--moves", "news"]) == 0
+    assert "news moves" in capsys.readouterr().out and MapSet.load(out).moves == "news"
+    assert main([*argv, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["moves"] == "octile"
+    assert main([*argv, "--moves", "news", "--no-corner-cutting"]) == 2
+    err = capsys.readouterr().err
+    assert "vinadv: error: --moves 'news' has no diagonal moves, so it is refused without corner cutting" in err
+    with pytest.raises(SystemExit):
+        main([*argv, "--moves", "hex"])
+    assert "invalid choice: 'hex'" in capsys.readouterr().err

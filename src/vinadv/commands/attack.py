@@ -140,7 +140,9 @@ def cmd_attack(args: argparse.Namespace) -> int:
     check_tolerances(args.harm_tolerance, args.harm_rtol)
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
-    planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
+    planner = load_planner(
+        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+    )
     # `make_attack`'s options, kept: on a cluster every worker builds its own attack from them
     options = dict(
         per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius, obstacles=args.obstacles

@@ -149,7 +149,9 @@ def cmd_gppn_eval(args: argparse.Namespace) -> int:
     from vinadv.planners.registry import load_planner
 
     maps, source = start_eval(args)
-    planner = load_planner("gppn", maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
+    planner = load_planner(
+        "gppn", maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+    )
     t0 = time.perf_counter()
     metrics = evaluate_planner(planner, maps, progress=shows_progress(args))
     return emit_metrics(args, {"planner": planner.spec(), "weights": args.weights or "shipped"}, source, metrics, t0)

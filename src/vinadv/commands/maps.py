@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
+from vinadv.commands import LazyChoices
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -24,6 +25,13 @@ def register(subparsers) -> None:
         "--no-corner-cutting",
         action="store_true",
         help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
+    )
+    gen.add_argument(
+        "--moves",
+        default="octile",
+        choices=LazyChoices("vinadv.grid.moves", "MOVES"),
+        help="movement model: octile (default: 8 moves, diagonal sqrt 2, the original data's), moore (8 moves, all "
+        "cost 1: GPPN's and the MP dataset's) or news (4 moves N, S, E, W, cost 1; not with --no-corner-cutting)",
     )
     gen.add_argument("--out", required=True, help="output maps file (.npz)")
     add_output_options(gen, json="the summary", quiet=True)
@@ -45,7 +53,13 @@ def cmd_generate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     with progress_bar(args, total=max(args.n, 0), unit="map", desc="maps") as bar:
         maps = generate_maps(
-            args.n, args.size, args.seed, args.starts, corner_cutting=not args.no_corner_cutting, progress=bar.update
+            args.n,
+            args.size,
+            args.seed,
+            args.starts,
+            corner_cutting=not args.no_corner_cutting,
+            progress=bar.update,
+            moves=args.moves,
         )
     elapsed = time.perf_counter() - t0
     maps.save(args.out)
@@ -56,6 +70,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
         "starts": maps.n_starts,
         "seed": args.seed,
         "corner_cutting": maps.corner_cutting,
+        "moves": maps.moves,
         "obstacle_fraction": round(obstacle_fraction(maps.obstacles), 4),
         "mean_expert_moves": round(float(maps.expert.lengths.mean() - 1), 3) if len(maps) else None,
         "seconds": round(elapsed, 3),
@@ -63,8 +78,8 @@ def cmd_generate(args: argparse.Namespace) -> int:
     return emit(
         args,
         summary,
-        f"wrote {len(maps)} maps of {maps.size}x{maps.size} ({maps.n_starts} starts each) to {args.out} "
-        f"in {elapsed:.2f} s; obstacles {summary['obstacle_fraction']:.1%}",
+        f"wrote {len(maps)} maps of {maps.size}x{maps.size} ({maps.n_starts} starts each, {maps.moves} moves) to "
+        f"{args.out} in {elapsed:.2f} s; obstacles {summary['obstacle_fraction']:.1%}",
     )
 
 
@@ -81,9 +96,9 @@ def cmd_show(args: argparse.Namespace) -> int:
     paths = [("expert", maps.expert_path(args.index, s)) for s in starts]
     costs = maps.expert_costs[args.index, starts]
     title = (
-        f"map {args.index}: expert cost {costs[0]:.2f}"
+        f"map {args.index}: expert cost {costs[0]:.2f} ({maps.moves})"
         if len(starts) == 1
-        else f"map {args.index}: {len(starts)} starts, expert costs {costs.min():.2f}-{costs.max():.2f}"
+        else f"map {args.index}: {len(starts)} starts, expert costs {costs.min():.2f}-{costs.max():.2f} ({maps.moves})"
     )
     fig, ax = plt.subplots(figsize=(4, 4.4))
     draw_map(

@@ -36,7 +36,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
-    planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
+    planner = load_planner(
+        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+    )
     t0 = time.perf_counter()
     result = planner.plan_maps(
         maps.obstacles,

@@ -62,7 +62,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.planners.registry import load_planner
 
     maps, source = start_eval(args)
-    planner = load_planner(args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting)
+    planner = load_planner(
+        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+    )
     t0 = time.perf_counter()
     ours = evaluate_planner(planner, maps, progress=shows_progress(args))
     t1 = time.perf_counter()

@@ -96,7 +96,9 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     from vinadv.robustness import benchmark_maps, robustness, save_robustness
 
     maps = benchmark_maps(args.n, args.size, seed=args.seed)
-    planner = load_planner(args.planner, args.size, weights=args.weights, corner_cutting=maps.corner_cutting)
+    planner = load_planner(
+        args.planner, args.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+    )
     result = robustness(
         planner,
         maps,

@@ -1,4 +1,8 @@
-"""A dataset of grid-world maps with starts, goals and expert (optimal) paths; file format "vinadv.maps/1"."""
+"""A dataset of grid-world maps with starts, goals and expert (optimal) paths; file format "vinadv.maps/2".
+
+Version 2 added the movement model (field `moves`); a "vinadv.maps/1" file is read as `octile`, the only model
+there was.
+"""
 
 from __future__ import annotations
 
@@ -8,11 +12,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from vinadv.grid.checks import check_maps
-from vinadv.grid.moves import DEFAULT_MOVES, check_moves
+from vinadv.grid.moves import DEFAULT_MOVES, check_moves, read_moves
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 
-MAPS_FORMAT = "vinadv.maps/1"
+MAPS_FORMAT = "vinadv.maps/2"
+#: older versions still read (as `octile` maps)
+OLDER_MAPS_FORMATS = ("vinadv.maps/1",)
 
 
 @dataclass(kw_only=True, eq=False)
@@ -80,6 +86,7 @@ class MapSet:
                 "expert_costs": self.expert_costs.astype(np.float64),
                 **self.expert.to_fields("expert"),
                 "corner_cutting": np.array(bool(self.corner_cutting)),
+                "moves": np.array(self.moves),
                 "seed": np.array(int(self.seed)),
                 **({} if self.start_counts is None else {"start_counts": np.asarray(self.start_counts, np.int64)}),
             },
@@ -88,7 +95,7 @@ class MapSet:
     @classmethod
     def load(cls, path: str | os.PathLike) -> MapSet:
         """Read and validate a maps file; any problem raises InputError naming the file and field."""
-        r = NpzReader(path, MAPS_FORMAT)
+        r = NpzReader(path, MAPS_FORMAT, OLDER_MAPS_FORMATS)
         obstacles = r.array("obstacles", "b", 3)
         n, size = obstacles.shape[0], obstacles.shape[1]
         if obstacles.shape[2] != size or size < 3:
@@ -106,7 +113,8 @@ class MapSet:
         if counts is not None and n and (counts.min() < 1 or counts.max() > s):
             raise r.fail("start_counts", f"has a count outside 1..{s} (the starts per map)")
         corner_cutting = bool(r.scalar("corner_cutting", "b", default=True))
-        check_maps(r.path, obstacles, goals, starts, expert, corner_cutting, counts)
+        moves = read_moves(r, corner_cutting)
+        check_maps(r.path, obstacles, goals, starts, expert, corner_cutting, counts, moves)
         return cls(
             obstacles=obstacles.astype(bool),
             goals=goals,
@@ -116,4 +124,5 @@ class MapSet:
             corner_cutting=corner_cutting,
             seed=int(r.scalar("seed", "i", default=-1)),
             start_counts=counts,
+            moves=moves,
         )

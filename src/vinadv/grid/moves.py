@@ -19,18 +19,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
 
+if TYPE_CHECKING:
+    from vinadv.npzfile import NpzReader
+
 __all__ = [
     "DEFAULT_MOVES",
     "MOVES",
+    "OCTILE_FORMATS",
     "MoveModel",
     "check_moves",
     "move_model",
+    "read_moves",
     "require_moves",
 ]
 
@@ -77,9 +83,11 @@ _MODELS = {
     "moore": _model("moore", 8, np.ones(8), 1.0, "8 moves, every move costs 1"),
     "news": _model("news", 4, np.ones(4), 2.0, "4 moves (N, S, E, W), cost 1"),
 }
-#: the model names, default first
+#: the file formats of before movement models: read as `octile` (they have no `moves` field)
+OCTILE_FORMATS = ("vinadv.maps/1", "vinadv.paths/1", "vinadv.pairs/1")
+#: the model names, the default first
 MOVES = tuple(_MODELS)
-DEFAULT_MOVES = "octile"
+DEFAULT_MOVES = MOVES[0]
 
 
 def move_model(moves: str | MoveModel = DEFAULT_MOVES) -> MoveModel:
@@ -98,18 +106,35 @@ def check_moves(moves: str, corner_cutting: bool = True) -> str:
     model = move_model(moves)
     if model.name == "news" and not corner_cutting:
         raise InputError(
-            "moves 'news' has no diagonal moves, so corner_cutting off means nothing with it: keep corner cutting on",
+            "moves 'news' has no diagonal moves, so it is refused without corner cutting (there is no corner to cut)",
             "moves",
-            "corner_cutting",
         )
     return model.name
 
 
 def require_moves(moves: str, supported: tuple[str, ...], what: str) -> None:
-    """Refuse (InputError naming `moves`) maps of a movement model that `what` (say "the database") does not
-    follow yet, instead of silently computing with another model's costs."""
+    """Refuse (InputError, one line naming the model) maps of a movement model that `what` (say "the database")
+    does not follow yet, instead of silently computing with another model's costs."""
     name = move_model(moves).name
     if name not in supported:
         raise InputError(
-            f"moves {name!r}: {what} supports {' and '.join(repr(m) for m in supported)} moves only", "moves"
+            f"the maps use {name!r} moves: {what} follows {' and '.join(repr(m) for m in supported)} moves only"
         )
+
+
+def read_moves(reader: NpzReader, corner_cutting: bool = True) -> str:
+    """The movement model of a file being read: its field `moves`, or `octile` for a file of an older format
+    version (written before movement models existed: every such file is octile). A name that is not a model, or
+    `news` without corner cutting, raises InputError naming the file and the field."""
+    if not reader.has("moves"):
+        if reader.format in OCTILE_FORMATS:
+            return DEFAULT_MOVES
+        raise reader.fail("moves", "is missing")
+    name = reader.scalar("moves", "U")
+    if name not in MOVES:
+        raise reader.fail("moves", f"is {name!r}, expected one of {', '.join(MOVES)}")
+    if name == "news" and not corner_cutting:
+        raise reader.fail(
+            "moves", "is 'news' (no diagonal moves) with corner_cutting False (a 'news' file cuts corners)"
+        )
+    return name

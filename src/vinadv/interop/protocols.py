@@ -27,6 +27,7 @@ import torch
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.mapset import MapSet
+from vinadv.grid.moves import require_moves
 from vinadv.interop.formats.gppn import unit_cost_distances
 from vinadv.interop.formats.samples import expert_steps
 from vinadv.planners.evaluation import evaluate_vin
@@ -141,6 +142,7 @@ def evaluate_protocol(
     """`model`'s figures on `maps` measured by `protocol` ('vinadv', 'kentsommer' or 'gppn')."""
     if protocol not in PROTOCOLS:
         raise InputError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
+    require_moves(maps.moves, ("octile",), f"the {protocol} protocol")
     if prior is not None and protocol != "kentsommer":
         raise InputError("prior applies to the kentsommer protocol only")
     if protocol == "vinadv":

@@ -16,6 +16,7 @@ import numpy as np
 import torch
 
 from vinadv.grid.mapset import MapSet
+from vinadv.grid.moves import require_moves
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
 from vinadv.planners.records import LengthBucketMetrics, PlannerMetrics, RolloutMetrics
 from vinadv.planners.result import PlanResult
@@ -163,6 +164,7 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
 
 def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> PlannerMetrics:
     """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)`, `plan(obs, goals, starts)`."""
+    require_moves(maps.moves, ("octile",), "planner evaluation")  # path costs and accuracy are octile's here
     obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
     chunks = range(0, len(maps), batch_size)
     if progress:

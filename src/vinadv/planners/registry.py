@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vinadv.errors import InputError
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
 
 #: `load(size, weights, corner_cutting, device)`: a registered planner for `size x size` maps
@@ -191,7 +192,12 @@ def list_planners(size: int = 28) -> list[dict]:
 
 
 def load_planner(
-    spec: str | None, size: int, weights: str | None = None, corner_cutting: bool = True, device: str = "cpu"
+    spec: str | None,
+    size: int,
+    weights: str | None = None,
+    corner_cutting: bool = True,
+    device: str = "cpu",
+    moves: str = DEFAULT_MOVES,
 ) -> Planner:
     """The planner named or specified by `spec` (None: `vin`) for `size x size` maps.
 
@@ -200,10 +206,25 @@ def load_planner(
         weights: a weights file for `vin` or `gppn` (default: the shipped ones); refused for the others.
         corner_cutting: the move rule of the maps (the `optimal` planner's logits follow it).
         device: torch device of a torch planner's forward.
+        moves: the movement model of the maps (`vinadv.grid.moves`). Every planner plans `octile` moves for now:
+            the learned ones were trained on them, and their rollouts take octile step limits. Maps of another
+            model are refused (one line naming both), not planned with masked logits: an 8-action policy on `news`
+            maps would be judged on moves it was trained to make and the maps lack, a silent mismatch.
 
     Raises `PlannerError` (an `InputError`) naming the spec for anything that cannot be loaded.
     """
     spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
+    model = move_model(moves)
+    planner = _load(spec, size, weights, corner_cutting, device)
+    if model.name != DEFAULT_MOVES:
+        raise PlannerError(
+            f"planner {spec!r} plans octile moves (8 actions, diagonal sqrt 2); the maps use {model.name!r} moves "
+            f"({model.description}): no planner follows another movement model yet"
+        )
+    return planner
+
+
+def _load(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
     if spec.endswith(SUFFIX):
         return load_symmetric(spec, size, weights, corner_cutting, device)
     info = REGISTRY.get(spec)

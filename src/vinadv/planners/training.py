@@ -27,6 +27,7 @@ import torch
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
+from vinadv.grid.moves import require_moves
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
 from vinadv.planners.gppn import GPPN, GPPNConfig
@@ -325,6 +326,9 @@ def train_model(
         log: called with one line per epoch (None: silent).
     """
     config.validate()
+    # the supervision (optimal actions) would follow the maps' model, but the record and the planners that load
+    # the weights know octile only: refused until both carry the model
+    require_moves(maps.moves, ("octile",), "training")
     device = resolve_device(config.device)
     size = maps.size
     model = model.to(device)

@@ -17,7 +17,7 @@ from tests.interop.formats.layouts import (
 )
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.grid import MapSet
+from vinadv.grid import MapSet, generate_maps
 from vinadv.interop import import_maps
 
 
@@ -118,3 +118,12 @@ def test_empty_splits(tmp_path, small_maps):
     assert len(import_maps(tmp_path / "g.npz", "gppn", split="test")) == 0
     got = import_maps(tmp_path / "g.npz", "gppn", split="all", starts=2)
     np.testing.assert_array_equal(got.obstacles, small_maps.obstacles)
+
+
+@pytest.mark.parametrize("fmt", ["kentsommer", "avivt", "gppn"])
+def test_export_refuses_maps_of_other_movement_models(tmp_path, fmt, capsys):
+    generate_maps(3, 10, seed=1, n_starts=2, moves="moore").save(tmp_path / "m.npz")
+    out = tmp_path / ("x.mat" if fmt == "avivt" else "x.npz")
+    assert main(["maps", "export", str(tmp_path / "m.npz"), "--format", fmt, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"the maps use 'moore' moves: export to {fmt} follows 'octile' moves only" in err and not out.exists()

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
+from vinadv.grid.moves import require_moves
 from vinadv.interop.formats import avivt, gppn, kentsommer
 
 
@@ -92,9 +93,10 @@ def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str |
     test), the other split is written empty; goal prior 10 at the goal, 0 elsewhere. avivt: `split` test (default)
     writes the test layout (one row per real start), train the per-sample training arrays (no batched arrays).
     gppn: the mazes go to `split` (train|valid|test, default test), the others are empty; the policies are
-    GPPN's (diagonal cost 1).
+    GPPN's (diagonal cost 1). Every layout is written from `octile` maps only, for now (InputError otherwise).
     """
     layout = _format(format)
+    require_moves(maps.moves, ("octile",), f"export to {format}")
     split = split or "test"
     if split not in layout.export_splits:
         allowed = ", ".join(layout.export_splits)
