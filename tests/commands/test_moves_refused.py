@@ -12,7 +12,7 @@ from vinadv.planners.evaluation import evaluate_planner
 from vinadv.planners.registry import load_planner
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.training import TrainConfig, train_vin
-from vinadv.planners.weights import save_vin
+from vinadv.planners.vin.weights import save_vin
 
 
 @pytest.fixture(scope="module", params=["moore", "news"])
