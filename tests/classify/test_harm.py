@@ -1,5 +1,6 @@
 """Harm of path pairs against independent oracles: a plain-Python Dijkstra (heapq), path costs summed move by
-move, the expert path walked with the DESIGN.md tie-break, and the rule by brute force."""
+move, the expert path walked with the DESIGN.md tie-break, and the rule by brute force; on every movement model
+(octile: diagonal sqrt 2; moore: every move 1; news: the 4 straight moves only)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,16 @@ from vinadv.errors import InputError
 from vinadv.grid.paths import PackedPaths
 
 MOVES = [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)]
+MODELS = ("octile", "moore", "news")
+
+
+def model_moves(moves):
+    """The (dr, dc) of the model's moves, in action order."""
+    return MOVES[:4] if moves == "news" else MOVES
+
+
+def step_cost(dr, dc, moves):
+    return math.sqrt(2) if dr and dc and moves == "octile" else 1.0
 
 
 def legal(obstacles, r, c, dr, dc, corner_cutting):
@@ -27,7 +38,7 @@ def legal(obstacles, r, c, dr, dc, corner_cutting):
     return corner_cutting or not (dr and dc) or not (obstacles[nr][c] or obstacles[r][nc])
 
 
-def dijkstra(obstacles, goal, corner_cutting):
+def dijkstra(obstacles, goal, corner_cutting, moves="octile"):
     """Cost-to-goal of every cell, {cell: cost} (reachable cells only)."""
     dist = {tuple(goal): 0.0}
     heap = [(0.0, tuple(goal))]
@@ -37,27 +48,27 @@ def dijkstra(obstacles, goal, corner_cutting):
         if (r, c) in done:
             continue
         done.add((r, c))
-        for dr, dc in MOVES:
+        for dr, dc in model_moves(moves):
             if legal(obstacles, r, c, dr, dc, corner_cutting):
-                nd = d + (math.sqrt(2) if dr and dc else 1.0)
+                nd = d + step_cost(dr, dc, moves)
                 if nd < dist.get((r + dr, c + dc), math.inf) - 1e-12:
                     dist[(r + dr, c + dc)] = nd
                     heapq.heappush(heap, (nd, (r + dr, c + dc)))
     return dist
 
 
-def optimal_path(obstacles, start, goal, corner_cutting):
+def optimal_path(obstacles, start, goal, corner_cutting, moves="octile"):
     """The expert path (lowest-index optimal action at each cell), or None when the goal is unreachable."""
-    dist = dijkstra(obstacles, goal, corner_cutting)
+    dist = dijkstra(obstacles, goal, corner_cutting, moves)
     cell = tuple(start)
     if cell not in dist:
         return None
     path = [cell]
     while cell != tuple(goal):
         r, c = cell
-        for dr, dc in MOVES:
+        for dr, dc in model_moves(moves):
             nb = (r + dr, c + dc)
-            step = math.sqrt(2) if dr and dc else 1.0
+            step = step_cost(dr, dc, moves)
             tight = nb in dist and abs(step + dist[nb] - dist[cell]) <= 1e-9
             if legal(obstacles, r, c, dr, dc, corner_cutting) and tight:
                 cell = nb
@@ -66,16 +77,18 @@ def optimal_path(obstacles, start, goal, corner_cutting):
     return path
 
 
-def path_cost(path):
-    return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(path, path[1:]))
+def path_cost(path, moves="octile"):
+    return sum(step_cost(b[0] - a[0], b[1] - a[1], moves) for a, b in zip(path, path[1:]))
 
 
 @st.composite
 def harm_cases(draw, corner_cutting=None):
-    """Pairs on small random maps: an original map, the same plus 1-2 obstacles, and two 'planner' paths that are
-    legal on their maps, optimal or not, reaching the goal or not."""
+    """Pairs on small random maps of one movement model: an original map, the same plus 1-2 obstacles, and two
+    'planner' paths that are legal on their maps, optimal or not, reaching the goal or not. `(rows, cc, moves)`."""
     n = draw(st.integers(4, 9))
+    moves = draw(st.sampled_from(MODELS))
     cc = draw(st.booleans()) if corner_cutting is None else corner_cutting
+    cc = cc or moves == "news"  # news has no corner to cut
     rows = []
     for _ in range(draw(st.integers(1, 5))):
         obstacles = np.array(draw(st.lists(st.booleans(), min_size=n * n, max_size=n * n)), dtype=bool).reshape(n, n)
@@ -83,7 +96,7 @@ def harm_cases(draw, corner_cutting=None):
         cell = st.tuples(st.integers(0, n - 1), st.integers(0, n - 1))
         start, goal = draw(cell), draw(cell)
         obstacles[start] = obstacles[goal] = False
-        expert_o = optimal_path(obstacles.tolist(), start, goal, cc)
+        expert_o = optimal_path(obstacles.tolist(), start, goal, cc, moves)
         if expert_o is None or start == goal:
             continue
         adv = obstacles.copy()
@@ -107,12 +120,12 @@ def harm_cases(draw, corner_cutting=None):
             if kind == "detour":  # optimal on a map with more obstacles: legal here, often longer
                 extra |= np.array(draw(st.lists(st.booleans(), min_size=n * n, max_size=n * n))).reshape(n, n)
                 extra[start] = extra[goal] = False
-            path = optimal_path(extra.tolist(), start, goal, cc) or [start]
+            path = optimal_path(extra.tolist(), start, goal, cc, moves) or [start]
             if kind == "cut" or path == [start]:
                 path = path[: draw(st.integers(1, max(1, len(path) - 1)))]
             paths.append(path)
         rows.append((obstacles, adv, start, goal, paths[0], paths[1]))
-    return rows, cc
+    return rows, cc, moves
 
 
 def run(rows, cc, **kwargs):
@@ -134,17 +147,17 @@ def close(a, b):
 @settings(max_examples=150, deadline=None)
 @given(harm_cases())
 def test_every_field_matches_the_oracles(case):
-    rows, cc = case
+    rows, cc, moves = case
     if not rows:
         return
-    harm, labels, t = run(rows, cc)
+    harm, labels, t = run(rows, cc, moves=moves)
     for i, (obs_o, obs_a, start, goal, path_o, path_a) in enumerate(rows):
-        expert_o = optimal_path(obs_o.tolist(), start, goal, cc)
-        expert_a = optimal_path(obs_a.tolist(), start, goal, cc)
-        opt_o = path_cost(expert_o)
-        opt_a = math.nan if expert_a is None else path_cost(expert_a)
-        cost_o = path_cost(path_o) if path_o[-1] == goal else math.nan
-        cost_a = path_cost(path_a) if path_a[-1] == goal else math.nan
+        expert_o = optimal_path(obs_o.tolist(), start, goal, cc, moves)
+        expert_a = optimal_path(obs_a.tolist(), start, goal, cc, moves)
+        opt_o = path_cost(expert_o, moves)
+        opt_a = math.nan if expert_a is None else path_cost(expert_a, moves)
+        cost_o = path_cost(path_o, moves) if path_o[-1] == goal else math.nan
+        cost_a = path_cost(path_a, moves) if path_a[-1] == goal else math.nan
         assert close(harm.opt_cost_o[i], opt_o)
         assert close(harm.opt_cost_a[i], opt_a)
         assert close(harm.cost_o[i], cost_o)
@@ -164,10 +177,10 @@ def test_every_field_matches_the_oracles(case):
 @settings(max_examples=100, deadline=None)
 @given(harm_cases())
 def test_harm_properties(case):
-    rows, cc = case
+    rows, cc, moves = case
     if not rows:
         return
-    harm, labels, _ = run(rows, cc)
+    harm, labels, _ = run(rows, cc, moves=moves)
     assert np.all(np.isnan(harm.regret_o) | (harm.regret_o >= -1e-9))
     assert np.all(np.isnan(harm.regret_a) | (harm.regret_a >= -1e-9))
     assert np.all(np.isin(harm.harm, HARMS))
@@ -203,7 +216,7 @@ def _dihedral_map(obstacles, k):
 @settings(max_examples=60, deadline=None)
 @given(harm_cases(), st.integers(1, 7))
 def test_harm_invariant_under_flips_and_rotations(case, k):
-    rows, cc = case
+    rows, cc, moves = case
     if not rows:
         return
     n = len(rows[0][0])
@@ -218,8 +231,8 @@ def test_harm_invariant_under_flips_and_rotations(case, k):
         )
         for o, a, s, g, po, pa in rows
     ]
-    before, _, _ = run(rows, cc)
-    after, _, _ = run(moved, cc)
+    before, _, _ = run(rows, cc, moves=moves)
+    after, _, _ = run(moved, cc, moves=moves)
     assert np.array_equal(before.harm, after.harm)
     for name in ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a"):
         assert np.allclose(getattr(before, name), getattr(after, name), atol=1e-9, equal_nan=True), name
@@ -247,6 +260,26 @@ def test_fork_onto_another_optimal_route_is_harmless_and_a_longer_one_harmful():
     assert harm.regret_a[0] == pytest.approx(0.0, abs=1e-9)
     assert harm.regret_a[1] == pytest.approx(2 * math.sqrt(2) - 2)
     assert list(harm.expert_label) == ["FP", "FP"]
+
+
+def test_the_verdict_follows_the_movement_model():
+    """The wide detour costs 2 sqrt 2 - 2 more than the upper route with octile costs, but on moore maps (every move
+    costs 1) both take 6 moves: the fork is harmless there. On news maps the planner's straight-only detours are
+    judged by their move counts."""
+    obstacles, start, goal = _corridor()
+    upper = [(3, 0), (2, 1), (2, 2), (2, 3), (2, 4), (2, 5), (3, 6)]
+    wide = [(3, 0), (4, 1), (5, 2), (5, 3), (5, 4), (4, 5), (3, 6)]
+    adv = obstacles.copy()
+    adv[2, 3] = True
+    octile = run([(obstacles, adv, start, goal, upper, wide)], True)[0]
+    moore = run([(obstacles, adv, start, goal, upper, wide)], True, moves="moore")[0]
+    assert octile.harm[0] == "harmful" and moore.harm[0] == "harmless"
+    assert moore.opt_cost_o[0] == moore.cost_a[0] == 6 and moore.regret_a[0] == 0
+    news_upper = [(3, 0), (2, 0), (2, 1), (2, 2), (2, 3), (2, 4), (2, 5), (2, 6), (3, 6)]
+    news_wide = [(3, 0), (4, 0), (5, 0), (5, 1), (5, 2), (5, 3), (5, 4), (5, 5), (5, 6), (4, 6), (3, 6)]
+    news = run([(obstacles, adv, start, goal, news_upper, news_wide)], True, moves="news")[0]
+    assert news.opt_cost_o[0] == news.opt_cost_a[0] == 8 and news.cost_a[0] == 10
+    assert news.regret_a[0] == 2 and news.harm[0] == "harmful"
 
 
 def test_tolerances():

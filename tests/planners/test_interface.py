@@ -6,15 +6,16 @@ import pytest
 import torch
 from torch import nn
 
+from tests.grid.oracle import brute_distances
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.grid import generate_maps
+from vinadv.grid import generate_maps, optimal_actions, shortest_distances
 from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, check_logits
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.reference import rollout
 from vinadv.planners.result import step_limits
-from vinadv.planners.rollout import rollout_logits
+from vinadv.planners.rollout import multi_start_limits, rollout_logits
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import plan_maps as engine_plan_maps
@@ -52,6 +53,29 @@ def test_rollout_follows_the_reference_rule_on_arbitrary_logits(corner_cutting):
             assert got.termination[t] == term
             seen.add(term)
     assert {0, 1, 2} <= seen  # goal, collision, loop at least
+
+
+@pytest.mark.parametrize("moves", ["octile", "moore", "news"])
+def test_rollout_follows_the_movement_model(moves):
+    """On expert logits of the maps' model the rollout walks the expert paths; on `news` it never takes a diagonal
+    however high its logit (the argmax is over the model's actions); the step limits are 2 L of the model (plain-
+    Python oracle)."""
+    maps = generate_maps(30, 10, seed=4, n_starts=3, moves=moves)
+    dist, _ = shortest_distances(maps.obstacles, maps.goals, True, moves)
+    logits = optimal_actions(dist, maps.obstacles, True, moves).transpose(0, 3, 1, 2).astype(np.float32)
+    if moves == "news":
+        logits[:, 4:] = 5.0
+    got = rollout_logits(logits, maps.obstacles, maps.goals, maps.starts, moves=moves)
+    assert got.paths == maps.expert and got.reached.all()
+    limits = multi_start_limits(maps.obstacles, maps.goals, maps.starts, True, moves)
+    for b in range(5):
+        best = brute_distances(maps.obstacles[b].tolist(), tuple(maps.goals[b]), True, moves)
+        for s in range(3):
+            assert limits[b, s] == 2 * best[tuple(maps.starts[b, s])][1]
+            assert (
+                step_limits(maps.obstacles[b : b + 1], maps.starts[b : b + 1, s], maps.goals[b : b + 1], True, moves)[0]
+                == limits[b, s]
+            )
 
 
 def test_step_limit_ending():

@@ -2,8 +2,9 @@
 
 Beside the paper's label, for a pair on the original map `o` and the adversarial map `a` (same start and goal):
 
-- `opt_cost_o`, `opt_cost_a`: exact shortest-path costs start -> goal (the DESIGN.md moves and costs);
-- `cost_o`, `cost_a`: the cost of the planner's path on each map when it reaches the goal, else NaN;
+- `opt_cost_o`, `opt_cost_a`: exact shortest-path costs start -> goal (the moves and costs of the pairs' movement
+  model, `vinadv.grid.moves`: octile, moore or news);
+- `cost_o`, `cost_a`: the cost of the planner's path on each map (same model) when it reaches the goal, else NaN;
 - `regret_x = cost_x - opt_cost_x` (NaN when the path misses the goal);
 - `expert_label`: the paper's rule (`vinadv.classify.rule`) applied to the two expert paths (optimal paths, ties
   to the lowest action index, as `vinadv.grid.shortest_paths.expert_paths`): did the optimal route itself change?
@@ -11,10 +12,11 @@ Beside the paper's label, for a pair on the original map `o` and the adversarial
   `harmless` otherwise. A fork onto another optimal route is harmless: a perfect planner does the same.
 
 Speed (`benchmarks/harm.py`). One compiled kernel, parallel over blocks of pairs, does per pair:
-1. the original map: an A* search from the goal with the octile distance to the start as heuristic (consistent,
-   with or without corner cutting), run until every cell on an optimal path is settled, so the expert path can be
-   walked from the start with the exact tie-break. Consecutive pairs of one original map (a map attacked several
-   times) share that search, and the generator's expert paths can be passed in (`expert_o`) to skip it;
+1. the original map: an A* search from the goal with the model's distance to the start as heuristic (octile,
+   Chebyshev on moore, Manhattan on news: consistent, with or without corner cutting), run until every cell on an
+   optimal path is settled, so the expert path can be walked from the start with the exact tie-break. Consecutive
+   pairs of one original map (a map attacked several times) share that search, and the generator's expert paths
+   can be passed in (`expert_o`) to skip it;
 2. the adversarial map adds obstacles only, so its paths are a subset of the original's: when the original expert
    path uses no move the added obstacles remove, it is also the adversarial map's expert path (every cell on it
    keeps its cost, and no lower action becomes optimal, as costs only grow) and `opt_cost_a = opt_cost_o`, the
@@ -30,8 +32,8 @@ import numpy as np
 
 from vinadv.classify.rule import default_threshold, distances_kernel, is_fork
 from vinadv.errors import InputError
-from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
 from vinadv.grid.columns import Columns
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import COST_TOL, heap_pop, heap_push, legal_move
 from vinadv.vocabulary import HARMS, LABELS
@@ -40,7 +42,6 @@ from vinadv.vocabulary import HARMS, LABELS
 DEFAULT_TOL = 1e-6
 #: pairs per block of the kernel (a block runs on one thread, its pairs in order, so a shared original is seen)
 _BLOCK = 256
-_SQRT2 = float(np.sqrt(2.0))
 
 # expert-label codes written by the kernel
 _E_INVALID, _E_URP, _E_UCP, _E_CHANGED = 0, 1, 2, 3
@@ -48,7 +49,8 @@ _E_INVALID, _E_URP, _E_UCP, _E_CHANGED = 0, 1, 2, 3
 
 @dataclass(kw_only=True, eq=False)
 class PairHarm(Columns):
-    """Harm of `n` pairs (see the module doc). Costs are in move-cost units (orthogonal 1, diagonal sqrt(2)).
+    """Harm of `n` pairs (see the module doc). Costs are in the movement model's units (a straight move costs 1; a
+    diagonal sqrt 2 on octile, 1 on moore).
 
     Attributes:
         opt_cost_o, opt_cost_a: `(n,)` float64, exact optimal cost start -> goal; NaN where the goal is unreachable.
@@ -119,6 +121,7 @@ def pair_harm(
     rtol: float = 0.0,
     t: int | None = None,
     expert_o: tuple[np.ndarray, PackedPaths] | None = None,
+    moves: str = DEFAULT_MOVES,
 ) -> PairHarm:
     """Harm of `n` pairs.
 
@@ -133,7 +136,10 @@ def pair_harm(
         t: the rule's FP/DP threshold for `expert_label` (default `round(4 * N / 28)`).
         expert_o: optional expert data of the original maps already computed (the generator's `expert_costs[:, 0]`
             and expert paths, one per pair): `(costs (n,), PackedPaths of n paths)`.
+        moves: the pairs' movement model (`vinadv.grid.moves`): the moves and costs of the optimal paths and of the
+            planner's paths.
     """
+    model = move_model(moves)
     obstacles_o = np.ascontiguousarray(obstacles_o, dtype=np.bool_)
     obstacles_a = np.ascontiguousarray(obstacles_a, dtype=np.bool_)
     if obstacles_o.ndim != 3 or obstacles_o.shape[1] != obstacles_o.shape[2]:
@@ -179,8 +185,9 @@ def pair_harm(
             starts,
             goals,
             bool(corner_cutting),
-            ACTION_DELTAS,
-            ACTION_COSTS,
+            model.deltas,
+            model.costs,
+            model.diagonal_cost,
             expert_o is not None,
             given_cost,
             given_cells,
@@ -196,8 +203,8 @@ def pair_harm(
     expert_label[code == _E_URP] = "UrP"
     expert_label[code == _E_INVALID] = "invalid"
 
-    cost_o = _reached_costs(path_o, goals)
-    cost_a = _reached_costs(path_a, goals)
+    cost_o = _reached_costs(path_o, goals, model.diagonal_cost)
+    cost_a = _reached_costs(path_a, goals, model.diagonal_cost)
     opt_o[~np.isfinite(opt_o)] = np.nan
     opt_a[~np.isfinite(opt_a)] = np.nan
     regret_o = cost_o - opt_o
@@ -240,6 +247,7 @@ def pairset_harm(
         rtol=rtol,
         t=t,
         expert_o=expert_o,
+        moves=getattr(pairs, "moves", DEFAULT_MOVES),
     )
 
 
@@ -252,16 +260,17 @@ def _cells(value, name: str, n: int, size: int) -> np.ndarray:
     return arr
 
 
-def _reached_costs(paths: PackedPaths, goals) -> np.ndarray:
-    """Cost of each path that ends on its goal (1 per orthogonal move, sqrt(2) per diagonal, as
-    `PackedPaths.costs`, in one compiled pass), NaN for the others: `(n,)` float64."""
+def _reached_costs(paths: PackedPaths, goals, diagonal_cost: float) -> np.ndarray:
+    """Cost of each path that ends on its goal (1 per straight move, `diagonal_cost` per diagonal: sqrt 2 on octile
+    as `PackedPaths.costs`, 1 on moore; news paths have none), in one compiled pass, NaN for the others: `(n,)`
+    float64."""
     out = np.empty(len(paths))
-    _reached_costs_kernel(paths.cells, paths.offsets, goals, out)
+    _reached_costs_kernel(paths.cells, paths.offsets, goals, diagonal_cost, out)
     return out
 
 
 @numba.njit(cache=True, nogil=True)
-def _reached_costs_kernel(cells, offsets, goals, out):
+def _reached_costs_kernel(cells, offsets, goals, diagonal_cost, out):
     for i in range(len(out)):
         lo, hi = offsets[i], offsets[i + 1]
         if hi == lo or cells[hi - 1, 0] != goals[i, 0] or cells[hi - 1, 1] != goals[i, 1]:
@@ -270,7 +279,7 @@ def _reached_costs_kernel(cells, offsets, goals, out):
         total = 0.0
         for j in range(lo + 1, hi):
             step = abs(cells[j, 0] - cells[j - 1, 0]) + abs(cells[j, 1] - cells[j - 1, 1])
-            total += _SQRT2 if step == 2 else step
+            total += diagonal_cost if step == 2 else step
         out[i] = total
 
 
@@ -300,20 +309,23 @@ def _padded_legal(pad, p, a, step, side_r, side_c, corner_cutting):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _octile(p, w, sr, sc):
-    """Octile distance from the cell `p` of a padded flat map (row width `w`) to the cell `(sr, sc)` (padded)."""
+def _distance(p, w, sr, sc, diag):
+    """The model's distance on an open map from the cell `p` of a padded flat map (row width `w`) to the cell
+    `(sr, sc)` (padded): `diag` per diagonal step (`MoveModel.diagonal_cost`: octile sqrt 2, Chebyshev 1,
+    Manhattan 2)."""
     r = p // w
     dr = abs(r - sr)
     dc = abs(p - r * w - sc)
-    return min(dr, dc) * (_SQRT2 - 1.0) + max(dr, dc)
+    return min(dr, dc) * (diag - 1.0) + max(dr, dc)
 
 
 @numba.njit(cache=True, nogil=True)
-def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch, heap_key, heap_val):
-    """A* on the padded flat map `pad` (row width `w`) from the cell `goal` toward the cell `s` (heuristic: octile
-    distance to `s`, consistent on any of these maps), run until every cell with `g + h <= optimum` is settled:
-    those are all the cells of optimal paths, with their exact cost-to-goal in `g` (`stamp == epoch` marks a
-    settled cell, `-epoch` one only reached). Returns the optimal cost, inf when `s` cannot be reached."""
+def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, diag, g, stamp, epoch, heap_key, heap_val):
+    """A* on the padded flat map `pad` (row width `w`) from the cell `goal` toward the cell `s` over the moves
+    `step` (heuristic: the model's distance to `s`, `_distance`, consistent on any of these maps), run until every
+    cell with `g + h <= optimum` is settled: those are all the cells of optimal paths, with their exact cost-to-goal
+    in `g` (`stamp == epoch` marks a settled cell, `-epoch` one only reached). Returns the optimal cost, inf when
+    `s` cannot be reached."""
     if pad[goal] or pad[s]:
         return np.inf
     sr = s // w
@@ -321,7 +333,7 @@ def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, sta
     best = np.inf
     g[goal] = 0.0
     stamp[goal] = -epoch
-    size = heap_push(heap_key, heap_val, 0, _octile(goal, w, sr, sc), goal)
+    size = heap_push(heap_key, heap_val, 0, _distance(goal, w, sr, sc, diag), goal)
     while size > 0:
         f, p, size = heap_pop(heap_key, heap_val, size)
         if f > best + COST_TOL:
@@ -332,7 +344,7 @@ def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, sta
         gv = g[p]
         if p == s:
             best = gv
-        for a in range(8):
+        for a in range(step.shape[0]):
             if not _padded_legal(pad, p, a, step, side_r, side_c, corner_cutting):
                 continue
             q = p + step[a]
@@ -343,7 +355,7 @@ def _search(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, sta
             if st != -epoch or nd < g[q] - COST_TOL:
                 g[q] = nd
                 stamp[q] = -epoch
-                size = heap_push(heap_key, heap_val, size, nd + _octile(q, w, sr, sc), q)
+                size = heap_push(heap_key, heap_val, size, nd + _distance(q, w, sr, sc, diag), q)
     return best
 
 
@@ -362,7 +374,7 @@ def _walk(pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp
         if p == goal:
             return k
         moved = False
-        for a in range(8):
+        for a in range(step.shape[0]):
             q = p + step[a]
             if not _padded_legal(pad, p, a, step, side_r, side_c, corner_cutting):
                 continue
@@ -427,6 +439,7 @@ def _harm_kernel(
     corner_cutting,
     deltas,
     costs,
+    diag,
     have_o,
     given_cost,
     given_cells,
@@ -442,10 +455,11 @@ def _harm_kernel(
     for block in numba.prange(n_blocks):
         w = n + 2
         pad = np.ones(w * w, dtype=np.uint8)
-        step = np.empty(8, dtype=np.int64)
-        side_r = np.empty(8, dtype=np.int64)
-        side_c = np.empty(8, dtype=np.int64)
-        for a in range(8):
+        n_act = deltas.shape[0]
+        step = np.empty(n_act, dtype=np.int64)
+        side_r = np.empty(n_act, dtype=np.int64)
+        side_c = np.empty(n_act, dtype=np.int64)
+        for a in range(n_act):
             side_r[a] = deltas[a, 0] * w
             side_c[a] = deltas[a, 1]
             step[a] = side_r[a] + side_c[a]
@@ -478,7 +492,21 @@ def _harm_kernel(
                 epoch += 1
                 _load_padded(obstacles_o[i], pad, w)
                 opt_o[i] = _search(
-                    pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch, heap_key, heap_val
+                    pad,
+                    w,
+                    s,
+                    goal,
+                    corner_cutting,
+                    step,
+                    side_r,
+                    side_c,
+                    costs,
+                    diag,
+                    g,
+                    stamp,
+                    epoch,
+                    heap_key,
+                    heap_val,
                 )
                 k_o = 0
                 if opt_o[i] < np.inf:
@@ -494,7 +522,7 @@ def _harm_kernel(
             epoch += 1
             _load_padded(obstacles_a[i], pad, w)
             opt_a[i] = _search(
-                pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, g, stamp, epoch, heap_key, heap_val
+                pad, w, s, goal, corner_cutting, step, side_r, side_c, costs, diag, g, stamp, epoch, heap_key, heap_val
             )
             if not opt_o[i] < np.inf:
                 code[i] = _E_INVALID

@@ -8,6 +8,7 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
+from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import shortest_distances
 from vinadv.vocabulary import COLLISION, GOAL, LOOP, STEP_LIMIT, TERMINATIONS, termination_names
@@ -81,11 +82,14 @@ def check_plan_inputs(obstacles, starts, goals) -> tuple[np.ndarray, np.ndarray,
     return obstacles, starts, goals
 
 
-def step_limits(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool) -> np.ndarray:
-    """`(B,)` int64: 2 * L, L the optimal move count from the start (N * N where the goal is unreachable)."""
+def step_limits(
+    obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool, moves: str = DEFAULT_MOVES
+) -> np.ndarray:
+    """`(B,)` int64: 2 * L, L the optimal move count from the start under the movement model `moves` (N * N where
+    the goal is unreachable)."""
     if len(obstacles) == 0:
         return np.zeros(0, dtype=np.int64)
-    _, moves = shortest_distances(obstacles, goals, corner_cutting)
+    _, counts = shortest_distances(obstacles, goals, corner_cutting, moves)
     n = obstacles.shape[1]
-    lengths = moves[np.arange(len(obstacles)), starts[:, 0], starts[:, 1]].astype(np.int64)
+    lengths = counts[np.arange(len(obstacles)), starts[:, 0], starts[:, 1]].astype(np.int64)
     return 2 * np.where(lengths < 0, n * n, lengths)

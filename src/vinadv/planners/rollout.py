@@ -6,6 +6,11 @@ rules and termination codes of `vinadv.planners.reference.rollout` (the engine's
 at each cell the goal ends the path ('goal'); a path that already made its step limit 2L of moves ends as
 'step_limit'; otherwise the move is taken: off the grid, into an obstacle, or (without corner cutting) diagonally
 past an obstacle ends it as 'collision', onto a visited cell as 'loop'.
+
+Movement models (`vinadv.grid.moves`): the step limit's L is the optimal move count under the maps' model, and the
+argmax runs over the model's actions only (on `news` the first 4 logits, N S E W): a planner whose action set does
+not fit the maps is refused before planning (`vinadv.planners.registry.load_planner`), so no logit of an action
+the maps lack is ever compared.
 """
 
 from __future__ import annotations
@@ -13,29 +18,30 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.shortest_paths import shortest_distances
 from vinadv.planners.result import COLLISION, GOAL, LOOP, STEP_LIMIT, PlanResult
 
 
 def multi_start_limits(
-    obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool
+    obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray, corner_cutting: bool, moves: str = DEFAULT_MOVES
 ) -> np.ndarray:
-    """Step limits `(B, S)` int64 of rollouts from `starts (B, S, 2)`: 2 L, L the optimal move count (N * N where
-    the goal cannot be reached), as `vinadv.planners.result.step_limits` for one start."""
+    """Step limits `(B, S)` int64 of rollouts from `starts (B, S, 2)`: 2 L, L the optimal move count under `moves`
+    (N * N where the goal cannot be reached), as `vinadv.planners.result.step_limits` for one start."""
     b, n = obstacles.shape[0], obstacles.shape[1]
     if b == 0:
         return np.zeros(starts.shape[:2], dtype=np.int64)
-    _, moves = shortest_distances(obstacles, goals, corner_cutting)
-    lengths = moves[np.arange(b)[:, None], starts[..., 0], starts[..., 1]].astype(np.int64)
+    _, counts = shortest_distances(obstacles, goals, corner_cutting, moves)
+    lengths = counts[np.arange(b)[:, None], starts[..., 0], starts[..., 1]].astype(np.int64)
     return 2 * np.where(lengths < 0, n * n, lengths)
 
 
 @numba.njit(cache=True, nogil=True)
 def _rollout_kernel(logits, obstacles, goals, starts, limits, corner_cutting, deltas, cells, lengths, terms):
-    """logits (B, A, N, N) float; starts (B, S, 2); limits (B, S). Rollout b * S + s into cells[b * S + s]
-    (`(N * N, 2)` int16: a rollout never visits a cell twice), its cell count into lengths, its code into terms."""
-    n_maps, n_act, n = logits.shape[0], logits.shape[1], logits.shape[2]
+    """logits (B, 8, N, N) float; starts (B, S, 2); limits (B, S); deltas (A, 2), the model's moves (the argmax runs
+    over the first A logits). Rollout b * S + s into cells[b * S + s] (`(N * N, 2)` int16: a rollout never visits a
+    cell twice), its cell count into lengths, its code into terms."""
+    n_maps, n_act, n = logits.shape[0], min(logits.shape[1], deltas.shape[0]), logits.shape[2]
     n_starts = starts.shape[1]
     stamp = np.zeros((n, n), dtype=np.int64)  # t + 1 on the cells rollout t has visited
     for b in range(n_maps):
@@ -102,6 +108,7 @@ def rollout_logits(
     starts: np.ndarray,
     corner_cutting: bool = True,
     limits: np.ndarray | None = None,
+    moves: str = DEFAULT_MOVES,
 ) -> PlanResult:
     """Paths from `starts (B, S, 2)` following the argmax of `logits (B, 8, N, N)` (one map per map).
 
@@ -109,6 +116,7 @@ def rollout_logits(
         logits: float32/float64, action order of DESIGN.md, finite or -inf (checked by the caller: NaN argmax is
             undefined). obstacles: `(B, N, N)` bool. goals: `(B, 2)`. starts: `(B, S, 2)`, inside the grid.
         limits: step limits `(B, S)`; default `multi_start_limits` (2L).
+        moves: the maps' movement model: its actions (the argmax is over them) and the L of the step limit.
 
     Returns:
         `PlanResult`, path `b * S + s` from start `s` of map `b`.
@@ -119,8 +127,9 @@ def rollout_logits(
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
     starts = np.ascontiguousarray(starts, dtype=np.int64)
+    model = move_model(moves)
     if limits is None:
-        limits = multi_start_limits(obstacles, goals, starts, corner_cutting)
+        limits = multi_start_limits(obstacles, goals, starts, corner_cutting, model.name)
     limits = np.ascontiguousarray(limits, dtype=np.int64)
     b, s, n = starts.shape[0], starts.shape[1], obstacles.shape[1]
     cells = np.empty((b * s, n * n, 2), dtype=np.int16)  # np.empty: untouched pages cost nothing
@@ -128,6 +137,6 @@ def rollout_logits(
     terms = np.empty(b * s, dtype=np.int8)
     if b * s:
         _rollout_kernel(
-            logits, obstacles, goals, starts, limits, bool(corner_cutting), ACTION_DELTAS, cells, lengths, terms
+            logits, obstacles, goals, starts, limits, bool(corner_cutting), model.deltas, cells, lengths, terms
         )
     return PlanResult.from_buffers(cells, lengths, terms)
