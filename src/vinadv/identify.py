@@ -21,6 +21,7 @@ from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_
 from vinadv.classify.rule import label_batch, path_distances
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
+from vinadv.grid.moves import require_moves
 from vinadv.planners.interface import Planner, as_planner
 from vinadv.planners.spec import PlannerSpec
 from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
@@ -227,10 +228,13 @@ def identify_and_store(
 
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
     pairs = PairSet.load(pairs_path)
+    require_moves(pairs.moves, ("octile",), "the database")  # its runs and pairs have no movement model yet
     t0 = time.perf_counter()
     replanner = None
     if planner is not None or weights is not None:
-        replanner = load_planner(planner, pairs.size, weights=weights, corner_cutting=pairs.corner_cutting)
+        replanner = load_planner(
+            planner, pairs.size, weights=weights, corner_cutting=pairs.corner_cutting, moves=pairs.moves
+        )
     classifier_model, classifier_name = load_classifier(classifier)
     if remote is None:
         if replanner is not None:

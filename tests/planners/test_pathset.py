@@ -1,5 +1,6 @@
 """The paths file: round trip, refusal of bad files, and `vinadv plan` end to end."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -29,6 +30,7 @@ def fields(ps: PathSet) -> dict:
         "termination": ps.termination,
         "n_starts": np.array(ps.n_starts),
         "size": np.array(ps.size),
+        "moves": np.array(ps.moves),
     }
 
 
@@ -41,6 +43,28 @@ def test_round_trip(planned, tmp_path):
         np.testing.assert_array_equal(getattr(back, name), getattr(ps, name))
     assert (back.n_starts, back.size, back.corner_cutting, back.model, back.n_maps) == (3, 16, True, "test", 12)
     np.testing.assert_array_equal(back.path(2, 1), ps.paths.cells[ps.paths.offsets[7] : ps.paths.offsets[8]])
+
+
+def test_movement_model_round_trip_and_version_1_files(planned, tmp_path):
+    """vinadv.paths/2 keeps the model; a vinadv.paths/1 file (no `moves`) reads as octile with the same arrays; the
+    model is checked (a diagonal step is a jump on news)."""
+    _, ps = planned
+    moore = dataclasses.replace(ps, moves="moore")
+    moore.save(tmp_path / "m.npz")
+    assert PathSet.load(tmp_path / "m.npz").moves == "moore"
+    assert str(np.load(tmp_path / "m.npz")["format"]) == "vinadv.paths/2"
+    old = {k: v for k, v in np.load(tmp_path / "m.npz").items() if k not in ("format", "moves")}
+    save_npz(tmp_path / "old.npz", "vinadv.paths/1", old)
+    back = PathSet.load(tmp_path / "old.npz")
+    assert back.moves == "octile" and back.paths.cells.tobytes() == ps.paths.cells.tobytes()
+    dataclasses.replace(ps, moves="news").save(tmp_path / "n.npz")  # the octile paths move diagonally
+    with pytest.raises(InputError, match="not 4-neighbours"):
+        PathSet.load(tmp_path / "n.npz")
+    f = fields(ps)
+    f.pop("moves")
+    save_npz(tmp_path / "none.npz", PATHS_FORMAT, f)
+    with pytest.raises(InputError, match="field 'moves' is missing"):
+        PathSet.load(tmp_path / "none.npz")
 
 
 @pytest.mark.parametrize(

@@ -1,7 +1,8 @@
-"""Map pairs (original map + K added obstacles, K >= 1) with both planned paths; file format "vinadv.pairs/1".
+"""Map pairs (original map + K added obstacles, K >= 1) with both planned paths; file format "vinadv.pairs/2".
 
 The field `added` is `(n, 2)` in a file of one-obstacle pairs (as before there were several: such a file is the same
-as ever, and every vinadv reads it) and `(n, K, 2)` in a file of K > 1 obstacles per pair.
+as ever, and every vinadv reads it) and `(n, K, 2)` in a file of K > 1 obstacles per pair. Version 2 added the
+movement model (field `moves`); a "vinadv.pairs/1" file is read as `octile`.
 """
 
 from __future__ import annotations
@@ -13,13 +14,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vinadv.grid.checks import check_pairs
+from vinadv.grid.moves import DEFAULT_MOVES, check_moves, read_moves
 from vinadv.grid.pairs import PathPairs, int_column
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 from vinadv.planners.spec import is_planner_spec
 from vinadv.vocabulary import TERMINATIONS
 
-PAIRS_FORMAT = "vinadv.pairs/1"
+PAIRS_FORMAT = "vinadv.pairs/2"
+#: older versions still read (as `octile` pairs)
+OLDER_PAIRS_FORMATS = ("vinadv.pairs/1",)
 
 
 @dataclass(kw_only=True, eq=False)
@@ -29,18 +33,21 @@ class PairSet(PathPairs):
 
     Attributes, besides those of `PathPairs`:
         map_index: `(n,)` int64, the map of the source maps file each pair comes from.
-        strategy: the attack strategy's name; params: its parameters (JSON-able); corner_cutting: the move rule.
+        strategy: the attack strategy's name; params: its parameters (JSON-able); corner_cutting: the move rule;
+        moves: the movement model of the maps (`vinadv.grid.moves`), which harm follows.
     """
 
-    META = ("strategy", "params", "corner_cutting")
+    META = ("strategy", "params", "corner_cutting", "moves")
 
     map_index: np.ndarray
     strategy: str = "unknown"
     params: dict = field(default_factory=dict)
     corner_cutting: bool = True
+    moves: str = DEFAULT_MOVES
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        self.moves = check_moves(self.moves, self.corner_cutting)
         self.map_index = int_column(self.map_index, "PairSet.map_index", (len(self.starts),))
 
     @classmethod
@@ -65,13 +72,14 @@ class PairSet(PathPairs):
                 "strategy": np.array(self.strategy),
                 "params": np.array(json.dumps(self.params, sort_keys=True)),
                 "corner_cutting": np.array(bool(self.corner_cutting)),
+                "moves": np.array(self.moves),
             },
         )
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> PairSet:
         """Read and validate a pairs file; any problem raises InputError naming the file and field."""
-        r = NpzReader(path, PAIRS_FORMAT)
+        r = NpzReader(path, PAIRS_FORMAT, OLDER_PAIRS_FORMATS)
         obs_o = r.array("obstacles_o", "b", 3)
         n, size = obs_o.shape[:2]
         if obs_o.shape[2] != size:
@@ -91,7 +99,9 @@ class PairSet(PathPairs):
             terms[side] = term
         for name, cells in (("starts", starts), ("goals", goals), ("added", added)):
             check_cells_in_grid(r, name, cells, size)
-        check_pairs(r.path, obs_o, obs_a, starts, goals, added, paths, terms, r.scalar("corner_cutting", "b", True))
+        corner_cutting = bool(r.scalar("corner_cutting", "b", default=True))
+        moves = read_moves(r, corner_cutting)
+        check_pairs(r.path, obs_o, obs_a, starts, goals, added, paths, terms, corner_cutting, moves)
         params = r.json("params")
         if not isinstance(params, dict):
             raise r.fail("params", "must be a JSON object")
@@ -110,7 +120,8 @@ class PairSet(PathPairs):
             term_a=terms["a"],
             strategy=str(r.scalar("strategy", "U")),
             params=params,
-            corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
+            corner_cutting=corner_cutting,
+            moves=moves,
         )
 
 

@@ -55,7 +55,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
         + ([f"k={k}"] if k is not None else [])
         + ([f"sha256={planner.checksum}"] if planner.checksum else [])
     )
-    PathSet.from_result(result, maps.n_starts, maps.size, maps.corner_cutting, model=label).save(args.out)
+    PathSet.from_result(result, maps.n_starts, maps.size, maps.corner_cutting, model=label, moves=maps.moves).save(
+        args.out
+    )
     counts = np.bincount(result.termination, minlength=4)
     summary = {
         "out": args.out,

@@ -1,4 +1,7 @@
-"""Planned paths of a maps file, one per (map, start); file format "vinadv.paths/1" (written by `vinadv plan`)."""
+"""Planned paths of a maps file, one per (map, start); file format "vinadv.paths/2" (written by `vinadv plan`).
+
+Version 2 added the movement model (field `moves`); a "vinadv.paths/1" file is read as `octile`.
+"""
 
 from __future__ import annotations
 
@@ -9,12 +12,15 @@ import numpy as np
 
 from vinadv.grid.checks import check_paths
 from vinadv.grid.columns import Columns
+from vinadv.grid.moves import DEFAULT_MOVES, check_moves, read_moves
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, save_npz
 from vinadv.planners.result import PlanResult
 from vinadv.vocabulary import GOAL, TERMINATIONS
 
-PATHS_FORMAT = "vinadv.paths/1"
+PATHS_FORMAT = "vinadv.paths/2"
+#: older versions still read (as `octile` paths)
+OLDER_PATHS_FORMATS = ("vinadv.paths/1",)
 
 
 @dataclass(kw_only=True, eq=False)
@@ -24,11 +30,12 @@ class PathSet(Columns):
     Attributes:
         paths: `PackedPaths` of n * S paths, `(row, col)` cells, start included.
         termination: `(n * S,)` str, 'goal' | 'collision' | 'loop' | 'step_limit'.
-        n_starts: S. size: N (map side). corner_cutting: the move rule used.
+        n_starts: S. size: N (map side). corner_cutting: the move rule used. moves: the movement model of the maps
+            (`vinadv.grid.moves`).
         model: a short description of the planner (e.g. the weights checksum), free text.
     """
 
-    META = ("n_starts", "size", "corner_cutting", "model")
+    META = ("n_starts", "size", "corner_cutting", "model", "moves")
 
     paths: PackedPaths
     termination: np.ndarray
@@ -36,6 +43,10 @@ class PathSet(Columns):
     size: int = 28
     corner_cutting: bool = True
     model: str = field(default="")
+    moves: str = DEFAULT_MOVES
+
+    def __post_init__(self) -> None:
+        self.moves = check_moves(self.moves, self.corner_cutting)
 
     @property
     def reached(self) -> np.ndarray:
@@ -52,7 +63,13 @@ class PathSet(Columns):
 
     @classmethod
     def from_result(
-        cls, result: PlanResult, n_starts: int, size: int, corner_cutting: bool = True, model: str = ""
+        cls,
+        result: PlanResult,
+        n_starts: int,
+        size: int,
+        corner_cutting: bool = True,
+        model: str = "",
+        moves: str = DEFAULT_MOVES,
     ) -> PathSet:
         return cls(
             paths=result.paths,
@@ -61,6 +78,7 @@ class PathSet(Columns):
             size=int(size),
             corner_cutting=bool(corner_cutting),
             model=model,
+            moves=moves,
         )
 
     def save(self, path: str | os.PathLike) -> None:
@@ -75,13 +93,14 @@ class PathSet(Columns):
                 "size": np.array(int(self.size)),
                 "corner_cutting": np.array(bool(self.corner_cutting)),
                 "model": np.array(str(self.model)),
+                "moves": np.array(self.moves),
             },
         )
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> PathSet:
         """Read and validate a paths file; any problem raises InputError naming the file and field."""
-        r = NpzReader(path, PATHS_FORMAT)
+        r = NpzReader(path, PATHS_FORMAT, OLDER_PATHS_FORMATS)
         size = int(r.scalar("size", "i"))
         if size < 3:
             raise r.fail("size", f"is {size}, expected >= 3")
@@ -97,12 +116,15 @@ class PathSet(Columns):
             raise r.fail("termination", f"has '{termination[bad][0]}', expected one of {', '.join(TERMINATIONS)}")
         if not np.array_equal(reached, termination == "goal"):
             raise r.fail("reached", "disagrees with 'termination' (reached means termination == 'goal')")
-        check_paths(r.path, "path_cells", paths, size)
+        corner_cutting = bool(r.scalar("corner_cutting", "b", default=True))
+        moves = read_moves(r, corner_cutting)
+        check_paths(r.path, "path_cells", paths, size, moves=moves)
         return cls(
             paths=paths,
             termination=termination.astype(str),
             n_starts=n_starts,
             size=size,
-            corner_cutting=bool(r.scalar("corner_cutting", "b", default=True)),
+            corner_cutting=corner_cutting,
             model=str(r.scalar("model", "U", default="")),
+            moves=moves,
         )
