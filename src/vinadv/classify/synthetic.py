@@ -36,7 +36,7 @@ def synthetic_pairs(n: int, size: int = 28, seed: int = 0, mix: bool = False) ->
         blocked = maps.expert.cells[pos].astype(np.int64)
         obstacles = maps.obstacles[idx].copy()
         obstacles[np.arange(len(idx)), blocked[:, 0], blocked[:, 1]] = True
-        costs, detours = expert_paths(obstacles, maps.goals[idx], maps.starts[idx], maps.corner_cutting)
+        costs, detours = expert_paths(obstacles, maps.goals[idx], maps.starts[idx], maps.corner_cutting, maps.moves)
         ok = np.isfinite(costs[:, 0])
         chosen = idx[ok][: want - have]
         detours = detours.take(np.flatnonzero(ok)[: len(chosen)])

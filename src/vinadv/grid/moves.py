@@ -52,7 +52,7 @@ class MoveModel:
         diagonal_cost: what a diagonal displacement of one cell costs at least in this model (sqrt 2, 1, or 2 on
             `news`: two straight moves); the A* heuristics use it (`(max - min) + min * diagonal_cost` over the row
             and column distances: octile, Chebyshev or Manhattan distance).
-        description: one line for messages and `maps show`.
+        description: one line for messages.
     """
 
     name: str
