@@ -5,8 +5,11 @@ import math
 import numpy as np
 import pytest
 
+from tests.grid.oracle import brute_distances
 from vinadv.grid import expert_paths, generate_maps
-from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.interface import PlannerError
+from vinadv.planners.optimal import ILLEGAL, OptimalPlanner
+from vinadv.planners.registry import PlannerRef, load_planner
 
 DELTAS = [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)]
 
@@ -90,3 +93,26 @@ def test_refuses_another_move_rule():
     maps = generate_maps(2, 8, seed=1, n_starts=1)
     with pytest.raises(ValueError, match="corner_cutting=True"):
         OptimalPlanner(8, True).plan_maps(maps.obstacles, maps.goals, maps.starts, corner_cutting=False)
+
+
+@pytest.mark.parametrize("moves", ["moore", "news"])
+def test_follows_the_movement_model(moves):
+    """On the maps' model: value map minus the model's cost-to-go (plain-Python oracle), the expert paths of that
+    model, and on `news` every diagonal illegal; `for_moves` gives the planner of another model, and the ref a
+    worker loads keeps it."""
+    maps = generate_maps(20, 10, seed=6, n_starts=2, moves=moves)
+    planner = load_planner("optimal", 10, moves=moves)
+    assert planner.moves == moves and planner.config == {"corner_cutting": True, "moves": moves}
+    assert OptimalPlanner(10).for_moves(moves).moves == moves and planner.for_moves(moves) is planner
+    values = planner.value_maps(maps.obstacles, maps.goals)
+    for b in range(3):
+        best = brute_distances(maps.obstacles[b].tolist(), tuple(maps.goals[b]), True, moves)
+        for (r, c), (cost, _) in best.items():
+            assert (math.isnan(values[b, r, c]) and math.isinf(cost)) or math.isclose(-values[b, r, c], cost)
+    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    assert result.paths == maps.expert and result.reached.all()
+    logits = planner.logits(maps.obstacles, maps.goals)
+    assert (logits[:, 4:] == ILLEGAL).all() if moves == "news" else (logits[:, 4:] > ILLEGAL).any()
+    assert PlannerRef.of(planner, "optimal", None, True).load().moves == moves
+    with pytest.raises(PlannerError, match=f"planner 'vin' plans octile moves .*the maps use '{moves}' moves"):
+        load_planner("vin", 28, moves=moves)

@@ -165,6 +165,9 @@ class Attack:
         """Attack a batch of maps with `planner` (a `Planner`, or a `VIN`): obstacles `(B, N, N)` bool, starts
         and goals `(B, 2)`; `self.obstacles` cells per pair, greedily (see the module doc).
 
+        The maps' movement model is the planner's (`Planner.moves`: `load_planner` gives the planner for the maps'
+        model): the valid cells and the pairs follow it.
+
         `first_map`: these maps are maps `first_map..first_map+B-1` of a larger batch; the result is that
         batch's result for them (so a batch can be attacked in shards). Randomised strategies draw one
         `rng.random((B, N, N))` per step, one PCG64 step per number, so a shard starts `first_map * N * N` steps in
@@ -187,7 +190,7 @@ class Attack:
             if step:
                 plans = planner.plan_batch(current, starts, goals, corner_cutting)
                 calls += b
-            valid = valid_cells(current, starts, goals, corner_cutting) & alive[:, None, None]
+            valid = valid_cells(current, starts, goals, corner_cutting, planner.moves) & alive[:, None, None]
             ctx = AttackContext(
                 current,
                 starts,
@@ -267,6 +270,7 @@ class Attack:
             strategy=self.name,
             params=self.params(),
             corner_cutting=corner_cutting,
+            moves=ctx.planner.moves,
             n_added=ctx.added.shape[1] + 1,
         )
 
@@ -314,6 +318,7 @@ def _make_pairs(ctx: AttackContext, map_idx, cells, obstacles_a, planned: PlanRe
         term_o=ctx.base.termination_names[map_idx],
         term_a=planned.termination_names,
         corner_cutting=corner_cutting,
+        moves=ctx.planner.moves,
     )
 
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.planners.batching import over_maps, torch_threads
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
@@ -86,10 +87,27 @@ class Planner(ABC):
     Attributes:
         name: the registry name or the user's spec (`vin`, `gppn`, `optimal`, `file.py:factory`), used in errors.
         size: N, the map side the planner was made for.
+        moves: the movement model it plans for (`vinadv.grid.moves`): the actions its rollouts take and the L of
+            their step limit. `octile` unless the planner says otherwise (the learned planners were trained on
+            octile maps); `for_moves` gives the planner for the maps' model or refuses.
     """
 
     name: str
     size: int
+    moves: str = DEFAULT_MOVES
+
+    def for_moves(self, moves: str) -> Planner:
+        """This planner for maps of the movement model `moves`: itself when it plans that model (a planner that can
+        follow several, `optimal`, returns its own for `moves`), else PlannerError, one line naming both models. A
+        planner is never masked down to another model's actions or judged with its costs: an 8-action policy on
+        `news` maps, or an octile-trained one on `moore` maps, would be scored on moves it was not made for."""
+        model = move_model(moves)
+        if model.name != self.moves:
+            raise PlannerError(
+                f"planner {self.name!r} plans {self.moves} moves ({move_model(self.moves).description}); the maps use "
+                f"{model.name!r} moves ({model.description})"
+            )
+        return self
 
     @abstractmethod
     def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray | torch.Tensor:
@@ -158,7 +176,12 @@ class Planner(ABC):
             sl = slice(i, i + chunk_size)
             parts.append(
                 rollout_logits(
-                    self.logits(obstacles[sl], goals[sl]), obstacles[sl], goals[sl], starts[sl], corner_cutting
+                    self.logits(obstacles[sl], goals[sl]),
+                    obstacles[sl],
+                    goals[sl],
+                    starts[sl],
+                    corner_cutting,
+                    moves=self.moves,
                 )
             )
         return PlanResult.concat(parts)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vinadv.errors import InputError
-from vinadv.grid.moves import DEFAULT_MOVES, move_model
+from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
 
 #: `load(size, weights, corner_cutting, device)`: a registered planner for `size x size` maps
@@ -206,22 +206,15 @@ def load_planner(
         weights: a weights file for `vin` or `gppn` (default: the shipped ones); refused for the others.
         corner_cutting: the move rule of the maps (the `optimal` planner's logits follow it).
         device: torch device of a torch planner's forward.
-        moves: the movement model of the maps (`vinadv.grid.moves`). Every planner plans `octile` moves for now:
-            the learned ones were trained on them, and their rollouts take octile step limits. Maps of another
-            model are refused (one line naming both), not planned with masked logits: an 8-action policy on `news`
-            maps would be judged on moves it was trained to make and the maps lack, a silent mismatch.
+        moves: the movement model of the maps (`vinadv.grid.moves`): the planner is `Planner.for_moves(moves)`.
+            `optimal` follows every model; the others plan `octile` moves (the learned ones were trained on them)
+            and refuse maps of another model with one line naming both, rather than planning with masked logits:
+            an 8-action policy on `news` maps would be judged on moves it was trained to make and the maps lack.
 
     Raises `PlannerError` (an `InputError`) naming the spec for anything that cannot be loaded.
     """
     spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
-    model = move_model(moves)
-    planner = _load(spec, size, weights, corner_cutting, device)
-    if model.name != DEFAULT_MOVES:
-        raise PlannerError(
-            f"planner {spec!r} plans octile moves (8 actions, diagonal sqrt 2); the maps use {model.name!r} moves "
-            f"({model.description}): no planner follows another movement model yet"
-        )
-    return planner
+    return _load(spec, size, weights, corner_cutting, device).for_moves(moves)
 
 
 def _load(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
@@ -326,14 +319,16 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
 @dataclass(frozen=True)
 class PlannerRef:
     """A loaded planner by reference, for another process (a Dask worker) to load the same one: the spec and weights
-    file as absolute paths (None: the shipped weights there), the map size, the move rule and the checksum the
-    client's planner has (`Planner.checksum`). `load` refuses a planner whose checksum differs."""
+    file as absolute paths (None: the shipped weights there), the map size, the move rule, the checksum the
+    client's planner has (`Planner.checksum`) and its movement model. `load` refuses a planner whose checksum
+    differs."""
 
     spec: str
     weights: str | None
     size: int
     corner_cutting: bool
     checksum: str | None
+    moves: str = DEFAULT_MOVES
 
     @classmethod
     def of(cls, planner: Planner, spec: str | None, weights: str | None, corner_cutting: bool) -> PlannerRef:
@@ -343,11 +338,16 @@ class PlannerRef:
         if sep and _is_file(source):
             spec = f"{Path(source).resolve()}:{factory}"
         weights = None if weights is None else str(Path(weights).resolve())
-        return cls(spec, weights, int(planner.size), bool(corner_cutting), planner.checksum)
+        return cls(spec, weights, int(planner.size), bool(corner_cutting), planner.checksum, planner.moves)
 
     def load(self, device: str = "cpu") -> Planner:
         planner = load_planner(
-            self.spec, self.size, weights=self.weights, corner_cutting=self.corner_cutting, device=device
+            self.spec,
+            self.size,
+            weights=self.weights,
+            corner_cutting=self.corner_cutting,
+            device=device,
+            moves=self.moves,
         )
         if planner.checksum != self.checksum:
             raise PlannerError(
