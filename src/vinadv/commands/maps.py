@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import LazyChoices
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -29,7 +28,7 @@ def register(subparsers) -> None:
     gen.add_argument(
         "--moves",
         default="octile",
-        choices=LazyChoices("vinadv.grid.moves", "MOVES"),
+        metavar="MOVES",  # checked by the library (`vinadv.grid.moves`): argparse choices would load it for --help
         help="movement model: octile (default: 8 moves, diagonal sqrt 2, the original data's), moore (8 moves, all "
         "cost 1: GPPN's and the MP dataset's) or news (4 moves N, S, E, W, cost 1; not with --no-corner-cutting)",
     )
