@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.grid.moves import require_moves
 from vinadv.planners.spec import PlannerSpec
 from vinadv.vocabulary import SUCCESS_LABELS
 
@@ -285,6 +286,8 @@ def robustness(
     strength = objective_strength(objective)
     if len(maps) < 1:
         raise InputError("maps: no maps to attack", "n")
+    # the clean paths' regret, the stored results and the report are octile's for now
+    require_moves(maps.moves, ("octile",), "the robustness benchmark")
     t_start = time.perf_counter()
     planner = as_planner(planner, maps.size)
     n = len(maps)

@@ -20,6 +20,7 @@ from vinadv.planners.registry import load_planner
 from vinadv.planners.testing import planning_vin
 from vinadv.planners.training import TrainConfig, train_vin
 from vinadv.planners.vin.weights import save_vin
+from vinadv.robustness import robustness
 
 
 @pytest.fixture(scope="module", params=["moore", "news"])
@@ -89,3 +90,9 @@ def test_optimal_plans_and_is_never_harmful_on_every_movement_model(moves, tmp_p
     assert PairSet.load(pairs).moves == moves
     if moves == "news":
         assert all(m.sum(axis=1).max(initial=1) == 1 for m in moved)  # straight moves only
+
+
+def test_robustness_refuses_other_movement_models(maps_file):
+    moves, path = maps_file
+    with pytest.raises(InputError, match=f"the maps use '{moves}' moves: the robustness benchmark follows 'octile'"):
+        robustness(load_planner("optimal", 8, moves=moves), MapSet.load(path), ["random"])
