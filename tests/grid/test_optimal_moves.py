@@ -21,6 +21,6 @@ def test_optimal_moves_match_dijkstra(corner_cutting, moves):
     _, counts = shortest_distances(obstacles, maps.goals, corner_cutting, moves)
     want = counts[np.arange(60)[:, None], starts[..., 0], starts[..., 1]].reshape(-1)
     index = np.repeat(np.arange(60), 4)
-    got = optimal_moves(obstacles, maps.goals, starts.reshape(-1, 2), index, corner_cutting, moves)
+    got = optimal_moves(obstacles, maps.goals, starts.reshape(-1, 2), index, corner_cutting=corner_cutting, moves=moves)
     np.testing.assert_array_equal(got, want)
     assert (got == -1).any() and (got > 0).any()

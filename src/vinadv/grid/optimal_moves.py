@@ -11,7 +11,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from vinadv.grid.moves import DEFAULT_MOVES, move_model
+from vinadv.grid.moves import DEFAULT_MOVES, MoveModel, move_model
 from vinadv.grid.shortest_paths import heap_pop, heap_push
 
 __all__ = ["optimal_moves", "optimal_moves_kernel"]
@@ -23,7 +23,7 @@ def optimal_moves(
     starts: np.ndarray,
     map_index: np.ndarray,
     corner_cutting: bool = True,
-    moves: str = DEFAULT_MOVES,
+    moves: str | MoveModel = DEFAULT_MOVES,
 ) -> np.ndarray:
     """Moves of an optimal path from `starts (R, 2)` to the goal of map `map_index (R,)` under the movement model
     `moves`: `(R,)` int64, -1 where the goal cannot be reached. obstacles `(B, N, N)` bool, goals `(B, 2)`."""

@@ -16,14 +16,16 @@ import numba
 import numpy as np
 
 from vinadv.grid.actions import N_ACTIONS
-from vinadv.grid.moves import DEFAULT_MOVES, move_model
+from vinadv.grid.moves import DEFAULT_MOVES, MoveModel, move_model
 from vinadv.grid.paths import PackedPaths
 
 # Costs are sums of 1 and sqrt(2); two different sums of up to a few thousand terms differ by far more.
 COST_TOL = 1e-9
 
 
-def valid_moves(obstacles: np.ndarray, corner_cutting: bool = True, moves: str = DEFAULT_MOVES) -> np.ndarray:
+def valid_moves(
+    obstacles: np.ndarray, corner_cutting: bool = True, moves: str | MoveModel = DEFAULT_MOVES
+) -> np.ndarray:
     """Which of the 8 actions from each cell are legal moves: `(B, N, N, 8)` bool.
 
     A move is legal when it is one of the model's (`moves`), its destination is on the grid and free; without
@@ -135,7 +137,7 @@ def dijkstra_batch(obstacles, goals, corner_cutting, deltas, costs, dist, moves)
 
 
 def shortest_distances(
-    obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
+    obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True, moves: str | MoveModel = DEFAULT_MOVES
 ) -> tuple[np.ndarray, np.ndarray]:
     """Optimal cost-to-goal and optimal move count of every cell, for a batch of maps.
 
@@ -160,7 +162,7 @@ def shortest_distances(
 
 
 def optimal_actions(
-    dist: np.ndarray, obstacles: np.ndarray, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
+    dist: np.ndarray, obstacles: np.ndarray, corner_cutting: bool = True, moves: str | MoveModel = DEFAULT_MOVES
 ) -> np.ndarray:
     """Which actions are optimal at each cell: `(B, N, N, 8)` bool, for `dist` of `shortest_distances` (same
     `moves`).
@@ -244,7 +246,7 @@ def expert_paths(
     goals: np.ndarray,
     starts: np.ndarray,
     corner_cutting: bool = True,
-    moves: str = DEFAULT_MOVES,
+    moves: str | MoveModel = DEFAULT_MOVES,
 ) -> tuple[np.ndarray, PackedPaths]:
     """Optimal paths from every start to the goal under the movement model `moves` (ties broken by the lowest
     action index).
@@ -266,7 +268,7 @@ def expert_paths_from(
     goals: np.ndarray,
     starts: np.ndarray,
     corner_cutting: bool = True,
-    moves: str = DEFAULT_MOVES,
+    moves: str | MoveModel = DEFAULT_MOVES,
 ) -> tuple[np.ndarray, PackedPaths]:
     """`expert_paths` for distances already computed by `shortest_distances` (same `moves`)."""
     model = move_model(moves)
