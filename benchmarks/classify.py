@@ -3,7 +3,7 @@
     nice .venv/bin/python benchmarks/classify.py [--pairs PAIRS.npz] [--n 20000] [--json]
 
 Without --pairs it uses synthetic pairs (expert paths on generated 28x28 maps, one obstacle added on the path,
-then mixed into all five categories; see vinadv.classify.synthetic) and says so. Classifiers are trained on a
+then mixed into all five categories; see vinadv.testing.classify) and says so. Classifiers are trained on a
 small balanced FP/DP sample only to have something to time (CNN/MLP 1 epoch): accuracy is not measured here
 (use `vinadv classify eval`). Ratios are measured side by side in this run: the rule labeller against a plain
 Python loop written straight from DESIGN.md, our SVM decision function against scikit-learn's SVC.predict,
@@ -80,7 +80,7 @@ def main(argv=None) -> int:
         batch = PathPairBatch.from_pairs(PairSet.load(args.pairs))
         source = f"real pairs from {args.pairs}"
     else:
-        from vinadv.classify.synthetic import synthetic_pairs
+        from vinadv.testing.classify import synthetic_pairs
 
         base = synthetic_pairs(min(args.n, 5000), 28, seed=0, mix=True)
         batch = PathPairBatch.concat([base] * -(-args.n // len(base))).take(np.arange(args.n))

@@ -28,9 +28,9 @@ import torch
 from vinadv.grid import generate_maps
 from vinadv.planners.batching import N_THREADS
 from vinadv.planners.reference import plan_reference
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import action_maps, plan_batch
+from vinadv.testing.planners import planning_vin
 
 
 def cpu_clock_hz() -> float:

@@ -33,8 +33,8 @@ def _weights(args, tmp: Path) -> str:
         return args.weights
     if default_weights_path(args.size).exists():
         return str(default_weights_path(args.size))
-    from vinadv.planners.testing import planning_vin
     from vinadv.planners.vin.weights import save_vin
+    from vinadv.testing.planners import planning_vin
 
     path = tmp / f"vin{args.size}.pt"
     save_vin(planning_vin(args.size, seed=0, noise=0.1), path)

@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/store.py [--n 50000] [--size 28] [--max-path 60] [--repeat 3] [--json]
 
-Prints, measured in one run on the same random records (`vinadv.store.synthetic.random_records`):
+Prints, measured in one run on the same random records (`vinadv.testing.store.random_records`):
 - encode only: PairRecords -> row tuples (the vectorised text encoding of maps, paths and cells), in the form
   `Store.write_pairs` sends to SQLite;
 - sqlite3 ceiling: the bare `sqlite3` driver inserting the already-encoded rows into the same schema with the same
@@ -35,7 +35,7 @@ import sqlalchemy as sa
 from vinadv.store import Store
 from vinadv.store.codec import driver_insert_sql, encode_rows
 from vinadv.store.pairs import DEFAULT_BATCH, SQLITE_ROWS_PER_STATEMENT
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"
 POSTGRES_DEFAULT = "postgresql+psycopg://postgres@127.0.0.1:5432/test"

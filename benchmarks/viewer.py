@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/viewer.py [--n 1000000] [--size 28] [--db /tmp/vinadv-viewer-bench.db] [--json]
 
 Builds (once; reused while --n and --size match) a SQLite database with one run of `--n` random pairs
-(`vinadv.store.synthetic.random_records`, maps and paths included), then times whole requests of the Flask test
+(`vinadv.testing.store.random_records`, maps and paths included), then times whole requests of the Flask test
 client (query + template + response), best of --repeat, side by side in one run:
 - grid pages: first page, and a page deep in the run (after 90% of the pairs), unfiltered and filtered by label,
   attack, label source and label + source, with the viewer's keyset paging (`after=`) and, for the ratio, the same
@@ -23,7 +23,7 @@ import sqlalchemy as sa
 
 from vinadv.store import Store
 from vinadv.store.schema import map_pairs
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 CHUNK = 50_000
 

@@ -30,48 +30,15 @@ set_torch_threads(1)
 os.environ["VINADV_CACHE_DIR"] = tempfile.mkdtemp(prefix="vinadv-test-cache-")
 atexit.register(shutil.rmtree, os.environ["VINADV_CACHE_DIR"], True)
 
-#: Tests left out of `make test-fast` (`pytest -m "not slow"`), by node id prefix: the ones that start Dask
-#: clusters or a browser, train networks or classifiers, or run the whole pipeline; together they take most of the
-#: suite's time. One list, so the fast selection is decided in one place.
-SLOW = (
-    "tests/cluster/",
-    "tests/report/",
-    "tests/viewer/test_browser.py",
-    "tests/planners/test_training.py",
-    "tests/classify/test_models.py",
-    "tests/classify/test_cooccurrence.py",
-    "tests/commands/test_classify.py::test_train_and_eval_on_held_out_split",
-    "tests/test_pipeline.py::test_killed_run_resumes_with_every_pair_exactly_once",
-    "tests/test_pipeline.py::test_stored_labels_agree_with_an_independent_recomputation",
-    "tests/test_readme.py",
-    # the slowest of the rest (pytest --durations, 2-core machine): subprocesses killed or starved on purpose,
-    # the largest float64 gradient check
-    "tests/planners/vin/test_value_iteration.py::test_values_and_gradients_equal_torch_float64",
-    "tests/planners/vin/test_value_iteration.py::test_float32_close_to_torch_and_batch_split_between_threads",
-    "tests/planners/replay/test_replay.py::test_a_process_without_pytorch_plans_what_pytorch_would",
-    "tests/planners/vin/test_engine.py::test_identical_to_reference_odd_sizes",
-    "tests/test_cli_imports.py::test_a_run_with_the_rule_labeller_does_without_scikit_learn",
-    "tests/test_faults.py::test_full_disk_during_a_run_is_one_line_with_the_resume_hint",
-    "tests/test_faults.py::test_kill_inside_a_transaction_then_resume_stores_every_pair_once",
-    "tests/test_faults.py::test_export_into_a_broken_pipe_ends_quietly",
-    "tests/store/test_store_db.py::test_killed_writer_resumes_with_every_pair_exactly_once",
-    "tests/test_cli_imports.py::test_a_command_still_checks_its_choices",
-    "tests/test_cli_imports.py::test_a_vin_run_needs_no_pytorch_once_the_replay_settings_are_kept",
-    "tests/planners/test_gppn_training.py",
-    "tests/attacks/test_obstacles.py::test_every_k_obstacle_pair_keeps_the_rules",
-    "tests/attacks/test_obstacles.py::test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search",
-    "tests/test_robustness.py::test_exhaustive_harmful_rate_is_the_share_of_maps_some_single_cell_harms",
-    # 2-thread PyTorch beside a busy core, and a fresh interpreter
-    "tests/planners/replay/test_replay.py::test_replay_kernel_is_q_values_bit_for_bit[2-threads",
-    "tests/planners/test_batching.py::test_torch_keeps_its_threads_after_numba_parallel_kernels",
-)
-
 
 def pytest_collection_modifyitems(config, items) -> None:
+    """The database servers' variants of a backend test (`db_url` = mysql/postgres) are slow: the quick selection
+    checks every backend test on SQLite. The rest of the slow tier (`make test-fast` is `pytest -m "not slow"`) is
+    marked in the test modules themselves (`pytestmark = pytest.mark.slow` or `@pytest.mark.slow`): the ones that
+    start Dask clusters, a browser or subprocesses, train networks or classifiers, or run the whole pipeline."""
     for item in items:
-        # the database servers' variants too: the quick selection checks every backend test on SQLite
-        on_server = getattr(item, "callspec", None) is not None and item.callspec.params.get("db_url") in SERVERS
-        if item.nodeid.startswith(SLOW) or on_server:
+        callspec = getattr(item, "callspec", None)
+        if callspec is not None and callspec.params.get("db_url") in SERVERS:
             item.add_marker(pytest.mark.slow)
 
 
@@ -152,8 +119,8 @@ def db_url(request):
 def planning_weights(tmp_path_factory):
     """`planning_weights(size)`: the path (str) of a weights file of `planning_vin(size, seed=2, noise=0.1)`, a VIN
     that plans well on small maps; written once per size and session."""
-    from vinadv.planners.testing import planning_vin
     from vinadv.planners.vin.weights import save_vin
+    from vinadv.testing.planners import planning_vin
 
     made: dict[int, str] = {}
 

@@ -23,7 +23,7 @@ def _maps(n_starts: int):
 
 @functools.cache
 def _model():
-    from vinadv.planners.testing import planning_vin
+    from vinadv.testing.planners import planning_vin
 
     return planning_vin(SIZE, seed=1, noise=0.1)
 
@@ -63,7 +63,7 @@ def write_weights(path: Path) -> Path:
 
 def write_classifier(path: Path) -> Path:
     from vinadv.classify import SVMImageClassifier, label_batch
-    from vinadv.classify.synthetic import synthetic_pairs
+    from vinadv.testing.classify import synthetic_pairs
 
     batch = synthetic_pairs(60, size=8, seed=2, mix=True)
     labels = label_batch(batch).labels
@@ -76,7 +76,7 @@ def write_database(path: Path) -> Path:
     import sqlite3
 
     from vinadv.store import Store
-    from vinadv.store.synthetic import random_records
+    from vinadv.testing.store import random_records
 
     with Store.open(str(path)) as store:
         store.write_pairs(store.create_run("fuzz"), random_records(6, size=5, seed=1))

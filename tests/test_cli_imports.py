@@ -47,6 +47,7 @@ def test_top_level_help_imports_no_numpy_either(argv):
     assert "numpy" not in imported_modules(*argv)
 
 
+@pytest.mark.slow
 def test_a_command_still_checks_its_choices():
     done = subprocess.run(
         [sys.executable, "-m", "vinadv.cli", "run", "--attack", "nope", "--n", "1"],
@@ -57,6 +58,7 @@ def test_a_command_still_checks_its_choices():
     assert done.returncode == 2 and "near-path" in done.stderr and "nope" in done.stderr
 
 
+@pytest.mark.slow
 def test_a_run_with_the_rule_labeller_does_without_scikit_learn(tmp_path):
     # every command imports only what it uses: the rule labeller is plain Numba, the classifiers bring scikit-learn
     names = imported_modules("run", "--n", "20", "--db", str(tmp_path / "r.db"), "--quiet")
@@ -64,6 +66,7 @@ def test_a_run_with_the_rule_labeller_does_without_scikit_learn(tmp_path):
     assert "sklearn" not in names and "matplotlib" not in names and "flask" not in names
 
 
+@pytest.mark.slow
 def test_a_vin_run_needs_no_pytorch_once_the_replay_settings_are_kept(tmp_path, monkeypatch):
     # the first run measures PyTorch's arithmetic for the near-tie replay and keeps it; the next loads no PyTorch
     monkeypatch.setenv("VINADV_CACHE_DIR", str(tmp_path / "cache"))

@@ -70,6 +70,7 @@ def test_run_name_taken_is_refused_without_resume(weights, tmp_path, capsys):
     assert main(_args(weights, db, "--name", "k", "--resume")) == 0
 
 
+@pytest.mark.slow
 def test_full_disk_during_a_run_is_one_line_with_the_resume_hint(weights, tmp_path):
     with tmpfs(tmp_path / "full", "2M") as folder:
         db = str(folder / "full.db")
@@ -122,6 +123,7 @@ _KILLED_IN_A_TRANSACTION = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow
 def test_kill_inside_a_transaction_then_resume_stores_every_pair_once(weights, tmp_path):
     db = str(tmp_path / "killed.db")
     args = _args(weights, db, "--name", "k", n=100, shard=20)
@@ -199,6 +201,7 @@ def test_full_disk_output_is_one_line_and_leaves_no_temp_file(tmp_path, capsys):
         assert [p.name for p in folder.iterdir()] == ["m.npz"] and (folder / "m.npz").read_bytes() == b"old"
 
 
+@pytest.mark.slow
 def test_export_into_a_broken_pipe_ends_quietly(weights, tmp_path):
     db = str(tmp_path / "runs.db")
     assert main(_args(weights, db, "--name", "p", n=200, shard=200)) == 0

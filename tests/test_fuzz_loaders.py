@@ -56,8 +56,8 @@ def _load_pairs(path):
 
 
 def _load_weights(path):
-    from vinadv.planners.testing import planning_vin  # noqa: F401 (torch is loaded anyway)
     from vinadv.planners.vin.weights import read_weights
+    from vinadv.testing.planners import planning_vin  # noqa: F401 (torch is loaded anyway)
 
     model, _ = read_weights(path, size=10)
     with torch.no_grad():  # the loaded model must run: a shape that only fails in conv2d is a loader bug

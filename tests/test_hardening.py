@@ -14,9 +14,9 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.hardening import AdversarialConfig, AdversarialMaps
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.training import TrainConfig, split_indices, train_vin
 from vinadv.planners.vin.engine import plan_batch
+from vinadv.testing.planners import planning_vin
 
 SIZE = 8
 TINY = dict(epochs=2, lr=0.01, batch_size=8, val_fraction=0.25, seed=1, l_h=8, l_q=8)

@@ -12,7 +12,7 @@ from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
 from vinadv.identify import objective_strength
 from vinadv.planners.reference import plan_reference
-from vinadv.planners.testing import planning_vin
+from vinadv.testing.planners import planning_vin
 
 SIZE = 10
 

@@ -28,6 +28,9 @@ LAYERS = {
     "attacks": 5,
     "classify": 5,
     "identify": 6,
+    # support code for tests and benchmarks: synthetic weights, records and pairs for what lies below it; no
+    # production module imports it (test_production_code_never_imports_the_test_support)
+    "testing": 6,
     "store": 4,
     "hardening": 7,
     "robustness": 8,
@@ -135,3 +138,12 @@ def test_the_report_check_sees_a_forbidden_import(tmp_path):
         "vinadv.planners.registry",
         "vinadv.classify.rule",
     }
+
+
+def test_production_code_never_imports_the_test_support():
+    importers = [
+        str(path.relative_to(SOURCE))
+        for path in sorted(SOURCE.rglob("*.py"))
+        if part_of(path) != "testing" and "testing" in imported_vinadv_names(path)
+    ]
+    assert not importers, importers

@@ -41,6 +41,7 @@ def test_same_run_reads_back_identical_on_every_backend(weights, sqlite_url, mys
     assert stored[0].equals(stored[1]) and stored[0].equals(stored[2])
 
 
+@pytest.mark.slow
 def test_stored_labels_agree_with_an_independent_recomputation(weights, sqlite_url):
     summary = run_pipeline(config(weights, attack="key-points"), db=sqlite_url, progress=False)
     engine = sa.create_engine(sqlite_url)
@@ -121,6 +122,7 @@ def test_result_does_not_depend_on_the_order_shards_finish(weights, sqlite_url, 
         assert s1.read_pairs(a.run_id).equals(s2.read_pairs(b.run_id))
 
 
+@pytest.mark.slow
 def test_killed_run_resumes_with_every_pair_exactly_once(weights, tmp_path):
     db = f"sqlite:///{tmp_path / 'kill.db'}"
     # many small shards, polled often: the run must still be going when the first shard is seen stored

@@ -17,7 +17,6 @@ from vinadv.errors import InputError
 from vinadv.identify import objective_strength
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.registry import load_planner
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin.weights import save_vin
 from vinadv.robustness import (
     MapOutcomes,
@@ -27,6 +26,7 @@ from vinadv.robustness import (
     worst_case,
 )
 from vinadv.store import Store
+from vinadv.testing.planners import planning_vin
 
 SIZE = 10
 TOL = 1e-6
@@ -125,6 +125,7 @@ def test_figures_per_strategy_and_worst_case_agree_with_a_plain_python_computati
     assert worst.harmful >= max(result.figures(name, 1).harmful for name in names) and worst.harmful > 0
 
 
+@pytest.mark.slow
 def test_exhaustive_harmful_rate_is_the_share_of_maps_some_single_cell_harms(model, maps):
     result = robustness(model, maps, ["exhaustive"], max_obstacles=1)
     harmed = valid = 0

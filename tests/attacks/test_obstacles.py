@@ -20,7 +20,7 @@ from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.identify import harm_strength, rule_strength
 from vinadv.planners.reference import plan_reference
-from vinadv.planners.testing import planning_vin
+from vinadv.testing.planners import planning_vin
 from vinadv.vocabulary import LABEL_STRENGTH
 
 SIZE = 8
@@ -64,6 +64,7 @@ def test_valid_additions_is_the_rule(seed, k, data, moves):
     assert bool(got[0]) == oracle_valid(obstacles, start, goal, cells, moves)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(
     seed=st.integers(0, 10**6), k=st.integers(1, 4), name=st.sampled_from(sorted(STRATEGIES)), per_map=st.integers(1, 2)
@@ -138,6 +139,7 @@ def _harm_value(obstacles, adv, start, goal, original, planned):
     return round(cost - optimum, 9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("objective", ["paper", "harm"])
 def test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search(model, maps, objective):
     k = 3

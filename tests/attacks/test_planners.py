@@ -17,8 +17,8 @@ from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, as
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.registry import load_custom
 from vinadv.planners.spec import is_planner_spec
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input
+from vinadv.testing.planners import planning_vin
 
 SIZE = 10
 

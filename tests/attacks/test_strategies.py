@@ -10,7 +10,7 @@ from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.identify import rule_strength
 from vinadv.planners.reference import plan_reference
-from vinadv.planners.testing import planning_vin
+from vinadv.testing.planners import planning_vin
 from vinadv.vocabulary import LABEL_STRENGTH
 
 SIZE = 10

@@ -15,9 +15,11 @@ from vinadv.classify.cooccurrence import (
     torch_features,
 )
 from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
-from vinadv.classify.synthetic import synthetic_pairs
 from vinadv.errors import InputError
 from vinadv.grid.dihedral import transform_grids
+from vinadv.testing.classify import synthetic_pairs
+
+pytestmark = pytest.mark.slow
 
 
 def _random_images(n: int, size: int, seed: int) -> np.ndarray:

@@ -16,8 +16,10 @@ from vinadv.classify import (
 )
 from vinadv.classify.base import MODEL_FORMAT
 from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier
-from vinadv.classify.synthetic import synthetic_pairs
 from vinadv.errors import InputError
+from vinadv.testing.classify import synthetic_pairs
+
+pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")

@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 
 from vinadv.classify.rule import label_batch
-from vinadv.classify.synthetic import synthetic_pairs
 from vinadv.classify.train_eval import evaluate_classifier, train_classifier
 from vinadv.errors import InputError
+from vinadv.testing.classify import synthetic_pairs
 
 
 def test_train_then_evaluate_on_the_held_out_split():

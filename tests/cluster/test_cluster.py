@@ -2,7 +2,9 @@
 as the local commands, pair by pair; a worker killed mid-run still leaves every pair stored exactly once.
 
 The oracle is the local, in-process computation (tests/test_pipeline.py pins that one against independent
-oracles); one module-scoped cluster serves every test (its start-up is the slow part on 2 cores).
+oracles); one module-scoped cluster serves every test (its start-up is the slow part on 2 cores). The tests that
+need a cluster are slow (`make test-fast` leaves them out); the ones that check what runs before or without one
+are quick.
 """
 
 import builtins
@@ -19,9 +21,9 @@ from vinadv.attacks.pairs import PairSet  # noqa: E402
 from vinadv.cli import main  # noqa: E402
 from vinadv.cluster import ClusterShards, start_local_cluster  # noqa: E402
 from vinadv.pipeline import RunConfig, compute_shard, run_pipeline  # noqa: E402
-from vinadv.planners.testing import planning_vin  # noqa: E402
 from vinadv.planners.vin.weights import load_vin, save_vin  # noqa: E402
 from vinadv.store import Store  # noqa: E402
+from vinadv.testing.planners import planning_vin  # noqa: E402
 
 SIZE = 12
 
@@ -52,6 +54,7 @@ def stored(db, run_id):
         return store.read_pairs(run_id)
 
 
+@pytest.mark.slow
 def test_run_on_the_cluster_stores_the_same_pairs_as_the_local_run(weights, cluster, tmp_path):
     _, client = cluster
     local_db, cluster_db = f"sqlite:///{tmp_path / 'local.db'}", f"sqlite:///{tmp_path / 'cluster.db'}"
@@ -66,6 +69,7 @@ def test_run_on_the_cluster_stores_the_same_pairs_as_the_local_run(weights, clus
     assert len(client.nthreads()) == 2
 
 
+@pytest.mark.slow
 def test_workers_are_single_threaded(cluster):
     _, client = cluster
 
@@ -107,6 +111,7 @@ def test_cli_run_with_a_local_cluster_of_its_own(weights, tmp_path):
         assert a.read_pairs(a.list_runs()[0]["id"]).equals(b.read_pairs(b.list_runs()[0]["id"]))
 
 
+@pytest.mark.slow
 def test_cli_run_with_cluster_address_matches_the_local_cli_run(weights, cluster, tmp_path):
     local, _ = cluster
     common = [
@@ -119,6 +124,7 @@ def test_cli_run_with_cluster_address_matches_the_local_cli_run(weights, cluster
         assert a.read_pairs(a.list_runs()[0]["id"]).equals(b.read_pairs(b.list_runs()[0]["id"]))
 
 
+@pytest.mark.slow
 def test_a_killed_worker_still_leaves_every_pair_exactly_once(weights, cluster, tmp_path):
     local, client = cluster
     pids_before = set(client.run(os.getpid).values())
@@ -165,6 +171,7 @@ def test_a_shard_delivered_twice_is_stored_once(weights, tmp_path):
     assert len(np.unique(got.pair_index)) == len(got)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("strategy, obstacles", [("near-path", 1), ("random", 1), ("key-points", 1), ("random", 3)])
 def test_attack_on_the_cluster_writes_the_same_pairs_file(weights, cluster, tmp_path, strategy, obstacles):
     local, _ = cluster
@@ -221,6 +228,7 @@ def test_attack_on_the_cluster_writes_the_same_pairs_file(weights, cluster, tmp_
     assert (a.strategy, a.params, a.corner_cutting) == (b.strategy, b.params, b.corner_cutting)
 
 
+@pytest.mark.slow
 def test_identify_on_the_cluster_stores_the_same_labels(weights, cluster, tmp_path):
     local, _ = cluster
     _, pairs = generate_and_attack(tmp_path, weights, n=50, size=SIZE, strategy="key-points")

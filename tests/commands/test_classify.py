@@ -6,8 +6,8 @@ import pytest
 
 from vinadv.attacks.pairs import PairSet
 from vinadv.classify import label_batch
-from vinadv.classify.synthetic import synthetic_pairs
 from vinadv.cli import main
+from vinadv.testing.classify import synthetic_pairs
 
 
 @pytest.fixture(scope="module")
@@ -39,6 +39,7 @@ def pairs_file(tmp_path_factory):
     return path, label_batch(batch).labels
 
 
+@pytest.mark.slow
 def test_train_and_eval_on_held_out_split(pairs_file, tmp_path, capsys):
     path, labels = pairs_file
     model = tmp_path / "svm.model"

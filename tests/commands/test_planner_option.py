@@ -14,10 +14,10 @@ from vinadv.grid import generate_maps
 from vinadv.identify import replan
 from vinadv.pipeline import PLANNER_SPEC
 from vinadv.planners.optimal import OptimalPlanner
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin.weights import save_vin
 from vinadv.planners.weights import weights_checksum
 from vinadv.store import Store
+from vinadv.testing.planners import planning_vin
 
 SIZE = 10
 

@@ -12,8 +12,8 @@ from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps, shortest_distances
 from vinadv.planners.evaluation import evaluate_vin
 from vinadv.planners.reference import plan_reference
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin.engine import plan_maps
+from vinadv.testing.planners import planning_vin
 
 
 @pytest.fixture(scope="module")

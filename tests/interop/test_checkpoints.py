@@ -15,9 +15,9 @@ from torch import nn
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.interop import read_checkpoint
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import VINConfig, make_input
 from vinadv.planners.vin.weights import default_weights_path, save_vin
+from vinadv.testing.planners import planning_vin
 
 
 class PortVIN(nn.Module):

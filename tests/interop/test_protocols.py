@@ -12,8 +12,8 @@ from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps
 from vinadv.grid.shortest_paths import expert_paths
 from vinadv.interop.protocols import evaluate_protocol
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input
+from vinadv.testing.planners import planning_vin
 
 OURS = [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)]
 

@@ -40,6 +40,7 @@ def test_set_threads_caps_the_threads(monkeypatch):
     assert callers == {threading.get_ident()}  # one thread: the caller's own
 
 
+@pytest.mark.slow
 def test_torch_keeps_its_threads_after_numba_parallel_kernels(tmp_path):
     """Numba's parallel kernels (OpenMP layer) can reset the calling thread's OpenMP thread count to Numba's own,
     which torch then uses; with `set_torch_threads` both agree. In a fresh process, whose defaults (2 threads each on

@@ -12,6 +12,8 @@ from vinadv.grid import generate_maps
 from vinadv.planners.gppn import load_gppn
 from vinadv.planners.training import TrainConfig, evaluate_loss, optimal_action_bits, split_indices, train_gppn
 
+pytestmark = pytest.mark.slow
+
 
 def test_a_short_training_lowers_the_loss_and_resumes(tmp_path):
     torch.set_num_threads(1)
@@ -157,7 +159,6 @@ def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatc
     assert rec["epochs"][1]["train_loss"] == pytest.approx(whole_rec["epochs"][1]["train_loss"], rel=1e-6)
 
 
-@pytest.mark.slow
 def test_compiled_training_trains_the_same_weights(tmp_path):
     torch.set_num_threads(1)
     maps = generate_maps(24, 8, seed=7, n_starts=1)

@@ -16,9 +16,9 @@ from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.reference import rollout
 from vinadv.planners.result import step_limits
 from vinadv.planners.rollout import multi_start_limits, rollout_logits
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import plan_maps as engine_plan_maps
+from vinadv.testing.planners import planning_vin
 
 
 def assert_same(a, b):

@@ -11,8 +11,8 @@ from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.npzfile import save_npz
 from vinadv.planners.pathset import PATHS_FORMAT, PathSet
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin.engine import plan_maps
+from vinadv.testing.planners import planning_vin
 
 
 @pytest.fixture(scope="module")

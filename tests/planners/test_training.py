@@ -23,6 +23,8 @@ from vinadv.planners.training import (
 from vinadv.planners.vin import VIN, VINConfig, init_shift_kernels
 from vinadv.planners.vin.weights import load_vin
 
+pytestmark = pytest.mark.slow
+
 
 def test_optimal_set_loss_matches_brute_force():
     rng = np.random.default_rng(0)

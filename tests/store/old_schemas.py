@@ -7,7 +7,7 @@ from collections.abc import Callable
 import sqlalchemy as sa
 
 from vinadv.store import Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 Undo = Callable[[sa.Connection, Callable[[str], str]], None]
 

@@ -14,7 +14,7 @@ from tests.store.oracle import map_text, path_text
 from tests.store.test_store_db import HARM_FLOATS
 from vinadv.cli import main
 from vinadv.store import Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 
 @pytest.fixture

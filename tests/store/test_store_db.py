@@ -17,7 +17,7 @@ import sqlalchemy as sa
 from tests.store.oracle import map_text, path_text
 from vinadv.errors import InputError
 from vinadv.store import LABELS, PairRecords, Store, schema
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 HARM_FLOATS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a")
 
@@ -132,7 +132,7 @@ _WRITER = textwrap.dedent("""
     import sys, time
     import numpy as np
     from vinadv.store import Store
-    from vinadv.store.synthetic import random_records
+    from vinadv.testing.store import random_records
     url, n = sys.argv[1], int(sys.argv[2])
     records = random_records(n, size=12, seed=5)
     records = records.take(np.random.default_rng(0).permutation(n))  # stored out of index order
@@ -143,6 +143,7 @@ _WRITER = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow
 def test_killed_writer_resumes_with_every_pair_exactly_once(db_url):
     n, batch = 2000, 50
     with Store.open(db_url) as store:  # create the schema up front so the child only writes

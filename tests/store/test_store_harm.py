@@ -13,7 +13,7 @@ from tests.store.old_schemas import columns_and_version, old_database
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
 from vinadv.store.schema import map_pairs
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 HARM_INDEX = next(ix for ix in map_pairs.indexes if ix.name == "ix_map_pairs_run_harm")
 HARM_COLUMNS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a", "expert_label", "harm")

@@ -12,7 +12,7 @@ import sqlalchemy as sa
 from tests.store.old_schemas import columns_and_version, old_database
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 from vinadv.vocabulary import TIMING
 
 

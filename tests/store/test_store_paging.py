@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from vinadv.store import LABELS, Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 
 @pytest.fixture

@@ -20,7 +20,7 @@ from tests.fault_files import tmpfs
 from vinadv.cli import main
 from vinadv.errors import InputError, OutputError
 from vinadv.store import Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 
 def _snapshot(folder: Path) -> dict[str, bytes]:

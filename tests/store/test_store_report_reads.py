@@ -10,7 +10,7 @@ import pytest
 
 from vinadv.errors import InputError
 from vinadv.store import Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 
 def test_pair_labels_and_terminations_match_the_records_written(db_url):

@@ -12,7 +12,7 @@ import pytest
 from tests.store.test_store_db import HARM_FLOATS, _oracle_rows, _raw_rows
 from vinadv.store import Store, codec, pairs
 from vinadv.store.codec import INSERT_COLUMNS, encode_rows
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 
 def _comparable(row: tuple) -> tuple:

@@ -10,7 +10,7 @@ import pytest
 
 from vinadv.grid.paths import PackedPaths
 from vinadv.store import PairRecords, Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 N_RANDOM = 230
 

@@ -445,7 +445,7 @@ def test_foreign_host_header_refused_unless_remote_allowed(store, db):
 
 def test_html_escapes_stored_text(tmp_path):
     from vinadv.store import Store
-    from vinadv.store.synthetic import random_records
+    from vinadv.testing.store import random_records
     from vinadv.viewer.app import create_app
 
     with Store.open(f"sqlite:///{tmp_path / 'x.db'}") as store:

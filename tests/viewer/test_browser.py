@@ -15,6 +15,8 @@ from tests import needs
 from tests.needs import CHROMIUM_ARGS
 from vinadv.store import Store
 
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture
 def served(db):
@@ -37,7 +39,6 @@ def served(db):
         store.close()
 
 
-@pytest.mark.slow
 def test_label_a_pair_with_the_keyboard(served):
     chromium = needs.chromium()
     from playwright.sync_api import sync_playwright

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from vinadv.store import Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 
 def test_pair_page_json_and_image_show_every_added_obstacle(tmp_path):

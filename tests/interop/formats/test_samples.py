@@ -53,7 +53,7 @@ def test_padded_maps_survive_export_and_import(tmp_path, small_maps):
 def test_evaluation_leaves_padded_starts_out(tmp_path, small_maps):
     from vinadv.planners.evaluation import evaluate_vin
     from vinadv.planners.reference import plan_reference
-    from vinadv.planners.testing import planning_vin
+    from vinadv.testing.planners import planning_vin
 
     keep = {1: 1, 4: 2, 9: 1}
     write_kentsommer(tmp_path / "k.npz", small_maps, [], trajectories(small_maps, lambda i, s: s < keep.get(i, 3)))

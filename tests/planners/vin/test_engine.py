@@ -7,9 +7,9 @@ import torch
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps, shortest_distances
 from vinadv.planners.reference import plan_reference
-from vinadv.planners.testing import exact_vin, planning_vin, random_vin
 from vinadv.planners.vin import VIN, VINConfig, make_input
 from vinadv.planners.vin.engine import TERMINATIONS, action_maps, plan_batch, plan_maps
+from vinadv.testing.planners import exact_vin, planning_vin, random_vin
 
 E, W = 2, 3
 
@@ -38,6 +38,7 @@ def test_identical_to_reference_28_all_endings():
     assert_same(fast, ref)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("size", [9, 13])
 def test_identical_to_reference_odd_sizes(size):
     # the value iteration runs two rows at a time: an odd N leaves one padding row that must stay 0

@@ -9,7 +9,6 @@ import torch.nn.functional as F
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.vin import VIN, VINConfig, make_input
 from vinadv.planners.vin.weights import (
     STATE_KEYS,
@@ -19,6 +18,7 @@ from vinadv.planners.vin.weights import (
     save_vin,
 )
 from vinadv.planners.weights import weights_checksum
+from vinadv.testing.planners import planning_vin
 
 
 @pytest.mark.parametrize("size,k", [(8, 10), (16, 20), (28, 36)])
