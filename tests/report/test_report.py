@@ -19,6 +19,8 @@ from vinadv.cli import main
 from vinadv.report import write_report
 from vinadv.report.render import PAGE_SECTIONS
 
+pytestmark = pytest.mark.slow
+
 FIGURES = ("fig1_map_pair", "fig2_path_pair", "fig3_categories", "fig5_map_pairs", "fig_table4_categories")
 TABLES = ("run_config.csv", "vin_quality.csv", "table4_categories.csv", "table7_processing_time.csv", "style.css")
 HARM_TABLES = ("harm_label_x_harm.csv", "harm_regret_changes.csv")  # written where the run has harm

@@ -30,6 +30,8 @@ from vinadv.pipeline import RunConfig, run_pipeline
 from vinadv.report import build_report
 from vinadv.store import Store
 
+pytestmark = pytest.mark.slow
+
 BASELINE = Path(__file__).parent / "baseline"
 PLANNER = "tests.report.greedy_planner:make"
 #: (name, attack, obstacles): run 1 the main run (every category but UcP), run 2 (with UcP) in table 4 beside it

@@ -16,6 +16,8 @@ import pytest
 from tests import needs
 from tests.needs import CHROMIUM_ARGS
 
+pytestmark = pytest.mark.slow
+
 #: screenshots are kept here when set (say, as CI artefacts); else in the test's tmp_path
 SCREENSHOT_DIR = os.environ.get("VINADV_SCREENSHOT_DIR")
 

@@ -11,6 +11,7 @@ import math
 from collections import Counter
 from pathlib import Path
 
+import pytest
 import sqlalchemy as sa
 from tests.classify.test_harm import optimal_path, path_cost
 from tests.store.oracle import parse_map, parse_path
@@ -22,6 +23,8 @@ from vinadv.report.render import render_report
 from vinadv.report.sections import gather_report
 from vinadv.report.sections.harm import HARM_EXAMPLES_SHOWN
 from vinadv.store import Store
+
+pytestmark = pytest.mark.slow
 
 TOL = 1e-6  # the runs' harm tolerance (the default)
 HARMS = ("harmful", "harmless", "invalid")

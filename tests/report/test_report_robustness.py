@@ -7,11 +7,14 @@ from __future__ import annotations
 import csv
 import math
 
+import pytest
 from tests.report.conftest import SIZE
 
 from vinadv.planners.vin.weights import load_vin
 from vinadv.report import write_report
 from vinadv.robustness import benchmark_maps, robustness, save_robustness
+
+pytestmark = pytest.mark.slow
 
 
 def _benchmarks(url: str, weights: str) -> list[dict]:

@@ -17,6 +17,8 @@ from vinadv.report.render import PAGE_SECTIONS, render_page, render_report
 from vinadv.report.sections import SECTIONS, gather_report
 from vinadv.store import Store
 
+pytestmark = pytest.mark.slow
+
 
 def _gather(url, out, order, runs):
     out.mkdir(parents=True, exist_ok=True)
