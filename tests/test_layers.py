@@ -9,6 +9,7 @@ rule labeller, the path pair batch, the harm summary, the path features and the 
 (`REPORT_CLASSIFY`)."""
 
 import ast
+import functools
 from pathlib import Path
 
 import vinadv
@@ -68,10 +69,17 @@ def imported_vinadv_modules(path: Path) -> set[str]:
     return {m for m in modules if m.split(".")[0] == "vinadv"}
 
 
-def imported_vinadv_names(path: Path) -> set[str]:
+@functools.cache
+def parsed(path: Path) -> ast.Module:
+    """The file's syntax tree, parsed once for all the checks here (walking every module is the checks' cost)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
+@functools.cache
+def imported_vinadv_names(path: Path) -> frozenset[str]:
     """`vinadv.X` names imported anywhere in the file (module level or inside functions)."""
     names = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(parsed(path)):
         if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
             modules = [node.module] if node.module != "vinadv" else [f"vinadv.{a.name}" for a in node.names]
         elif isinstance(node, ast.Import):
@@ -83,7 +91,7 @@ def imported_vinadv_names(path: Path) -> set[str]:
             if parts[0] == "vinadv":
                 # `from vinadv import __version__` imports the package itself
                 names.add(parts[1] if len(parts) > 1 and parts[1] in LAYERS else "vinadv")
-    return names
+    return frozenset(names)
 
 
 def part_of(path: Path) -> str:
@@ -109,8 +117,7 @@ def test_no_module_imports_its_own_layer_or_above():
 def test_relative_imports_are_not_used():
     # the layer check reads absolute imports only
     for path in SOURCE.rglob("*.py"):
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        assert not [n for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.level], path
+        assert not [n for n in ast.walk(parsed(path)) if isinstance(n, ast.ImportFrom) and n.level], path
 
 
 def test_the_report_only_reads():

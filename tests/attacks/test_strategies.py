@@ -82,6 +82,7 @@ def test_valid_cells_match_brute_force(maps):
                 assert valid[i, r, c] == expected, (i, r, c)
 
 
+@pytest.mark.slow  # the quick tier checks validity against the brute force on the usual maps
 @pytest.mark.parametrize(
     "corner_cutting, moves",
     [(True, "octile"), (False, "octile"), (True, "moore"), (True, "news")],
@@ -128,6 +129,7 @@ def test_no_valid_cell_gives_no_pair(name):
     assert result.no_valid_cell.tolist() == [0]
 
 
+@pytest.mark.slow  # a planner call per cell; tests/test_identify.py checks exhaustive against a brute force quickly
 def test_exhaustive_finds_the_strongest_cell_of_a_brute_force_search(model, maps):
     result = make_attack("exhaustive").attack(
         maps.obstacles[:6], maps.starts[:6, 0], maps.goals[:6], model, strength=rule_strength

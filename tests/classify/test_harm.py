@@ -174,6 +174,7 @@ def test_every_field_matches_the_oracles(case):
         assert harm.harm[i] == want
 
 
+@pytest.mark.slow  # the quick tier checks every field against the oracles (test_every_field_matches_the_oracles)
 @settings(max_examples=100, deadline=None)
 @given(harm_cases())
 def test_harm_properties(case):
@@ -213,6 +214,7 @@ def _dihedral_map(obstacles, k):
     return out
 
 
+@pytest.mark.slow  # 60 generated cases, each run twice (as drawn and flipped or rotated)
 @settings(max_examples=60, deadline=None)
 @given(harm_cases(), st.integers(1, 7))
 def test_harm_invariant_under_flips_and_rotations(case, k):

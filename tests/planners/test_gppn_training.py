@@ -9,7 +9,7 @@ import torch
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
-from vinadv.planners.gppn import load_gppn
+from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn
 from vinadv.planners.training import TrainConfig, evaluate_loss, optimal_action_bits, split_indices, train_gppn
 
 pytestmark = pytest.mark.slow
@@ -45,7 +45,7 @@ def test_a_short_training_lowers_the_loss_and_resumes(tmp_path):
 
 
 def test_init_may_change_the_iterations_but_not_the_weights_shapes(tmp_path):
-    from vinadv.planners.gppn import GPPN, GPPNConfig, save_gppn
+    from vinadv.planners.gppn import save_gppn
     from vinadv.planners.weights import weights_checksum
 
     torch.set_num_threads(1)
@@ -161,16 +161,24 @@ def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatc
 
 def test_compiled_training_trains_the_same_weights(tmp_path):
     torch.set_num_threads(1)
-    maps = generate_maps(24, 8, seed=7, n_starts=1)
-    config = TrainConfig(planner="gppn", epochs=2, lr=0.01, batch_size=8, k=4, l_h=4, kernel=3, seed=3)
+    # compiling is the cost (each graph shape compiles a forward and a backward; 24 maps in batches of 8 and 7 plus
+    # one validation map cost three compilations, 46 s): 9 maps are 8 for training, in two equal batches of 4 (one
+    # training graph, 4 steps), and 1 for validation (the eval graph)
+    maps = generate_maps(9, 8, seed=7, n_starts=1)
+    config = TrainConfig(planner="gppn", epochs=2, lr=0.01, batch_size=4, k=4, l_h=4, kernel=3, seed=3)
     eager, eager_rec = train_gppn(maps, config, checkpoint=tmp_path / "e.ckpt", progress=False)
+    assert (eager_rec["n_train"], eager_rec["n_val"], eager_rec["steps"]) == (8, 1, 4)
     compiled_config = TrainConfig(**{**config.to_dict(), "compile": True})
     compiled, rec = train_gppn(maps, compiled_config, checkpoint=tmp_path / "c.ckpt", progress=False)
     assert rec["train_config"]["compile"] is True and eager_rec["train_config"]["compile"] is False
+    torch.manual_seed(config.seed)  # the trainer's initial weights
+    initial = GPPN(GPPNConfig(k=config.k, l_h=config.l_h, f=config.kernel)).state_dict()
     for k, v in eager.state_dict().items():  # fused kernels round differently, nothing more
+        assert not torch.equal(v, initial[k]), k  # every parameter was trained
         torch.testing.assert_close(compiled.state_dict()[k], v, rtol=1e-4, atol=1e-5)
     for a, b in zip(eager_rec["epochs"], rec["epochs"], strict=True):
         assert b["train_loss"] == pytest.approx(a["train_loss"], rel=1e-4)
+        assert b["val_loss"] == pytest.approx(a["val_loss"], rel=1e-4)
     # the checkpoint holds the model's own keys (not the compiled wrapper's), so eager training resumes it
     assert set(torch.load(tmp_path / "c.ckpt", weights_only=True)["model"]) == set(eager.state_dict())
     resumed, _ = train_gppn(maps, config, checkpoint=tmp_path / "c.ckpt", resume=True, progress=False)

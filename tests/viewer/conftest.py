@@ -4,6 +4,7 @@ hand-made pairs with gaps in their indices), and a Flask test client over it."""
 from __future__ import annotations
 
 import re
+import shutil
 
 import numpy as np
 import pytest
@@ -51,18 +52,27 @@ def crafted_records() -> PairRecords:
     )
 
 
-@pytest.fixture
-def db(tmp_path):
-    """(url, {"random": (run_id, records), "crafted": (run_id, records)})."""
-    url = f"sqlite:///{tmp_path / 'viewer.db'}"
-    with Store.open(url) as store:
+@pytest.fixture(scope="session")
+def db_file(tmp_path_factory):
+    """The database file, written once per session: (path, runs as in `db`). Tests get a copy (`db`)."""
+    path = tmp_path_factory.mktemp("viewer") / "viewer.db"
+    with Store.open(f"sqlite:///{path}") as store:
         runs = {}
         for name, records in (("random", random_records(N_RANDOM, size=12, seed=3)), ("crafted", crafted_records())):
             run_id = store.create_run(name, attack="random", seed=0)
             store.write_pairs(run_id, records)
             store.finish_run(run_id, {"total": 1.0})
             runs[name] = (run_id, records)
-    return url, runs
+    return path, runs
+
+
+@pytest.fixture
+def db(db_file, tmp_path):
+    """(url, {"random": (run_id, records), "crafted": (run_id, records)}): a fresh copy of the session's file, so
+    a test that labels pairs changes only its own."""
+    path, runs = db_file
+    shutil.copyfile(path, tmp_path / "viewer.db")
+    return f"sqlite:///{tmp_path / 'viewer.db'}", runs
 
 
 @pytest.fixture

@@ -20,7 +20,6 @@ def _grads(model: VIN, q: torch.Tensor, upstream: torch.Tensor) -> dict:
     return {name: p.grad.clone() for name, p in model.named_parameters() if p.grad is not None}
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("size,k", [(8, 10), (11, 7), (16, 20)])
 def test_values_and_gradients_equal_torch_float64(size, k):
     model = _model(k, seed=size, dtype=torch.float64)
@@ -37,7 +36,6 @@ def test_values_and_gradients_equal_torch_float64(size, k):
         torch.testing.assert_close(got[name], want[name], rtol=1e-10, atol=1e-12, msg=name)
 
 
-@pytest.mark.slow
 def test_float32_close_to_torch_and_batch_split_between_threads():
     model = _model(36, seed=1, dtype=torch.float32)
     x = torch.rand(9, 2, 28, 28, generator=torch.Generator().manual_seed(0))  # >= 2 maps per thread: threaded
