@@ -55,6 +55,19 @@ def brute_distances(obstacles, goal, corner_cutting=True, moves="octile"):
 
 
 def reachable(obstacles, start, goal, corner_cutting=True, moves="octile") -> bool:
-    """Whether `start` reaches `goal` on `obstacles` (rows of bools: nested lists or a 2-D array)."""
+    """Whether `start` reaches `goal` on `obstacles` (rows of bools: nested lists or a 2-D array): a flood fill from
+    `start` over the legal moves (the attack oracles call it for every cell of a map; costs are not needed)."""
     rows = [[bool(cell) for cell in row] for row in obstacles]
-    return math.isfinite(brute_distances(rows, tuple(goal), corner_cutting, moves)[tuple(start)][0])
+    start, goal = (int(start[0]), int(start[1])), (int(goal[0]), int(goal[1]))
+    if rows[start[0]][start[1]] or rows[goal[0]][goal[1]]:
+        return False
+    seen, todo = {start}, [start]
+    while todo:
+        r, c = todo.pop()
+        if (r, c) == goal:
+            return True
+        for a, (dr, dc) in enumerate(DELTAS):
+            if (r + dr, c + dc) not in seen and legal(rows, r, c, a, corner_cutting, moves):
+                seen.add((r + dr, c + dc))
+                todo.append((r + dr, c + dc))
+    return False
