@@ -44,6 +44,11 @@ os.environ["VINADV_CACHE_DIR"] = tempfile.mkdtemp(prefix="vinadv-test-cache-")
 atexit.register(shutil.rmtree, os.environ["VINADV_CACHE_DIR"], True)
 
 
+#: (node id, slow?) of every test the session collected, before `-m` selected some (tests/test_tiers.py reads it)
+COLLECTED = pytest.StashKey[list[tuple[str, bool]]]()
+
+
+@pytest.hookimpl(tryfirst=True)  # before `-m` selects: the marks set here count
 def pytest_collection_modifyitems(config, items) -> None:
     """The database servers' variants of a backend test (`db_url` = mysql/postgres) are slow: the quick selection
     checks every backend test on SQLite. The rest of the slow tier (`make test-fast` is `pytest -m "not slow"`) is
@@ -53,6 +58,7 @@ def pytest_collection_modifyitems(config, items) -> None:
         callspec = getattr(item, "callspec", None)
         if callspec is not None and callspec.params.get("db_url") in SERVERS:
             item.add_marker(pytest.mark.slow)
+    config.stash[COLLECTED] = [(item.nodeid, item.get_closest_marker("slow") is not None) for item in items]
 
 
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"

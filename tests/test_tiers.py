@@ -6,14 +6,13 @@ ids, which a renamed test would silently leave.
 """
 
 import ast
-import json
 import re
-import subprocess
-import sys
 import tomllib
 from pathlib import Path
 
 import pytest
+
+from tests.conftest import COLLECTED
 
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = ROOT / "tests"
@@ -55,47 +54,34 @@ def test_conftests_name_no_tests():
     assert not found, found
 
 
-#: collects the suite three times in one interpreter (the test modules are imported once): all tests, `-m slow` and
-#: `-m "not slow"`; writes the three lists of node ids as JSON to argv[1]
-COLLECT = """
-import json, sys
-import pytest
-
-class NodeIds:
-    def pytest_collection_finish(self, session):
-        self.ids = [item.nodeid for item in session.items]
-
-lists = {}
-for name, select in (("all", []), ("slow", ["-m", "slow"]), ("fast", ["-m", "not slow"])):
-    plugin = NodeIds()
-    code = pytest.main(["--collect-only", "-qq", "-p", "no:cacheprovider", *select, "tests"], plugins=[plugin])
-    assert code == 0, (name, code)
-    lists[name] = plugin.ids
-with open(sys.argv[1], "w") as f:
-    json.dump(lists, f)
-"""
-
-
 #: test packages with no quick test: every report test builds runs and renders a whole report
 ALL_SLOW = {"report"}
 
 
-@pytest.mark.slow  # collecting the suite imports every test module (about 10 s of CPU)
-def test_slow_and_fast_tiers_split_the_suite_and_every_package_keeps_fast_tests(tmp_path):
-    out = tmp_path / "tiers.json"
-    subprocess.run([sys.executable, "-c", COLLECT, str(out)], cwd=ROOT, check=True, capture_output=True, timeout=600)
-    lists = json.loads(out.read_text())
-    everything, slow, fast = (lists[k] for k in ("all", "slow", "fast"))
-    assert len(set(everything)) == len(everything) > 0
-    assert len(slow) == len(set(slow)) and len(fast) == len(set(fast))
-    assert not set(slow) & set(fast)
-    assert sorted(slow + fast) == sorted(everything)
+def test_every_test_has_one_tier_and_every_package_keeps_quick_tests(request):
+    """Reads what this session collected (tests/conftest.py keeps it, before `-m` selects), so it costs nothing and
+    runs in both tiers; it needs the whole suite collected (`pytest`, `make test`, `make test-fast`)."""
+    collected = request.config.stash[COLLECTED]
+    files = {node_id.split("::")[0] for node_id, _ in collected}
+    on_disk = {str(p.relative_to(ROOT)) for p in TESTS.rglob("test_*.py")}
+    whole_suite = {(ROOT / arg).resolve() for arg in request.config.args} in ({TESTS}, {ROOT})
+    if not whole_suite:
+        pytest.skip("only part of the suite was collected")
+    assert on_disk <= files, sorted(on_disk - files)  # every test file's tests, before `-m` selected
+    node_ids = [node_id for node_id, _ in collected]
+    assert len(set(node_ids)) == len(node_ids)
+    slow = {node_id for node_id, is_slow in collected if is_slow}
+    fast = set(node_ids) - slow
     # the quick tier is a real part of the suite, not a token one
-    assert len(fast) > len(slow)
+    assert len(fast) > len(slow) > 0
+    # `-m` selected from the tier it names only (the server variants' marks were set before it selected)
+    selected = {item.nodeid for item in request.session.items}
+    tier = {"not slow": fast, "slow": slow}.get(request.config.option.markexpr, set(node_ids))
+    assert selected <= tier
 
     # every test package (one per vinadv package) and the top-level tests keep some tests in the quick tier
     def package(node_id: str) -> str:
         parts = node_id.split("::")[0].split("/")
         return parts[1] if len(parts) > 2 else "tests"
 
-    assert {package(n) for n in fast} == {package(n) for n in everything} - ALL_SLOW
+    assert {package(n) for n in fast} == {package(n) for n in node_ids} - ALL_SLOW
