@@ -17,10 +17,10 @@ from vinadv.grid import MapSet, generate_maps
 from vinadv.planners.evaluation import evaluate_planner
 from vinadv.planners.pathset import PathSet
 from vinadv.planners.registry import load_planner
-from vinadv.planners.testing import planning_vin
 from vinadv.planners.training import TrainConfig, train_vin
 from vinadv.planners.vin.weights import save_vin
 from vinadv.robustness import robustness
+from vinadv.testing.planners import planning_vin
 
 
 @pytest.fixture(scope="module", params=["moore", "news"])

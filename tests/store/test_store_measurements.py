@@ -8,7 +8,7 @@ import pytest
 from tests.store.old_schemas import columns_and_version, old_database, table_names
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 from vinadv.vocabulary import PLANNER_QUALITY, TIMING
 
 
