@@ -82,11 +82,15 @@ def test_valid_cells_match_brute_force(maps):
                 assert valid[i, r, c] == expected, (i, r, c)
 
 
-@pytest.mark.slow  # the quick tier checks validity against the brute force on the usual maps
+# octile's variants are slow: the quick tier checks octile validity against the brute force on the usual maps
 @pytest.mark.parametrize(
     "corner_cutting, moves",
-    [(True, "octile"), (False, "octile"), (True, "moore"), (True, "news")],
-    ids=["corner-cutting", "no-corner-cutting", "moore", "news"],
+    [
+        pytest.param(True, "octile", id="corner-cutting", marks=pytest.mark.slow),
+        pytest.param(False, "octile", id="no-corner-cutting", marks=pytest.mark.slow),
+        pytest.param(True, "moore", id="moore"),
+        pytest.param(True, "news", id="news"),
+    ],
 )
 def test_valid_cells_match_brute_force_on_dense_maps(corner_cutting, moves):
     # dense small maps: many cells are the only way through (the generated maps have few)
