@@ -50,13 +50,15 @@ COLLECTED = pytest.StashKey[list[tuple[str, bool]]]()
 
 @pytest.hookimpl(tryfirst=True)  # before `-m` selects: the marks set here count
 def pytest_collection_modifyitems(config, items) -> None:
-    """The database servers' variants of a backend test (`db_url` = mysql/postgres) are slow: the quick selection
-    checks every backend test on SQLite. The rest of the slow tier (`make test-fast` is `pytest -m "not slow"`) is
+    """Tests on the database servers are slow, whether a variant of a backend test (`db_url` = mysql/postgres) or a
+    test that takes a server's fixture (`SERVER_FIXTURES`): the quick selection checks every backend test on SQLite
+    and needs no server. The rest of the slow tier (`make test-fast` is `pytest -m "not slow"`) is
     marked in the test modules themselves (`pytestmark = pytest.mark.slow` or `@pytest.mark.slow`): the ones that
     start Dask clusters, a browser or subprocesses, train networks or classifiers, or run the whole pipeline."""
     for item in items:
         callspec = getattr(item, "callspec", None)
-        if callspec is not None and callspec.params.get("db_url") in SERVERS:
+        on_server = callspec is not None and callspec.params.get("db_url") in SERVERS
+        if on_server or SERVER_FIXTURES & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
     config.stash[COLLECTED] = [(item.nodeid, item.get_closest_marker("slow") is not None) for item in items]
 
@@ -65,6 +67,8 @@ MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"
 POSTGRES_DEFAULT = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 BACKENDS = ("sqlite", "mysql", "postgres")
 SERVERS = BACKENDS[1:]
+#: the fixtures that reach a database server
+SERVER_FIXTURES = {"mysql_server", "postgres_server", "mysql_url", "postgres_url"}
 
 
 def _server(env: str, default: str) -> sa.Engine:
