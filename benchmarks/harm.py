@@ -22,6 +22,14 @@ import time
 import numba
 import numpy as np
 
+from vinadv.attacks.pairs import PairSet
+from vinadv.attacks.strategies import make_attack
+from vinadv.classify import PathPairBatch, label_batch
+from vinadv.classify.harm import pairset_harm
+from vinadv.grid.generator import generate_maps
+from vinadv.grid.shortest_paths import expert_paths
+from vinadv.planners.vin.weights import load_vin
+
 
 def timed_side_by_side(fns, rounds: int):
     """Best time of each of `fns` over `rounds` rounds, the functions taking turns within a round, so that load
@@ -38,10 +46,6 @@ def timed_side_by_side(fns, rounds: int):
 
 def make_pairs(n_maps: int, attack: str, seed: int = 0):
     """Real attack pairs on generated maps, and the generator's expert paths of each pair's original map."""
-    from vinadv.attacks.strategies import make_attack
-    from vinadv.grid.generator import generate_maps
-    from vinadv.planners.vin.weights import load_vin
-
     maps = generate_maps(n_maps, 28, seed=seed, n_starts=1)
     result = make_attack(attack, per_map=1, seed=seed).attack(
         maps.obstacles, maps.starts[:, 0], maps.goals, load_vin(None, size=28)
@@ -66,13 +70,7 @@ def main(argv=None) -> int:
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
 
-    from vinadv.classify import PathPairBatch, label_batch
-    from vinadv.classify.harm import pairset_harm
-
     if args.pairs:
-        from vinadv.attacks.pairs import PairSet
-        from vinadv.grid.shortest_paths import expert_paths
-
         pairs = PairSet.load(args.pairs)
         costs, paths = expert_paths(pairs.obstacles_o, pairs.goals, pairs.starts[:, None], pairs.corner_cutting)
         source, expert = args.pairs, (costs[:, 0], paths)

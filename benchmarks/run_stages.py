@@ -9,6 +9,10 @@ maps the run planned, in one `plan_batch` call, compiled and warm, best of 3). G
 planning at most 1.5x the engine's time, the whole command under 4x.
 """
 
+# Imports stay in the functions: the child (this script, run again) times what `vinadv run` imports, so nothing may be
+# imported before its clock starts.
+# ruff: noqa: PLC0415
+
 from __future__ import annotations
 
 import argparse

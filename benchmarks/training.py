@@ -22,6 +22,7 @@ import torch
 from vinadv.grid import generate_maps
 from vinadv.planners.training import bits_to_mask, optimal_action_bits, optimal_set_loss
 from vinadv.planners.vin import VIN, VINConfig, default_k, make_input, value_iteration
+from vinadv.planners.vin.weights import default_weights_path, load_vin
 
 
 def main() -> None:
@@ -84,8 +85,6 @@ def main() -> None:
 
 
 def _model(size: int) -> VIN:
-    from vinadv.planners.vin.weights import default_weights_path, load_vin
-
     path = default_weights_path(size)
     if path.exists():
         return load_vin(path, size=size)

@@ -1,9 +1,13 @@
 """`vinadv --help`, `--version` and the help of commands that need no heavy library import none of them: the parser
 is built from light modules (behaviour, not timing: which modules a fresh interpreter loaded)."""
 
+import ast
 import json
+import re
 import subprocess
 import sys
+import tomllib
+from pathlib import Path
 
 import pytest
 
@@ -80,3 +84,96 @@ def test_a_vin_run_needs_no_pytorch_once_the_replay_settings_are_kept(tmp_path, 
     assert replayed or not MODELLED_CPU, f"the replay was not verified on a modelled CPU ({cpu_vendor()})"
     second = imported_modules("run", "--n", "2000", "--seed", "1", "--db", str(tmp_path / "b.db"), "--quiet")
     assert "sqlalchemy" in second and ("torch" in second) == (not replayed)
+
+
+# --- the lint rule that keeps the commands light ----------------------------------------------------------------------
+# Ruff's banned-module-level-imports (TID253) for src/vinadv/commands/ (its ruff.toml; vinadv.cluster extends it) names
+# the heavy libraries of pyproject.toml, NumPy, and every vinadv module that imports one of them at module level; these
+# tests keep that list exact as modules change.
+
+SRC = Path(__file__).resolve().parent.parent / "src"
+
+
+def module_level_imports(path: Path, name: str) -> set[str]:
+    """The modules a module's import statements name outside functions (`if TYPE_CHECKING:` blocks aside); for
+    `from A import b`, both `A` and `A.b` (b may be a module)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: set[str] = set()
+
+    def visit(body) -> None:
+        for node in body:
+            if isinstance(node, ast.Import):
+                found.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                base = package.split(".")[: len(package.split(".")) - node.level + 1] if node.level else []
+                module = ".".join([*base, *([node.module] if node.module else [])])
+                found.add(module)
+                found.update(f"{module}.{alias.name}" for alias in node.names)
+            elif isinstance(node, ast.If):
+                if "TYPE_CHECKING" not in ast.unparse(node.test):
+                    visit(node.body)
+                visit(node.orelse)
+            elif isinstance(node, ast.Try):
+                for block in (node.body, node.orelse, node.finalbody, *(h.body for h in node.handlers)):
+                    visit(block)
+            elif isinstance(node, ast.With | ast.ClassDef):
+                visit(node.body)
+
+    visit(ast.parse(path.read_text()).body)
+    return found
+
+
+def heavy_vinadv_modules(libraries: set[str]) -> set[str]:
+    """The vinadv modules whose import loads one of `libraries`: those importing one at module level, through any
+    chain of vinadv imports (importing `a.b.c` runs `a` and `a.b` first). A package whose names load lazily (a module
+    `__getattr__`) counts as importing each of its modules wherever a name is imported from it."""
+    imports, lazy = {}, set()
+    for path in sorted((SRC / "vinadv").rglob("*.py")):
+        name = ".".join(path.relative_to(SRC).with_suffix("").parts).removesuffix(".__init__")
+        imports[name] = module_level_imports(path, name)
+        if path.name == "__init__.py" and re.search(r"^def __getattr__", path.read_text(), re.M):
+            lazy.add(name)
+    for found in imports.values():
+        found.update(m for m in imports if any(m.startswith(f"{p}.") for p in found & lazy))
+
+    def loads(module: str) -> set[str]:
+        """`module` and its packages, as far as they are vinadv modules."""
+        parts = module.split(".")
+        return {".".join(parts[:i]) for i in range(1, len(parts) + 1)} & imports.keys()
+
+    heavy = {name for name, found in imports.items() if {m.split(".")[0] for m in found} & libraries}
+    while True:
+        more = {
+            name
+            for name, found in imports.items()
+            if name not in heavy and (loads(name) - {name} | set().union(*map(loads, found))) & heavy
+        }
+        if not more:
+            return heavy
+        heavy |= more
+
+
+def heavy_libraries() -> set[str]:
+    """What the commands' start-up does without: pyproject.toml's banned-module-level-imports, and NumPy."""
+    lint = tomllib.loads((SRC.parent / "pyproject.toml").read_text())["tool"]["ruff"]["lint"]
+    return set(lint["flake8-tidy-imports"]["banned-module-level-imports"]) | {"numpy"}
+
+
+def test_the_commands_lint_bans_exactly_the_heavy_libraries_and_vinadv_modules():
+    libraries = heavy_libraries()
+    commands = tomllib.loads((SRC / "vinadv" / "commands" / "ruff.toml").read_text())["lint"]
+    banned = commands["flake8-tidy-imports"]["banned-module-level-imports"]
+    heavy = heavy_vinadv_modules(libraries)
+    # a heavy package's modules are all heavy (importing one runs the package): the package's name covers them
+    expected = libraries | {m for m in heavy if m.rpartition(".")[0] not in heavy}
+    assert len(banned) == len(set(banned))
+    assert not set(banned) - expected, f"light (or gone): remove from commands/ruff.toml {set(banned) - expected}"
+    assert not expected - set(banned), f"heavy: add to commands/ruff.toml {expected - set(banned)}"
+
+
+def test_the_command_line_layer_imports_nothing_heavy_at_module_level():
+    heavy = heavy_vinadv_modules(heavy_libraries())
+    layer = {"vinadv.cli", "vinadv.commands", "vinadv.cluster"}
+    assert not {m for m in heavy if m in layer or m.rpartition(".")[0] in layer}, "the CLI imports a heavy module"
+    cluster = tomllib.loads((SRC / "vinadv" / "cluster" / "ruff.toml").read_text())
+    assert cluster["extend"] == "../commands/ruff.toml"  # vinadv.cluster builds the run and attack parsers

@@ -23,6 +23,7 @@ from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
 from vinadv.grid.moves import require_moves
 from vinadv.planners.interface import Planner, as_planner
+from vinadv.planners.registry import PlannerRef, load_planner
 from vinadv.planners.spec import PlannerSpec
 from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
 
@@ -38,8 +39,8 @@ def load_classifier(spec: str | os.PathLike | None) -> tuple[PairClassifier | No
     `vinadv classify train` gives the model (an FP/DP model inside the paper's hybrid)."""
     if spec is None or str(spec) == "rule":
         return None, "rule"
-    from vinadv.classify.base import load_model
-    from vinadv.classify.hybrid import HybridClassifier, RuleClassifier
+    from vinadv.classify.base import load_model  # noqa: PLC0415 (scikit-learn: the rule labeller does without it)
+    from vinadv.classify.hybrid import HybridClassifier, RuleClassifier  # noqa: PLC0415 (as above)
 
     if not os.path.exists(spec):
         raise InputError(
@@ -89,7 +90,7 @@ class Identification(Columns):
 
     def records(self, pair_index: np.ndarray | None = None):
         """The store's `PairRecords` of these pairs (`pair_index` defaults to `0..n-1`)."""
-        from vinadv.store.records import PairRecords
+        from vinadv.store.records import PairRecords  # noqa: PLC0415 (SQLAlchemy: identify without a store)
 
         return PairRecords.from_pairs(
             self.pairs,
@@ -139,7 +140,7 @@ def identify(
     batch = PathPairBatch.from_pairs(pairs)
     exact_rule = classifier is None
     if not exact_rule:  # a classifier object: scikit-learn is loaded already
-        from vinadv.classify.hybrid import RuleClassifier
+        from vinadv.classify.hybrid import RuleClassifier  # noqa: PLC0415 (as above)
 
         exact_rule = isinstance(classifier, RuleClassifier)
     if exact_rule:
@@ -223,8 +224,7 @@ def identify_and_store(
     elsewhere (say `vinadv.cluster.ClusterIdentify`; `planner_ref` a `PlannerRef`, or None to keep the file's
     paths); it is called after the inputs are checked, so a bad file is refused before any worker starts. Without
     it, everything runs in this process."""
-    from vinadv.planners.registry import PlannerRef, load_planner
-    from vinadv.store import Store
+    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: identify without a store)
 
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
     pairs = PairSet.load(pairs_path)

@@ -262,7 +262,7 @@ def run_pipeline(
 ) -> RunSummary:
     """Run the main job and store it; returns the summary. `shard_results(config, shards, planner, classifier,
     label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order."""
-    from vinadv.store import Store
+    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: computing a shard needs no store)
 
     t_start = time.perf_counter()
     planner = resolve_planner(config)

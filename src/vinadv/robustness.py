@@ -35,10 +35,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vinadv.attacks.strategies import STRATEGIES, make_attack
+from vinadv.classify.harm import DEFAULT_TOL, check_tolerances
 from vinadv.errors import InputError
+from vinadv.grid.generator import generate_maps
 from vinadv.grid.moves import require_moves
+from vinadv.identify import identify, objective_strength
+from vinadv.planners.interface import as_planner
 from vinadv.planners.spec import PlannerSpec
-from vinadv.vocabulary import SUCCESS_LABELS
+from vinadv.vocabulary import SUCCESS_LABELS, label_counts
 
 #: the strategies run by default; `exhaustive` only on request (it plans every valid cell of every map)
 DEFAULT_STRATEGIES = ("key-points", "saliency", "near-path", "random")
@@ -51,8 +56,6 @@ WORST_CASE = "worst case"
 
 def benchmark_maps(n: int = 1000, size: int = 28, seed: int = BENCHMARK_SEED, corner_cutting: bool = True):
     """The benchmark's fixed maps: the generator's first `n` maps of `seed`, one start each (a `MapSet`)."""
-    from vinadv.grid.generator import generate_maps
-
     return generate_maps(n, size, seed=seed, n_starts=1, corner_cutting=corner_cutting)
 
 
@@ -230,8 +233,6 @@ def check_strategies(strategies, exhaustive: bool = False) -> tuple[str, ...]:
 
 def _known(names) -> tuple[str, ...]:
     """`names` as a tuple, each a strategy of `vinadv.attacks.strategies.STRATEGIES`, none twice, at least one."""
-    from vinadv.attacks.strategies import STRATEGIES
-
     names = tuple(names)
     for name in names:
         if name not in STRATEGIES:
@@ -272,12 +273,6 @@ def robustness(
             near-path's distance to the path.
         harm_tol, harm_rtol: the harm test's tolerances (default `vinadv.classify.harm.DEFAULT_TOL`, 0).
     """
-    from vinadv.attacks.strategies import make_attack
-    from vinadv.classify.harm import DEFAULT_TOL, check_tolerances
-    from vinadv.identify import identify, objective_strength
-    from vinadv.planners.interface import as_planner
-    from vinadv.vocabulary import label_counts
-
     harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
     if int(max_obstacles) < 1:
@@ -365,7 +360,7 @@ def _outcomes(n: int, map_index, labels, harm, regret_a) -> MapOutcomes:
 
 def save_robustness(result: RobustnessResult, db: str | None) -> int:
     """Store `result` as a row of the database's `robustness` table; return its id."""
-    from vinadv.store import Store
+    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy)
 
     with Store.open(db) as store:
         return store.add_robustness(

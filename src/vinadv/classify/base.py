@@ -31,9 +31,9 @@ _REGISTRY: dict[str, type] = {}
 def _registry() -> dict[str, type]:
     """Every model kind: the classes register themselves when their modules are imported (done here, at first use,
     since the package imports its modules lazily)."""
-    import vinadv.classify.hybrid
-    import vinadv.classify.models
-    import vinadv.classify.similarity  # noqa: F401
+    import vinadv.classify.hybrid  # noqa: PLC0415 (an import cycle: the model modules import this one)
+    import vinadv.classify.models  # noqa: PLC0415 (as above)
+    import vinadv.classify.similarity  # noqa: F401, PLC0415 (as above)
 
     return _REGISTRY
 

@@ -146,7 +146,7 @@ class SVMImageClassifier(PairClassifier):
 
 
 def _torch():
-    import torch
+    import torch  # noqa: PLC0415 (PyTorch: only the CNN and MLP classifiers need it)
 
     # the machine is shared: never more than 2 threads
     if torch.get_num_threads() > 2:
@@ -303,7 +303,7 @@ class TorchImageClassifier(PairClassifier):
         cosine = self.schedule == "cosine"
         scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(steps, 1)) if cosine else None
         loss_fn = torch.nn.CrossEntropyLoss()
-        from tqdm import tqdm
+        from tqdm import tqdm  # noqa: PLC0415 (tqdm)
 
         self.network_.train()
         for _ in tqdm(range(self.epochs), desc=f"training {self.kind}", disable=not self.verbose, unit="epoch"):

@@ -30,9 +30,19 @@ from __future__ import annotations
 
 import contextlib
 import os
+import socket
 from collections.abc import Iterator
+from urllib.parse import urlsplit
 
+from vinadv.cluster.worker import (
+    SINGLE_THREAD_ENV,
+    _plugin_class,
+    attack_shard_task,
+    identify_shard_task,
+    run_shard_task,
+)
 from vinadv.errors import InputError
+from vinadv.planners.weights import weights_checksum
 
 INSTALL_HINT = "pip install 'vinadv[cluster]'"
 #: how often a task that raised is run again (worker deaths are handled by the scheduler's allowed-failures)
@@ -86,8 +96,6 @@ def start_local_cluster(workers: int, **kwargs):
     require_dask()
     from distributed import LocalCluster
 
-    from vinadv.cluster.worker import SINGLE_THREAD_ENV
-
     options = dict(
         n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None, env=dict(SINGLE_THREAD_ENV)
     )
@@ -106,8 +114,6 @@ def open_cluster(address: str | None = None, workers: int | None = None) -> Iter
     require_dask()
     from distributed import Client
 
-    from vinadv.cluster.worker import _plugin_class
-
     with contextlib.ExitStack() as stack:
         if workers is not None:
             cluster = stack.enter_context(start_local_cluster(workers))
@@ -124,9 +130,6 @@ def open_cluster(address: str | None = None, workers: int | None = None) -> Iter
 
 def _check_reachable(address: str) -> None:
     """Fail fast (Dask's client keeps retrying a refused connection until its timeout)."""
-    import socket
-    from urllib.parse import urlsplit
-
     parts = urlsplit(address if "://" in address else f"tcp://{address}")
     if parts.scheme not in ("tcp", "tls"):
         return  # other transports (inproc, ucx): let Dask judge
@@ -168,9 +171,7 @@ class ClusterShards:
         from dask.base import tokenize
         from distributed import as_completed
 
-        from vinadv.cluster.worker import run_shard_task
         from vinadv.planners.registry import PlannerRef
-        from vinadv.planners.weights import weights_checksum
 
         ref = PlannerRef.of(planner, config.planner, config.weights, config.corner_cutting)
         classifier = config.classifier if config.classifier in (None, "rule") else _absolute(config.classifier)
@@ -265,7 +266,6 @@ def attack_on_cluster(
     import numpy as np
 
     from vinadv.attacks.strategies import AttackResult, make_attack
-    from vinadv.cluster.worker import attack_shard_task
 
     attack = make_attack(strategy, **options)  # validates the options here, before anything is sent
     bounds = _bounds(len(maps), shard_size)
@@ -357,9 +357,7 @@ def identify_on_cluster(
     per task: the same `Identification` as the local command (harm with the tolerances `harm_tol`, `harm_rtol`)."""
     import numpy as np
 
-    from vinadv.cluster.worker import identify_shard_task
     from vinadv.identify import Identification
-    from vinadv.planners.weights import weights_checksum
 
     classifier = classifier if classifier in (None, "rule") else _absolute(classifier)
     classifier_sum = None if classifier in (None, "rule") else weights_checksum(classifier)

@@ -12,6 +12,10 @@ from __future__ import annotations
 import os
 import threading
 
+from vinadv.errors import InputError
+from vinadv.planners.batching import set_threads, set_torch_threads
+from vinadv.planners.weights import weights_checksum  # a file's SHA-256, for any model file
+
 #: environment of a worker process: one thread for each numeric library (a worker process is one core)
 SINGLE_THREAD_ENV = {
     "OMP_NUM_THREADS": "1",
@@ -34,8 +38,6 @@ def single_threaded() -> None:
         return
     for name, value in SINGLE_THREAD_ENV.items():
         os.environ.setdefault(name, value)  # before numba/torch first import in this process
-    from vinadv.planners.batching import set_threads, set_torch_threads
-
     set_torch_threads(1)
     set_threads(1)  # the planners' own thread pool over maps (sized from the CPU affinity)
     _THREAD_STATE.done = True
@@ -56,9 +58,7 @@ def worker_planner(ref):
 
 def worker_classifier(spec: str | None, checksum: str | None):
     """The classifier `spec` ('rule', None or a model file), loaded once per worker process."""
-    from vinadv.errors import InputError
     from vinadv.identify import load_classifier
-    from vinadv.planners.weights import weights_checksum  # a file's SHA-256, for any model file
 
     def load():
         if checksum is not None:

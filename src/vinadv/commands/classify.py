@@ -78,7 +78,7 @@ def register(subparsers) -> None:
 
 def _load_pairs(path):
     from vinadv.attacks.pairs import PairSet
-    from vinadv.classify import PathPairBatch
+    from vinadv.classify.batch import PathPairBatch
 
     return PathPairBatch.from_pairs(PairSet.load(path))
 
@@ -97,8 +97,7 @@ def _human_labels(args):
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from vinadv.classify import label_batch
-    from vinadv.classify.rule import default_threshold
+    from vinadv.classify.rule import default_threshold, label_batch
     from vinadv.classify.train_eval import train_classifier
 
     if args.labels == "human":

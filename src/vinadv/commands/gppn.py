@@ -10,6 +10,7 @@ from vinadv.commands.evaluation import add_eval_arguments, emit_metrics, start_e
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.training import add_compile_argument, add_train_arguments, run_training, train_config
 from vinadv.outfile import check_output_path
+from vinadv.planners.weights import weights_checksum
 
 #: GPPN defaults at 28x28, chosen by benchmarks/gppn_training.py on the 2-core CPU (README, "Planners"): a 5x5
 #: recurrent kernel reaches two cells per iteration, so 20 iterations cross a 28x28 map.
@@ -94,7 +95,6 @@ def cmd_gppn_train(args: argparse.Namespace) -> int:
 
 def cmd_gppn_widen(args: argparse.Namespace) -> int:
     from vinadv.planners.gppn import load_gppn, save_gppn, widen_gppn
-    from vinadv.planners.weights import weights_checksum
 
     check_output_path(args.out, mkdir=True)
     model = load_gppn(args.weights)
@@ -123,7 +123,6 @@ def cmd_gppn_widen(args: argparse.Namespace) -> int:
 def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
     from vinadv.interop.checkpoints import gppn_from_checkpoint
     from vinadv.planners.gppn import save_gppn
-    from vinadv.planners.weights import weights_checksum
 
     check_output_path(args.out, mkdir=True)
     model = gppn_from_checkpoint(args.checkpoint, args.k, args.entry)

@@ -16,6 +16,7 @@ from vinadv.commands.output import add_output_options, emit, progress_lines, sho
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 from vinadv.planners.records import TrainingRecord
+from vinadv.planners.weights import weights_checksum
 
 if TYPE_CHECKING:  # PyTorch behind it: imported by the command that trains
     from vinadv.planners.training import TrainConfig
@@ -153,7 +154,6 @@ def run_training(
     """Load the data, train with `train(maps, config, ...)` (checkpoint OUT.ckpt, `--resume`), write the weights
     with `save(model, out, record)` and the record next to them; the body of every `train` command."""
     from vinadv.grid.mapset import MapSet
-    from vinadv.planners.weights import weights_checksum
 
     set_threads(args.threads)
     check_output_path(args.out, mkdir=True)  # before hours of training: a folder in the way

@@ -10,6 +10,7 @@ from vinadv.commands.evaluation import add_eval_arguments, emit_metrics, start_e
 from vinadv.commands.output import add_output_options, emit, note, shows_progress
 from vinadv.commands.training import add_train_arguments, run_training, train_config
 from vinadv.errors import InputError
+from vinadv.planners.weights import weights_checksum
 
 
 def register(subparsers) -> None:
@@ -72,7 +73,6 @@ def cmd_train(args: argparse.Namespace) -> int:
 def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.interop.protocols import evaluate_protocol
     from vinadv.planners.vin.weights import default_weights_path, load_vin
-    from vinadv.planners.weights import weights_checksum
 
     maps, source = start_eval(args)
     model = load_vin(args.weights, size=maps.size, k=args.k)

@@ -10,6 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.layout_engine import ConstrainedLayoutEngine  # noqa: E402
 
 from vinadv.outfile import atomic_output  # noqa: E402
 
@@ -72,8 +73,6 @@ def map_legend(fig, axes, **kwargs) -> None:
         for handle, label in zip(*ax.get_legend_handles_labels()):
             handles.setdefault(label, handle)
     if handles:
-        from matplotlib.layout_engine import ConstrainedLayoutEngine
-
         # under constrained layout an "outside" legend gets its own room; else it hangs below the axes
         place = (
             {"loc": "outside lower center"}

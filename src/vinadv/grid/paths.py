@@ -13,6 +13,7 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import SQRT2
+from vinadv.npzfile import check_cells_in_grid, check_offsets
 
 
 class PackedPaths:
@@ -176,8 +177,6 @@ class PackedPaths:
     def read(cls, reader, prefix: str, n: int, size: int) -> PackedPaths:
         """Fields `{prefix}_cells`/`{prefix}_offsets` of an `NpzReader`, checked: `n` paths of at least one cell
         inside the `size x size` grid (errors name the file and the field)."""
-        from vinadv.npzfile import check_cells_in_grid, check_offsets
-
         cells = reader.array(f"{prefix}_cells", "i", 2, (None, 2))
         offsets = reader.array(f"{prefix}_offsets", "i", 1).astype(np.int64)
         check_cells_in_grid(reader, f"{prefix}_cells", cells, size)

@@ -21,6 +21,8 @@ import numpy as np
 import torch
 
 from vinadv.errors import InputError
+from vinadv.interop.formats.gppn import GPPN_TO_VINADV
+from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.vin.arrays import STATE_KEYS
 from vinadv.planners.vin.model import VIN
 
@@ -146,9 +148,6 @@ def gppn_from_checkpoint(path: str | os.PathLike, k: int, which: str | None = No
     so the rows of `policy.weight` are reordered to vinadv's. Refused with an InputError naming the file: another
     model, a 3-D (orientation) maze, or 4 actions (GPPN's 'news' mechanism; vinadv plans with 8 moves).
     """
-    from vinadv.interop.formats.gppn import GPPN_TO_VINADV
-    from vinadv.planners.gppn import GPPN, GPPNConfig
-
     state, meta = read_checkpoint(path, which)
     missing = [key for key in GPPN_KEYS if key not in state]
     if missing:

@@ -31,6 +31,7 @@ from vinadv.grid.moves import require_moves
 from vinadv.interop.formats.gppn import unit_cost_distances
 from vinadv.interop.formats.samples import expert_steps
 from vinadv.planners.evaluation import evaluate_vin
+from vinadv.planners.interface import as_planner
 from vinadv.planners.vin.model import VIN, make_input
 
 PROTOCOLS = ("vinadv", "kentsommer", "gppn")
@@ -98,8 +99,6 @@ def kentsommer_protocol(model: VIN, maps: MapSet, prior: float = PORT_TEST_PRIOR
 
 def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_size: int = 256) -> np.ndarray:
     """The argmax action (lowest index on ties) of every cell by `planner` (a `Planner` or a VIN), `(n, N, N)`."""
-    from vinadv.planners.interface import as_planner
-
     planner = as_planner(planner, obstacles.shape[1])
     out = [
         np.argmax(planner.logits(obstacles[i : i + batch_size], goals[i : i + batch_size]), axis=1)

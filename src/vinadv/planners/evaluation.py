@@ -14,12 +14,14 @@ from collections.abc import Callable
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import require_moves
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
 from vinadv.planners.records import LengthBucketMetrics, PlannerMetrics, RolloutMetrics
 from vinadv.planners.result import PlanResult
+from vinadv.planners.vin import engine
 from vinadv.planners.vin.model import VIN, make_input
 from vinadv.vocabulary import TERMINATIONS
 
@@ -56,8 +58,6 @@ def accuracy_counts_from_logits(
 
 
 def _engine_planner(obstacles, goals, starts, model, corner_cutting) -> PlanResult:
-    from vinadv.planners.vin import engine
-
     if hasattr(engine, "plan_maps"):  # one value map per map, shared by its starts
         return engine.plan_maps(obstacles, goals, starts, model, corner_cutting)
     s = starts.shape[1]
@@ -168,8 +168,6 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> Pl
     obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
     chunks = range(0, len(maps), batch_size)
     if progress:
-        from tqdm import tqdm
-
         chunks = tqdm(chunks, desc="evaluating", unit="batch")
     correct, cells, parts = 0, 0, []
     for i in chunks:

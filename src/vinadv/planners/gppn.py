@@ -34,6 +34,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from vinadv.errors import InputError
+from vinadv.planners.weights import weights_file
 
 GPPN_FORMAT = "vinadv.gppn/1"
 WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
@@ -186,8 +187,6 @@ def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
 
     Sets `record` (the training record) and `weights_path` on the model. Raises InputError naming the file.
     """
-    from vinadv.planners.weights import weights_file
-
     name = weights_file(path, default_gppn_path(size), "GPPN", size)
     try:
         data = torch.load(name, map_location="cpu", weights_only=True)

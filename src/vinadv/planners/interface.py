@@ -29,7 +29,9 @@ from vinadv.planners.batching import over_maps, torch_threads
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
 from vinadv.planners.spec import PlannerSpec
+from vinadv.planners.vin import engine
 from vinadv.planners.vin.arrays import VINWeights
+from vinadv.planners.weights import weights_checksum
 
 if TYPE_CHECKING:  # PyTorch is loaded only by the planners that run it
     import torch
@@ -291,8 +293,6 @@ class VINPlanner(Planner):
     (it may be training)."""
 
     def __init__(self, vin, size: int, checksum: str | None = None):
-        from vinadv.planners.weights import weights_checksum
-
         self.name, self.size = "vin", int(size)
         self._source = vin
         self._torch: TorchPlanner | None = None
@@ -321,7 +321,7 @@ class VINPlanner(Planner):
 
     def _torch_planner(self) -> TorchPlanner:
         if self._torch is None:
-            from vinadv.planners.vin.model import VINPolicy
+            from vinadv.planners.vin.model import VINPolicy  # noqa: PLC0415 (PyTorch: the VIN plans without it)
 
             self._torch = TorchPlanner(VINPolicy(self.vin), self.name, self.size, self._checksum, self.config)
         return self._torch
@@ -341,7 +341,7 @@ class VINPlanner(Planner):
         """The VIN's value maps `max_a q`, `(B, N, N)` float32, `batch_size` maps per forward."""
         import torch
 
-        from vinadv.planners.vin.model import make_input
+        from vinadv.planners.vin.model import make_input  # noqa: PLC0415 (PyTorch: the VIN plans without it)
 
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         self._check_size(obstacles)
@@ -362,8 +362,6 @@ class VINPlanner(Planner):
         chunk_size: int | None = None,
         progress: bool = False,
     ) -> PlanResult:
-        from vinadv.planners.vin import engine
-
         obstacles, goals, starts = _check_multi(obstacles, goals, starts)
         self._check_size(obstacles)
         return engine.plan_maps(
@@ -382,7 +380,7 @@ def as_planner(planner, size: int) -> Planner:
     if "torch" in sys.modules:  # without PyTorch loaded, nothing is a module
         from torch import nn
 
-        from vinadv.planners.vin.model import VIN
+        from vinadv.planners.vin.model import VIN  # noqa: PLC0415 (PyTorch: the VIN plans without it)
 
         if isinstance(planner, VIN):
             return VINPlanner(planner, size)

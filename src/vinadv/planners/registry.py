@@ -25,6 +25,9 @@ from pathlib import Path
 from vinadv.errors import InputError
 from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
+from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
+from vinadv.planners.weights import WEIGHTS_DIR, weights_checksum
 
 #: `load(size, weights, corner_cutting, device)`: a registered planner for `size x size` maps
 Loader = Callable[[int, str | None, bool, str], Planner]
@@ -89,32 +92,24 @@ def register(
 
 
 def _vin_weights_path(size: int) -> Path:
-    from vinadv.planners.vin.weights import default_weights_path
-
     return default_weights_path(size)
 
 
 def _vin_robust_weights_path(size: int) -> Path:
-    from vinadv.planners.weights import WEIGHTS_DIR
-
     return WEIGHTS_DIR / f"vin{int(size)}_robust.pt"
 
 
 def _gppn_weights_path(size: int) -> Path:
-    from vinadv.planners.gppn import default_gppn_path
+    from vinadv.planners.gppn import default_gppn_path  # noqa: PLC0415 (PyTorch: the VIN planners load without it)
 
     return default_gppn_path(size)
 
 
 def _load_vin(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
-    from vinadv.planners.vin.weights import load_vin_weights
-
     return VINPlanner(load_vin_weights(weights, size=size), size=size)
 
 
 def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
-    from vinadv.planners.vin.weights import load_vin_weights
-
     path = _vin_robust_weights_path(size)
     if not path.exists():
         raise PlannerError(
@@ -127,8 +122,7 @@ def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, devic
 
 
 def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
-    from vinadv.planners.gppn import load_gppn
-    from vinadv.planners.weights import weights_checksum
+    from vinadv.planners.gppn import load_gppn  # noqa: PLC0415 (PyTorch: the VIN planners load without it)
 
     model = load_gppn(weights, size=size)
     trained = model.record.get("size")
@@ -147,8 +141,6 @@ def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str
 
 
 def _load_optimal(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
-    from vinadv.planners.optimal import OptimalPlanner
-
     return OptimalPlanner(size, corner_cutting)
 
 
@@ -235,7 +227,7 @@ def _load(spec: str, size: int, weights: str | None, corner_cutting: bool, devic
 def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str) -> TorchPlanner:
     """`BASE+d4`: the planner `BASE` averaged over the grid's 8 symmetries (`vinadv.planners.symmetric`); its run
     records keep the base planner's weights checksum and add `"average": "d4"` to its config."""
-    from vinadv.planners.symmetric import DihedralAverage
+    from vinadv.planners.symmetric import DihedralAverage  # noqa: PLC0415 (PyTorch: the VIN planners load without it)
 
     base_spec = spec[: -len(SUFFIX)].strip()
     if not base_spec or base_spec.endswith(SUFFIX):
@@ -263,8 +255,6 @@ def _is_file(source: str) -> bool:
 
 def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
     """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring)."""
-    from vinadv.planners.weights import weights_checksum
-
     source, _, factory_name = spec.rpartition(":")
     if not source or not factory_name.isidentifier():
         raise PlannerError(f"planner {spec!r}: expected FILE.py:FACTORY or MODULE:FACTORY")

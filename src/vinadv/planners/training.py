@@ -24,17 +24,20 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import require_moves
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
-from vinadv.planners.gppn import GPPN, GPPNConfig
+from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn
 from vinadv.planners.records import EpochRecord, TrainingRecord
 from vinadv.planners.vin import value_iteration
 from vinadv.planners.vin.arrays import VINConfig, default_k
 from vinadv.planners.vin.model import VI_INITS, VIN, init_shift_kernels, make_input
+from vinadv.planners.vin.weights import load_vin
+from vinadv.planners.weights import weights_checksum
 
 CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
 _BITS = 1 << np.arange(8, dtype=np.uint16)
@@ -254,8 +257,6 @@ def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, Traini
         init_shift_kernels(model)
     record = options.get("record")
     if config.init:
-        from vinadv.planners.vin.weights import load_vin
-
         record = _start_from(model, load_vin(config.init, size=maps.size, k=vin_config.k), config.init, record)
     cpu = resolve_device(config.device).type == "cpu"
     options["record"] = {
@@ -273,8 +274,6 @@ def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, Trai
     gppn_config = GPPNConfig(k=config.k or default_k(maps.size), l_h=config.l_h, f=config.kernel)
     model = GPPN(gppn_config)
     if config.init:
-        from vinadv.planners.gppn import load_gppn
-
         options["record"] = _start_from(
             model, load_gppn(config.init, size=maps.size), config.init, options.get("record")
         )
@@ -284,8 +283,6 @@ def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, Trai
 def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: TrainingRecord | None) -> TrainingRecord:
     """Load `start`'s weights (read from `path`, `--init`) into `model`; the record gains their checksum (and
     their k where it differs: the iterations are not weights, so training may go on with more or fewer)."""
-    from vinadv.planners.weights import weights_checksum
-
     if replace(start.config, k=model.config.k) != model.config:
         raise InputError(
             f"init {path}: its {type(start).__name__} ({start.config}) is not the one to train ({model.config})", "init"
@@ -398,8 +395,6 @@ def train_model(
         order = pool[np.random.default_rng([config.seed, epoch]).permutation(len(pool))][: len(train_idx)]
         batches = range(done * config.batch_size, len(order), config.batch_size)
         if progress:
-            from tqdm import tqdm
-
             batches = tqdm(batches, desc=f"epoch {epoch + 1}/{config.epochs}", unit="batch", leave=False)
         loss_sum, cell_sum, correct_sum = state.partial if done else (0.0, 0, 0)
         epoch_start = time.time()

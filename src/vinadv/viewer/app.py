@@ -20,6 +20,7 @@ Human labels go to the `annotations` table; the automatic label in `map_pairs` i
 from __future__ import annotations
 
 import hashlib
+import ipaddress
 import math
 import re
 import secrets
@@ -581,8 +582,6 @@ def _fmt_dist(value) -> str:
 
 def is_loopback(host: str) -> bool:
     """Whether `host` (a name or an address) is a loopback address the server may bind without --allow-remote."""
-    import ipaddress
-
     if host.lower() == "localhost":
         return True
     try:

@@ -15,6 +15,7 @@ from collections import OrderedDict
 
 import numpy as np
 
+from vinadv.classify.images import render_path_images
 from vinadv.store.records import PairRecords
 
 #: the images of a pair, in page order
@@ -70,7 +71,7 @@ def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from vinadv.grid.draw import draw_map
+    from vinadv.grid.draw import draw_map  # noqa: PLC0415 (Matplotlib: only the map images need it)
 
     o, a = records.path_o[i], records.path_a[i]
     paths = []
@@ -98,8 +99,6 @@ def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
 
 def _path_image_png(records: PairRecords, i: int) -> bytes:
     from PIL import Image
-
-    from vinadv.classify.images import render_path_images
 
     image = render_path_images(records.path_o.take([i]), records.path_a.take([i]), records.size)[0]
     big = np.repeat(np.repeat(image, PATH_IMAGE_SCALE, axis=0), PATH_IMAGE_SCALE, axis=1)

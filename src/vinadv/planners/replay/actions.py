@@ -102,7 +102,7 @@ def _fc_action(p: _Weights, q: np.ndarray) -> int:
 
 def _torch_fc(weights: VINWeights, q: np.ndarray) -> np.ndarray:
     """PyTorch's `fc` on one value vector `(l_q,)`, as `VIN.forward` applies it: `(A,)` float32."""
-    import torch
+    import torch  # noqa: PLC0415 (PyTorch: the replay is there to plan without it)
 
     with torch.no_grad():
         return weights.module().fc(torch.from_numpy(np.ascontiguousarray(q, dtype=np.float32))[None])[0].numpy()
@@ -135,7 +135,7 @@ def _q_values(p: _Weights, x: np.ndarray) -> np.ndarray:
 
 
 def _torch_q_values(weights: VINWeights, x: np.ndarray) -> np.ndarray:
-    import torch
+    import torch  # noqa: PLC0415 (as above)
 
     with torch.no_grad():
         return weights.module().q_values(torch.from_numpy(np.ascontiguousarray(x))[None])[0].numpy()

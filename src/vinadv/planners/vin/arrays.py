@@ -86,7 +86,7 @@ class VINWeights:
         if self._module is None:
             import torch
 
-            from vinadv.planners.vin.model import VIN
+            from vinadv.planners.vin.model import VIN  # noqa: PLC0415 (PyTorch)
 
             vin = VIN(self.config)
             vin.load_state_dict({k: torch.from_numpy(np.array(v, dtype=np.float32)) for k, v in self.state.items()})

@@ -479,7 +479,7 @@ def plan_maps(
     chunk_size = max(1, int(chunk_size))
     chunks = range(0, len(obstacles), chunk_size)
     if progress:
-        from tqdm import tqdm
+        from tqdm import tqdm  # noqa: PLC0415 (tqdm: the engine plans without it)
 
         chunks = tqdm(chunks, unit="chunk", desc="planning")
     parts = [
