@@ -90,7 +90,7 @@ class Identification(Columns):
 
     def records(self, pair_index: np.ndarray | None = None):
         """The store's `PairRecords` of these pairs (`pair_index` defaults to `0..n-1`)."""
-        from vinadv.store.records import PairRecords  # noqa: PLC0415 (SQLAlchemy: identify without a store)
+        from vinadv.store.records import PairRecords  # noqa: PLC0415 (SQLAlchemy: identify needs no store)
 
         return PairRecords.from_pairs(
             self.pairs,
@@ -224,7 +224,7 @@ def identify_and_store(
     elsewhere (say `vinadv.cluster.ClusterIdentify`; `planner_ref` a `PlannerRef`, or None to keep the file's
     paths); it is called after the inputs are checked, so a bad file is refused before any worker starts. Without
     it, everything runs in this process."""
-    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: identify without a store)
+    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: identify needs no store)
 
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
     pairs = PairSet.load(pairs_path)

@@ -360,7 +360,7 @@ def _outcomes(n: int, map_index, labels, harm, regret_a) -> MapOutcomes:
 
 def save_robustness(result: RobustnessResult, db: str | None) -> int:
     """Store `result` as a row of the database's `robustness` table; return its id."""
-    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy)
+    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only to store the result)
 
     with Store.open(db) as store:
         return store.add_robustness(

@@ -303,7 +303,7 @@ class TorchImageClassifier(PairClassifier):
         cosine = self.schedule == "cosine"
         scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(steps, 1)) if cosine else None
         loss_fn = torch.nn.CrossEntropyLoss()
-        from tqdm import tqdm  # noqa: PLC0415 (tqdm)
+        from tqdm import tqdm  # noqa: PLC0415 (tqdm: only the PyTorch classifiers show progress)
 
         self.network_.train()
         for _ in tqdm(range(self.epochs), desc=f"training {self.kind}", disable=not self.verbose, unit="epoch"):
