@@ -75,7 +75,7 @@ def batch_of(records) -> PathPairBatch:
 
 def load_run_pairs(store, run_id: int, seed: int = 0, max_other: int = MAX_OTHER_PAIRS) -> RunPairs:
     """Read the run's FP/DP pairs and up to `max_other` other pairs (a seeded sample) with their rule labels."""
-    from vinadv.store import PairRecords
+    from vinadv.store import PairRecords  # noqa: PLC0415 (SQLAlchemy)
 
     index, labels = store.pair_labels(run_id)
     if not len(index):

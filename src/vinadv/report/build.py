@@ -60,7 +60,7 @@ def build_report(
     latest run. Table 4 and the classifier section
     show every run of `runs` (the main run first; default: just the main run), each with its stored evaluation.
     """
-    from vinadv.store import Store
+    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy)
 
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
@@ -116,7 +116,7 @@ def robustness_report(out_dir, db: str | None = None, results: list[dict] | None
         raise InputError(f"out_dir {out}: exists and is not a directory")
     rows, url = [], None
     if db is not None:
-        from vinadv.store import Store
+        from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only with a database)
 
         with Store.open(db, readonly=True) as store:
             rows, url = store.read_robustness(), store.url

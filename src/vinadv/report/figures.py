@@ -289,7 +289,7 @@ def accuracy_vs_size(points: dict, stem: Path) -> list[str]:
 def roc_pr_curves(curves: dict, stem: Path) -> list[str]:
     """Fig. 9: PR and ROC curves for imbalanced and balanced training, one curve per classifier, AP/AUC in the
     legend. `curves`: {training: {classifier: (curve points dict, roc_auc, ap)}}."""
-    from sklearn.metrics import PrecisionRecallDisplay, RocCurveDisplay
+    from sklearn.metrics import PrecisionRecallDisplay, RocCurveDisplay  # noqa: PLC0415 (scikit-learn: only Fig. 9 draws with it)
 
     fig, axes = plt.subplots(2, 2, figsize=(10, 9), layout="constrained")  # titles clear of the x labels above
     axes = axes.ravel()

@@ -22,7 +22,7 @@ class CategoriesData:
 
 
 def gather(ctx: Context) -> CategoriesData:
-    from vinadv.report import figures
+    from vinadv.report import figures  # noqa: PLC0415 (Matplotlib: drawn when gathered)
 
     records, chosen, pairs = chosen_examples(ctx)
     position = {p.pair_index: i for i, p in enumerate(pairs)}

@@ -78,7 +78,7 @@ def gather(ctx: Context) -> ClassifiersData:
 
 
 def _run_evaluation(ctx: Context, rid: int, stored: list[dict]) -> RunEvaluation:
-    from vinadv.report import figures
+    from vinadv.report import figures  # noqa: PLC0415 (Matplotlib: drawn when gathered)
 
     latest = {(r["classifier"], r["setting"], r["training"], r["train_fraction"]): r for r in stored}
     rows = sorted(latest.values(), key=lambda r: r["id"])

@@ -47,7 +47,7 @@ class DistributionData:
 
 
 def gather(ctx: Context) -> DistributionData:
-    from vinadv.report import figures
+    from vinadv.report import figures  # noqa: PLC0415 (Matplotlib: drawn when gathered)
 
     rows = []
     for rid in ctx.compare:

@@ -69,7 +69,7 @@ def chosen_examples(ctx: Context):
 
 
 def gather(ctx: Context) -> ExamplesData:
-    from vinadv.report import figures
+    from vinadv.report import figures  # noqa: PLC0415 (Matplotlib: drawn when gathered)
 
     records, chosen, pairs = chosen_examples(ctx)
     position = {p.pair_index: i for i, p in enumerate(pairs)}

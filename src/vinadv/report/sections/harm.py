@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vinadv.classify.harm import DEFAULT_TOL, harm_summary
+from vinadv.grid.shortest_paths import expert_paths
 from vinadv.report.data import ALL_LABELS, Context, Figure, Table
 from vinadv.vocabulary import HARMS, SUCCESS_LABELS
 
@@ -112,8 +114,6 @@ def change_bins(values: np.ndarray, tol: float) -> np.ndarray:
 
 
 def gather(ctx: Context) -> HarmData:
-    from vinadv.classify.harm import DEFAULT_TOL, harm_summary  # numba: loaded when a report is written
-
     config = ctx.store.run_info(ctx.run_id).get("config") or {}
     tol, rtol = float(config.get("harm_tolerance", DEFAULT_TOL)), float(config.get("harm_rtol", 0.0))
     stored = ctx.store.harm_counts(ctx.run_id)
@@ -161,7 +161,7 @@ def gather(ctx: Context) -> HarmData:
 
 def _harm_regrets(ctx: Context, data: HarmData) -> None:
     """The regret change summary and histogram of the FP and DP pairs, from one GROUP BY (`Store.regret_changes`)."""
-    from vinadv.report import figures
+    from vinadv.report import figures  # noqa: PLC0415 (Matplotlib: drawn when gathered)
 
     groups = ctx.store.regret_changes(ctx.run_id, REGRET_LABELS)
     for label in REGRET_LABELS:
@@ -233,8 +233,7 @@ def _harm_regrets(ctx: Context, data: HarmData) -> None:
 def _harm_examples(ctx: Context, data: HarmData, corner_cutting: bool) -> None:
     """Up to `HARM_EXAMPLES_SHOWN` pairs of each `HARM_EXAMPLES` kind (the first by pair index), their expert
     paths recomputed on both maps (`grid.shortest_paths.expert_paths`: the few pairs shown, nothing stored)."""
-    from vinadv.grid.shortest_paths import expert_paths
-    from vinadv.report import figures
+    from vinadv.report import figures  # noqa: PLC0415 (Matplotlib: drawn when gathered)
 
     for label, harm in HARM_EXAMPLES:
         kind = f"{harm} {label}"

@@ -60,7 +60,7 @@ class RobustnessData:
 def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
     """The robustness section of `rows`, robustness benchmarks as `Store.read_robustness` returns them (`id` None for
     one not stored): the comparison table, its CSV (every strategy and the worst case at every k) and the curves."""
-    from vinadv.report import figures
+    from vinadv.report import figures  # noqa: PLC0415 (Matplotlib: drawn when gathered)
 
     benchmarks = []
     for row in rows:
