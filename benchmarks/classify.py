@@ -18,7 +18,10 @@ import sys
 import time
 
 import numpy as np
+import scipy.sparse
+from sklearn.svm import SVC
 
+from vinadv.attacks.pairs import PairSet
 from vinadv.classify import (
     HybridClassifier,
     PathPairBatch,
@@ -27,6 +30,7 @@ from vinadv.classify import (
     make_fp_classifier,
     render_batch,
 )
+from vinadv.testing.classify import synthetic_pairs
 from vinadv.vocabulary import FORK_OR_DETOUR
 
 PAPER_PAIRS_PER_S = 100 / 0.22
@@ -75,13 +79,9 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     if args.pairs:
-        from vinadv.attacks.pairs import PairSet
-
         batch = PathPairBatch.from_pairs(PairSet.load(args.pairs))
         source = f"real pairs from {args.pairs}"
     else:
-        from vinadv.testing.classify import synthetic_pairs
-
         base = synthetic_pairs(min(args.n, 5000), 28, seed=0, mix=True)
         batch = PathPairBatch.concat([base] * -(-args.n // len(base))).take(np.arange(args.n))
         source = (
@@ -140,9 +140,6 @@ def main(argv=None) -> int:
     results["predict_pairs_per_s"] = predict
 
     # scikit-learn's own SVC.predict on the same model, side by side with our decision function
-    import scipy.sparse
-    from sklearn.svm import SVC
-
     svc = SVC(kernel="rbf", gamma="scale").fit(
         scipy.sparse.csr_matrix(render_batch(train_batch).reshape(len(train_batch), -1) / 255.0), train_y
     )

@@ -21,6 +21,7 @@ from vinadv.grid import generate_maps
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import action_maps, plan_maps
+from vinadv.planners.vin.weights import load_vin
 from vinadv.testing.planners import planning_vin, random_vin
 from vinadv.vocabulary import TERMINATIONS
 
@@ -28,8 +29,6 @@ from vinadv.vocabulary import TERMINATIONS
 def weight_sets(size: int, weights: str | None) -> dict:
     sets = {"planning_vin(seed=0)": planning_vin(size, seed=0), "default_init(seed=0)": random_vin(size, seed=0)}
     try:
-        from vinadv.planners.vin.weights import load_vin
-
         sets["shipped" if weights is None else weights] = load_vin(weights, size=size)
     except Exception as exc:  # no shipped weights yet: say so and go on
         print(f"(no trained weights: {exc})")

@@ -30,6 +30,7 @@ from vinadv.planners.batching import N_THREADS
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import action_maps, plan_batch
+from vinadv.planners.vin.weights import load_vin
 from vinadv.testing.planners import planning_vin
 
 
@@ -41,8 +42,6 @@ def cpu_clock_hz() -> float:
 
 def load_model(size: int, weights: str | None):
     try:
-        from vinadv.planners.vin.weights import load_vin
-
         return load_vin(weights, size=size), weights or "shipped"
     except Exception:
         if weights is not None:

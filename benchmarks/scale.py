@@ -23,27 +23,28 @@ import tempfile
 import time
 from pathlib import Path
 
+from distributed import Client
+
+from vinadv.cluster import ClusterShards, start_local_cluster
+from vinadv.cluster.worker import _plugin_class
+from vinadv.pipeline import RunConfig, run_pipeline
+from vinadv.planners.vin.weights import default_weights_path, save_vin
+from vinadv.testing.planners import planning_vin
+
 TARGET_PAIRS = 10_000_000
 
 
 def _weights(args, tmp: Path) -> str:
-    from vinadv.planners.vin.weights import default_weights_path
-
     if args.weights:
         return args.weights
     if default_weights_path(args.size).exists():
         return str(default_weights_path(args.size))
-    from vinadv.planners.vin.weights import save_vin
-    from vinadv.testing.planners import planning_vin
-
     path = tmp / f"vin{args.size}.pt"
     save_vin(planning_vin(args.size, seed=0, noise=0.1), path)
     return str(path)
 
 
 def _timed_run(config, db: str, shard_results=None) -> dict:
-    from vinadv.pipeline import run_pipeline
-
     t0 = time.perf_counter()
     summary = run_pipeline(config, db=db, progress=False, shard_results=shard_results)
     wall = time.perf_counter() - t0
@@ -66,12 +67,6 @@ def main() -> None:
     parser.add_argument("--weights")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-
-    from distributed import Client
-
-    from vinadv.cluster import ClusterShards, start_local_cluster
-    from vinadv.cluster.worker import _plugin_class
-    from vinadv.pipeline import RunConfig
 
     load_before = os.getloadavg()
     out = {

@@ -24,6 +24,7 @@ import sqlalchemy as sa
 from vinadv.store import Store
 from vinadv.store.schema import map_pairs
 from vinadv.testing.store import random_records
+from vinadv.viewer.app import create_app
 
 CHUNK = 50_000
 
@@ -69,8 +70,6 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-
-    from vinadv.viewer.app import create_app
 
     run_id = build(Path(args.db), args.n, args.size)
     store = Store.open(f"sqlite:///{args.db}", create=False)
