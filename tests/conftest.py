@@ -18,6 +18,8 @@ import sqlalchemy as sa
 
 from tests.needs import skip_or_fail
 from vinadv.planners.batching import set_torch_threads
+from vinadv.planners.vin.weights import save_vin
+from vinadv.testing.planners import planning_vin
 
 # One torch thread in the test process: the tests' maps are small, and on a shared 2-core machine a 2-thread op on
 # a small map waits for the busy core (the oracles' step-by-step planning ran 50x slower). Numba's parallel kernels
@@ -142,9 +144,6 @@ def db_url(request):
 def planning_weights(tmp_path_factory):
     """`planning_weights(size)`: the path (str) of a weights file of `planning_vin(size, seed=2, noise=0.1)`, a VIN
     that plans well on small maps; written once per size and session."""
-    from vinadv.planners.vin.weights import save_vin
-    from vinadv.testing.planners import planning_vin
-
     made: dict[int, str] = {}
 
     def path_for(size: int) -> str:

@@ -5,26 +5,34 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import sqlite3
 import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from vinadv.attacks.strategies import make_attack
+from vinadv.classify import SVMImageClassifier, label_batch
+from vinadv.grid import generate_maps
+from vinadv.planners.pathset import PathSet
+from vinadv.planners.vin.engine import plan_maps
+from vinadv.planners.vin.weights import save_vin
+from vinadv.store import Store
+from vinadv.testing.classify import synthetic_pairs
+from vinadv.testing.planners import planning_vin
+from vinadv.testing.store import random_records
+
 SIZE = 10
 
 
 @functools.cache
 def _maps(n_starts: int):
-    from vinadv.grid import generate_maps
-
     return generate_maps(12, SIZE, seed=3, n_starts=n_starts)
 
 
 @functools.cache
 def _model():
-    from vinadv.testing.planners import planning_vin
-
     return planning_vin(SIZE, seed=1, noise=0.1)
 
 
@@ -34,9 +42,6 @@ def write_maps(path: Path) -> Path:
 
 
 def write_paths(path: Path) -> Path:
-    from vinadv.planners.pathset import PathSet
-    from vinadv.planners.vin.engine import plan_maps
-
     maps = _maps(3)
     result = plan_maps(maps.obstacles, maps.goals, maps.starts, _model(), maps.corner_cutting)
     PathSet.from_result(result, maps.n_starts, maps.size, maps.corner_cutting, model="test").save(path)
@@ -44,8 +49,6 @@ def write_paths(path: Path) -> Path:
 
 
 def write_pairs(path: Path) -> Path:
-    from vinadv.attacks.strategies import make_attack
-
     maps = _maps(1)
     result = make_attack("random", per_map=2, seed=0).attack(
         maps.obstacles, maps.starts[:, 0], maps.goals, _model(), maps.corner_cutting
@@ -55,16 +58,11 @@ def write_pairs(path: Path) -> Path:
 
 
 def write_weights(path: Path) -> Path:
-    from vinadv.planners.vin.weights import save_vin
-
     save_vin(_model(), path)
     return path
 
 
 def write_classifier(path: Path) -> Path:
-    from vinadv.classify import SVMImageClassifier, label_batch
-    from vinadv.testing.classify import synthetic_pairs
-
     batch = synthetic_pairs(60, size=8, seed=2, mix=True)
     labels = label_batch(batch).labels
     keep = np.flatnonzero(np.isin(labels, ("DP", "FP")))
@@ -73,11 +71,6 @@ def write_classifier(path: Path) -> Path:
 
 
 def write_database(path: Path) -> Path:
-    import sqlite3
-
-    from vinadv.store import Store
-    from vinadv.testing.store import random_records
-
     with Store.open(str(path)) as store:
         store.write_pairs(store.create_run("fuzz"), random_records(6, size=5, seed=1))
     conn = sqlite3.connect(path)  # one self-contained file (no -wal) so byte mutations reach every page

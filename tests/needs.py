@@ -41,7 +41,7 @@ def chromium() -> str:
             "`make test` does; or set VINADV_CHROMIUM)"
         )
     try:
-        import playwright.sync_api  # noqa: F401
+        import playwright.sync_api  # noqa: F401, PLC0415 (whether it is installed)
     except ImportError:
         skip_or_fail("Playwright's Python package is missing (pip install -e '.[dev]')")
     return found

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,7 @@ import pytest
 from tests.fault_files import tmpfs
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.grid import generate_maps, generator
 from vinadv.pipeline import RunConfig, run_pipeline
 from vinadv.store import Store
 
@@ -233,10 +235,6 @@ def test_maps_generate_refuses_what_cannot_fit_at_once(args, limit, tmp_path, ca
 
 
 def test_generator_chunks_shrink_with_the_size_and_keep_memory_bounded():
-    import tracemalloc
-
-    from vinadv.grid import generator
-
     assert generator.chunk_maps(28) == generator.CHUNK  # the 28x28 stream is unchanged
     assert generator.chunk_maps(100) < 20
     tracemalloc.start()
@@ -251,8 +249,6 @@ def test_generator_chunks_shrink_with_the_size_and_keep_memory_bounded():
 
 
 def test_generator_library_errors_name_parameters():
-    from vinadv.grid import generate_maps
-
     with pytest.raises(InputError, match="^size 100000") as caught:  # the command line shows --size 100000
         generate_maps(1, 100000)
     assert "size" in caught.value.parameters

@@ -24,7 +24,13 @@ from tests.fault_files import (
     write_paths,
     write_weights,
 )
+from vinadv.attacks.pairs import PairSet
+from vinadv.classify import load_model
 from vinadv.errors import InputError
+from vinadv.grid.mapset import MapSet
+from vinadv.planners.pathset import PathSet
+from vinadv.planners.vin.weights import read_weights
+from vinadv.store import Store
 
 # torch warns about the odd pickle protocols of damaged files; the test is about what vinadv raises
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
@@ -38,26 +44,18 @@ FUZZ = settings(
 
 
 def _load_maps(path):
-    from vinadv.grid.mapset import MapSet
-
     return MapSet.load(path)
 
 
 def _load_paths(path):
-    from vinadv.planners.pathset import PathSet
-
     return PathSet.load(path)
 
 
 def _load_pairs(path):
-    from vinadv.attacks.pairs import PairSet
-
     return PairSet.load(path)
 
 
 def _load_weights(path):
-    from vinadv.planners.vin.weights import read_weights
-    from vinadv.testing.planners import planning_vin  # noqa: F401 (torch is loaded anyway)
 
     model, _ = read_weights(path, size=10)
     with torch.no_grad():  # the loaded model must run: a shape that only fails in conv2d is a loader bug
@@ -66,14 +64,10 @@ def _load_weights(path):
 
 
 def _load_classifier(path):
-    from vinadv.classify import load_model
-
     return load_model(path)
 
 
 def _load_database(path):
-    from vinadv.store import Store
-
     with Store.open(str(path), create=False) as store:
         for run in store.list_runs():
             store.read_pairs(run["id"])
@@ -254,8 +248,6 @@ def test_weights_mutations_give_input_errors(valid, tmp_path):
 
 
 def test_random_bytes_as_weights_say_what_the_file_is_not(tmp_path):
-    from vinadv.planners.vin.weights import read_weights
-
     path = tmp_path / "noise.pt"
     path.write_bytes(np.random.default_rng(0).bytes(4096))
     with pytest.raises(InputError) as err:
@@ -270,8 +262,6 @@ def test_random_bytes_as_weights_say_what_the_file_is_not(tmp_path):
 
 
 def test_plain_state_dict_with_wrong_input_channels_names_key_and_shapes(valid, tmp_path):
-    from vinadv.planners.vin.weights import read_weights
-
     state = dict(torch.load(valid["weights"], weights_only=True)["state_dict"])
     state["h.weight"] = torch.zeros(150, 3, 3, 3)
     path = tmp_path / "port.pt"
@@ -295,8 +285,6 @@ def test_database_that_is_a_vinadv_file_with_mangled_rows(valid, tmp_path, mangl
     """Text columns changed behind vinadv's back (a map of the wrong length, a path that is no cells): reading the
     run refuses it every time, in one line naming the column and the row, and never a wrong read; the other rows
     still read right, and a read-only open leaves the file byte-identical."""
-    from vinadv.store import Store
-
     path = tmp_path / "mangled.db"
     path.write_bytes(valid["database"].read_bytes())
     conn = sqlite3.connect(path)

@@ -12,9 +12,15 @@ import pytest
 import sqlalchemy as sa
 
 from tests.classify.oracle import rule_oracle
+from tests.classify.test_harm import optimal_path, path_cost
 from tests.cli_files import command_line, generate_and_attack
+from vinadv.attacks.pairs import PairSet
+from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
-from vinadv.pipeline import RunConfig, run_pipeline
+from vinadv.grid import generate_maps
+from vinadv.identify import objective_strength
+from vinadv.pipeline import RunConfig, compute_shard, run_pipeline
+from vinadv.planners.vin.weights import load_vin
 from vinadv.store import Store
 
 SIZE = 12
@@ -64,8 +70,6 @@ def test_stored_labels_agree_with_an_independent_recomputation(weights, sqlite_u
 
 
 def test_stored_harm_agrees_with_an_independent_recomputation(weights, sqlite_url):
-    from tests.classify.test_harm import optimal_path, path_cost
-
     summary = run_pipeline(config(weights, attack="key-points", per_map=2), db=sqlite_url, progress=False).to_dict()
     engine = sa.create_engine(sqlite_url)
     with engine.connect() as conn:
@@ -109,8 +113,6 @@ def test_stored_harm_agrees_with_an_independent_recomputation(weights, sqlite_ur
 
 
 def test_result_does_not_depend_on_the_order_shards_finish(weights, sqlite_url, tmp_path):
-    from vinadv.pipeline import compute_shard
-
     def reversed_shards(config, shards, model, classifier, label_source):
         for shard in reversed(list(shards)):
             yield compute_shard(config, shard, model, classifier, label_source)
@@ -218,11 +220,6 @@ def test_attack_and_identify_commands(weights, tmp_path, sqlite_url, capsys):
 
 
 def test_run_of_several_obstacles_stores_every_added_cell_and_resume_compares_it(weights, sqlite_url, tmp_path, capsys):
-    from vinadv.attacks.strategies import make_attack
-    from vinadv.grid import generate_maps
-    from vinadv.identify import objective_strength
-    from vinadv.planners.vin.weights import load_vin
-
     summary = run_pipeline(
         config(weights, n=30, attack="key-points", obstacles=2), db=sqlite_url, name="k2", progress=False
     )
@@ -267,8 +264,6 @@ def test_a_run_stored_before_several_obstacles_resumes_as_one_obstacle(weights, 
 
 
 def test_attack_and_identify_keep_every_added_obstacle(weights, tmp_path, sqlite_url, capsys):
-    from vinadv.attacks.pairs import PairSet
-
     maps, pairs = generate_and_attack(
         tmp_path, weights, n=20, size=SIZE, strategy="near-path", options=("--obstacles", "3", "--quiet")
     )

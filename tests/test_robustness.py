@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import sqlite3
 
 import numpy as np
 import pytest
@@ -249,8 +250,6 @@ def test_cli_bad_input_exits_2_with_one_line(weights, capsys, args, message):
 
 
 def test_cli_refuses_a_foreign_database_or_a_file_as_report_folder_before_the_work(weights, tmp_path, capsys):
-    import sqlite3
-
     foreign = tmp_path / "other.db"
     with sqlite3.connect(foreign) as conn:
         conn.execute("CREATE TABLE runs (who TEXT)")

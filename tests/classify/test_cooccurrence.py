@@ -1,6 +1,8 @@
 """Row/column co-occurrence features, against loops written from their definition; the tuned classifiers on
 them learn the FP/DP rule from labelled pairs."""
 
+import json
+
 import numpy as np
 import pytest
 from sklearn.metrics import balanced_accuracy_score, roc_auc_score
@@ -12,6 +14,7 @@ from vinadv.classify.cooccurrence import (
     feature_shape,
     image_features,
     offset_cooccurrence,
+    offset_matrix,
     torch_features,
 )
 from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
@@ -90,8 +93,6 @@ def test_transpose_swaps_rows_and_columns():
 @pytest.mark.parametrize("features", FEATURES)
 def test_image_features_are_presence_and_match_torch(features):
     torch = pytest.importorskip("torch")
-    from vinadv.classify.cooccurrence import offset_matrix
-
     images = _random_images(5, 6, seed=2)
     flat = image_features(images, features)
     assert flat.shape == (5, int(np.prod(feature_shape(features, 6)))) and set(np.unique(flat)) <= {0.0, 1.0}
@@ -173,8 +174,6 @@ def test_feature_models_round_trip(rule_pairs, make, tmp_path):
 
 def test_model_files_from_before_features_load_as_pixels(rule_pairs, tmp_path):
     """Files written before the `features` parameter existed have no such entry: they are pixel models."""
-    import json
-
     X, y, Xt, _ = rule_pairs
     X, y = X.take(np.arange(0, len(X), 8)), y[::8]
     model = SVMImageClassifier().fit(X, y)

@@ -15,7 +15,9 @@ from hypothesis import strategies as st
 from tests.classify.oracle import rule_oracle
 from vinadv.classify.harm import HARMS, pair_harm
 from vinadv.errors import InputError
+from vinadv.grid.generator import generate_maps
 from vinadv.grid.paths import PackedPaths
+from vinadv.grid.shortest_paths import expert_paths
 
 MOVES = [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)]
 MODELS = ("octile", "moore", "news")
@@ -304,9 +306,6 @@ def test_tolerances():
 
 
 def test_shared_original_and_given_expert_data_give_the_same_result():
-    from vinadv.grid.generator import generate_maps
-    from vinadv.grid.shortest_paths import expert_paths
-
     maps = generate_maps(40, 16, seed=5, n_starts=1)
     # four attacks per map, on cells of the expert path and off it, maps repeated consecutively
     map_index = np.repeat(np.arange(len(maps.obstacles)), 4)

@@ -16,11 +16,19 @@ import pytest
 
 pytest.importorskip("distributed")
 
+from distributed import Client  # noqa: E402
+
 from tests.cli_files import command_line, generate_and_attack  # noqa: E402
 from vinadv.attacks.pairs import PairSet  # noqa: E402
 from vinadv.cli import main  # noqa: E402
 from vinadv.cluster import ClusterShards, start_local_cluster  # noqa: E402
+from vinadv.cluster.worker import (
+    _plugin_class,  # noqa: E402
+    worker_planner,  # noqa: E402
+)
+from vinadv.errors import InputError  # noqa: E402
 from vinadv.pipeline import RunConfig, compute_shard, run_pipeline  # noqa: E402
+from vinadv.planners.registry import PlannerRef  # noqa: E402
 from vinadv.planners.vin.weights import load_vin, save_vin  # noqa: E402
 from vinadv.store import Store  # noqa: E402
 from vinadv.testing.planners import planning_vin  # noqa: E402
@@ -35,10 +43,6 @@ def weights(planning_weights):
 
 @pytest.fixture(scope="module")
 def cluster():
-    from distributed import Client
-
-    from vinadv.cluster.worker import _plugin_class
-
     with start_local_cluster(2) as local, Client(local) as client:
         client.register_plugin(_plugin_class()())
         yield local, client
@@ -74,14 +78,14 @@ def test_workers_are_single_threaded(cluster):
     _, client = cluster
 
     def threads():
-        import torch
+        import torch  # noqa: PLC0415 (the worker's: what runs there imports there)
 
-        from vinadv.cluster.worker import single_threaded
+        from vinadv.cluster.worker import single_threaded  # noqa: PLC0415 (as above)
 
         single_threaded()
-        import numba
+        import numba  # noqa: PLC0415 (as above, after single_threaded())
 
-        from vinadv.planners import batching
+        from vinadv.planners import batching  # noqa: PLC0415 (as above)
 
         return (
             torch.get_num_threads(),
@@ -94,10 +98,6 @@ def test_workers_are_single_threaded(cluster):
 
 
 def test_a_worker_with_other_weights_refuses_them(weights):
-    from vinadv.cluster.worker import worker_planner
-    from vinadv.errors import InputError
-    from vinadv.planners.registry import PlannerRef
-
     with pytest.raises(InputError, match="workers need the same planner files"):
         worker_planner(PlannerRef("vin", weights, SIZE, True, "0" * 64))
 

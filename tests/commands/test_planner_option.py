@@ -10,14 +10,18 @@ from tests.cli_files import command_line
 from tests.interop.test_protocols import brute_gppn_figures
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
+from vinadv.evaluation import evaluate_planner_quality
 from vinadv.grid import generate_maps
+from vinadv.grid.mapset import MapSet
 from vinadv.identify import replan
 from vinadv.pipeline import PLANNER_SPEC
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.vin.weights import save_vin
 from vinadv.planners.weights import weights_checksum
+from vinadv.report import write_report
 from vinadv.store import Store
 from vinadv.testing.planners import planning_vin
+from vinadv.viewer.app import create_app
 
 SIZE = 10
 
@@ -101,8 +105,6 @@ def test_eval_gives_both_conventions(maps_file, tmp_path, capsys):
     figures = json.loads(capsys.readouterr().out)
     assert figures["planner"]["name"] == "optimal"
     assert figures["vinadv"]["success_rate"] == 1.0 and figures["vinadv"]["optimal_rate"] == 1.0
-    from vinadv.grid.mapset import MapSet
-
     maps = MapSet.load(maps_file)
     actions = np.argmax(OptimalPlanner(SIZE).logits(maps.obstacles, maps.goals), axis=1)
     suc, opt = brute_gppn_figures(maps, actions)
@@ -133,10 +135,6 @@ def test_bad_planner_exits_2(maps_file, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_report_and_viewer_show_the_runs_planner(tmp_path):
-    from vinadv.evaluation import evaluate_planner_quality
-    from vinadv.report import write_report
-    from vinadv.viewer.app import create_app
-
     db = str(tmp_path / "r.db")
     run = command_line("run", n=20, size=SIZE, shard_size=10, db=db, planner="optimal", attack="key-points")
     assert main([*run, "--quiet"]) == 0

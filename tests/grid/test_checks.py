@@ -16,6 +16,7 @@ from tests.fault_files import (
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.grid import generate_maps
 from vinadv.grid.checks import check_paths
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.paths import PackedPaths
@@ -184,8 +185,6 @@ def test_maps_without_a_border_wall_are_legitimate(files, tmp_path):
 
 def test_maps_without_corner_cutting_refuse_a_squeezing_diagonal(tmp_path):
     """An expert path of a no-corner-cutting file may not pass diagonally between an obstacle and a cell."""
-    from vinadv.grid import generate_maps
-
     maps = generate_maps(20, 10, seed=1, n_starts=2, corner_cutting=True)
     maps.save(tmp_path / "cc.npz")
     a = read_npz(tmp_path / "cc.npz")

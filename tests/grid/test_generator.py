@@ -3,6 +3,7 @@ import pytest
 
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps, obstacle_fraction, shortest_distances
+from vinadv.grid.generator import _paint_shapes
 
 
 @pytest.fixture(scope="module")
@@ -79,8 +80,6 @@ def _shapes_by_testing_every_cell(attempts, is_disc, top, left, height, width, r
 
 @pytest.mark.parametrize("size, max_obs, max_size", [(9, 12, 4), (28, 50, 2), (16, 30, 7)])
 def test_painted_shapes_equal_testing_every_cell(size, max_obs, max_size):
-    from vinadv.grid.generator import _paint_shapes
-
     rng = np.random.default_rng(size)
     n = 300
     draws = dict(

@@ -10,6 +10,8 @@ from tests.interop.conftest import borderless
 from vinadv.attacks.strategies import make_attack
 from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps, shortest_distances
+from vinadv.grid.mapset import MapSet
+from vinadv.grid.shortest_paths import expert_paths
 from vinadv.planners.evaluation import evaluate_vin
 from vinadv.planners.reference import plan_reference
 from vinadv.planners.vin.engine import plan_maps
@@ -63,9 +65,6 @@ def test_engine_matches_the_reference_planner_without_a_border(edge_maps, corner
 
 
 def test_attacks_and_eval_without_a_border(edge_maps):
-    from vinadv.grid.mapset import MapSet
-    from vinadv.grid.shortest_paths import expert_paths
-
     obstacles, goals, starts = edge_maps
     model = planning_vin(10, seed=5)
     for name in ("random", "near-path", "key-points"):

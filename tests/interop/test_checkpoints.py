@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import os
 
@@ -163,8 +164,6 @@ def test_gppn_vin_weights_are_refused_with_what_is_missing(tmp_path, f, capsys):
 
 def test_numpy_1_names_in_old_checkpoints(tmp_path):
     # GPPN's checkpoints were pickled under numpy 1, whose reconstructors live in numpy.core.multiarray
-    import io
-
     buf = io.BytesIO()
     torch.save({"model": {"w": np.ones((2, 3))}, "acc": np.float64(0.5)}, buf, _use_new_zipfile_serialization=False)
     data = buf.getvalue()

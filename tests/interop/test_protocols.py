@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import torch
@@ -12,6 +14,7 @@ from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps
 from vinadv.grid.shortest_paths import expert_paths
 from vinadv.interop.protocols import evaluate_protocol
+from vinadv.planners.evaluation import evaluate_vin
 from vinadv.planners.vin import make_input
 from vinadv.testing.planners import planning_vin
 
@@ -121,8 +124,6 @@ def test_gppn_protocol_matches_gppns_definitions(model, maps):
 
 
 def test_vinadv_protocol_is_evaluate_vin(model, maps):
-    from vinadv.planners.evaluation import evaluate_vin
-
     got = evaluate_protocol(model, maps, "vinadv")
     assert got.pop("protocol") == "vinadv" and got == evaluate_vin(model, maps)
 
@@ -135,8 +136,6 @@ def test_bad_protocol_options(model, maps):
 
 
 def test_cli_vin_eval_protocol(tmp_path, capsys):
-    import json
-
     maps = generate_maps(5, 28, seed=3, n_starts=2)
     maps.save(tmp_path / "m.npz")
     assert main(["vin", "eval", "--data", str(tmp_path / "m.npz"), "--protocol", "gppn", "--json"]) == 0

@@ -1,11 +1,14 @@
 """`over_maps`: every map exactly once, in pieces, never more threads at once than asked for."""
 
+import subprocess
+import sys
 import threading
 import time
 
 import numpy as np
 import pytest
 
+from vinadv.grid import generate_maps
 from vinadv.planners import batching
 
 
@@ -45,11 +48,6 @@ def test_torch_keeps_its_threads_after_numba_parallel_kernels(tmp_path):
     """Numba's parallel kernels (OpenMP layer) can reset the calling thread's OpenMP thread count to Numba's own,
     which torch then uses; with `set_torch_threads` both agree. In a fresh process, whose defaults (2 threads each on
     a 2-core machine) the bug needs; torch used, then a maps file read and its maps searched, showed it."""
-    import subprocess
-    import sys
-
-    from vinadv.grid import generate_maps
-
     path = tmp_path / "maps.npz"
     generate_maps(3000, 28, seed=1, n_starts=1).save(path)
     code = (

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 import torch
 
+from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.interop.checkpoints import GPPN_KEYS
@@ -147,8 +148,6 @@ def test_widening_refuses_a_narrower_width_and_bad_noise(tmp_path, capsys):
     for noise in (-0.1, float("nan")):
         with pytest.raises(InputError, match="noise must be >= 0"):
             widen_gppn(model, 6, noise=noise)
-    from vinadv.cli import main
-
     save_gppn(model, tmp_path / "g.pt")
     assert main(["gppn", "widen", str(tmp_path / "g.pt"), "--l-h", "2", "--out", str(tmp_path / "w.pt")]) == 2
     assert "--l-h must be at least" in capsys.readouterr().err

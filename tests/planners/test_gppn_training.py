@@ -6,11 +6,20 @@ import numpy as np
 import pytest
 import torch
 
+import vinadv.planners.training as training
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
-from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn
-from vinadv.planners.training import TrainConfig, evaluate_loss, optimal_action_bits, split_indices, train_gppn
+from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn, save_gppn
+from vinadv.planners.training import (
+    TrainConfig,
+    evaluate_loss,
+    optimal_action_bits,
+    split_indices,
+    train_gppn,
+    train_vin,
+)
+from vinadv.planners.weights import weights_checksum
 
 pytestmark = pytest.mark.slow
 
@@ -33,8 +42,6 @@ def test_a_short_training_lowers_the_loss_and_resumes(tmp_path):
     for k, v in model.state_dict().items():
         torch.testing.assert_close(again.state_dict()[k], v)
     # a VIN training may not resume a GPPN checkpoint
-    from vinadv.planners.training import train_vin
-
     with pytest.raises(InputError, match="planner='gppn', now 'vin'"):
         train_vin(
             maps, TrainConfig(**{**config.to_dict(), "planner": "vin"}), checkpoint=ck, resume=True, progress=False
@@ -45,9 +52,6 @@ def test_a_short_training_lowers_the_loss_and_resumes(tmp_path):
 
 
 def test_init_may_change_the_iterations_but_not_the_weights_shapes(tmp_path):
-    from vinadv.planners.gppn import save_gppn
-    from vinadv.planners.weights import weights_checksum
-
     torch.set_num_threads(1)
     maps = generate_maps(16, 10, seed=3, n_starts=1)
     start = GPPN(GPPNConfig(k=6, l_h=8, f=3))
@@ -130,8 +134,6 @@ def test_cli_train_eval_plan(tmp_path, capsys):
 
 
 def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatch):
-    import vinadv.planners.training as training
-
     torch.set_num_threads(1)
     maps = generate_maps(40, 8, seed=6, n_starts=1)
     config = TrainConfig(

@@ -14,8 +14,10 @@ from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, check_logits
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.reference import rollout
+from vinadv.planners.registry import load_custom
 from vinadv.planners.result import step_limits
 from vinadv.planners.rollout import multi_start_limits, rollout_logits
+from vinadv.planners.symmetric import DihedralAverage
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import plan_maps as engine_plan_maps
 from vinadv.testing.planners import planning_vin
@@ -124,9 +126,6 @@ def _planners(size):
     with torch.no_grad():  # a wider logit spread than the default initialisation: longer, varied paths
         gppn.policy.weight.mul_(30)
         wide.policy.weight.mul_(30)
-    from vinadv.planners.registry import load_custom
-    from vinadv.planners.symmetric import DihedralAverage
-
     return [
         VINPlanner(planning_vin(size, seed=2), size=size),
         OptimalPlanner(size),

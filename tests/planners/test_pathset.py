@@ -12,6 +12,7 @@ from vinadv.grid import generate_maps
 from vinadv.npzfile import save_npz
 from vinadv.planners.pathset import PATHS_FORMAT, PathSet
 from vinadv.planners.vin.engine import plan_maps
+from vinadv.planners.vin.weights import save_vin
 from vinadv.testing.planners import planning_vin
 
 
@@ -104,8 +105,6 @@ def test_wrong_format_and_garbage(planned, tmp_path):
 
 
 def test_cli_plan(planned, tmp_path, capsys):
-    from vinadv.planners.vin.weights import save_vin
-
     maps, ps = planned
     maps.save(tmp_path / "maps.npz")
     save_vin(planning_vin(16, seed=4), tmp_path / "w.pt")

@@ -1,6 +1,9 @@
 """The planner registry, bring-your-own specs, the shipped example, and the CLI (`vinadv planners`, `plan`)."""
 
+import importlib.util
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -9,10 +12,13 @@ import torch
 
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.grid import generate_maps
+from vinadv.grid import MapSet, generate_maps
+from vinadv.planners import registry
 from vinadv.planners.interface import PlannerError
+from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.pathset import PathSet
 from vinadv.planners.registry import list_planners, load_planner
+from vinadv.planners.rollout import rollout_logits
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
@@ -69,15 +75,10 @@ def test_the_shipped_example_plans_from_the_cli(tmp_path, capsys):
     paths = PathSet.load(out)
     assert paths.model.startswith(str(EXAMPLE)) and "sha256=" in paths.model
     # the same paths as planning through the library
-    import importlib.util
-
     spec = importlib.util.spec_from_file_location("example_planner", EXAMPLE)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     net = module.make(12).eval()
-    from vinadv.grid import MapSet
-    from vinadv.planners.rollout import rollout_logits
-
     m = MapSet.load(maps_file)
     with torch.no_grad():
         logits = net(torch.from_numpy(m.obstacles.astype(np.float32)), torch.from_numpy(m.goals)).numpy()
@@ -113,9 +114,6 @@ def test_planners_command(capsys):
 
 
 def test_a_registered_planner_is_loaded_listed_and_refused_twice(monkeypatch):
-    from vinadv.planners import registry
-    from vinadv.planners.optimal import OptimalPlanner
-
     monkeypatch.setattr(registry, "REGISTRY", dict(registry.REGISTRY))
     calls = []
 
@@ -142,9 +140,6 @@ def test_a_registered_planner_is_loaded_listed_and_refused_twice(monkeypatch):
 
 
 def test_registering_the_planners_imports_no_pytorch():
-    import subprocess
-    import sys
-
     code = "import sys, vinadv.planners.registry as r; assert r.REGISTRY['gppn']; print('torch' in sys.modules)"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
     assert done.stdout.strip() == "False"

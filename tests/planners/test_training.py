@@ -21,7 +21,8 @@ from vinadv.planners.training import (
     train_vin,
 )
 from vinadv.planners.vin import VIN, VINConfig, init_shift_kernels
-from vinadv.planners.vin.weights import load_vin
+from vinadv.planners.vin.weights import load_vin, save_vin
+from vinadv.planners.weights import weights_checksum
 
 pytestmark = pytest.mark.slow
 
@@ -106,9 +107,6 @@ def test_killed_training_resumes_to_the_same_weights(tmp_path):
 
 
 def test_init_continues_from_given_weights(tmp_path):
-    from vinadv.planners.vin.weights import save_vin
-    from vinadv.planners.weights import weights_checksum
-
     maps = generate_maps(16, 8, seed=9, n_starts=1)
     first, _ = train_vin(maps, TrainConfig(**TINY), progress=False)
     save_vin(first, tmp_path / "first.pt")

@@ -8,8 +8,10 @@ import shutil
 
 import pytest
 
+from vinadv.cli import main
 from vinadv.evaluation import evaluate_planner_quality, evaluate_timing
 from vinadv.pipeline import RunConfig, run_pipeline
+from vinadv.report import write_report
 from vinadv.store import Store
 
 SIZE = 12
@@ -41,8 +43,6 @@ def base_db(tmp_path_factory, report_weights):
 def base_report(base_db, tmp_path_factory):
     """The report of the base database, run 1 the main run beside run 2 (the report only reads, so the database
     itself): (URL, run ids, report folder). Read it, don't write there."""
-    from vinadv.report import write_report
-
     path, ids = base_db
     url = f"sqlite:///{path}"
     index = write_report(url, tmp_path_factory.mktemp("base_report") / "rep", run_id=ids[0], runs=ids)
@@ -65,8 +65,6 @@ def db_copy(base_db, tmp_path):
 def evaluated(base_db, tmp_path_factory):
     """The base database after `vinadv evaluate` (svm, rule, hausdorff, hybrid; fraction 0.5) and its report:
     (URL, run ids, report folder)."""
-    from vinadv.cli import main
-
     path, ids = base_db
     folder = tmp_path_factory.mktemp("evaluated")
     shutil.copy(path, folder / "e.db")

@@ -18,6 +18,7 @@ from tests.report.conftest import SIZE
 from vinadv.cli import main
 from vinadv.report import write_report
 from vinadv.report.render import PAGE_SECTIONS
+from vinadv.store import Store
 
 pytestmark = pytest.mark.slow
 
@@ -291,8 +292,6 @@ def test_main_run_is_the_first_of_runs_and_each_runs_evaluation_is_shown(evaluat
 
 
 def test_a_run_labelled_by_a_classifier_is_marked_in_table4(db_copy, tmp_path):
-    from vinadv.store import Store
-
     url, (saliency, near_path) = db_copy
     with Store.open(url) as store:
         records = store.read_pairs(saliency)

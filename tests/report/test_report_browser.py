@@ -16,6 +16,8 @@ import pytest
 from tests import needs
 from tests.needs import CHROMIUM_ARGS
 
+from vinadv.report.render import PAGE_SECTIONS
+
 pytestmark = pytest.mark.slow
 
 #: screenshots are kept here when set (say, as CI artefacts); else in the test's tmp_path
@@ -43,7 +45,7 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
 
 
 def _open_and_check(url: str, screenshot: Path, chromium: str) -> dict:
-    from playwright.sync_api import sync_playwright
+    from playwright.sync_api import sync_playwright  # noqa: PLC0415 (the dev extra: needs.chromium() skips or fails without it)
 
     errors, failed, bad_status = [], [], []
     with sync_playwright() as pw:
@@ -82,8 +84,6 @@ def _open_and_check(url: str, screenshot: Path, chromium: str) -> dict:
 @pytest.mark.parametrize("via", ["http", "file"])
 def test_report_opens_in_headless_chromium_without_errors(served, tmp_path, via):
     chromium = needs.chromium()
-    from vinadv.report.render import PAGE_SECTIONS
-
     http_url, out = served
     url = http_url if via == "http" else out.joinpath("index.html").resolve().as_uri()
     folder = Path(SCREENSHOT_DIR) if SCREENSHOT_DIR else tmp_path

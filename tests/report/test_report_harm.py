@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 import sqlalchemy as sa
 from tests.classify.test_harm import optimal_path, path_cost
+from tests.report.test_report import _check_complete
 from tests.store.oracle import parse_map, parse_path
 from tests.store.test_store_harm import HARM_COLUMNS, HARM_INDEX
 
@@ -170,8 +171,6 @@ def _drop_harm(url: str, run_id: int, below: int | None = None) -> None:
 
 
 def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path):
-    from tests.report.test_report import _check_complete
-
     url, (saliency, near_path) = db_copy
     _drop_harm(url, saliency)
     out = write_report(url, tmp_path / "old", run_id=saliency).parent

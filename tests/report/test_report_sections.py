@@ -79,8 +79,6 @@ def _oracle_distances(path_o: str, path_a: str) -> tuple[int, int]:
 
 
 def test_fp_and_dp_examples_give_dh_dv_and_what_makes_a_fork(evaluated):
-    import sqlalchemy as sa
-
     url, (saliency, _), out = evaluated
     page = (out / "index.html").read_text()
     listed = re.findall(r"pair (\d+) \((FP|DP)\): dh (\d+), dv (\d+)(?:: FP by (dh and dv|dh|dv) \(|: DP)", page)

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from dataclasses import fields
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ import sqlalchemy as sa
 
 from tests.store.oracle import map_text, path_text
 from vinadv.errors import InputError
-from vinadv.store import LABELS, PairRecords, Store, schema
+from vinadv.store import LABELS, PairRecords, Store, resolve_url, schema
 from vinadv.testing.store import random_records
 
 HARM_FLOATS = ("opt_cost_o", "opt_cost_a", "cost_o", "cost_a", "regret_o", "regret_a")
@@ -252,8 +253,6 @@ def test_missing_sqlite_file_without_create(tmp_path):
 
 
 def test_url_resolution(tmp_path, monkeypatch):
-    from vinadv.store import resolve_url
-
     monkeypatch.delenv("VINADV_DB", raising=False)
     monkeypatch.chdir(tmp_path)
     assert resolve_url(None) == f"sqlite:///{tmp_path / 'vinadv.db'}"
@@ -293,6 +292,4 @@ def test_subset_and_concatenate_keep_paths():
 
 
 def _fields(records: PairRecords) -> dict:
-    from dataclasses import fields
-
     return {f.name: getattr(records, f.name) for f in fields(records)}

@@ -18,7 +18,9 @@ import sqlalchemy as sa
 
 from tests.fault_files import tmpfs
 from vinadv.cli import main
+from vinadv.commands import cli_message
 from vinadv.errors import InputError, OutputError
+from vinadv.report import build_report
 from vinadv.store import Store
 from vinadv.testing.store import random_records
 
@@ -124,8 +126,6 @@ def test_read_only_database_report(tmp_path):
         _remount_readonly(folder)
         with Store.open(url, readonly=True) as store:
             assert store.list_runs()[0]["n_pairs"] == 12
-        from vinadv.report import build_report
-
         with pytest.raises(InputError, match="run_id: no run named 'absent'"):
             build_report(url, tmp_path / "report", run_id="absent")
 
@@ -147,8 +147,6 @@ def test_run_name_is_unique_and_not_a_number(sqlite_url):
         first = store.create_run("k")
         with pytest.raises(InputError, match="already called 'k'.*resume") as caught:
             store.create_run("k")
-        from vinadv.commands import cli_message
-
         assert "with --resume, or choose another --name" in cli_message(caught.value)
         with pytest.raises(InputError, match="numbers are run ids"):
             store.create_run("12")

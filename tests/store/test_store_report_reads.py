@@ -3,11 +3,13 @@ of the records written (pair indices shuffled and with gaps, two runs side by si
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 
 import numpy as np
 import pytest
 
+from tests.store.test_store_harm import _make_version_1
 from vinadv.errors import InputError
 from vinadv.store import Store
 from vinadv.testing.store import random_records
@@ -38,8 +40,6 @@ def test_pair_labels_and_terminations_match_the_records_written(db_url):
 
 
 def test_harm_counts_and_regret_changes_match_the_records_written(db_url):
-    import math
-
     records = random_records(200, size=8, seed=7)
     # 25 FP pairs, harmless, whose regret change is one value reached by different float sums: one group
     same = np.arange(25)
@@ -70,8 +70,6 @@ def test_harm_counts_and_regret_changes_match_the_records_written(db_url):
 
 
 def test_harm_reads_of_a_version_1_database_opened_without_create(db_url):
-    from tests.store.test_store_harm import _make_version_1
-
     run_id = _make_version_1(db_url)
     with Store.open(db_url, readonly=True) as store:
         counts = store.harm_counts(run_id)

@@ -12,6 +12,7 @@ import pytest
 from vinadv.grid.paths import PackedPaths
 from vinadv.store import PairRecords, Store
 from vinadv.testing.store import random_records
+from vinadv.viewer.app import create_app
 
 N_RANDOM = 230
 
@@ -84,8 +85,6 @@ def store(db):
 
 @pytest.fixture
 def app(store):
-    from vinadv.viewer.app import create_app
-
     app = create_app(store, secret_key="test-secret")
     app.config["TESTING"] = True
     return app

@@ -3,11 +3,18 @@ oracles on the records written), and of bad input: unknown ids, malformed parame
 
 from __future__ import annotations
 
+import re
+from io import BytesIO
+
 import numpy as np
 import pytest
+from PIL import Image
 
 from tests.viewer.conftest import N_RANDOM, csrf_from
-from vinadv.store import LABELS
+from vinadv.store import LABELS, Store
+from vinadv.testing.store import random_records
+from vinadv.viewer.app import _fmt_cost, create_app
+from vinadv.viewer.render import PATH_IMAGE_SCALE, PngCache
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -47,9 +54,6 @@ def test_runs_page_and_api_counts(client, db):
 
 
 def test_runs_page_empty_database(tmp_path):
-    from vinadv.store import Store
-    from vinadv.viewer.app import create_app
-
     with Store.open(f"sqlite:///{tmp_path / 'empty.db'}") as store:
         client = create_app(store).test_client()
         assert "No runs" in client.get("/").get_data(as_text=True)
@@ -189,10 +193,6 @@ def test_harm_and_regret_on_the_grid_and_the_pair_page(client, db):
 
 
 def test_grid_page_filtered_by_harm_lists_those_pairs_with_their_harm_and_regrets(client, db):
-    import re
-
-    from vinadv.viewer.app import _fmt_cost
-
     run_id, records = db[1]["random"]
     html = client.get(f"/runs/{run_id}/pairs?harm=harmless&size=20").get_data(as_text=True)
     order = np.argsort(records.pair_index)
@@ -227,12 +227,6 @@ def test_images_png_cached_with_etag(client, app, db, kind):
 
 
 def test_path_image_pixels_follow_the_paper_colours(client, db):
-    from io import BytesIO
-
-    from PIL import Image
-
-    from vinadv.viewer.render import PATH_IMAGE_SCALE
-
     run_id, _ = db[1]["crafted"]
     image = np.asarray(Image.open(BytesIO(client.get(f"/img/{run_id}/10/pathimage.png").data)).convert("RGB"))
     cell = image[::PATH_IMAGE_SCALE, ::PATH_IMAGE_SCALE]
@@ -244,8 +238,6 @@ def test_path_image_pixels_follow_the_paper_colours(client, db):
 
 
 def test_png_cache_evicts_least_recently_used():
-    from vinadv.viewer.render import PngCache
-
     cache = PngCache(max_bytes=10)
     cache.put("a", b"1234")
     cache.put("b", b"1234")
@@ -432,8 +424,6 @@ def test_label_unknown_pair_is_404(client, store, db):
 
 
 def test_foreign_host_header_refused_unless_remote_allowed(store, db):
-    from vinadv.viewer.app import create_app
-
     run_id, _ = db[1]["crafted"]
     local = create_app(store).test_client()
     assert local.get("/", headers={"Host": "evil.example"}).status_code == 400
@@ -444,10 +434,6 @@ def test_foreign_host_header_refused_unless_remote_allowed(store, db):
 
 
 def test_html_escapes_stored_text(tmp_path):
-    from vinadv.store import Store
-    from vinadv.testing.store import random_records
-    from vinadv.viewer.app import create_app
-
     with Store.open(f"sqlite:///{tmp_path / 'x.db'}") as store:
         run_id = store.create_run("<script>alert(1)</script>")
         records = random_records(2, size=6)

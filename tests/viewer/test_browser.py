@@ -10,10 +10,12 @@ from __future__ import annotations
 import threading
 
 import pytest
+from werkzeug.serving import make_server
 
 from tests import needs
 from tests.needs import CHROMIUM_ARGS
 from vinadv.store import Store
+from vinadv.viewer.app import create_app
 
 pytestmark = pytest.mark.slow
 
@@ -21,10 +23,6 @@ pytestmark = pytest.mark.slow
 @pytest.fixture
 def served(db):
     """(base URL, url of the database, runs) with the viewer served from a thread on a free 127.0.0.1 port."""
-    from werkzeug.serving import make_server
-
-    from vinadv.viewer.app import create_app
-
     url, runs = db
     store = Store.open(url, create=False)
     server = make_server("127.0.0.1", 0, create_app(store), threaded=True)
@@ -41,7 +39,7 @@ def served(db):
 
 def test_label_a_pair_with_the_keyboard(served):
     chromium = needs.chromium()
-    from playwright.sync_api import sync_playwright
+    from playwright.sync_api import sync_playwright  # noqa: PLC0415 (the dev extra: needs.chromium() skips or fails without it)
 
     base, url, runs = served
     run_id, records = runs["random"]

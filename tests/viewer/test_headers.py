@@ -3,7 +3,9 @@ browsed, and labelling it is refused."""
 
 from __future__ import annotations
 
+from tests.viewer.conftest import csrf_from
 from vinadv.store import Store
+from vinadv.viewer.app import create_app
 
 
 def _assert_headers(response):
@@ -33,9 +35,6 @@ def test_security_headers_on_every_kind_of_response(client, db):
 
 
 def test_read_only_store_is_browsed_and_labelling_refused(db):
-    from tests.viewer.conftest import csrf_from
-    from vinadv.viewer.app import create_app
-
     url, runs = db
     run_id = runs["random"][0]
     with Store.open(url, readonly=True) as store:

@@ -6,11 +6,10 @@ import numpy as np
 
 from vinadv.store import Store
 from vinadv.testing.store import random_records
+from vinadv.viewer.app import create_app
 
 
 def test_pair_page_json_and_image_show_every_added_obstacle(tmp_path):
-    from vinadv.viewer.app import create_app
-
     url = f"sqlite:///{tmp_path / 'k.db'}"
     records = random_records(4, size=9, seed=2, n_added=3)
     with Store.open(url) as store:

@@ -3,12 +3,16 @@
 
 from __future__ import annotations
 
+import socket
 import threading
 import urllib.request
 
 import pytest
+import sqlalchemy as sa
+import werkzeug.serving
 
 from vinadv.cli import main
+from vinadv.store import Store
 from vinadv.viewer.app import is_loopback
 
 
@@ -51,8 +55,6 @@ def test_serve_refuses_missing_database(tmp_path, capsys):
 
 
 def test_serve_port_in_use(db, capsys):
-    import socket
-
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen()
@@ -63,10 +65,6 @@ def test_serve_port_in_use(db, capsys):
 
 def test_serve_runs_on_loopback(db, monkeypatch, capsys):
     """The command builds the app and serves it on 127.0.0.1 (the test stops it through the server object)."""
-    import socket
-
-    import werkzeug.serving
-
     made = {}
     real_make_server = werkzeug.serving.make_server
 
@@ -99,10 +97,6 @@ def test_serve_runs_on_loopback(db, monkeypatch, capsys):
 
 
 def test_ensure_indexes_adds_missing(tmp_path):
-    import sqlalchemy as sa
-
-    from vinadv.store import Store
-
     url = f"sqlite:///{tmp_path / 'old.db'}"
     with Store.open(url) as store:
         with store.engine.begin() as conn:

@@ -3,6 +3,7 @@ pairs they belong to, and `vinadv classify train --labels human`."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -77,8 +78,6 @@ def test_human_training_set_reads_the_labelled_pairs(db):
 
 
 def test_classify_train_on_human_labels(db, tmp_path, capsys):
-    import json
-
     url, runs = db
     run_id, _ = runs["random"]
     with Store.open(url, create=False) as store:

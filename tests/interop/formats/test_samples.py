@@ -11,6 +11,9 @@ from tests.interop.formats.layouts import assert_same_maps, trajectories, write_
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, PackedPaths
 from vinadv.interop import export_maps, import_maps, read_maps
+from vinadv.planners.evaluation import evaluate_vin
+from vinadv.planners.reference import plan_reference
+from vinadv.testing.planners import planning_vin
 
 
 def test_the_files_optimal_paths_are_kept_and_others_replaced(tmp_path):
@@ -51,10 +54,6 @@ def test_padded_maps_survive_export_and_import(tmp_path, small_maps):
 
 
 def test_evaluation_leaves_padded_starts_out(tmp_path, small_maps):
-    from vinadv.planners.evaluation import evaluate_vin
-    from vinadv.planners.reference import plan_reference
-    from vinadv.testing.planners import planning_vin
-
     keep = {1: 1, 4: 2, 9: 1}
     write_kentsommer(tmp_path / "k.npz", small_maps, [], trajectories(small_maps, lambda i, s: s < keep.get(i, 3)))
     padded = import_maps(tmp_path / "k.npz", "kentsommer")

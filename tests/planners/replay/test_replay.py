@@ -1,6 +1,9 @@
 """PyTorch's value map replayed: bit for bit against `VIN.q_values` and `conv2d`, and the policy against the ports'."""
 
 import json
+import os
+import subprocess
+import sys
 from fractions import Fraction
 
 import numpy as np
@@ -26,8 +29,9 @@ from vinadv.planners.replay import (
 )
 from vinadv.planners.replay.fc import fma32, replay_fc
 from vinadv.planners.replay.kernels import conv_chains, conv_fused, conv_plain, replay_kernel, sum_channels
-from vinadv.planners.vin import make_input
+from vinadv.planners.vin import engine, make_input
 from vinadv.planners.vin.flat import from_flat, layout, to_flat
+from vinadv.planners.vin.weights import load_vin, load_vin_weights
 from vinadv.testing.planners import planning_vin, random_vin
 
 
@@ -142,8 +146,6 @@ def test_replay_kernel_is_q_values_bit_for_bit(size, make, torch_threads):
 
 
 def test_shipped_weights_replay_bit_for_bit(torch_threads):
-    from vinadv.planners.vin.weights import load_vin
-
     model = load_vin(None, size=28).eval()
     maps = generate_maps(20, 28, seed=9, n_starts=1)
     for i in range(len(maps)):
@@ -334,13 +336,6 @@ print(stats["near_tie_maps"])
 def test_a_process_without_pytorch_plans_what_pytorch_would(tmp_path):
     # the first process measures PyTorch's arithmetic and keeps it; the second plans without PyTorch, near ties
     # included, and gets the paths of the engine checked against PyTorch in this process (same thread count)
-    import os
-    import subprocess
-    import sys
-
-    from vinadv.planners.vin import engine
-    from vinadv.planners.vin.weights import load_vin_weights
-
     env = {**os.environ, "VINADV_CACHE_DIR": str(tmp_path / "cache"), "OMP_NUM_THREADS": "1"}
     runs = {}
     for mode in ("measure", "blocked"):

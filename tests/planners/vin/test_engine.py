@@ -1,9 +1,13 @@
 """The engine against the reference planner (re-running the PyTorch VIN at every step) and hand-built cases."""
 
+import ast
+import pathlib
+
 import numpy as np
 import pytest
 import torch
 
+import vinadv
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps, shortest_distances
 from vinadv.planners.reference import plan_reference
@@ -166,11 +170,6 @@ def test_empty_batch_and_bad_inputs():
 
 def test_production_code_never_imports_the_reference_planner():
     # the reference is the tests' oracle: the engine must reach its answers by its own means
-    import ast
-    import pathlib
-
-    import vinadv
-
     root = pathlib.Path(vinadv.__file__).parent
     importers = []
     for path in root.rglob("*.py"):
