@@ -37,7 +37,7 @@ demo: venv
 
 # the documentation site into site/ (mkdocs.yml); --strict: a broken link or docstring reference fails the build
 docs: venv
-	$(VENV)/bin/mkdocs build --strict --quiet
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
 bench: venv
 	for b in grid planning attacks classify store; do $(PY) benchmarks/$$b.py || exit 1; done
