@@ -116,3 +116,19 @@ def test_every_python_name_the_docs_give_exists():
                 missing.append(name)
             break
     assert not missing, f"the docs name what the code no longer has: {missing}"
+
+
+def test_the_readme_is_a_front_page():
+    text = (ROOT / "README.md").read_text()
+    assert len(text.splitlines()) <= 200
+    for heading in ("## Install", "## A five-minute tour", "## Documentation", "## Citing", "## Licence"):
+        assert f"\n{heading}\n" in text
+    for target in re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", text):  # every relative link leads to a file
+        assert (ROOT / target).exists(), target
+
+
+def test_the_readme_results_table_is_the_generated_one():
+    hooks = docs_module("hooks")
+    assert hooks.readme_table((ROOT / "README.md").read_text()) == hooks.weights_table(), (
+        "README.md's results table is stale: run .venv/bin/python docs/hooks.py"
+    )
