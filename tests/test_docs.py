@@ -132,3 +132,17 @@ def test_the_readme_results_table_is_the_generated_one():
     assert hooks.readme_table((ROOT / "README.md").read_text()) == hooks.weights_table(), (
         "README.md's results table is stale: run .venv/bin/python docs/hooks.py"
     )
+
+
+def test_the_formats_page_names_every_file_format_version():
+    from vinadv.attacks.pairs import PAIRS_FORMAT
+    from vinadv.classify.base import MODEL_FORMAT
+    from vinadv.commands.store import EXPORT_FORMAT
+    from vinadv.grid.mapset import MAPS_FORMAT
+    from vinadv.planners.gppn import GPPN_FORMAT
+    from vinadv.planners.pathset import PATHS_FORMAT
+    from vinadv.planners.vin.weights import WEIGHTS_FORMAT
+
+    page = (DOCS / "formats.md").read_text()
+    for name in (MAPS_FORMAT, PATHS_FORMAT, PAIRS_FORMAT, WEIGHTS_FORMAT, GPPN_FORMAT, MODEL_FORMAT, EXPORT_FORMAT):
+        assert f'"{name}"' in page or f"`{name}`" in page, f"docs/formats.md does not describe {name}"
