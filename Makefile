@@ -1,4 +1,5 @@
-# make demo: the main job on the embedded default (SQLite); make test: the test suite. Both set up .venv themselves.
+# make demo: the main job on the embedded default (SQLite); make test: the test suite; make docs: the documentation
+# site (site/index.html). Each sets up .venv itself; constraints.txt pins the exact builds (pyproject.toml: ranges).
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
@@ -6,13 +7,13 @@ STAMP := $(VENV)/.installed-stamp
 DEMO_DIR ?= demo-out
 DEMO_FLAGS ?=
 
-.PHONY: venv browser test test-fast demo bench clean
+.PHONY: venv browser test test-fast demo docs bench clean
 
 venv: $(STAMP)
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install -q --disable-pip-version-check -e '.[dev,cluster,viewer]'
+	$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -e '.[dev,cluster,viewer,docs]'
 	touch $(STAMP)
 
 # headless Chromium for the viewer's browser test (tests/viewer/test_browser.py); quick when already installed
@@ -34,8 +35,12 @@ demo: venv
 	$(VENV)/bin/vinadv run --n 5000 --size 28 --attack near-path --seed 0 --db $(DEMO_DIR)/vinadv.db --name demo --report $(DEMO_DIR)/report $(DEMO_FLAGS)
 	@echo "open $(DEMO_DIR)/report/index.html; look at the pairs with: $(VENV)/bin/vinadv serve --db $(DEMO_DIR)/vinadv.db"
 
+# the documentation site into site/ (mkdocs.yml); --strict: a broken link or docstring reference fails the build
+docs: venv
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+
 bench: venv
 	for b in grid planning attacks classify store; do $(PY) benchmarks/$$b.py || exit 1; done
 
 clean:
-	rm -rf $(VENV) $(DEMO_DIR) .pytest_cache .hypothesis
+	rm -rf $(VENV) $(DEMO_DIR) site .pytest_cache .hypothesis

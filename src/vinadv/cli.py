@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import argparse
 import gc
+import hashlib
 import importlib
 import os
 import sys
+from pathlib import Path
 
 from vinadv import __version__
 from vinadv.commands import cli_message
@@ -33,12 +35,54 @@ COMMAND_MODULES = [
 ]
 
 
+# the trained weights shipped in the package (package data); `vinadv --version` names each with its checksum
+SHIPPED_WEIGHTS_DIR = Path(__file__).resolve().parent / "weights"
+
+
+def shipped_weights_checksums(folder: Path = SHIPPED_WEIGHTS_DIR) -> dict[str, str]:
+    """SHA-256 (hex) of every weights file `*.pt` in `folder`, by file name, in name order.
+
+    The same checksum runs record (`weights_sha256`), so a figure can be traced to the weights that made it. Reads
+    the files with hashlib alone: `vinadv --version` must not import NumPy or PyTorch.
+    """
+    sums = {}
+    for path in sorted(folder.glob("*.pt")):
+        digest = hashlib.sha256()
+        with path.open("rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+        sums[path.name] = digest.hexdigest()
+    return sums
+
+
+def version_text() -> str:
+    """What `vinadv --version` prints: the version, then one `name  sha256` line per shipped weights file."""
+    sums = shipped_weights_checksums()
+    width = max((len(name) for name in sums), default=0)
+    lines = [f"vinadv {__version__}", "shipped weights (sha256):" if sums else "shipped weights: none"]
+    lines += [f"  {name:<{width}}  {digest}" for name, digest in sums.items()]
+    return "\n".join(lines)
+
+
+class VersionAction(argparse.Action):
+    """`--version`: print `version_text()` and exit 0 (argparse's own version action prints one fixed string)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(version_text())
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="vinadv",
         description="Find and identify adversarial maps for Value Iteration Network path planning.",
     )
-    parser.add_argument("--version", action="version", version=f"vinadv {__version__}")
+    parser.add_argument(
+        "--version", action=VersionAction, help="show the version and the shipped weights' SHA-256 checksums, and exit"
+    )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     subparsers.required = True
     for name in COMMAND_MODULES:

@@ -31,7 +31,9 @@ held-out seed of the evaluation tables), one start each. Results go to a databas
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -44,6 +46,10 @@ from vinadv.identify import identify, objective_strength
 from vinadv.planners.interface import as_planner
 from vinadv.planners.spec import PlannerSpec
 from vinadv.vocabulary import SUCCESS_LABELS, label_counts
+
+if TYPE_CHECKING:  # names for the annotations only: the planners and the grid load when a benchmark runs
+    from vinadv.grid.mapset import MapSet
+    from vinadv.planners.interface import Planner
 
 #: the strategies run by default; `exhaustive` only on request (it plans every valid cell of every map)
 DEFAULT_STRATEGIES = ("key-points", "saliency", "near-path", "random")
@@ -247,9 +253,9 @@ def _known(names) -> tuple[str, ...]:
 
 
 def robustness(
-    planner,
-    maps,
-    strategies=DEFAULT_STRATEGIES,
+    planner: Planner,
+    maps: MapSet,
+    strategies: Sequence[str] = DEFAULT_STRATEGIES,
     max_obstacles: int = 3,
     *,
     objective: str = "harm",
@@ -269,9 +275,12 @@ def robustness(
             named; see `check_strategies`).
         max_obstacles: the curve's largest k, >= 1.
         objective: 'harm' or 'paper', what the ranking strategies keep (`vinadv.identify.objective_strength`).
-        seed: the randomised strategies' seed; budget: key-points/saliency candidates per map and step; radius:
-            near-path's distance to the path.
-        harm_tol, harm_rtol: the harm test's tolerances (default `vinadv.classify.harm.DEFAULT_TOL`, 0).
+        seed: the randomised strategies' seed.
+        budget: key-points/saliency candidates per map and step.
+        radius: near-path's distance to the path.
+        harm_tol: the harm test's absolute tolerance (default `vinadv.classify.harm.DEFAULT_TOL`).
+        harm_rtol: the harm test's relative tolerance (times the optimal cost), default 0.
+        progress: show a progress bar.
     """
     harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))

@@ -183,7 +183,8 @@ def test_shift_kernels_read_each_actions_neighbour():
 
 def test_shift_initialised_training_learns_the_recursion():
     # the point of vi_init 'shift': on the same maps, steps and seed, it learns what the default start does not
-    # (at 28x28 on 20,000 maps: 99.9% after 10 epochs, against 96.8% for vin28.pt after nine rounds; README)
+    # (at 28x28 on 20,000 maps: 99.9% after 10 epochs, against 96.8% for vin28.pt after nine rounds;
+    # docs/results/history.md)
     maps = generate_maps(1000, 16, seed=11, n_starts=1)
     settings = dict(epochs=3, lr=0.002, batch_size=16, val_fraction=0.2, seed=3)
     accuracy = {}

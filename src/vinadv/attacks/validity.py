@@ -143,8 +143,11 @@ def valid_cells(
     """Cells where one added obstacle makes a valid adversarial map: `(B, N, N)` bool.
 
     Args:
-        obstacles: `(B, N, N)` bool. starts, goals: `(B, 2)`; the goal must be reachable from the start.
-        corner_cutting, moves: the maps' move rule and movement model.
+        obstacles: `(B, N, N)` bool.
+        starts: `(B, 2)` `(row, col)`.
+        goals: `(B, 2)` `(row, col)`; the goal must be reachable from the start.
+        corner_cutting: the maps' move rule (whether a diagonal move may cut a corner).
+        moves: the maps' movement model (`vinadv.grid.moves`).
     """
     deltas = move_model(moves).deltas
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
@@ -203,11 +206,14 @@ def valid_additions(
     """Whether adding the cells `added` to each map makes a valid adversarial map: `(B,)` bool.
 
     Args:
-        obstacles: `(B, N, N)` bool, the original maps. starts, goals: `(B, 2)`.
+        obstacles: `(B, N, N)` bool, the original maps.
+        starts: `(B, 2)` `(row, col)`.
+        goals: `(B, 2)` `(row, col)`.
         added: `(B, K, 2)` (or `(B, 2)`, K = 1) cells: valid when they are K distinct cells on the grid, each free
             on the original map and neither the start nor the goal, and the goal is reachable from the start
             (and from a start on an obstacle nothing is) with all K added.
-        corner_cutting, moves: the maps' move rule and movement model.
+        corner_cutting: the maps' move rule (whether a diagonal move may cut a corner).
+        moves: the maps' movement model (`vinadv.grid.moves`).
     """
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     starts = np.ascontiguousarray(starts, dtype=np.int64)

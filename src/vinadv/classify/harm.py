@@ -126,13 +126,17 @@ def pair_harm(
     """Harm of `n` pairs.
 
     Args:
-        obstacles_o, obstacles_a: `(n, N, N)` bool, True = obstacle; `obstacles_a` adds obstacles to `obstacles_o`
-            (a pair where it does not is still right, only slower).
-        starts, goals: `(n, 2)` int `(row, col)`.
-        path_o, path_a: `PackedPaths` of n paths each, the planner's paths on both maps.
+        obstacles_o: `(n, N, N)` bool, True = obstacle: the original maps.
+        obstacles_a: `(n, N, N)` bool: the adversarial maps, which add obstacles to `obstacles_o` (a pair where they
+            do not is still right, only slower).
+        starts: `(n, 2)` int `(row, col)`.
+        goals: `(n, 2)` int `(row, col)`.
+        path_o: `PackedPaths` of n paths, the planner's paths on the original maps.
+        path_a: `PackedPaths` of n paths, the planner's paths on the adversarial maps.
         labels: `(n,)` str, the paper's label of each pair ('invalid' | 'UrP' | 'UcP' | 'DP' | 'FP').
         corner_cutting: the run's corner-cutting setting (the moves of the optimal paths).
-        tol, rtol: absolute and relative (times `opt_cost_a`) tolerance of the harm test, >= 0.
+        tol: absolute tolerance of the harm test (cost units), >= 0.
+        rtol: relative tolerance of the harm test (times `opt_cost_a`), >= 0.
         t: the rule's FP/DP threshold for `expert_label` (default `round(4 * N / 28)`).
         expert_o: optional expert data of the original maps already computed (the generator's `expert_costs[:, 0]`
             and expert paths, one per pair): `(costs (n,), PackedPaths of n paths)`.

@@ -12,7 +12,7 @@ from vinadv.commands.training import add_compile_argument, add_train_arguments, 
 from vinadv.outfile import check_output_path
 from vinadv.planners.weights import weights_checksum
 
-#: GPPN defaults at 28x28, chosen by benchmarks/gppn_training.py on the 2-core CPU (README, "Planners"): a 5x5
+#: GPPN defaults at 28x28, chosen by benchmarks/gppn_training.py on the 2-core CPU (docs/results/history.md): a 5x5
 #: recurrent kernel reaches two cells per iteration, so 20 iterations cross a 28x28 map.
 GPPN_DEFAULTS = {"l_h": 32, "k": 20, "kernel": 5, "lr": 0.001}
 

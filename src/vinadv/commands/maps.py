@@ -117,8 +117,7 @@ def _register_interop(sub) -> None:
         "import",
         help="read maps of the kentsommer PyTorch port, avivt's .mat files or GPPN",
         description="Regroup another codebase's samples into maps and trajectories; expert costs "
-        "are vinadv's (diagonal cost sqrt 2). See README, 'Using data and models "
-        "from other VIN/GPPN code'.",
+        "are vinadv's (diagonal cost sqrt 2). See docs/guide/interop.md.",
     )
     imp.add_argument("input", metavar="IN", help="the file to read (.npz for kentsommer and gppn, .mat for avivt)")
     imp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the file's layout")

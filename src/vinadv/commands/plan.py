@@ -15,7 +15,7 @@ from vinadv.planners.batching import DEFAULT_CHUNK
 def register(subparsers) -> None:
     p = subparsers.add_parser("plan", help="plan paths from every start of every map (VIN or another planner)")
     p.add_argument("--maps", required=True, help="maps file (.npz, from `vinadv maps generate`)")
-    p.add_argument("--out", required=True, help="output paths file (.npz, format vinadv.paths/1)")
+    p.add_argument("--out", required=True, help="output paths file (.npz, format vinadv.paths/2)")
     add_planner_arguments(p)
     p.add_argument(
         "--chunk-size", type=int, default=DEFAULT_CHUNK, help=f"maps per batch; bounds memory (default {DEFAULT_CHUNK})"

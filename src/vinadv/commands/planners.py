@@ -46,7 +46,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
             print(f"{p['name']:<11} {p['description']}{weights}")
         print(
             "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
-            "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (README, 'Planners')"
+            "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (docs/own-planner.md)"
         )
         print(
             f"symmetric:  any of these but optimal with {SUFFIX} (gppn{SUFFIX}): averaged over the 8 rotations and "

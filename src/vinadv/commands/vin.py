@@ -27,7 +27,7 @@ def register(subparsers) -> None:
         metavar="INIT",
         help="how a fresh VIN's value iteration starts: default (PyTorch's initialisation, the paper's VIN) or shift "
         "(each q channel reads one neighbour's value, fc the identity: learns the shortest-path recursion itself; "
-        "README, 'Adversarial training')",
+        "docs/guide/planners.md)",
     )
     train.set_defaults(func=cmd_train)
 
@@ -40,7 +40,7 @@ def register(subparsers) -> None:
         choices=("vinadv", "kentsommer", "gppn"),
         default="vinadv",
         help="measure as vinadv (default), the kentsommer port's test.py, or GPPN (%%Opt/%%Suc over every "
-        "free cell); see README, 'Using data and models from other VIN/GPPN code'",
+        "free cell); see docs/guide/interop.md",
     )
     ev.add_argument(
         "--prior",

@@ -76,7 +76,7 @@ class TrainConfig:
     # 'shift' (`vin.init_shift_kernels`)
     vi_init: str = "default"
     # run the training forward and backward through `torch.compile` (a torch planner other than the VIN, whose CPU
-    # value iteration is compiled by Numba already): the same function, fused kernels (README, "GPPN")
+    # value iteration is compiled by Numba already): the same function, fused kernels (docs/guide/planners.md)
     compile: bool = False
 
     def validate(self) -> None:

@@ -1,7 +1,7 @@
 """Writers of the kentsommer, avivt and GPPN layouts for the format tests.
 
-They follow the layouts as the issue and README state them, cell by cell in plain Python, so the importers are
-checked against an independent reading of the layout, not against the exporters.
+They follow the layouts as the issue and docs/guide/interop.md state them, cell by cell in plain Python, so the
+importers are checked against an independent reading of the layout, not against the exporters.
 """
 
 from __future__ import annotations

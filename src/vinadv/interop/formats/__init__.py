@@ -1,6 +1,6 @@
 """Maps of other VIN/GPPN code read into a MapSet and written back out, one module per layout.
 
-The layouts (conventions checked against the real files in README.md, "Using data and models from other VIN/GPPN
+The layouts (conventions checked against the real files in docs/guide/interop.md, "Data and models from other VIN/GPPN
 code"): `kentsommer` (the common PyTorch port, `.npz`), `avivt` (the VIN authors' `.mat`) and `gppn` (`.npz`); each
 module's docstring says what its arrays hold. `FORMATS` maps a layout's name to its `Format`: what `read_maps` and
 `export_maps` dispatch on. What the layouts share (samples regrouped into maps and trajectories, the file's expert

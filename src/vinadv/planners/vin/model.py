@@ -7,7 +7,7 @@ The value map does not depend on the agent's cell, so `action_logits` returns th
 `forward(x, rows, cols)` picks the cells of a batch of states, as the ports do.
 
 `init_shift_kernels` starts a VIN's value iteration as moves to the neighbours (`vinadv vin train --vi-init shift`):
-trained from there, the VIN learns the shortest-path recursion itself (README, "Adversarial training").
+trained from there, the VIN learns the shortest-path recursion itself (docs/results/history.md, "Adversarial training").
 """
 
 from __future__ import annotations

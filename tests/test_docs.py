@@ -1,0 +1,148 @@
+"""The documentation cannot go stale: the CLI reference is the parsers' help, the results are the committed metrics.
+
+The site itself is built by `make docs` (`mkdocs build --strict`, in CI); these tests hold what the build cannot see.
+"""
+
+import importlib.util
+import json
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+WEIGHTS = ROOT / "src" / "vinadv" / "weights"
+
+
+def docs_module(name: str):
+    """A script of docs/ (not a package) loaded from its file."""
+    spec = importlib.util.spec_from_file_location(f"docs_{name}", DOCS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_cli_reference_is_the_parsers_help():
+    gen_cli = docs_module("gen_cli")
+    assert (DOCS / "reference" / "cli.md").read_text() == gen_cli.render(), (
+        "docs/reference/cli.md is stale: run .venv/bin/python docs/gen_cli.py"
+    )
+
+
+def test_the_cli_reference_has_every_command():
+    from vinadv.cli import build_parser
+
+    gen_cli = docs_module("gen_cli")
+    text = gen_cli.render()
+    commands = [words for words, _ in gen_cli.walk(build_parser())]
+    assert "vinadv maps generate" in commands and "vinadv run" in commands and "vinadv gppn train" in commands
+    for words in commands:
+        assert f"`{words}`\n\n```text\nusage: {words} " in text
+
+
+def test_the_results_table_is_read_from_the_metrics_files(tmp_path):
+    hooks = docs_module("hooks")
+    table = hooks.weights_table()
+    for metrics in sorted(WEIGHTS.glob("*.metrics.json")):
+        data = json.loads(metrics.read_text())
+        figures = data.get("vinadv", data)
+        weights = metrics.name.replace(".metrics.json", ".pt")
+        row = next(line for line in table.splitlines() if f"| `{weights}` |" in line)
+        assert f"{100 * figures['success_rate']:.1f}%" in row or f"{100 * figures['success_rate']:.2f}%" in row
+        assert f"{figures['rollouts']:,}" in row
+        assert data["command"] in hooks.weights_commands()
+    # a re-measured file changes the table: nothing is copied by hand
+    (tmp_path / "vin28.metrics.json").write_text(
+        json.dumps(
+            {
+                "weights_sha256": "ab" * 32,
+                "command": "vinadv vin eval --n 10",
+                "size": 28,
+                "success_rate": 0.5,
+                "rollouts": 10,
+                "optimal_rate": 0.25,
+                "action_accuracy": 0.999996,
+            }
+        )
+    )
+    assert hooks.weights_table(tmp_path).splitlines()[2] == (
+        "| `vin` | `vin28.pt` | 50.0% of 10 | 25.0% | 100.00% |  |  |"
+    )
+
+
+def test_the_hook_fills_the_results_page():
+    hooks = docs_module("hooks")
+    page = (DOCS / "results" / "index.md").read_text()
+    for marker in (hooks.WEIGHTS_TABLE, hooks.WEIGHTS_COMMANDS, hooks.BY_LENGTH):
+        assert marker in page
+    filled = hooks.on_page_markdown(page, page=None, config=None, files=None)
+    assert "<!-- vinadv:" not in filled and hooks.weights_table() in filled
+    assert "| 25-29 |" in hooks.by_length_table()
+
+
+def test_user_facing_pages_name_public_sources_not_the_workspace():
+    pages = [ROOT / "README.md", *DOCS.rglob("*.md")]
+    for page in pages:
+        assert not re.search(r"shared/data|/work/", page.read_text()), page
+
+
+NOT_PYTHON = {"vinadv.db", "vinadv.by_length"}  # a database file name; a key of `vinadv eval --json`
+
+
+def named_objects() -> set[str]:
+    """Every `vinadv.x.y` the README and the pages name in code spans, file formats (`vinadv.maps/1`) left out."""
+    pages = [ROOT / "README.md", *DOCS.rglob("*.md")]
+    names = set()
+    for page in pages:
+        for name, after in re.findall(r"`(vinadv(?:\.\w+)+)(.?)", page.read_text()):
+            if after not in "/-" or not after:
+                names.add(name)
+    return names - NOT_PYTHON
+
+
+def test_every_python_name_the_docs_give_exists():
+    import importlib
+
+    missing = []
+    for name in sorted(named_objects()):
+        parts = name.split(".")
+        for cut in range(len(parts), 0, -1):  # the longest importable module, then attributes
+            try:
+                obj = importlib.import_module(".".join(parts[:cut]))
+            except ModuleNotFoundError:
+                continue
+            for attr in parts[cut:]:
+                obj = getattr(obj, attr, None)
+            if obj is None:
+                missing.append(name)
+            break
+    assert not missing, f"the docs name what the code no longer has: {missing}"
+
+
+def test_the_readme_is_a_front_page():
+    text = (ROOT / "README.md").read_text()
+    assert len(text.splitlines()) <= 200
+    for heading in ("## Install", "## A five-minute tour", "## Documentation", "## Citing", "## Licence"):
+        assert f"\n{heading}\n" in text
+    for target in re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", text):  # every relative link leads to a file
+        assert (ROOT / target).exists(), target
+
+
+def test_the_readme_results_table_is_the_generated_one():
+    hooks = docs_module("hooks")
+    assert hooks.readme_table((ROOT / "README.md").read_text()) == hooks.weights_table(), (
+        "README.md's results table is stale: run .venv/bin/python docs/hooks.py"
+    )
+
+
+def test_the_formats_page_names_every_file_format_version():
+    from vinadv.attacks.pairs import PAIRS_FORMAT
+    from vinadv.classify.base import MODEL_FORMAT
+    from vinadv.commands.store import EXPORT_FORMAT
+    from vinadv.grid.mapset import MAPS_FORMAT
+    from vinadv.planners.gppn import GPPN_FORMAT
+    from vinadv.planners.pathset import PATHS_FORMAT
+    from vinadv.planners.vin.weights import WEIGHTS_FORMAT
+
+    page = (DOCS / "formats.md").read_text()
+    for name in (MAPS_FORMAT, PATHS_FORMAT, PAIRS_FORMAT, WEIGHTS_FORMAT, GPPN_FORMAT, MODEL_FORMAT, EXPORT_FORMAT):
+        assert f'"{name}"' in page or f"`{name}`" in page, f"docs/formats.md does not describe {name}"
