@@ -3,10 +3,20 @@
 The site itself is built by `make docs` (`mkdocs build --strict`, in CI); these tests hold what the build cannot see.
 """
 
+import importlib
 import importlib.util
 import json
 import re
 from pathlib import Path
+
+from vinadv.attacks.pairs import PAIRS_FORMAT
+from vinadv.classify.base import MODEL_FORMAT
+from vinadv.cli import build_parser
+from vinadv.commands.store import EXPORT_FORMAT
+from vinadv.grid.mapset import MAPS_FORMAT
+from vinadv.planners.gppn import GPPN_FORMAT
+from vinadv.planners.pathset import PATHS_FORMAT
+from vinadv.planners.vin.weights import WEIGHTS_FORMAT
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -29,8 +39,6 @@ def test_the_cli_reference_is_the_parsers_help():
 
 
 def test_the_cli_reference_has_every_command():
-    from vinadv.cli import build_parser
-
     gen_cli = docs_module("gen_cli")
     text = gen_cli.render()
     commands = [words for words, _ in gen_cli.walk(build_parser())]
@@ -100,8 +108,6 @@ def named_objects() -> set[str]:
 
 
 def test_every_python_name_the_docs_give_exists():
-    import importlib
-
     missing = []
     for name in sorted(named_objects()):
         parts = name.split(".")
@@ -135,14 +141,6 @@ def test_the_readme_results_table_is_the_generated_one():
 
 
 def test_the_formats_page_names_every_file_format_version():
-    from vinadv.attacks.pairs import PAIRS_FORMAT
-    from vinadv.classify.base import MODEL_FORMAT
-    from vinadv.commands.store import EXPORT_FORMAT
-    from vinadv.grid.mapset import MAPS_FORMAT
-    from vinadv.planners.gppn import GPPN_FORMAT
-    from vinadv.planners.pathset import PATHS_FORMAT
-    from vinadv.planners.vin.weights import WEIGHTS_FORMAT
-
     page = (DOCS / "formats.md").read_text()
     for name in (MAPS_FORMAT, PATHS_FORMAT, PAIRS_FORMAT, WEIGHTS_FORMAT, GPPN_FORMAT, MODEL_FORMAT, EXPORT_FORMAT):
         assert f'"{name}"' in page or f"`{name}`" in page, f"docs/formats.md does not describe {name}"
