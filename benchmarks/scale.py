@@ -26,7 +26,7 @@ from pathlib import Path
 from distributed import Client
 
 from vinadv.cluster import ClusterShards, start_local_cluster
-from vinadv.cluster.worker import _plugin_class
+from vinadv.cluster.worker import plugin_class
 from vinadv.pipeline import RunConfig, run_pipeline
 from vinadv.planners.vin.weights import default_weights_path, save_vin
 from vinadv.testing.planners import planning_vin
@@ -96,7 +96,7 @@ def main() -> None:
         out["runs"]["local"] = _timed_run(config, f"sqlite:///{tmp / 'local.db'}")
         for k in (int(v) for v in args.workers.split(",")):
             with start_local_cluster(k) as cluster, Client(cluster) as client:
-                client.register_plugin(_plugin_class()())
+                client.register_plugin(plugin_class()())
                 _timed_run(warm, f"sqlite:///{tmp / f'warm{k}.db'}", ClusterShards(client))  # every worker warm
                 out["runs"][f"{k}w"] = _timed_run(config, f"sqlite:///{tmp / f'w{k}.db'}", ClusterShards(client))
     out["load_after"] = [round(v, 2) for v in os.getloadavg()]

@@ -23,7 +23,7 @@ from vinadv.attacks.pairs import PairSet  # noqa: E402
 from vinadv.cli import main  # noqa: E402
 from vinadv.cluster import ClusterShards, start_local_cluster  # noqa: E402
 from vinadv.cluster.worker import (
-    _plugin_class,  # noqa: E402
+    plugin_class,  # noqa: E402
     worker_planner,  # noqa: E402
 )
 from vinadv.errors import InputError  # noqa: E402
@@ -44,7 +44,7 @@ def weights(planning_weights):
 @pytest.fixture(scope="module")
 def cluster():
     with start_local_cluster(2) as local, Client(local) as client:
-        client.register_plugin(_plugin_class()())
+        client.register_plugin(plugin_class()())
         yield local, client
 
 

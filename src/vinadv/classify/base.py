@@ -102,14 +102,16 @@ class PairClassifier(ClassifierMixin, BaseEstimator):
         return load_model(path, expected=cls)
 
 
-def _pack_state(model) -> tuple[dict, dict]:
+def pack_state(model) -> tuple[dict, dict]:
+    """A fitted classifier as (JSON-ready header: kind, params, meta; named arrays), the form `save` writes and a
+    wrapping classifier (the hybrid) nests."""
     meta, arrays = model._state()
     return {"kind": model.kind, "params": model._json_params(), "meta": meta}, arrays
 
 
 def save_model(model: PairClassifier, path, record: dict | None = None, record_arrays: dict | None = None) -> None:
     """Save `model` (any registered kind) to `path`; `record`/`record_arrays` travel along (training facts)."""
-    header, arrays = _pack_state(model)
+    header, arrays = pack_state(model)
     entries = {f"a.{k}": np.asarray(v) for k, v in arrays.items()}
     entries.update({f"r.{k}": np.asarray(v) for k, v in (record_arrays or {}).items()})
     with atomic_output(path, "wb") as handle:  # a file handle keeps the user's name (np.savez would append .npz)
@@ -171,7 +173,7 @@ def _model_from_archive(path: Path, archive: dict, expected: type | None) -> Pai
 
 
 def model_from_state(header: dict, arrays: dict) -> PairClassifier:
-    """Rebuild a model from `_pack_state` output (used to nest one model inside another)."""
+    """Rebuild a model from `pack_state` output (used to nest one model inside another)."""
     cls = _registry().get(header["kind"])
     if cls is None:
         raise InputError(f"unknown model kind {header['kind']!r}; known kinds: {sorted(_REGISTRY)}")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vinadv.classify.base import PairClassifier, _pack_state, model_from_state, register_kind
+from vinadv.classify.base import PairClassifier, model_from_state, pack_state, register_kind
 from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.features import path_features
 from vinadv.classify.models import CNNImageClassifier, MLPImageClassifier, SVMImageClassifier
@@ -136,7 +136,7 @@ class HybridClassifier(_FiveWay):
     def _state(self):
         if self.fp_classifier is None:
             raise InputError("HybridClassifier needs an fp_classifier")
-        header, arrays = _pack_state(self.fp_classifier)
+        header, arrays = pack_state(self.fp_classifier)
         return {"inner": header}, {f"inner.{k}": v for k, v in arrays.items()}
 
     @classmethod

@@ -36,9 +36,9 @@ from urllib.parse import urlsplit
 
 from vinadv.cluster.worker import (
     SINGLE_THREAD_ENV,
-    _plugin_class,
     attack_shard_task,
     identify_shard_task,
+    plugin_class,
     run_shard_task,
 )
 from vinadv.errors import InputError
@@ -124,7 +124,7 @@ def open_cluster(address: str | None = None, workers: int | None = None) -> Iter
                 client = stack.enter_context(Client(address, timeout="15s"))
             except (OSError, TimeoutError, ValueError) as exc:
                 raise InputError(f"cluster {address}: cannot connect to a Dask scheduler ({exc})", "cluster") from None
-        client.register_plugin(_plugin_class()())
+        client.register_plugin(plugin_class()())
         yield client
 
 

@@ -134,7 +134,8 @@ def identify_shard_task(
     )
 
 
-def _plugin_class():
+def plugin_class():
+    """The worker plugin class (made on first use: it subclasses Dask's `WorkerPlugin`, imported late)."""
     from distributed.diagnostics.plugin import WorkerPlugin
 
     class SingleThreadWorker(WorkerPlugin):
