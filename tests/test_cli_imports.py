@@ -13,7 +13,7 @@ import pytest
 
 from tests.needs import MODELLED_CPU, cpu_vendor
 
-HEAVY = ("torch", "numba", "sklearn", "sqlalchemy", "scipy", "matplotlib", "distributed", "flask")
+HEAVY = ("torch", "numba", "sklearn", "sqlalchemy", "scipy", "matplotlib", "distributed", "flask", "pandas", "pyarrow")
 
 
 def imported_modules(*argv: str) -> set[str]:

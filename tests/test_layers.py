@@ -40,9 +40,14 @@ LAYERS = {
     "report": 9,
     "viewer": 9,
     "cluster": 9,
-    "commands": 10,
-    "cli": 11,
+    "analysis": 10,
+    "commands": 11,
+    "cli": 12,
 }
+
+#: the imports that run upward on purpose: the package's `__getattr__` imports `vinadv.analysis` on first use of
+#: `vinadv.open` (lazily, so `import vinadv` stays light)
+LAZY_EXPORTS = {("vinadv", "analysis")}
 
 
 #: what the report may not import though it is a lower layer: computing (planning, evaluating, training) is the
@@ -109,7 +114,7 @@ def test_no_module_imports_its_own_layer_or_above():
     for path in sorted(SOURCE.rglob("*.py")):
         own = part_of(path)
         for name in imported_vinadv_names(path) - {own}:
-            if LAYERS[name] >= LAYERS[own]:
+            if LAYERS[name] >= LAYERS[own] and (own, name) not in LAZY_EXPORTS:
                 upstream_imports.append(f"{path.relative_to(SOURCE)} imports vinadv.{name}")
     assert not upstream_imports, upstream_imports
 

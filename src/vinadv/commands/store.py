@@ -1,4 +1,4 @@
-"""`vinadv export`: stored map pairs of one run out of the database, as CSV, JSON lines or an npz file."""
+"""`vinadv export`: stored map pairs of one run out of the database, as CSV, JSON lines, an npz or a Parquet file."""
 
 from __future__ import annotations
 
@@ -13,6 +13,8 @@ from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 
 EXPORT_FORMAT = "vinadv.labelled_pairs/1"
+#: the formats written to a file only (--out required)
+BINARY_FORMATS = ("npz", "parquet")
 #: the first text columns of an exported row: the paper's Table 2, then the attack flag, the run and the pair index
 LEADING_COLUMNS = ("no", "map_o", "map_a", "path_o", "path_a", "label", "attack", "run_id", "pair_index")
 
@@ -28,16 +30,19 @@ def export_columns() -> tuple[str, ...]:
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "export",
-        help="export the stored pairs of a run (csv, jsonl or npz)",
+        help="export the stored pairs of a run (csv, jsonl, npz or parquet)",
         description="Export the stored map pairs of one run. csv/jsonl keep the database's text formats "
         "(maps as 0/1 rows joined by ';', paths as row,col cells joined by ';'); npz decodes them into "
-        f"arrays ({EXPORT_FORMAT}: the pairs-file fields plus labels).",
+        f"arrays ({EXPORT_FORMAT}: the pairs-file fields plus labels); parquet writes one typed row per pair, "
+        "maps and paths as list columns, the run and its config in the file's metadata (for pandas and pyarrow).",
     )
     p.add_argument("--db", default=None, help="database URL or SQLite file (default: $VINADV_DB, else vinadv.db)")
     p.add_argument("--run", required=True, help="run id, or run name (its latest run)")
-    p.add_argument("--format", choices=("csv", "jsonl", "npz"), default="csv")
+    p.add_argument("--format", choices=("csv", "jsonl", "npz", "parquet"), default="csv")
     p.add_argument("--successful-only", action="store_true", help="only successful attacks (UrP or FP)")
-    p.add_argument("--out", default=None, help="output file (default: stdout for csv/jsonl; required for npz)")
+    p.add_argument(
+        "--out", default=None, help="output file (default: stdout for csv/jsonl; required for npz and parquet)"
+    )
     add_output_options(p, quiet=True)
     p.set_defaults(func=run_export)
 
@@ -45,14 +50,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run_export(args: argparse.Namespace) -> int:
     from vinadv.store import Store  # imported here so `vinadv --help` stays fast
 
-    if args.format == "npz" and not args.out:
-        raise InputError("--out: required with --format npz")
+    if args.format in BINARY_FORMATS and not args.out:
+        raise InputError(f"--out: required with --format {args.format}")
     if args.out:
         check_output_path(args.out)  # a directory or a missing folder is refused before the database is read
     with Store.open(args.db, readonly=True) as store:
         run_id = store.resolve_run(args.run)
         if args.format == "npz":
             n = _export_npz(store, run_id, args.out, args.successful_only)
+        elif args.format == "parquet":
+            n = _export_parquet(store, run_id, args.out, args.successful_only, args)
         else:
             n = _export_text(store, run_id, args.format, args.out, args.successful_only, args)
     note(args, f"exported {n} pairs of run {run_id} to {args.out or 'stdout'}")
@@ -97,6 +104,14 @@ def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
     with atomic_output(out, "wb") as fh:  # a failed export never leaves a half-written file behind
         np.savez_compressed(fh, **arrays)
     return len(records)
+
+
+def _export_parquet(store, run_id: int, out: str, successful_only: bool, args: argparse.Namespace) -> int:
+    from vinadv.analysis import write_parquet  # pyarrow: imported here so `vinadv --help` stays fast
+
+    total = store.count_pairs(run_id)
+    with progress_bar(args, total=total, unit="pair", file=sys.stderr) as bar:
+        return write_parquet(store, run_id, out, successful_only=successful_only, progress=bar.update)
 
 
 def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only: bool, args: argparse.Namespace) -> int:

@@ -156,6 +156,17 @@ class PairQueries(Database):
             for part in result.mappings().partitions(chunk):
                 yield [dict(r) for r in part]
 
+    def iter_pairs(self, run_id: int, *, successful_only: bool = False, chunk: int = 10_000) -> Iterator[PairRecords]:
+        """The run's stored pairs, ordered by pair index, decoded into `PairRecords` of at most `chunk` pairs each
+        (streamed: a run larger than memory is read a chunk at a time; none for a run without pairs)."""
+        if int(chunk) < 1:
+            raise InputError(f"chunk: {chunk} pairs, need at least 1", "chunk")
+        query = self._pairs_query(run_id, successful_only=successful_only)
+        with self.engine.connect() as conn:
+            result = conn.execution_options(stream_results=True, yield_per=int(chunk)).execute(query)
+            for part in result.partitions(int(chunk)):
+                yield decode_rows(part)
+
     def _pairs_query(self, run_id, *, successful_only=False, labels=None, pair_indices=None) -> sa.Select:
         query = sa.select(
             *[sa.null().label(name) if name in self.absent_columns else map_pairs.c[name] for name in PAIR_COLUMNS]
