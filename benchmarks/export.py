@@ -5,9 +5,10 @@
 Stores --n random pairs (`vinadv.store.synthetic.random_records`: --size maps, paths of up to --max-path cells,
 NULLs in the nullable columns) as one run in a fresh SQLite file (untimed), then times `vinadv export` of that run
 (the command in this process, `--quiet`) as CSV and as Parquet, and reading each file back into a pandas DataFrame
-(`pandas.read_csv`, `pandas.read_parquet`). Prints the best of --repeat trials, wall clock and this process's CPU
-time (which other load on the machine hardly changes; the header gives the load average), the file sizes and the
-ratios Parquet / CSV.
+(`pandas.read_csv`; the Parquet file both with `pandas.read_parquet`, which makes the list columns NumPy object
+arrays, and with `vinadv.analysis.read_parquet`, which keeps them as Arrow arrays). Prints the best of --repeat
+trials, wall clock and this process's CPU time (which other load on the machine hardly changes; the header gives the
+load average), the file sizes and the ratios Parquet / CSV.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from vinadv.analysis import read_parquet
 from vinadv.cli import main as vinadv_main
 from vinadv.store import Store
 from vinadv.store.synthetic import random_records
@@ -59,7 +61,6 @@ def measure(n: int, size: int, max_path: int, repeat: int, folder: Path) -> dict
     run_id = store_run(url, n, size, max_path)
     stored_s = time.perf_counter() - t0
     result = {"n": n, "size": size, "max_path": max_path, "repeat": repeat, "store_seconds": round(stored_s, 2)}
-    readers = {"csv": pd.read_csv, "parquet": pd.read_parquet}
     for fmt in ("csv", "parquet"):
         out = folder / f"pairs.{fmt}"
         argv = ["export", "--db", url, "--run", str(run_id), "--format", fmt, "--out", str(out), "--quiet"]
@@ -69,7 +70,8 @@ def measure(n: int, size: int, max_path: int, repeat: int, folder: Path) -> dict
                 raise SystemExit(f"vinadv {' '.join(argv)} failed")
 
         wall, cpu = best(export, repeat)
-        read_wall, read_cpu = best(lambda out=out, fmt=fmt: readers[fmt](out), repeat)
+        reader = pd.read_csv if fmt == "csv" else pd.read_parquet
+        read_wall, read_cpu = best(lambda out=out, reader=reader: reader(out), repeat)
         result[fmt] = {
             "export_s": wall,
             "export_cpu_s": cpu,
@@ -78,12 +80,15 @@ def measure(n: int, size: int, max_path: int, repeat: int, folder: Path) -> dict
             "read_s": read_wall,
             "read_cpu_s": read_cpu,
         }
+    arrow_wall, arrow_cpu = best(lambda: read_parquet(folder / "pairs.parquet"), repeat)
+    result["parquet"].update(read_arrow_lists_s=arrow_wall, read_arrow_lists_cpu_s=arrow_cpu)
     csv, parquet = result["csv"], result["parquet"]
     result["ratios"] = {
         "export_time": parquet["export_s"] / csv["export_s"],
         "export_cpu": parquet["export_cpu_s"] / csv["export_cpu_s"],
         "size": parquet["bytes"] / csv["bytes"],
         "read_time": parquet["read_s"] / csv["read_s"],
+        "read_time_arrow_lists": parquet["read_arrow_lists_s"] / csv["read_s"],
     }
     return result
 
@@ -97,6 +102,7 @@ def report(result: dict) -> None:
     )
     print(f"  (storing the run: {result['store_seconds']:.1f} s, untimed)")
     print(f"  {'':8} {'export s':>9} {'cpu s':>7} {'pairs/s':>9} {'MB':>8} {'B/pair':>7} {'pandas read s':>14}")
+    print(f"  {'':8} {'':>9} {'':>7} {'':>9} {'':>8} {'':>7} {'(pd.read_*)':>14}")
     for fmt in ("csv", "parquet"):
         r = result[fmt]
         print(
@@ -107,6 +113,10 @@ def report(result: dict) -> None:
     print(
         f"  parquet / csv: export time {ratios['export_time']:.2f}x (cpu {ratios['export_cpu']:.2f}x), "
         f"size {ratios['size']:.3f}x, pandas read time {ratios['read_time']:.2f}x"
+    )
+    print(
+        f"  vinadv.analysis.read_parquet (list columns as Arrow): {result['parquet']['read_arrow_lists_s']:.2f} s, "
+        f"{ratios['read_time_arrow_lists']:.2f}x pandas.read_csv"
     )
 
 

@@ -27,6 +27,7 @@ from vinadv.analysis import (
     grid,
     pair_schema,
     parquet_metadata,
+    read_parquet,
     write_parquet,
 )
 from vinadv.cli import main
@@ -123,7 +124,17 @@ def test_parquet_read_with_pandas_equals_the_database_and_the_api(stored, tmp_pa
         assert [tuple(c) for c in cells(frame["path_o"][i]).tolist()] == parse_path(r["path_o"])
         assert cells(frame["added"][i]).shape == (3, 2)
     with vinadv.open(url) as results:
-        pd.testing.assert_frame_equal(results.pairs("three"), frame)
+        pairs = results.pairs("three")
+    # vinadv's own reader gives the API's DataFrame (the list columns kept as Arrow arrays), with the same values
+    read = read_parquet(out)
+    pd.testing.assert_frame_equal(read, pairs)
+    assert read.attrs == pairs.attrs and read.attrs["vinadv"]["run"]["id"] == ids["three"]
+    assert isinstance(read["path_o"].dtype, pd.ArrowDtype)
+    for i in range(len(frame)):
+        assert np.array_equal(grid(frame["map_o"][i]), grid(read["map_o"][i]))
+        for name in ("path_a", "added"):
+            assert np.array_equal(cells(frame[name][i]), cells(read[name][i])), name
+        assert np.array_equal(cells([frame["start"][i]]), cells([read["start"][i]]))
 
 
 def test_parquet_metadata_holds_the_run_and_its_config(stored, tmp_path):
@@ -138,6 +149,9 @@ def test_parquet_metadata_holds_the_run_and_its_config(stored, tmp_path):
     table = pq.read_table(out)
     expected = [r["pair_index"] for r in database_rows(url, ids["one"]) if r["attack"]]
     assert table["pair_index"].to_pylist() == expected and 0 < len(expected) < 40
+    with vinadv.open(url) as results:  # the API's export is the command's
+        assert results.to_parquet(tmp_path / "api.parquet", "one", successful_only=True) == len(expected)
+    assert pq.read_table(tmp_path / "api.parquet").equals(table, check_metadata=True)
 
 
 def test_export_writes_a_row_group_per_batch_and_an_empty_run_as_its_schema(sqlite_url, tmp_path):

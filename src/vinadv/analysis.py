@@ -1,12 +1,12 @@
 """Results as DataFrames: `vinadv.open(url)` reads a vinadv database into pandas, `write_parquet` exports a run.
 
 `open(url)` gives a `Results`: `.runs()`, `.pairs(run)` and `.robustness()` return pandas DataFrames,
-`.iter_pairs(run, batch_size)` yields a run's pairs a DataFrame at a time (for runs larger than memory). Nothing is
-written to the database (it is opened read-only).
+`.iter_pairs(run, batch_size)` yields a run's pairs a DataFrame at a time (for runs larger than memory),
+`.to_parquet(path, run)` exports a run. Nothing is written to the database (it is opened read-only).
 
 A run's pairs have one layout, as an Arrow table (`pairs_table`), in a Parquet file (`write_parquet`,
 `vinadv export --format parquet`) and as a DataFrame (`Results.pairs`: the DataFrame `pandas.read_parquet` makes of
-the exported file). One row per pair, in pair-index order (`PAIR_SCHEMA`):
+the exported file as `read_parquet` reads it). One row per pair, in pair-index order (`pair_schema()`):
 
 - `no` int64, `run_id` int64, `pair_index` int64 (unique in a run);
 - `label`, `term_o`, `term_a`, `label_source` string; `attack` bool (success: UrP or FP);
@@ -17,8 +17,10 @@ the exported file). One row per pair, in pair-index order (`PAIR_SCHEMA`):
 - `map_o`, `map_a`: the maps, list<list<bool>>, N rows of N cells (True = obstacle);
 - `path_o`, `path_a`: the paths, list<fixed_size_list<int16>[2]>, the (row, col) cells in order (empty: no path).
 
-In pandas a list value is a NumPy array (of arrays, for the nested ones): `grid(value)` makes a map value an
-(N, N) bool array, `cells(value)` a cell list an (L, 2) int16 array.
+In the DataFrames of `Results` and `read_parquet` the list columns stay Arrow arrays (`pandas.ArrowDtype`: no
+conversion, a value is a Python list); `pandas.read_parquet` makes them object columns of NumPy arrays instead (20
+times slower to read). Either way `grid(value)` makes a map value an (N, N) bool array, `cells(value)` a cell list
+an (L, 2) int16 array.
 
 The Parquet file's metadata holds the run under the key `vinadv` (JSON, `parquet_metadata`): the format
 (`PARQUET_FORMAT`), the run's row (id, name, created, config, seed, weights checksum, attack, classifier,
@@ -258,6 +260,33 @@ def write_parquet(
     return n
 
 
+def to_frame(table: pa.Table) -> pd.DataFrame:
+    """A pairs table as a pandas DataFrame: numbers and strings as `Table.to_pandas` makes them (null: NaN, or a
+    missing string), the list columns (cells, maps, paths) kept as Arrow arrays (`pandas.ArrowDtype`), which costs
+    nothing, where NumPy object arrays would cost a Python object per map row and path cell."""
+    import pandas as pd
+    import pyarrow as pa
+
+    def keep_lists(arrow_type: pa.DataType):
+        return (
+            pd.ArrowDtype(arrow_type)
+            if pa.types.is_list(arrow_type) or pa.types.is_fixed_size_list(arrow_type)
+            else None
+        )
+
+    return table.to_pandas(types_mapper=keep_lists)
+
+
+def read_parquet(path: str | Path) -> pd.DataFrame:
+    """An exported Parquet file as the DataFrame `Results.pairs` gives of its run (`to_frame`), the file's metadata
+    (`parquet_metadata`) in `attrs["vinadv"]`."""
+    import pyarrow.parquet as pq
+
+    frame = to_frame(pq.read_table(path))
+    frame.attrs[METADATA_KEY] = parquet_metadata(path)
+    return frame
+
+
 def parquet_metadata(path: str | Path) -> dict:
     """The run an exported Parquet file holds (`run_metadata`), read from its metadata."""
     import pyarrow.parquet as pq
@@ -326,7 +355,7 @@ class Results:
 
     def pairs(self, run: int | str | None = None, *, successful_only: bool = False) -> pd.DataFrame:
         """The run's stored pairs, one row each, in pair-index order (the module doc lists the columns); the same
-        DataFrame as `pandas.read_parquet` of the run's Parquet export. `attrs["vinadv"]`: the run's metadata."""
+        DataFrame as `read_parquet` of the run's Parquet export. `attrs["vinadv"]`: the run's metadata."""
         import pyarrow as pa
 
         run_id = self.run_id(run)
@@ -334,7 +363,7 @@ class Results:
         for records in self.store.iter_pairs(run_id, successful_only=successful_only):
             tables.append(pairs_table(records, run_id))
             size = int(records.obstacles_o.shape[-1])
-        frame = (pa.concat_tables(tables) if tables else pair_schema().empty_table()).to_pandas()
+        frame = to_frame(pa.concat_tables(tables) if tables else pair_schema().empty_table())
         frame.attrs[METADATA_KEY] = run_metadata(self.store, run_id, size=size, successful_only=successful_only)
         return frame
 
@@ -346,9 +375,21 @@ class Results:
         _check_batch_size(batch_size)
         run_id = self.run_id(run)
         return (
-            pairs_table(records, run_id).to_pandas()
+            to_frame(pairs_table(records, run_id))
             for records in self.store.iter_pairs(run_id, successful_only=successful_only, chunk=int(batch_size))
         )
+
+    def to_parquet(
+        self,
+        path: str | Path,
+        run: int | str | None = None,
+        *,
+        successful_only: bool = False,
+        batch_size: int = DEFAULT_BATCH,
+    ) -> int:
+        """Write the run's pairs to the Parquet file `path` (`write_parquet`: what `vinadv export --format parquet`
+        writes); return how many."""
+        return write_parquet(self.store, self.run_id(run), path, successful_only=successful_only, batch_size=batch_size)
 
     def robustness(self) -> pd.DataFrame:
         """The stored robustness benchmarks (`vinadv robustness`), long form: one row per benchmark, strategy and
@@ -408,7 +449,9 @@ __all__ = [
     "pair_schema",
     "pairs_table",
     "parquet_metadata",
+    "read_parquet",
     "robustness_rows",
     "run_metadata",
+    "to_frame",
     "write_parquet",
 ]
