@@ -5,10 +5,14 @@ batches hold every pair once."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import math
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -36,6 +40,7 @@ from vinadv.store import Store
 from vinadv.store.schema import HARM_FLOAT_COLUMNS, map_pairs
 from vinadv.store.synthetic import random_records
 
+GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guides" / "analysis.md"
 NULLABLE_FLOATS = ("score", *HARM_FLOAT_COLUMNS)
 NULLABLE_STRINGS = ("expert_label", "harm")
 
@@ -284,3 +289,15 @@ def test_import_vinadv_stays_light():
     assert callable(vinadv.open) and vinadv.open is vinadv.analysis.open
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         vinadv.nope  # noqa: B018 (the attribute access is the test)
+
+
+@pytest.mark.slow  # a run of 200 maps with the shipped VIN: seconds
+def test_the_guides_python_tour_runs_as_written():
+    # docs/guides/analysis.md's one Python block, exactly as written there: a small run, its DataFrames, the export
+    (code,) = re.findall(r"```python\n(.*?)```", GUIDE.read_text(encoding="utf-8"), flags=re.S)
+    namespace: dict = {}
+    with contextlib.redirect_stdout(io.StringIO()) as out:
+        exec(compile(code, str(GUIDE), "exec"), namespace)
+    pairs = namespace["pairs"]
+    assert len(pairs) > 0 and namespace["runs"]["n_pairs"].tolist() == [len(pairs)]
+    assert "near-path" in out.getvalue() and "(28, 28)" in out.getvalue()
