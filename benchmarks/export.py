@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/export.py [--n 100000] [--size 28] [--max-path 60] [--repeat 3] [--json]
 
-Stores --n random pairs (`vinadv.store.synthetic.random_records`: --size maps, paths of up to --max-path cells,
+Stores --n random pairs (`vinadv.testing.store.random_records`: --size maps, paths of up to --max-path cells,
 NULLs in the nullable columns) as one run in a fresh SQLite file (untimed), then times `vinadv export` of that run
 (the command in this process, `--quiet`) as CSV and as Parquet, and reading each file back into a pandas DataFrame
 (`pandas.read_csv`; the Parquet file both with `pandas.read_parquet`, which makes the list columns NumPy object
@@ -24,7 +24,7 @@ from pathlib import Path
 from vinadv.analysis import read_parquet
 from vinadv.cli import main as vinadv_main
 from vinadv.store import Store
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 #: pairs generated and written at a time while the run is stored (bounded memory for any --n)
 WRITE_CHUNK = 20_000

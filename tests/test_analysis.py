@@ -38,7 +38,7 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.store import Store
 from vinadv.store.schema import HARM_FLOAT_COLUMNS, map_pairs
-from vinadv.store.synthetic import random_records
+from vinadv.testing.store import random_records
 
 GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guides" / "analysis.md"
 NULLABLE_FLOATS = ("score", *HARM_FLOAT_COLUMNS)
