@@ -9,7 +9,7 @@ A run's pairs have one layout, as an Arrow table (`pairs_table`), in a Parquet f
 the exported file as `read_parquet` reads it). One row per pair, in pair-index order (`pair_schema()`):
 
 - `no` int64, `run_id` int64, `pair_index` int64 (unique in a run);
-- `label`, `term_o`, `term_a`, `label_source` string; `attack` bool (success: UrP or FP);
+- `label` string, `attack` bool (success: UrP or FP), `term_o`, `term_a`, `label_source` string;
 - `score` float64, `dh`, `dv` int32, the harm costs (`opt_cost_o` ... `regret_a`, move units) float64,
   `expert_label`, `harm` string: null where the database holds NULL (in pandas NaN, or None for the strings);
 - `start`, `goal`: a cell, fixed_size_list<int16>[2] (row, col);
@@ -31,7 +31,9 @@ pyarrow and pandas are imported when first used, so `import vinadv` and the comm
 
 from __future__ import annotations
 
+import contextlib
 import datetime
+import itertools
 import json
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -44,7 +46,7 @@ from vinadv.errors import InputError
 from vinadv.outfile import atomic_output
 from vinadv.robustness import WORST_CASE
 from vinadv.store import PairRecords, Store
-from vinadv.store.schema import HARM_FLOAT_COLUMNS
+from vinadv.store.schema import HARM_COLUMNS, HARM_FLOAT_COLUMNS
 from vinadv.store.schema import runs as runs_table
 
 if TYPE_CHECKING:
@@ -64,15 +66,13 @@ PAIR_COLUMNS = (
     "pair_index",
     "label",
     "attack",
-    "label_source",
-    "score",
     "term_o",
     "term_a",
+    "label_source",
+    "score",
     "dh",
     "dv",
-    *HARM_FLOAT_COLUMNS,
-    "expert_label",
-    "harm",
+    *HARM_COLUMNS,
     "start",
     "goal",
     "added",
@@ -243,20 +243,22 @@ def write_parquet(
     import pyarrow.parquet as pq
 
     _check_batch_size(batch_size)
-    batches = store.iter_pairs(run_id, successful_only=successful_only, chunk=batch_size)
-    first = next(batches, None)
-    size = None if first is None else int(first.obstacles_o.shape[-1])
-    metadata = run_metadata(store, run_id, size=size, successful_only=successful_only)
-    schema = pair_schema().with_metadata({METADATA_KEY: json.dumps(metadata, default=str)})
+    metadata = run_metadata(store, run_id, size=None, successful_only=successful_only)  # InputError: no such run
     n = 0
-    with atomic_output(out, "wb") as fh, pq.ParquetWriter(fh, schema, compression="zstd") as writer:
-        if first is None:
-            writer.write_table(schema.empty_table())  # a file of the schema and no rows
-        for records in _chain(first, batches):
-            writer.write_table(pairs_table(records, run_id))
-            n += len(records)
-            if progress is not None:
-                progress(len(records))
+    # closed (the database read ended) whether the export finishes or fails
+    with contextlib.closing(store.iter_pairs(run_id, successful_only=successful_only, chunk=batch_size)) as batches:
+        # the first batch gives the map size, which the file's metadata holds, and the writer needs it from the start
+        first = next(batches, None)
+        metadata["size"] = None if first is None else int(first.obstacles_o.shape[-1])
+        schema = pair_schema().with_metadata({METADATA_KEY: json.dumps(metadata, default=str)})
+        with atomic_output(out, "wb") as fh, pq.ParquetWriter(fh, schema, compression="zstd") as writer:
+            if first is None:
+                writer.write_table(schema.empty_table())  # a file of the schema and no rows
+            for records in itertools.chain([first] if first is not None else [], batches):
+                writer.write_table(pairs_table(records, run_id))
+                n += len(records)
+                if progress is not None:
+                    progress(len(records))
     return n
 
 
@@ -298,12 +300,6 @@ def parquet_metadata(path: str | Path) -> dict:
     return json.loads(raw)
 
 
-def _chain(first: PairRecords | None, rest: Iterator[PairRecords]) -> Iterator[PairRecords]:
-    if first is not None:
-        yield first
-    yield from rest
-
-
 def _check_batch_size(batch_size: int) -> None:
     if isinstance(batch_size, bool) or not isinstance(batch_size, int | np.integer) or batch_size < 1:
         raise InputError(f"batch_size: {batch_size!r}, need a whole number of pairs, at least 1", "batch_size")
@@ -323,8 +319,8 @@ class Results:
     def url(self) -> str:
         return self.store.url
 
-    def close(self) -> None:
-        self.store.close()
+    def __repr__(self) -> str:
+        return f"Results({self.url!r})"
 
     def __enter__(self) -> Results:
         return self
@@ -332,8 +328,9 @@ class Results:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def __repr__(self) -> str:
-        return f"Results({self.url!r})"
+    def close(self) -> None:
+        """Close the database (its connections); the DataFrames already read stay."""
+        self.store.close()
 
     def run_id(self, run: int | str | None = None) -> int:
         """The id of run `run` (an id or a name; None: the latest run). InputError when there is none."""
