@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vinadv.store import LABELS, Store
+from vinadv.errors import InputError
+from vinadv.store import LABELS, PairRecords, Store
 from vinadv.testing.store import random_records
 
 
@@ -93,3 +94,15 @@ def test_counts_sources_runs_annotations(filled):
     got = [(a["pair_index"], a["label"]) for a in store.read_annotations(ids[0], pair_indices=[3, 99])]
     assert got == [(3, "FP"), (3, "UcP")]
     assert len(store.read_annotations(ids[0])) == 3
+
+
+@pytest.mark.parametrize("chunk", [1, 7, 150, 1000])
+def test_iter_pairs_reads_the_run_in_chunks_of_records(filled, chunk):
+    store, ids, (first, _) = filled
+    chunks = list(store.iter_pairs(ids[0], chunk=chunk))
+    assert [len(c) for c in chunks[:-1]] == [chunk] * (len(chunks) - 1) and 0 < len(chunks[-1]) <= chunk
+    assert PairRecords.concat(chunks).equals(first)
+    attacks = list(store.iter_pairs(ids[0], chunk=chunk, successful_only=True))
+    assert np.concatenate([c.pair_index for c in attacks]).tolist() == np.flatnonzero(first.attack).tolist()
+    with pytest.raises(InputError, match="chunk"):
+        next(store.iter_pairs(ids[0], chunk=0))
