@@ -21,6 +21,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import pandas as pd
+
 from vinadv.analysis import read_parquet
 from vinadv.cli import main as vinadv_main
 from vinadv.store import Store
@@ -54,8 +56,6 @@ def store_run(url: str, n: int, size: int, max_path: int) -> int:
 
 def measure(n: int, size: int, max_path: int, repeat: int, folder: Path) -> dict:
     """Export and read-back figures of CSV and Parquet (see the module doc)."""
-    import pandas as pd
-
     url = f"sqlite:///{folder / 'bench.db'}"
     t0 = time.perf_counter()
     run_id = store_run(url, n, size, max_path)

@@ -45,8 +45,8 @@ LAYERS = {
     "cli": 12,
 }
 
-#: the imports that run upward on purpose: the package's `__getattr__` imports `vinadv.analysis` on first use of
-#: `vinadv.open` (lazily, so `import vinadv` stays light)
+#: the imports that run upward on purpose: the package's `vinadv.open` imports `vinadv.analysis` when called (and
+#: for type checkers only), so that `import vinadv` stays light
 LAZY_EXPORTS = {("vinadv", "analysis")}
 
 
