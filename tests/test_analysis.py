@@ -40,7 +40,7 @@ from vinadv.store import Store
 from vinadv.store.schema import HARM_FLOAT_COLUMNS, map_pairs
 from vinadv.testing.store import random_records
 
-GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guides" / "analysis.md"
+GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guide" / "analysis.md"
 NULLABLE_FLOATS = ("score", *HARM_FLOAT_COLUMNS)
 NULLABLE_STRINGS = ("expert_label", "harm")
 
@@ -295,7 +295,7 @@ def test_import_vinadv_stays_light(sqlite_url):
 
 @pytest.mark.slow  # a run of 200 maps with the shipped VIN: seconds
 def test_the_guides_python_tour_runs_as_written():
-    # docs/guides/analysis.md's one Python block, exactly as written there: a small run, its DataFrames, the export
+    # docs/guide/analysis.md's one Python block, exactly as written there: a small run, its DataFrames, the export
     (code,) = re.findall(r"```python\n(.*?)```", GUIDE.read_text(encoding="utf-8"), flags=re.S)
     namespace: dict = {}
     with contextlib.redirect_stdout(io.StringIO()) as out:
