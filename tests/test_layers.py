@@ -21,6 +21,7 @@ LAYERS = {
     "vinadv": 0,
     "errors": 0,
     "vocabulary": 1,
+    "seeds": 1,
     "outfile": 1,
     "npzfile": 2,
     "grid": 3,

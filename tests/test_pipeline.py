@@ -14,12 +14,14 @@ import sqlalchemy as sa
 from tests.classify.oracle import rule_oracle
 from tests.classify.test_harm import optimal_path, path_cost
 from tests.cli_files import command_line, generate_and_attack
+from tests.planner_files import NO_PARAMETERS
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
 from vinadv.grid import generate_maps
 from vinadv.identify import objective_strength
 from vinadv.pipeline import RunConfig, compute_shard, run_pipeline
+from vinadv.planners.interface import EMPTY_SHA256
 from vinadv.planners.vin.weights import load_vin
 from vinadv.store import Store
 
@@ -294,3 +296,19 @@ def test_attack_and_identify_keep_every_added_obstacle(weights, tmp_path, sqlite
         == 2
     )
     assert "--obstacles must be >= 1" in capsys.readouterr().err
+
+
+def test_a_planner_without_weights_is_stored_without_a_checksum_and_old_runs_resume(tmp_path, db_url):
+    (tmp_path / "none.py").write_text(NO_PARAMETERS)
+    settings = RunConfig(n=4, size=8, seed=1, shard_size=2, planner=f"{tmp_path / 'none.py'}:make")
+    summary = run_pipeline(settings, db=db_url, name="no weights", progress=False)
+    with Store.open(db_url) as store:
+        info = store.run_info(summary.run_id)
+    assert info["weights_checksum"] is None and info["config"]["planner_spec"]["weights_sha256"] is None
+    # a run an older vinadv stored recorded the SHA-256 of no bytes: it is the same planner, and resumes
+    engine = sa.create_engine(db_url, poolclass=sa.pool.NullPool)
+    with engine.begin() as conn:
+        conn.execute(sa.text("UPDATE runs SET weights_checksum = :c"), {"c": EMPTY_SHA256})
+    engine.dispose()
+    again = run_pipeline(settings, db=db_url, name="no weights", resume=True, progress=False)
+    assert again.run_id == summary.run_id and again.stored == 0

@@ -17,6 +17,7 @@ from pathlib import Path
 from vinadv import __version__
 from vinadv.commands import cli_message
 from vinadv.errors import InputError, os_error_message
+from vinadv.seeds import check_seed
 
 # Order is the order of `vinadv --help`; one module per stage of the pipeline.
 COMMAND_MODULES = [
@@ -94,6 +95,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        if getattr(args, "seed", None) is not None:
+            check_seed(args.seed)  # every command's --seed, by one rule, before the command does anything
         code = args.func(args)
     except InputError as exc:
         print(f"vinadv: error: {cli_message(exc)}", file=sys.stderr)

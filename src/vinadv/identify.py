@@ -225,7 +225,10 @@ def identify_and_store(
     paths); it is called after the inputs are checked, so a bad file is refused before any worker starts. Without
     it, everything runs in this process."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: identify needs no store)
+    from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
 
+    if name is not None:
+        check_run_name(name)  # before the work and the database: it is refused, not found, after them
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
     pairs = PairSet.load(pairs_path)
     require_moves(pairs.moves, ("octile",), "the database")  # its runs and pairs have no movement model yet

@@ -25,11 +25,12 @@ from vinadv import __version__
 from vinadv.attacks.strategies import make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.errors import InputError, OutputError
-from vinadv.grid.generator import generate_maps
+from vinadv.grid.generator import MIN_SIZE, check_limits, default_obstacle_params, generate_maps
 from vinadv.identify import PLANNER_SPEC, Identification, identify, load_classifier, objective_strength
-from vinadv.planners.interface import Planner
+from vinadv.planners.interface import EMPTY_SHA256, Planner
 from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
 from vinadv.planners.spec import PlannerSpec
+from vinadv.seeds import check_seed
 from vinadv.vocabulary import LABEL_STRENGTH, success_count
 
 STAGES = ("generate", "attack", "identify", "store")
@@ -57,12 +58,16 @@ class RunConfig:
     obstacles: int = 1
 
     def __post_init__(self):
-        if self.n < 1:
-            raise InputError(f"n must be >= 1, got {self.n}", "n")
-        if self.shard_size < 1:
-            raise InputError(f"shard_size must be >= 1, got {self.shard_size}", "shard_size")
-        if self.obstacles < 1:
-            raise InputError(f"obstacles must be >= 1, got {self.obstacles}", "obstacles")
+        # every setting is checked here, before `run_pipeline` opens the database: a value refused only when the
+        # first shard uses it would leave a run row without pairs behind (and its name taken). The attack settings
+        # too, whether this strategy uses them or not: they are stored with the run.
+        least = {"n": 1, "shard_size": 1, "obstacles": 1, "size": MIN_SIZE, "per_map": 0, "budget": 1, "radius": 0}
+        for name, bound in least.items():
+            if getattr(self, name) < bound:
+                raise InputError(f"{name} must be >= {bound}, got {getattr(self, name)}", name)
+        check_seed(self.seed)
+        make_attack(self.attack, self.per_map, self.seed, self.budget, self.radius, self.obstacles)  # its name
+        check_limits(min(self.n, self.shard_size), self.size, 1, default_obstacle_params(self.size)[0])
         check_tolerances(self.harm_tolerance, self.harm_rtol)
         objective_strength(self.objective)  # InputError for an unknown objective
 
@@ -232,7 +237,10 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
                 "resume",
                 "name",
             )
-        if info["weights_checksum"] != planner.checksum:
+        stored_checksum = info["weights_checksum"]
+        if stored_checksum == EMPTY_SHA256:  # a planner without weights, as an older vinadv recorded it
+            stored_checksum = None
+        if stored_checksum != planner.checksum:
             raise InputError(
                 f"resume: run '{name}' was made with another {planner.name!r} planner (weights sha256 "
                 f"{info['weights_checksum']}, now {planner.checksum}); use the same planner or another "
@@ -263,7 +271,13 @@ def run_pipeline(
     """Run the main job and store it; returns the summary. `shard_results(config, shards, planner, classifier,
     label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: computing a shard needs no store)
+    from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
 
+    # everything that can be refused is refused before the database is opened (opening may create it)
+    if resume and not name:
+        raise InputError("resume needs name (the run to resume)", "resume", "name")
+    if name is not None:
+        check_run_name(name)
     t_start = time.perf_counter()
     planner = resolve_planner(config)
     classifier, classifier_name = load_classifier(config.classifier)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import torch
 
+from tests.planner_files import NO_PARAMETERS
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps
@@ -19,6 +20,7 @@ from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.pathset import PathSet
 from vinadv.planners.registry import list_planners, load_planner
 from vinadv.planners.rollout import rollout_logits
+from vinadv.planners.vin.weights import default_weights_path
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
@@ -143,3 +145,28 @@ def test_registering_the_planners_imports_no_pytorch():
     code = "import sys, vinadv.planners.registry as r; assert r.REGISTRY['gppn']; print('torch' in sys.modules)"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
     assert done.stdout.strip() == "False"
+
+
+def test_vin_weights_of_another_map_size_are_refused(tmp_path, capsys):
+    # the shipped weights were trained on 28x28 maps: on 16x16 ones they would plan, badly and silently
+    shipped = str(default_weights_path(28))
+    with pytest.raises(InputError, match=r"VIN weights trained on 28x28 maps, the maps are 16x16"):
+        load_planner("vin", 16, weights=shipped)
+    maps_file = tmp_path / "m.npz"
+    assert main(["maps", "generate", "--n", "1", "--size", "16", "--out", str(maps_file), "--quiet"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "p.npz"
+    assert main(["plan", "--maps", str(maps_file), "--weights", shipped, "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"vinadv: error: {shipped}: VIN weights trained on 28x28 maps, the maps are 16x16"
+    assert not out.exists()
+    assert load_planner("vin", 28, weights=shipped).size == 28  # the control: on their own size they load
+
+
+def test_a_planner_without_parameters_records_no_weights_checksum(tmp_path):
+    (tmp_path / "none.py").write_text(NO_PARAMETERS)
+    planner = load_planner(f"{tmp_path / 'none.py'}:make", 8)
+    assert planner.checksum is None and planner.spec()["weights_sha256"] is None
+    assert len(planner.config["source_sha256"]) == 64  # its source is still identified
+    (tmp_path / "one.py").write_text(EXAMPLE.read_text())
+    assert len(load_planner(f"{tmp_path / 'one.py'}:make", 8).checksum) == 64  # one with weights has a checksum

@@ -48,9 +48,11 @@ def register(subparsers) -> None:
 def cmd_generate(args: argparse.Namespace) -> int:
     from vinadv.grid import generate_maps, obstacle_fraction
 
+    if args.n < 1:  # a maps file holds at least one map
+        raise InputError(f"--n must be >= 1, got {args.n}")
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     t0 = time.perf_counter()
-    with progress_bar(args, total=max(args.n, 0), unit="map", desc="maps") as bar:
+    with progress_bar(args, total=args.n, unit="map", desc="maps") as bar:
         maps = generate_maps(
             args.n,
             args.size,
@@ -154,6 +156,9 @@ def cmd_import(args: argparse.Namespace) -> int:
     if args.starts is not None and args.starts < 1:
         raise InputError(f"--starts must be >= 1, got {args.starts}")
     maps, info = read_maps(args.input, args.format, split=args.split, starts=args.starts, seed=args.seed)
+    if len(maps) == 0:  # a maps file holds at least one map (`MapSet.save`): say so of the file read
+        split = args.split or info.get("split")
+        raise InputError(f"{args.input}: no maps to import{f' (split {split})' if split else ''}")
     maps.save(args.out)
     info = {"out": args.out, **info}
 

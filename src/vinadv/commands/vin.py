@@ -10,7 +10,7 @@ from vinadv.commands.evaluation import add_eval_arguments, emit_metrics, start_e
 from vinadv.commands.output import add_output_options, emit, note, shows_progress
 from vinadv.commands.training import add_train_arguments, run_training, train_config
 from vinadv.errors import InputError
-from vinadv.planners.weights import weights_checksum
+from vinadv.planners.weights import check_trained_size, weights_checksum
 
 
 def register(subparsers) -> None:
@@ -76,12 +76,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
     maps, source = start_eval(args)
     model = load_vin(args.weights, size=maps.size, k=args.k)
-    trained = model.record.get("size")
-    if trained is not None and trained != maps.size:
-        raise InputError(
-            f"{model.weights_path}: weights were trained on {trained}x{trained} maps, "
-            f"the maps are {maps.size}x{maps.size}"
-        )
+    check_trained_size(model.weights_path, model.record, maps.size, "VIN")
     data_seed = model.record.get("data", {}).get("seed")
     if data_seed is not None and data_seed == maps.seed:
         note(args, f"vinadv: warning: these maps use seed {maps.seed}, the seed of the training data")

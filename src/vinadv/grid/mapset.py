@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vinadv.errors import InputError
 from vinadv.grid.checks import check_maps
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves, read_moves
 from vinadv.grid.paths import PackedPaths
@@ -76,6 +77,10 @@ class MapSet:
         return self.expert[i * self.n_starts + s]
 
     def save(self, path: str | os.PathLike) -> None:
+        """Write the maps to `path` (format `MAPS_FORMAT`, atomically). A maps file holds at least one map: an empty
+        set is refused (InputError naming `path`), so no command meets a file it has nothing to do with."""
+        if len(self) == 0:
+            raise InputError(f"{path}: no maps to write (a maps file holds at least one map)")
         save_npz(
             path,
             MAPS_FORMAT,
@@ -94,12 +99,15 @@ class MapSet:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> MapSet:
-        """Read and validate a maps file; any problem raises InputError naming the file and field."""
+        """Read and validate a maps file; any problem (no maps included) raises InputError naming the file and
+        field."""
         r = NpzReader(path, MAPS_FORMAT, OLDER_MAPS_FORMATS)
         obstacles = r.array("obstacles", "b", 3)
         n, size = obstacles.shape[0], obstacles.shape[1]
         if obstacles.shape[2] != size or size < 3:
             raise r.fail("obstacles", f"has shape {obstacles.shape}, expected (n, N, N) with N >= 3")
+        if n == 0:  # written by a vinadv before `save` refused empty sets
+            raise r.fail("obstacles", "holds no maps")
         goals = r.array("goals", "i", 2, (n, 2)).astype(np.int64)
         starts = r.array("starts", "i", 3, (n, None, 2)).astype(np.int64)
         s = starts.shape[1]

@@ -71,12 +71,21 @@ def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
     return logits
 
 
-def state_checksum(module: nn.Module) -> str:
-    """SHA-256 (hex) of a module's state dict: names, dtypes, shapes and bytes, in name order."""
+#: SHA-256 of no bytes: what `state_checksum` recorded for a module without state before it returned None there
+#: (runs stored by an older vinadv may hold it; they compare equal to None)
+EMPTY_SHA256 = hashlib.sha256().hexdigest()
+
+
+def state_checksum(module: nn.Module) -> str | None:
+    """SHA-256 (hex) of a module's state dict: names, dtypes, shapes and bytes, in name order; None for a module
+    without parameters or buffers (a planner without weights, as `Planner.checksum` says of one)."""
     import torch
 
+    state = module.state_dict()
+    if not state:
+        return None
     h = hashlib.sha256()
-    for key, value in sorted(module.state_dict().items()):
+    for key, value in sorted(state.items()):
         t = value.detach().to("cpu").contiguous()
         h.update(f"{key}:{t.dtype}:{tuple(t.shape)};".encode())
         h.update(t.numpy().tobytes() if t.dtype != torch.bfloat16 else t.float().numpy().tobytes())

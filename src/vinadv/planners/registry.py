@@ -27,7 +27,7 @@ from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
-from vinadv.planners.weights import WEIGHTS_DIR, weights_checksum
+from vinadv.planners.weights import WEIGHTS_DIR, check_trained_size, weights_checksum
 
 #: `load(size, weights, corner_cutting, device)`: a registered planner for `size x size` maps
 Loader = Callable[[int, str | None, bool, str], Planner]
@@ -106,7 +106,9 @@ def _gppn_weights_path(size: int) -> Path:
 
 
 def _load_vin(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
-    return VINPlanner(load_vin_weights(weights, size=size), size=size)
+    loaded = load_vin_weights(weights, size=size)
+    check_trained_size(loaded.path, loaded.record, size, "VIN")
+    return VINPlanner(loaded, size=size)
 
 
 def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
@@ -116,7 +118,9 @@ def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, devic
             f"no shipped adversarially trained VIN for {size}x{size} maps ({path}); make one with "
             "`vinadv vin train --adversarial` and load it as planner 'vin' with those weights"
         )
-    planner = VINPlanner(load_vin_weights(path, size=size), size=size)
+    loaded = load_vin_weights(path, size=size)
+    check_trained_size(loaded.path, loaded.record, size, "VIN")
+    planner = VINPlanner(loaded, size=size)
     planner.name = "vin_robust"
     return planner
 
@@ -125,11 +129,7 @@ def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str
     from vinadv.planners.gppn import load_gppn  # noqa: PLC0415 (PyTorch: the VIN planners load without it)
 
     model = load_gppn(weights, size=size)
-    trained = model.record.get("size")
-    if trained is not None and trained != size:
-        raise PlannerError(
-            f"{model.weights_path}: GPPN weights trained on {trained}x{trained} maps, the maps are {size}x{size}"
-        )
+    check_trained_size(model.weights_path, model.record, size, "GPPN")
     return TorchPlanner(
         model,
         "gppn",

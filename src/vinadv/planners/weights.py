@@ -14,7 +14,7 @@ from vinadv.errors import InputError
 
 #: the weights shipped with vinadv (`vin28.pt`, `gppn28.pt`, ...)
 WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
-__all__ = ["WEIGHTS_DIR", "weights_checksum", "weights_file"]
+__all__ = ["WEIGHTS_DIR", "check_trained_size", "weights_checksum", "weights_file"]
 
 
 def weights_checksum(path: str | os.PathLike) -> str:
@@ -40,3 +40,15 @@ def weights_file(path: str | os.PathLike | None, shipped: Path, planner: str, si
     if not os.path.exists(name):
         raise InputError(f"{name}: no such weights file")
     return name
+
+
+def check_trained_size(name: str | os.PathLike | None, record: dict, size: int, planner: str) -> None:
+    """Refuse (InputError naming the file `name` and both sizes) weights whose training `record` says they were
+    trained on maps of another size than `size`: a VIN's or GPPN's convolutions run on any map, so nothing else
+    would notice. Weights without a recorded size (ports of other code) are taken as they are."""
+    trained = record.get("size") if isinstance(record, dict) else None
+    if isinstance(trained, int) and not isinstance(trained, bool) and trained != size:
+        raise InputError(
+            f"{name or 'the weights'}: {planner} weights trained on {trained}x{trained} maps, the maps are "
+            f"{size}x{size}"
+        )

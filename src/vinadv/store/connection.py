@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+import re
 import sqlite3
 import urllib.parse
 from pathlib import Path
@@ -44,7 +45,10 @@ _CONNECT_TIMEOUT_S = 5
 
 
 def resolve_url(db: str | None = None) -> str:
-    """The database URL: `db`, else env `VINADV_DB`, else `vinadv.db`; a plain path becomes `sqlite:///PATH`."""
+    """The database URL: `db`, else env `VINADV_DB`, else `vinadv.db`; a plain path becomes `sqlite:///PATH`.
+    An empty `db` (not None) is refused: it names no database, and the default is what leaving it out gives."""
+    if db is not None and not db.strip():
+        raise InputError(f"db: {db!r} names no database (give a file or a URL, or leave it out for the default)", "db")
     db = db or os.environ.get(ENV_DB) or DEFAULT_DB
     if "://" in db:
         return db
@@ -55,8 +59,8 @@ def safe_url(url: str | sa.URL) -> str:
     """The URL with its password hidden, for messages."""
     try:
         return sa.make_url(url).render_as_string(hide_password=True)
-    except Exception:
-        return "<unparseable database URL>"
+    except Exception:  # not parseable: shown as given, but for what could be a password (`user:PASSWORD@`)
+        return re.sub(r"(://[^/@:]*:)[^@]*@", r"\1***@", str(url))
 
 
 def utcnow() -> dt.datetime:
@@ -92,10 +96,16 @@ def open_engine(url: str, *, create: bool = True, readonly: bool = False) -> tup
     shown = safe_url(url)
     try:
         parsed = sa.make_url(url)
-    except sa_exc.ArgumentError as exc:
-        raise InputError(f"db: not a database URL: {shown} ({exc})", "db") from None
+    except (sa_exc.ArgumentError, ValueError) as exc:  # ValueError: urllib's, say for 'postgresql://[::1'
+        raise InputError(f"db: not a database URL: {shown} ({first_line(exc)})", "db") from None
     backend = parsed.get_backend_name()
     connect_args: dict = {}
+    if backend == "sqlite" and create and in_memory(parsed):
+        raise InputError(
+            f"db: {url} is an in-memory SQLite database: what is stored there is gone when the command ends; "
+            "give a file or a server URL",
+            "db",
+        )
     if backend == "sqlite":
         path = parsed.database
         if path and path != ":memory:" and not path.startswith("file:"):
@@ -132,6 +142,13 @@ def open_engine(url: str, *, create: bool = True, readonly: bool = False) -> tup
         engine.dispose()
         raise InputError(f"database {shown}: a damaged file (SQLite's own error message is not text)") from None
     return engine, absent
+
+
+def in_memory(url: sa.URL) -> bool:
+    """Whether the SQLite URL `url` names an in-memory database (`sqlite://`, `sqlite:///:memory:`, a `file:` URI
+    with `mode=memory` or `:memory:`), which lives only as long as its connections."""
+    database = url.database or ""
+    return database in ("", ":memory:") or database.startswith("file::memory:") or url.query.get("mode") == "memory"
 
 
 def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool) -> frozenset[str]:

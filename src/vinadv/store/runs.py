@@ -2,12 +2,47 @@
 
 from __future__ import annotations
 
+import unicodedata
+
 import sqlalchemy as sa
 
 from vinadv import __version__
 from vinadv.errors import InputError
 from vinadv.store.connection import Database, utcnow
 from vinadv.store.schema import map_pairs, meta_table, runs
+
+#: the longest run name, in characters: the `runs.name` column's length, which MariaDB and PostgreSQL enforce
+MAX_NAME_LENGTH = runs.c.name.type.length
+
+
+def check_run_name(name: str) -> str:
+    """Refuse (InputError naming `name`) what cannot be a run name, before anything is written: a name is found
+    again exactly as given, so it has no leading or trailing whitespace and no control characters (a name that
+    shows as another); it needs a letter (`resolve_run` reads a number as a run id) and holds at most
+    `MAX_NAME_LENGTH` characters (what every backend stores). Returns `name`."""
+    if not isinstance(name, str):
+        raise InputError(f"name: a run name is text, got {type(name).__name__}", "name")
+    shown = repr(name) if len(name) <= 60 else repr(name[:40]) + f"... ({len(name):,} characters)"
+    if len(name) > MAX_NAME_LENGTH:
+        raise InputError(f"name: {shown} is longer than {MAX_NAME_LENGTH} characters", "name")
+    if not name.strip() or name.strip().isdigit():
+        raise InputError(f"name: {shown} cannot be a run name (a name needs a letter; numbers are run ids)", "name")
+    if name != name.strip():
+        raise InputError(f"name: {shown} starts or ends with whitespace; give the name without it", "name")
+    odd = next((c for c in name if unicodedata.category(c) in _UNSHOWN), None)
+    if odd is not None:
+        what = _UNSHOWN[unicodedata.category(odd)]
+        raise InputError(f"name: {shown} holds U+{ord(odd):04X} ({what}), which a run name may not", "name")
+    return name
+
+
+#: Unicode categories a run name may not hold: characters that show as nothing or as another, or cannot be stored
+_UNSHOWN = {
+    "Cc": "a control character",
+    "Cs": "a lone surrogate: bytes that are not UTF-8",
+    "Zl": "a line separator",
+    "Zp": "a paragraph separator",
+}
 
 
 class RunQueries(Database):
@@ -26,12 +61,9 @@ class RunQueries(Database):
         status: str = "running",
     ) -> int:
         """Insert a run and return its id. A `name` is unique in a database (`--resume` finds a run by it) and
-        not a number (`resolve_run` reads a number as a run id): InputError otherwise."""
+        follows `check_run_name`: InputError otherwise."""
         if name is not None:
-            if not name.strip() or name.strip().isdigit():
-                raise InputError(
-                    f"name: {name!r} cannot be a run name (a name needs a letter; numbers are run ids)", "name"
-                )
+            check_run_name(name)
             found = self.find_run(name)
             if found is not None:
                 raise InputError(

@@ -8,6 +8,8 @@ import scipy.io
 
 from tests.interop.conftest import real_file
 from tests.interop.formats.layouts import assert_same_maps, trajectories, write_avivt_test, write_avivt_train
+from vinadv.cli import main
+from vinadv.errors import InputError
 from vinadv.grid import PackedPaths
 from vinadv.interop import import_maps, read_maps
 
@@ -64,3 +66,46 @@ def test_real_8x8_batched_arrays_alone_give_maps_with_drawn_starts(tmp_path):
     assert "starts drawn" in info["layout"] and info["maps"] == len(per_sample)
     np.testing.assert_array_equal(got.obstacles, per_sample.obstacles)  # same maps, same order, both readings
     np.testing.assert_array_equal(got.goals, per_sample.goals)
+
+
+def test_an_empty_mat_file_is_one_line(tmp_path):
+    (tmp_path / "empty.mat").write_bytes(b"")
+    with pytest.raises(InputError, match="empty.mat: not a readable MATLAB .mat file"):
+        read_maps(tmp_path / "empty.mat", "avivt")
+
+
+@pytest.mark.parametrize(
+    "write,renamed",
+    [
+        (write_avivt_test, "all_im_data"),
+        (write_avivt_test, "all_value_data"),
+        (write_avivt_train, "im_data"),
+        (write_avivt_train, "state_xy_data"),
+    ],
+)
+def test_a_missing_array_is_named_for_the_layout_the_file_has(tmp_path, small_maps, write, renamed):
+    write(tmp_path / "a.mat", small_maps, trajectories(small_maps))
+    arrays = {k: v for k, v in scipy.io.loadmat(tmp_path / "a.mat").items() if not k.startswith("__")}
+    arrays["renamed_" + renamed] = arrays.pop(renamed)
+    scipy.io.savemat(tmp_path / "b.mat", arrays)
+    with pytest.raises(InputError, match=f"array '{renamed}' is missing"):
+        read_maps(tmp_path / "b.mat", "avivt")
+
+
+def test_a_file_of_neither_layout_names_both(tmp_path):
+    scipy.io.savemat(tmp_path / "c.mat", {"something": np.zeros((2, 64))})
+    with pytest.raises(InputError, match="none of the arrays of avivt's layouts .*all_im_data.*im_data"):
+        read_maps(tmp_path / "c.mat", "avivt")
+
+
+def test_a_file_of_no_maps_is_read_but_not_imported(tmp_path, capsys):
+    paths = np.empty((0, 1), dtype=object)  # a MATLAB cell array of no paths
+    scipy.io.savemat(
+        tmp_path / "z.mat",
+        {"all_im_data": np.zeros((0, 64)), "all_value_data": np.zeros((0, 64)), "all_states_xy": paths},
+    )
+    assert len(read_maps(tmp_path / "z.mat", "avivt")[0]) == 0
+    out = tmp_path / "z.npz"
+    assert main(["maps", "import", str(tmp_path / "z.mat"), "--format", "avivt", "--out", str(out), "--quiet"]) == 2
+    assert capsys.readouterr().err == f"vinadv: error: {tmp_path / 'z.mat'}: no maps to import\n"
+    assert not out.exists()

@@ -74,9 +74,29 @@ def _maps_of_rows(
     return new_map, obstacles, goals
 
 
+#: the arrays of each layout the file may have: the test layout, the training layout's per-sample arrays and its
+#: batches (a training file may have either or both)
+TEST_ARRAYS = ("all_im_data", "all_value_data", "all_states_xy")
+SAMPLE_ARRAYS = ("im_data", "value_data", "state_xy_data", "label_data")
+BATCH_ARRAYS = ("batch_im_data", "batch_value_data", "state_x_data", "state_y_data", "batch_label_data")
+
+
+def _layout(f: ForeignArrays) -> str:
+    """The layout the file looks like, test or train: the one with the most of its arrays, so that a file missing
+    one array is told which (of its layout) is missing. InputError when it has none of either."""
+    test = sum(f.has(name) for name in TEST_ARRAYS)
+    train = max(sum(f.has(name) for name in SAMPLE_ARRAYS), sum(f.has(name) for name in BATCH_ARRAYS))
+    if not test and not train:
+        raise InputError(
+            f"{f.path}: none of the arrays of avivt's layouts (test: {', '.join(TEST_ARRAYS)}; train: "
+            f"{', '.join(SAMPLE_ARRAYS)} or {', '.join(BATCH_ARRAYS)}); has {sorted(f.data)[:12]}"
+        )
+    return "test" if test >= train else "train"
+
+
 def _read(f: ForeignArrays, split: str | None, starts: int | None, seed: int) -> tuple[MapSet, dict]:
     if split is None:
-        split = "test" if f.has("all_im_data") else "train"
+        split = _layout(f)
     if split == "test":
         refuse_starts(f, starts)
         im = f.get("all_im_data", 2)
@@ -102,7 +122,7 @@ def _read(f: ForeignArrays, split: str | None, starts: int | None, seed: int) ->
         cells = f.integers("all_states_xy", np.concatenate(cells_list), 1, s) - 1 if n else np.zeros((0, 2), int)
         maps, info = from_trajectories(f, "all_states_xy", obstacles, goals, np.cumsum(new_map) - 1, cells, offsets)
         return maps, {"layout": "test", **info}
-    if f.has("im_data"):
+    if any(f.has(name) for name in SAMPLE_ARRAYS):  # the per-sample arrays, or some of them (one renamed)
         refuse_starts(f, starts)
         im = f.get("im_data", 2)
         m = im.shape[0]

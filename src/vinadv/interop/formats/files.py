@@ -58,11 +58,12 @@ def load_npz(path: str) -> ForeignArrays:
 
 def load_mat(path: str) -> ForeignArrays:
     import scipy.io
+    import scipy.io.matlab
 
     if not os.path.exists(path):
         raise InputError(f"{path}: no such file")
     try:
         data = scipy.io.loadmat(path)
-    except (ValueError, OSError, TypeError, NotImplementedError) as exc:
+    except (ValueError, OSError, TypeError, NotImplementedError, scipy.io.matlab.MatReadError) as exc:
         raise InputError(f"{path}: not a readable MATLAB .mat file ({exc})") from None
     return ForeignArrays(path, {k: v for k, v in data.items() if not k.startswith("__")})
