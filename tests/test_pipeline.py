@@ -312,3 +312,20 @@ def test_a_planner_without_weights_is_stored_without_a_checksum_and_old_runs_res
     engine.dispose()
     again = run_pipeline(settings, db=db_url, name="no weights", resume=True, progress=False)
     assert again.run_id == summary.run_id and again.stored == 0
+
+
+def test_resume_refuses_a_planner_file_edited_since(tmp_path, db_url, capsys):
+    from tests.planners.test_registry import NO_PARAMETERS
+
+    planner = tmp_path / "none.py"
+    planner.write_text(NO_PARAMETERS)
+    run = ["run", "--n", "4", "--size", "8", "--shard-size", "2", "--planner", f"{planner}:make", "--db", db_url]
+    assert main([*run, "--name", "mine", "--quiet"]) == 0
+    capsys.readouterr()
+    planner.write_text(NO_PARAMETERS + "\n# edited: the planner may plan otherwise now\n")
+    assert main([*run, "--name", "mine", "--resume", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("vinadv: error: --resume: run 'mine' was made with another source of --planner")
+    assert len(err.strip().splitlines()) == 1
+    planner.write_text(NO_PARAMETERS)  # the file as it was: the run resumes
+    assert main([*run, "--name", "mine", "--resume", "--quiet"]) == 0

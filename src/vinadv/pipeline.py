@@ -237,17 +237,7 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
                 "resume",
                 "name",
             )
-        stored_checksum = info["weights_checksum"]
-        if stored_checksum == EMPTY_SHA256:  # a planner without weights, as an older vinadv recorded it
-            stored_checksum = None
-        if stored_checksum != planner.checksum:
-            raise InputError(
-                f"resume: run '{name}' was made with another {planner.name!r} planner (weights sha256 "
-                f"{info['weights_checksum']}, now {planner.checksum}); use the same planner or another "
-                "name",
-                "resume",
-                "planner",
-            )
+        _check_same_planner(name, info, planner)
         return run_id
     return store.create_run(
         name,
@@ -258,6 +248,31 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         classifier=classifier_name,
         version=__version__,
     )
+
+
+def _check_same_planner(name: str, info: dict, planner: Planner) -> None:
+    """Refuse (InputError) to resume the run `name` (its row `info`) with another planner than it was made with:
+    other weights (checksum), or a bring-your-own planner whose source file changed since (its recorded SHA-256)."""
+    stored_checksum = info["weights_checksum"]
+    if stored_checksum == EMPTY_SHA256:  # a planner without weights, as an older vinadv recorded it
+        stored_checksum = None
+    if stored_checksum != planner.checksum:
+        raise InputError(
+            f"resume: run '{name}' was made with another {planner.name!r} planner (weights sha256 "
+            f"{info['weights_checksum']}, now {planner.checksum}); use the same planner or another name",
+            "resume",
+            "planner",
+        )
+    stored_spec = (info["config"] or {}).get(PLANNER_SPEC) or {}
+    stored_source = (stored_spec.get("config") or {}).get("source_sha256")
+    source = planner.config.get("source_sha256")
+    if stored_source is not None and stored_source != source:
+        raise InputError(
+            f"resume: run '{name}' was made with another source of planner {planner.name!r} (source sha256 "
+            f"{stored_source}, now {source}); use the same planner file or another name",
+            "resume",
+            "planner",
+        )
 
 
 def run_pipeline(

@@ -166,6 +166,8 @@ class Broken(nn.Module):
             return out
         if self.mode == "int":
             return torch.zeros(b, 8, n, n, dtype=torch.int64)
+        if self.mode == "meta":
+            return torch.zeros(b, 8, n, n, device="meta")
         raise RuntimeError("boom")
 
 
@@ -175,6 +177,7 @@ class Broken(nn.Module):
         ("shape", r"logits of shape \(3, 4, 8, 8\); expected \(B, 8, N, N\)"),
         ("nan", "NaN logits"),
         ("int", "torch.int64 logits"),
+        ("meta", "logits on the 'meta' device, which holds no values"),
         ("raise", "forward failed: RuntimeError: boom"),
     ],
 )

@@ -51,6 +51,8 @@ def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
     if torch is not None and isinstance(logits, torch.Tensor):
         if not torch.is_floating_point(logits):
             raise PlannerError(f"planner {name!r} returned {logits.dtype} logits; expected a float tensor")
+        if logits.is_meta:  # shapes without data: nothing to copy to the CPU
+            raise PlannerError(f"planner {name!r} returned logits on the 'meta' device, which holds no values")
         logits = logits.detach().to("cpu", torch.float32).numpy()
     elif isinstance(logits, np.ndarray):
         if logits.dtype.kind != "f":
