@@ -315,8 +315,6 @@ def test_a_planner_without_weights_is_stored_without_a_checksum_and_old_runs_res
 
 
 def test_resume_refuses_a_planner_file_edited_since(tmp_path, db_url, capsys):
-    from tests.planners.test_registry import NO_PARAMETERS
-
     planner = tmp_path / "none.py"
     planner.write_text(NO_PARAMETERS)
     run = ["run", "--n", "4", "--size", "8", "--shard-size", "2", "--planner", f"{planner}:make", "--db", db_url]
@@ -329,3 +327,89 @@ def test_resume_refuses_a_planner_file_edited_since(tmp_path, db_url, capsys):
     assert len(err.strip().splitlines()) == 1
     planner.write_text(NO_PARAMETERS)  # the file as it was: the run resumes
     assert main([*run, "--name", "mine", "--resume", "--quiet"]) == 0
+
+
+# a run of two shards that is stopped in its second (the first is stored): Ctrl-C, SIGTERM, a planner that exits
+STOPPED = ["run", "--n", "4", "--size", "8", "--shard-size", "2", "--planner", "optimal", "--name", "k", "--quiet"]
+
+
+def stop_in_second_shard(monkeypatch, stop):
+    """Make `vinadv run` call `stop()` when it starts computing shard 1."""
+
+    def stopping(config, shard, *args, **kw):
+        if shard == 1:
+            stop()
+        return compute_shard(config, shard, *args, **kw)
+
+    monkeypatch.setattr("vinadv.pipeline.compute_shard", stopping)
+
+
+def run_status(url: str) -> str:
+    with Store.open(url, readonly=True) as store:
+        (run,) = store.list_runs(with_counts=False)
+    return run["status"]
+
+
+def test_ctrl_c_marks_the_run_interrupted_and_says_how_to_resume(db_url, monkeypatch, capsys):
+    def ctrl_c():
+        raise KeyboardInterrupt
+
+    stop_in_second_shard(monkeypatch, ctrl_c)
+    assert main([*STOPPED, "--db", db_url]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("vinadv: interrupted: run 1 stopped with ") and len(err.strip().splitlines()) == 1
+    assert err.strip().endswith("pairs stored this time: resume it with the same options and --name k --resume")
+    assert run_status(db_url) == "interrupted"
+    monkeypatch.undo()
+    assert main([*STOPPED, "--db", db_url, "--resume", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["skipped_shards"] == 1
+    assert run_status(db_url) == "done"
+
+
+def test_sigterm_marks_the_run_interrupted_and_exits_143(sqlite_url, monkeypatch, capsys):
+    class Unhandled(Exception):
+        pass
+
+    def unhandled(signum, frame):  # what the test's own process does with a SIGTERM vinadv does not handle
+        raise Unhandled
+
+    previous = signal.signal(signal.SIGTERM, unhandled)
+    try:
+        stop_in_second_shard(monkeypatch, lambda: os.kill(os.getpid(), signal.SIGTERM))
+        assert main([*STOPPED, "--db", sqlite_url]) == 143
+        assert signal.getsignal(signal.SIGTERM) is unhandled  # the command gave the handler back
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    err = capsys.readouterr().err
+    assert err.startswith("vinadv: terminated: run 1 stopped with ") and err.strip().endswith("--name k --resume")
+    assert run_status(sqlite_url) == "interrupted"
+
+
+EXITING = """
+import sys
+
+import torch
+
+
+class Exiting(torch.nn.Module):
+    def forward(self, obstacles, goals):
+        sys.exit(0)
+
+
+def make(size):
+    return Exiting()
+"""
+
+
+def test_a_planner_that_exits_is_one_line_and_the_run_is_marked_failed(tmp_path, db_url, capsys):
+    (tmp_path / "exits.py").write_text(EXITING)
+    planner = f"{tmp_path / 'exits.py'}:make"
+    run = ["run", "--n", "2", "--size", "8", "--planner", planner, "--name", "x", "--db", db_url, "--quiet"]
+    assert main(run) == 2
+    line = f"vinadv: error: planner {planner!r}: forward failed: SystemExit: 0; run 1 marked failed"
+    assert capsys.readouterr().err.strip() == line
+    assert run_status(db_url) == "failed"
+    maps = tmp_path / "m.npz"
+    generate_maps(1, 8, seed=1, n_starts=1).save(maps)
+    assert main(["plan", "--maps", str(maps), "--planner", planner, "--out", str(tmp_path / "p.npz"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip() == f"vinadv: error: planner {planner!r}: forward failed: SystemExit: 0"

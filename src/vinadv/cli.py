@@ -11,7 +11,9 @@ import gc
 import hashlib
 import importlib
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from vinadv import __version__
@@ -91,9 +93,29 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is (as Ctrl-C raises KeyboardInterrupt), so that a command stopped either
+    way cleans up the same: a run records that it was interrupted and says how to resume it."""
+
+
+def _raise_terminated(_signum, _frame) -> None:
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    on_main_thread = threading.current_thread() is threading.main_thread()  # where Python runs signal handlers
+    previous = signal.signal(signal.SIGTERM, _raise_terminated) if on_main_thread else None
+    try:
+        return _run(args, argv)
+    finally:
+        if on_main_thread:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _run(args: argparse.Namespace, argv: list[str] | None) -> int:
+    """Run the parsed command; every bad input, fault of the environment or interruption as one line and a status."""
     try:
         if getattr(args, "seed", None) is not None:
             check_seed(args.seed)  # every command's --seed, by one rule, before the command does anything
@@ -112,9 +134,12 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # a file the command reads or writes: permissions, full disk, a folder in the way
         print(f"vinadv: error: {os_error_message(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("vinadv: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:  # Ctrl-C (status 128 + SIGINT) or SIGTERM (128 + SIGTERM), as a shell reports
+        terminated = isinstance(exc, Terminated)
+        print(
+            f"vinadv: {'terminated' if terminated else 'interrupted'}{f': {exc}' if str(exc) else ''}", file=sys.stderr
+        )
+        return 128 + int(signal.SIGTERM if terminated else signal.SIGINT)
     if argv is None:
         # Run as the program, which exits next. The interpreter's shutdown runs the garbage collector over every
         # object PyTorch and the rest created (hundreds of thousands): after a command that imported PyTorch, exit

@@ -15,6 +15,7 @@ database fault while storing (a full disk) stops the run with one line naming th
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -238,6 +239,7 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
                 "name",
             )
         _check_same_planner(name, info, planner)
+        store.set_run_status(run_id, "running")  # again, after "interrupted" or "failed"
         return run_id
     return store.create_run(
         name,
@@ -322,21 +324,39 @@ def run_pipeline(
                 summary.add(result, written, time.perf_counter() - t0)
                 if bar is not None:
                     bar.update(result.n_maps)
-        except OutputError as exc:
-            how = (
-                f"resume it with the same options and --name {name} --resume"
-                if name
-                else "it has no --name, so it cannot be resumed (give runs a --name)"
-            )
-            raise OutputError(
-                f"{exc}; run {run_id} stopped with {summary.stored:,} pairs stored this time: {how}"
-            ) from None
+        except OutputError as exc:  # a fault of the database: no status can be recorded there
+            raise OutputError(f"{exc}; run {run_id} {_stopped(summary, name)}") from None
+        except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (the command line raises a KeyboardInterrupt for it)
+            _record_status(store, run_id, "interrupted")
+            raise type(exc)(f"run {run_id} {_stopped(summary, name)}") from None
+        except Exception as exc:  # the planner broke its contract, or a bug: the run did not finish
+            _record_status(store, run_id, "failed")
+            if isinstance(exc, InputError):
+                raise type(exc)(f"{exc}; run {run_id} marked failed", *exc.parameters) from None
+            raise
         finally:
             if bar is not None:
                 bar.close()
         summary.wall_seconds = time.perf_counter() - t_start
         store.finish_run(run_id, timings={**summary.to_dict()["seconds"], "wall": summary.wall_seconds})
     return summary
+
+
+def _stopped(summary: RunSummary, name: str | None) -> str:
+    """What a run stopped part way has stored, and how to go on with it (the end of a one-line message)."""
+    how = (
+        f"resume it with the same options and --name {name} --resume"
+        if name
+        else "it has no --name, so it cannot be resumed (give runs a --name)"
+    )
+    return f"stopped with {summary.stored:,} pairs stored this time: {how}"
+
+
+def _record_status(store, run_id: int, status: str) -> None:
+    """Record the status of a run stopped part way, as far as the database lets: what stopped the run is what the
+    user is told, not a second fault of the database on the way out."""
+    with contextlib.suppress(Exception):
+        store.set_run_status(run_id, status)
 
 
 def _complete_shards(store, run_id: int, config: RunConfig) -> int:

@@ -282,7 +282,7 @@ class TorchPlanner(Planner):
                     g = torch.from_numpy(goals[sl].astype(np.int64)).to(self.device)
                     try:
                         raw = self.module(obs, g)
-                    except Exception as exc:  # a user's module: say which planner failed, in one line
+                    except (Exception, SystemExit) as exc:  # a user's module: say which planner failed, in one line
                         raise PlannerError(
                             f"planner {self.name!r}: forward failed: {type(exc).__name__}: {exc}"
                         ) from None

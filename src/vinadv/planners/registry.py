@@ -269,14 +269,14 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         sys.modules[module_name] = module  # dataclasses and pickling look the module up by name
         try:
             module_spec.loader.exec_module(module)
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:  # SystemExit: a sys.exit() at import must not end the command
             sys.modules.pop(module_name, None)
             raise PlannerError(f"planner {spec!r}: {source} failed to import: {type(exc).__name__}: {exc}") from None
         source_sha = weights_checksum(path)
     else:
         try:
             module = importlib.import_module(source)
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:
             raise PlannerError(
                 f"planner {spec!r}: cannot import module {source!r}: {type(exc).__name__}: {exc}"
             ) from None
@@ -287,7 +287,7 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         raise PlannerError(f"planner {spec!r}: {source} has no callable {factory_name!r}")
     try:
         net = factory(int(size))
-    except Exception as exc:
+    except (Exception, SystemExit) as exc:
         raise PlannerError(f"planner {spec!r}: {factory_name}({size}) failed: {type(exc).__name__}: {exc}") from None
     import torch
 

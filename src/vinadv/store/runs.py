@@ -141,10 +141,16 @@ class RunQueries(Database):
 
     def finish_run(self, run_id: int, timings: dict | None = None, status: str = "done") -> None:
         """Record the run's timings (seconds per stage) and final status."""
+        self._update_run(run_id, timings=timings, status=status)
+
+    def set_run_status(self, run_id: int, status: str) -> None:
+        """Record the run's status alone: "running" again when resumed, "interrupted" (Ctrl-C, SIGTERM) or
+        "failed" (its planner broke the contract) when it stopped part way."""
+        self._update_run(run_id, status=status)
+
+    def _update_run(self, run_id: int, **values) -> None:
         with self.engine.begin() as conn:
-            updated = conn.execute(
-                runs.update().where(runs.c.id == int(run_id)).values(timings=timings, status=status)
-            ).rowcount
+            updated = conn.execute(runs.update().where(runs.c.id == int(run_id)).values(**values)).rowcount
         if updated != 1:
             raise InputError(f"run_id: no run {run_id} in database {self.url}", "run_id")
 
