@@ -166,6 +166,10 @@ class Broken(nn.Module):
             return out
         if self.mode == "int":
             return torch.zeros(b, 8, n, n, dtype=torch.int64)
+        if self.mode in ("+inf", "-inf"):  # at one cell of the last map
+            out = torch.zeros(b, 8, n, n)
+            out[-1, 3, 2, 2] = float(self.mode)
+            return out
         if self.mode == "meta":
             return torch.zeros(b, 8, n, n, device="meta")
         raise RuntimeError("boom")
@@ -178,6 +182,7 @@ class Broken(nn.Module):
         ("nan", "NaN logits"),
         ("int", "torch.int64 logits"),
         ("meta", "logits on the 'meta' device, which holds no values"),
+        ("+inf", r"returned \+inf logits \(on 1 of 3 maps\)"),
         ("raise", "forward failed: RuntimeError: boom"),
     ],
 )
@@ -187,6 +192,12 @@ def test_a_planner_that_breaks_the_contract_is_refused_by_name(mode, message):
     with pytest.raises(PlannerError, match="planner 'my-broken'.*" + message):
         planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
     assert issubclass(PlannerError, InputError)
+
+
+def test_minus_infinity_masks_a_move():
+    maps = generate_maps(3, 8, seed=1, n_starts=1)
+    result = TorchPlanner(Broken("-inf"), "masking", 8).plan_maps(maps.obstacles, maps.goals, maps.starts)
+    assert len(result) == 3
 
 
 def test_check_logits_numpy_and_sizes():

@@ -406,6 +406,9 @@ def test_forged_posts_are_refused(client, app, store, db):
         ({"label": "FP", "annotator": "<script>"}, 400),
         ({"label": "FP", "annotator": "x" * 65}, 400),
         ({"label": "FP", "extra": "1"}, 400),
+        ({"label": ["FP", "DP"]}, 400),  # two labels for one pair: refused, not the first taken
+        ({"label": ["FP", "FP"]}, 400),
+        ({"label": "FP", "annotator": ["ann", "bob"]}, 400),
     ],
 )
 def test_bad_label_forms_are_400(client, store, db, form, status):

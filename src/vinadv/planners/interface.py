@@ -6,7 +6,7 @@ one map per map serves all its rollouts. `Planner.plan_maps` turns them into pat
 `vinadv.planners.rollout` (argmax, lowest index on ties), the same for every planner. A planner may plan faster its
 own way as long as the paths are the same: the VIN keeps its exact engine (`VINPlanner`).
 
-Every planner's logits pass `check_logits`: a planner that returns another shape, a non-float type or NaN is
+Every planner's logits pass `check_logits`: a planner that returns another shape, a non-float type, NaN or +inf is
 refused with a `PlannerError` (an `InputError`: the planner is the user's input) naming it.
 
 PyTorch is imported by the planners that run it, when they run it: the VIN plans from NumPy weights
@@ -46,7 +46,8 @@ class PlannerError(InputError):
 
 
 def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
-    """`logits` as a float32/float64 NumPy array `(b, 8, n, n)` without NaN; else a `PlannerError` naming `name`."""
+    """`logits` as a float32/float64 NumPy array `(b, 8, n, n)` without NaN or +inf (-inf masks a move); else a
+    `PlannerError` naming `name`."""
     torch = sys.modules.get("torch")  # without PyTorch loaded, nothing is a tensor
     if torch is not None and isinstance(logits, torch.Tensor):
         if not torch.is_floating_point(logits):
@@ -66,10 +67,13 @@ def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
         )
     if logits.dtype not in (np.float32, np.float64):
         logits = logits.astype(np.float32)
-    if np.isnan(logits).any():
-        raise PlannerError(
-            f"planner {name!r} returned NaN logits (on {int(np.isnan(logits).any(axis=(1, 2, 3)).sum())} of {b} maps)"
-        )
+    # NaN orders nothing, and +inf ties every move it marks (an argmax then picks by position): both refused;
+    # -inf is a masked move, allowed
+    for what, bad in (("NaN", np.isnan), ("+inf", np.isposinf)):
+        found = bad(logits)
+        if found.any():
+            maps = int(found.any(axis=(1, 2, 3)).sum())
+            raise PlannerError(f"planner {name!r} returned {what} logits (on {maps} of {b} maps)")
     return logits
 
 

@@ -178,6 +178,8 @@ def create_app(
         for name in request.form:
             if name not in ("csrf_token", "label", "annotator"):
                 raise BadRequest(f"unknown form field {name!r}")
+            if len(request.form.getlist(name)) > 1:  # which one was meant? (the first would be taken silently)
+                raise BadRequest(f"form field {name!r} given more than once")
         label = request.form.get("label", "")
         if label not in HUMAN_LABELS:
             raise BadRequest(f"label: {label!r} is not one of {'|'.join(HUMAN_LABELS)}")
