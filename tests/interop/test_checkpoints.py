@@ -6,6 +6,8 @@ import argparse
 import io
 import json
 import os
+import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -139,6 +141,22 @@ class Payload:
 
     def __reduce__(self):
         return (os.getcwd, ())  # harmless if it ran, but a call all the same
+
+
+@pytest.mark.parametrize("kind", ["hostile", "pickle"])
+def test_gppn_import_weights_refuses_unsafe_files_in_one_line_of_its_own(tmp_path, capsys, kind):
+    path = tmp_path / f"{kind}.pth"
+    if kind == "hostile":  # torch.save of an object outside the allow-list
+        torch.save({"model": gppn_vin_state(), "extra": Payload()}, path)
+        why = "it holds Python objects, not only tensors and plain values; building them would run code"
+    else:  # a plain pickle (protocol 4): torch warns of the protocol before it fails
+        path.write_bytes(pickle.dumps({"model": {"w": 1}}, protocol=4))
+        why = "a Python pickle, not a file torch.save wrote; loading it would run code"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["gppn", "import-weights", str(path), "--k", "10", "--out", str(tmp_path / "o.pt")]) == 2
+    assert not caught  # no torch warnings before the error
+    assert capsys.readouterr().err == f"vinadv: error: {path}: not a readable checkpoint ({why})\n"
 
 
 def test_objects_outside_the_allow_list_are_refused(tmp_path):

@@ -25,6 +25,7 @@ from vinadv.interop.formats.gppn import GPPN_TO_VINADV
 from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.vin.arrays import STATE_KEYS
 from vinadv.planners.vin.model import VIN
+from vinadv.planners.weights import torch_load
 
 GPPN_VIN_KEYS = ("h.weight", "h.bias", "r.weight", "q.weight", "w", "policy.weight")
 
@@ -79,12 +80,7 @@ def read_checkpoint(path: str | os.PathLike, which: str | None = None) -> tuple[
     name = str(path)
     if not os.path.exists(name):
         raise InputError(f"{name}: no such checkpoint file")
-    try:
-        with torch.serialization.safe_globals(_allowed_globals()):
-            data = torch.load(name, map_location="cpu", weights_only=True)
-    except Exception as exc:  # torch raises many types: pickle, zip, EOF, a global outside the allow-list
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{name}: not a readable checkpoint ({first})") from None
+    data = torch_load(name, "readable checkpoint", _allowed_globals())
     if not isinstance(data, dict):
         raise InputError(f"{name}: expected a checkpoint dict, found {type(data).__name__}")
     which = which or ("best_model" if "best_model" in data else "model")

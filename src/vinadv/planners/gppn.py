@@ -34,7 +34,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from vinadv.errors import InputError
-from vinadv.planners.weights import weights_file
+from vinadv.planners.weights import torch_load, weights_file
 
 GPPN_FORMAT = "vinadv.gppn/1"
 WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
@@ -189,9 +189,9 @@ def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
     """
     name = weights_file(path, default_gppn_path(size), "GPPN", size)
     try:
-        data = torch.load(name, map_location="cpu", weights_only=True)
-    except Exception as exc:  # torch raises many types for a bad file
-        raise InputError(f"{name}: not a readable weights file ({type(exc).__name__}); {_AUTHORS_HINT}") from None
+        data = torch_load(name, "readable weights file")
+    except InputError as exc:
+        raise InputError(f"{exc}; {_AUTHORS_HINT}") from None
     if isinstance(data, dict) and data.get("format") is None and ("best_model" in data or "model" in data):
         raise InputError(f"{name}: not a vinadv GPPN weights file; {_AUTHORS_HINT}")
     if not isinstance(data, dict) or data.get("format") != GPPN_FORMAT:

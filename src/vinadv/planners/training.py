@@ -37,7 +37,7 @@ from vinadv.planners.vin import value_iteration
 from vinadv.planners.vin.arrays import VINConfig, default_k
 from vinadv.planners.vin.model import VI_INITS, VIN, init_shift_kernels, make_input
 from vinadv.planners.vin.weights import load_vin
-from vinadv.planners.weights import weights_checksum
+from vinadv.planners.weights import torch_load, weights_checksum
 
 CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
 _BITS = 1 << np.arange(8, dtype=np.uint16)
@@ -493,10 +493,7 @@ def _save_checkpoint(path, model, optimizer, config, state: _State, rec: Trainin
 
 
 def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: TrainingRecord) -> _State:
-    try:
-        ck = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as exc:
-        raise InputError(f"{path}: not a readable training checkpoint ({exc})") from None
+    ck = torch_load(path, "readable training checkpoint")
     if not isinstance(ck, dict) or ck.get("format") != CHECKPOINT_FORMAT:
         raise InputError(f"{path}: not a vinadv training checkpoint")
     # Resuming under other settings would silently mix two trainings; only the epoch count may grow.

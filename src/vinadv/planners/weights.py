@@ -8,13 +8,17 @@ from __future__ import annotations
 
 import hashlib
 import os
+import warnings
+import zipfile
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from vinadv.errors import InputError
 
 #: the weights shipped with vinadv (`vin28.pt`, `gppn28.pt`, ...)
 WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
-__all__ = ["WEIGHTS_DIR", "check_trained_size", "weights_checksum", "weights_file"]
+__all__ = ["WEIGHTS_DIR", "check_trained_size", "torch_load", "weights_checksum", "weights_file"]
 
 
 def weights_checksum(path: str | os.PathLike) -> str:
@@ -52,3 +56,31 @@ def check_trained_size(name: str | os.PathLike | None, record: dict, size: int, 
             f"{name or 'the weights'}: {planner} weights trained on {trained}x{trained} maps, the maps are "
             f"{size}x{size}"
         )
+
+
+def torch_load(name: str | os.PathLike, what: str, allowed_globals: Iterable = ()) -> Any:
+    """`torch.load(name, weights_only=True)` on the CPU: tensors and plain values (and `allowed_globals`), never
+    code. A file torch cannot load so raises InputError in one line, "NAME: not a WHAT (why)", without torch's
+    advice to load it with `weights_only=False` (which would run the file's code) and without its warnings."""
+    import torch
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # say, torch's note on a pickle protocol it did not write: the error says
+            with torch.serialization.safe_globals(list(allowed_globals)):
+                return torch.load(name, map_location="cpu", weights_only=True)
+    except Exception as exc:  # torch raises many types for a bad file (pickle, zip, EOF, an unsafe global)
+        raise InputError(f"{name}: not a {what} ({_why_unreadable(str(name), exc)})") from None
+
+
+def _why_unreadable(name: str, exc: Exception) -> str:
+    """Why torch could not load the file `name`, in vinadv's words."""
+    text = str(exc)
+    if "Unsupported global" in text or "Unsupported class" in text or "GLOBAL" in text:
+        return "it holds Python objects, not only tensors and plain values; building them would run code"
+    if zipfile.is_zipfile(name):
+        return "a zip archive, but not one torch wrote"
+    with open(name, "rb") as fh:
+        if fh.read(1) == b"\x80":  # a pickle's protocol opcode: pickled by Python, not saved by torch
+            return "a Python pickle, not a file torch.save wrote; loading it would run code"
+    return "damaged or another kind of file"

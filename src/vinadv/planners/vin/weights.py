@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import json
 import os
-import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +26,7 @@ from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.outfile import atomic_output
 from vinadv.planners.torchfile import read_torch_file
 from vinadv.planners.vin.arrays import STATE_KEYS, VINConfig, VINWeights, default_k
-from vinadv.planners.weights import WEIGHTS_DIR, weights_file
+from vinadv.planners.weights import WEIGHTS_DIR, torch_load, weights_file
 
 WEIGHTS_FORMAT = "vinadv.vin/1"
 __all__ = [
@@ -126,10 +125,7 @@ def _torch_load(name: str) -> Any:
     bfloat16 reads too); what `read_torch_file` could not read."""
     import torch
 
-    try:
-        data = torch.load(name, map_location="cpu", weights_only=True)
-    except Exception as exc:  # torch raises many types for a bad file (pickle, zip, EOF, unsafe global)
-        raise InputError(_unreadable(name, exc)) from None
+    data = torch_load(name, "vinadv/PyTorch weights file")
 
     def arrays(value):
         if isinstance(value, torch.Tensor):
@@ -139,19 +135,6 @@ def _torch_load(name: str) -> Any:
         return value
 
     return arrays(data)
-
-
-def _unreadable(name: str, exc: Exception) -> str:
-    """Why torch could not load `name`, in vinadv's words (torch's own message advises `weights_only=False`,
-    which would let the file run code: never repeated)."""
-    text = str(exc)
-    if "Unsupported global" in text or "Unsupported class" in text or "GLOBAL" in text:
-        return (
-            f"{name}: holds Python objects, not only tensors and plain values; refused (weights files are "
-            "loaded without running code)"
-        )
-    kind = "a zip archive, but not one torch wrote" if zipfile.is_zipfile(name) else "damaged or another kind of file"
-    return f"{name}: not a vinadv/PyTorch weights file ({kind})"
 
 
 def _check_planner_shapes(name: str, state: dict, config: VINConfig) -> None:
