@@ -14,7 +14,7 @@ import sqlalchemy as sa
 from tests.classify.oracle import rule_oracle
 from tests.classify.test_harm import optimal_path, path_cost
 from tests.cli_files import command_line, generate_and_attack
-from tests.planner_files import NO_PARAMETERS
+from tests.planner_files import EXITING, NO_PARAMETERS
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
@@ -383,22 +383,6 @@ def test_sigterm_marks_the_run_interrupted_and_exits_143(sqlite_url, monkeypatch
     err = capsys.readouterr().err
     assert err.startswith("vinadv: terminated: run 1 stopped with ") and err.strip().endswith("--name k --resume")
     assert run_status(sqlite_url) == "interrupted"
-
-
-EXITING = """
-import sys
-
-import torch
-
-
-class Exiting(torch.nn.Module):
-    def forward(self, obstacles, goals):
-        sys.exit(0)
-
-
-def make(size):
-    return Exiting()
-"""
 
 
 def test_a_planner_that_exits_is_one_line_and_the_run_is_marked_failed(tmp_path, db_url, capsys):
