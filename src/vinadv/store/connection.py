@@ -164,14 +164,10 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
     if not present & ours:
         if not create:
             raise InputError(f"database {shown}: no vinadv tables (nothing stored there yet)")
-        with engine.begin() as conn:
-            if sqlite:
-                # page size first: it takes effect only before the first table is written, and not in WAL mode
-                conn.exec_driver_sql("PRAGMA page_size=32768")
-                conn.exec_driver_sql("PRAGMA journal_mode=WAL")
-            metadata.create_all(conn)
-            conn.execute(meta_table.insert(), [{"key": "schema_version", "value": SCHEMA_VERSION}])
-        return frozenset()
+        if create_tables(engine):
+            return frozenset()
+        with engine.connect() as conn:  # another process made them first: check them as any others
+            present = set(sa.inspect(conn).get_table_names())
     if meta_table.name not in present:
         raise InputError(
             f"database {shown}: has tables {sorted(present & ours)} but no {meta_table.name} table; "
@@ -218,6 +214,50 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
             for table in missing_additive:
                 table.create(conn, checkfirst=True)
     return absent
+
+
+#: PostgreSQL's advisory lock key for creating the tables (advisory locks are per database): "vinadv" and 1
+_PG_SCHEMA_LOCK = 0x76696E616476_0001
+_LOCK_TIMEOUT_S = 30
+
+
+def create_tables(engine: sa.Engine) -> bool:
+    """Create vinadv's tables and record the schema version in the database behind `engine`, which was found empty,
+    holding a lock that one process at a time holds (SQLite: an immediate transaction; MariaDB: a named lock;
+    PostgreSQL: an advisory lock), all in one transaction where the backend allows. Returns False, having done
+    nothing, when the database is no longer empty once the lock is held: another process made the tables first.
+    Without the lock, two first uses of one database at once collided (a table created twice, or a schema version
+    read before the other wrote it)."""
+    dialect = engine.dialect.name
+    lock_name = f"vinadv schema {engine.url.database}"[:64]  # MariaDB's named locks are server-wide
+    with engine.connect() as conn:
+        if dialect == "sqlite":
+            # page size first: it takes effect only before the first table is written, and not in WAL mode
+            conn.exec_driver_sql("PRAGMA page_size=32768")
+            conn.exec_driver_sql("BEGIN IMMEDIATE")  # the write lock, waited for (busy_timeout) before the check
+        elif dialect == "postgresql":
+            conn.execute(sa.text("SELECT pg_advisory_xact_lock(:key)"), {"key": _PG_SCHEMA_LOCK})
+        else:
+            got = conn.execute(
+                sa.text("SELECT GET_LOCK(:name, :timeout)"), {"name": lock_name, "timeout": _LOCK_TIMEOUT_S}
+            ).scalar()
+            if got != 1:
+                raise OutputError(f"database {safe_url(engine.url)}: another process holds the schema lock")
+        try:
+            if set(sa.inspect(conn).get_table_names()) & {t.name for t in TABLES}:
+                conn.rollback()
+                return False
+            metadata.create_all(conn)
+            conn.execute(meta_table.insert(), [{"key": "schema_version", "value": SCHEMA_VERSION}])
+            conn.commit()
+        finally:
+            if dialect not in ("sqlite", "postgresql"):
+                conn.rollback()  # after a failure: the lock is released on a usable connection
+                conn.execute(sa.text("SELECT RELEASE_LOCK(:name)"), {"name": lock_name})
+                conn.commit()
+        if dialect == "sqlite":
+            conn.exec_driver_sql("PRAGMA journal_mode=WAL")  # outside the transaction, as SQLite requires
+    return True
 
 
 def upgrade(engine: sa.Engine) -> None:

@@ -89,24 +89,44 @@ class PairQueries(Database):
         written = 0
         for lo in range(0, len(records), batch_size):
             hi = min(lo + batch_size, len(records))
-            with self.engine.begin() as conn:
-                # encoded and inserted a chunk at a time, inside the batch's one transaction: the batch's text
-                # never exists all at once, and each chunk is still in the CPU cache when the driver copies it
-                for start in range(lo, hi, ROW_CHUNK):
-                    stop = min(start + ROW_CHUNK, hi)
-                    if self.sqlite:
-                        self._insert_sqlite(conn, run_id, records, start, stop)
-                    elif self._insert_sql is not None:
-                        # straight to the driver's executemany: SQLAlchemy's per-row parameter processing would
-                        # cost more than encoding and inserting together (PyMySQL turns it into multi-row INSERTs)
-                        conn.exec_driver_sql(self._insert_sql, encode_rows(run_id, records, start, stop))
-                    else:
-                        rows = encode_rows(run_id, records, start, stop)
-                        conn.execute(map_pairs.insert(), [dict(zip(INSERT_COLUMNS, row)) for row in rows])
-            written += hi - lo
+            try:
+                self._insert_batch(run_id, records, lo, hi)
+                done = hi - lo
+            except sa.exc.IntegrityError as conflict:
+                if not skip_stored:
+                    raise
+                done = self._insert_missing(run_id, records.take(slice(lo, hi)), batch_size, conflict)
+            written += done
             if progress is not None:
                 progress(hi - lo)
         return written
+
+    def _insert_batch(self, run_id: int, records: PairRecords, lo: int, hi: int) -> None:
+        """Insert records `lo:hi` in one transaction (all or nothing)."""
+        with self.engine.begin() as conn:
+            # encoded and inserted a chunk at a time, inside the batch's one transaction: the batch's text
+            # never exists all at once, and each chunk is still in the CPU cache when the driver copies it
+            for start in range(lo, hi, ROW_CHUNK):
+                stop = min(start + ROW_CHUNK, hi)
+                if self.sqlite:
+                    self._insert_sqlite(conn, run_id, records, start, stop)
+                elif self._insert_sql is not None:
+                    # straight to the driver's executemany: SQLAlchemy's per-row parameter processing would
+                    # cost more than encoding and inserting together (PyMySQL turns it into multi-row INSERTs)
+                    conn.exec_driver_sql(self._insert_sql, encode_rows(run_id, records, start, stop))
+                else:
+                    rows = encode_rows(run_id, records, start, stop)
+                    conn.execute(map_pairs.insert(), [dict(zip(INSERT_COLUMNS, row)) for row in rows])
+
+    def _insert_missing(self, run_id: int, batch: PairRecords, batch_size: int, conflict: sa.exc.IntegrityError) -> int:
+        """A batch that met pairs of its own stored since they were read (another writer of the run: a concurrent
+        `--resume`): write those still missing. A conflict that no newly stored pair explains (the run's row
+        gone, say) is raised as it was."""
+        stored = self.stored_indices(run_id, batch.pair_index.min(), batch.pair_index.max())
+        missing = ~np.isin(batch.pair_index, stored)
+        if missing.all():
+            raise conflict
+        return self.write_pairs(run_id, batch.take(missing), batch_size=batch_size, skip_stored=True)
 
     def _insert_sqlite(self, conn: sa.Connection, run_id: int, records: PairRecords, lo: int, hi: int) -> None:
         """Insert records `lo:hi` into SQLite, mostly `SQLITE_ROWS_PER_STATEMENT` rows per INSERT statement.

@@ -165,12 +165,18 @@ class RunQueries(Database):
     def set_shards_done(self, run_id: int, shards: int) -> None:
         """Record that shards `0 .. shards-1` of the run are completely stored (`--resume` skips them)."""
         key = _shards_key(run_id)
-        with self.engine.begin() as conn:
-            updated = conn.execute(
-                meta_table.update().where(meta_table.c.key == key).values(value=str(int(shards)))
-            ).rowcount
-            if not updated:
-                conn.execute(meta_table.insert().values(key=key, value=str(int(shards))))
+        for attempt in range(2):  # again only when another writer of the run (a concurrent resume) inserted it
+            try:
+                with self.engine.begin() as conn:
+                    updated = conn.execute(
+                        meta_table.update().where(meta_table.c.key == key).values(value=str(int(shards)))
+                    ).rowcount
+                    if not updated:
+                        conn.execute(meta_table.insert().values(key=key, value=str(int(shards))))
+                return
+            except sa.exc.IntegrityError:
+                if attempt:
+                    raise
 
 
 def _shards_key(run_id: int) -> str:
