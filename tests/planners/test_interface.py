@@ -10,6 +10,7 @@ from tests.grid.oracle import brute_distances
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps, optimal_actions, shortest_distances
+from vinadv.grid.shortest_paths import valid_moves
 from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, check_logits
 from vinadv.planners.optimal import OptimalPlanner
@@ -21,6 +22,7 @@ from vinadv.planners.symmetric import DihedralAverage
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import plan_maps as engine_plan_maps
 from vinadv.testing.planners import planning_vin
+from vinadv.vocabulary import COLLISION
 
 
 def assert_same(a, b):
@@ -166,6 +168,13 @@ class Broken(nn.Module):
             return out
         if self.mode == "int":
             return torch.zeros(b, 8, n, n, dtype=torch.int64)
+        if self.mode == "-inf everywhere":  # every move of every cell of the first map
+            out = torch.zeros(b, 8, n, n)
+            out[0] = float("-inf")
+            return out
+        if self.mode == "-inf on illegal moves":  # masking as a planner may: every move that is not legal
+            legal = valid_moves(obstacles.numpy().astype(bool))
+            return torch.from_numpy(np.where(legal, 0.0, -np.inf).transpose(0, 3, 1, 2).astype(np.float32))
         if self.mode in ("+inf", "-inf"):  # at one cell of the last map
             out = torch.zeros(b, 8, n, n)
             out[-1, 3, 2, 2] = float(self.mode)
@@ -183,6 +192,7 @@ class Broken(nn.Module):
         ("int", "torch.int64 logits"),
         ("meta", "logits on the 'meta' device, which holds no values"),
         ("+inf", r"returned \+inf logits \(on 1 of 3 maps\)"),
+        ("-inf everywhere", r"-inf logits for every legal move of cell \(\d+, \d+\) of map 0, which can reach"),
         ("raise", "forward failed: RuntimeError: boom"),
     ],
 )
@@ -194,10 +204,13 @@ def test_a_planner_that_breaks_the_contract_is_refused_by_name(mode, message):
     assert issubclass(PlannerError, InputError)
 
 
-def test_minus_infinity_masks_a_move():
+@pytest.mark.parametrize("mode", ["-inf", "-inf on illegal moves"])
+def test_minus_infinity_masks_a_move(mode):
     maps = generate_maps(3, 8, seed=1, n_starts=1)
-    result = TorchPlanner(Broken("-inf"), "masking", 8).plan_maps(maps.obstacles, maps.goals, maps.starts)
+    result = TorchPlanner(Broken(mode), "masking", 8).plan_maps(maps.obstacles, maps.goals, maps.starts)
     assert len(result) == 3
+    if mode == "-inf on illegal moves":
+        assert not (result.termination == COLLISION).any()  # only legal moves were left to take
 
 
 def test_check_logits_numpy_and_sizes():

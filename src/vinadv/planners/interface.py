@@ -25,6 +25,7 @@ import numpy as np
 from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
+from vinadv.grid.shortest_paths import shortest_distances, valid_moves
 from vinadv.planners.batching import over_maps, torch_threads
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
@@ -80,6 +81,27 @@ def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
 #: SHA-256 of no bytes: what `state_checksum` recorded for a module without state before it returned None there
 #: (runs stored by an older vinadv may hold it; they compare equal to None)
 EMPTY_SHA256 = hashlib.sha256().hexdigest()
+
+
+def check_masking(
+    name: str, logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool, moves: str
+) -> None:
+    """Refuse (`PlannerError` naming `name`) logits `(B, 8, N, N)` that mask (-inf) every legal move of a cell that
+    can reach the goal: the rollout would then take an arbitrary move there. -inf on some moves is masking, allowed;
+    checked only when some logit is -inf (the shortest paths it needs cost a Dijkstra per map)."""
+    masked = np.isneginf(logits)
+    if not masked.any():
+        return
+    open_move = valid_moves(obstacles, corner_cutting, moves) & ~masked.transpose(0, 2, 3, 1)
+    dist, _ = shortest_distances(obstacles, goals, corner_cutting, moves)
+    stuck = np.isfinite(dist) & (dist > 0) & ~open_move.any(axis=-1)
+    if stuck.any():
+        b, r, c = (int(v) for v in np.argwhere(stuck)[0])
+        maps = int(stuck.any(axis=(1, 2)).sum())
+        raise PlannerError(
+            f"planner {name!r} returned -inf logits for every legal move of cell ({r}, {c}) of map {b}, which can "
+            f"reach the goal (cells like it on {maps} of {len(logits)} maps)"
+        )
 
 
 def state_checksum(module: nn.Module) -> str | None:
@@ -191,9 +213,11 @@ class Planner(ABC):
         parts = []
         for i in chunks:
             sl = slice(i, i + chunk_size)
+            logits = self.logits(obstacles[sl], goals[sl])
+            check_masking(self.name, logits, obstacles[sl], goals[sl], corner_cutting, self.moves)
             parts.append(
                 rollout_logits(
-                    self.logits(obstacles[sl], goals[sl]),
+                    logits,
                     obstacles[sl],
                     goals[sl],
                     starts[sl],
