@@ -58,6 +58,7 @@ def test_added_maps_are_the_models_harmful_adversarial_maps():
     assert late(model, 2, train_idx) is None
 
 
+@pytest.mark.slow  # over a second: the quick tier keeps the module's other tests
 def test_training_takes_the_added_maps_in_and_records_them(tmp_path):
     maps = generate_maps(16, SIZE, seed=8, n_starts=1)
     extra = generate_maps(6, SIZE, seed=9, n_starts=1)

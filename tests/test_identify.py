@@ -17,6 +17,7 @@ from vinadv.testing.planners import planning_vin
 SIZE = 10
 
 
+@pytest.mark.slow  # over a second: the quick tier keeps the module's other tests
 def test_exhaustive_with_the_harm_objective_keeps_the_most_harmful_cell_of_a_brute_force_search():
     model = planning_vin(SIZE, seed=1, noise=0.1)
     maps = generate_maps(6, SIZE, seed=3, n_starts=1)

@@ -146,6 +146,7 @@ def close(a, b):
     return (math.isnan(a) and math.isnan(b)) or math.isclose(a, b, abs_tol=1e-9)
 
 
+@pytest.mark.slow  # over a second: the quick tier keeps the module's other tests
 @settings(max_examples=150, deadline=None)
 @given(harm_cases())
 def test_every_field_matches_the_oracles(case):

@@ -44,6 +44,7 @@ def test_take_matches_list_indexing(paths, data):
     assert as_lists(PackedPaths.pack(paths).take(mask)) == lists([p for p, m in zip(paths, mask) if m])
 
 
+@pytest.mark.slow  # over a second: the quick tier keeps the module's other tests
 @settings(max_examples=100, deadline=None)
 @given(st.lists(paths_strategy, max_size=4))
 def test_concat_matches_list_concatenation(groups):

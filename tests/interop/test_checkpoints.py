@@ -47,6 +47,7 @@ class PortVIN(nn.Module):
         return self.fc(q.permute(0, 2, 3, 1))
 
 
+@pytest.mark.slow  # over a second: the quick tier keeps the module's other tests
 def test_export_weights_loads_into_the_port_class(tmp_path, capsys):
     model = planning_vin(16, seed=3)
     save_vin(model, tmp_path / "w.pt", {"note": "test"})

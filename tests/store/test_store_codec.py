@@ -38,6 +38,7 @@ def test_maps_match_oracle_and_round_trip(obstacles):
             assert np.array_equal(np.array([parse_map(t) for t in texts]), obstacles)
 
 
+@pytest.mark.slow  # over a second: the quick tier keeps the module's other tests
 @settings(max_examples=200, deadline=None)
 @given(paths_strategy)
 def test_paths_match_oracle_and_round_trip(paths):
