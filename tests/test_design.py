@@ -4,10 +4,9 @@
 import re
 from pathlib import Path
 
-import vinadv
-
 ROOT = Path(__file__).resolve().parents[1]
-SOURCE = Path(vinadv.__file__).parent
+#: the checkout's package (not `vinadv.__file__`: the layout is about this tree, whichever vinadv is imported)
+SOURCE = ROOT / "src" / "vinadv"
 #: an entry of the layout block: indentation, then `name/` (a folder) or `name.py` (a module), then its description
 ENTRY = re.compile(r"^(?P<indent> *)(?P<name>[\w./]+/|\w+\.py)(?:\s|$)")
 
