@@ -202,7 +202,7 @@ class Planner(ABC):
         progress: bool = False,
     ) -> PlanResult:
         """Paths from `starts (B, S, 2)`: path `b * S + s` from start `s` of map `b`, `chunk_size` maps at a time."""
-        obstacles, goals, starts = _check_multi(obstacles, goals, starts)
+        obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
         self._check_size(obstacles)
         chunk_size = max(1, int(chunk_size))
         chunks = range(0, len(obstacles), chunk_size)
@@ -240,7 +240,7 @@ class Planner(ABC):
             raise PlannerError(f"planner {self.name!r} is for {self.size}x{self.size} maps, the maps are {n}x{n}")
 
 
-def _check_multi(obstacles, goals, starts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def check_multi_inputs(obstacles, goals, starts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """`check_plan_inputs` for `starts (B, S, 2)`: normalised `(obstacles, goals, starts)`."""
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     obstacles, _, goals = check_plan_inputs(obstacles, np.zeros((len(obstacles), 2)), goals)
@@ -401,7 +401,7 @@ class VINPlanner(Planner):
         chunk_size: int | None = None,
         progress: bool = False,
     ) -> PlanResult:
-        obstacles, goals, starts = _check_multi(obstacles, goals, starts)
+        obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
         self._check_size(obstacles)
         return engine.plan_maps(
             obstacles, goals, starts, self.weights, corner_cutting, chunk_size or engine.DEFAULT_CHUNK, progress
