@@ -413,7 +413,8 @@ def best_first_search(
         cost: `(B, N, N)` float, finite, >= 0: the cost of each cell (charged when the search leaves it, and added to
             the heuristic): 1 on free cells for vanilla A*; a guidance map (Neural A*'s encoder output) otherwise.
         obstacles: `(B, N, N)` bool, True = obstacle: never opened.
-        starts, goals: `(B, 2)` int `(row, col)`.
+        starts: `(B, 2)` int `(row, col)` of each start.
+        goals: `(B, 2)` int `(row, col)` of each goal.
         g_ratio: `f = g_ratio * g + (1 - g_ratio) * h`, in [0, 1]: 0.5 is A*, `1 / (1 + w)` weighted A* with weight
             `w`, 0 greedy best-first.
         moves: the movement model (`vinadv.grid.moves`): the moves, their costs, and the distance of the heuristic
