@@ -142,26 +142,11 @@ def _replica_key(g, h, g_ratio32, h_ratio32, sqrt_n32):
 
 
 @numba.njit(cache=True, nogil=True)
-def _search_one(
-    cost,
-    obstacles,
-    sr,
-    sc,
-    gr,
-    gc,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    expanded,
-):
-    """One search (see the module doc); fills `cells_out` (the path, start first) and `expanded`; returns
+def _search_one(cost, obstacles, sr, sc, gr, gc, params, cells_out, expanded):
+    """One search (see the module doc) from `(sr, sc)` to `(gr, gc)` with the parameters `params` that
+    `best_first_search` packs; fills `cells_out` (the path, start first) and `expanded`; returns
     `(path length, termination)`."""
+    g_ratio, deltas, move_costs, diagonal_cost, tie_break, corner_cutting, exact, budget = params
     n = obstacles.shape[0]
     m = obstacles.shape[1]
     cells = n * m
@@ -262,43 +247,13 @@ def _search_one(
 
 
 @numba.njit(cache=True, nogil=True)
-def _search_row(
-    b,
-    cost,
-    obstacles,
-    starts,
-    goals,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    lengths,
-    termination,
-    expanded,
-):
-    """Search row `b` of the batch into row `b` of the outputs (`[start]` where the goal is not reached)."""
+def _search_row(b, inputs, params, outputs):
+    """Search row `b` of the batch into row `b` of the outputs (`[start]` where the goal is not reached); the
+    arguments are the tuples `_search` packs."""
+    cost, obstacles, starts, goals = inputs
+    cells_out, lengths, termination, expanded = outputs
     length, term = _search_one(
-        cost[b],
-        obstacles[b],
-        starts[b, 0],
-        starts[b, 1],
-        goals[b, 0],
-        goals[b, 1],
-        g_ratio,
-        deltas,
-        move_costs,
-        diagonal_cost,
-        tie_break,
-        corner_cutting,
-        exact,
-        budget,
-        cells_out[b],
-        expanded[b],
+        cost[b], obstacles[b], starts[b, 0], starts[b, 1], goals[b, 0], goals[b, 1], params, cells_out[b], expanded[b]
     )
     if term != GOAL:
         cells_out[b, 0, 0] = starts[b, 0]
@@ -308,88 +263,17 @@ def _search_row(
 
 
 @numba.njit(cache=True, parallel=True)
-def _search_batch(
-    cost,
-    obstacles,
-    starts,
-    goals,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    lengths,
-    termination,
-    expanded,
-):
+def _search_batch(inputs, params, outputs):
     """Every row, in parallel over rows (Numba threads)."""
-    for b in numba.prange(obstacles.shape[0]):
-        _search_row(
-            b,
-            cost,
-            obstacles,
-            starts,
-            goals,
-            g_ratio,
-            deltas,
-            move_costs,
-            diagonal_cost,
-            tie_break,
-            corner_cutting,
-            exact,
-            budget,
-            cells_out,
-            lengths,
-            termination,
-            expanded,
-        )
+    for b in numba.prange(inputs[0].shape[0]):
+        _search_row(b, inputs, params, outputs)
 
 
 @numba.njit(cache=True, nogil=True)
-def _search_rows(
-    cost,
-    obstacles,
-    starts,
-    goals,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    lengths,
-    termination,
-    expanded,
-):
-    """Every row, one after the other: for a few rows, where waking the threads of `_search_batch` costs more than
-    it saves."""
-    for b in range(obstacles.shape[0]):
-        _search_row(
-            b,
-            cost,
-            obstacles,
-            starts,
-            goals,
-            g_ratio,
-            deltas,
-            move_costs,
-            diagonal_cost,
-            tie_break,
-            corner_cutting,
-            exact,
-            budget,
-            cells_out,
-            lengths,
-            termination,
-            expanded,
-        )
+def _search_rows(inputs, params, outputs):
+    """Every row on the calling thread: for a few rows, where waking `_search_batch`'s threads costs more."""
+    for b in range(inputs[0].shape[0]):
+        _search_row(b, inputs, params, outputs)
 
 
 #: batches of fewer rows are searched on the calling thread (`_search_rows`)
@@ -458,23 +342,20 @@ def best_first_search(
     termination = np.zeros(b, dtype=np.int8)
     expanded = np.zeros(obstacles.shape, dtype=bool)
     if b:
-        (_search_batch if b >= PARALLEL_FROM else _search_rows)(
-            cost,
-            obstacles,
-            starts,
-            goals,
-            g_ratio,
-            model.deltas,
-            model.costs,
-            float(model.diagonal_cost),
-            TIE_BREAK,
-            bool(corner_cutting),
-            bool(exact),
-            budget,
-            cells,
-            lengths,
-            termination,
-            expanded,
+        search = _search_batch if b >= PARALLEL_FROM else _search_rows
+        search(
+            (cost, obstacles, starts, goals),
+            (
+                g_ratio,
+                model.deltas,
+                model.costs,
+                float(model.diagonal_cost),
+                TIE_BREAK,
+                bool(corner_cutting),
+                bool(exact),
+                budget,
+            ),
+            (cells, lengths, termination, expanded),
         )
     plan = PlanResult.from_buffers(cells, lengths, termination)
     return SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)
