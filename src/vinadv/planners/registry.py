@@ -8,7 +8,9 @@
 - `optimal`: exact shortest paths (the control: what a perfect planner does).
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
   `forward(obstacles, goals)` takes obstacles as 0/1 float32 `(B, N, N)` and goals as int64 `(B, 2)` and returns
-  `(B, 8, N, N)` logits in DESIGN.md's action order. Its source file and weights are checksummed for run records.
+  `(B, 8, N, N)` logits in DESIGN.md's action order; or an object with `plan_paths` (a search planner,
+  `vinadv.planners.search.UserSearchPlanner`: its paths are checked by `check_paths`). Its source file and weights are
+  checksummed for run records.
 - any of these but `optimal` with `+d4` after it (`gppn+d4`, `file.py:factory+d4`): that planner averaged over the
   8 rotations and flips of the map (`vinadv.planners.symmetric`), an exactly equivariant planner at 8 forwards.
 """
@@ -26,6 +28,7 @@ from vinadv.errors import InputError
 from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
 from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.search import UserSearchPlanner
 from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
 from vinadv.planners.weights import WEIGHTS_DIR, check_trained_size, weights_checksum
 
@@ -253,8 +256,9 @@ def _is_file(source: str) -> bool:
     return source.endswith(".py") or "/" in source or "\\" in source
 
 
-def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
-    """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring)."""
+def load_custom(spec: str, size: int, device: str = "cpu") -> Planner:
+    """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring): a
+    `TorchPlanner` around the factory's module, or a `UserSearchPlanner` around an object with `plan_paths`."""
     source, _, factory_name = spec.rpartition(":")
     if not source or not factory_name.isidentifier():
         raise PlannerError(f"planner {spec!r}: expected FILE.py:FACTORY or MODULE:FACTORY")
@@ -289,11 +293,17 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         net = factory(int(size))
     except (Exception, SystemExit) as exc:
         raise PlannerError(f"planner {spec!r}: {factory_name}({size}) failed: {type(exc).__name__}: {exc}") from None
+    config = {"source": source, "factory": factory_name, "source_sha256": source_sha}
+    if callable(getattr(net, "plan_paths", None)):  # a search planner: paths, not logits
+        torch = sys.modules.get("torch")  # a search planner may be a torch module (its weights checksummed), or not
+        stateful = torch is not None and isinstance(net, torch.nn.Module)
+        return UserSearchPlanner(net, spec, size, checksum=state_checksum(net) if stateful else None, config=config)
     import torch
 
     if not isinstance(net, torch.nn.Module):
         raise PlannerError(
-            f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, expected a torch.nn.Module"
+            f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, expected a torch.nn.Module "
+            "(a policy planner) or an object with plan_paths (a search planner)"
         )
     net = net.to(device)
     return TorchPlanner(
@@ -301,7 +311,7 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         spec,
         size,
         checksum=state_checksum(net),
-        config={"source": source, "factory": factory_name, "source_sha256": source_sha},
+        config=config,
         device=device,
     )
 
