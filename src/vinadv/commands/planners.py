@@ -1,4 +1,4 @@
-"""`vinadv planners` (the registry) and `vinadv eval` (any planner, both conventions)."""
+"""`vinadv planners` (the registry) and `vinadv eval` (any planner, any protocol: the one eval command)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,10 @@ from pathlib import Path
 from vinadv.commands import add_planner_arguments, command_line
 from vinadv.commands.evaluation import add_eval_arguments, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
+from vinadv.errors import InputError
+
+#: `vinadv.interop.protocols.PROTOCOLS`, not imported: building the parser loads no PyTorch
+PROTOCOLS = ("vinadv", "gppn", "kentsommer")
 
 
 def register(subparsers) -> None:
@@ -19,10 +23,29 @@ def register(subparsers) -> None:
 
     ev = subparsers.add_parser(
         "eval",
-        help="any planner's figures in both conventions: vinadv's rollouts and GPPN's %%Opt/%%Suc over every free cell",
+        help="any planner's figures, by any protocol: vinadv's rollouts, GPPN's %%Opt/%%Suc over every free cell, "
+        "the kentsommer port's (policy planners: vinadv and gppn by default; search planners: vinadv)",
+        description="Measure a planner on a maps file or on generated maps. A policy planner gets vinadv's figures "
+        "(action accuracy, rollouts from every start) and GPPN's (%%Opt/%%Suc from every free cell) by default; a "
+        "search planner vinadv's path figures (success, optimal paths, cost ratio to optimal, expansions). "
+        "`vin eval` and `gppn eval` are this command for one planner and one protocol, with a flat record.",
     )
     add_planner_arguments(ev)
     add_eval_arguments(ev)
+    ev.add_argument(
+        "--protocol",
+        default=None,
+        metavar="P[,P]",
+        help=f"protocols, joined by commas, from {', '.join(PROTOCOLS)} or all (default vinadv,gppn for a policy "
+        "planner, vinadv for a search planner; kentsommer measures a VIN, gppn and kentsommer need a policy; "
+        "docs/guide/interop.md)",
+    )
+    ev.add_argument(
+        "--prior",
+        type=float,
+        default=None,
+        help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)",
+    )
     ev.set_defaults(func=cmd_eval)
 
 
@@ -56,40 +79,104 @@ def cmd_planners(args: argparse.Namespace) -> int:
     return emit(args, listing, text)
 
 
-def cmd_eval(args: argparse.Namespace) -> int:
-    from vinadv.interop.protocols import gppn_protocol
-    from vinadv.planners.evaluation import evaluate_planner
-    from vinadv.planners.registry import load_planner
+def check_protocols(text: str | None) -> tuple[str, ...] | None:
+    """`--protocol`: names from `PROTOCOLS` joined by commas ('all': every one), none twice; None: the planner's
+    default. InputError naming the option otherwise."""
+    if text is None:
+        return None
+    names = [p.strip() for p in str(text).split(",")]
+    if names == ["all"]:
+        return PROTOCOLS
+    for name in names:
+        if name not in PROTOCOLS:
+            raise InputError(f"protocol {name!r}: choose from {', '.join(PROTOCOLS)} or all", "protocol")
+    if len(set(names)) != len(names):
+        raise InputError(f"protocol: a protocol named twice in {text}", "protocol")
+    return tuple(names)
 
+
+def cmd_eval(args: argparse.Namespace) -> int:
+    from vinadv.interop.protocols import PORT_TEST_PRIOR, gppn_protocol, kentsommer_protocol, require_policy
+    from vinadv.planners.evaluation import evaluate_planner
+    from vinadv.planners.interface import PlannerError, VINPlanner
+    from vinadv.planners.registry import load_planner
+    from vinadv.planners.search import SearchPlanner
+
+    protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
+    if args.prior is not None and "kentsommer" not in (protocols or ()):
+        raise InputError("--prior applies to --protocol kentsommer only")
     maps, source = start_eval(args)
     planner = load_planner(
         args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
     )
-    t0 = time.perf_counter()
-    ours = evaluate_planner(planner, maps, progress=shows_progress(args))
-    t1 = time.perf_counter()
-    theirs = gppn_protocol(planner, maps)
+    search = isinstance(planner, SearchPlanner)
+    if protocols is None:
+        protocols = ("vinadv",) if search else ("vinadv", "gppn")
+    for protocol in protocols:
+        if protocol != "vinadv":
+            require_policy(planner, protocol)
+    if "kentsommer" in protocols and not isinstance(planner, VINPlanner):
+        raise PlannerError(
+            f"the kentsommer protocol measures a VIN (its goal prior is a VIN input); planner {planner.name!r} is not "
+            "one"
+        )
+    figures, seconds = {}, {}
+    for protocol in protocols:
+        t0 = time.perf_counter()
+        if protocol == "vinadv":
+            figures[protocol] = evaluate_planner(planner, maps, progress=shows_progress(args))
+        elif protocol == "gppn":
+            figures[protocol] = gppn_protocol(planner, maps)
+        else:
+            prior = PORT_TEST_PRIOR if args.prior is None else args.prior
+            figures[protocol] = kentsommer_protocol(planner.vin, maps, prior)
+        seconds[protocol] = round(time.perf_counter() - t0, 2)
     metrics = {
         "planner": planner.spec(),
         "weights": args.weights or "shipped",
         **source,
-        "vinadv": ours,
-        "gppn": theirs,
-        "seconds": {"vinadv": round(t1 - t0, 2), "gppn": round(time.perf_counter() - t1, 2)},
+        **figures,
+        "seconds": seconds,
         "command": command_line(),
     }
     write_figures(args, metrics)
+    return emit(args, metrics, lambda: print_eval(planner.name, maps, figures))
 
-    def text() -> None:
-        print(f"planner {planner.name}: {ours['maps']} maps of {ours['size']}x{ours['size']}")
-        print(
-            f"  vinadv: rollout success {ours['success_rate']:.2%} of {ours['rollouts']} rollouts, optimal paths "
-            f"{ours['optimal_rate']:.2%}, action accuracy {ours['action_accuracy']:.2%}"
+
+def _pct(x) -> str:
+    return "n/a" if x is None or x != x else f"{x:.2%}"  # x != x: NaN
+
+
+def print_eval(name: str, maps, figures: dict) -> None:
+    """`vinadv eval`'s text: the planner and maps, one line per protocol, then vinadv's by optimal moves."""
+    print(f"planner {name}: {len(maps)} maps of {maps.size}x{maps.size}")
+    ours = figures.get("vinadv")
+    if ours is not None:
+        head = (
+            f"  vinadv: rollout success {_pct(ours['success_rate'])} of {ours['rollouts']} rollouts, optimal paths "
+            f"{_pct(ours['optimal_rate'])}"
         )
+        if "search" in ours:
+            found = ours["search"]
+            ratio = "n/a" if found["cost_ratio"] is None else f"{found['cost_ratio']:.4f}"
+            expanded = (
+                "not reported" if found["mean_expansions"] is None else f"{found['mean_expansions']:.1f} per search"
+            )
+            print(f"{head}, cost ratio to optimal {ratio}, expansions {expanded}")
+        else:
+            print(f"{head}, action accuracy {_pct(ours['action_accuracy'])}")
+    theirs = figures.get("gppn")
+    if theirs is not None:
         print(
-            f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
+            f"  gppn:   %Suc {_pct(theirs['percent_success'])}, %Opt {_pct(theirs['percent_optimal'])} over "
             f"{theirs['cells']} free cells (every Moore move costs 1)"
         )
+    port = figures.get("kentsommer")
+    if port is not None:
+        print(
+            f"  kentsommer: rollout success {_pct(port['success_rate'])} of {port['rollouts']} (goal prior "
+            f"{port['prior']:g}), action accuracy {_pct(port['action_accuracy_single_label'])} single-label over "
+            f"{port['trajectory_states']} trajectory states"
+        )
+    if ours is not None:
         print(by_length_text(ours))
-
-    return emit(args, metrics, text)

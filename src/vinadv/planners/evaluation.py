@@ -6,6 +6,10 @@
 - rollouts (DESIGN.md rule, by `vinadv.planners.vin.engine`), from every start of every map:
   success rate (goal reached), % optimal (path cost equals the expert cost within 1e-9; an unreached path is
   not optimal), mean extra path cost of the reached paths (cost - expert cost), and the termination reasons.
+
+A search planner (`vinadv.planners.search.SearchPlanner`) has no policy, so no action accuracy (`action_accuracy`
+None, `action_cells` 0); its paths get the same rollout figures, and `search_metrics` adds the cost ratio to optimal
+and the expansions where it reports them.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from vinadv.grid.moves import require_moves
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
 from vinadv.planners.records import LengthBucketMetrics, PlannerMetrics, RolloutMetrics
 from vinadv.planners.result import PlanResult
+from vinadv.planners.search import SearchPlanner, SearchResult
 from vinadv.planners.vin import engine
 from vinadv.planners.vin.model import VIN, make_input
 from vinadv.vocabulary import TERMINATIONS
@@ -147,7 +152,18 @@ def evaluate_vin(
 
 def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> PlannerMetrics:
     """All figures for any `vinadv.planners.interface.Planner` on `maps`: action accuracy from its logits, rollouts
-    (from every start) by its `plan_maps`."""
+    (from every start) by its `plan_maps`. A search planner's paths get the rollout figures and `search` (the
+    `search_metrics`), and no action accuracy (it has no policy)."""
+    if isinstance(planner, SearchPlanner):
+        searched: list[SearchResult] = []
+
+        def search(obs, goals, starts):
+            searched.append(planner.plan_maps(obs, goals, starts, maps.corner_cutting))
+            return searched[-1]
+
+        metrics = _evaluate(maps, None, search, batch_size, progress)
+        metrics["search"] = search_metrics(SearchResult.concat(searched), maps)
+        return metrics
 
     def counts(obs, goals):
         logits = planner.logits(obs, goals).transpose(0, 2, 3, 1)
@@ -162,8 +178,24 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
     )
 
 
+def search_metrics(result: SearchResult, maps: MapSet) -> dict:
+    """A search planner's path figures over the real starts of `maps` (`result`: row `b * S + s` from start `s` of
+    map `b`): `cost_ratio`, the mean of path cost over optimal cost over the reached paths whose optimal cost is
+    positive (1 is optimal; None without such paths), and `mean_expansions`, the cells expanded per search (None
+    where the planner does not report them)."""
+    keep = maps.start_mask.reshape(-1)
+    costs, optimal = result.paths.costs()[keep], np.asarray(maps.expert_costs, np.float64).reshape(-1)[keep]
+    ratio_of = result.reached[keep] & (optimal > 0)
+    expansions = result.expansions
+    return {
+        "cost_ratio": float((costs[ratio_of] / optimal[ratio_of]).mean()) if ratio_of.any() else None,
+        "mean_expansions": None if expansions is None or not keep.any() else float(expansions[keep].mean()),
+    }
+
+
 def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> PlannerMetrics:
-    """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)`, `plan(obs, goals, starts)`."""
+    """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)` (None: no action accuracy, a search
+    planner's), `plan(obs, goals, starts)`."""
     require_moves(maps.moves, ("octile",), "planner evaluation")  # path costs and accuracy are octile's here
     obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
     chunks = range(0, len(maps), batch_size)
@@ -172,9 +204,10 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> Pl
     correct, cells, parts = 0, 0, []
     for i in chunks:
         sl = slice(i, i + batch_size)
-        c, n = counts(obstacles[sl], goals[sl])
-        correct += c
-        cells += n
+        if counts is not None:
+            c, n = counts(obstacles[sl], goals[sl])
+            correct += c
+            cells += n
         parts.append(plan(obstacles[sl], goals[sl], starts[sl]))
     result = PlanResult.concat(parts)
     moves = maps.expert.lengths - 1  # cells - 1: an optimal path's move count L, the same for all of them
@@ -184,7 +217,7 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> Pl
         "starts_per_map": maps.n_starts,
         "seed": int(maps.seed),
         "corner_cutting": bool(maps.corner_cutting),
-        "action_accuracy": correct / cells if cells else float("nan"),
+        "action_accuracy": None if counts is None else (correct / cells if cells else float("nan")),
         "action_cells": cells,
         **rollout_metrics(result, maps.expert_costs, maps.start_mask, moves),
     }
