@@ -203,3 +203,15 @@ def test_a_user_value_map_is_used_and_checked():
     bad = UserSearchPlanner(Answers(straight, value_maps=lambda o, g: np.ones((1, 6))), "mine.py:make", 6)
     with pytest.raises(PlannerError, match=r"value maps of shape \(1, 6\)"):
         bad.value_maps(np.zeros((2, 6, 6), bool), np.array([[1, 4], [1, 4]]))
+
+
+def test_a_search_planner_has_no_policy_to_average_or_to_read_per_cell(maps):
+    with pytest.raises(PlannerError, match=r"is a search planner; \+d4 averages a policy planner's"):
+        load_planner(f"{EXAMPLE}:make+d4", SIZE)
+    from vinadv.interop.protocols import gppn_protocol, planner_actions  # noqa: PLC0415 (PyTorch: this test only)
+
+    planner = load_planner(f"{EXAMPLE}:make", SIZE)
+    with pytest.raises(PlannerError, match="the gppn protocol follows a policy from every cell"):
+        gppn_protocol(planner, maps)
+    with pytest.raises(PlannerError, match="needs a policy planner"):
+        planner_actions(planner, maps.obstacles, maps.goals)

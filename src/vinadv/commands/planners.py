@@ -114,7 +114,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         protocols = ("vinadv",) if search else ("vinadv", "gppn")
     for protocol in protocols:
         if protocol != "vinadv":
-            require_policy(planner, protocol)
+            require_policy(planner, f"the {protocol} protocol")
     if "kentsommer" in protocols and not isinstance(planner, VINPlanner):
         raise PlannerError(
             f"the kentsommer protocol measures a VIN (its goal prior is a VIN input); planner {planner.name!r} is not "

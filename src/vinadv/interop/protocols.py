@@ -101,8 +101,10 @@ def kentsommer_protocol(model: VIN, maps: MapSet, prior: float = PORT_TEST_PRIOR
 
 
 def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_size: int = 256) -> np.ndarray:
-    """The argmax action (lowest index on ties) of every cell by `planner` (a `Planner` or a VIN), `(n, N, N)`."""
+    """The argmax action (lowest index on ties) of every cell by `planner` (a `Planner` or a VIN), `(n, N, N)`; a
+    search planner is refused (`require_policy`)."""
     planner = as_planner(planner, obstacles.shape[1])
+    require_policy(planner, "the argmax action of every cell")
     out = [
         np.argmax(planner.logits(obstacles[i : i + batch_size], goals[i : i + batch_size]), axis=1)
         for i in range(0, len(obstacles), batch_size)
@@ -110,11 +112,12 @@ def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_siz
     return np.concatenate(out) if out else np.zeros(obstacles.shape, np.int64)
 
 
-def require_policy(planner, protocol: str) -> None:
-    """Refuse (`PlannerError`, one line) a search planner for `protocol`, which reads a policy at every cell."""
+def require_policy(planner, what: str) -> None:
+    """Refuse (`PlannerError`, one line) a search planner for `what` ("the gppn protocol"), which reads a policy at
+    every cell."""
     if isinstance(planner, SearchPlanner):
         raise PlannerError(
-            f"the {protocol} protocol follows a policy from every cell: it needs a policy planner (vin, gppn, optimal, "
+            f"{what} follows a policy from every cell: it needs a policy planner (vin, gppn, optimal, "
             f"your own torch module); {planner.name!r} is a search planner (measure it with the vinadv protocol)"
         )
 
@@ -124,7 +127,7 @@ def gppn_protocol(planner, maps: MapSet) -> dict:
     refused (`require_policy`)."""
     n, size = len(maps), maps.size
     planner = as_planner(planner, size)
-    require_policy(planner, "gppn")
+    require_policy(planner, "the gppn protocol")
     actions = planner_actions(planner, maps.obstacles, maps.goals)
     succ = _moves(maps.obstacles, actions)
     goal = maps.goals @ np.array([size, 1])

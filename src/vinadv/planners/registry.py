@@ -28,7 +28,7 @@ from vinadv.errors import InputError
 from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
 from vinadv.planners.optimal import OptimalPlanner
-from vinadv.planners.search import UserSearchPlanner
+from vinadv.planners.search import SearchPlanner, UserSearchPlanner
 from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
 from vinadv.planners.weights import WEIGHTS_DIR, check_trained_size, weights_checksum
 
@@ -237,6 +237,11 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
         raise PlannerError(f"planner {spec!r}: {SUFFIX} follows one planner name or spec, once (e.g. gppn{SUFFIX})")
     base = load_planner(base_spec, size, weights=weights, corner_cutting=corner_cutting, device=device)
     module = base.differentiable
+    if isinstance(base, SearchPlanner):  # the average is over policies: a search planner has none
+        raise PlannerError(
+            f"planner {spec!r}: {base.name!r} is a search planner; {SUFFIX} averages a policy planner's action "
+            "probabilities (vin, gppn or your own torch module)"
+        )
     if module is None:
         raise PlannerError(
             f"planner {spec!r}: {base.name!r} has no torch module to average ({SUFFIX} takes vin, gppn or your own)"
