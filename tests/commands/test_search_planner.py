@@ -54,7 +54,7 @@ def test_plan_writes_the_search_planner_s_fewest_move_paths(maps_file, tmp_path,
 
 def test_eval_gives_a_search_planner_its_path_figures(maps_file, capsys):
     figures = run_json(capsys, ["eval", "--planner", SPEC, "--data", maps_file])
-    assert set(figures) >= {"planner", "vinadv"} and "gppn" not in figures  # no policy: no gppn protocol by default
+    assert set(figures) >= {"planner", "vinadv", "search"} and "gppn" not in figures  # no policy: no gppn protocol
     ours = figures["vinadv"]
     maps = MapSet.load(maps_file)
     # oracle: plain-Python costs of the planner's own paths against the expert costs
@@ -63,12 +63,14 @@ def test_eval_gives_a_search_planner_its_path_figures(maps_file, capsys):
     expert = maps.expert_costs.reshape(-1)
     assert ours["success_rate"] == 1.0 and ours["action_accuracy"] is None and ours["action_cells"] == 0
     assert ours["optimal_rate"] == pytest.approx(np.mean(np.abs(costs - expert) < 1e-9))
-    assert ours["search"]["cost_ratio"] == pytest.approx(np.mean(costs[expert > 0] / expert[expert > 0]))
-    assert ours["search"]["mean_expansions"] == pytest.approx(result.expansions.mean())
+    found = figures["search"]  # the search protocol: the same paths' cost ratio, and the cells expanded
+    assert found["success"] == 1.0 and found["rows"] == 16
+    assert found["cost_ratio"] == pytest.approx(np.mean(np.where(expert > 0, costs / np.maximum(expert, 1e-12), 1)))
+    assert found["expansions"] == pytest.approx(result.expansions.mean())
     capsys.readouterr()
     assert main(["eval", "--planner", SPEC, "--data", maps_file, "--quiet"]) == 0
     text = capsys.readouterr()
-    assert text.err == "" and "cost ratio to optimal" in text.out  # --quiet: the result, no progress bar
+    assert text.err == "" and "search: Opt" in text.out  # --quiet: the result, no progress bar
     for protocol in ("gppn", "kentsommer", "all"):
         assert main(["eval", "--planner", SPEC, "--data", maps_file, "--protocol", protocol]) == 2
         assert "needs a policy planner" in capsys.readouterr().err
@@ -77,7 +79,7 @@ def test_eval_gives_a_search_planner_its_path_figures(maps_file, capsys):
 def test_eval_protocol_option_is_checked_before_the_maps_are_read(tmp_path, capsys):
     missing = str(tmp_path / "none.npz")
     for bad, message in (
-        ("vinadv,nope", "protocol 'nope': choose from vinadv, gppn, kentsommer or all"),
+        ("vinadv,nope", "protocol 'nope': choose from vinadv, gppn, kentsommer, search or all"),
         ("gppn,gppn", "a protocol named twice"),
     ):
         assert main(["eval", "--data", missing, "--protocol", bad]) == 2

@@ -12,7 +12,7 @@ from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
 #: `vinadv.interop.protocols.PROTOCOLS`, not imported: building the parser loads no PyTorch
-PROTOCOLS = ("vinadv", "gppn", "kentsommer")
+PROTOCOLS = ("vinadv", "gppn", "kentsommer", "search")
 
 
 def register(subparsers) -> None:
@@ -24,11 +24,12 @@ def register(subparsers) -> None:
     ev = subparsers.add_parser(
         "eval",
         help="any planner's figures, by any protocol: vinadv's rollouts, GPPN's %%Opt/%%Suc over every free cell, "
-        "the kentsommer port's (policy planners: vinadv and gppn by default; search planners: vinadv)",
-        description="Measure a planner on a maps file or on generated maps. A policy planner gets vinadv's figures "
-        "(action accuracy, rollouts from every start) and GPPN's (%%Opt/%%Suc from every free cell) by default; a "
-        "search planner vinadv's path figures (success, optimal paths, cost ratio to optimal, expansions). "
-        "`vin eval` and `gppn eval` are this command for one planner and one protocol, with a flat record.",
+        "the kentsommer port's, the Neural A* authors' Opt/Exp/Hmean",
+        description="Measure a planner on a maps file or on generated maps. By default a policy planner gets vinadv's "
+        "figures (action accuracy, rollouts from every start), GPPN's (%%Opt/%%Suc from every free cell) and the "
+        "search figures (the Neural A* authors' Opt/Exp/Hmean, success, cost ratio to optimal); a search planner "
+        "vinadv's rollout figures of its paths and the search figures. `vin eval` and `gppn eval` are this command "
+        "for one planner and one protocol, with a flat record.",
     )
     add_planner_arguments(ev)
     add_eval_arguments(ev)
@@ -36,9 +37,9 @@ def register(subparsers) -> None:
         "--protocol",
         default=None,
         metavar="P[,P]",
-        help=f"protocols, joined by commas, from {', '.join(PROTOCOLS)} or all (default vinadv,gppn for a policy "
-        "planner, vinadv for a search planner; kentsommer measures a VIN, gppn and kentsommer need a policy; "
-        "docs/guide/interop.md)",
+        help=f"protocols, joined by commas, from {', '.join(PROTOCOLS)} or all (default vinadv,gppn,search for a "
+        "policy planner, vinadv,search for a search planner; kentsommer measures a VIN, gppn and kentsommer need a "
+        "policy; docs/guide/planners.md)",
     )
     ev.add_argument(
         "--prior",
@@ -56,6 +57,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
     listing = {
         "planners": planners,
         "bring_your_own": "FILE.py:FACTORY or MODULE:FACTORY",
+        "parameters": "NAME:KEY=VALUE[,KEY=VALUE...] for a planner that lists parameters (wastar:w=3)",
         "symmetric": f"NAME{SUFFIX} or SPEC{SUFFIX}: the planner averaged over the 8 rotations and flips",
     }
 
@@ -66,7 +68,8 @@ def cmd_planners(args: argparse.Namespace) -> int:
                 if p["weights"] is None
                 else (f"  [weights {Path(p['weights']).name}{'' if p['weights_available'] else ' not shipped'}]")
             )
-            print(f"{p['name']:<11} {p['description']}{weights}")
+            params = ", ".join(f"{q['name']}={q['default']:g}" for q in p["params"])
+            print(f"{p['name']:<11} {p['description']}{weights}{f'  [parameters {params}]' if params else ''}")
         print(
             "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
             "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (docs/own-planner.md)"
@@ -101,6 +104,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.planners.interface import PlannerError, VINPlanner
     from vinadv.planners.registry import load_planner
     from vinadv.planners.search import SearchPlanner
+    from vinadv.planners.search_metrics import evaluate_search
 
     protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
     if args.prior is not None and "kentsommer" not in (protocols or ()):
@@ -111,9 +115,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
     )
     search = isinstance(planner, SearchPlanner)
     if protocols is None:
-        protocols = ("vinadv",) if search else ("vinadv", "gppn")
+        protocols = ("vinadv", "search") if search else ("vinadv", "gppn", "search")
     for protocol in protocols:
-        if protocol != "vinadv":
+        if protocol in ("gppn", "kentsommer"):
             require_policy(planner, f"the {protocol} protocol")
     if "kentsommer" in protocols and not isinstance(planner, VINPlanner):
         raise PlannerError(
@@ -127,6 +131,8 @@ def cmd_eval(args: argparse.Namespace) -> int:
             figures[protocol] = evaluate_planner(planner, maps, progress=shows_progress(args))
         elif protocol == "gppn":
             figures[protocol] = gppn_protocol(planner, maps)
+        elif protocol == "search":
+            figures[protocol] = evaluate_search(planner, maps, progress=shows_progress(args))
         else:
             prior = PORT_TEST_PRIOR if args.prior is None else args.prior
             figures[protocol] = kentsommer_protocol(planner.vin, maps, prior)
@@ -156,15 +162,8 @@ def print_eval(name: str, maps, figures: dict) -> None:
             f"  vinadv: rollout success {_pct(ours['success_rate'])} of {ours['rollouts']} rollouts, optimal paths "
             f"{_pct(ours['optimal_rate'])}"
         )
-        if "search" in ours:
-            found = ours["search"]
-            ratio = "n/a" if found["cost_ratio"] is None else f"{found['cost_ratio']:.4f}"
-            expanded = (
-                "not reported" if found["mean_expansions"] is None else f"{found['mean_expansions']:.1f} per search"
-            )
-            print(f"{head}, cost ratio to optimal {ratio}, expansions {expanded}")
-        else:
-            print(f"{head}, action accuracy {_pct(ours['action_accuracy'])}")
+        accuracy = ours["action_accuracy"]
+        print(head if accuracy is None else f"{head}, action accuracy {_pct(accuracy)}")
     theirs = figures.get("gppn")
     if theirs is not None:
         print(
@@ -178,5 +177,18 @@ def print_eval(name: str, maps, figures: dict) -> None:
             f"{port['prior']:g}), action accuracy {_pct(port['action_accuracy_single_label'])} single-label over "
             f"{port['trajectory_states']} trajectory states"
         )
+    found = figures.get("search")
+    if found is not None:
+        print(f"  search: {search_text(found)}")
     if ours is not None:
         print(by_length_text(ours))
+
+
+def search_text(m: dict) -> str:
+    """The search metrics (`vinadv.planners.search_metrics`) in one line; n/a where undefined."""
+    ratio = "n/a" if m["cost_ratio"] is None else f"{m['cost_ratio']:.4f}"
+    expanded = "" if m["expansions"] is None else f", {m['expansions']:.1f} cells expanded per search"
+    return (
+        f"Opt {_pct(m['opt'])}, Exp {_pct(m['exp'])}, Hmean {_pct(m['hmean'])}, success {_pct(m['success'])}, "
+        f"cost ratio {ratio} over {m['rows']} (map, start) rows{expanded}"
+    )

@@ -8,8 +8,8 @@
   not optimal), mean extra path cost of the reached paths (cost - expert cost), and the termination reasons.
 
 A search planner (`vinadv.planners.search.SearchPlanner`) has no policy, so no action accuracy (`action_accuracy`
-None, `action_cells` 0); its paths get the same rollout figures, and `search_metrics` adds the cost ratio to optimal
-and the expansions where it reports them.
+None, `action_cells` 0); its paths get the same rollout figures. The search figures (Opt, Exp, Hmean, cost ratio) of
+any planner are `vinadv.planners.search_metrics`'.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from vinadv.grid.moves import require_moves
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
 from vinadv.planners.records import LengthBucketMetrics, PlannerMetrics, RolloutMetrics
 from vinadv.planners.result import PlanResult
-from vinadv.planners.search import SearchPlanner, SearchResult
+from vinadv.planners.search import SearchPlanner
 from vinadv.planners.vin import engine
 from vinadv.planners.vin.model import VIN, make_input
 from vinadv.vocabulary import TERMINATIONS
@@ -152,18 +152,8 @@ def evaluate_vin(
 
 def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> PlannerMetrics:
     """All figures for any `vinadv.planners.interface.Planner` on `maps`: action accuracy from its logits, rollouts
-    (from every start) by its `plan_maps`. A search planner's paths get the rollout figures and `search` (the
-    `search_metrics`), and no action accuracy (it has no policy)."""
-    if isinstance(planner, SearchPlanner):
-        searched: list[SearchResult] = []
-
-        def search(obs, goals, starts):
-            searched.append(planner.plan_maps(obs, goals, starts, maps.corner_cutting))
-            return searched[-1]
-
-        metrics = _evaluate(maps, None, search, batch_size, progress)
-        metrics["search"] = search_metrics(SearchResult.concat(searched), maps)
-        return metrics
+    (from every start) by its `plan_maps`. A search planner's paths get the rollout figures, and no action accuracy
+    (it has no policy)."""
 
     def counts(obs, goals):
         logits = planner.logits(obs, goals).transpose(0, 2, 3, 1)
@@ -171,26 +161,11 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
 
     return _evaluate(
         maps,
-        counts,
+        None if isinstance(planner, SearchPlanner) else counts,
         lambda obs, goals, starts: planner.plan_maps(obs, goals, starts, maps.corner_cutting),
         batch_size,
         progress,
     )
-
-
-def search_metrics(result: SearchResult, maps: MapSet) -> dict:
-    """A search planner's path figures over the real starts of `maps` (`result`: row `b * S + s` from start `s` of
-    map `b`): `cost_ratio`, the mean of path cost over optimal cost over the reached paths whose optimal cost is
-    positive (1 is optimal; None without such paths), and `mean_expansions`, the cells expanded per search (None
-    where the planner does not report them)."""
-    keep = maps.start_mask.reshape(-1)
-    costs, optimal = result.paths.costs()[keep], np.asarray(maps.expert_costs, np.float64).reshape(-1)[keep]
-    ratio_of = result.reached[keep] & (optimal > 0)
-    expansions = result.expansions
-    return {
-        "cost_ratio": float((costs[ratio_of] / optimal[ratio_of]).mean()) if ratio_of.any() else None,
-        "mean_expansions": None if expansions is None or not keep.any() else float(expansions[keep].mean()),
-    }
 
 
 def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> PlannerMetrics:

@@ -48,8 +48,7 @@ class RolloutMetrics(TypedDict):
 class PlannerMetrics(RolloutMetrics):
     """A planner's figures on a set of maps (`evaluation.evaluate_planner`, `evaluate_vin`): the maps (count, side,
     starts per map, seed, corner cutting), the action accuracy over `action_cells` supervised cells (None for a
-    search planner, which has no policy), then the rollout figures; a search planner's also `search`
-    (`evaluation.search_metrics`)."""
+    search planner, which has no policy), then the rollout figures."""
 
     maps: int
     size: int
@@ -58,7 +57,6 @@ class PlannerMetrics(RolloutMetrics):
     corner_cutting: bool
     action_accuracy: float | None
     action_cells: int
-    search: NotRequired[dict]
 
 
 class EpochRecord(TypedDict):
