@@ -93,6 +93,7 @@ def test_eval_kentsommer_protocol_takes_a_vin_only(maps_file, capsys):
     assert "the kentsommer protocol measures a VIN" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # over a second on the 2-core machine
 def test_attack_and_identify_on_a_search_planner(maps_file, tmp_path, capsys):
     pairs_file, db = tmp_path / "a.npz", str(tmp_path / "i.db")
     summary = run_json(
@@ -109,6 +110,7 @@ def test_attack_and_identify_on_a_search_planner(maps_file, tmp_path, capsys):
     assert stored.path_a == pairs.path_a  # planned again by the same planner: the same paths
 
 
+@pytest.mark.slow  # over a second on the 2-core machine
 def test_run_on_a_search_planner_and_on_a_maps_file(maps_file, tmp_path, capsys):
     db = str(tmp_path / "r.db")
     generated = run_json(capsys, command_line("run", n=6, size=SIZE, db=db, planner=SPEC, attack="key-points"))
@@ -171,3 +173,22 @@ def test_wrong_maps_files_are_refused_before_anything_is_written(command, maps_f
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
         assert not db.exists() and not report.exists()
+
+
+@pytest.mark.slow  # over a second on the 2-core machine
+def test_the_built_in_search_planners_through_robustness_and_run(tmp_path, capsys):
+    # exact A*: a perfect planner re-routes optimally, so no strategy ever finds a harmful pair
+    out = run_json(
+        capsys,
+        command_line(
+            "robustness", n=12, size=SIZE, planner="astar", max_obstacles=1, strategies="key-points,saliency,random"
+        ),
+    )
+    assert out["planner"]["name"] == "astar" and out["clean"]["success_rate"] == 1.0
+    assert all(s["by_obstacles"][0]["harmful_rate"] == 0.0 for s in out["strategies"].values())
+    assert out["strategies"]["saliency"]["ranked_as"] == "key-points"
+    db = str(tmp_path / "w.db")
+    summary = run_json(capsys, command_line("run", n=6, size=SIZE, db=db, planner="wastar:w=2", attack="near-path"))
+    with Store.open(db) as store:
+        config = store.run_info(summary["run_id"])["config"]
+    assert config["planner"] == "wastar:w=2" and config["planner_spec"]["config"] == {"w": 2.0}
