@@ -30,6 +30,7 @@ def bfs():
 
 
 def context(planner, maps):
+    """The first step's `AttackContext` of `planner` on `maps` (first start each)."""
     obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
     return AttackContext(
         obstacles,

@@ -8,7 +8,7 @@ from pathlib import Path
 from vinadv.commands import add_planner_arguments
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
-from vinadv.commands.run import maps_settings
+from vinadv.commands.run import add_maps_arguments, maps_settings
 from vinadv.errors import InputError, OutputError
 
 #: `vinadv.robustness.DEFAULT_STRATEGIES`, not imported: building the parser stays light
@@ -26,13 +26,7 @@ def register(subparsers) -> None:
         "rate against the number of added obstacles.",
     )
     add_planner_arguments(p)
-    p.add_argument("--n", type=int, default=None, help="maps (default 1000; with --maps, the file's first N: all)")
-    p.add_argument(
-        "--maps",
-        metavar="FILE",
-        help="benchmark on the maps of this maps file (first start of each; an import, say) instead of the "
-        "generator's held-out maps: its size is the benchmark's, and the settings record its path and SHA-256",
-    )
+    add_maps_arguments(p, n=1000, instead="the generator's held-out maps", record="the settings record")
     p.add_argument(
         "--seed",
         type=int,
@@ -40,7 +34,6 @@ def register(subparsers) -> None:
         help="seed of the maps and of the randomised strategies (default 1000: the held-out maps of the "
         "evaluation tables)",
     )
-    p.add_argument("--size", type=int, default=None, help="map side N (default 28; with --maps, the file's)")
     p.add_argument(
         "--strategies",
         default="all",

@@ -20,14 +20,7 @@ from vinadv.errors import InputError
 
 def register(subparsers) -> None:
     run = subparsers.add_parser("run", help="the main job: maps -> attack -> identify -> store (-> report)")
-    run.add_argument("--n", type=int, default=None, help="maps (default 5000; with --maps, the file's first N: all)")
-    run.add_argument("--size", type=int, default=None, help="map side N (default 28; with --maps, the file's)")
-    run.add_argument(
-        "--maps",
-        metavar="FILE",
-        help="attack the maps of this maps file (first start of each; an import, say) instead of generating them: "
-        "its size and corner cutting are the run's, and the run records its path and SHA-256",
-    )
+    add_maps_arguments(run, n=5000, instead="generating them", record="the run records")
     run.add_argument(
         "--attack",
         default="near-path",
@@ -128,6 +121,19 @@ def cmd_run(args: argparse.Namespace) -> int:
         result["comparison"] = reason or "stored"
         result["seconds"]["report"] = round(time.perf_counter() - t0, 3)
     return emit(args, result, lambda: _print_run(result))
+
+
+def add_maps_arguments(parser, n: int, instead: str, record: str) -> None:
+    """`--n`, `--size` and `--maps FILE` (a maps file's maps `instead` of the generated ones; what `record`s its path
+    and SHA-256): the maps of `run` and `robustness`, read by `maps_settings`."""
+    parser.add_argument("--n", type=int, default=None, help=f"maps (default {n}; with --maps, the file's first N: all)")
+    parser.add_argument("--size", type=int, default=None, help="map side N (default 28; with --maps, the file's)")
+    parser.add_argument(
+        "--maps",
+        metavar="FILE",
+        help=f"the maps of this maps file (first start of each; an import, say) instead of {instead}: its size and "
+        f"corner cutting are used, and {record} its path and SHA-256",
+    )
 
 
 def maps_settings(args: argparse.Namespace, n: int = 5000, size: int = 28) -> dict:

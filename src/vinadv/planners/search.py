@@ -302,14 +302,6 @@ class UserSearchPlanner(SearchPlanner):
         self._checksum = checksum
         self._config = dict(config or {})
 
-    @property
-    def checksum(self) -> str | None:
-        return self._checksum
-
-    @property
-    def config(self) -> dict:
-        return self._config
-
     def _call(self, what: str, method, *args):
         try:
             return method(*args)
