@@ -215,3 +215,30 @@ def test_a_search_planner_has_no_policy_to_average_or_to_read_per_cell(maps):
         gppn_protocol(planner, maps)
     with pytest.raises(PlannerError, match="needs a policy planner"):
         planner_actions(planner, maps.obstacles, maps.goals)
+
+
+@pytest.mark.parametrize(
+    ("moves", "corner_cutting"),
+    [("octile", True), ("octile", False), ("moore", True), ("moore", False), ("news", True)],  # news cuts no corner
+)
+def test_the_move_check_agrees_with_the_oracle_s_move_rule_for_every_step(moves, corner_cutting):
+    """Every step from every free cell of a random 5x5 map to each of its 3x3 neighbourhood (staying put included):
+    accepted exactly where the oracle's `legal` says it is one legal move."""
+    rng = np.random.default_rng(7)
+    obstacles = rng.random((1, 5, 5)) < 0.35
+    for r, c in np.argwhere(~obstacles[0]).tolist():
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                dst = (r + dr, c + dc)
+                if not (0 <= dst[0] < 5 and 0 <= dst[1] < 5):
+                    continue
+                expected = (dr, dc) in DELTAS and legal(
+                    obstacles[0].tolist(), r, c, DELTAS.index((dr, dc)), corner_cutting, moves
+                )
+                args = ([np.array([[r, c], dst])], obstacles, np.array([[r, c]]), np.array([[0, 0]]))
+                try:
+                    check_paths("p", *args, corner_cutting=corner_cutting, moves=moves)
+                    accepted = True
+                except PlannerError:
+                    accepted = False
+                assert accepted == expected, (r, c, dr, dc)

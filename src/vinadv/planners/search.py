@@ -34,7 +34,7 @@ from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS, N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves, move_model
 from vinadv.grid.paths import PackedPaths
-from vinadv.grid.shortest_paths import shortest_distances, valid_moves
+from vinadv.grid.shortest_paths import shortest_distances
 from vinadv.planners.interface import DEFAULT_CHUNK, Planner, PlannerError, check_multi_inputs
 from vinadv.planners.result import GOAL, STEP_LIMIT, TERMINATIONS, PlanResult, check_plan_inputs
 
@@ -159,12 +159,13 @@ def check_paths(
     near = np.all(np.abs(delta) <= 1, axis=1)
     clipped = np.clip(delta, -1, 1) + 1
     action = np.where(near, _ACTION_OF_DELTA[clipped[:, 0] * 3 + clipped[:, 1]], -1)
-    known = (action >= 0) & (action < model.n_actions)
-    legal = np.zeros(len(src), dtype=bool)
-    if known.any():
-        table = valid_moves(obstacles, corner_cutting, model.name)  # (B, N, N, 8)
-        k = np.flatnonzero(known)
-        legal[k] = table[row[k], src[k, 0], src[k, 1], action[k]]
+    # legal: one of the model's moves, into a free cell; without corner cutting a diagonal move also needs both cells
+    # beside it free (the rule of `grid.shortest_paths.valid_moves`, at the path's moves only)
+    legal = (action >= 0) & (action < model.n_actions) & ~obstacles[row, dst[:, 0], dst[:, 1]]
+    if not corner_cutting:
+        diagonal = legal & (delta[:, 0] != 0) & (delta[:, 1] != 0)
+        k = np.flatnonzero(diagonal)
+        legal[k] = ~obstacles[row[k], dst[k, 0], src[k, 1]] & ~obstacles[row[k], src[k, 0], dst[k, 1]]
     rule = f"{model.name}{'' if corner_cutting else ', no corner cutting'}"
     refuse(
         ~legal,
