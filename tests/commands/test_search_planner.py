@@ -99,7 +99,7 @@ def test_attack_and_identify_on_a_search_planner(maps_file, tmp_path, capsys):
     summary = run_json(
         capsys, ["attack", "--maps", maps_file, "--strategy", "saliency", "--planner", SPEC, "--out", str(pairs_file)]
     )
-    assert summary["pairs"] > 0
+    assert summary["pairs"] > 0 and summary["ranked_as"] == "key-points"
     pairs = PairSet.load(pairs_file)
     assert pairs.params["planner"]["name"] == SPEC and pairs.params["ranked_as"] == "key-points"
     ident = run_json(capsys, ["identify", "--pairs", str(pairs_file), "--db", db, "--planner", SPEC])
