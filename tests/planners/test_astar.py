@@ -11,9 +11,13 @@ import math
 import numpy as np
 import pytest
 
+from vinadv.attacks.strategies import make_attack
+from vinadv.classify.harm import pairset_harm
+from vinadv.classify.rule import label_pairs
 from vinadv.errors import InputError
 from vinadv.grid.moves import move_model
 from vinadv.planners.astar import AStarPlanner, WeightedAStarPlanner, best_first_search, replica_is_exact
+from vinadv.planners.registry import load_planner
 from vinadv.planners.result import GOAL, STEP_LIMIT
 
 F32 = np.float32
@@ -281,3 +285,26 @@ def test_bad_arguments_are_refused_naming_them():
         WeightedAStarPlanner(4, w=0.5)
     with pytest.raises(InputError, match="for 4x4 maps"):
         AStarPlanner(4).plan_paths(np.zeros((1, 5, 5), bool), starts, goals)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("moves", ["octile", "moore", "news"])
+def test_astar_is_never_harmful_and_weighted_astar_sometimes_is(moves):
+    """Every valid one-obstacle attack (exhaustive) on cluttered random maps: A* re-routes optimally on each, so
+    no pair is harmful; weighted A* does not."""
+    rng = np.random.default_rng(2)
+    n, b = 14, 16
+    obstacles = rng.random((b, n, n)) < 0.3
+    starts, goals = np.tile([1, 1], (b, 1)), np.tile([n - 2, n - 2], (b, 1))
+    obstacles[:, 1, 1] = obstacles[:, n - 2, n - 2] = False
+    reachable = np.isfinite([dijkstra(o, s, g, moves, True) for o, s, g in zip(obstacles, starts, goals)])
+    obstacles, starts, goals = obstacles[reachable], starts[reachable], goals[reachable]
+    harmful = {}
+    for spec in ("astar", "wastar:w=3"):
+        planner = load_planner(spec, n, moves=moves)
+        pairs = make_attack("exhaustive", per_map=0).attack(obstacles, starts, goals, planner).pairs
+        labels = label_pairs(pairs.path_o, pairs.path_a, pairs.goals, n).labels
+        harmful[spec] = int((pairset_harm(pairs, labels).harm == "harmful").sum())
+        assert len(pairs) > 100
+    assert harmful["astar"] == 0
+    assert harmful["wastar:w=3"] > 0

@@ -142,26 +142,11 @@ def _replica_key(g, h, g_ratio32, h_ratio32, sqrt_n32):
 
 
 @numba.njit(cache=True, nogil=True)
-def _search_one(
-    cost,
-    obstacles,
-    sr,
-    sc,
-    gr,
-    gc,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    expanded,
-):
-    """One search (see the module doc); fills `cells_out` (the path, start first) and `expanded`; returns
+def _search_one(cost, obstacles, sr, sc, gr, gc, params, cells_out, expanded):
+    """One search (see the module doc) from `(sr, sc)` to `(gr, gc)` with the parameters `params` that
+    `best_first_search` packs; fills `cells_out` (the path, start first) and `expanded`; returns
     `(path length, termination)`."""
+    g_ratio, deltas, move_costs, diagonal_cost, tie_break, corner_cutting, exact, budget = params
     n = obstacles.shape[0]
     m = obstacles.shape[1]
     cells = n * m
@@ -261,49 +246,38 @@ def _search_one(
     return 1, STEP_LIMIT  # the budget is spent
 
 
+@numba.njit(cache=True, nogil=True)
+def _search_row(b, inputs, params, outputs):
+    """Search row `b` of the batch into row `b` of the outputs (`[start]` where the goal is not reached); the
+    arguments are the tuples `_search` packs."""
+    cost, obstacles, starts, goals = inputs
+    cells_out, lengths, termination, expanded = outputs
+    length, term = _search_one(
+        cost[b], obstacles[b], starts[b, 0], starts[b, 1], goals[b, 0], goals[b, 1], params, cells_out[b], expanded[b]
+    )
+    if term != GOAL:
+        cells_out[b, 0, 0] = starts[b, 0]
+        cells_out[b, 0, 1] = starts[b, 1]
+    lengths[b] = length
+    termination[b] = term
+
+
 @numba.njit(cache=True, parallel=True)
-def _search_batch(
-    cost,
-    obstacles,
-    starts,
-    goals,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    lengths,
-    termination,
-    expanded,
-):
-    for b in numba.prange(obstacles.shape[0]):
-        length, term = _search_one(
-            cost[b],
-            obstacles[b],
-            starts[b, 0],
-            starts[b, 1],
-            goals[b, 0],
-            goals[b, 1],
-            g_ratio,
-            deltas,
-            move_costs,
-            diagonal_cost,
-            tie_break,
-            corner_cutting,
-            exact,
-            budget,
-            cells_out[b],
-            expanded[b],
-        )
-        if term != GOAL:
-            cells_out[b, 0, 0] = starts[b, 0]
-            cells_out[b, 0, 1] = starts[b, 1]
-        lengths[b] = length
-        termination[b] = term
+def _search_batch(inputs, params, outputs):
+    """Every row, in parallel over rows (Numba threads)."""
+    for b in numba.prange(inputs[0].shape[0]):
+        _search_row(b, inputs, params, outputs)
+
+
+@numba.njit(cache=True, nogil=True)
+def _search_rows(inputs, params, outputs):
+    """Every row on the calling thread: for a few rows, where waking `_search_batch`'s threads costs more."""
+    for b in range(inputs[0].shape[0]):
+        _search_row(b, inputs, params, outputs)
+
+
+#: batches of fewer rows are searched on the calling thread (`_search_rows`)
+PARALLEL_FROM = 4
 
 
 def best_first_search(
@@ -323,7 +297,8 @@ def best_first_search(
         cost: `(B, N, N)` float, finite, >= 0: the cost of each cell (charged when the search leaves it, and added to
             the heuristic): 1 on free cells for vanilla A*; a guidance map (Neural A*'s encoder output) otherwise.
         obstacles: `(B, N, N)` bool, True = obstacle: never opened.
-        starts, goals: `(B, 2)` int `(row, col)`.
+        starts: `(B, 2)` int `(row, col)` of each start.
+        goals: `(B, 2)` int `(row, col)` of each goal.
         g_ratio: `f = g_ratio * g + (1 - g_ratio) * h`, in [0, 1]: 0.5 is A*, `1 / (1 + w)` weighted A* with weight
             `w`, 0 greedy best-first.
         moves: the movement model (`vinadv.grid.moves`): the moves, their costs, and the distance of the heuristic
@@ -367,23 +342,20 @@ def best_first_search(
     termination = np.zeros(b, dtype=np.int8)
     expanded = np.zeros(obstacles.shape, dtype=bool)
     if b:
-        _search_batch(
-            cost,
-            obstacles,
-            starts,
-            goals,
-            g_ratio,
-            model.deltas,
-            model.costs,
-            float(model.diagonal_cost),
-            TIE_BREAK,
-            bool(corner_cutting),
-            bool(exact),
-            budget,
-            cells,
-            lengths,
-            termination,
-            expanded,
+        search = _search_batch if b >= PARALLEL_FROM else _search_rows
+        search(
+            (cost, obstacles, starts, goals),
+            (
+                g_ratio,
+                model.deltas,
+                model.costs,
+                float(model.diagonal_cost),
+                TIE_BREAK,
+                bool(corner_cutting),
+                bool(exact),
+                budget,
+            ),
+            (cells, lengths, termination, expanded),
         )
     plan = PlanResult.from_buffers(cells, lengths, termination)
     return SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)
