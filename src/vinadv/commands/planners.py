@@ -75,6 +75,10 @@ def cmd_planners(args: argparse.Namespace) -> int:
             "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (docs/own-planner.md)"
         )
         print(
+            "           or an object with plan_paths(obstacles (B,N,N) bool, starts (B,2), goals (B,2), "
+            "corner_cutting) -> SearchResult or B (L,2) paths: a search planner, every path checked"
+        )
+        print(
             f"symmetric:  any of these but optimal with {SUFFIX} (gppn{SUFFIX}): averaged over the 8 rotations and "
             "flips of the map, 8 forwards"
         )
