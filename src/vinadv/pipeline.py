@@ -113,7 +113,9 @@ def maps_file_config(path: str, n: int | None = None) -> dict:
     require_moves(maps.moves, ("octile",), "a run's database")
     if n is None:
         n = len(maps)
-    if not 1 <= n <= len(maps):
+    if n < 1:
+        raise InputError(f"n must be >= 1, got {n}", "n")
+    if n > len(maps):
         raise InputError(f"n {n}: the maps file {path} holds {len(maps)} maps", "n")
     return {
         "n": int(n),
