@@ -18,9 +18,11 @@ from tests.planner_files import EXITING, NO_PARAMETERS
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
+from vinadv.errors import InputError
 from vinadv.grid import generate_maps
+from vinadv.grid.mapset import MapSet
 from vinadv.identify import objective_strength
-from vinadv.pipeline import RunConfig, compute_shard, run_pipeline
+from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run_pipeline, shard_maps
 from vinadv.planners.interface import EMPTY_SHA256
 from vinadv.planners.vin.weights import load_vin
 from vinadv.store import Store
@@ -397,3 +399,22 @@ def test_a_planner_that_exits_is_one_line_and_the_run_is_marked_failed(tmp_path,
     generate_maps(1, 8, seed=1, n_starts=1).save(maps)
     assert main(["plan", "--maps", str(maps), "--planner", planner, "--out", str(tmp_path / "p.npz"), "--quiet"]) == 2
     assert capsys.readouterr().err.strip() == f"vinadv: error: planner {planner!r}: forward failed: SystemExit: 0"
+
+
+def test_a_maps_file_run_takes_the_file_s_maps_in_shards_and_refuses_a_changed_file(tmp_path):
+    """`maps_file_config` + `compute_shard`: shard k holds the file's maps k * shard_size .., first start each (the
+    oracle: the file's own arrays); a file changed under the recorded path is refused by its checksum."""
+    path = tmp_path / "m.npz"
+    generate_maps(7, 8, seed=2, n_starts=3).save(path)
+    config = RunConfig(**maps_file_config(str(path)), planner="optimal", shard_size=3)
+    assert (config.n, config.size, config.n_shards) == (7, 8, 3)
+    assert config.to_dict()["maps_sha256"] == config.maps_sha256 and "maps" not in RunConfig().to_dict()
+    maps = MapSet.load(path)
+    last = shard_maps(config, 2)
+    assert len(last) == 1 and np.array_equal(last.obstacles, maps.obstacles[6:])
+    assert np.array_equal(last.starts[:, 0], maps.starts[6:, 0]) and last.n_starts == 1
+    assert last.expert[0].tolist() == maps.expert_path(6, 0).tolist()
+    generate_maps(7, 8, seed=3, n_starts=3).save(tmp_path / "other.npz")
+    changed = RunConfig(**{**config.to_dict(), "maps": str(tmp_path / "other.npz")})
+    with pytest.raises(InputError, match="its SHA-256 is not the one the run recorded"):
+        shard_maps(changed, 0)

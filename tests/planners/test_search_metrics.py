@@ -86,7 +86,8 @@ def test_eval_json_shows_the_search_metrics(capsys):
     assert main(["eval", "--n", "3", "--size", "10", "--starts", "2", "--planner", "wastar:w=2", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["planner"] == {"name": "wastar", "size": 10, "config": {"w": 2.0}, "weights_sha256": None}
-    assert out["vinadv"] is None and out["gppn"] is None  # a search planner has no policy to measure
+    # a search planner has no policy: no action accuracy, no gppn protocol (its paths get vinadv's rollout figures)
+    assert out["vinadv"]["action_accuracy"] is None and "gppn" not in out
     assert set(out["search"]) >= {"opt", "exp", "hmean", "success", "cost_ratio"} and out["search"]["rows"] == 6
     assert main(["eval", "--n", "3", "--size", "10", "--starts", "2", "--planner", "optimal"]) == 0
     text = capsys.readouterr().out

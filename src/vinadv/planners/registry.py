@@ -11,7 +11,9 @@
 - `wastar`: weighted A*, `f = g + w * h` (`wastar:w=3`; w >= 1, default 2): fewer expansions, suboptimal paths.
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
   `forward(obstacles, goals)` takes obstacles as 0/1 float32 `(B, N, N)` and goals as int64 `(B, 2)` and returns
-  `(B, 8, N, N)` logits in DESIGN.md's action order. Its source file and weights are checksummed for run records.
+  `(B, 8, N, N)` logits in DESIGN.md's action order; or an object with `plan_paths` (a search planner,
+  `vinadv.planners.search.UserSearchPlanner`: its paths are checked by `check_paths`). Its source file and weights are
+  checksummed for run records.
 - a registered name followed by `:` and `key=value` pairs separated by commas, `wastar:w=3`: that planner with those
   parameters (`PlannerParam`; a `module:factory` never holds `=`, so the two read apart). Unknown keys and bad values
   are refused with one line naming them; the values are in the planner's config, so run records keep them.
@@ -34,6 +36,7 @@ from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.astar import AStarPlanner, WeightedAStarPlanner
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
 from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.search import SearchPlanner, UserSearchPlanner
 from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
 from vinadv.planners.weights import WEIGHTS_DIR, check_trained_size, weights_checksum
 
@@ -340,6 +343,11 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
         raise PlannerError(f"planner {spec!r}: {SUFFIX} follows one planner name or spec, once (e.g. gppn{SUFFIX})")
     base = load_planner(base_spec, size, weights=weights, corner_cutting=corner_cutting, device=device)
     module = base.differentiable
+    if isinstance(base, SearchPlanner):  # the average is over policies: a search planner has none
+        raise PlannerError(
+            f"planner {spec!r}: {base.name!r} is a search planner; {SUFFIX} averages a policy planner's action "
+            "probabilities (vin, gppn or your own torch module)"
+        )
     if module is None:
         raise PlannerError(
             f"planner {spec!r}: {base.name!r} has no torch module to average ({SUFFIX} takes vin, gppn or your own)"
@@ -359,8 +367,9 @@ def _is_file(source: str) -> bool:
     return source.endswith(".py") or "/" in source or "\\" in source
 
 
-def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
-    """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring)."""
+def load_custom(spec: str, size: int, device: str = "cpu") -> Planner:
+    """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring): a
+    `TorchPlanner` around the factory's module, or a `UserSearchPlanner` around an object with `plan_paths`."""
     source, _, factory_name = spec.rpartition(":")
     if not source or not factory_name.isidentifier():
         raise PlannerError(f"planner {spec!r}: expected FILE.py:FACTORY or MODULE:FACTORY")
@@ -395,11 +404,17 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         net = factory(int(size))
     except (Exception, SystemExit) as exc:
         raise PlannerError(f"planner {spec!r}: {factory_name}({size}) failed: {type(exc).__name__}: {exc}") from None
+    config = {"source": source, "factory": factory_name, "source_sha256": source_sha}
+    if callable(getattr(net, "plan_paths", None)):  # a search planner: paths, not logits
+        torch = sys.modules.get("torch")  # a search planner may be a torch module (its weights checksummed), or not
+        stateful = torch is not None and isinstance(net, torch.nn.Module)
+        return UserSearchPlanner(net, spec, size, checksum=state_checksum(net) if stateful else None, config=config)
     import torch
 
     if not isinstance(net, torch.nn.Module):
         raise PlannerError(
-            f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, expected a torch.nn.Module"
+            f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, expected a torch.nn.Module "
+            "(a policy planner) or an object with plan_paths (a search planner)"
         )
     net = net.to(device)
     return TorchPlanner(
@@ -407,7 +422,7 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         spec,
         size,
         checksum=state_checksum(net),
-        config={"source": source, "factory": factory_name, "source_sha256": source_sha},
+        config=config,
         device=device,
     )
 
