@@ -6,7 +6,7 @@ import argparse
 import time
 
 from vinadv.cluster import add_cluster_arguments, attack_on_cluster, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments
+from vinadv.commands import LazyChoices, add_planner_arguments, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.outfile import check_output_path
 
@@ -138,10 +138,16 @@ def cmd_attack(args: argparse.Namespace) -> int:
     from vinadv.planners.registry import PlannerRef, load_planner
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
+    device = planner_device(args)
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
     planner = load_planner(
-        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+        args.planner,
+        maps.size,
+        weights=args.weights,
+        corner_cutting=maps.corner_cutting,
+        moves=maps.moves,
+        device=device,
     )
     # `make_attack`'s options, kept: on a cluster every worker builds its own attack from them
     options = dict(

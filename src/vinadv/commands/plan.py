@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_planner_arguments, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -34,10 +34,16 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
     if args.chunk_size < 1:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")
+    device = planner_device(args)
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
     planner = load_planner(
-        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+        args.planner,
+        maps.size,
+        weights=args.weights,
+        corner_cutting=maps.corner_cutting,
+        moves=maps.moves,
+        device=device,
     )
     t0 = time.perf_counter()
     result = planner.plan_maps(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_planner_arguments, planner_device
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError, OutputError
@@ -84,6 +84,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     if args.radius < 0:
         raise InputError(f"radius must be >= 0, got {args.radius}", "radius")
     check_tolerances(args.harm_tolerance, args.harm_rtol)
+    device = planner_device(args)
     if args.report:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
@@ -97,7 +98,12 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
     maps = benchmark_maps(args.n, args.size, seed=args.seed)
     planner = load_planner(
-        args.planner, args.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+        args.planner,
+        args.size,
+        weights=args.weights,
+        corner_cutting=maps.corner_cutting,
+        moves=maps.moves,
+        device=device,
     )
     result = robustness(
         planner,
