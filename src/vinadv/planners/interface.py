@@ -397,12 +397,11 @@ class VINPlanner(Planner):
         if self._torch is None:
             from vinadv.planners.vin.model import VINPolicy  # noqa: PLC0415 (PyTorch: the VIN plans without it)
 
-            policy = VINPolicy(self.vin)
-            if self._device is not None:  # a copy moved there: the weights' own module stays on the CPU
+            if self._device is None:
+                policy = VINPolicy(self.vin)
+            else:  # a copy moved there: the weights' own module stays on the CPU
                 policy = VINPolicy(copy.deepcopy(self.vin)).to(self._device)
-            self._torch = TorchPlanner(
-                policy, self.name, self.size, self._checksum, self.config, device=self._device
-            )
+            self._torch = TorchPlanner(policy, self.name, self.size, self._checksum, self.config, device=self._device)
         return self._torch
 
     @property

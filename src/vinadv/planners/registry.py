@@ -235,9 +235,7 @@ def _load(spec: str, size: int, weights: str | None, corner_cutting: bool, devic
     )
 
 
-def load_symmetric(
-    spec: str, size: int, weights: str | None, corner_cutting: bool, device: str | None
-) -> TorchPlanner:
+def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str | None) -> TorchPlanner:
     """`BASE+d4`: the planner `BASE` averaged over the grid's 8 symmetries (`vinadv.planners.symmetric`); its run
     records keep the base planner's weights checksum and add `"average": "d4"` to its config."""
     from vinadv.planners.symmetric import DihedralAverage  # noqa: PLC0415 (PyTorch: the VIN planners load without it)
