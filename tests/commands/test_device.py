@@ -108,7 +108,8 @@ def test_run_identify_robustness_and_eval_on_the_cpu_give_the_defaults_figures(p
     assert "device" not in config_two  # not a setting of the run: it may be resumed on another device
 
     pairs = tmp_path / "pairs.npz"
-    assert main([*command_line("attack", maps=maps_file, strategy="random", out=pairs, per_map=3, planner="optimal"), "--quiet"]) == 0
+    attack = command_line("attack", maps=maps_file, strategy="random", out=pairs, per_map=3, planner="optimal")
+    assert main([*attack, "--quiet"]) == 0
     capsys.readouterr()
     ident_db = tmp_path / "i.db"
     a, b = _both(["identify", "--pairs", str(pairs), "--db", "{db}", *planner], capsys, {"db": ident_db})
@@ -154,7 +155,8 @@ def test_a_device_the_machine_lacks_is_one_line_and_nothing_is_written(argv, map
 
 
 def test_identify_refuses_a_device_without_a_planner(tmp_path, capsys):
-    assert main(["identify", "--pairs", str(tmp_path / "p.npz"), "--db", str(tmp_path / "x.db"), "--device", "cpu"]) == 2
+    argv = ["identify", "--pairs", str(tmp_path / "p.npz"), "--db", str(tmp_path / "x.db")]
+    assert main([*argv, "--device", "cpu"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--device: only with --planner or --weights" in err, err
     assert not (tmp_path / "x.db").exists()
