@@ -5,18 +5,21 @@ oracle (tested against the re-run-every-step reference in tests/planners/vin).""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import torch
 
 from tests.planner_files import NO_PARAMETERS
-from vinadv.attacks.strategies import make_attack
+from vinadv.attacks.strategies import AttackContext, make_attack
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.planners.device import resolve_device
 from vinadv.planners.gppn import GPPN, GPPNConfig, save_gppn
 from vinadv.planners.interface import TorchPlanner, VINPlanner
 from vinadv.planners.registry import PlannerRef, load_planner
+from vinadv.testing.planners import tie_flips
 
 SIZE = 10
 
@@ -143,3 +146,90 @@ def test_a_worker_without_the_clients_device_refuses_it(gppn_file, no_cuda):
     ref = PlannerRef("gppn", gppn_file, SIZE, True, None, device="cuda")
     with pytest.raises(InputError, match="CUDA is not available"):
         ref.load()
+
+
+def test_tie_flips_finds_the_flipped_cells_and_tells_ties_from_differences():
+    reference = np.zeros((2, 8, 3, 3))
+    reference[:, 0] = 1.0  # action 0 everywhere, by 1 over the rest
+    reference[1, 3, 2, 2] = 1.0 - 1e-6  # a near tie at map 1, cell (2, 2)
+    other = reference.copy()
+    other[1, 3, 2, 2] = 1.0 + 1e-6  # the tie flipped
+    other[0, 5, 0, 1] = 2.0  # map 0, cell (0, 1): another choice, by a whole unit
+    flips = tie_flips(reference, other, rel_tol=1e-4)
+    assert flips["cells"] == 2 and flips["not_ties"] == 1 and flips["maps"].tolist() == [True, True]
+    assert tie_flips(reference, reference)["cells"] == 0
+
+
+# On a CUDA GPU (marked `cuda`: skipped without one; benchmarks/device_check.sh runs them).
+#: the shipped 28x28 weights, on maps held out from every training (the robustness benchmark's seed)
+GPU_MAPS = 200
+
+
+@pytest.fixture(scope="module")
+def maps28():
+    return generate_maps(GPU_MAPS, 28, seed=1000)
+
+
+def _compare_devices(cpu, gpu, maps) -> dict:
+    """Logits and paths of one planner on the CPU and on the GPU: every action that differs is a near tie of the
+    CPU's logits, and a path differs only on a map where an action does. Returns the counts."""
+    flips = tie_flips(cpu.logits(maps.obstacles, maps.goals), gpu.logits(maps.obstacles, maps.goals))
+    a = cpu.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    b = gpu.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    differ = ~a.paths.same_as(b.paths)
+    owner = np.repeat(np.arange(len(maps)), maps.n_starts)
+    assert flips["not_ties"] == 0, flips
+    assert not (differ & ~flips["maps"][owner]).any()
+    return {"flipped_cells": flips["cells"], "paths": len(differ), "paths_differing": int(differ.sum())}
+
+
+@pytest.mark.cuda
+@pytest.mark.parametrize("spec", ["gppn", "gppn+d4", "file"])
+def test_torch_planners_on_cuda_plan_the_cpus_paths_but_at_near_ties(spec, maps28, record_property):
+    if spec == "file":
+        spec = f"{Path(__file__).resolve().parents[2] / 'examples' / 'my_planner.py'}:make"
+    cpu, gpu = load_planner(spec, 28), load_planner(spec, 28, device="cuda")
+    assert gpu.device.type == "cuda" and gpu.spec()["device"] == "cuda"
+    counts = _compare_devices(cpu, gpu, maps28)
+    record_property("counts", counts)
+    print(spec, counts)
+
+
+@pytest.mark.cuda
+def test_the_vins_forward_on_cuda_plans_the_engines_paths_but_at_near_ties(maps28, record_property):
+    engine, cpu, gpu = (load_planner("vin", 28, device=d) for d in (None, "cpu", "cuda"))
+    counts = _compare_devices(cpu, gpu, maps28)
+    a = engine.plan_maps(maps28.obstacles, maps28.goals, maps28.starts)
+    b = gpu.plan_maps(maps28.obstacles, maps28.goals, maps28.starts)
+    counts["paths_differing_from_the_engine"] = int((~a.paths.same_as(b.paths)).sum())
+    assert counts["paths_differing_from_the_engine"] <= counts["paths_differing"] + int(
+        (~a.paths.same_as(cpu.plan_maps(maps28.obstacles, maps28.goals, maps28.starts).paths)).sum()
+    )
+    record_property("counts", counts)
+    print("vin", counts)
+
+
+@pytest.mark.cuda
+def test_the_exhaustive_search_and_saliency_on_cuda_match_the_cpu_but_at_near_ties(maps28):
+    """Every candidate of 4 maps in batches on the GPU: the same candidates, each adversarial path the CPU's unless
+    its map has a near tie that flipped; saliency's gradients the CPU's to float32 rounding."""
+    cpu, gpu = load_planner("gppn", 28), load_planner("gppn", 28, device="cuda")
+    m = slice(0, 4)
+    obstacles, starts, goals = maps28.obstacles[m], maps28.starts[m, 0], maps28.goals[m]
+    a = make_attack("exhaustive", per_map=0).attack(obstacles, starts, goals, cpu)
+    b = make_attack("exhaustive", per_map=0).attack(obstacles, starts, goals, gpu)
+    assert len(a.pairs) > 500 and np.array_equal(a.pairs.added, b.pairs.added)
+    flips = tie_flips(cpu.logits(a.pairs.obstacles_a, a.pairs.goals), gpu.logits(a.pairs.obstacles_a, a.pairs.goals))
+    assert flips["not_ties"] == 0
+    differ = ~a.pairs.path_a.same_as(b.pairs.path_a)
+    assert not (differ & ~flips["maps"]).any()
+    print("exhaustive", {"candidates": len(differ), "differing": int(differ.sum()), "flipped_cells": flips["cells"]})
+
+    saliency = make_attack("saliency")
+    base = cpu.plan_batch(obstacles, starts, goals)
+    ctx = [
+        AttackContext(obstacles, starts, goals, np.ones_like(obstacles), base, planner, np.random.default_rng(0))
+        for planner in (cpu, gpu)
+    ]
+    one, two = (saliency.candidate_scores(c) for c in ctx)
+    np.testing.assert_allclose(two, one, rtol=1e-3, atol=1e-4 * np.abs(one).max())

@@ -4,10 +4,16 @@
 parameter `device`): a name torch does not read, CUDA on a machine without it, a GPU index the machine lacks. `auto`
 is CUDA where it is available, else the CPU. PyTorch is imported when a name is resolved, not before: a command
 that plans with the VIN's exact engine (no `--device`) never loads it.
+
+`full_precision(device)`: the planners' forwards on a GPU run in float32 as on the CPU. PyTorch lets cuDNN compute
+convolutions in TF32 (a 10-bit mantissa) by default, which moves logits by about 1e-3 of their size and would
+break near ties far more often than the order of float32 sums does; inside the block it may not (restored after).
 """
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 from vinadv.errors import InputError
@@ -53,3 +59,20 @@ def cuda_available() -> bool:
     import torch
 
     return bool(torch.cuda.is_available())
+
+
+@contextlib.contextmanager
+def full_precision(device: torch.device) -> Iterator[None]:
+    """float32 convolutions and matrix products on `device` inside the block (no TF32 on a GPU); nothing on the CPU."""
+    if device.type != "cuda":
+        yield
+        return
+    import torch
+
+    matmul = torch.backends.cuda.matmul.allow_tf32
+    torch.backends.cuda.matmul.allow_tf32 = False
+    try:
+        with torch.backends.cudnn.flags(enabled=torch.backends.cudnn.enabled, allow_tf32=False):
+            yield
+    finally:
+        torch.backends.cuda.matmul.allow_tf32 = matmul

@@ -28,6 +28,7 @@ from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.shortest_paths import shortest_distances, valid_moves
 from vinadv.planners.batching import over_maps, torch_threads
+from vinadv.planners.device import full_precision
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
 from vinadv.planners.spec import PlannerSpec
@@ -338,8 +339,9 @@ class TorchPlanner(Planner):
                         ) from None
                     out[sl] = check_logits(self.name, raw, obs.shape[0], n)  # one copy back per batch
 
-        if not on_cpu:  # whole batches on the device, one after another
-            forward(0, b)
+        if not on_cpu:  # whole batches on the device, one after another, in float32 (`full_precision`)
+            with full_precision(self.device):
+                forward(0, b)
             return out
         with torch_threads(1):  # maps split between threads, one torch thread each
             over_maps(b, forward)
@@ -433,7 +435,7 @@ class VINPlanner(Planner):
         if self._device is not None:
             vin, device = self._torch_planner().module.vin, self.device
             batch_size = max(batch_size, self._torch_planner().device_batch_size if device.type != "cpu" else 0)
-        with torch.no_grad():
+        with torch.no_grad(), full_precision(self.device if device is not None else torch.device("cpu")):
             for i in range(0, len(obstacles), batch_size):
                 x = make_input(obstacles[i : i + batch_size], goals[i : i + batch_size])
                 if device is not None:
