@@ -65,7 +65,7 @@ def add_device_argument(parser) -> None:
         metavar="cpu|cuda|cuda:N|auto",
         help="torch device of the planner's forward; auto: cuda where available, else cpu. Default: the CPU, and for "
         "the VIN its exact CPU engine (with --device the VIN plans with its PyTorch forward there). Recorded by type "
-        "in the planner's record (docs/gpu.md)",
+        "in the planner's record (docs/guide/gpu.md)",
     )
 
 

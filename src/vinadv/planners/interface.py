@@ -359,7 +359,7 @@ class VINPlanner(Planner):
     then the rollout every planner shares), a copy of the VIN moved there at first use; value maps and gradients are
     computed there too.
     None (the default) keeps the exact engine, the reference. On the CPU the forward gives the engine's paths (the
-    engine replays PyTorch's float32 arithmetic at near ties; docs/gpu.md gives the count measured on 1,000 maps);
+    engine replays PyTorch's float32 arithmetic at near ties; docs/guide/gpu.md gives the count measured on 1,000 maps);
     on a GPU other float sums may break a near tie the other way.
     """
 
