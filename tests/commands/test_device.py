@@ -13,11 +13,11 @@ import pytest
 import torch
 
 from tests.cli_files import command_line
+from tests.planner_files import write_gppn
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.grid import generate_maps
 from vinadv.identify import PLANNER_SPEC
-from vinadv.planners.gppn import GPPN, GPPNConfig, save_gppn
 from vinadv.planners.pathset import PathSet
 from vinadv.store import Store
 
@@ -27,10 +27,7 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
 @pytest.fixture(scope="module")
 def gppn_file(tmp_path_factory):
-    torch.manual_seed(5)
-    path = tmp_path_factory.mktemp("g") / "gppn.pt"
-    save_gppn(GPPN(GPPNConfig(k=6, l_h=5, f=3)), path, {"size": SIZE})
-    return str(path)
+    return write_gppn(tmp_path_factory.mktemp("g") / "gppn.pt", SIZE, seed=5)
 
 
 @pytest.fixture(scope="module")

@@ -11,12 +11,11 @@ import numpy as np
 import pytest
 import torch
 
-from tests.planner_files import NO_PARAMETERS
+from tests.planner_files import NO_PARAMETERS, write_gppn
 from vinadv.attacks.strategies import AttackContext, make_attack
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.planners.device import resolve_device
-from vinadv.planners.gppn import GPPN, GPPNConfig, save_gppn
 from vinadv.planners.interface import TorchPlanner, VINPlanner
 from vinadv.planners.registry import PlannerRef, load_planner
 from vinadv.testing.planners import tie_flips
@@ -26,11 +25,7 @@ SIZE = 10
 
 @pytest.fixture(scope="module")
 def gppn_file(tmp_path_factory):
-    """A small GPPN's weights (untrained: its logits are as good as any for comparing two paths to them)."""
-    torch.manual_seed(3)
-    path = tmp_path_factory.mktemp("g") / "gppn.pt"
-    save_gppn(GPPN(GPPNConfig(k=6, l_h=5, f=3)), path, {"size": SIZE})
-    return str(path)
+    return write_gppn(tmp_path_factory.mktemp("g") / "gppn.pt", SIZE, seed=3)
 
 
 @pytest.fixture(scope="module")

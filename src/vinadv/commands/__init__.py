@@ -69,6 +69,17 @@ def add_device_argument(parser) -> None:
     )
 
 
+def load_args_planner(args, maps, device: str | None):
+    """The planner of `--planner`/`--weights` for the maps `maps` (a `MapSet`: its size, move rule and movement
+    model), its forward on `device` (`planner_device(args)`, checked before the command wrote anything)."""
+    from vinadv.planners.registry import load_planner
+
+    size, corner_cutting, moves = maps.size, maps.corner_cutting, maps.moves
+    return load_planner(
+        args.planner, size, weights=args.weights, corner_cutting=corner_cutting, moves=moves, device=device
+    )
+
+
 def planner_device(args) -> str | None:
     """`--device` checked and made concrete (`auto` -> `cuda` or `cpu`), for `load_planner(..., device=)`; None when
     not given. Call it before the command writes anything: a device this machine lacks is one line, exit status 2."""

@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments, command_line, planner_device
+from vinadv.commands import add_planner_arguments, command_line, load_args_planner, planner_device
 from vinadv.commands.evaluation import add_eval_arguments, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
 
@@ -59,18 +59,10 @@ def cmd_planners(args: argparse.Namespace) -> int:
 def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.interop.protocols import gppn_protocol
     from vinadv.planners.evaluation import evaluate_planner
-    from vinadv.planners.registry import load_planner
 
     device = planner_device(args)
     maps, source = start_eval(args)
-    planner = load_planner(
-        args.planner,
-        maps.size,
-        weights=args.weights,
-        corner_cutting=maps.corner_cutting,
-        moves=maps.moves,
-        device=device,
-    )
+    planner = load_args_planner(args, maps, device)
     t0 = time.perf_counter()
     ours = evaluate_planner(planner, maps, progress=shows_progress(args))
     t1 = time.perf_counter()

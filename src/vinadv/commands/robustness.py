@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments, planner_device
+from vinadv.commands import add_planner_arguments, load_args_planner, planner_device
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError, OutputError
@@ -93,18 +93,10 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
         with Store.open(args.db):
             pass
-    from vinadv.planners.registry import load_planner
     from vinadv.robustness import benchmark_maps, robustness, save_robustness
 
     maps = benchmark_maps(args.n, args.size, seed=args.seed)
-    planner = load_planner(
-        args.planner,
-        args.size,
-        weights=args.weights,
-        corner_cutting=maps.corner_cutting,
-        moves=maps.moves,
-        device=device,
-    )
+    planner = load_args_planner(args, maps, device)
     result = robustness(
         planner,
         maps,
