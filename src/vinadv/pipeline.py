@@ -283,9 +283,12 @@ class RunSummary:
         }
 
 
-def resolve_planner(config: RunConfig) -> Planner:
-    """The planner of a run (`config.planner` with `config.weights`, for the run's map size and move rule)."""
-    return load_planner(config.planner, config.size, weights=config.weights, corner_cutting=config.corner_cutting)
+def resolve_planner(config: RunConfig, device: str | None = None) -> Planner:
+    """The planner of a run (`config.planner` with `config.weights`, for the run's map size and move rule), its
+    forward on `device` (`load_planner`; None: the planner's default)."""
+    return load_planner(
+        config.planner, config.size, weights=config.weights, corner_cutting=config.corner_cutting, device=device
+    )
 
 
 def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: Planner, classifier_name: str):
@@ -356,9 +359,12 @@ def run_pipeline(
     resume: bool = False,
     progress: bool = True,
     shard_results: Callable | None = None,
+    device: str | None = None,
 ) -> RunSummary:
     """Run the main job and store it; returns the summary. `shard_results(config, shards, planner, classifier,
-    label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order."""
+    label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order. `device`: where
+    the planner's forward runs (`load_planner`), not part of the config: a run may be resumed on another device. The
+    run records its type in the planner's spec (`PLANNER_SPEC`)."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: computing a shard needs no store)
     from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
 
@@ -368,7 +374,7 @@ def run_pipeline(
     if name is not None:
         check_run_name(name)
     t_start = time.perf_counter()
-    planner = resolve_planner(config)
+    planner = resolve_planner(config, device)
     classifier, classifier_name = load_classifier(config.classifier)
     with Store.open(db) as store:
         run_id = open_run(store, config, name, resume, planner, classifier_name)

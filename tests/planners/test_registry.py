@@ -127,7 +127,9 @@ def test_a_registered_planner_is_loaded_listed_and_refused_twice(monkeypatch):
 
     registry.register("mine", description="my planner", load=load)
     planner = load_planner("mine", 12, corner_cutting=False)
-    assert isinstance(planner, OptimalPlanner) and calls == [(12, None, False, "cpu")]
+    load_planner("mine", 12, device="auto")  # a device name reaches the loader checked and concrete
+    expected = "cuda" if torch.cuda.is_available() else "cpu"
+    assert isinstance(planner, OptimalPlanner) and calls == [(12, None, False, None), (12, None, True, expected)]
     assert list_planners(12)[-1] == {
         "name": "mine",
         "description": "my planner",

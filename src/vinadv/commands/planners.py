@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments, command_line
+from vinadv.commands import add_planner_arguments, command_line, load_args_planner, planner_device
 from vinadv.commands.evaluation import add_eval_arguments, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
@@ -106,17 +106,15 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.interop.protocols import PORT_TEST_PRIOR, gppn_protocol, kentsommer_protocol, require_policy
     from vinadv.planners.evaluation import evaluate_planner
     from vinadv.planners.interface import PlannerError, VINPlanner
-    from vinadv.planners.registry import load_planner
     from vinadv.planners.search import SearchPlanner
     from vinadv.planners.search_metrics import evaluate_search
 
     protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
     if args.prior is not None and "kentsommer" not in (protocols or ()):
         raise InputError("--prior applies to --protocol kentsommer only")
+    device = planner_device(args)
     maps, source = start_eval(args)
-    planner = load_planner(
-        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
-    )
+    planner = load_args_planner(args, maps, device)
     search = isinstance(planner, SearchPlanner)
     if protocols is None:
         protocols = ("vinadv", "search") if search else ("vinadv", "gppn", "search")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_planner_arguments, load_args_planner, planner_device
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
@@ -84,6 +84,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     if args.radius < 0:
         raise InputError(f"radius must be >= 0, got {args.radius}", "radius")
     check_tolerances(args.harm_tolerance, args.harm_rtol)
+    device = planner_device(args)
     if args.report:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
@@ -93,7 +94,6 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
         with Store.open(args.db):
             pass
-    from vinadv.planners.registry import load_planner
     from vinadv.robustness import benchmark_maps, robustness, save_robustness
 
     if args.maps is None:
@@ -103,9 +103,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
         maps = MapSet.load(args.maps).take(slice(0, settings["n"]))
         source = {"maps": settings["maps"], "maps_sha256": settings["maps_sha256"]}
-    planner = load_planner(
-        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
-    )
+    planner = load_args_planner(args, maps, device)
     result = robustness(
         planner,
         maps,
