@@ -33,6 +33,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
     listing = {
         "planners": planners,
         "bring_your_own": "FILE.py:FACTORY or MODULE:FACTORY",
+        "parameters": "NAME:KEY=VALUE[,KEY=VALUE...] for a planner that lists parameters (wastar:w=3)",
         "symmetric": f"NAME{SUFFIX} or SPEC{SUFFIX}: the planner averaged over the 8 rotations and flips",
     }
 
@@ -43,7 +44,8 @@ def cmd_planners(args: argparse.Namespace) -> int:
                 if p["weights"] is None
                 else (f"  [weights {Path(p['weights']).name}{'' if p['weights_available'] else ' not shipped'}]")
             )
-            print(f"{p['name']:<11} {p['description']}{weights}")
+            params = ", ".join(f"{q['name']}={q['default']:g}" for q in p["params"])
+            print(f"{p['name']:<11} {p['description']}{weights}{f'  [parameters {params}]' if params else ''}")
         print(
             "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
             "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (docs/own-planner.md)"
