@@ -65,9 +65,7 @@ def from_lightning_checkpoint(path: str | os.PathLike) -> tuple[NeuralAstar, dic
         raise InputError(f"{name}: state_dict entries that are not tensors: {_names(not_tensors)}")
     encoder = {k[len(ENCODER_PREFIX) :]: v for k, v in state.items() if k.startswith(ENCODER_PREFIX)}
     if not encoder:
-        raise InputError(
-            f"{name}: no Neural A* encoder (no {ENCODER_PREFIX}* keys); its keys: {_names(state)}"
-        )
+        raise InputError(f"{name}: no Neural A* encoder (no {ENCODER_PREFIX}* keys); its keys: {_names(state)}")
     depth = _depth_of(encoder)
     expected = encoder_shapes(depth)
     others = set(state) - {ENCODER_PREFIX + k for k in encoder} - set(FILTER_KEYS)
@@ -76,7 +74,10 @@ def from_lightning_checkpoint(path: str | os.PathLike) -> tuple[NeuralAstar, dic
     if FILTER_KEYS[0] not in state:
         missing.add(FILTER_KEYS[0])
     if unexpected or missing:
-        parts = [f"unexpected keys {_names(unexpected)}" if unexpected else "", f"missing {_names(missing)}" if missing else ""]
+        parts = [
+            f"unexpected keys {_names(unexpected)}" if unexpected else "",
+            f"missing {_names(missing)}" if missing else "",
+        ]
         raise InputError(
             f"{name}: not the Neural A* authors' CNN encoder ('m+' input, depth 1..{len(CHANNELS)}): "
             + "; ".join(p for p in parts if p)

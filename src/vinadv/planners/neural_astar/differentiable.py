@@ -35,12 +35,13 @@ import torch
 from torch import nn
 
 from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.planners.astar import TIE_BREAK
 from vinadv.planners.neural_astar.model import NeuralAstar
 
 __all__ = ["DifferentiableSearch", "NeuralAstarPaths", "authors_heuristic", "differentiable_astar"]
 
 
-def authors_heuristic(goals: torch.Tensor, n: int, tb_factor: float = 0.001) -> torch.Tensor:
+def authors_heuristic(goals: torch.Tensor, n: int, tb_factor: float = TIE_BREAK) -> torch.Tensor:
     """`(B, N, N)` float32: Chebyshev distance to the goal plus `tb_factor` times the Euclidean distance, computed in
     float32 in the authors' order (`(|dr| + |dc|) - min(|dr|, |dc|)`, `sqrt(dr^2 + dc^2)`)."""
     idx = torch.arange(n, dtype=torch.float32, device=goals.device)
@@ -96,7 +97,6 @@ def differentiable_astar(
     goals: torch.Tensor,
     g_ratio: float = 0.5,
     tmax: float = 1.0,
-    tb_factor: float = 0.001,
 ) -> DifferentiableSearch:
     """The authors' differentiable A* on B maps (module docstring).
 
@@ -114,7 +114,7 @@ def differentiable_astar(
     start_idx = starts[:, 0] * n + starts[:, 1]
     goal_idx = goals[:, 0] * n + goals[:, 1]
     cost = cost_maps.reshape(b, cells)
-    h = authors_heuristic(goals, n, tb_factor).reshape(b, cells) + cost
+    h = authors_heuristic(goals, n).reshape(b, cells) + cost
     free_flat = free.detach().reshape(b, cells) > 0.5
     open_ = torch.zeros(b, cells, dtype=torch.float32, device=device)
     open_[rows, start_idx] = 1.0
@@ -132,13 +132,18 @@ def differentiable_astar(
         f = g_ratio * g + (1 - g_ratio) * h
         e = torch.exp(-1 * f / temperature) * open_
         total = e.sum(dim=-1, keepdim=True)
-        empty = (total[:, 0] == 0) & active  # nothing left to open: the goal cannot be reached
+        is_open = open_ > 0
+        empty = active & ~is_open.any(dim=-1)  # nothing left to open: the goal cannot be reached
         if bool(empty.any()):
             active = active & ~empty
             if not bool(active.any()):
                 break
-        y = e / torch.where(total == 0, torch.ones_like(total), total)
+        underflow = total[:, 0] == 0
+        y = e / torch.where(underflow[:, None], torch.ones_like(total), total)
         selected = y.detach().argmax(dim=-1)  # the first index of the largest share
+        if bool((underflow & active).any()):  # every open exp is 0: the smallest f first, as the exact mode does
+            lowest = torch.where(is_open, f.detach(), torch.full_like(f, math.inf)).argmin(dim=-1)
+            selected = torch.where(underflow, lowest, selected)
         hard = torch.zeros_like(y)
         hard[rows, selected] = 1.0
         histories = histories + (hard + (y - y.detach())) * active[:, None]
@@ -158,8 +163,8 @@ def differentiable_astar(
         nb = nr.clamp(0, n - 1) * n + nc.clamp(0, n - 1)
         exb = ex[:, None].expand_as(nb)
         g2 = (g[ex, sel] + cost.detach()[ex, sel])[:, None]
-        is_open = open_[exb, nb] > 0
-        update = inside & free_flat[exb, nb] & ((~is_open & ~closed[exb, nb]) | (is_open & (g[exb, nb] > g2)))
+        nb_open = open_[exb, nb] > 0
+        update = inside & free_flat[exb, nb] & ((~nb_open & ~closed[exb, nb]) | (nb_open & (g[exb, nb] > g2)))
         ub, un = exb[update], nb[update]
         g[ub, un] = g2.expand_as(nb)[update]
         open_[ub, un] = 1.0
@@ -199,7 +204,7 @@ class NeuralAstarPaths(nn.Module):
         """The differentiable search with the model's guidance cost maps."""
         cost = self.model(obstacles, starts, goals)
         cfg = self.model.config
-        return differentiable_astar(cost, 1.0 - obstacles, starts, goals, cfg.g_ratio, self.tmax, cfg.tb_factor)
+        return differentiable_astar(cost, 1.0 - obstacles, starts, goals, cfg.g_ratio, self.tmax)
 
     def forward(self, obstacles: torch.Tensor, starts: torch.Tensor, goals: torch.Tensor) -> torch.Tensor:
         out = self.search(obstacles, starts, goals)

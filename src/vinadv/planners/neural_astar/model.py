@@ -52,18 +52,17 @@ __all__ = [
 
 @dataclass(frozen=True)
 class NeuralAstarConfig:
-    """The model's settings (the authors' defaults, which their mazes model was trained with).
+    """The model's settings (the authors' defaults, which their mazes model was trained with). The heuristic's
+    tie-break weight is the authors' 0.001 (`vinadv.planners.astar.TIE_BREAK`), which their code does not vary.
 
     Attributes:
         depth: encoder blocks (1..4), the authors' `encoder.depth`.
         g_ratio: the search's f = g_ratio * g + (1 - g_ratio) * h (0.5: A*; 0: best-first search).
-        tb_factor: weight of the Euclidean distance added to the Chebyshev heuristic to break ties (0.001).
         encoder_input: "m+", the map and the start + goal map (the only input vinadv reads).
     """
 
     depth: int = 4
     g_ratio: float = 0.5
-    tb_factor: float = 0.001
     encoder_input: str = "m+"
 
     def to_dict(self) -> dict:
@@ -74,8 +73,6 @@ class NeuralAstarConfig:
             raise InputError(f"Neural A* encoder depth must be 1..{len(CHANNELS)}, got {self.depth}", "depth")
         if not 0.0 <= self.g_ratio <= 1.0:
             raise InputError(f"Neural A* g_ratio must be in [0, 1], got {self.g_ratio}", "g_ratio")
-        if not self.tb_factor >= 0.0:
-            raise InputError(f"Neural A* tb_factor must be >= 0, got {self.tb_factor}", "tb_factor")
         if self.encoder_input != "m+":
             raise InputError(
                 f"Neural A* encoder input {self.encoder_input!r}: only 'm+' (map and start + goal map) is supported",
@@ -112,13 +109,14 @@ class GuidanceEncoder(nn.Module):
         return torch.sigmoid(self.model(inputs))
 
 
-def encoder_inputs(obstacles: torch.Tensor, starts: torch.Tensor, goals: torch.Tensor) -> torch.Tensor:
+def encoder_inputs(obstacles: torch.Tensor, starts: torch.Tensor | None, goals: torch.Tensor) -> torch.Tensor:
     """`(B, 2, N, N)`: the map (1 - obstacles: 1 free, as the MP dataset's) and the start map plus the goal map (2 at
-    a start that is the goal), the authors' "m+" input."""
+    a start that is the goal), the authors' "m+" input; `starts` None marks the goal alone."""
     b = obstacles.shape[0]
     rows = torch.arange(b, device=obstacles.device)
     marks = torch.zeros_like(obstacles)
-    marks[rows, starts[:, 0], starts[:, 1]] += 1.0
+    if starts is not None:
+        marks[rows, starts[:, 0], starts[:, 1]] += 1.0
     marks[rows, goals[:, 0], goals[:, 1]] += 1.0
     return torch.stack([1.0 - obstacles, marks], dim=1)
 
@@ -134,7 +132,7 @@ class NeuralAstar(nn.Module):
         self.config = config
         self.encoder = GuidanceEncoder(config.depth)
 
-    def forward(self, obstacles: torch.Tensor, starts: torch.Tensor, goals: torch.Tensor) -> torch.Tensor:
+    def forward(self, obstacles: torch.Tensor, starts: torch.Tensor | None, goals: torch.Tensor) -> torch.Tensor:
         return self.encoder(encoder_inputs(obstacles, starts, goals))[:, 0]
 
 
