@@ -130,7 +130,7 @@ def differentiable_astar(
     t = 0
     for t in range(steps):  # noqa: B007 (the last t backtracks, as the authors' code)
         f = g_ratio * g + (1 - g_ratio) * h
-        e = torch.exp(-1 * f / temperature) * open_
+        e = torch.exp(-1 * f / temperature) * open_.clone()  # a copy: autograd keeps it, open_ changes in place
         total = e.sum(dim=-1, keepdim=True)
         is_open = open_ > 0
         empty = active & ~is_open.any(dim=-1)  # nothing left to open: the goal cannot be reached
