@@ -28,8 +28,11 @@ def random_problems(b: int, n: int, seed: int, density: float = 0.3):
 
 def search(free, starts, goals, cost, tmax=1.0):
     return differentiable_astar(
-        torch.from_numpy(cost), torch.from_numpy(free.astype(np.float32)), torch.from_numpy(starts),
-        torch.from_numpy(goals), tmax=tmax,
+        torch.from_numpy(cost),
+        torch.from_numpy(free.astype(np.float32)),
+        torch.from_numpy(starts),
+        torch.from_numpy(goals),
+        tmax=tmax,
     )
 
 
@@ -80,7 +83,9 @@ def test_a_batch_gives_what_each_map_gives_alone():
     batch = search(free, starts, goals, cost)
     for b in range(6):
         alone = search(free[b : b + 1], starts[b : b + 1], goals[b : b + 1], cost[b : b + 1])
-        assert torch.equal(alone.histories[0], batch.histories[b]) and torch.equal(alone.path_maps[0], batch.path_maps[b])
+        assert torch.equal(alone.histories[0], batch.histories[b]) and torch.equal(
+            alone.path_maps[0], batch.path_maps[b]
+        )
 
 
 def test_an_unreachable_goal_ends_unsolved_without_nan():
@@ -97,8 +102,9 @@ def test_the_straight_through_gradient_is_the_softmax_derivative_summed_over_ste
     the softmax share of that selection (its open cells), from a literal replay of the search."""
     free, starts, goals, cost = random_problems(1, 7, seed=11, density=0.2)
     c = torch.from_numpy(cost).requires_grad_(True)
-    out = differentiable_astar(c, torch.from_numpy(free.astype(np.float32)), torch.from_numpy(starts),
-                               torch.from_numpy(goals))
+    out = differentiable_astar(
+        c, torch.from_numpy(free.astype(np.float32)), torch.from_numpy(starts), torch.from_numpy(goals)
+    )
     w = torch.from_numpy(np.random.default_rng(0).standard_normal((1, 7, 7)).astype(np.float32))
     (out.histories * w).sum().backward()
     # replay with the same selections, in float64, collecting each step's share y over the open cells

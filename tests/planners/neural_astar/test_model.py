@@ -7,7 +7,13 @@ import numpy as np
 import pytest
 import torch
 
-from tests.planners.neural_astar.literal import checkpoint_state, mazes_test_split, plain_encoder
+from tests.planners.neural_astar.literal import (
+    CHECKPOINT,
+    checkpoint_state,
+    mazes_test_split,
+    plain_encoder,
+    shared_file,
+)
 from vinadv.errors import InputError
 from vinadv.planners.neural_astar.checkpoint import from_lightning_checkpoint
 from vinadv.planners.neural_astar.model import (
@@ -18,7 +24,7 @@ from vinadv.planners.neural_astar.model import (
     load_neural_astar,
     save_neural_astar,
 )
-from tests.planners.neural_astar.literal import CHECKPOINT, shared_file
+from vinadv.planners.weights import weights_checksum
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +86,9 @@ def test_save_and_load_keep_the_model(tmp_path):
 
 
 def test_load_refuses_a_lightning_checkpoint_and_other_files(tmp_path):
-    with pytest.raises(InputError, match="a Lightning checkpoint, not a vinadv Neural A\\* weights file.*import-weights"):
+    with pytest.raises(
+        InputError, match="a Lightning checkpoint, not a vinadv Neural A\\* weights file.*import-weights"
+    ):
         load_neural_astar(shared_file(CHECKPOINT))
     other = tmp_path / "other.pt"
     torch.save({"format": "vinadv.gppn/1"}, other)
@@ -100,8 +108,6 @@ def test_the_shipped_weights_are_the_checkpoint_and_carry_its_record_and_licence
     for key, value in encoder.items():
         assert torch.equal(shipped["state_dict"][key.removeprefix("planner.encoder.")], value), key
     record = shipped["record"]
-    from vinadv.planners.weights import weights_checksum
-
     assert record["imported_from"]["sha256"] == weights_checksum(shared_file(CHECKPOINT))
     assert record["train_config"]["encoder"] == {"input": "m+", "arch": "CNN", "depth": 4}
     licence = shared_file("neural-astar/LICENSE").read_text()
