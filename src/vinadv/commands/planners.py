@@ -62,36 +62,65 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.interop.protocols import gppn_protocol
     from vinadv.planners.evaluation import evaluate_planner
     from vinadv.planners.registry import load_planner
+    from vinadv.planners.search import SearchPlanner
+    from vinadv.planners.search_metrics import evaluate_search
 
     maps, source = start_eval(args)
     planner = load_planner(
         args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
     )
+    # a search planner has no policy: the action accuracy and GPPN's per-cell protocol need one
+    policy = not isinstance(planner, SearchPlanner)
     t0 = time.perf_counter()
-    ours = evaluate_planner(planner, maps, progress=shows_progress(args))
+    ours = evaluate_planner(planner, maps, progress=shows_progress(args)) if policy else None
     t1 = time.perf_counter()
-    theirs = gppn_protocol(planner, maps)
+    theirs = gppn_protocol(planner, maps) if policy else None
+    t2 = time.perf_counter()
+    search = evaluate_search(planner, maps, progress=shows_progress(args))
     metrics = {
         "planner": planner.spec(),
         "weights": args.weights or "shipped",
         **source,
         "vinadv": ours,
         "gppn": theirs,
-        "seconds": {"vinadv": round(t1 - t0, 2), "gppn": round(time.perf_counter() - t1, 2)},
+        "search": search,
+        "seconds": {
+            "vinadv": round(t1 - t0, 2),
+            "gppn": round(t2 - t1, 2),
+            "search": round(time.perf_counter() - t2, 2),
+        },
         "command": command_line(),
     }
     write_figures(args, metrics)
 
     def text() -> None:
-        print(f"planner {planner.name}: {ours['maps']} maps of {ours['size']}x{ours['size']}")
-        print(
-            f"  vinadv: rollout success {ours['success_rate']:.2%} of {ours['rollouts']} rollouts, optimal paths "
-            f"{ours['optimal_rate']:.2%}, action accuracy {ours['action_accuracy']:.2%}"
-        )
-        print(
-            f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
-            f"{theirs['cells']} free cells (every Moore move costs 1)"
-        )
-        print(by_length_text(ours))
+        if ours is not None:
+            print(f"planner {planner.name}: {ours['maps']} maps of {ours['size']}x{ours['size']}")
+            print(
+                f"  vinadv: rollout success {ours['success_rate']:.2%} of {ours['rollouts']} rollouts, optimal paths "
+                f"{ours['optimal_rate']:.2%}, action accuracy {ours['action_accuracy']:.2%}"
+            )
+            print(
+                f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
+                f"{theirs['cells']} free cells (every Moore move costs 1)"
+            )
+        else:
+            print(f"planner {planner.name}: {len(maps)} maps of {maps.size}x{maps.size} ({maps.moves} moves)")
+        print(f"  search: {search_text(search)}")
+        if ours is not None:
+            print(by_length_text(ours))
 
     return emit(args, metrics, text)
+
+
+def search_text(m: dict) -> str:
+    """The search metrics (`vinadv.planners.search_metrics`) in one line; n/a where undefined."""
+
+    def pct(x):
+        return "n/a" if x is None else f"{x:.2%}"
+
+    ratio = "n/a" if m["cost_ratio"] is None else f"{m['cost_ratio']:.4f}"
+    return (
+        f"Opt {pct(m['opt'])}, Exp {pct(m['exp'])}, Hmean {pct(m['hmean'])}, success {pct(m['success'])}, "
+        f"cost ratio {ratio} over {m['rows']} (map, start) rows"
+    )

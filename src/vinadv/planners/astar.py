@@ -261,6 +261,52 @@ def _search_one(
     return 1, STEP_LIMIT  # the budget is spent
 
 
+@numba.njit(cache=True, nogil=True)
+def _search_row(
+    b,
+    cost,
+    obstacles,
+    starts,
+    goals,
+    g_ratio,
+    deltas,
+    move_costs,
+    diagonal_cost,
+    tie_break,
+    corner_cutting,
+    exact,
+    budget,
+    cells_out,
+    lengths,
+    termination,
+    expanded,
+):
+    """Search row `b` of the batch into row `b` of the outputs (`[start]` where the goal is not reached)."""
+    length, term = _search_one(
+        cost[b],
+        obstacles[b],
+        starts[b, 0],
+        starts[b, 1],
+        goals[b, 0],
+        goals[b, 1],
+        g_ratio,
+        deltas,
+        move_costs,
+        diagonal_cost,
+        tie_break,
+        corner_cutting,
+        exact,
+        budget,
+        cells_out[b],
+        expanded[b],
+    )
+    if term != GOAL:
+        cells_out[b, 0, 0] = starts[b, 0]
+        cells_out[b, 0, 1] = starts[b, 1]
+    lengths[b] = length
+    termination[b] = term
+
+
 @numba.njit(cache=True, parallel=True)
 def _search_batch(
     cost,
@@ -280,14 +326,14 @@ def _search_batch(
     termination,
     expanded,
 ):
+    """Every row, in parallel over rows (Numba threads)."""
     for b in numba.prange(obstacles.shape[0]):
-        length, term = _search_one(
-            cost[b],
-            obstacles[b],
-            starts[b, 0],
-            starts[b, 1],
-            goals[b, 0],
-            goals[b, 1],
+        _search_row(
+            b,
+            cost,
+            obstacles,
+            starts,
+            goals,
             g_ratio,
             deltas,
             move_costs,
@@ -296,14 +342,58 @@ def _search_batch(
             corner_cutting,
             exact,
             budget,
-            cells_out[b],
-            expanded[b],
+            cells_out,
+            lengths,
+            termination,
+            expanded,
         )
-        if term != GOAL:
-            cells_out[b, 0, 0] = starts[b, 0]
-            cells_out[b, 0, 1] = starts[b, 1]
-        lengths[b] = length
-        termination[b] = term
+
+
+@numba.njit(cache=True, nogil=True)
+def _search_rows(
+    cost,
+    obstacles,
+    starts,
+    goals,
+    g_ratio,
+    deltas,
+    move_costs,
+    diagonal_cost,
+    tie_break,
+    corner_cutting,
+    exact,
+    budget,
+    cells_out,
+    lengths,
+    termination,
+    expanded,
+):
+    """Every row, one after the other: for a few rows, where waking the threads of `_search_batch` costs more than
+    it saves."""
+    for b in range(obstacles.shape[0]):
+        _search_row(
+            b,
+            cost,
+            obstacles,
+            starts,
+            goals,
+            g_ratio,
+            deltas,
+            move_costs,
+            diagonal_cost,
+            tie_break,
+            corner_cutting,
+            exact,
+            budget,
+            cells_out,
+            lengths,
+            termination,
+            expanded,
+        )
+
+
+#: batches of fewer rows are searched on the calling thread (`_search_rows`)
+PARALLEL_FROM = 4
 
 
 def best_first_search(
@@ -367,7 +457,7 @@ def best_first_search(
     termination = np.zeros(b, dtype=np.int8)
     expanded = np.zeros(obstacles.shape, dtype=bool)
     if b:
-        _search_batch(
+        (_search_batch if b >= PARALLEL_FROM else _search_rows)(
             cost,
             obstacles,
             starts,
