@@ -112,23 +112,34 @@ class NeuralAstarPlanner(SearchPlanner):
         self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
     ) -> SearchResult:
         """The differentiable mode's search as a `SearchResult` (no gradients; the paths are the chains of parents,
-        `[start]` with termination `step_limit` where the goal was not reached), `batch_size` maps at a time."""
+        `[start]` with termination `step_limit` where the goal was not reached), `batch_size` maps at a time (on the
+        CPU, split between threads of one torch thread each: the search's many small steps gain nothing from
+        PyTorch's own threads and lose much to their synchronisation on a busy machine)."""
         obstacles, starts, goals = self._check_inputs(obstacles, starts, goals, corner_cutting)
         module = self.differentiable_paths
-        parts = []
-        with torch.no_grad():
-            for i in range(0, len(obstacles), self.batch_size):
-                sl = slice(i, i + self.batch_size)
-                out = module.search(
-                    torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device),
-                    torch.from_numpy(starts[sl]).to(self.device),
-                    torch.from_numpy(goals[sl]).to(self.device),
-                )
-                reached = out.reached.cpu().numpy()
-                plan = PlanResult.from_paths(out.paths(starts[sl], goals[sl]), np.where(reached, GOAL, STEP_LIMIT))
-                expanded = out.histories.detach().cpu().numpy() > 0.5
-                parts.append(SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded))
-        return SearchResult.concat(parts)
+        parts: dict[int, SearchResult] = {}
+
+        def search(lo: int, hi: int) -> None:
+            with torch.no_grad():
+                for i in range(lo, hi, self.batch_size):
+                    sl = slice(i, min(hi, i + self.batch_size))
+                    out = module.search(
+                        torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device),
+                        torch.from_numpy(starts[sl]).to(self.device),
+                        torch.from_numpy(goals[sl]).to(self.device),
+                    )
+                    reached = out.reached.cpu().numpy()
+                    paths = out.paths(starts[sl], goals[sl])
+                    plan = PlanResult.from_paths(paths, np.where(reached, GOAL, STEP_LIMIT))
+                    expanded = out.histories.detach().cpu().numpy() > 0.5
+                    parts[i] = SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)
+
+        if self.device.type != "cpu":
+            search(0, len(obstacles))
+        else:
+            with torch_threads(1):
+                over_maps(len(obstacles), search)
+        return SearchResult.concat([parts[i] for i in sorted(parts)])
 
     @property
     def differentiable_paths(self) -> NeuralAstarPaths:
