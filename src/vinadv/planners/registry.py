@@ -296,7 +296,8 @@ def load_planner(
 
     Args:
         spec: a registered name, with parameters (`wastar:w=3`) or not, or `file.py:factory` / `module:factory`.
-        weights: a weights file for `vin` or `gppn` (default: the shipped ones); refused for the others.
+        weights: a weights file for `vin`, `gppn` or `neural-astar` (default: the shipped ones); refused for the
+            others.
         corner_cutting: the move rule of the maps (the `optimal` planner's logits follow it).
         device: torch device of a torch planner's forward.
         moves: the movement model of the maps (`vinadv.grid.moves`): the planner is `Planner.for_moves(moves)`.

@@ -22,7 +22,10 @@ Where the authors' batched loop goes on until every map is solved, re-selecting 
 changes nothing: the goal then has the smallest f among the open cells, and its neighbours are not re-opened), this
 module stops each map at its goal; and a map whose open list empties (the goal cannot be reached: the authors' code
 divides 0 by 0 there) stops unsolved with a path map holding the goal alone, as a search that ran out of Tmax
-before opening the goal does.
+before opening the goal does. Where every open cell's exp(-f / sqrt(N)) underflows to 0 in float32 (f / sqrt(N) above
+about 104: long searches on large maps), the authors' selection is 0/0; this module then selects the open cell of
+the smallest f (the first on ties), as the exact mode (`vinadv.planners.astar`) does, without a gradient for that
+step.
 """
 
 from __future__ import annotations
