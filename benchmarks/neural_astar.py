@@ -25,7 +25,8 @@ import numba
 import numpy as np
 import torch
 
-from search import mpd_rows, timed_side_by_side  # the same rows and timing (this folder is on a script's path)
+from harm import timed_side_by_side  # the benchmarks' side-by-side timer (this folder is on a script's path)
+from search import mpd_rows  # the same rows as benchmarks/search.py
 from vinadv.grid.generator import generate_maps
 from vinadv.planners.astar import AStarPlanner
 from vinadv.planners.neural_astar.model import load_neural_astar

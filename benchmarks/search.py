@@ -16,25 +16,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 
 import numba
 import numpy as np
 
+from harm import timed_side_by_side  # the benchmarks' side-by-side timer (benchmarks/harm.py)
 from vinadv.grid.generator import generate_maps
 from vinadv.planners.astar import AStarPlanner
-
-
-def timed_side_by_side(fns, rounds: int):
-    """Best time of each of `fns` over `rounds` rounds, taking turns within a round; and each one's last result."""
-    best = [np.inf] * len(fns)
-    results = [None] * len(fns)
-    for _ in range(rounds):
-        for k, fn in enumerate(fns):
-            start = time.perf_counter()
-            results[k] = fn()
-            best[k] = min(best[k], time.perf_counter() - start)
-    return best, results
 
 
 def mpd_rows(path: str, seed: int = 0):

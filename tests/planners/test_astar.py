@@ -11,9 +11,13 @@ import math
 import numpy as np
 import pytest
 
+from vinadv.attacks.strategies import make_attack
+from vinadv.classify.harm import pairset_harm
+from vinadv.classify.rule import label_pairs
 from vinadv.errors import InputError
 from vinadv.grid.moves import move_model
 from vinadv.planners.astar import AStarPlanner, WeightedAStarPlanner, best_first_search, replica_is_exact
+from vinadv.planners.registry import load_planner
 from vinadv.planners.result import GOAL, STEP_LIMIT
 
 F32 = np.float32
@@ -67,8 +71,11 @@ def oracle(cost, obstacles, start, goal, g_ratio, moves, corner_cutting, exact, 
         else:
             f = F32(g_ratio) * g + F32(1 - g_ratio) * h
             e = np.exp(((-f) / F32(math.sqrt(n))).astype(np.float64)).astype(F32) * is_open
-            assert e.max() > 0  # no underflow on small maps
-            sel = divmod(int(np.argmax(e)), n)  # the first index of the largest
+            if e.max() >= np.finfo(F32).tiny:
+                sel = divmod(int(np.argmax(e)), n)  # the first index of the largest
+            else:  # every open value subnormal or 0: the largest, then the smallest f, then the first
+                keys = sorted((-e[r, c], f[r, c], r * n + c) for r, c in zip(*np.nonzero(is_open)))
+                sel = divmod(keys[0][2], n)
         closed[sel] = True
         is_open[sel] = False
         if sel == tuple(goal):
@@ -166,6 +173,23 @@ def test_the_kernel_expands_and_returns_what_the_literal_rule_does(moves, corner
         assert term == want[2], k
         assert path == want[0], k
         assert np.array_equal(expanded, want[1]), k
+
+
+def test_where_exp_underflows_the_replica_orders_by_f():
+    rng = np.random.default_rng(6)
+    for k, (obstacles, start, goal) in enumerate(random_problems(12, 12, sizes=(6, 9))):
+        n = obstacles.shape[0]
+        cost = (200 + 300 * rng.random((n, n))).astype(F32)  # f / sqrt N far above 87: exp subnormal or 0
+        want = oracle(cost, obstacles, start, goal, 0.5, "moore", True, False)
+        path, expanded, term = search_one(cost, obstacles, start, goal, exact=False)
+        assert (path, term) == (want[0], want[2]) and np.array_equal(expanded, want[1]), k
+    for k, (obstacles, start, goal) in enumerate(random_problems(13, 12, sizes=(8, 9))):
+        # greedy (g_ratio 0), f = h in [283, 294]: f / sqrt 8 in [100, 104], where float32 exp is a few units of
+        # the smallest subnormal and cells of different f tie
+        cost = (283 + 4 * rng.random((8, 8))).astype(F32)
+        want = oracle(cost, obstacles, start, goal, 0.0, "moore", True, False)
+        path, expanded, term = search_one(cost, obstacles, start, goal, g_ratio=0.0, exact=False)
+        assert (path, term) == (want[0], want[2]) and np.array_equal(expanded, want[1]), k
 
 
 def test_the_budget_stops_the_search_as_the_literal_rule_does():
@@ -281,3 +305,26 @@ def test_bad_arguments_are_refused_naming_them():
         WeightedAStarPlanner(4, w=0.5)
     with pytest.raises(InputError, match="for 4x4 maps"):
         AStarPlanner(4).plan_paths(np.zeros((1, 5, 5), bool), starts, goals)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("moves", ["octile", "moore", "news"])
+def test_astar_is_never_harmful_and_weighted_astar_sometimes_is(moves):
+    """Every valid one-obstacle attack (exhaustive) on cluttered random maps: A* re-routes optimally on each, so
+    no pair is harmful; weighted A* does not."""
+    rng = np.random.default_rng(2)
+    n, b = 14, 16
+    obstacles = rng.random((b, n, n)) < 0.3
+    starts, goals = np.tile([1, 1], (b, 1)), np.tile([n - 2, n - 2], (b, 1))
+    obstacles[:, 1, 1] = obstacles[:, n - 2, n - 2] = False
+    reachable = np.isfinite([dijkstra(o, s, g, moves, True) for o, s, g in zip(obstacles, starts, goals)])
+    obstacles, starts, goals = obstacles[reachable], starts[reachable], goals[reachable]
+    harmful = {}
+    for spec in ("astar", "wastar:w=3"):
+        planner = load_planner(spec, n, moves=moves)
+        pairs = make_attack("exhaustive", per_map=0).attack(obstacles, starts, goals, planner).pairs
+        labels = label_pairs(pairs.path_o, pairs.path_a, pairs.goals, n).labels
+        harmful[spec] = int((pairset_harm(pairs, labels).harm == "harmful").sum())
+        assert len(pairs) > 100
+    assert harmful["astar"] == 0
+    assert harmful["wastar:w=3"] > 0

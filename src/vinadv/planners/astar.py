@@ -26,9 +26,10 @@ two cells tie exactly when their float32 `exp` values are equal, and the row-maj
 their `argmax`. Two differences, both documented, neither seen on the MP maps: (1) `exp` is computed in float64 and
 rounded once to float32 (the correctly rounded float32 `exp` but for rare double roundings; PyTorch's vectorised
 float32 `exp` is within one unit in the last place of it), and the authors divide the values by their sum before the
-`argmax`, which can merge two values one unit apart; (2) where every open cell's `exp(x)` underflows
-to 0 (`f / sqrt N` above about 104: long searches on large maps), the authors' division gives NaN and an arbitrary
-cell, the replica compares `f` (smallest first) among those zeros instead.
+`argmax`, which can merge two values one unit apart; (2) where `exp(x)` is subnormal or underflows to 0 (`f / sqrt
+N` above about 87: long searches on large maps), cells of different `f` tie (and where every open value is 0 the
+authors' division gives NaN and an arbitrary cell): the replica orders such cells by `f` (smallest first), then by
+row-major index.
 
 Arithmetic (`exact=True`): float64 `g`, `h`, `f`; ties of `f` go to the smaller `tb * euclid` term, then to the
 row-major first cell, and `g` improves only by more than 1e-9 (`COST_TOL`). The tie term then only breaks ties and
@@ -36,8 +37,8 @@ the search is exact A* whatever the move costs: on `octile` two path costs `a + 
 the `tb` term (or than float32 rounding), which would make the replica suboptimal there.
 
 The planners: `astar` is vanilla A* (`g_ratio` 0.5, unit cost on free cells) on the maps' movement model: the
-replica on `moore` and `news` (exact there: every move costs 1 and the tie term is below 1/2 for N < 350, so it
-never outweighs a move; larger maps use `exact`), `exact` on `octile`. On `moore` maps it is the authors' vanilla A*,
+replica on `moore` and `news` (exact there: every move costs 1 and the tie term stays below 1/2 for N <= 354, so
+it never outweighs a move; larger maps use `exact`), `exact` on `octile`. On `moore` maps it is the authors' vanilla A*,
 expansions included. `wastar:w=W` is weighted A*, `f = g + W h` (as `g_ratio = 1 / (1 + W)`), suboptimal for
 `W > 1`, with the same arithmetic rule.
 """
@@ -66,6 +67,8 @@ __all__ = [
 
 #: the weight of the Euclidean tie-break term of the heuristic (the authors' `tb_factor`)
 TIE_BREAK = 0.001
+#: the smallest normal float32: below it `exp` loses precision (subnormal), so the replica orders by `f` there
+FLOAT32_TINY = np.float32(np.finfo(np.float32).tiny)
 
 
 def replica_is_exact(moves: str, size: int) -> bool:
@@ -134,34 +137,19 @@ def _heap_pop(k1, k2, cell, size):
 @numba.njit(cache=True, nogil=True)
 def _replica_key(g, h, g_ratio32, h_ratio32, sqrt_n32):
     """`(k1, k2)` of a cell in the replica: minus the float32 `exp(-f / sqrt N)` (largest first), and `f` where
-    that `exp` underflows to 0 (else 0): the order of the authors' `argmax`, the cell index breaking the ties."""
+    that `exp` is subnormal or 0 (else 0): the order of the authors' `argmax`, the cell index breaking the ties."""
     f = np.float32(np.float32(g_ratio32 * g) + np.float32(h_ratio32 * h))
     x = np.float32(np.float32(-f) / sqrt_n32)
     e = np.float32(math.exp(np.float64(x)))  # float64 exp, rounded once: the float32 exp (module doc)
-    return -np.float64(e), (np.float64(f) if e == 0 else 0.0)
+    return -np.float64(e), (np.float64(f) if e < FLOAT32_TINY else 0.0)
 
 
 @numba.njit(cache=True, nogil=True)
-def _search_one(
-    cost,
-    obstacles,
-    sr,
-    sc,
-    gr,
-    gc,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    expanded,
-):
-    """One search (see the module doc); fills `cells_out` (the path, start first) and `expanded`; returns
+def _search_one(cost, obstacles, sr, sc, gr, gc, params, cells_out, expanded):
+    """One search (see the module doc) from `(sr, sc)` to `(gr, gc)` with the parameters `params` that
+    `best_first_search` packs; fills `cells_out` (the path, start first) and `expanded`; returns
     `(path length, termination)`."""
+    g_ratio, deltas, move_costs, diagonal_cost, tie_break, corner_cutting, exact, budget = params
     n = obstacles.shape[0]
     m = obstacles.shape[1]
     cells = n * m
@@ -262,43 +250,13 @@ def _search_one(
 
 
 @numba.njit(cache=True, nogil=True)
-def _search_row(
-    b,
-    cost,
-    obstacles,
-    starts,
-    goals,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    lengths,
-    termination,
-    expanded,
-):
-    """Search row `b` of the batch into row `b` of the outputs (`[start]` where the goal is not reached)."""
+def _search_row(b, inputs, params, outputs):
+    """Search row `b` of the batch into row `b` of the outputs (`[start]` where the goal is not reached); the
+    arguments are the tuples `_search` packs."""
+    cost, obstacles, starts, goals = inputs
+    cells_out, lengths, termination, expanded = outputs
     length, term = _search_one(
-        cost[b],
-        obstacles[b],
-        starts[b, 0],
-        starts[b, 1],
-        goals[b, 0],
-        goals[b, 1],
-        g_ratio,
-        deltas,
-        move_costs,
-        diagonal_cost,
-        tie_break,
-        corner_cutting,
-        exact,
-        budget,
-        cells_out[b],
-        expanded[b],
+        cost[b], obstacles[b], starts[b, 0], starts[b, 1], goals[b, 0], goals[b, 1], params, cells_out[b], expanded[b]
     )
     if term != GOAL:
         cells_out[b, 0, 0] = starts[b, 0]
@@ -308,88 +266,17 @@ def _search_row(
 
 
 @numba.njit(cache=True, parallel=True)
-def _search_batch(
-    cost,
-    obstacles,
-    starts,
-    goals,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    lengths,
-    termination,
-    expanded,
-):
+def _search_batch(inputs, params, outputs):
     """Every row, in parallel over rows (Numba threads)."""
-    for b in numba.prange(obstacles.shape[0]):
-        _search_row(
-            b,
-            cost,
-            obstacles,
-            starts,
-            goals,
-            g_ratio,
-            deltas,
-            move_costs,
-            diagonal_cost,
-            tie_break,
-            corner_cutting,
-            exact,
-            budget,
-            cells_out,
-            lengths,
-            termination,
-            expanded,
-        )
+    for b in numba.prange(inputs[0].shape[0]):
+        _search_row(b, inputs, params, outputs)
 
 
 @numba.njit(cache=True, nogil=True)
-def _search_rows(
-    cost,
-    obstacles,
-    starts,
-    goals,
-    g_ratio,
-    deltas,
-    move_costs,
-    diagonal_cost,
-    tie_break,
-    corner_cutting,
-    exact,
-    budget,
-    cells_out,
-    lengths,
-    termination,
-    expanded,
-):
-    """Every row, one after the other: for a few rows, where waking the threads of `_search_batch` costs more than
-    it saves."""
-    for b in range(obstacles.shape[0]):
-        _search_row(
-            b,
-            cost,
-            obstacles,
-            starts,
-            goals,
-            g_ratio,
-            deltas,
-            move_costs,
-            diagonal_cost,
-            tie_break,
-            corner_cutting,
-            exact,
-            budget,
-            cells_out,
-            lengths,
-            termination,
-            expanded,
-        )
+def _search_rows(inputs, params, outputs):
+    """Every row on the calling thread: for a few rows, where waking `_search_batch`'s threads costs more."""
+    for b in range(inputs[0].shape[0]):
+        _search_row(b, inputs, params, outputs)
 
 
 #: batches of fewer rows are searched on the calling thread (`_search_rows`)
@@ -413,7 +300,8 @@ def best_first_search(
         cost: `(B, N, N)` float, finite, >= 0: the cost of each cell (charged when the search leaves it, and added to
             the heuristic): 1 on free cells for vanilla A*; a guidance map (Neural A*'s encoder output) otherwise.
         obstacles: `(B, N, N)` bool, True = obstacle: never opened.
-        starts, goals: `(B, 2)` int `(row, col)`.
+        starts: `(B, 2)` int `(row, col)` of each start.
+        goals: `(B, 2)` int `(row, col)` of each goal.
         g_ratio: `f = g_ratio * g + (1 - g_ratio) * h`, in [0, 1]: 0.5 is A*, `1 / (1 + w)` weighted A* with weight
             `w`, 0 greedy best-first.
         moves: the movement model (`vinadv.grid.moves`): the moves, their costs, and the distance of the heuristic
@@ -457,23 +345,20 @@ def best_first_search(
     termination = np.zeros(b, dtype=np.int8)
     expanded = np.zeros(obstacles.shape, dtype=bool)
     if b:
-        (_search_batch if b >= PARALLEL_FROM else _search_rows)(
-            cost,
-            obstacles,
-            starts,
-            goals,
-            g_ratio,
-            model.deltas,
-            model.costs,
-            float(model.diagonal_cost),
-            TIE_BREAK,
-            bool(corner_cutting),
-            bool(exact),
-            budget,
-            cells,
-            lengths,
-            termination,
-            expanded,
+        search = _search_batch if b >= PARALLEL_FROM else _search_rows
+        search(
+            (cost, obstacles, starts, goals),
+            (
+                g_ratio,
+                model.deltas,
+                model.costs,
+                float(model.diagonal_cost),
+                TIE_BREAK,
+                bool(corner_cutting),
+                bool(exact),
+                budget,
+            ),
+            (cells, lengths, termination, expanded),
         )
     plan = PlanResult.from_buffers(cells, lengths, termination)
     return SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)

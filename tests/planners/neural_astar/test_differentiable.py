@@ -141,10 +141,19 @@ def test_the_straight_through_gradient_is_the_softmax_derivative_summed_over_ste
     np.testing.assert_allclose(c.grad[0].reshape(-1).numpy(), expected, rtol=1e-4, atol=1e-6)
 
 
-def test_where_every_exp_underflows_the_smallest_f_goes_first_as_in_the_exact_mode():
-    free, starts, goals, _ = random_problems(8, 9, seed=5, density=0.2)
-    cost = np.full(free.shape, 2000.0, np.float32)  # f / sqrt(N) far above 104: exp(-f / sqrt N) is 0 in float32
+@pytest.mark.parametrize("scale", [2000.0, 60.0], ids=["all-zero", "subnormal"])
+def test_where_exp_is_subnormal_or_zero_the_smallest_f_goes_first_as_in_the_exact_mode(scale):
+    """scale 2000: f / sqrt(N) far above 104 from the first step, every exp(-f / sqrt N) is 0 in float32; scale 60:
+    the search passes from normal through subnormal values (f / sqrt N about 87 to 104) to 0 as g grows."""
+    free, starts, goals, noise = random_problems(8, 9, seed=5, density=0.2)
+    starts[:4], goals[:4] = [0, 0], [8, 8]  # long searches
+    free[:4, 0, 0] = free[:4, 8, 8] = True
+    cost = (scale + noise).astype(np.float32)
     out = search(free, starts, goals, cost)
     exact = best_first_search(cost, ~free, starts, goals, 0.5, "moore", True, exact=False)
     assert np.array_equal(out.histories.numpy() > 0.5, exact.expanded)
     assert np.array_equal(out.reached.numpy(), exact.reached)
+    assert all(np.array_equal(a, b) for a, b in zip(out.paths(starts, goals), exact.paths))
+    # the regime was entered: f / sqrt(N) of some goal above 87 (exp below the smallest normal float32)
+    f_goal = [0.5 * cost[b][tuple(p[:-1].T)].sum() + 0.5 * cost[b][tuple(goals[b])] for b, p in enumerate(exact.paths)]
+    assert max(f_goal) / 3 > 87

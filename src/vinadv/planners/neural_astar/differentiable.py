@@ -22,10 +22,10 @@ Where the authors' batched loop goes on until every map is solved, re-selecting 
 changes nothing: the goal then has the smallest f among the open cells, and its neighbours are not re-opened), this
 module stops each map at its goal; and a map whose open list empties (the goal cannot be reached: the authors' code
 divides 0 by 0 there) stops unsolved with a path map holding the goal alone, as a search that ran out of Tmax
-before opening the goal does. Where every open cell's exp(-f / sqrt(N)) underflows to 0 in float32 (f / sqrt(N) above
-about 104: long searches on large maps), the authors' selection is 0/0; this module then selects the open cell of
-the smallest f (the first on ties), as the exact mode (`vinadv.planners.astar`) does, without a gradient for that
-step.
+before opening the goal does. Where the largest open exp(-f / sqrt(N)) is subnormal or 0 in float32 (f / sqrt(N)
+above about 87: long searches on large maps), float32 can no longer tell those cells apart (and where all are 0 the
+authors' selection is 0/0); this module then selects, among the open cells of that largest value, the one of the
+smallest f (the first on ties), as the exact mode (`vinadv.planners.astar`) does.
 """
 
 from __future__ import annotations
@@ -38,9 +38,11 @@ import torch
 from torch import nn
 
 from vinadv.grid.actions import ACTION_DELTAS
-from vinadv.planners.astar import TIE_BREAK
+from vinadv.planners.astar import FLOAT32_TINY, TIE_BREAK
 from vinadv.planners.neural_astar.model import NeuralAstar
 
+#: the smallest normal float32: below it exp(-f / sqrt(N)) is subnormal (`vinadv.planners.astar.FLOAT32_TINY`)
+TINY = float(FLOAT32_TINY)
 __all__ = ["DifferentiableSearch", "NeuralAstarPaths", "authors_heuristic", "differentiable_astar"]
 
 
@@ -144,9 +146,12 @@ def differentiable_astar(
         underflow = total[:, 0] == 0
         y = e / torch.where(underflow[:, None], torch.ones_like(total), total)
         selected = y.detach().argmax(dim=-1)  # the first index of the largest share
-        if bool((underflow & active).any()):  # every open exp is 0: the smallest f first, as the exact mode does
-            lowest = torch.where(is_open, f.detach(), torch.full_like(f, math.inf)).argmin(dim=-1)
-            selected = torch.where(underflow, lowest, selected)
+        top = e.detach().max(dim=-1, keepdim=True).values
+        low = top[:, 0] < TINY  # the largest open exp is subnormal or 0: the exact mode's rule (module doc)
+        if bool((low & active).any()):
+            tied = is_open & (e.detach() == top)
+            lowest = torch.where(tied, f.detach(), torch.full_like(f, math.inf)).argmin(dim=-1)
+            selected = torch.where(low, lowest, selected)
         hard = torch.zeros_like(y)
         hard[rows, selected] = 1.0
         histories = histories + (hard + (y - y.detach())) * active[:, None]
