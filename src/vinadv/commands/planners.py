@@ -62,6 +62,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
     }
 
     def text() -> None:
+        width = max([11, *(len(p["name"]) for p in planners)])  # the names in one column
         for p in planners:
             weights = (
                 ""
@@ -69,7 +70,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
                 else (f"  [weights {Path(p['weights']).name}{'' if p['weights_available'] else ' not shipped'}]")
             )
             params = ", ".join(f"{q['name']}={q['default']:g}" for q in p["params"])
-            print(f"{p['name']:<11} {p['description']}{weights}{f'  [parameters {params}]' if params else ''}")
+            print(f"{p['name']:<{width}} {p['description']}{weights}{f'  [parameters {params}]' if params else ''}")
         print(
             "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
             "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (docs/own-planner.md)"

@@ -9,6 +9,9 @@
 - `astar`: vanilla A* on the maps' movement model, with its expansions (`vinadv.planners.astar`; on `moore` maps the
   Neural A* authors' vanilla A*).
 - `wastar`: weighted A*, `f = g + w * h` (`wastar:w=3`; w >= 1, default 2): fewer expansions, suboptimal paths.
+- `neural-astar`: Neural A* (Yonetani et al. 2021), the authors' CNN encoder and search on `moore` maps; weights from
+  `weights=` or the shipped `neural_astar_mazes32.pt` (converted from the authors' mazes checkpoint; the encoder is
+  fully convolutional, so the same file serves every map size).
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
   `forward(obstacles, goals)` takes obstacles as 0/1 float32 `(B, N, N)` and goals as int64 `(B, 2)` and returns
   `(B, 8, N, N)` logits in DESIGN.md's action order; or an object with `plan_paths` (a search planner,
@@ -209,6 +212,17 @@ def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str
     )
 
 
+def _neural_astar_weights_path(size: int) -> Path:
+    return WEIGHTS_DIR / "neural_astar_mazes32.pt"  # one model for every size: the encoder is fully convolutional
+
+
+def _load_neural_astar(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
+    from vinadv.planners.neural_astar.model import load_neural_astar  # noqa: PLC0415 (PyTorch: loaded when used)
+    from vinadv.planners.neural_astar.planner import NeuralAstarPlanner  # noqa: PLC0415 (PyTorch, as above)
+
+    return NeuralAstarPlanner(load_neural_astar(weights), size, device=device)
+
+
 def _load_optimal(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     return OptimalPlanner(size, corner_cutting)
 
@@ -257,6 +271,13 @@ register(
     load=_load_wastar,
     params=(PlannerParam("w", 2.0, "the weight of the heuristic (1: A*)", minimum=1.0),),
 )
+register(
+    "neural-astar",
+    description="Neural A* (Yonetani et al. 2021): a CNN's guidance costs searched by A*, on moore maps",
+    load=_load_neural_astar,
+    default_weights=_neural_astar_weights_path,
+    takes_weights=True,
+)
 
 
 def default_weights(name: str, size: int) -> Path | None:
@@ -283,7 +304,8 @@ def load_planner(
 
     Args:
         spec: a registered name, with parameters (`wastar:w=3`) or not, or `file.py:factory` / `module:factory`.
-        weights: a weights file for `vin` or `gppn` (default: the shipped ones); refused for the others.
+        weights: a weights file for `vin`, `gppn` or `neural-astar` (default: the shipped ones); refused for the
+            others.
         corner_cutting: the move rule of the maps (the `optimal` planner's logits follow it).
         device: the torch device of the planner's forward (`cpu`, `cuda`, `cuda:N`, `auto`: checked by
             `vinadv.planners.device.resolve_device`, `InputError` for one this machine lacks), recorded by type in
