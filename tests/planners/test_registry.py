@@ -111,7 +111,15 @@ def test_plan_optimal_and_vin_from_the_cli(tmp_path, capsys):
 def test_planners_command(capsys):
     assert main(["planners", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert [p["name"] for p in out["planners"]] == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar", "neural-astar"]
+    assert [p["name"] for p in out["planners"]] == [
+        "vin",
+        "vin_robust",
+        "gppn",
+        "optimal",
+        "astar",
+        "wastar",
+        "neural-astar",
+    ]
     assert main(["planners"]) == 0
     text = capsys.readouterr().out
     assert "optimal" in text and "FILE.py:FACTORY" in text

@@ -50,9 +50,7 @@ class NeuralAstarPlanner(SearchPlanner):
 
     moves = MOVES
 
-    def __init__(
-        self, model: NeuralAstar, size: int, device: str | torch.device | None = None, batch_size: int = 64
-    ):
+    def __init__(self, model: NeuralAstar, size: int, device: str | torch.device | None = None, batch_size: int = 64):
         self.name, self.size = "neural-astar", int(size)
         # None: the CPU, not recorded in `spec()`; a device given is recorded by its type (as `TorchPlanner`)
         self.device = torch.device("cpu" if device is None else device)
