@@ -7,6 +7,7 @@ from collections.abc import Callable
 import sqlalchemy as sa
 
 from vinadv.store import Store
+from vinadv.store.schema import map_pairs
 from vinadv.testing.store import random_records
 
 Undo = Callable[[sa.Connection, Callable[[str], str]], None]
@@ -32,6 +33,33 @@ def old_database(url: str, version: int, n_pairs: int, undo: Undo, name: str = "
         conn.execute(sa.text(stamp))
     engine.dispose()
     return run_id
+
+
+#: `map_pairs` columns that schema versions 2 and 3 added
+LATER_COLUMNS = (
+    "opt_cost_o",
+    "opt_cost_a",
+    "cost_o",
+    "cost_a",
+    "regret_o",
+    "regret_a",
+    "expert_label",
+    "harm",
+    "added_more",
+)
+
+
+def version_1_database(url: str, n_pairs: int, name: str = "old") -> int:
+    """A database as vinadv with schema version 1 left it: one run `name` of `n_pairs` pairs, no harm columns (nor
+    version 3's `added_more`, version 4's table, version 5's collation); the run's id."""
+
+    def undo(conn, quote):
+        harm_index = next(ix for ix in map_pairs.indexes if ix.name == "ix_map_pairs_run_harm")
+        harm_index.drop(conn)  # version 1 had no index on harm (SQLite cannot drop an indexed column)
+        for column in LATER_COLUMNS:
+            conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote(column)}"))
+
+    return old_database(url, 1, n_pairs, undo, name=name)
 
 
 def run_name_collation(url: str) -> str | None:

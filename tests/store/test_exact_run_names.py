@@ -11,7 +11,13 @@ import csv
 import numpy as np
 import sqlalchemy as sa
 
-from tests.store.old_schemas import columns_and_version, old_database, run_name_collation
+from tests.store.old_schemas import (
+    LATER_COLUMNS,
+    columns_and_version,
+    old_database,
+    run_name_collation,
+    version_1_database,
+)
 from vinadv.cli import main
 from vinadv.store import SCHEMA_VERSION, Store
 from vinadv.store.schema import exact_collation, runs
@@ -140,32 +146,13 @@ def test_a_version_4_database_holding_names_is_upgraded_in_place(db_url):
 
 def test_a_version_1_database_gains_the_columns_and_the_exact_names(db_url):
     # the additive steps (versions 2 to 4) and version 5's collation compose in one open
-    undo_columns = (
-        "opt_cost_o",
-        "opt_cost_a",
-        "cost_o",
-        "cost_a",
-        "regret_o",
-        "regret_a",
-        "expert_label",
-        "harm",
-        "added_more",
-    )
-
-    def undo(conn, quote):
-        conn.execute(
-            sa.text("DROP INDEX ix_map_pairs_run_harm" + (" ON map_pairs" if conn.dialect.name == "mysql" else ""))
-        )
-        for name in undo_columns:
-            conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote(name)}"))
-
-    run_id = old_database(db_url, 1, 6, undo, name="Run")
+    run_id = version_1_database(db_url, 6, name="Run")
     (other,) = _insert_names(db_url, ["run"])
     with Store.open(db_url) as store:
         assert [store.find_run("Run"), store.find_run("run")] == [run_id, other]
         assert len(store.read_pairs(run_id)) == 6
     columns, version = columns_and_version(db_url)
-    assert version == "5" and set(undo_columns) <= columns
+    assert version == "5" and set(LATER_COLUMNS) <= columns
 
 
 def test_an_upgrade_cut_short_is_finished_by_the_next_open(mysql_url):
