@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.fault_files import write_classifier, write_database, write_maps, write_pairs, write_paths, write_weights
-from vinadv.cli import build_parser, main
+from vinadv.cli import SHIPPED_WEIGHTS_DIR, build_parser, main
 
 pytestmark = [pytest.mark.slow, pytest.mark.filterwarnings("ignore::UserWarning")]
 
@@ -66,6 +66,7 @@ FILE_NAMES = [
     "paths.npz",
     "pairs.npz",
     "weights.pt",
+    "gppn.pt",
     "model.joblib",
     "vinadv.db",
     "absent.npz",
@@ -163,6 +164,7 @@ def files(tmp_path_factory) -> Path:
     write_paths(folder / "paths.npz")
     write_pairs(folder / "pairs.npz")
     write_weights(folder / "weights.pt")
+    shutil.copy(SHIPPED_WEIGHTS_DIR / "gppn28.pt", folder / "gppn.pt")  # a GPPN (the shipped one, 28x28)
     write_classifier(folder / "model.joblib")
     write_database(folder / "vinadv.db")
     (folder / "folder").mkdir()
