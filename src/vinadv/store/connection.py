@@ -88,9 +88,14 @@ class Database:
         self.absent_columns = frozenset(absent_columns)
 
     def ensure_table(self, table: sa.Table) -> None:
-        """Create `table` unless the database has it (an additive table, see `schema.ADDITIVE_TABLES`)."""
-        with self.engine.begin() as conn:
+        """Create `table` unless the database has it (an additive table, see `schema.ADDITIVE_TABLES`), under the
+        `schema_lock`: two processes doing so at once create it once."""
+        with self.engine.connect() as conn:
+            if sa.inspect(conn).has_table(table.name):
+                return
+        with self.engine.connect() as conn, schema_lock(conn):
             table.create(conn, checkfirst=True)
+            conn.commit()
 
 
 def open_engine(url: str, *, create: bool = True, readonly: bool = False) -> tuple[sa.Engine, frozenset[str]]:
