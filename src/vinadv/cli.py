@@ -18,7 +18,7 @@ from pathlib import Path
 
 from vinadv import __version__
 from vinadv.commands import cli_message
-from vinadv.errors import InputError, os_error_message
+from vinadv.errors import InputError, one_line, os_error_message
 from vinadv.seeds import check_seed
 
 # Order is the order of `vinadv --help`; one module per stage of the pipeline.
@@ -122,10 +122,10 @@ def _run(args: argparse.Namespace, argv: list[str] | None) -> int:
             check_seed(args.seed)  # every command's --seed, by one rule, before the command does anything
         code = args.func(args)
     except InputError as exc:
-        print(f"vinadv: error: {cli_message(exc)}", file=sys.stderr)
+        print(f"vinadv: error: {one_line(cli_message(exc))}", file=sys.stderr)
         return 2
     except FileNotFoundError as exc:
-        print(f"vinadv: error: no such file: {exc.filename}", file=sys.stderr)
+        print(f"vinadv: error: no such file: {one_line(str(exc.filename))}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # the reader went away (`vinadv export | head`): stop quietly, as a program killed by SIGPIPE would;
@@ -133,7 +133,7 @@ def _run(args: argparse.Namespace, argv: list[str] | None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
     except OSError as exc:  # a file the command reads or writes: permissions, full disk, a folder in the way
-        print(f"vinadv: error: {os_error_message(exc)}", file=sys.stderr)
+        print(f"vinadv: error: {one_line(os_error_message(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:  # Ctrl-C (status 128 + SIGINT) or SIGTERM (128 + SIGTERM), as a shell reports
         terminated = isinstance(exc, Terminated)

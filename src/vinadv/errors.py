@@ -47,6 +47,16 @@ def first_line(exc: BaseException) -> str:
     return text.splitlines()[0] if text else type(exc).__name__
 
 
+#: what `one_line` writes for the characters that would break a line or show as nothing: their escapes
+_LINE_BREAKERS = {c: repr(chr(c))[1:-1] for c in (*range(0x20), 0x7F, 0x85, 0x2028, 0x2029)}
+
+
+def one_line(text: str) -> str:
+    """`text` on one line: line breaks and other control characters in it (a file name or a value the user gave)
+    written as their escapes (`\\n`, `\\x1b`), so an error message stays the one line the CLI promises."""
+    return text.translate(_LINE_BREAKERS)
+
+
 def os_error_message(exc: OSError, path: str | os.PathLike | None = None) -> str:
     """One line for an OSError: the path it concerns (`path`, else the error's own) and what went wrong."""
     where = path if path is not None else exc.filename

@@ -9,7 +9,7 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.interop.checkpoints import GPPN_KEYS
-from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn, save_gppn, widen_gppn
+from vinadv.planners.gppn import GPPN, MAX_KERNEL, MAX_WIDTH, GPPNConfig, load_gppn, save_gppn, widen_gppn
 
 
 def plain_gppn(model: GPPN, free: torch.Tensor, goal_map: torch.Tensor) -> torch.Tensor:
@@ -155,3 +155,20 @@ def test_widening_refuses_a_narrower_width_and_bad_noise(tmp_path, capsys):
     assert main(["gppn", "widen", str(tmp_path / "g.pt"), "--l-h", "6", "--out", str(tmp_path / "w.pt"), "--json"]) == 0
     wide = load_gppn(tmp_path / "w.pt")
     assert wide.config.l_h == 6 and wide.record["widened_from"]["config"]["l_h"] == 4
+
+
+def test_a_width_or_kernel_past_the_limit_is_refused_before_anything_is_made(tmp_path, capsys):
+    # a width of millions took every byte of memory (the process was killed) before this check
+    model = GPPN(GPPNConfig(k=3, l_h=4, f=3))
+    with pytest.raises(InputError, match=f"l_h must be at most {MAX_WIDTH}, got {MAX_WIDTH + 1}") as err:
+        widen_gppn(model, MAX_WIDTH + 1)
+    assert err.value.parameters == ("l_h",)
+    assert widen_gppn(model, 6, noise=0).config.l_h == 6
+    for config in (GPPNConfig(l_h=10**7), GPPNConfig(f=MAX_KERNEL + 2)):
+        with pytest.raises(InputError, match="at most"):
+            GPPN(config)
+    save_gppn(model, tmp_path / "g.pt")
+    out = tmp_path / "w.pt"
+    assert main(["gppn", "widen", str(tmp_path / "g.pt"), "--l-h", str(10**7), "--out", str(out)]) == 2
+    assert capsys.readouterr().err == f"vinadv: error: GPPN --l-h must be at most {MAX_WIDTH}, got 10000000\n"
+    assert not out.exists()

@@ -193,3 +193,21 @@ def test_compile_is_refused_for_the_vin():
         TrainConfig(planner="vin", compile=True).validate()
     assert err.value.parameters == ("compile",)
     TrainConfig(planner="gppn", compile=True).validate()
+
+
+@pytest.mark.parametrize(
+    "field,value,message",
+    [
+        ("l_h", 10**7, r"l_h must be in \[1, 2048\], got 10000000"),
+        ("l_h", 0, r"l_h must be in \[1, 2048\], got 0"),
+        ("l_q", 2049, r"l_q must be in \[1, 2048\], got 2049"),
+        ("kernel", 65, r"kernel must be odd and in \[1, 63\], got 65"),
+        ("kernel", 4, r"kernel must be odd and in \[1, 63\], got 4"),
+    ],
+)
+def test_a_model_too_wide_to_build_is_refused_with_the_options(field, value, message):
+    # checked with the training options, before any map is made or any weight allocated
+    with pytest.raises(InputError, match=message) as err:
+        TrainConfig(planner="gppn", **{field: value}).validate()
+    assert err.value.parameters == (field,)
+    TrainConfig(planner="gppn", l_h=2048, kernel=63).validate()

@@ -1,16 +1,21 @@
 """Two writers at once, made to meet where they used to collide by a barrier (deterministic, not by timing): two
-resumes of one run that both read "nothing stored yet" before either writes, and two first uses of one new
-database that both find it empty before either creates the tables. Both finish, and everything is stored once."""
+resumes of one run that both read "nothing stored yet" before either writes, two first uses of one new
+database that both find it empty before either creates the tables, and two opens of an old database that both
+read its old version before either upgrades it. Both finish, and everything is stored once."""
 
 from __future__ import annotations
 
+import contextlib
 import threading
+from collections.abc import Iterator
 
 import numpy as np
 import sqlalchemy as sa
 
-from vinadv.store import Store
+from tests.store.old_schemas import LATER_COLUMNS, columns_and_version, table_names, version_1_database
+from vinadv.store import SCHEMA_VERSION, Store
 from vinadv.store.pairs import PairQueries
+from vinadv.store.schema import evaluations
 from vinadv.testing.store import random_records
 
 
@@ -83,3 +88,75 @@ def test_two_first_uses_of_a_new_database_both_open_it(db_url, monkeypatch):
     assert all(isinstance(i, int) for i in ids), ids
     with Store.open(db_url, readonly=True) as store:
         assert sorted(r["name"] for r in store.list_runs(with_counts=False)) == ["run 0", "run 1"]
+
+
+#: the statements that take the schema lock (`connection.schema_lock`) on SQLite, PostgreSQL and MariaDB
+LOCK_STATEMENTS = ("BEGIN IMMEDIATE", "PG_ADVISORY_XACT_LOCK", "GET_LOCK(")
+
+
+@contextlib.contextmanager
+def meet_at_first(ddl: str) -> Iterator[dict[str, set]]:
+    """For the block, make each of two threads wait at its first `ddl` statement (`ALTER TABLE`, `CREATE TABLE`)
+    until the other one is about to run its first too, or is about to take the schema lock (which the waiting thread
+    then holds): without a lock both change what they read before either changed it, every time; with one, the
+    second waits for the first to finish. Yields the threads seen at each point ({"ddl": ..., "lock": ...})."""
+    seen: dict[str, set] = {"ddl": set(), "lock": set()}
+    ready = threading.Condition()
+    mine = threading.local()
+
+    def before(conn, cursor, statement, parameters, context, executemany):
+        text, me = statement.lstrip().upper(), threading.get_ident()
+        if any(s in text for s in LOCK_STATEMENTS):
+            with ready:
+                seen["lock"].add(me)
+                ready.notify_all()
+        elif text.startswith(ddl) and not getattr(mine, "met", False):
+            mine.met = True
+            with ready:
+                seen["ddl"].add(me)
+                ready.notify_all()
+                assert ready.wait_for(lambda: (seen["ddl"] | seen["lock"]) - {me}, timeout=30), "no other thread"
+
+    sa.event.listen(sa.engine.Engine, "before_cursor_execute", before)
+    try:
+        yield seen
+    finally:
+        sa.event.remove(sa.engine.Engine, "before_cursor_execute", before)
+
+
+def test_two_opens_of_an_old_database_upgrade_it_once(db_url):
+    run_id = version_1_database(db_url, 8, name="old")
+
+    def open_and_write(i: int) -> int:
+        with Store.open(db_url) as store:
+            return store.create_run(f"after {i}")
+
+    with meet_at_first("ALTER TABLE") as seen:
+        ids = in_two_threads(open_and_write)
+    assert all(isinstance(i, int) for i in ids), ids
+    assert len(seen["ddl"]) == 1 and len(seen["lock"]) == 2  # one upgraded, the other waited and found it done
+    columns, version = columns_and_version(db_url)
+    assert version == SCHEMA_VERSION and set(LATER_COLUMNS) <= columns
+    with Store.open(db_url, readonly=True) as store:
+        assert len(store.read_pairs(run_id)) == 8
+        assert sorted(r["name"] for r in store.list_runs(with_counts=False)) == ["after 0", "after 1", "old"]
+
+
+def test_two_writers_of_a_missing_additive_table_create_it_once(db_url):
+    with Store.open(db_url):
+        pass
+    engine = sa.create_engine(db_url, poolclass=sa.pool.NullPool)
+    with engine.begin() as conn:
+        evaluations.drop(conn)  # as an older database lacks it; opened without create, it is made when written
+    engine.dispose()
+
+    def ensure(i: int) -> bool:
+        with Store.open(db_url, create=False) as store:
+            store.ensure_table(evaluations)
+            return True
+
+    with meet_at_first("CREATE TABLE") as seen:
+        done = in_two_threads(ensure)
+    assert done == [True, True], done
+    assert len(seen["ddl"]) == 1 and len(seen["lock"]) == 2
+    assert "evaluations" in table_names(db_url)

@@ -88,8 +88,10 @@ def cmd_show(args: argparse.Namespace) -> int:
     import matplotlib.pyplot as plt
 
     from vinadv.grid import MapSet
-    from vinadv.grid.draw import draw_map, map_legend, save_figure
+    from vinadv.grid.draw import draw_map, figure_format, map_legend, save_figure
 
+    figure_format(args.out)  # before the work: an extension matplotlib cannot write
+    check_output_path(args.out)
     maps = MapSet.load(args.maps)
     if not 0 <= args.index < len(maps):
         raise InputError(f"--index {args.index} is out of range: {args.maps} has {len(maps)} maps")

@@ -10,8 +10,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.backend_bases import FigureCanvasBase  # noqa: E402
 from matplotlib.layout_engine import ConstrainedLayoutEngine  # noqa: E402
 
+from vinadv.errors import InputError  # noqa: E402
 from vinadv.outfile import atomic_output  # noqa: E402
 
 PATH_STYLES = {"expert": ("#2ca02c", "-"), "original": ("#d62728", "-"), "adversarial": ("#1f77b4", "--")}
@@ -83,10 +85,20 @@ def map_legend(fig, axes, **kwargs) -> None:
         fig.legend(list(handles.values()), list(handles), **options)
 
 
-def save_figure(fig, path: str | os.PathLike) -> None:
-    """Save and close `fig`; the format follows the file extension (png, svg, pdf)."""
+def figure_format(path: str | os.PathLike) -> str | None:
+    """The image format of the file `path` by its extension (png, svg, pdf, ...; None without one: png); InputError
+    naming the path when matplotlib writes no such format."""
     fmt = os.path.splitext(os.fspath(path))[1].lstrip(".").lower() or None
+    supported = FigureCanvasBase.get_supported_filetypes()
+    if fmt is not None and fmt not in supported:
+        raise InputError(f"out: {os.fspath(path)!r} is no image file name (use .png, .svg or .pdf)", "out")
+    return fmt
+
+
+def save_figure(fig, path: str | os.PathLike) -> None:
+    """Save and close `fig`; the format follows the file extension (png, svg, pdf; see `figure_format`)."""
     try:
+        fmt = figure_format(path)
         with atomic_output(path, "wb") as fh:
             fig.savefig(fh, format=fmt, dpi=150, bbox_inches="tight")
     finally:

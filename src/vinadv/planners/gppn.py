@@ -40,6 +40,14 @@ GPPN_FORMAT = "vinadv.gppn/1"
 WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
 
 
+#: the widest hidden layer (l_h, and the VIN's l_q) a planner may be built with: a GPPN's weights grow with its
+#: square (2048: ~0.1 billion parameters, 0.4 GB), and a wider one asked for by a typo or a hostile file would
+#: take every byte of memory before any error
+MAX_WIDTH = 2048
+#: the largest recurrent kernel (f) of a GPPN: far past any map it would plan (its weights grow with f * f * l_h)
+MAX_KERNEL = 63
+
+
 @dataclass(frozen=True)
 class GPPNConfig:
     """k iterations (k - 1 LSTM steps, as the published code), l_h hidden channels, f the kernel of `conv`."""
@@ -57,6 +65,10 @@ class GPPNConfig:
             raise InputError(f"GPPN k, l_h and n_actions must be >= 1, got {self.to_dict()}")
         if self.f < 1 or self.f % 2 == 0:
             raise InputError(f"GPPN kernel f must be odd and >= 1, got {self.f}")
+        if self.l_h > MAX_WIDTH:
+            raise InputError(f"GPPN l_h must be at most {MAX_WIDTH}, got {self.l_h}", "l_h")
+        if self.f > MAX_KERNEL:
+            raise InputError(f"GPPN kernel f must be at most {MAX_KERNEL}, got {self.f}")
 
 
 class GPPN(nn.Module):
@@ -106,6 +118,7 @@ def widen_gppn(model: GPPN, l_h: int, noise: float = 1e-3, seed: int = 0) -> GPP
     (measured in the tests) and training can tell the copies apart. Returns a new model in eval mode.
     """
     old = model.config.l_h
+    GPPNConfig(**{**model.config.to_dict(), "l_h": l_h}).validate()  # before anything of width l_h is made
     if l_h < old:
         raise InputError(f"l_h must be at least the model's width {old} to widen it, got {l_h}", "l_h")
     if not noise >= 0:

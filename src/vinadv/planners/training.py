@@ -32,7 +32,7 @@ from vinadv.grid.moves import require_moves
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
 from vinadv.planners.device import resolve_device
-from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn
+from vinadv.planners.gppn import GPPN, MAX_KERNEL, MAX_WIDTH, GPPNConfig, load_gppn
 from vinadv.planners.records import EpochRecord, TrainingRecord
 from vinadv.planners.vin import value_iteration
 from vinadv.planners.vin.arrays import VINConfig, default_k
@@ -101,6 +101,11 @@ class TrainConfig:
                 "vi_init",
                 "init",
             )
+        for name in ("l_h", "l_q"):
+            if not 1 <= getattr(self, name) <= MAX_WIDTH:
+                raise InputError(f"{name} must be in [1, {MAX_WIDTH}], got {getattr(self, name)}", name)
+        if not 1 <= self.kernel <= MAX_KERNEL or self.kernel % 2 == 0:
+            raise InputError(f"kernel must be odd and in [1, {MAX_KERNEL}], got {self.kernel}", "kernel")
         if self.compile and self.planner == "vin":
             raise InputError(
                 "compile is for torch planners such as the GPPN; the VIN's value iteration is compiled already",

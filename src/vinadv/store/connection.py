@@ -16,11 +16,13 @@ server) is raised as `OutputError` (an InputError) naming the database in one li
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import os
 import re
 import sqlite3
 import urllib.parse
+from collections.abc import Iterator
 from pathlib import Path
 
 import sqlalchemy as sa
@@ -34,9 +36,11 @@ from vinadv.store.schema import (
     UPGRADABLE_VERSIONS,
     UPGRADE_COLUMNS,
     UPGRADE_TABLES,
+    exact_collation,
     map_pairs,
     meta_table,
     metadata,
+    runs,
 )
 
 DEFAULT_DB = "vinadv.db"
@@ -84,9 +88,14 @@ class Database:
         self.absent_columns = frozenset(absent_columns)
 
     def ensure_table(self, table: sa.Table) -> None:
-        """Create `table` unless the database has it (an additive table, see `schema.ADDITIVE_TABLES`)."""
-        with self.engine.begin() as conn:
+        """Create `table` unless the database has it (an additive table, see `schema.ADDITIVE_TABLES`), under the
+        `schema_lock`: two processes doing so at once create it once."""
+        with self.engine.connect() as conn:
+            if sa.inspect(conn).has_table(table.name):
+                return
+        with self.engine.connect() as conn, schema_lock(conn):
             table.create(conn, checkfirst=True)
+            conn.commit()
 
 
 def open_engine(url: str, *, create: bool = True, readonly: bool = False) -> tuple[sa.Engine, frozenset[str]]:
@@ -197,7 +206,8 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
             if missing:
                 raise InputError(f"database {shown}: wrong schema: table {table.name} lacks columns {sorted(missing)}")
     absent: frozenset[str] = frozenset()
-    if version in UPGRADABLE_VERSIONS:
+    missing_additive = [t for t in ADDITIVE_TABLES if t.name not in present]
+    if version in UPGRADABLE_VERSIONS or (missing_additive and create):
         if create:
             upgrade(engine)
         else:  # read-only use: nothing changes, the columns it lacks read as NULL
@@ -207,75 +217,112 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
     with engine.connect() as conn:
         if sqlite and conn.exec_driver_sql("PRAGMA journal_mode").scalar() != "wal":
             conn.exec_driver_sql("PRAGMA journal_mode=WAL")  # a vinadv file written by another tool
-    missing_additive = [t for t in ADDITIVE_TABLES if t.name not in present]
-    if missing_additive and create:
-        # an older version-1 database: add the new tables (nothing existing changes)
-        with engine.begin() as conn:
-            for table in missing_additive:
-                table.create(conn, checkfirst=True)
     return absent
 
 
-#: PostgreSQL's advisory lock key for creating the tables (advisory locks are per database): "vinadv" and 1
+#: PostgreSQL's advisory lock key for changing the schema (advisory locks are per database): "vinadv" and 1
 _PG_SCHEMA_LOCK = 0x76696E616476_0001
 _LOCK_TIMEOUT_S = 30
 
 
+@contextlib.contextmanager
+def schema_lock(conn: sa.Connection) -> Iterator[None]:
+    """Hold, for the block, the lock that one process at a time holds while it creates or upgrades the tables of
+    the database behind `conn` (SQLite: an immediate transaction, the write lock; MariaDB: a named lock, held by
+    the session across its DDL, which MariaDB commits statement by statement; PostgreSQL: an advisory lock until
+    the transaction ends). The block commits what it did; the lock is waited for (`_LOCK_TIMEOUT_S` on MariaDB,
+    SQLite's busy timeout), so the block reads the schema only once no other process is changing it."""
+    dialect = conn.dialect.name
+    lock_name = f"vinadv schema {conn.engine.url.database}"[:64]  # MariaDB's named locks are server-wide
+    if dialect == "sqlite":
+        conn.exec_driver_sql("BEGIN IMMEDIATE")  # the write lock, waited for (busy_timeout) before the check
+    elif dialect == "postgresql":
+        conn.execute(sa.text("SELECT pg_advisory_xact_lock(:key)"), {"key": _PG_SCHEMA_LOCK})
+    else:
+        got = conn.execute(
+            sa.text("SELECT GET_LOCK(:name, :timeout)"), {"name": lock_name, "timeout": _LOCK_TIMEOUT_S}
+        ).scalar()
+        if got != 1:
+            raise OutputError(f"database {safe_url(conn.engine.url)}: another process holds the schema lock")
+    try:
+        yield
+    finally:
+        if dialect not in ("sqlite", "postgresql"):
+            conn.rollback()  # after a failure: the lock is released on a usable connection
+            conn.execute(sa.text("SELECT RELEASE_LOCK(:name)"), {"name": lock_name})
+            conn.commit()
+        elif conn.in_transaction():
+            conn.rollback()  # after a failure, or nothing to do: the lock goes with the transaction
+
+
 def create_tables(engine: sa.Engine) -> bool:
     """Create vinadv's tables and record the schema version in the database behind `engine`, which was found empty,
-    holding a lock that one process at a time holds (SQLite: an immediate transaction; MariaDB: a named lock;
-    PostgreSQL: an advisory lock), all in one transaction where the backend allows. Returns False, having done
-    nothing, when the database is no longer empty once the lock is held: another process made the tables first.
-    Without the lock, two first uses of one database at once collided (a table created twice, or a schema version
-    read before the other wrote it)."""
-    dialect = engine.dialect.name
-    lock_name = f"vinadv schema {engine.url.database}"[:64]  # MariaDB's named locks are server-wide
+    under the `schema_lock`, all in one transaction where the backend allows. Returns False, having done nothing,
+    when the database is no longer empty once the lock is held: another process made the tables first. Without the
+    lock, two first uses of one database at once collided (a table created twice, or a schema version read before
+    the other wrote it)."""
+    sqlite = engine.dialect.name == "sqlite"
     with engine.connect() as conn:
-        if dialect == "sqlite":
+        if sqlite:
             # page size first: it takes effect only before the first table is written, and not in WAL mode
             conn.exec_driver_sql("PRAGMA page_size=32768")
-            conn.exec_driver_sql("BEGIN IMMEDIATE")  # the write lock, waited for (busy_timeout) before the check
-        elif dialect == "postgresql":
-            conn.execute(sa.text("SELECT pg_advisory_xact_lock(:key)"), {"key": _PG_SCHEMA_LOCK})
-        else:
-            got = conn.execute(
-                sa.text("SELECT GET_LOCK(:name, :timeout)"), {"name": lock_name, "timeout": _LOCK_TIMEOUT_S}
-            ).scalar()
-            if got != 1:
-                raise OutputError(f"database {safe_url(engine.url)}: another process holds the schema lock")
-        try:
+        with schema_lock(conn):
             if set(sa.inspect(conn).get_table_names()) & {t.name for t in TABLES}:
-                conn.rollback()
                 return False
             metadata.create_all(conn)
             conn.execute(meta_table.insert(), [{"key": "schema_version", "value": SCHEMA_VERSION}])
             conn.commit()
-        finally:
-            if dialect not in ("sqlite", "postgresql"):
-                conn.rollback()  # after a failure: the lock is released on a usable connection
-                conn.execute(sa.text("SELECT RELEASE_LOCK(:name)"), {"name": lock_name})
-                conn.commit()
-        if dialect == "sqlite":
+        if sqlite:
             conn.exec_driver_sql("PRAGMA journal_mode=WAL")  # outside the transaction, as SQLite requires
     return True
 
 
 def upgrade(engine: sa.Engine) -> None:
-    """Schema version 1, 2 or 3 -> 4: add the `UPGRADE_COLUMNS` the database lacks (the harm columns, `added_more`;
-    all nullable, existing rows read them as NULL) and the `UPGRADE_TABLES` (`measurements`), then record the new
-    version. Only what is missing is added, so an upgrade cut short (MySQL commits each ALTER on its own) is
-    finished by the next open."""
+    """Schema version 1 to 4 -> 5, under the `schema_lock` (two processes opening one old database at once upgrade
+    it once; the second finds it done): add the `UPGRADE_COLUMNS` the database lacks (the harm columns,
+    `added_more`; all nullable, existing rows read them as NULL), the `UPGRADE_TABLES` (`measurements`) and
+    `ADDITIVE_TABLES` it lacks, give `runs.name` its exact collation on MySQL/MariaDB (version 5: the column is
+    changed in place, its rows kept), then record the new version. Only what is missing is done, so an upgrade cut
+    short (MariaDB commits each ALTER on its own) is finished by the next open."""
     prep = engine.dialect.identifier_preparer
-    with engine.begin() as conn:
-        have = {c["name"] for c in sa.inspect(conn).get_columns(map_pairs.name)}
+    with engine.connect() as conn, schema_lock(conn):
+        version = conn.execute(
+            sa.select(meta_table.c.value).where(meta_table.c.key == "schema_version")
+        ).scalar_one_or_none()
+        if version not in (SCHEMA_VERSION, *UPGRADABLE_VERSIONS):  # changed by another program meanwhile
+            raise InputError(f"database {safe_url(engine.url)}: schema version {version!r} changed while opening it")
+        inspector = sa.inspect(conn)
+        have = {c["name"] for c in inspector.get_columns(map_pairs.name)}
         for name in UPGRADE_COLUMNS:
             if name not in have:
                 kind = map_pairs.c[name].type.compile(dialect=engine.dialect)
                 table, column = prep.format_table(map_pairs), prep.quote(name)
                 conn.execute(sa.text(f"ALTER TABLE {table} ADD COLUMN {column} {kind}"))
-        for new_table in UPGRADE_TABLES:
+        for new_table in (*UPGRADE_TABLES, *ADDITIVE_TABLES):
             new_table.create(conn, checkfirst=True)
-        conn.execute(meta_table.update().where(meta_table.c.key == "schema_version").values(value=SCHEMA_VERSION))
+        _exact_run_names(conn)
+        if version != SCHEMA_VERSION:
+            conn.execute(meta_table.update().where(meta_table.c.key == "schema_version").values(value=SCHEMA_VERSION))
+        conn.commit()
+
+
+def _exact_run_names(conn: sa.Connection) -> None:
+    """Schema version 5 on MySQL/MariaDB: `runs.name` in the `exact_collation` (in place, keeping every row and the
+    name index), unless it has it already; nothing elsewhere."""
+    collation = exact_collation(conn.dialect)
+    if collation is None:
+        return
+    current = conn.execute(
+        sa.text(
+            "SELECT collation_name FROM information_schema.columns "
+            "WHERE table_schema = DATABASE() AND table_name = :table AND column_name = 'name'"
+        ),
+        {"table": runs.name},
+    ).scalar_one_or_none()
+    if current != collation:
+        prep = conn.dialect.identifier_preparer
+        kind = runs.c.name.type.compile(dialect=conn.dialect)
+        conn.execute(sa.text(f"ALTER TABLE {prep.format_table(runs)} MODIFY {prep.quote('name')} {kind} NULL"))
 
 
 def _error_line(exc: BaseException) -> str:

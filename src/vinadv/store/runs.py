@@ -9,7 +9,7 @@ import sqlalchemy as sa
 from vinadv import __version__
 from vinadv.errors import InputError
 from vinadv.store.connection import Database, utcnow
-from vinadv.store.schema import map_pairs, meta_table, runs
+from vinadv.store.schema import exact_collation, map_pairs, meta_table, runs
 
 #: the longest run name, in characters: the `runs.name` column's length, which MariaDB and PostgreSQL enforce
 MAX_NAME_LENGTH = runs.c.name.type.length
@@ -91,19 +91,26 @@ class RunQueries(Database):
             return int(result.inserted_primary_key[0])
 
     def find_run(self, name: str) -> int | None:
-        """The id of the latest run called `name` (for `--resume`), or None."""
+        """The id of the latest run called exactly `name` (for `--resume`), or None: on MySQL/MariaDB compared under
+        the `exact_collation` (the column's since schema version 5; named here too, so an older database opened
+        read-only compares exactly as well)."""
+        collation = exact_collation(self.engine.dialect)
+        column = runs.c.name if collation is None else runs.c.name.collate(collation)
         with self.engine.connect() as conn:
             found = conn.execute(
-                sa.select(runs.c.id).where(runs.c.name == name).order_by(runs.c.id.desc()).limit(1)
+                sa.select(runs.c.id).where(column == name).order_by(runs.c.id.desc()).limit(1)
             ).scalar_one_or_none()
         return None if found is None else int(found)
 
     def resolve_run(self, ref: str | int, param: str = "run_id") -> int:
         """The id of the run `ref` names: the one rule for every run reference. A number is a run id (a run name is
-        never a number, see `create_run`), anything else a run name (its latest run). InputError (naming the
-        parameter `param`) when there is no such run."""
-        text = str(ref).strip()
-        if text.isdigit():
+        never a number, see `create_run`), anything else a run name (its latest run), looked up exactly as given,
+        then, when no run has that exact name, without the whitespace around it (a run an older vinadv stored as
+        'x ' is found by 'x ', and 'x' by ' x '). InputError (naming the parameter `param`) when there is no such
+        run."""
+        text = str(ref)
+        if text.strip().isascii() and text.strip().isdigit():  # not '²': a digit to isdigit, no number to int
+            text = text.strip()
             found = None
             if int(text) < 2**63:  # a larger number is no id (and no SQL integer)
                 with self.engine.connect() as conn:
@@ -112,6 +119,8 @@ class RunQueries(Database):
                 raise InputError(f"{param}: no run {text} in database {self.url}", param)
             return int(text)
         found = self.find_run(text) if text else None
+        if found is None and text.strip() and text.strip() != text:
+            found = self.find_run(text.strip())
         if found is None:
             raise InputError(f"{param}: no run named {text!r} in database {self.url} (give a run id or name)", param)
         return found

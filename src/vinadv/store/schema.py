@@ -18,10 +18,13 @@ Tables:
 Version 2 adds the harm columns of `map_pairs` (`HARM_COLUMNS`, all nullable: DESIGN.md "Harm"). Version 3 adds
 `added_more` (nullable): the obstacles a pair adds after the first (`added_obstacle`), for pairs of several added
 obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair, so those rows are stored as before.
-Version 4 adds the table `measurements` (`UPGRADE_TABLES`). A database of an older version (`UPGRADABLE_VERSIONS`)
-gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`) and tables it lacks on open (see
-`connection.upgrade`); opened read-only it reads the columns as NULL and the tables as empty; any other version is
-refused untouched.
+Version 4 adds the table `measurements` (`UPGRADE_TABLES`). Version 5 compares run names exactly on every backend:
+on MySQL/MariaDB `runs.name` gets a binary collation without padding (`exact_collation`), so names differing in
+case, accents, emoji or trailing spaces are different runs there too (SQLite and PostgreSQL compare bytes
+already); an older MariaDB database has the column changed in place, its rows kept. A database of an older version
+(`UPGRADABLE_VERSIONS`) gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`), tables and collation it
+lacks on open (see `connection.upgrade`); opened read-only it reads the columns as NULL and the tables as empty; any
+other version is refused untouched.
 
 Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
 VARCHAR would cap both.
@@ -37,11 +40,41 @@ from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exp
 from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
-SCHEMA_VERSION = "4"
-#: the versions before: upgraded on open by adding the `UPGRADE_COLUMNS` they lack (nothing existing changes)
-UPGRADABLE_VERSIONS = ("1", "2", "3")
+SCHEMA_VERSION = "5"
+#: the versions before: upgraded on open by adding what they lack (`UPGRADE_COLUMNS`, `UPGRADE_TABLES`, the run
+#: name's collation; nothing existing is lost)
+UPGRADABLE_VERSIONS = ("1", "2", "3", "4")
 
 metadata = sa.MetaData()
+
+
+def exact_collation(dialect: sa.Dialect) -> str | None:
+    """The collation under which MySQL/MariaDB compares two strings equal only when they are the same characters:
+    binary (case, accents and every emoji count) and without padding (a trailing space counts), where the server
+    has one (MariaDB 10.2 on: `utf8mb4_nopad_bin`; MySQL 8.0.17 on: `utf8mb4_0900_bin`; older servers have only
+    the padding `utf8mb4_bin`). None on the other backends, which compare bytes already."""
+    if dialect.name not in ("mysql", "mariadb"):
+        return None
+    version = dialect.server_version_info or ()
+    if getattr(dialect, "is_mariadb", False):
+        return "utf8mb4_nopad_bin" if version >= (10, 2) else "utf8mb4_bin"
+    return "utf8mb4_0900_bin" if version >= (8, 0, 17) else "utf8mb4_bin"
+
+
+class ExactString(sa.types.TypeDecorator):
+    """A `String(length)` compared exactly on every backend: on MySQL/MariaDB a utf8mb4 VARCHAR of the
+    `exact_collation` (schema version 5: their default collations ignore case and accents and treat all emoji as
+    one), elsewhere a plain VARCHAR."""
+
+    impl = sa.String
+    cache_ok = True
+
+    def load_dialect_impl(self, dialect: sa.Dialect) -> sa.types.TypeEngine:
+        collation = exact_collation(dialect)
+        if collation is None:
+            return dialect.type_descriptor(sa.String(self.impl.length))
+        return dialect.type_descriptor(mysql.VARCHAR(self.impl.length, charset="utf8mb4", collation=collation))
+
 
 # MySQL TEXT stops at 64 KiB (a 256x256 map, or a ~10,000-cell path); MEDIUMTEXT holds 16 MiB.
 _LongText = sa.Text().with_variant(mysql.MEDIUMTEXT(), "mysql", "mariadb")
@@ -60,7 +93,7 @@ runs = sa.Table(
     "runs",
     metadata,
     sa.Column("id", _BigId, primary_key=True, autoincrement=True),
-    sa.Column("name", sa.String(255), nullable=True),
+    sa.Column("name", ExactString(255), nullable=True),  # compared exactly (schema version 5)
     sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive (MySQL DATETIME has no zone)
     sa.Column("config", sa.JSON(), nullable=True),
     sa.Column("seed", sa.BigInteger(), nullable=True),
