@@ -27,6 +27,7 @@ from vinadv.attacks.strategies import make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.errors import InputError, OutputError
 from vinadv.grid.generator import MIN_SIZE, check_limits, default_obstacle_params, generate_maps
+from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import PLANNER_SPEC, Identification, identify, load_classifier, objective_strength
 from vinadv.planners.interface import EMPTY_SHA256, Planner
 from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
@@ -57,6 +58,7 @@ class RunConfig:
     harm_rtol: float = 0.0
     objective: str = "paper"
     obstacles: int = 1
+    moves: str = DEFAULT_MOVES
 
     def __post_init__(self):
         # every setting is checked here, before `run_pipeline` opens the database: a value refused only when the
@@ -71,6 +73,7 @@ class RunConfig:
         check_limits(min(self.n, self.shard_size), self.size, 1, default_obstacle_params(self.size)[0])
         check_tolerances(self.harm_tolerance, self.harm_rtol)
         objective_strength(self.objective)  # InputError for an unknown objective
+        check_moves(self.moves, self.corner_cutting)
 
     @property
     def n_shards(self) -> int:
@@ -82,7 +85,12 @@ class RunConfig:
         return self.per_map if self.per_map > 0 else self.size * self.size
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The settings as stored with the run. `moves` only when not `octile`: an octile run's config is what it
+        was before movement models (the run's model is also in `runs.moves`, which the store reads)."""
+        settings = asdict(self)
+        if settings["moves"] == DEFAULT_MOVES:
+            del settings["moves"]
+        return settings
 
 
 @dataclass
@@ -107,7 +115,12 @@ def compute_shard(
     seconds = {}
     t0 = time.perf_counter()
     maps = generate_maps(
-        n_maps, config.size, seed=(config.seed, shard), n_starts=1, corner_cutting=config.corner_cutting
+        n_maps,
+        config.size,
+        seed=(config.seed, shard),
+        n_starts=1,
+        corner_cutting=config.corner_cutting,
+        moves=config.moves,
     )
     t1 = time.perf_counter()
     attack = make_attack(
@@ -212,8 +225,11 @@ class RunSummary:
 
 
 def resolve_planner(config: RunConfig) -> Planner:
-    """The planner of a run (`config.planner` with `config.weights`, for the run's map size and move rule)."""
-    return load_planner(config.planner, config.size, weights=config.weights, corner_cutting=config.corner_cutting)
+    """The planner of a run (`config.planner` with `config.weights`, for the run's map size, move rule and movement
+    model: a planner of another model is refused, see `Planner.for_moves`)."""
+    return load_planner(
+        config.planner, config.size, weights=config.weights, corner_cutting=config.corner_cutting, moves=config.moves
+    )
 
 
 def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: Planner, classifier_name: str):
@@ -249,6 +265,7 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         attack=config.attack,
         classifier=classifier_name,
         version=__version__,
+        moves=config.moves,
     )
 
 

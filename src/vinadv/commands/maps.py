@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
+from vinadv.commands import add_moves_argument
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -25,13 +26,7 @@ def register(subparsers) -> None:
         action="store_true",
         help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
     )
-    gen.add_argument(
-        "--moves",
-        default="octile",
-        metavar="MOVES",  # checked by the library (`vinadv.grid.moves`): argparse choices would load it for --help
-        help="movement model: octile (default: 8 moves, diagonal sqrt 2, the original data's), moore (8 moves, all "
-        "cost 1: GPPN's and the MP dataset's) or news (4 moves N, S, E, W, cost 1; not with --no-corner-cutting)",
-    )
+    add_moves_argument(gen)
     gen.add_argument("--out", required=True, help="output maps file (.npz)")
     add_output_options(gen, json="the summary", quiet=True)
     gen.set_defaults(func=cmd_generate)

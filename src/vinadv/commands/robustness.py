@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_moves_argument, add_planner_arguments
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError, OutputError
@@ -34,6 +34,7 @@ def register(subparsers) -> None:
         "evaluation tables)",
     )
     p.add_argument("--size", type=int, default=28, help="map side N (default 28)")
+    add_moves_argument(p, what="movement model of the benchmark maps (the planner must plan it)")
     p.add_argument(
         "--strategies",
         default="all",
@@ -74,6 +75,7 @@ def register(subparsers) -> None:
 
 def cmd_robustness(args: argparse.Namespace) -> int:
     from vinadv.classify.harm import check_tolerances
+    from vinadv.grid.moves import check_moves
     from vinadv.robustness import check_strategies
 
     # every option checked before the maps are made and the planner loaded
@@ -84,6 +86,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     if args.radius < 0:
         raise InputError(f"radius must be >= 0, got {args.radius}", "radius")
     check_tolerances(args.harm_tolerance, args.harm_rtol)
+    check_moves(args.moves)
     if args.report:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
@@ -95,7 +98,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     from vinadv.planners.registry import load_planner
     from vinadv.robustness import benchmark_maps, robustness, save_robustness
 
-    maps = benchmark_maps(args.n, args.size, seed=args.seed)
+    maps = benchmark_maps(args.n, args.size, seed=args.seed, moves=args.moves)
     planner = load_planner(
         args.planner, args.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
     )

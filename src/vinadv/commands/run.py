@@ -6,7 +6,7 @@ import argparse
 import time
 
 from vinadv.cluster import ClusterIdentify, ClusterShards, add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments
+from vinadv.commands import LazyChoices, add_moves_argument, add_planner_arguments
 from vinadv.commands.attack import (
     add_harm_arguments,
     add_objective_argument,
@@ -35,6 +35,7 @@ def register(subparsers) -> None:
     run.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
     add_obstacles_argument(run)
     run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
+    add_moves_argument(run, what="movement model of the generated maps (the planner must plan it)")
     run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
     run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     add_planner_arguments(run)
@@ -96,6 +97,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         harm_rtol=args.harm_rtol,
         objective=args.objective,
         obstacles=args.obstacles,
+        moves=args.moves,
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(
