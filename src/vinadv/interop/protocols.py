@@ -141,7 +141,9 @@ def evaluate_protocol(
     """`model`'s figures on `maps` measured by `protocol` ('vinadv', 'kentsommer' or 'gppn')."""
     if protocol not in PROTOCOLS:
         raise InputError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
-    require_moves(maps.moves, ("octile",), f"the {protocol} protocol")
+    # GPPN's %Opt and %Suc count moves of cost 1 whatever the maps' costs, so octile and moore maps alike; the
+    # others judge paths by octile costs
+    require_moves(maps.moves, ("octile", "moore") if protocol == "gppn" else ("octile",), f"the {protocol} protocol")
     if prior is not None and protocol != "kentsommer":
         raise InputError("prior applies to the kentsommer protocol only")
     if protocol == "vinadv":
