@@ -88,7 +88,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         )
         print(
             f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
-            f"{theirs['cells']} free cells (every Moore move costs 1)"
+            f"{theirs['cells']} free cells (every {'NEWS' if maps.moves == 'news' else 'Moore'} move costs 1)"
         )
         print(by_length_text(ours))
 
