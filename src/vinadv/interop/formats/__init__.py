@@ -100,16 +100,9 @@ def read_maps(
     return maps, {"format": format, "file": path, "moves": maps.moves, **info}
 
 
-def import_maps(
-    path: str | os.PathLike,
-    format: str,
-    split: str | None = None,
-    starts: int | None = None,
-    seed: int = 0,
-    moves: str | None = None,
-) -> MapSet:
-    """`read_maps` without the info dict."""
-    return read_maps(path, format, split, starts, seed, moves)[0]
+def import_maps(path: str | os.PathLike, format: str, *args, **kwargs) -> MapSet:
+    """`read_maps` (the same arguments) without the info dict."""
+    return read_maps(path, format, *args, **kwargs)[0]
 
 
 def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str | None = None) -> dict:

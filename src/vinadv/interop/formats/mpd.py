@@ -31,7 +31,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
 from vinadv.interop.formats.files import ForeignArrays, load_npz
 from vinadv.interop.formats.gppn import check_policies, unit_cost_policies
-from vinadv.interop.formats.samples import decode_images, goal_images
+from vinadv.interop.formats.samples import decode_images, goal_images, padded_map_set
 from vinadv.seeds import check_seed
 
 #: the splits read, and the index of the first array (maps) of each
@@ -75,16 +75,8 @@ def _read(f: ForeignArrays, split: str, k: int, seed: int) -> tuple[MapSet, dict
     obstacles, goals, dist, drawn = obstacles[keep], goals[keep], dist[keep], drawn[keep]
     starts = np.stack(np.divmod(drawn, m), axis=-1).astype(np.int64)
     costs, expert = expert_paths_from(dist, obstacles, goals, starts, True, MOVES)
-    out = MapSet(
-        obstacles=obstacles,
-        goals=goals,
-        starts=starts,
-        expert_costs=costs,
-        expert=expert,
-        corner_cutting=True,
-        seed=int(seed),
-        moves=MOVES,
-    )
+    counts = np.full(len(starts), k, dtype=np.int64)  # every start real: no padding
+    out = padded_map_set(obstacles, goals, starts, costs, expert, counts, k, seed=int(seed), moves=MOVES)
     return out, {
         "split": split,
         "maps": int(keep.sum()),
