@@ -42,18 +42,19 @@ def columns_and_version(url: str) -> tuple[set, str]:
     return columns, version
 
 
-def run_columns(url: str) -> set[str]:
-    """The `runs` columns."""
+def inspected(url: str, read: Callable[[sa.Inspector], object]):
+    """`read(inspector)` of the database at `url`, on a connection of its own."""
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     with engine.connect() as conn:
-        columns = {c["name"] for c in sa.inspect(conn).get_columns("runs")}
+        found = read(sa.inspect(conn))
     engine.dispose()
-    return columns
+    return found
+
+
+def run_columns(url: str) -> set[str]:
+    """The `runs` columns."""
+    return inspected(url, lambda inspector: {c["name"] for c in inspector.get_columns("runs")})
 
 
 def table_names(url: str) -> set[str]:
-    engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
-    with engine.connect() as conn:
-        names = set(sa.inspect(conn).get_table_names())
-    engine.dispose()
-    return names
+    return inspected(url, lambda inspector: set(inspector.get_table_names()))
