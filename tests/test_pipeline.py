@@ -18,9 +18,11 @@ from tests.planner_files import EXITING, NO_PARAMETERS
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
+from vinadv.errors import InputError
 from vinadv.grid import generate_maps
+from vinadv.grid.mapset import MapSet
 from vinadv.identify import objective_strength
-from vinadv.pipeline import RunConfig, compute_shard, run_pipeline
+from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run_pipeline, shard_maps
 from vinadv.planners.interface import EMPTY_SHA256
 from vinadv.planners.vin.weights import load_vin
 from vinadv.store import Store
@@ -434,3 +436,36 @@ def test_a_planner_of_another_model_is_refused_before_the_run_is_made(sqlite_url
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "plans octile moves" in err and "'moore'" in err
     assert not os.path.exists(sqlite_url.removeprefix("sqlite:///"))  # refused before the database was made
+
+
+def test_a_maps_file_run_takes_the_file_s_maps_in_shards_and_refuses_a_changed_file(tmp_path):
+    """`maps_file_config` + `compute_shard`: shard k holds the file's maps k * shard_size .., first start each (the
+    oracle: the file's own arrays); a file changed under the recorded path is refused by its checksum."""
+    path = tmp_path / "m.npz"
+    generate_maps(7, 8, seed=2, n_starts=3).save(path)
+    config = RunConfig(**maps_file_config(str(path)), planner="optimal", shard_size=3)
+    assert (config.n, config.size, config.n_shards) == (7, 8, 3)
+    assert config.to_dict()["maps_sha256"] == config.maps_sha256 and "maps" not in RunConfig().to_dict()
+    maps = MapSet.load(path)
+    last = shard_maps(config, 2)
+    assert len(last) == 1 and np.array_equal(last.obstacles, maps.obstacles[6:])
+    assert np.array_equal(last.starts[:, 0], maps.starts[6:, 0]) and last.n_starts == 1
+    assert last.expert[0].tolist() == maps.expert_path(6, 0).tolist()
+    generate_maps(7, 8, seed=3, n_starts=3).save(tmp_path / "other.npz")
+    changed = RunConfig(**{**config.to_dict(), "maps": str(tmp_path / "other.npz")})
+    with pytest.raises(InputError, match="its SHA-256 is not the one the run recorded"):
+        shard_maps(changed, 0)
+
+
+def test_a_maps_file_of_another_model_runs_as_that_model(tmp_path, sqlite_url):
+    """`--maps FILE` takes the file's movement model (a moore MP import, say): the config, the shards' maps and the
+    stored run are the file's model; `--moves` beside `--maps` is refused (the file says it)."""
+    path = tmp_path / "moore.npz"
+    generate_maps(4, 8, seed=2, n_starts=2, moves="moore").save(path)
+    config = RunConfig(**maps_file_config(str(path)), planner="optimal", attack="random", shard_size=2)
+    assert config.moves == "moore" and shard_maps(config, 1).moves == "moore"
+    summary = run_pipeline(config, db=sqlite_url, progress=False)
+    with Store.open(sqlite_url) as store:
+        assert store.run_moves(summary.run_id) == "moore"
+    line = ["run", "--maps", str(path), "--planner", "optimal", "--db", sqlite_url, "--quiet"]
+    assert main([*line, "--moves", "moore"]) == 2

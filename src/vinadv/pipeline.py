@@ -6,6 +6,10 @@ stored run does not depend on how (or where) shards are computed. A pair's `pair
 slot: `global_map * per_map + slot` (with `per_map = 0`, all pairs: `global_map * N*N + row*N + col` of the last
 added cell).
 
+With `maps` (`maps_file_config`: a maps file, such as an MP import, instead of generated maps), shard `k` takes the
+file's maps `k * shard_size ..` (the first start of each); the file's path and SHA-256 are in the run's config, and a
+shard refuses a file whose checksum differs (a worker elsewhere reading another file under that path).
+
 A shard is written in batches inside transactions and `(run_id, pair_index)` is unique; a run killed part way
 resumes with `resume=True`: shards are stored in order and each completely stored shard is recorded
 (`Store.set_shards_done`), so the recorded ones are skipped (and, for a run stored by an older vinadv, the shards
@@ -16,9 +20,11 @@ database fault while storing (a full disk) stops the run with one line naming th
 from __future__ import annotations
 
 import contextlib
+import functools
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -27,11 +33,13 @@ from vinadv.attacks.strategies import make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.errors import InputError, OutputError
 from vinadv.grid.generator import MIN_SIZE, check_limits, default_obstacle_params, generate_maps
+from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import PLANNER_SPEC, Identification, identify, load_classifier, objective_strength
 from vinadv.planners.interface import EMPTY_SHA256, Planner
 from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
 from vinadv.planners.spec import PlannerSpec
+from vinadv.planners.weights import weights_checksum
 from vinadv.seeds import check_seed
 from vinadv.vocabulary import LABEL_STRENGTH, success_count
 
@@ -59,6 +67,9 @@ class RunConfig:
     objective: str = "paper"
     obstacles: int = 1
     moves: str = DEFAULT_MOVES
+    #: a maps file (absolute path) to attack instead of generated maps, and its SHA-256 (`maps_file_config`)
+    maps: str | None = None
+    maps_sha256: str | None = None
 
     def __post_init__(self):
         # every setting is checked here, before `run_pipeline` opens the database: a value refused only when the
@@ -74,6 +85,8 @@ class RunConfig:
         check_tolerances(self.harm_tolerance, self.harm_rtol)
         objective_strength(self.objective)  # InputError for an unknown objective
         check_moves(self.moves, self.corner_cutting)
+        if (self.maps is None) != (self.maps_sha256 is None):
+            raise InputError("maps and maps_sha256 go together (maps_file_config gives both)", "maps")
 
     @property
     def n_shards(self) -> int:
@@ -85,12 +98,75 @@ class RunConfig:
         return self.per_map if self.per_map > 0 else self.size * self.size
 
     def to_dict(self) -> dict:
-        """The settings as stored with the run. `moves` only when not `octile`: an octile run's config is what it
-        was before movement models (the run's model is also in `runs.moves`, which the store reads)."""
-        settings = asdict(self)
-        if settings["moves"] == DEFAULT_MOVES:
-            del settings["moves"]
-        return settings
+        """The config as stored with the run; without a maps file, its two fields are left out (the runs of
+        generated maps are stored as before), and `moves` when `octile` (an octile run's config is what it was
+        before movement models; the run's model is also in `runs.moves`, which the store reads)."""
+        out = asdict(self)
+        if self.maps is None:
+            del out["maps"], out["maps_sha256"]
+        if out["moves"] == DEFAULT_MOVES:
+            del out["moves"]
+        return out
+
+
+def maps_file_config(path: str, n: int | None = None) -> dict:
+    """`RunConfig`'s settings for attacking the maps file `path` (first start of each map) instead of generated maps:
+    `n` (its first `n` maps; None: all), `size` and `corner_cutting` from the file, `maps` (absolute path) and
+    `maps_sha256`, and its movement model `moves`. The file is read and checked here (InputError naming it and the
+    field), before anything is written."""
+    maps = MapSet.load(path)
+    if n is None:
+        n = len(maps)
+    if n < 1:
+        raise InputError(f"n must be >= 1, got {n}", "n")
+    if n > len(maps):
+        raise InputError(f"n {n}: the maps file {path} holds {len(maps)} maps", "n")
+    return {
+        "n": int(n),
+        "size": maps.size,
+        "corner_cutting": bool(maps.corner_cutting),
+        "moves": maps.moves,
+        "maps": str(Path(path).resolve()),
+        "maps_sha256": weights_checksum(path),
+    }
+
+
+@functools.lru_cache(maxsize=2)
+def _maps_file(path: str, sha256: str) -> MapSet:
+    """The maps file of a run, read once per process; InputError if its SHA-256 is not the run's."""
+    if weights_checksum(path) != sha256:
+        raise InputError(
+            f"maps file {path}: its SHA-256 is not the one the run recorded ({sha256}); the same file is "
+            "needed (on every worker)"
+        )
+    return MapSet.load(path)
+
+
+def shard_maps(config: RunConfig, shard: int) -> MapSet:
+    """Shard `shard`'s maps, one start each: generated from the seed `(seed, shard)`, or the maps file's maps
+    `shard * shard_size ..` (their first start)."""
+    first_map = shard * config.shard_size
+    n_maps = min(config.shard_size, config.n - first_map)
+    if config.maps is None:
+        return generate_maps(
+            n_maps,
+            config.size,
+            seed=(config.seed, shard),
+            n_starts=1,
+            corner_cutting=config.corner_cutting,
+            moves=config.moves,
+        )
+    maps = _maps_file(config.maps, config.maps_sha256).take(slice(first_map, first_map + n_maps))
+    return MapSet(
+        obstacles=maps.obstacles,
+        goals=maps.goals,
+        starts=maps.starts[:, :1],
+        expert_costs=maps.expert_costs[:, :1],
+        expert=maps.expert.take(np.arange(len(maps)) * maps.n_starts),
+        corner_cutting=maps.corner_cutting,
+        seed=maps.seed,
+        moves=maps.moves,
+    )
 
 
 @dataclass
@@ -111,17 +187,10 @@ def compute_shard(
 ) -> ShardResult:
     """Generate, attack and identify shard `shard` of the run: deterministic for `(config, shard)`."""
     first_map = shard * config.shard_size
-    n_maps = min(config.shard_size, config.n - first_map)
     seconds = {}
     t0 = time.perf_counter()
-    maps = generate_maps(
-        n_maps,
-        config.size,
-        seed=(config.seed, shard),
-        n_starts=1,
-        corner_cutting=config.corner_cutting,
-        moves=config.moves,
-    )
+    maps = shard_maps(config, shard)
+    n_maps = len(maps)
     t1 = time.perf_counter()
     attack = make_attack(
         config.attack,
@@ -243,7 +312,7 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         if run_id is None:
             raise InputError(f"resume: no run named '{name}' in {store.url}", "resume")
         info = store.run_info(run_id)
-        # runs stored before planners / several obstacles: the VIN, one obstacle
+        # runs stored before planners / several obstacles / maps files: the VIN, one obstacle, generated maps
         stored_config = {"planner": DEFAULT_PLANNER, "obstacles": 1, **(info["config"] or {})}
         stored_config.pop(PLANNER_SPEC, None)
         if stored_config != config.to_dict():

@@ -168,12 +168,16 @@ class StrategyResult:
     seconds: float
     planner_calls: int
     outcomes: list[MapOutcomes] = field(default_factory=list, repr=False)
+    #: the strategy whose ranking this one used on the planner, where it could not rank its own way (saliency
+    #: without gradients: "key-points"), else None (`Attack.ranked_as`)
+    ranked_as: str | None = None
 
     def to_dict(self) -> dict:
         return {
             "name": self.name,
             "seconds": round(self.seconds, 3),
             "planner_calls": self.planner_calls,
+            **({} if self.ranked_as is None else {"ranked_as": self.ranked_as}),
             "by_obstacles": [f.to_dict() for f in self.by_k],
         }
 
@@ -268,6 +272,7 @@ def robustness(
     harm_tol: float | None = None,
     harm_rtol: float = 0.0,
     progress: bool = False,
+    maps_source: dict | None = None,
 ) -> RobustnessResult:
     """Run the robustness benchmark of `planner` on `maps` (see the module doc).
 
@@ -284,6 +289,8 @@ def robustness(
         harm_tol: the harm test's absolute tolerance (default `vinadv.classify.harm.DEFAULT_TOL`).
         harm_rtol: the harm test's relative tolerance (times the optimal cost), default 0.
         progress: show a progress bar.
+        maps_source: where `maps` came from when not from `benchmark_maps` (a maps file: `{"maps": path,
+            "maps_sha256": ...}`), recorded in the settings.
     """
     harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
@@ -312,7 +319,9 @@ def robustness(
             outcome = _outcomes(n, pairs.map_index, ident.labels, ident.harm.harm, ident.harm.regret_a)
             outcomes.append(outcome)
             by_k.append(Figures.of(k, outcome, counts=label_counts(ident.labels)))
-        results[name] = StrategyResult(name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes)
+        results[name] = StrategyResult(
+            name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes, attack.ranked_as(planner)
+        )
     overall_outcomes = [worst_case([r.outcomes[k] for r in results.values()]) for k in range(int(max_obstacles))]
     overall = [Figures.of(k + 1, o) for k, o in enumerate(overall_outcomes)]
     settings = {
@@ -330,6 +339,7 @@ def robustness(
         "harm_rtol": harm_rtol,
         # an octile benchmark's settings are what they were before movement models
         **({} if maps.moves == DEFAULT_MOVES else {"moves": maps.moves}),
+        **(maps_source or {}),
     }
     return RobustnessResult(
         planner=planner.spec(),

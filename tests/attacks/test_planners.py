@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import torch
 
+from tests.attacks.test_search_planners import context
 from tests.attacks.test_strategies import assert_valid
 from tests.grid.oracle import brute_distances
 from vinadv.attacks.pairs import PairSet
@@ -128,17 +129,7 @@ def test_value_maps_per_planner(maps):
 
 
 def test_saliency_without_gradients_ranks_as_key_points(maps):
-    planner = OptimalPlanner(SIZE)
-    obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
-    ctx = AttackContext(
-        obstacles,
-        starts,
-        goals,
-        valid_cells(obstacles, starts, goals, True),
-        planner.plan_batch(obstacles, starts, goals),
-        planner,
-        np.random.default_rng(0),
-    )
+    ctx = context(OptimalPlanner(SIZE), maps)
     np.testing.assert_array_equal(SaliencyAttack().candidate_scores(ctx), KeyPointsAttack().candidate_scores(ctx))
 
 

@@ -10,6 +10,7 @@ are quick.
 import builtins
 import os
 import signal
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,7 +28,8 @@ from vinadv.cluster.worker import (
     worker_planner,  # noqa: E402
 )
 from vinadv.errors import InputError  # noqa: E402
-from vinadv.pipeline import RunConfig, compute_shard, run_pipeline  # noqa: E402
+from vinadv.grid import generate_maps  # noqa: E402
+from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run_pipeline  # noqa: E402
 from vinadv.planners.registry import PlannerRef  # noqa: E402
 from vinadv.planners.vin.weights import load_vin, save_vin  # noqa: E402
 from vinadv.store import Store  # noqa: E402
@@ -292,3 +294,21 @@ def test_bad_cluster_options_exit_2(weights, tmp_path, capsys):
     assert "--workers must be >= 1, got 0" in capsys.readouterr().err
     assert main([*base, "--cluster", "tcp://127.0.0.1:1"]) == 2
     assert "cannot connect" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_search_planner_on_a_maps_file_runs_on_the_cluster_as_locally(cluster, tmp_path):
+    """The Dask path with a bring-your-own search planner (workers load the file by its spec, checksummed) and a
+    maps file (workers read it by path, checksummed): the same stored pairs as the local run."""
+
+    _, client = cluster
+    spec = f"{Path(__file__).resolve().parents[2] / 'examples' / 'my_search_planner.py'}:make"
+    maps = tmp_path / "m.npz"
+    generate_maps(30, SIZE, seed=5, n_starts=2).save(maps)
+    settings = RunConfig(**maps_file_config(str(maps)), attack="key-points", seed=3, shard_size=10, planner=spec)
+    local_db, cluster_db = f"sqlite:///{tmp_path / 'local.db'}", f"sqlite:///{tmp_path / 'cluster.db'}"
+    local = run_pipeline(settings, db=local_db, name="s", progress=False)
+    on_cluster = run_pipeline(settings, db=cluster_db, name="s", progress=False, shard_results=ClusterShards(client))
+    assert on_cluster.stored == local.stored == 30
+    a, b = stored(local_db, local.run_id), stored(cluster_db, on_cluster.run_id)
+    assert np.array_equal(a.pair_index, b.pair_index) and a.equals(b)

@@ -2,6 +2,7 @@
 
 import importlib.util
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -15,6 +16,7 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps
 from vinadv.planners import registry
+from vinadv.planners.astar import WeightedAStarPlanner
 from vinadv.planners.interface import PlannerError
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.pathset import PathSet
@@ -27,7 +29,7 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
 def test_list_names_the_registered_planners():
     names = [p["name"] for p in list_planners(28)]
-    assert names == ["vin", "vin_robust", "gppn", "optimal"]
+    assert names == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar"]
     vin = list_planners(28)[0]
     assert vin["weights"].endswith("vin28.pt") and vin["weights_available"] is True
 
@@ -109,7 +111,7 @@ def test_plan_optimal_and_vin_from_the_cli(tmp_path, capsys):
 def test_planners_command(capsys):
     assert main(["planners", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert [p["name"] for p in out["planners"]] == ["vin", "vin_robust", "gppn", "optimal"]
+    assert [p["name"] for p in out["planners"]] == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar"]
     assert main(["planners"]) == 0
     text = capsys.readouterr().out
     assert "optimal" in text and "FILE.py:FACTORY" in text
@@ -131,12 +133,13 @@ def test_a_registered_planner_is_loaded_listed_and_refused_twice(monkeypatch):
         "description": "my planner",
         "weights": None,
         "weights_available": None,
+        "params": [],
     }
     with pytest.raises(PlannerError, match="planner 'mine' takes no weights file"):
         load_planner("mine", 12, weights="w.pt")
     with pytest.raises(InputError, match="'mine': a planner of that name is already registered"):
         registry.register("mine", description="again", load=load)
-    for bad in ("my:planner", "mine+d4", " mine2", ""):
+    for bad in ("my:planner", "mine+d4", " mine2", "", "a=b", "a,b"):
         with pytest.raises(InputError, match="would not read as a planner name"):
             registry.register(bad, description="bad", load=load)
 
@@ -170,3 +173,71 @@ def test_a_planner_without_parameters_records_no_weights_checksum(tmp_path):
     assert len(planner.config["source_sha256"]) == 64  # its source is still identified
     (tmp_path / "one.py").write_text(EXAMPLE.read_text())
     assert len(load_planner(f"{tmp_path / 'one.py'}:make", 8).checksum) == 64  # one with weights has a checksum
+
+
+def test_a_spec_gives_a_registered_planner_parameters_which_its_config_records():
+    planner = load_planner("wastar:w=3", 16, moves="moore")
+    assert isinstance(planner, WeightedAStarPlanner) and planner.w == 3.0 and planner.moves == "moore"
+    assert planner.spec()["name"] == "wastar" and planner.spec()["config"] == {"moves": "moore", "w": 3.0}
+    assert load_planner("wastar", 16).w == 2.0  # the default
+    assert load_planner(" wastar : w = 1.5 ", 16).w == 1.5
+    assert registry.split_spec("wastar:w=3,x=y") == ("wastar", {"w": "3", "x": "y"})
+    assert registry.split_spec("pkg.mod:make") == ("pkg.mod:make", None)  # a factory never holds '='
+    ref = registry.PlannerRef.of(planner, "wastar:w=3", None, True)
+    assert ref.spec == "wastar:w=3" and ref.load().w == 3.0
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("wastar:x=1", "planner 'wastar:x=1': unknown parameter 'x' (wastar takes w)"),
+        ("astar:w=2", "planner 'astar:w=2': unknown parameter 'w' (astar takes no parameters)"),
+        ("wastar:w=abc", "planner 'wastar:w=abc': parameter w must be a number >= 1, got 'abc'"),
+        ("wastar:w=0.5", "parameter w must be a number >= 1, got '0.5'"),
+        ("wastar:w=nan", "parameter w must be a number >= 1, got 'nan'"),
+        ("wastar:w=2,w=3", "parameter 'w' is given twice"),
+        ("wastar:w=2,", "parameters are key=value pairs separated by commas, got ''"),
+        ("wastar:=2", "parameters are key=value pairs separated by commas, got '=2'"),
+        ("nope:w=2", "key=value parameters follow a registered planner name"),
+    ],
+)
+def test_bad_parameters_are_refused_in_one_line_naming_them(spec, message):
+    with pytest.raises(PlannerError, match=re.escape(message)) as caught:
+        load_planner(spec, 16)
+    assert "\n" not in str(caught.value)
+
+
+def test_a_registered_planner_takes_its_parameters_by_keyword(monkeypatch):
+    monkeypatch.setattr(registry, "REGISTRY", dict(registry.REGISTRY))
+    calls = []
+
+    def load(size, weights, corner_cutting, device, depth, scale):
+        calls.append((depth, scale))
+        return OptimalPlanner(size, corner_cutting)
+
+    params = (registry.PlannerParam("depth", 3, "layers", minimum=1), registry.PlannerParam("scale", 0.5, "x"))
+    registry.register("deep", description="d", load=load, params=params)
+    load_planner("deep:scale=-2", 8)
+    load_planner("deep", 8)
+    assert calls == [(3, -2.0), (3, 0.5)] and isinstance(calls[0][0], int)
+    with pytest.raises(PlannerError, match=r"parameter depth must be an integer >= 1, got '2.5'"):
+        load_planner("deep:depth=2.5", 8)
+    assert list_planners(8)[-1]["params"][0] == {"name": "depth", "default": 3, "minimum": 1, "description": "layers"}
+    with pytest.raises(InputError, match="distinct identifiers"):
+        registry.register("deeper", description="d", load=load, params=params[:1] * 2)
+
+
+def test_the_cli_lists_parameters_and_refuses_bad_ones_with_exit_2(tmp_path, capsys):
+    assert main(["planners", "--json"]) == 0
+    wastar = json.loads(capsys.readouterr().out)["planners"][-1]
+    assert wastar["name"] == "wastar" and [p["name"] for p in wastar["params"]] == ["w"]
+    assert main(["planners"]) == 0
+    assert "[parameters w=2]" in capsys.readouterr().out
+    maps_file = tmp_path / "m.npz"
+    assert main(["maps", "generate", "--n", "1", "--size", "8", "--out", str(maps_file), "--quiet"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "p.npz"
+    assert main(["plan", "--maps", str(maps_file), "--planner", "wastar:w=x", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "vinadv: error: planner 'wastar:w=x': parameter w must be a number >= 1, got 'x'"
+    assert not out.exists()

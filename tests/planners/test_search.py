@@ -9,7 +9,7 @@ from vinadv.planners.search import SearchPlanner, SearchResult
 
 
 class Recorder(SearchPlanner):
-    """Answers the two-cell path (start, goal) and expands exactly its start; records the rows it was asked."""
+    """Answers "no path found" (the start alone) and expands exactly its start; records the rows it was asked."""
 
     name, size = "recorder", 5
 
@@ -18,10 +18,10 @@ class Recorder(SearchPlanner):
 
     def plan_paths(self, obstacles, starts, goals, corner_cutting=True):
         self.calls.append(len(starts))
-        paths = [np.array([s, g]) for s, g in zip(starts, goals, strict=True)]
+        paths = [np.array([s]) for s in starts]
         expanded = np.zeros(obstacles.shape, bool)
         expanded[np.arange(len(starts)), starts[:, 0], starts[:, 1]] = True
-        term = np.where(obstacles.any(axis=(1, 2)), STEP_LIMIT, GOAL)
+        term = np.where(np.all(starts == goals, axis=1), GOAL, STEP_LIMIT)
         return SearchResult(paths=PlanResult.from_paths(paths, term).paths, termination=term, expanded=expanded)
 
 
@@ -32,13 +32,15 @@ def test_plan_maps_plans_start_s_of_map_b_as_row_b_times_s_plus_s_in_chunks():
     obstacles[1, 0, 0] = True
     goals = rng.integers(0, 5, (b, 2))
     starts = rng.integers(0, 5, (b, s, 2))
+    starts[:, :, 0] = 4  # never the goal (no path is found) nor the obstacle
+    goals[:, 0] = 0
     planner = Recorder()
     result = planner.plan_maps(obstacles, goals, starts, chunk_size=5)
     assert planner.calls == [5, 5, 2]
     for row in range(b * s):
         m, k = divmod(row, s)
-        assert result.paths[row].tolist() == [starts[m, k].tolist(), goals[m].tolist()]
-        assert result.termination[row] == (STEP_LIMIT if m == 1 else GOAL)
+        assert result.paths[row].tolist() == [starts[m, k].tolist()]
+        assert result.termination[row] == STEP_LIMIT
     assert result.expansions.tolist() == [1] * (b * s)
     assert result.take([0, 5]).expanded.shape == (2, 5, 5)
 

@@ -24,9 +24,18 @@ The strategies:
 - `saliency`: white-box. The gradient, with respect to the obstacles, of the log-probability of the planner's
   chosen actions along the original path (autograd through `Planner.differentiable`); the most negative
   gradient first (adding an obstacle there lowers the planner's confidence in its own path the most, to first
-  order). Evaluates the top `budget`. A planner without gradients (`optimal`) is ranked as by `key-points`.
+  order). Evaluates the top `budget`. A planner without gradients (`optimal`) is ranked as by `key-points`, and the
+  pairs' params record it: `ranked_as: "key-points"`.
 - `exhaustive`: every valid cell of every map; keeps the strongest per map, or all pairs with `per_map=0`.
   This is the upper bound of what one obstacle can do.
+
+On a search planner (`vinadv.planners.search.SearchPlanner`, which answers paths and has no policy): `random`,
+`near-path` and `exhaustive` are unchanged (they need only paths); `key-points` ranks tier 3 by the planner's
+`value_maps`, its own cost or heuristic map where it has one, else minus the exact cost-to-go; `saliency` takes the
+gradient, with respect to the obstacles, of the planner's differentiable path map
+(`SearchPlanner.differentiable_paths`, a soft path as Neural A*'s) summed over the cells of the original path, most
+negative first (an obstacle there pulls the path off its cells the most, to first order); a search planner without
+one is ranked as by `key-points`, recorded as `ranked_as: "key-points"` as for `optimal`.
 
 K obstacles (`obstacles=K`, DESIGN.md "Several obstacles"): greedy. Step 1 is the attack above; each later step runs
 the same strategy again on the maps with the cells chosen so far added (their valid cells, the planner's paths on
@@ -48,8 +57,9 @@ import numpy as np
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import valid_cells
 from vinadv.errors import InputError
-from vinadv.planners.interface import Planner, as_planner
+from vinadv.planners.interface import Planner, PlannerError, as_planner
 from vinadv.planners.result import PlanResult
+from vinadv.planners.search import SearchPlanner
 
 #: candidates planned together; bounds memory (each holds an N x N map and a path)
 EVAL_CHUNK = 8192
@@ -151,6 +161,11 @@ class Attack:
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         raise NotImplementedError
 
+    def ranked_as(self, planner: Planner) -> str | None:
+        """The strategy whose ranking this one uses on `planner`, where it cannot rank its own way (saliency
+        without gradients: key-points); None where it ranks its own way. Recorded in the pairs' params."""
+        return None
+
     def attack(
         self,
         obstacles: np.ndarray,
@@ -220,7 +235,9 @@ class Attack:
                 ranked=self.ranked or not last,
             )
             calls += len(map_idx)
-            kept.params = {**kept.params, "planner": planner.spec()}  # which planner the attacks were found on
+            # which planner the attacks were found on, and the ranking used where the strategy's own could not be
+            fallback = self.ranked_as(planner)
+            kept.params = {**kept.params, "planner": planner.spec(), **({"ranked_as": fallback} if fallback else {})}
             steps.append(kept)
             if not last:
                 current = obstacles.copy()
@@ -427,10 +444,22 @@ def _steepness(value: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
 class SaliencyAttack(Attack):
     name = "saliency"
 
+    @staticmethod
+    def _module(planner: Planner):
+        """The planner's differentiable module: its path map for a search planner, its logits otherwise; None."""
+        if isinstance(planner, SearchPlanner):
+            return planner.differentiable_paths
+        return planner.differentiable
+
+    def ranked_as(self, planner: Planner) -> str | None:
+        return KeyPointsAttack.name if self._module(planner) is None else None
+
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
-        module = ctx.planner.differentiable
-        if module is None:  # no gradients (the `optimal` control): rank as key-points does
+        module = self._module(ctx.planner)
+        if module is None:  # no gradients (the `optimal` control, most search planners): rank as key-points does
             return KeyPointsAttack.candidate_scores(self, ctx)
+        if isinstance(ctx.planner, SearchPlanner):
+            return _path_saliency(ctx, module)
         import torch  # here only: the other strategies run without PyTorch
 
         device = getattr(ctx.planner, "device", torch.device("cpu"))
@@ -455,6 +484,34 @@ class SaliencyAttack(Attack):
             (grad,) = torch.autograd.grad(objective, x)
             out[lo:hi] = -grad.cpu().numpy()
         return out
+
+
+def _path_saliency(ctx: AttackContext, module) -> np.ndarray:
+    """Minus the gradient, with respect to the obstacles, of a search planner's differentiable path map
+    `module(obstacles (B,N,N) float, starts (B,2), goals (B,2)) -> (B,N,N)` summed over the cells of its path on each
+    searched map, `TORCH_CHUNK` maps per forward and backward."""
+    import torch  # noqa: PLC0415 (here only: the other strategies run without PyTorch)
+
+    device = getattr(ctx.planner, "device", torch.device("cpu"))
+    if hasattr(module, "eval"):
+        module.eval()
+    on_path = ctx.path_mask()
+    out = np.empty(ctx.obstacles.shape)
+    for lo in range(0, len(ctx.obstacles), TORCH_CHUNK):
+        hi = min(len(ctx.obstacles), lo + TORCH_CHUNK)
+        x = torch.from_numpy(ctx.obstacles[lo:hi].astype(np.float32)).to(device).requires_grad_(True)
+        starts = torch.from_numpy(ctx.starts[lo:hi]).to(device)
+        goals = torch.from_numpy(ctx.goals[lo:hi]).to(device)
+        path_map = module(x, starts, goals)
+        if tuple(path_map.shape) != tuple(x.shape):
+            raise PlannerError(
+                f"planner {ctx.planner.name!r}: its differentiable path map has shape {tuple(path_map.shape)}, "
+                f"expected {tuple(x.shape)}"
+            )
+        objective = (path_map * torch.from_numpy(on_path[lo:hi]).to(device, path_map.dtype)).sum()
+        (grad,) = torch.autograd.grad(objective, x)
+        out[lo:hi] = -grad.detach().cpu().double().numpy()
+    return out
 
 
 class ExhaustiveAttack(Attack):

@@ -181,12 +181,17 @@ def cmd_attack(args: argparse.Namespace) -> int:
     summary.update(
         strategy=args.strategy, params=attack.params(), planner=planner.spec(), out=args.out, objective=args.objective
     )
+    fallback = attack.ranked_as(planner)
+    if fallback:  # saliency without gradients (optimal, most search planners): ranked as key-points
+        summary["ranked_as"] = fallback
 
     def report() -> None:
         print(
             f"{args.strategy} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps in "
             f"{elapsed:.1f} s -> {args.out}"
         )
+        if fallback:
+            print(f"planner {planner.name} has no gradients: {args.strategy} ranked the cells as {fallback}")
         if result.no_valid_cell.size:
             print(
                 f"{len(result.no_valid_cell)} maps had no valid cell for an added obstacle; no pair was made for them"

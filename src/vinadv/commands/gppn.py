@@ -35,7 +35,11 @@ def register(subparsers) -> None:
     add_compile_argument(train)
     train.set_defaults(func=cmd_gppn_train, k=GPPN_DEFAULTS["k"])
 
-    ev = sub.add_parser("eval", help="action accuracy and rollout figures of a GPPN")
+    ev = sub.add_parser(
+        "eval",
+        help="action accuracy and rollout figures of a GPPN: an alias of `vinadv eval --planner gppn --protocol "
+        "vinadv`, with a flat record",
+    )
     ev.add_argument("--weights", default=None, help="GPPN weights file (default: the shipped weights for the size)")
     add_eval_arguments(ev)
     ev.set_defaults(func=cmd_gppn_eval)

@@ -1,4 +1,4 @@
-"""`vinadv planners` (the registry) and `vinadv eval` (any planner, both conventions)."""
+"""`vinadv planners` (the registry) and `vinadv eval` (any planner, any protocol: the one eval command)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,10 @@ from pathlib import Path
 from vinadv.commands import add_planner_arguments, command_line
 from vinadv.commands.evaluation import add_eval_arguments, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
+from vinadv.errors import InputError
+
+#: `vinadv.interop.protocols.PROTOCOLS`, not imported: building the parser loads no PyTorch
+PROTOCOLS = ("vinadv", "gppn", "kentsommer", "search")
 
 
 def register(subparsers) -> None:
@@ -19,10 +23,30 @@ def register(subparsers) -> None:
 
     ev = subparsers.add_parser(
         "eval",
-        help="any planner's figures in both conventions: vinadv's rollouts and GPPN's %%Opt/%%Suc over every free cell",
+        help="any planner's figures, by any protocol: vinadv's rollouts, GPPN's %%Opt/%%Suc over every free cell, "
+        "the kentsommer port's, the Neural A* authors' Opt/Exp/Hmean",
+        description="Measure a planner on a maps file or on generated maps. By default a policy planner gets vinadv's "
+        "figures (action accuracy, rollouts from every start), GPPN's (%%Opt/%%Suc from every free cell) and the "
+        "search figures (the Neural A* authors' Opt/Exp/Hmean, success, cost ratio to optimal); a search planner "
+        "vinadv's rollout figures of its paths and the search figures. `vin eval` and `gppn eval` are this command "
+        "for one planner and one protocol, with a flat record.",
     )
     add_planner_arguments(ev)
     add_eval_arguments(ev)
+    ev.add_argument(
+        "--protocol",
+        default=None,
+        metavar="P[,P]",
+        help=f"protocols, joined by commas, from {', '.join(PROTOCOLS)} or all (default vinadv,gppn,search for a "
+        "policy planner, vinadv,search for a search planner; kentsommer measures a VIN, gppn and kentsommer need a "
+        "policy; docs/guide/planners.md)",
+    )
+    ev.add_argument(
+        "--prior",
+        type=float,
+        default=None,
+        help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)",
+    )
     ev.set_defaults(func=cmd_eval)
 
 
@@ -33,6 +57,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
     listing = {
         "planners": planners,
         "bring_your_own": "FILE.py:FACTORY or MODULE:FACTORY",
+        "parameters": "NAME:KEY=VALUE[,KEY=VALUE...] for a planner that lists parameters (wastar:w=3)",
         "symmetric": f"NAME{SUFFIX} or SPEC{SUFFIX}: the planner averaged over the 8 rotations and flips",
     }
 
@@ -43,10 +68,15 @@ def cmd_planners(args: argparse.Namespace) -> int:
                 if p["weights"] is None
                 else (f"  [weights {Path(p['weights']).name}{'' if p['weights_available'] else ' not shipped'}]")
             )
-            print(f"{p['name']:<11} {p['description']}{weights}")
+            params = ", ".join(f"{q['name']}={q['default']:g}" for q in p["params"])
+            print(f"{p['name']:<11} {p['description']}{weights}{f'  [parameters {params}]' if params else ''}")
         print(
             "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
             "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (docs/own-planner.md)"
+        )
+        print(
+            "           or an object with plan_paths(obstacles (B,N,N) bool, starts (B,2), goals (B,2), "
+            "corner_cutting) -> SearchResult or B (L,2) paths: a search planner, every path checked"
         )
         print(
             f"symmetric:  any of these but optimal with {SUFFIX} (gppn{SUFFIX}): averaged over the 8 rotations and "
@@ -56,40 +86,113 @@ def cmd_planners(args: argparse.Namespace) -> int:
     return emit(args, listing, text)
 
 
-def cmd_eval(args: argparse.Namespace) -> int:
-    from vinadv.interop.protocols import gppn_protocol
-    from vinadv.planners.evaluation import evaluate_planner
-    from vinadv.planners.registry import load_planner
+def check_protocols(text: str | None) -> tuple[str, ...] | None:
+    """`--protocol`: names from `PROTOCOLS` joined by commas ('all': every one), none twice; None: the planner's
+    default. InputError naming the option otherwise."""
+    if text is None:
+        return None
+    names = [p.strip() for p in str(text).split(",")]
+    if names == ["all"]:
+        return PROTOCOLS
+    for name in names:
+        if name not in PROTOCOLS:
+            raise InputError(f"protocol {name!r}: choose from {', '.join(PROTOCOLS)} or all", "protocol")
+    if len(set(names)) != len(names):
+        raise InputError(f"protocol: a protocol named twice in {text}", "protocol")
+    return tuple(names)
 
+
+def cmd_eval(args: argparse.Namespace) -> int:
+    from vinadv.interop.protocols import PORT_TEST_PRIOR, gppn_protocol, kentsommer_protocol, require_policy
+    from vinadv.planners.evaluation import evaluate_planner
+    from vinadv.planners.interface import PlannerError, VINPlanner
+    from vinadv.planners.registry import load_planner
+    from vinadv.planners.search import SearchPlanner
+    from vinadv.planners.search_metrics import evaluate_search
+
+    protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
+    if args.prior is not None and "kentsommer" not in (protocols or ()):
+        raise InputError("--prior applies to --protocol kentsommer only")
     maps, source = start_eval(args)
     planner = load_planner(
         args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
     )
-    t0 = time.perf_counter()
-    ours = evaluate_planner(planner, maps, progress=shows_progress(args))
-    t1 = time.perf_counter()
-    theirs = gppn_protocol(planner, maps)
+    search = isinstance(planner, SearchPlanner)
+    if protocols is None:
+        protocols = ("vinadv", "search") if search else ("vinadv", "gppn", "search")
+    for protocol in protocols:
+        if protocol in ("gppn", "kentsommer"):
+            require_policy(planner, f"the {protocol} protocol")
+    if "kentsommer" in protocols and not isinstance(planner, VINPlanner):
+        raise PlannerError(
+            f"the kentsommer protocol measures a VIN (its goal prior is a VIN input); planner {planner.name!r} is not "
+            "one"
+        )
+    figures, seconds = {}, {}
+    for protocol in protocols:
+        t0 = time.perf_counter()
+        if protocol == "vinadv":
+            figures[protocol] = evaluate_planner(planner, maps, progress=shows_progress(args))
+        elif protocol == "gppn":
+            figures[protocol] = gppn_protocol(planner, maps)
+        elif protocol == "search":
+            figures[protocol] = evaluate_search(planner, maps, progress=shows_progress(args))
+        else:
+            prior = PORT_TEST_PRIOR if args.prior is None else args.prior
+            figures[protocol] = kentsommer_protocol(planner.vin, maps, prior)
+        seconds[protocol] = round(time.perf_counter() - t0, 2)
     metrics = {
         "planner": planner.spec(),
         "weights": args.weights or "shipped",
         **source,
-        "vinadv": ours,
-        "gppn": theirs,
-        "seconds": {"vinadv": round(t1 - t0, 2), "gppn": round(time.perf_counter() - t1, 2)},
+        **figures,
+        "seconds": seconds,
         "command": command_line(),
     }
     write_figures(args, metrics)
+    return emit(args, metrics, lambda: print_eval(planner.name, maps, figures))
 
-    def text() -> None:
-        print(f"planner {planner.name}: {ours['maps']} maps of {ours['size']}x{ours['size']}")
-        print(
-            f"  vinadv: rollout success {ours['success_rate']:.2%} of {ours['rollouts']} rollouts, optimal paths "
-            f"{ours['optimal_rate']:.2%}, action accuracy {ours['action_accuracy']:.2%}"
+
+def _pct(x) -> str:
+    return "n/a" if x is None or x != x else f"{x:.2%}"  # x != x: NaN
+
+
+def print_eval(name: str, maps, figures: dict) -> None:
+    """`vinadv eval`'s text: the planner and maps, one line per protocol, then vinadv's by optimal moves."""
+    print(f"planner {name}: {len(maps)} maps of {maps.size}x{maps.size}")
+    ours = figures.get("vinadv")
+    if ours is not None:
+        head = (
+            f"  vinadv: rollout success {_pct(ours['success_rate'])} of {ours['rollouts']} rollouts, optimal paths "
+            f"{_pct(ours['optimal_rate'])}"
         )
+        accuracy = ours["action_accuracy"]
+        print(head if accuracy is None else f"{head}, action accuracy {_pct(accuracy)}")
+    theirs = figures.get("gppn")
+    if theirs is not None:
         print(
-            f"  gppn:   %Suc {theirs['percent_success']:.2%}, %Opt {theirs['percent_optimal']:.2%} over "
+            f"  gppn:   %Suc {_pct(theirs['percent_success'])}, %Opt {_pct(theirs['percent_optimal'])} over "
             f"{theirs['cells']} free cells (every {'NEWS' if maps.moves == 'news' else 'Moore'} move costs 1)"
         )
+    port = figures.get("kentsommer")
+    if port is not None:
+        print(
+            f"  kentsommer: rollout success {_pct(port['success_rate'])} of {port['rollouts']} (goal prior "
+            f"{port['prior']:g}), action accuracy {_pct(port['action_accuracy_single_label'])} single-label over "
+            f"{port['trajectory_states']} trajectory states"
+        )
+    found = figures.get("search")
+    if found is not None:
+        print(f"  search: {search_text(found)}")
+    if ours is not None:
         print(by_length_text(ours))
 
-    return emit(args, metrics, text)
+
+def search_text(m: dict) -> str:
+    """The search metrics (`vinadv.planners.search_metrics`) in one line; n/a where undefined."""
+    ratio = "n/a" if m["cost_ratio"] is None else f"{m['cost_ratio']:.4f}"
+    expanded = "" if m["expansions"] is None else f", {m['expansions']:.1f} cells expanded per search"
+    return (
+        f"Opt {_pct(m['opt'])}, Exp {_pct(m['exp'])}, Hmean {_pct(m['hmean'])}, success {_pct(m['success'])}, "
+        f"cost ratio {ratio} over {m['rows']} (map, start) rows{expanded}"
+    )

@@ -8,6 +8,7 @@ from pathlib import Path
 from vinadv.commands import add_moves_argument, add_planner_arguments
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
+from vinadv.commands.run import add_maps_arguments, maps_settings
 from vinadv.errors import InputError, OutputError
 
 #: `vinadv.robustness.DEFAULT_STRATEGIES`, not imported: building the parser stays light
@@ -25,7 +26,7 @@ def register(subparsers) -> None:
         "rate against the number of added obstacles.",
     )
     add_planner_arguments(p)
-    p.add_argument("--n", type=int, default=1000, help="maps (default 1000)")
+    add_maps_arguments(p, n=1000, instead="the generator's held-out maps", record="the settings record")
     p.add_argument(
         "--seed",
         type=int,
@@ -33,8 +34,9 @@ def register(subparsers) -> None:
         help="seed of the maps and of the randomised strategies (default 1000: the held-out maps of the "
         "evaluation tables)",
     )
-    p.add_argument("--size", type=int, default=28, help="map side N (default 28)")
-    add_moves_argument(p, what="movement model of the benchmark maps (the planner must plan it)")
+    add_moves_argument(
+        p, default=None, what="movement model of the benchmark maps (the planner must plan it; with --maps, the file's)"
+    )
     p.add_argument(
         "--strategies",
         default="all",
@@ -81,15 +83,17 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     # every option checked before the maps are made and the planner loaded
     strategies = check_strategies(args.strategies, exhaustive=args.exhaustive)
     for name in ("n", "max_obstacles", "budget"):
-        if getattr(args, name) < 1:
+        if getattr(args, name) is not None and getattr(args, name) < 1:
             raise InputError(f"{name} must be >= 1, got {getattr(args, name)}", name)
     if args.radius < 0:
         raise InputError(f"radius must be >= 0, got {args.radius}", "radius")
     check_tolerances(args.harm_tolerance, args.harm_rtol)
-    check_moves(args.moves)
+    if args.moves is not None:
+        check_moves(args.moves)
     if args.report:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
+    settings = maps_settings(args, n=1000)  # a maps file is read and checked here, before anything is written
     if args.db is not None:  # a database that will be refused is refused now, not after the benchmark
         from vinadv.store import Store
 
@@ -98,9 +102,16 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     from vinadv.planners.registry import load_planner
     from vinadv.robustness import benchmark_maps, robustness, save_robustness
 
-    maps = benchmark_maps(args.n, args.size, seed=args.seed, moves=args.moves)
+    if args.maps is None:
+        maps = benchmark_maps(settings["n"], settings["size"], seed=args.seed, moves=settings["moves"])
+        source = None
+    else:
+        from vinadv.grid.mapset import MapSet
+
+        maps = MapSet.load(args.maps).take(slice(0, settings["n"]))
+        source = {"maps": settings["maps"], "maps_sha256": settings["maps_sha256"]}
     planner = load_planner(
-        args.planner, args.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
+        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
     )
     result = robustness(
         planner,
@@ -114,6 +125,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         harm_tol=args.harm_tolerance,
         harm_rtol=args.harm_rtol,
         progress=shows_progress(args),
+        maps_source=source,
     )
     out = result.to_dict()
     if args.db is not None:
@@ -147,9 +159,10 @@ def print_robustness(out: dict) -> None:
     s, clean = out["settings"], out["clean"]
     planner = out["planner"]
     weights = (planner.get("weights_sha256") or "")[:12]
+    origin = f"from {s['maps']}" if "maps" in s else f"seed {s['maps_seed']}"
     print(
         f"robustness of planner {planner['name']}{f' (weights {weights})' if weights else ''} on {s['n']:,} maps "
-        f"{s['size']}x{s['size']} (seed {s['maps_seed']}), kept by {s['objective']}, in {out['seconds']:.1f} s"
+        f"{s['size']}x{s['size']} ({origin}), kept by {s['objective']}, in {out['seconds']:.1f} s"
     )
     regret = "—" if clean["mean_regret"] is None else f"{clean['mean_regret']:.3f}"
     print(

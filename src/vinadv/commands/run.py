@@ -20,8 +20,7 @@ from vinadv.errors import InputError
 
 def register(subparsers) -> None:
     run = subparsers.add_parser("run", help="the main job: maps -> attack -> identify -> store (-> report)")
-    run.add_argument("--n", type=int, default=5000, help="maps (default 5000)")
-    run.add_argument("--size", type=int, default=28, help="map side N (default 28)")
+    add_maps_arguments(run, n=5000, instead="generating them", record="the run records")
     run.add_argument(
         "--attack",
         default="near-path",
@@ -35,7 +34,9 @@ def register(subparsers) -> None:
     run.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
     add_obstacles_argument(run)
     run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
-    add_moves_argument(run, what="movement model of the generated maps (the planner must plan it)")
+    add_moves_argument(
+        run, default=None, what="movement model of the generated maps (the planner plans it; with --maps, the file's)"
+    )
     run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
     run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     add_planner_arguments(run)
@@ -81,14 +82,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.no_evaluate and not args.report:
         raise InputError("--no-evaluate: only with --report DIR")
     config = RunConfig(
-        n=args.n,
-        size=args.size,
+        **maps_settings(args),
         attack=args.attack,
         seed=args.seed,
         per_map=args.per_map,
         budget=args.budget,
         radius=args.radius,
-        corner_cutting=not args.no_corner_cutting,
         shard_size=args.shard_size,
         classifier=args.classifier,
         planner=args.planner or "vin",
@@ -97,7 +96,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         harm_rtol=args.harm_rtol,
         objective=args.objective,
         obstacles=args.obstacles,
-        moves=args.moves,
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(
@@ -126,6 +124,43 @@ def cmd_run(args: argparse.Namespace) -> int:
         result["comparison"] = reason or "stored"
         result["seconds"]["report"] = round(time.perf_counter() - t0, 3)
     return emit(args, result, lambda: _print_run(result))
+
+
+def add_maps_arguments(parser, n: int, instead: str, record: str) -> None:
+    """`--n`, `--size` and `--maps FILE` (a maps file's maps `instead` of the generated ones; what `record`s its path
+    and SHA-256): the maps of `run` and `robustness`, read by `maps_settings`."""
+    parser.add_argument("--n", type=int, default=None, help=f"maps (default {n}; with --maps, the file's first N: all)")
+    parser.add_argument("--size", type=int, default=None, help="map side N (default 28; with --maps, the file's)")
+    parser.add_argument(
+        "--maps",
+        metavar="FILE",
+        help=f"the maps of this maps file (first start of each; an import, say) instead of {instead}: its size and "
+        f"corner cutting are used, and {record} its path and SHA-256",
+    )
+
+
+def maps_settings(args: argparse.Namespace, n: int = 5000, size: int = 28) -> dict:
+    """The maps of `run` or `robustness` as `RunConfig` settings: `--n`, `--size`, the corner-cutting rule and the
+    movement model (`--moves`, default octile) of generated maps (defaults `n`, `size`), or with `--maps FILE` the
+    file's (`pipeline.maps_file_config`, which reads and checks it): then `--size`, `--no-corner-cutting` and
+    `--moves` are the file's to say, and refused."""
+    if args.maps is None:
+        return {
+            "n": n if args.n is None else args.n,
+            "size": size if args.size is None else args.size,
+            "corner_cutting": not getattr(args, "no_corner_cutting", False),
+            "moves": args.moves or "octile",
+        }
+    from vinadv.pipeline import maps_file_config
+
+    for flag_name, given in (
+        ("--size", args.size is not None),
+        ("--no-corner-cutting", getattr(args, "no_corner_cutting", False)),
+        ("--moves", args.moves is not None),
+    ):
+        if given:
+            raise InputError(f"{flag_name}: with --maps the maps file says it ({args.maps})")
+    return maps_file_config(args.maps, args.n)
 
 
 def _cluster_options(client) -> dict:

@@ -31,7 +31,11 @@ def register(subparsers) -> None:
     )
     train.set_defaults(func=cmd_train)
 
-    ev = sub.add_parser("eval", help="action accuracy and rollout figures of a VIN")
+    ev = sub.add_parser(
+        "eval",
+        help="action accuracy and rollout figures of a VIN: an alias of `vinadv eval --planner vin --protocol P`, "
+        "with a flat record (and --k for port-style weights)",
+    )
     ev.add_argument("--weights", default=None, help="weights file (default: the shipped weights for the map size)")
     add_eval_arguments(ev)
     ev.add_argument("--k", type=int, default=None, help="value-iteration steps for a port-style weights file")

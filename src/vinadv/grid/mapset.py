@@ -72,6 +72,22 @@ class MapSet:
     def n_starts(self) -> int:
         return int(self.starts.shape[1])
 
+    def take(self, index) -> MapSet:
+        """The maps at `index` (int array, bool mask or slice), in that order, with all their starts."""
+        idx = np.arange(len(self))[index]
+        rows = (idx[:, None] * self.n_starts + np.arange(self.n_starts)[None, :]).reshape(-1)
+        return MapSet(
+            obstacles=self.obstacles[idx],
+            goals=self.goals[idx],
+            starts=self.starts[idx],
+            expert_costs=self.expert_costs[idx],
+            expert=self.expert.take(rows),
+            corner_cutting=self.corner_cutting,
+            seed=self.seed,
+            start_counts=None if self.start_counts is None else np.asarray(self.start_counts)[idx],
+            moves=self.moves,
+        )
+
     def expert_path(self, i: int, s: int = 0) -> np.ndarray:
         """The optimal path from start `s` of map `i`, `(L, 2)` int16."""
         return self.expert[i * self.n_starts + s]

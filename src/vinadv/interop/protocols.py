@@ -17,7 +17,9 @@ prior is a VIN input).
   (goal included) whose policy reaches the goal, %Opt the share whose policy path has as few moves as a shortest
   path (free cells that cannot reach the goal at all count as optimal, as GPPN's code counts them), averaged over
   maps.
-Ties between logits go to the lowest vinadv action index in all three.
+Ties between logits go to the lowest vinadv action index in all three. `gppn` and `kentsommer` read a policy at every
+cell: a search planner (`vinadv.planners.search.SearchPlanner`, paths only) is refused with one line; `vinadv` measures
+its paths (`evaluate_planner`).
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ from vinadv.grid.moves import require_moves
 from vinadv.interop.formats.gppn import unit_cost_distances
 from vinadv.interop.formats.samples import expert_steps
 from vinadv.planners.evaluation import evaluate_vin
-from vinadv.planners.interface import as_planner
+from vinadv.planners.interface import PlannerError, as_planner
+from vinadv.planners.search import SearchPlanner
 from vinadv.planners.vin.model import VIN, make_input
 
 PROTOCOLS = ("vinadv", "kentsommer", "gppn")
@@ -99,8 +102,10 @@ def kentsommer_protocol(model: VIN, maps: MapSet, prior: float = PORT_TEST_PRIOR
 
 
 def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_size: int = 256) -> np.ndarray:
-    """The argmax action (lowest index on ties) of every cell by `planner` (a `Planner` or a VIN), `(n, N, N)`."""
+    """The argmax action (lowest index on ties) of every cell by `planner` (a `Planner` or a VIN), `(n, N, N)`; a
+    search planner is refused (`require_policy`)."""
     planner = as_planner(planner, obstacles.shape[1])
+    require_policy(planner, "the argmax action of every cell")
     out = [
         np.argmax(planner.logits(obstacles[i : i + batch_size], goals[i : i + batch_size]), axis=1)
         for i in range(0, len(obstacles), batch_size)
@@ -108,9 +113,22 @@ def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_siz
     return np.concatenate(out) if out else np.zeros(obstacles.shape, np.int64)
 
 
+def require_policy(planner, what: str) -> None:
+    """Refuse (`PlannerError`, one line) a search planner for `what` ("the gppn protocol"), which reads a policy at
+    every cell."""
+    if isinstance(planner, SearchPlanner):
+        raise PlannerError(
+            f"{what} follows a policy from every cell: it needs a policy planner (vin, gppn, optimal, "
+            f"your own torch module); {planner.name!r} is a search planner (measure it with the vinadv protocol)"
+        )
+
+
 def gppn_protocol(planner, maps: MapSet) -> dict:
-    """GPPN's %Opt and %Suc of `planner` (a `Planner` or a VIN) on `maps` (module doc)."""
+    """GPPN's %Opt and %Suc of `planner` (a `Planner` or a VIN) on `maps` (module doc); a search planner is
+    refused (`require_policy`)."""
     n, size = len(maps), maps.size
+    planner = as_planner(planner, size)
+    require_policy(planner, "the gppn protocol")
     actions = planner_actions(planner, maps.obstacles, maps.goals)
     succ = _moves(maps.obstacles, actions)
     goal = maps.goals @ np.array([size, 1])

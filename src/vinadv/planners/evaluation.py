@@ -6,6 +6,10 @@
 - rollouts (DESIGN.md rule, by `vinadv.planners.vin.engine`), from every start of every map:
   success rate (goal reached), % optimal (path cost equals the expert cost within 1e-9; an unreached path is
   not optimal), mean extra path cost of the reached paths (cost - expert cost), and the termination reasons.
+
+A search planner (`vinadv.planners.search.SearchPlanner`) has no policy, so no action accuracy (`action_accuracy`
+None, `action_cells` 0); its paths get the same rollout figures. The search figures (Opt, Exp, Hmean, cost ratio) of
+any planner are `vinadv.planners.search_metrics`'.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from vinadv.grid.moves import DEFAULT_MOVES, move_model, require_moves
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
 from vinadv.planners.records import LengthBucketMetrics, PlannerMetrics, RolloutMetrics
 from vinadv.planners.result import PlanResult
+from vinadv.planners.search import SearchPlanner
 from vinadv.planners.vin import engine
 from vinadv.planners.vin.model import VIN, make_input
 from vinadv.vocabulary import TERMINATIONS
@@ -157,8 +162,9 @@ def evaluate_vin(
 
 def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> PlannerMetrics:
     """All figures for any `vinadv.planners.interface.Planner` on `maps`: action accuracy from its logits, rollouts
-    (from every start) by its `plan_maps`; under the maps' movement model, which the planner must plan
-    (`Planner.for_moves`: one of another model is refused in one line)."""
+    (from every start) by its `plan_maps`, under the maps' movement model, which the planner must plan
+    (`Planner.for_moves`: one of another model is refused in one line). A search planner's paths get the rollout
+    figures, and no action accuracy (it has no policy)."""
     planner = planner.for_moves(maps.moves)
 
     def counts(obs, goals):
@@ -167,7 +173,7 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
 
     return _evaluate(
         maps,
-        counts,
+        None if isinstance(planner, SearchPlanner) else counts,
         lambda obs, goals, starts: planner.plan_maps(obs, goals, starts, maps.corner_cutting),
         batch_size,
         progress,
@@ -175,7 +181,8 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
 
 
 def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> PlannerMetrics:
-    """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)`, `plan(obs, goals, starts)`."""
+    """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)` (None: no action accuracy, a search
+    planner's), `plan(obs, goals, starts)`."""
     obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
     chunks = range(0, len(maps), batch_size)
     if progress:
@@ -183,9 +190,10 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> Pl
     correct, cells, parts = 0, 0, []
     for i in chunks:
         sl = slice(i, i + batch_size)
-        c, n = counts(obstacles[sl], goals[sl])
-        correct += c
-        cells += n
+        if counts is not None:
+            c, n = counts(obstacles[sl], goals[sl])
+            correct += c
+            cells += n
         parts.append(plan(obstacles[sl], goals[sl], starts[sl]))
     result = PlanResult.concat(parts)
     lengths = maps.expert.lengths - 1  # cells - 1: an optimal path's move count L, the same for all of them
@@ -195,7 +203,7 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> Pl
         "starts_per_map": maps.n_starts,
         "seed": int(maps.seed),
         "corner_cutting": bool(maps.corner_cutting),
-        "action_accuracy": correct / cells if cells else float("nan"),
+        "action_accuracy": None if counts is None else (correct / cells if cells else float("nan")),
         "action_cells": cells,
         **rollout_metrics(result, maps.expert_costs, maps.start_mask, lengths, maps.moves),
     }

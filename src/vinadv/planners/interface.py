@@ -154,13 +154,14 @@ class Planner(ABC):
 
     @property
     def checksum(self) -> str | None:
-        """SHA-256 identifying the planner's weights (None for a planner without weights)."""
-        return None
+        """SHA-256 identifying the planner's weights (None for a planner without weights): `_checksum` where a
+        subclass sets it."""
+        return getattr(self, "_checksum", None)
 
     @property
     def config(self) -> dict:
-        """Hyper-parameters worth recording (JSON values)."""
-        return {}
+        """Hyper-parameters worth recording (JSON values): `_config` where a subclass sets it."""
+        return getattr(self, "_config", {})
 
     def spec(self) -> PlannerSpec:
         """What a run records about the planner: name, size, config and weights checksum."""
@@ -284,14 +285,6 @@ class TorchPlanner(Planner):
         self.device = torch.device(device)
 
     @property
-    def checksum(self) -> str | None:
-        return self._checksum
-
-    @property
-    def config(self) -> dict:
-        return self._config
-
-    @property
     def differentiable(self) -> nn.Module:
         return self.module
 
@@ -349,10 +342,6 @@ class VINPlanner(Planner):
     def vin(self):
         """The PyTorch `VIN` (built from the weights at first use)."""
         return self._source.module() if isinstance(self._source, VINWeights) else self._source
-
-    @property
-    def checksum(self) -> str | None:
-        return self._checksum
 
     @property
     def config(self) -> dict:

@@ -47,15 +47,15 @@ class RolloutMetrics(TypedDict):
 
 class PlannerMetrics(RolloutMetrics):
     """A planner's figures on a set of maps (`evaluation.evaluate_planner`, `evaluate_vin`): the maps (count, side,
-    starts per map, seed, corner cutting), the action accuracy over `action_cells` supervised cells, then the
-    rollout figures."""
+    starts per map, seed, corner cutting), the action accuracy over `action_cells` supervised cells (None for a
+    search planner, which has no policy), then the rollout figures."""
 
     maps: int
     size: int
     starts_per_map: int
     seed: int
     corner_cutting: bool
-    action_accuracy: float
+    action_accuracy: float | None
     action_cells: int
 
 

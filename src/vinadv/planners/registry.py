@@ -6,9 +6,17 @@
   (`vinadv.planners.vin.init_shift_kernels`) with adversarial rounds (`vinadv.hardening`).
 - `gppn`: the Gated Path Planning Network; weights from `weights=` or the shipped `gppn{N}.pt`.
 - `optimal`: exact shortest paths (the control: what a perfect planner does).
+- `astar`: vanilla A* on the maps' movement model, with its expansions (`vinadv.planners.astar`; on `moore` maps the
+  Neural A* authors' vanilla A*).
+- `wastar`: weighted A*, `f = g + w * h` (`wastar:w=3`; w >= 1, default 2): fewer expansions, suboptimal paths.
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
   `forward(obstacles, goals)` takes obstacles as 0/1 float32 `(B, N, N)` and goals as int64 `(B, 2)` and returns
-  `(B, 8, N, N)` logits in DESIGN.md's action order. Its source file and weights are checksummed for run records.
+  `(B, 8, N, N)` logits in DESIGN.md's action order; or an object with `plan_paths` (a search planner,
+  `vinadv.planners.search.UserSearchPlanner`: its paths are checked by `check_paths`). Its source file and weights are
+  checksummed for run records.
+- a registered name followed by `:` and `key=value` pairs separated by commas, `wastar:w=3`: that planner with those
+  parameters (`PlannerParam`; a `module:factory` never holds `=`, so the two read apart). Unknown keys and bad values
+  are refused with one line naming them; the values are in the planner's config, so run records keep them.
 - any of these but `optimal` with `+d4` after it (`gppn+d4`, `file.py:factory+d4`): that planner averaged over the
   8 rotations and flips of the map (`vinadv.planners.symmetric`), an exactly equivariant planner at 8 forwards.
 """
@@ -17,6 +25,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import math
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,13 +33,49 @@ from pathlib import Path
 
 from vinadv.errors import InputError
 from vinadv.grid.moves import DEFAULT_MOVES
+from vinadv.planners.astar import AStarPlanner, WeightedAStarPlanner
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
 from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.search import SearchPlanner, UserSearchPlanner
 from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
 from vinadv.planners.weights import WEIGHTS_DIR, check_trained_size, weights_checksum
 
-#: `load(size, weights, corner_cutting, device)`: a registered planner for `size x size` maps
-Loader = Callable[[int, str | None, bool, str], Planner]
+#: `load(size, weights, corner_cutting, device, **params)`: a registered planner for `size x size` maps, with the
+#: values of its `PlannerParam`s as keyword arguments (none for a planner without parameters)
+Loader = Callable[..., Planner]
+
+
+@dataclass(frozen=True)
+class PlannerParam:
+    """A parameter of a registered planner, given in the spec as `name:key=value` (`wastar:w=3`).
+
+    Attributes:
+        name: the key (an identifier).
+        default: the value when the spec does not give it; its type (int or float) is the parameter's.
+        description: one line for `vinadv planners`.
+        minimum: the smallest value allowed (None: no bound).
+    """
+
+    name: str
+    default: float | int
+    description: str
+    minimum: float | int | None = None
+
+    def parse(self, spec: str, text: str) -> float | int:
+        """The value `text` of this parameter, or PlannerError naming the spec, the key and the value."""
+        kind = int if isinstance(self.default, int) else float
+        try:
+            value = kind(text)
+        except ValueError:
+            value = None
+        bound = "" if self.minimum is None else f" >= {self.minimum:g}"
+        if value is None or not math.isfinite(value) or (self.minimum is not None and value < self.minimum):
+            what = "an integer" if kind is int else "a number"
+            raise PlannerError(f"planner {spec!r}: parameter {self.name} must be {what}{bound}, got {text!r}")
+        return value
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "default": self.default, "minimum": self.minimum, "description": self.description}
 
 
 @dataclass(frozen=True)
@@ -42,6 +87,7 @@ class PlannerInfo:
         default_weights: `default_weights(size) -> Path`, the shipped weights for `size x size` maps; None: a
             planner without weights.
         takes_weights: whether `load_planner(..., weights=FILE)` may give it another weights file.
+        params: the parameters a spec may give it (`name:key=value,...`), passed to `load` by keyword.
     """
 
     name: str
@@ -49,6 +95,7 @@ class PlannerInfo:
     load: Loader
     default_weights: Callable[[int], Path] | None = None
     takes_weights: bool = False
+    params: tuple[PlannerParam, ...] = ()
 
     def to_dict(self, size: int = 28) -> dict:
         """Name, description, the shipped weights for `size x size` maps (None: no weights) and whether present."""
@@ -58,7 +105,18 @@ class PlannerInfo:
             "description": self.description,
             "weights": None if path is None else str(path),
             "weights_available": None if path is None else path.exists(),
+            "params": [p.to_dict() for p in self.params],
         }
+
+    def parse_params(self, spec: str, given: dict[str, str]) -> dict[str, float | int]:
+        """Every parameter's value: `given` (key -> text, from the spec) over the defaults; an unknown key or a bad
+        value raises PlannerError naming the spec and the key."""
+        known = {p.name: p for p in self.params}
+        for key in given:
+            if key not in known:
+                takes = f"takes {', '.join(known)}" if known else "takes no parameters"
+                raise PlannerError(f"planner {spec!r}: unknown parameter {key!r} ({self.name} {takes})")
+        return {name: (p.parse(spec, given[name]) if name in given else p.default) for name, p in known.items()}
 
 
 #: the registered planners by name, in the order `vinadv planners` lists them
@@ -75,18 +133,24 @@ def register(
     load: Loader,
     default_weights: Callable[[int], Path] | None = None,
     takes_weights: bool = False,
+    params: tuple[PlannerParam, ...] = (),
 ) -> PlannerInfo:
-    """Register planner `name`: `load_planner(name, ...)` calls `load`, `default_weights(name, size)` calls
-    `default_weights(size)`. Registering imports nothing: the loaders import their planner's modules (PyTorch) when
-    called. Refuses a name already registered, or one that a spec would read otherwise (`:`, the `+d4` suffix)."""
+    """Register planner `name`: `load_planner(name, ...)` calls `load` (with the values of `params` by keyword),
+    `default_weights(name, size)` calls `default_weights(size)`. Registering imports nothing: the loaders import
+    their planner's modules (PyTorch) when called. Refuses a name already registered, one that a spec would read
+    otherwise (`:`, `=`, `,`, the `+d4` suffix), and parameters whose keys are not distinct identifiers."""
     if name in REGISTRY:
         raise InputError(f"name {name!r}: a planner of that name is already registered", "name")
-    if not name or name != name.strip() or ":" in name or name.endswith(SUFFIX):
+    if not name or name != name.strip() or any(ch in name for ch in ":=,") or name.endswith(SUFFIX):
         raise InputError(
-            f"name {name!r} would not read as a planner name: no ':', no {SUFFIX} at its end, no spaces around it",
+            f"name {name!r} would not read as a planner name: no ':', '=' or ',', no {SUFFIX} at its end, no spaces "
+            "around it",
             "name",
         )
-    info = PlannerInfo(name, description, load, default_weights, takes_weights)
+    keys = [p.name for p in params]
+    if len(set(keys)) != len(keys) or not all(k.isidentifier() for k in keys):
+        raise InputError(f"params {keys!r}: the keys of a planner's parameters are distinct identifiers", "params")
+    info = PlannerInfo(name, description, load, default_weights, takes_weights, tuple(params))
     REGISTRY[name] = info
     return info
 
@@ -144,6 +208,14 @@ def _load_optimal(size: int, weights: str | None, corner_cutting: bool, device: 
     return OptimalPlanner(size, corner_cutting)
 
 
+def _load_astar(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+    return AStarPlanner(size)  # the move rule comes with each search (`plan_paths`' corner_cutting)
+
+
+def _load_wastar(size: int, weights: str | None, corner_cutting: bool, device: str, w: float) -> Planner:
+    return WeightedAStarPlanner(size, w=w)
+
+
 register(
     "vin",
     description="Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine (default)",
@@ -168,6 +240,17 @@ register(
     "optimal",
     description="exact shortest paths (Dijkstra, lowest action index on ties): the control",
     load=_load_optimal,
+)
+register(
+    "astar",
+    description="A* search on the maps' moves, with its expansions (on moore maps the Neural A* authors' vanilla A*)",
+    load=_load_astar,
+)
+register(
+    "wastar",
+    description="weighted A* search, f = g + w*h: fewer expansions, suboptimal paths (wastar:w=3)",
+    load=_load_wastar,
+    params=(PlannerParam("w", 2.0, "the weight of the heuristic (1: A*)", minimum=1.0),),
 )
 
 
@@ -194,14 +277,15 @@ def load_planner(
     """The planner named or specified by `spec` (None: `vin`) for `size x size` maps.
 
     Args:
-        spec: a registered name or `file.py:factory` / `module:factory`.
+        spec: a registered name, with parameters (`wastar:w=3`) or not, or `file.py:factory` / `module:factory`.
         weights: a weights file for `vin` or `gppn` (default: the shipped ones); refused for the others.
         corner_cutting: the move rule of the maps (the `optimal` planner's logits follow it).
         device: torch device of a torch planner's forward.
         moves: the movement model of the maps (`vinadv.grid.moves`): the planner is `Planner.for_moves(moves)`.
-            `optimal` follows every model; the others plan `octile` moves (the learned ones were trained on them)
-            and refuse maps of another model with one line naming both, rather than planning with masked logits:
-            an 8-action policy on `news` maps would be judged on moves it was trained to make and the maps lack.
+            `optimal`, `astar` and `wastar` follow every model; the others plan `octile` moves (the learned ones
+            were trained on them) and refuse maps of another model with one line naming both, rather than planning
+            with masked logits: an 8-action policy on `news` maps would be judged on moves it was trained to make
+            and the maps lack.
 
     Raises `PlannerError` (an `InputError`) naming the spec for anything that cannot be loaded.
     """
@@ -209,14 +293,39 @@ def load_planner(
     return _load(spec, size, weights, corner_cutting, device).for_moves(moves)
 
 
+def split_spec(spec: str) -> tuple[str, dict[str, str] | None]:
+    """`(name, parameters)` of a spec: `wastar:w=3,x=1` -> `("wastar", {"w": "3", "x": "1"})`; a spec without
+    parameters (a name, `file.py:factory`, `module:factory`: no `=`) -> `(spec, None)`. A parameter list that is not
+    `key=value` pairs with distinct keys, or that follows something other than a registered name, raises
+    PlannerError naming the spec."""
+    head, sep, tail = spec.partition(":")
+    if not sep or "=" not in tail:
+        return spec, None
+    name = head.strip()
+    if name not in REGISTRY:
+        raise PlannerError(
+            f"planner {spec!r}: key=value parameters follow a registered planner name ({', '.join(REGISTRY)})"
+        )
+    given: dict[str, str] = {}
+    for item in tail.split(","):
+        key, eq, value = (part.strip() for part in item.partition("="))
+        if not eq or not key or not value:
+            raise PlannerError(f"planner {spec!r}: parameters are key=value pairs separated by commas, got {item!r}")
+        if key in given:
+            raise PlannerError(f"planner {spec!r}: parameter {key!r} is given twice")
+        given[key] = value
+    return name, given
+
+
 def _load(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
     if spec.endswith(SUFFIX):
         return load_symmetric(spec, size, weights, corner_cutting, device)
-    info = REGISTRY.get(spec)
+    name, given = split_spec(spec)
+    info = REGISTRY.get(name)
     if weights is not None and (info is None or not info.takes_weights):
         raise PlannerError(f"planner {spec!r} takes no weights file (weights={weights!r})")
     if info is not None:
-        return info.load(size, weights, corner_cutting, device)
+        return info.load(size, weights, corner_cutting, device, **info.parse_params(spec, given or {}))
     if ":" in spec:
         return load_custom(spec, size, device)
     raise PlannerError(
@@ -234,6 +343,11 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
         raise PlannerError(f"planner {spec!r}: {SUFFIX} follows one planner name or spec, once (e.g. gppn{SUFFIX})")
     base = load_planner(base_spec, size, weights=weights, corner_cutting=corner_cutting, device=device)
     module = base.differentiable
+    if isinstance(base, SearchPlanner):  # the average is over policies: a search planner has none
+        raise PlannerError(
+            f"planner {spec!r}: {base.name!r} is a search planner; {SUFFIX} averages a policy planner's action "
+            "probabilities (vin, gppn or your own torch module)"
+        )
     if module is None:
         raise PlannerError(
             f"planner {spec!r}: {base.name!r} has no torch module to average ({SUFFIX} takes vin, gppn or your own)"
@@ -253,8 +367,9 @@ def _is_file(source: str) -> bool:
     return source.endswith(".py") or "/" in source or "\\" in source
 
 
-def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
-    """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring)."""
+def load_custom(spec: str, size: int, device: str = "cpu") -> Planner:
+    """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring): a
+    `TorchPlanner` around the factory's module, or a `UserSearchPlanner` around an object with `plan_paths`."""
     source, _, factory_name = spec.rpartition(":")
     if not source or not factory_name.isidentifier():
         raise PlannerError(f"planner {spec!r}: expected FILE.py:FACTORY or MODULE:FACTORY")
@@ -289,11 +404,17 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         net = factory(int(size))
     except (Exception, SystemExit) as exc:
         raise PlannerError(f"planner {spec!r}: {factory_name}({size}) failed: {type(exc).__name__}: {exc}") from None
+    config = {"source": source, "factory": factory_name, "source_sha256": source_sha}
+    if callable(getattr(net, "plan_paths", None)):  # a search planner: paths, not logits
+        torch = sys.modules.get("torch")  # a search planner may be a torch module (its weights checksummed), or not
+        stateful = torch is not None and isinstance(net, torch.nn.Module)
+        return UserSearchPlanner(net, spec, size, checksum=state_checksum(net) if stateful else None, config=config)
     import torch
 
     if not isinstance(net, torch.nn.Module):
         raise PlannerError(
-            f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, expected a torch.nn.Module"
+            f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, expected a torch.nn.Module "
+            "(a policy planner) or an object with plan_paths (a search planner)"
         )
     net = net.to(device)
     return TorchPlanner(
@@ -301,7 +422,7 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> TorchPlanner:
         spec,
         size,
         checksum=state_checksum(net),
-        config={"source": source, "factory": factory_name, "source_sha256": source_sha},
+        config=config,
         device=device,
     )
 

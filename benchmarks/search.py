@@ -1,0 +1,93 @@
+"""Search throughput: `astar` (vinadv.planners.astar) on a batch of rows at once against one row per call.
+
+    nice .venv/bin/python benchmarks/search.py [--data MPD.npz] [--n 1000] [--size 32] [--moves moore] [--json]
+
+Rows are (map, start) searches: with `--data` the test maps of an MP dataset file (planning-datasets layout, one
+start per map drawn from the cells that reach the goal, `moore` moves), else `--n` generated maps of `--size` with
+their first start, on the movement model `--moves`. Timed side by side in this run, taking turns, best of
+`--rounds`:
+- `batched`: `AStarPlanner.plan_paths` of all rows in one call (the kernel runs the rows in parallel, Numba threads);
+- `one at a time`: one call per row (what a planner without a batched search would do: the Python call, the input
+  checks and the result packing per row).
+Both give the same paths and expansions (checked). The kernel is compiled (and cached) before timing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numba
+import numpy as np
+
+from harm import timed_side_by_side  # the benchmarks' side-by-side timer (benchmarks/harm.py)
+from vinadv.grid.generator import generate_maps
+from vinadv.planners.astar import AStarPlanner
+
+
+def mpd_rows(path: str, seed: int = 0):
+    """The test split of an MP dataset file: obstacles, one start per map that reaches the goal, goals."""
+    with np.load(path) as data:
+        free = data["arr_8"] == 1
+        goals = np.argwhere(data["arr_9"][:, 0] == 1)[:, 1:]
+        reachable = data["arr_11"][:, 0] > data["arr_11"].min()
+    rng = np.random.default_rng(seed)
+    starts = np.array([rng.choice(np.argwhere(r)) for r in reachable])
+    return ~free, starts, goals
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", help="an MP dataset file (<family>_032_moore_c8.npz): its test maps")
+    parser.add_argument("--n", type=int, default=1000, help="generated maps (default 1000)")
+    parser.add_argument("--size", type=int, default=32, help="side of the generated maps (default 32)")
+    parser.add_argument("--moves", default="moore", help="movement model of the generated maps (default moore)")
+    parser.add_argument("--rounds", type=int, default=3, help="rounds of timing, best kept (default 3)")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+
+    if args.data:
+        obstacles, starts, goals = mpd_rows(args.data)
+        moves, source = "moore", f"{args.data}: {len(obstacles)} test maps"
+    else:
+        maps = generate_maps(args.n, args.size, seed=0, n_starts=1, moves=args.moves)
+        obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
+        moves, source = args.moves, f"{args.n} generated {args.size}x{args.size} maps"
+    planner = AStarPlanner(obstacles.shape[1], moves)
+    planner.plan_paths(obstacles[:2], starts[:2], goals[:2])  # compile (or load the cache) before timing
+
+    def batched():
+        return planner.plan_paths(obstacles, starts, goals)
+
+    def one_at_a_time():
+        return [
+            planner.plan_paths(obstacles[i : i + 1], starts[i : i + 1], goals[i : i + 1]) for i in range(len(starts))
+        ]
+
+    (t_batch, t_one), (whole, parts) = timed_side_by_side([batched, one_at_a_time], args.rounds)
+    for i, part in enumerate(parts):
+        assert part.paths[0].tolist() == whole.paths[i].tolist()
+        assert np.array_equal(part.expanded[0], whole.expanded[i])
+    rows = len(starts)
+    out = {
+        "source": source,
+        "moves": moves,
+        "rows": rows,
+        "threads": numba.get_num_threads(),
+        "mean_expansions": float(whole.expansions.mean()),
+        "batched_rows_per_s": round(rows / t_batch, 1),
+        "one_at_a_time_rows_per_s": round(rows / t_one, 1),
+        "speedup": round(t_one / t_batch, 2),
+    }
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{source}, {moves} moves, {out['threads']} Numba threads, {out['mean_expansions']:.1f} expansions/row")
+        print(f"  batched        {out['batched_rows_per_s']:>10.1f} rows/s")
+        print(f"  one at a time  {out['one_at_a_time_rows_per_s']:>10.1f} rows/s")
+        print(f"  batched / one at a time: {out['speedup']:.2f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,69 @@
+"""The release shape: the wheel carries the code, templates and shipped weights, and runs the main job outside the
+repository (issue 35). Built with `pip wheel --no-deps`, installed with `--no-deps` into a fresh venv in a temporary
+folder; the dependencies come from the test's own environment through a `.pth` line (the machine's system Python
+has none), after the wheel's own site-packages, so `import vinadv` can only find the installed wheel."""
+
+import json
+import os
+import subprocess
+import sys
+import sysconfig
+import venv
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.slow
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_the_wheel_installs_outside_the_repository_and_runs_the_main_job(tmp_path):
+    dist = tmp_path / "dist"
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(dist), str(ROOT)],
+        check=True,
+        capture_output=True,
+    )
+    (wheel,) = dist.glob("vinadv-*.whl")
+    env_dir = tmp_path / "env"
+    venv.EnvBuilder(system_site_packages=True, with_pip=False).create(env_dir)
+    python = env_dir / "bin" / "python"
+    site = Path(
+        subprocess.run(
+            [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout.strip()
+    )
+    subprocess.run(
+        [sys.executable, "-m", "pip", "--python", str(python), "install", "--no-deps", "--no-index", "-q", str(wheel)],
+        check=True,
+        capture_output=True,
+    )
+    (site / "zz_test_dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    clean_env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    where = subprocess.run(
+        [str(python), "-c", "import vinadv.planners.weights as w; print(w.WEIGHTS_DIR)"],
+        cwd=work,
+        env=clean_env,
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout.strip()
+    assert Path(where).is_relative_to(env_dir), where  # the wheel's copy, not the checkout's
+    assert (Path(where) / "vin28.pt").is_file()
+    ran = subprocess.run(
+        [str(env_dir / "bin" / "vinadv"), "run", "--n", "50", "--db", "out.db", "--name", "w", "--json", "--quiet"],
+        cwd=work,
+        env=clean_env,
+        capture_output=True,
+        text=True,
+    )
+    assert ran.returncode == 0, ran.stderr
+    summary = json.loads(ran.stdout)
+    assert (summary["maps"], summary["pairs"], summary["stored"]) == (50, 50, 50), summary
+    assert (work / "out.db").is_file()
