@@ -94,14 +94,22 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
     settings = maps_settings(args, n=1000)  # a maps file is read and checked here, before anything is written
+    from vinadv.planners.registry import load_planner
+    from vinadv.robustness import benchmark_maps, robustness, save_robustness
+
+    # the planner too (a planner of another movement model than the maps' is refused in one line)
+    planner = load_planner(
+        args.planner,
+        settings["size"],
+        weights=args.weights,
+        corner_cutting=settings["corner_cutting"],
+        moves=settings["moves"],
+    )
     if args.db is not None:  # a database that will be refused is refused now, not after the benchmark
         from vinadv.store import Store
 
         with Store.open(args.db):
             pass
-    from vinadv.planners.registry import load_planner
-    from vinadv.robustness import benchmark_maps, robustness, save_robustness
-
     if args.maps is None:
         maps = benchmark_maps(settings["n"], settings["size"], seed=args.seed, moves=settings["moves"])
         source = None
@@ -110,9 +118,6 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
         maps = MapSet.load(args.maps).take(slice(0, settings["n"]))
         source = {"maps": settings["maps"], "maps_sha256": settings["maps_sha256"]}
-    planner = load_planner(
-        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
-    )
     result = robustness(
         planner,
         maps,
