@@ -16,7 +16,7 @@ class TinyPlanner(nn.Module):
 
     def forward(self, obstacles: torch.Tensor, goals: torch.Tensor) -> torch.Tensor:
         goal_map = torch.zeros_like(obstacles)
-        goal_map[torch.arange(len(goals)), goals[:, 0], goals[:, 1]] = 1.0
+        goal_map[torch.arange(len(goals), device=goals.device), goals[:, 0], goals[:, 1]] = 1.0
         return self.net(torch.stack([obstacles, goal_map], dim=1))
 
 

@@ -54,15 +54,26 @@ COLLECTED = pytest.StashKey[list[tuple[str, bool]]]()
 def pytest_collection_modifyitems(config, items) -> None:
     """Tests on the database servers are slow, whether a variant of a backend test (`db_url` = mysql/postgres) or a
     test that takes a server's fixture (`SERVER_FIXTURES`): the quick selection checks every backend test on SQLite
-    and needs no server. The rest of the slow tier (`make test-fast` is `pytest -m "not slow"`) is
-    marked in the test modules themselves (`pytestmark = pytest.mark.slow` or `@pytest.mark.slow`): the ones that
-    start Dask clusters, a browser or subprocesses, train networks or classifiers, or run the whole pipeline."""
+    and needs no server. So are the GPU tests (marked `cuda`). The rest of the slow tier (`make test-fast` is
+    `pytest -m "not slow"`) is marked in the test modules themselves (`pytestmark = pytest.mark.slow` or
+    `@pytest.mark.slow`): the ones that start Dask clusters, a browser or subprocesses, train networks or
+    classifiers, or run the whole pipeline."""
     for item in items:
         callspec = getattr(item, "callspec", None)
         on_server = callspec is not None and callspec.params.get("db_url") in SERVERS
-        if on_server or SERVER_FIXTURES & set(getattr(item, "fixturenames", ())):
+        on_gpu = item.get_closest_marker("cuda") is not None  # the GPU tests: never in the quick tier
+        if on_server or on_gpu or SERVER_FIXTURES & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
     config.stash[COLLECTED] = [(item.nodeid, item.get_closest_marker("slow") is not None) for item in items]
+
+
+def pytest_runtest_setup(item) -> None:
+    """A test marked `cuda` is skipped where PyTorch sees no CUDA GPU (CI has none: skipped there too, not failed)."""
+    if item.get_closest_marker("cuda") is not None:
+        import torch  # noqa: PLC0415 (only for the GPU tests)
+
+        if not torch.cuda.is_available():
+            pytest.skip("needs a CUDA GPU (PyTorch sees none here); benchmarks/device_check.sh runs it on one")
 
 
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"

@@ -28,6 +28,7 @@ COMMAND_MODULES = [
     "vinadv.commands.plan",
     "vinadv.commands.planners",
     "vinadv.commands.gppn",
+    "vinadv.commands.neural_astar",
     "vinadv.commands.attack",
     "vinadv.commands.classify",
     "vinadv.commands.run",

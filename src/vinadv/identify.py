@@ -213,6 +213,7 @@ def identify_and_store(
     harm_tol: float = DEFAULT_TOL,
     harm_rtol: float = 0.0,
     remote: Callable[..., Identification] | None = None,
+    device: str | None = None,
 ) -> StoredIdentification:
     """`vinadv identify`: label the pairs of a pairs file and store them as a new run in `db`, with their harm
     (tolerances `harm_tol`, `harm_rtol`). With `planner` or `weights` (`vinadv.planners.registry.load_planner`),
@@ -222,19 +223,32 @@ def identify_and_store(
     `remote(pairs, planner_ref, classifier, label_source, harm_tol=, harm_rtol=)` computes the identification
     elsewhere (say `vinadv.cluster.ClusterIdentify`; `planner_ref` a `PlannerRef`, or None to keep the file's
     paths); it is called after the inputs are checked, so a bad file is refused before any worker starts. Without
-    it, everything runs in this process."""
+    it, everything runs in this process. `device`: where the planner given plans (`load_planner`); refused
+    without `planner` or `weights` (the file's paths are kept then: nothing runs on it)."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: identify needs no store)
     from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
 
     if name is not None:
         check_run_name(name)  # before the work and the database: it is refused, not found, after them
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
+    if device is not None and planner is None and weights is None:
+        raise InputError(
+            "device: only with planner or weights (without them the file's paths are kept, nothing is planned)",
+            "device",
+            "planner",
+            "weights",
+        )
     pairs = PairSet.load(pairs_path)
     t0 = time.perf_counter()
     replanner = None
     if planner is not None or weights is not None:
         replanner = load_planner(
-            planner, pairs.size, weights=weights, corner_cutting=pairs.corner_cutting, moves=pairs.moves
+            planner,
+            pairs.size,
+            weights=weights,
+            corner_cutting=pairs.corner_cutting,
+            moves=pairs.moves,
+            device=device,
         )
     classifier_model, classifier_name = load_classifier(classifier)
     if remote is None:

@@ -293,11 +293,17 @@ class RunSummary:
         }
 
 
-def resolve_planner(config: RunConfig) -> Planner:
+def resolve_planner(config: RunConfig, device: str | None = None) -> Planner:
     """The planner of a run (`config.planner` with `config.weights`, for the run's map size, move rule and movement
-    model: a planner of another model is refused, see `Planner.for_moves`)."""
+    model: a planner of another model is refused, see `Planner.for_moves`), its forward on `device`
+    (`load_planner`; None: the planner's default)."""
     return load_planner(
-        config.planner, config.size, weights=config.weights, corner_cutting=config.corner_cutting, moves=config.moves
+        config.planner,
+        config.size,
+        weights=config.weights,
+        corner_cutting=config.corner_cutting,
+        device=device,
+        moves=config.moves,
     )
 
 
@@ -370,9 +376,12 @@ def run_pipeline(
     resume: bool = False,
     progress: bool = True,
     shard_results: Callable | None = None,
+    device: str | None = None,
 ) -> RunSummary:
     """Run the main job and store it; returns the summary. `shard_results(config, shards, planner, classifier,
-    label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order."""
+    label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order. `device`: where
+    the planner's forward runs (`load_planner`), not part of the config: a run may be resumed on another device. The
+    run records its type in the planner's spec (`PLANNER_SPEC`)."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: computing a shard needs no store)
     from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
 
@@ -382,7 +391,7 @@ def run_pipeline(
     if name is not None:
         check_run_name(name)
     t_start = time.perf_counter()
-    planner = resolve_planner(config)
+    planner = resolve_planner(config, device)
     classifier, classifier_name = load_classifier(config.classifier)
     with Store.open(db) as store:
         run_id = open_run(store, config, name, resume, planner, classifier_name)

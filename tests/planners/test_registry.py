@@ -29,7 +29,7 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
 def test_list_names_the_registered_planners():
     names = [p["name"] for p in list_planners(28)]
-    assert names == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar"]
+    assert names == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar", "neural-astar"]
     vin = list_planners(28)[0]
     assert vin["weights"].endswith("vin28.pt") and vin["weights_available"] is True
 
@@ -111,7 +111,15 @@ def test_plan_optimal_and_vin_from_the_cli(tmp_path, capsys):
 def test_planners_command(capsys):
     assert main(["planners", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert [p["name"] for p in out["planners"]] == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar"]
+    assert [p["name"] for p in out["planners"]] == [
+        "vin",
+        "vin_robust",
+        "gppn",
+        "optimal",
+        "astar",
+        "wastar",
+        "neural-astar",
+    ]
     assert main(["planners"]) == 0
     text = capsys.readouterr().out
     assert "optimal" in text and "FILE.py:FACTORY" in text
@@ -127,7 +135,9 @@ def test_a_registered_planner_is_loaded_listed_and_refused_twice(monkeypatch):
 
     registry.register("mine", description="my planner", load=load)
     planner = load_planner("mine", 12, corner_cutting=False)
-    assert isinstance(planner, OptimalPlanner) and calls == [(12, None, False, "cpu")]
+    load_planner("mine", 12, device="auto")  # a device name reaches the loader checked and concrete
+    expected = "cuda" if torch.cuda.is_available() else "cpu"
+    assert isinstance(planner, OptimalPlanner) and calls == [(12, None, False, None), (12, None, True, expected)]
     assert list_planners(12)[-1] == {
         "name": "mine",
         "description": "my planner",
@@ -229,7 +239,7 @@ def test_a_registered_planner_takes_its_parameters_by_keyword(monkeypatch):
 
 def test_the_cli_lists_parameters_and_refuses_bad_ones_with_exit_2(tmp_path, capsys):
     assert main(["planners", "--json"]) == 0
-    wastar = json.loads(capsys.readouterr().out)["planners"][-1]
+    wastar = next(p for p in json.loads(capsys.readouterr().out)["planners"] if p["name"] == "wastar")
     assert wastar["name"] == "wastar" and [p["name"] for p in wastar["params"]] == ["w"]
     assert main(["planners"]) == 0
     assert "[parameters w=2]" in capsys.readouterr().out

@@ -57,6 +57,7 @@ import numpy as np
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import valid_cells
 from vinadv.errors import InputError
+from vinadv.planners.device import full_precision
 from vinadv.planners.interface import Planner, PlannerError, as_planner
 from vinadv.planners.result import PlanResult
 from vinadv.planners.search import SearchPlanner
@@ -470,19 +471,20 @@ class SaliencyAttack(Attack):
         # the decisions along the path: every path cell but the goal
         at_goal = np.all(cells_all == ctx.goals[owner_all], axis=1)
         out = np.empty(ctx.obstacles.shape)
-        for lo in range(0, b, TORCH_CHUNK):
-            hi = min(b, lo + TORCH_CHUNK)
-            sel = (owner_all >= lo) & (owner_all < hi) & ~at_goal
-            x = torch.from_numpy(ctx.obstacles[lo:hi].astype(np.float32)).to(device).requires_grad_(True)
-            logits = module(x, torch.from_numpy(ctx.goals[lo:hi]).to(device))  # (b, 8, N, N)
-            owner = torch.from_numpy(owner_all[sel] - lo).to(device)
-            rows = torch.from_numpy(cells_all[sel, 0]).to(device)
-            cols = torch.from_numpy(cells_all[sel, 1]).to(device)
-            picked = torch.log_softmax(logits[owner, :, rows, cols], dim=-1)
-            chosen = picked.detach().argmax(dim=-1)
-            objective = picked.gather(1, chosen[:, None]).sum()
-            (grad,) = torch.autograd.grad(objective, x)
-            out[lo:hi] = -grad.cpu().numpy()
+        with full_precision(device):  # a GPU's gradients in float32, as the CPU's (no TF32)
+            for lo in range(0, b, TORCH_CHUNK):
+                hi = min(b, lo + TORCH_CHUNK)
+                sel = (owner_all >= lo) & (owner_all < hi) & ~at_goal
+                x = torch.from_numpy(ctx.obstacles[lo:hi].astype(np.float32)).to(device).requires_grad_(True)
+                logits = module(x, torch.from_numpy(ctx.goals[lo:hi]).to(device))  # (b, 8, N, N)
+                owner = torch.from_numpy(owner_all[sel] - lo).to(device)
+                rows = torch.from_numpy(cells_all[sel, 0]).to(device)
+                cols = torch.from_numpy(cells_all[sel, 1]).to(device)
+                picked = torch.log_softmax(logits[owner, :, rows, cols], dim=-1)
+                chosen = picked.detach().argmax(dim=-1)
+                objective = picked.gather(1, chosen[:, None]).sum()
+                (grad,) = torch.autograd.grad(objective, x)
+                out[lo:hi] = -grad.cpu().numpy()
         return out
 
 

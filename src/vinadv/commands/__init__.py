@@ -16,6 +16,7 @@ from collections.abc import Iterator
 
 from vinadv.errors import InputError
 from vinadv.planners.batching import set_torch_threads
+from vinadv.planners.device import resolve_device
 
 
 class LazyChoices:
@@ -39,7 +40,8 @@ class LazyChoices:
 
 
 def add_planner_arguments(parser, weights_help: str | None = None) -> None:
-    """`--planner NAME|SPEC` and `--weights FILE`: the planner a command plans with (`vinadv.planners.registry`)."""
+    """`--planner NAME|SPEC`, `--weights FILE` and `--device` (`add_device_argument`): the planner a command plans
+    with (`vinadv.planners.registry`) and where its forward runs."""
     parser.add_argument(
         "--planner",
         default=None,
@@ -52,6 +54,39 @@ def add_planner_arguments(parser, weights_help: str | None = None) -> None:
         default=None,
         help=weights_help or "weights file of the vin or gppn planner (default: the shipped weights for the map size)",
     )
+    add_device_argument(parser)
+
+
+def add_device_argument(parser) -> None:
+    """`--device cpu|cuda|cuda:N|auto`: where a torch planner's forward runs (read it with `planner_device`)."""
+    parser.add_argument(
+        "--device",
+        default=None,
+        metavar="cpu|cuda|cuda:N|auto",
+        help="torch device of the planner's forward; auto: cuda where available, else cpu. Default: the CPU, and for "
+        "the VIN its exact CPU engine (with --device the VIN plans with its PyTorch forward there). Recorded by type "
+        "in the planner's record (docs/guide/gpu.md)",
+    )
+
+
+def load_args_planner(args, maps, device: str | None):
+    """The planner of `--planner`/`--weights` for the maps `maps` (a `MapSet`: its size, move rule and movement
+    model), its forward on `device` (`planner_device(args)`, checked before the command wrote anything)."""
+    from vinadv.planners.registry import load_planner
+
+    size, corner_cutting, moves = maps.size, maps.corner_cutting, maps.moves
+    return load_planner(
+        args.planner, size, weights=args.weights, corner_cutting=corner_cutting, moves=moves, device=device
+    )
+
+
+def planner_device(args) -> str | None:
+    """`--device` checked and made concrete (`auto` -> `cuda` or `cpu`), for `load_planner(..., device=)`; None when
+    not given. Call it before the command writes anything: a device this machine lacks is one line, exit status 2."""
+    name = getattr(args, "device", None)
+    if name is None:
+        return None
+    return str(resolve_device(name))
 
 
 def add_moves_argument(parser, default: str | None = "octile", what: str = "") -> None:

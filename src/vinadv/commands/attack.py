@@ -6,7 +6,7 @@ import argparse
 import time
 
 from vinadv.cluster import add_cluster_arguments, attack_on_cluster, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments
+from vinadv.commands import LazyChoices, add_planner_arguments, load_args_planner, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.outfile import check_output_path
 
@@ -135,14 +135,13 @@ def cmd_attack(args: argparse.Namespace) -> int:
     from vinadv.classify.harm import check_tolerances
     from vinadv.grid.mapset import MapSet
     from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
-    from vinadv.planners.registry import PlannerRef, load_planner
+    from vinadv.planners.registry import PlannerRef
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
+    device = planner_device(args)
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
-    planner = load_planner(
-        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
-    )
+    planner = load_args_planner(args, maps, device)
     # `make_attack`'s options, kept: on a cluster every worker builds its own attack from them
     options = dict(
         per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius, obstacles=args.obstacles

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_planner_arguments, load_args_planner, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -29,16 +29,14 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
     from vinadv.grid import MapSet
     from vinadv.planners.pathset import PathSet
-    from vinadv.planners.registry import load_planner
     from vinadv.vocabulary import TERMINATIONS
 
     if args.chunk_size < 1:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")
+    device = planner_device(args)
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
     maps = MapSet.load(args.maps)
-    planner = load_planner(
-        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
-    )
+    planner = load_args_planner(args, maps, device)
     t0 = time.perf_counter()
     result = planner.plan_maps(
         maps.obstacles,

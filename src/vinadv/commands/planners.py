@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments, command_line
+from vinadv.commands import add_planner_arguments, command_line, load_args_planner, planner_device
 from vinadv.commands.evaluation import add_eval_arguments, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
@@ -62,6 +62,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
     }
 
     def text() -> None:
+        width = max([11, *(len(p["name"]) for p in planners)])  # the names in one column
         for p in planners:
             weights = (
                 ""
@@ -69,7 +70,7 @@ def cmd_planners(args: argparse.Namespace) -> int:
                 else (f"  [weights {Path(p['weights']).name}{'' if p['weights_available'] else ' not shipped'}]")
             )
             params = ", ".join(f"{q['name']}={q['default']:g}" for q in p["params"])
-            print(f"{p['name']:<11} {p['description']}{weights}{f'  [parameters {params}]' if params else ''}")
+            print(f"{p['name']:<{width}} {p['description']}{weights}{f'  [parameters {params}]' if params else ''}")
         print(
             "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
             "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (docs/own-planner.md)"
@@ -106,17 +107,15 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.interop.protocols import PORT_TEST_PRIOR, gppn_protocol, kentsommer_protocol, require_policy
     from vinadv.planners.evaluation import evaluate_planner
     from vinadv.planners.interface import PlannerError, VINPlanner
-    from vinadv.planners.registry import load_planner
     from vinadv.planners.search import SearchPlanner
     from vinadv.planners.search_metrics import evaluate_search
 
     protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
     if args.prior is not None and "kentsommer" not in (protocols or ()):
         raise InputError("--prior applies to --protocol kentsommer only")
+    device = planner_device(args)
     maps, source = start_eval(args)
-    planner = load_planner(
-        args.planner, maps.size, weights=args.weights, corner_cutting=maps.corner_cutting, moves=maps.moves
-    )
+    planner = load_args_planner(args, maps, device)
     search = isinstance(planner, SearchPlanner)
     if protocols is None:
         protocols = ("vinadv", "search") if search else ("vinadv", "gppn", "search")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vinadv.commands import add_moves_argument, add_planner_arguments
+from vinadv.commands import add_moves_argument, add_planner_arguments, planner_device
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
@@ -90,6 +90,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     check_tolerances(args.harm_tolerance, args.harm_rtol)
     if args.moves is not None:
         check_moves(args.moves)
+    device = planner_device(args)
     if args.report:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
@@ -104,6 +105,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         weights=args.weights,
         corner_cutting=settings["corner_cutting"],
         moves=settings["moves"],
+        device=device,
     )
     if args.db is not None:  # a database that will be refused is refused now, not after the benchmark
         from vinadv.store import Store

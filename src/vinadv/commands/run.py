@@ -6,7 +6,7 @@ import argparse
 import time
 
 from vinadv.cluster import ClusterIdentify, ClusterShards, add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices, add_moves_argument, add_planner_arguments
+from vinadv.commands import LazyChoices, add_moves_argument, add_planner_arguments, planner_device
 from vinadv.commands.attack import (
     add_harm_arguments,
     add_objective_argument,
@@ -81,6 +81,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     if args.no_evaluate and not args.report:
         raise InputError("--no-evaluate: only with --report DIR")
+    device = planner_device(args)
     config = RunConfig(
         **maps_settings(args),
         attack=args.attack,
@@ -104,6 +105,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             name=args.name,
             resume=args.resume,
             progress=shows_progress(args),
+            device=device,
             **_cluster_options(client),
         )
     result = summary.to_dict()
@@ -215,6 +217,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         harm_tol=args.harm_tolerance,
         harm_rtol=args.harm_rtol,
         remote=remote,
+        device=planner_device(args),
     )
     ident = done.identification
     summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds, harm_table=ident.harm_table())

@@ -41,7 +41,9 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
     )
     train.add_argument("--val-fraction", type=float, default=0.05, help="maps held out for validation (default 0.05)")
     train.add_argument("--seed", type=int, default=0, help="seed for initialisation, split and shuffling (default 0)")
-    train.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
+    train.add_argument(
+        "--device", default="cpu", help="torch device: cpu, cuda, cuda:N, auto (cuda where available) (default cpu)"
+    )
     train.add_argument("--k", type=int, default=None, help=k_help)
     train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
     train.add_argument(

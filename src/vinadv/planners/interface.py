@@ -15,6 +15,7 @@ PyTorch is imported by the planners that run it, when they run it: the VIN plans
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import sys
 from abc import ABC, abstractmethod
@@ -27,6 +28,7 @@ from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.shortest_paths import shortest_distances, valid_moves
 from vinadv.planners.batching import over_maps, torch_threads
+from vinadv.planners.device import full_precision
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
 from vinadv.planners.spec import PlannerSpec
@@ -40,6 +42,9 @@ if TYPE_CHECKING:  # PyTorch is loaded only by the planners that run it
 
 #: maps per chunk of `plan_maps`: bounds the memory of the logits (B * 8 * N * N floats) and of the path buffers.
 DEFAULT_CHUNK = 1024
+#: maps per forward of a torch planner on a GPU (`TorchPlanner.device_batch_size`): a whole planning chunk, so the
+#: candidates of an exhaustive attack (about 500 a 28x28 map) go in one batch, several maps at once
+DEVICE_BATCH = DEFAULT_CHUNK
 
 
 class PlannerError(InputError):
@@ -134,6 +139,9 @@ class Planner(ABC):
     name: str
     size: int
     moves: str = DEFAULT_MOVES
+    #: the device type (`cpu`, `cuda`) its forward was asked to run on (`--device`), recorded in `spec()`; None: the
+    #: planner's default (the VIN's exact CPU engine, a torch planner on the CPU), recorded as before devices were
+    device_type: str | None = None
 
     def for_moves(self, moves: str) -> Planner:
         """This planner for maps of the movement model `moves`: itself when it plans that model (a planner that can
@@ -164,8 +172,12 @@ class Planner(ABC):
         return getattr(self, "_config", {})
 
     def spec(self) -> PlannerSpec:
-        """What a run records about the planner: name, size, config and weights checksum."""
-        return PlannerSpec(name=self.name, size=int(self.size), config=self.config, weights_sha256=self.checksum)
+        """What a run records about the planner: name, size, config and weights checksum, and the device type where
+        one was chosen (`device_type`)."""
+        spec = PlannerSpec(name=self.name, size=int(self.size), config=self.config, weights_sha256=self.checksum)
+        if self.device_type is not None:
+            spec["device"] = self.device_type
+        return spec
 
     @property
     def differentiable(self) -> nn.Module | None:
@@ -258,9 +270,14 @@ class TorchPlanner(Planner):
     """A planner around a `torch.nn.Module` whose `forward(obstacles, goals)` takes obstacles as 0/1 float32
     `(B, N, N)` and goals as int64 `(B, 2)` and returns `(B, 8, N, N)` logits (the bring-your-own contract).
 
-    The module runs in eval mode without gradients, `batch_size` maps at a time, on `device`; on the CPU the maps
-    are split between threads (`vinadv.planners.batching.over_maps`), each running the forward on one torch thread,
-    so `forward` must not change the module's state. `module` stays available for gradient-based attacks.
+    The module runs in eval mode without gradients, `batch_size` maps at a time, on `device` (the module must be
+    there already: the loaders move it). On the CPU the maps are split between threads
+    (`vinadv.planners.batching.over_maps`), each running the forward on one torch thread, so `forward` must not
+    change the module's state. On another device (a GPU) `device_batch_size` maps go in one forward, one batch
+    after another: each batch's maps are sent as one uint8 tensor (a quarter of float32's bytes) and its logits come
+    back in one copy. `module` stays available for gradient-based attacks.
+
+    `device` None is the CPU, not recorded in `spec()`; a device given is recorded by its type (`device_type`).
     """
 
     def __init__(
@@ -271,7 +288,8 @@ class TorchPlanner(Planner):
         checksum: str | None = None,
         config: dict | None = None,
         batch_size: int = 64,
-        device: str | torch.device = "cpu",
+        device: str | torch.device | None = None,
+        device_batch_size: int = DEVICE_BATCH,
     ):
         import torch
         from torch import nn
@@ -282,7 +300,9 @@ class TorchPlanner(Planner):
         self._checksum = checksum if checksum is not None else state_checksum(module)
         self._config = dict(config or {})
         self.batch_size = max(1, int(batch_size))
-        self.device = torch.device(device)
+        self.device_batch_size = max(1, int(device_batch_size))
+        self.device = torch.device("cpu" if device is None else device)
+        self.device_type = None if device is None else self.device.type
 
     @property
     def differentiable(self) -> nn.Module:
@@ -294,12 +314,15 @@ class TorchPlanner(Planner):
         self.module.eval()
         b, n = obstacles.shape[0], obstacles.shape[1]
         out = np.empty((b, N_ACTIONS, n, n), dtype=np.float32)
+        on_cpu = self.device.type == "cpu"
+        step = self.batch_size if on_cpu else self.device_batch_size
 
         def forward(lo: int, hi: int) -> None:
             with torch.no_grad():  # per thread: grad mode is thread-local
-                for i in range(lo, hi, self.batch_size):
-                    sl = slice(i, min(hi, i + self.batch_size))
-                    obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
+                for i in range(lo, hi, step):
+                    sl = slice(i, min(hi, i + step))
+                    # sent as uint8 (a quarter of float32's bytes to a GPU), made 0/1 float32 where the forward runs
+                    obs = torch.from_numpy(obstacles[sl].view(np.uint8)).to(self.device).float()
                     g = torch.from_numpy(goals[sl].astype(np.int64)).to(self.device)
                     try:
                         raw = self.module(obs, g)
@@ -307,13 +330,14 @@ class TorchPlanner(Planner):
                         raise PlannerError(
                             f"planner {self.name!r}: forward failed: {type(exc).__name__}: {exc}"
                         ) from None
-                    out[sl] = check_logits(self.name, raw, obs.shape[0], n)
+                    out[sl] = check_logits(self.name, raw, obs.shape[0], n)  # one copy back per batch
 
-        if self.device.type != "cpu":
-            forward(0, b)
-        else:  # maps split between threads, one torch thread each (`torch_threads`)
-            with torch_threads(1):
-                over_maps(b, forward)
+        if not on_cpu:  # whole batches on the device, one after another, in float32 (`full_precision`)
+            with full_precision(self.device):
+                forward(0, b)
+            return out
+        with torch_threads(1):  # maps split between threads, one torch thread each
+            over_maps(b, forward)
         return out
 
 
@@ -322,12 +346,25 @@ class VINPlanner(Planner):
     every step), not the generic rollout; logits, value maps and gradients from the PyTorch `VIN`.
 
     `vin` is `VINWeights` (from a file: planning needs no PyTorch) or a PyTorch `VIN`, read afresh at every call
-    (it may be training)."""
+    (it may be training).
 
-    def __init__(self, vin, size: int, checksum: str | None = None):
+    `device` (`--device`): plan with the PyTorch forward on that device instead (`VINPolicy` through `TorchPlanner`,
+    then the rollout every planner shares), a copy of the VIN moved there at first use; value maps and gradients are
+    computed there too.
+    None (the default) keeps the exact engine, the reference. On the CPU the forward gives the engine's paths (the
+    engine replays PyTorch's float32 arithmetic at near ties; docs/guide/gpu.md gives the count measured on 1,000 maps);
+    on a GPU other float sums may break a near tie the other way.
+    """
+
+    def __init__(self, vin, size: int, checksum: str | None = None, device: str | torch.device | None = None):
         self.name, self.size = "vin", int(size)
         self._source = vin
         self._torch: TorchPlanner | None = None
+        self._device = device
+        if device is not None:
+            import torch
+
+            self.device_type = torch.device(device).type
         path = vin.path if isinstance(vin, VINWeights) else getattr(vin, "weights_path", None)
         if checksum is None:
             checksum = weights_checksum(path) if path is not None else state_checksum(self.vin)
@@ -351,8 +388,17 @@ class VINPlanner(Planner):
         if self._torch is None:
             from vinadv.planners.vin.model import VINPolicy  # noqa: PLC0415 (PyTorch: the VIN plans without it)
 
-            self._torch = TorchPlanner(VINPolicy(self.vin), self.name, self.size, self._checksum, self.config)
+            if self._device is None:
+                policy = VINPolicy(self.vin)
+            else:  # a copy moved there: the weights' own module stays on the CPU
+                policy = VINPolicy(copy.deepcopy(self.vin)).to(self._device)
+            self._torch = TorchPlanner(policy, self.name, self.size, self._checksum, self.config, device=self._device)
         return self._torch
+
+    @property
+    def device(self) -> torch.device:
+        """Where its PyTorch forward runs (the CPU unless a device was given)."""
+        return self._torch_planner().device
 
     @property
     def module(self) -> nn.Module:
@@ -374,11 +420,16 @@ class VINPlanner(Planner):
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         self._check_size(obstacles)
         out = np.empty(obstacles.shape, np.float32)
-        vin = self.vin
-        with torch.no_grad():
+        vin, device = self.vin, None
+        if self._device is not None:
+            vin, device = self._torch_planner().module.vin, self.device
+            batch_size = max(batch_size, self._torch_planner().device_batch_size if device.type != "cpu" else 0)
+        with torch.no_grad(), full_precision(self.device if device is not None else torch.device("cpu")):
             for i in range(0, len(obstacles), batch_size):
                 x = make_input(obstacles[i : i + batch_size], goals[i : i + batch_size])
-                out[i : i + batch_size] = vin.q_values(x).max(dim=1).values.numpy()
+                if device is not None:
+                    x = x.to(device)
+                out[i : i + batch_size] = vin.q_values(x).max(dim=1).values.cpu().numpy()
         return out
 
     def plan_maps(
@@ -390,6 +441,9 @@ class VINPlanner(Planner):
         chunk_size: int | None = None,
         progress: bool = False,
     ) -> PlanResult:
+        if self._device is not None:  # the PyTorch forward on the device, the rollout every planner shares
+            chunk = DEFAULT_CHUNK if chunk_size is None else chunk_size
+            return super().plan_maps(obstacles, goals, starts, corner_cutting, chunk, progress)
         obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
         self._check_size(obstacles)
         return engine.plan_maps(

@@ -9,6 +9,9 @@
 - `astar`: vanilla A* on the maps' movement model, with its expansions (`vinadv.planners.astar`; on `moore` maps the
   Neural A* authors' vanilla A*).
 - `wastar`: weighted A*, `f = g + w * h` (`wastar:w=3`; w >= 1, default 2): fewer expansions, suboptimal paths.
+- `neural-astar`: Neural A* (Yonetani et al. 2021), the authors' CNN encoder and search on `moore` maps; weights from
+  `weights=` or the shipped `neural_astar_mazes32.pt` (converted from the authors' mazes checkpoint; the encoder is
+  fully convolutional, so the same file serves every map size).
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
   `forward(obstacles, goals)` takes obstacles as 0/1 float32 `(B, N, N)` and goals as int64 `(B, 2)` and returns
   `(B, 8, N, N)` logits in DESIGN.md's action order; or an object with `plan_paths` (a search planner,
@@ -34,6 +37,7 @@ from pathlib import Path
 from vinadv.errors import InputError
 from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.astar import AStarPlanner, WeightedAStarPlanner
+from vinadv.planners.device import resolve_device
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.search import SearchPlanner, UserSearchPlanner
@@ -41,7 +45,8 @@ from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
 from vinadv.planners.weights import WEIGHTS_DIR, check_trained_size, weights_checksum
 
 #: `load(size, weights, corner_cutting, device, **params)`: a registered planner for `size x size` maps, with the
-#: values of its `PlannerParam`s as keyword arguments (none for a planner without parameters)
+#: values of its `PlannerParam`s as keyword arguments (none for a planner without parameters); `device` a checked
+#: device name (`resolve_device`), or None for the planner's default
 Loader = Callable[..., Planner]
 
 
@@ -83,7 +88,8 @@ class PlannerInfo:
     """One registered planner: its name, what it is, how to load it and where its shipped weights are.
 
     Attributes:
-        load: `load(size, weights, corner_cutting, device) -> Planner`; `weights` is None unless `takes_weights`.
+        load: `load(size, weights, corner_cutting, device) -> Planner`; `weights` is None unless `takes_weights`;
+            `device` a checked device name, or None for the planner's default (a torch planner on the CPU).
         default_weights: `default_weights(size) -> Path`, the shipped weights for `size x size` maps; None: a
             planner without weights.
         takes_weights: whether `load_planner(..., weights=FILE)` may give it another weights file.
@@ -169,13 +175,13 @@ def _gppn_weights_path(size: int) -> Path:
     return default_gppn_path(size)
 
 
-def _load_vin(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+def _load_vin(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     loaded = load_vin_weights(weights, size=size)
     check_trained_size(loaded.path, loaded.record, size, "VIN")
-    return VINPlanner(loaded, size=size)
+    return VINPlanner(loaded, size=size, device=device)
 
 
-def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     path = _vin_robust_weights_path(size)
     if not path.exists():
         raise PlannerError(
@@ -184,15 +190,17 @@ def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, devic
         )
     loaded = load_vin_weights(path, size=size)
     check_trained_size(loaded.path, loaded.record, size, "VIN")
-    planner = VINPlanner(loaded, size=size)
+    planner = VINPlanner(loaded, size=size, device=device)
     planner.name = "vin_robust"
     return planner
 
 
-def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     from vinadv.planners.gppn import load_gppn  # noqa: PLC0415 (PyTorch: the VIN planners load without it)
 
     model = load_gppn(weights, size=size)
+    if device is not None:
+        model = model.to(device)
     check_trained_size(model.weights_path, model.record, size, "GPPN")
     return TorchPlanner(
         model,
@@ -204,15 +212,26 @@ def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str
     )
 
 
-def _load_optimal(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+def _neural_astar_weights_path(size: int) -> Path:
+    return WEIGHTS_DIR / "neural_astar_mazes32.pt"  # one model for every size: the encoder is fully convolutional
+
+
+def _load_neural_astar(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
+    from vinadv.planners.neural_astar.model import load_neural_astar  # noqa: PLC0415 (PyTorch: loaded when used)
+    from vinadv.planners.neural_astar.planner import NeuralAstarPlanner  # noqa: PLC0415 (PyTorch, as above)
+
+    return NeuralAstarPlanner(load_neural_astar(weights), size, device=device)
+
+
+def _load_optimal(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     return OptimalPlanner(size, corner_cutting)
 
 
-def _load_astar(size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+def _load_astar(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     return AStarPlanner(size)  # the move rule comes with each search (`plan_paths`' corner_cutting)
 
 
-def _load_wastar(size: int, weights: str | None, corner_cutting: bool, device: str, w: float) -> Planner:
+def _load_wastar(size: int, weights: str | None, corner_cutting: bool, device: str | None, w: float) -> Planner:
     return WeightedAStarPlanner(size, w=w)
 
 
@@ -252,6 +271,13 @@ register(
     load=_load_wastar,
     params=(PlannerParam("w", 2.0, "the weight of the heuristic (1: A*)", minimum=1.0),),
 )
+register(
+    "neural-astar",
+    description="Neural A* (Yonetani et al. 2021): a CNN's guidance costs searched by A*, on moore maps",
+    load=_load_neural_astar,
+    default_weights=_neural_astar_weights_path,
+    takes_weights=True,
+)
 
 
 def default_weights(name: str, size: int) -> Path | None:
@@ -271,16 +297,21 @@ def load_planner(
     size: int,
     weights: str | None = None,
     corner_cutting: bool = True,
-    device: str = "cpu",
+    device: str | None = None,
     moves: str = DEFAULT_MOVES,
 ) -> Planner:
     """The planner named or specified by `spec` (None: `vin`) for `size x size` maps.
 
     Args:
         spec: a registered name, with parameters (`wastar:w=3`) or not, or `file.py:factory` / `module:factory`.
-        weights: a weights file for `vin` or `gppn` (default: the shipped ones); refused for the others.
+        weights: a weights file for `vin`, `gppn` or `neural-astar` (default: the shipped ones); refused for the
+            others.
         corner_cutting: the move rule of the maps (the `optimal` planner's logits follow it).
-        device: torch device of a torch planner's forward.
+        device: the torch device of the planner's forward (`cpu`, `cuda`, `cuda:N`, `auto`: checked by
+            `vinadv.planners.device.resolve_device`, `InputError` for one this machine lacks), recorded by type in
+            `Planner.spec()`. None (default): a torch planner runs on the CPU and the VIN plans with its exact CPU
+            engine; with a device the VIN plans with its PyTorch forward there (`VINPlanner`). `optimal` has no
+            forward and ignores it.
         moves: the movement model of the maps (`vinadv.grid.moves`): the planner is `Planner.for_moves(moves)`.
             `optimal`, `astar` and `wastar` follow every model; the others plan `octile` moves (the learned ones
             were trained on them) and refuse maps of another model with one line naming both, rather than planning
@@ -290,6 +321,8 @@ def load_planner(
     Raises `PlannerError` (an `InputError`) naming the spec for anything that cannot be loaded.
     """
     spec = DEFAULT_PLANNER if spec is None else str(spec).strip()
+    if device is not None:
+        device = str(resolve_device(device))  # `auto` made concrete, refused here before anything loads
     return _load(spec, size, weights, corner_cutting, device).for_moves(moves)
 
 
@@ -317,7 +350,7 @@ def split_spec(spec: str) -> tuple[str, dict[str, str] | None]:
     return name, given
 
 
-def _load(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str) -> Planner:
+def _load(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     if spec.endswith(SUFFIX):
         return load_symmetric(spec, size, weights, corner_cutting, device)
     name, given = split_spec(spec)
@@ -333,7 +366,7 @@ def _load(spec: str, size: int, weights: str | None, corner_cutting: bool, devic
     )
 
 
-def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str) -> TorchPlanner:
+def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bool, device: str | None) -> TorchPlanner:
     """`BASE+d4`: the planner `BASE` averaged over the grid's 8 symmetries (`vinadv.planners.symmetric`); its run
     records keep the base planner's weights checksum and add `"average": "d4"` to its config."""
     from vinadv.planners.symmetric import DihedralAverage  # noqa: PLC0415 (PyTorch: the VIN planners load without it)
@@ -353,7 +386,7 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
             f"planner {spec!r}: {base.name!r} has no torch module to average ({SUFFIX} takes vin, gppn or your own)"
         )
     return TorchPlanner(
-        DihedralAverage(module).to(device),
+        DihedralAverage(module).to(base.device),
         f"{base.name}{SUFFIX}",
         size,
         checksum=base.checksum,
@@ -367,7 +400,7 @@ def _is_file(source: str) -> bool:
     return source.endswith(".py") or "/" in source or "\\" in source
 
 
-def load_custom(spec: str, size: int, device: str = "cpu") -> Planner:
+def load_custom(spec: str, size: int, device: str | None = None) -> Planner:
     """A bring-your-own planner from `file.py:factory` or `module:factory` (see the module docstring): a
     `TorchPlanner` around the factory's module, or a `UserSearchPlanner` around an object with `plan_paths`."""
     source, _, factory_name = spec.rpartition(":")
@@ -416,7 +449,7 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> Planner:
             f"planner {spec!r}: {factory_name}({size}) returned {type(net).__name__}, expected a torch.nn.Module "
             "(a policy planner) or an object with plan_paths (a search planner)"
         )
-    net = net.to(device)
+    net = net.to("cpu" if device is None else device)
     return TorchPlanner(
         net,
         spec,
@@ -431,8 +464,9 @@ def load_custom(spec: str, size: int, device: str = "cpu") -> Planner:
 class PlannerRef:
     """A loaded planner by reference, for another process (a Dask worker) to load the same one: the spec and weights
     file as absolute paths (None: the shipped weights there), the map size, the move rule, the checksum the
-    client's planner has (`Planner.checksum`) and its movement model. `load` refuses a planner whose checksum
-    differs."""
+    client's planner has (`Planner.checksum`), its movement model and the device its forward runs on where one was
+    chosen (None: the planner's default; a worker without that device refuses it with one line). `load` refuses a
+    planner whose checksum differs."""
 
     spec: str
     weights: str | None
@@ -440,6 +474,7 @@ class PlannerRef:
     corner_cutting: bool
     checksum: str | None
     moves: str = DEFAULT_MOVES
+    device: str | None = None
 
     @classmethod
     def of(cls, planner: Planner, spec: str | None, weights: str | None, corner_cutting: bool) -> PlannerRef:
@@ -449,15 +484,17 @@ class PlannerRef:
         if sep and _is_file(source):
             spec = f"{Path(source).resolve()}:{factory}"
         weights = None if weights is None else str(Path(weights).resolve())
-        return cls(spec, weights, int(planner.size), bool(corner_cutting), planner.checksum, planner.moves)
+        device = str(planner.device) if planner.device_type is not None else None
+        return cls(spec, weights, int(planner.size), bool(corner_cutting), planner.checksum, planner.moves, device)
 
-    def load(self, device: str = "cpu") -> Planner:
+    def load(self, device: str | None = None) -> Planner:
+        """The planner, loaded here, on `device` (default: the client's choice, `self.device`)."""
         planner = load_planner(
             self.spec,
             self.size,
             weights=self.weights,
             corner_cutting=self.corner_cutting,
-            device=device,
+            device=self.device if device is None else device,
             moves=self.moves,
         )
         if planner.checksum != self.checksum:

@@ -5,7 +5,7 @@ A light module (no NumPy): the pairs-file reader and the robustness benchmark us
 
 from __future__ import annotations
 
-from typing import Any, TypedDict
+from typing import Any, NotRequired, TypedDict
 
 
 class PlannerSpec(TypedDict):
@@ -17,12 +17,15 @@ class PlannerSpec(TypedDict):
         size: N, the map side the planner was made for.
         config: its hyper-parameters (JSON values; `Planner.config`).
         weights_sha256: SHA-256 (hex) of its weights (`Planner.checksum`); None for a planner without weights.
+        device: the device type its forward ran on (`cpu`, `cuda`) where one was chosen (`--device`); absent for the
+            planner's default (the VIN's exact CPU engine, a torch planner on the CPU).
     """
 
     name: str
     size: int
     config: dict[str, Any]
     weights_sha256: str | None
+    device: NotRequired[str]
 
 
 def is_planner_spec(value: object) -> bool:

@@ -31,6 +31,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import require_moves
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
+from vinadv.planners.device import resolve_device
 from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn
 from vinadv.planners.records import EpochRecord, TrainingRecord
 from vinadv.planners.vin import value_iteration
@@ -203,18 +204,6 @@ def hardware_info(device: torch.device) -> dict:
     if device.type == "cuda":
         info["gpu"] = torch.cuda.get_device_name(device)
     return info
-
-
-def resolve_device(name: str) -> torch.device:
-    try:
-        device = torch.device(name)
-    except RuntimeError as exc:
-        raise InputError(f"device {name!r} is not a device ({exc})", "device") from None
-    if device.type == "cuda" and not torch.cuda.is_available():
-        raise InputError(f"device {name!r}: CUDA is not available on this machine", "device")
-    if device.type not in ("cpu", "cuda", "mps"):
-        raise InputError(f"device {name!r}: use cpu or cuda", "device")
-    return device
 
 
 @dataclass

@@ -9,6 +9,7 @@ DESIGN.md's move costs, with no noise: the architecture's best case, which plans
 
 from __future__ import annotations
 
+import numpy as np
 import torch
 
 from vinadv.grid.actions import ACTION_COSTS, ACTION_DELTAS
@@ -69,3 +70,28 @@ def exact_vin(size: int = 28, k: int | None = None, obstacle_cost: float = 1e7, 
             model.q.weight[a, 0, 1 + dr, 1 + dc] = tie_cost
         model.q.weight[8:, 0, 1, 1] = 1000.0
     return model
+
+
+def tie_flips(reference, other, rel_tol: float = 1e-4) -> dict:
+    """Where two logits arrays `(B, 8, N, N)` of one planner on the same maps (say the CPU's and a GPU's) choose
+    another action (argmax, lowest index on ties), and whether each such cell is a near tie of `reference`: its logits
+    of the two actions closer than `rel_tol` times the largest |logit| of that map, so a difference of float sums may
+    flip it.
+
+    Returns `{"cells": flipped cells, "not_ties": flipped cells that are not near ties, "maps": (B,) bool, the maps
+    with a flip}`. A planner whose two devices differ only at near ties has `not_ties == 0`; a path can differ only
+    on a map with a flip."""
+    reference, other = np.asarray(reference, np.float64), np.asarray(other, np.float64)
+    mine, theirs = reference.argmax(axis=1), other.argmax(axis=1)  # (B, N, N)
+    flipped = mine != theirs
+    # how much better `reference` finds its own choice than the other's
+    both = np.take_along_axis(reference, np.stack([mine, theirs], axis=1), axis=1)  # (B, 2, N, N)
+    gap = both[:, 0] - both[:, 1]
+    finite = np.where(np.isfinite(reference), np.abs(reference), 0.0)
+    scale = np.maximum(finite.max(axis=(1, 2, 3)), 1e-30)[:, None, None]
+    tie = gap <= rel_tol * scale
+    return {
+        "cells": int(flipped.sum()),
+        "not_ties": int((flipped & ~tie).sum()),
+        "maps": flipped.any(axis=(1, 2)),
+    }

@@ -1,0 +1,187 @@
+"""`vinadv neural-astar import-weights` and `vinadv neural-astar compare-modes`."""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import time
+from pathlib import Path
+
+from vinadv import __version__
+from vinadv.commands import command_line
+from vinadv.commands.output import add_output_options, emit, progress_bar
+from vinadv.errors import InputError
+from vinadv.outfile import atomic_output, check_output_path
+from vinadv.planners.weights import weights_checksum
+
+#: the format of the record of an import, in the weights file and beside it
+IMPORT_RECORD_FORMAT = "vinadv.neural-astar-import/1"
+
+
+def register(subparsers) -> None:
+    na = subparsers.add_parser("neural-astar", help="the Neural A* planner: import the authors' weights, check it")
+    sub = na.add_subparsers(dest="neural_astar_command", metavar="ACTION")
+    sub.required = True
+
+    imp = sub.add_parser(
+        "import-weights",
+        help="the Neural A* authors' Lightning checkpoint (CNN encoder) as vinadv weights, with its record",
+    )
+    imp.add_argument("checkpoint", metavar="CKPT", help="the authors' checkpoint (epoch=..-step=...ckpt)")
+    imp.add_argument(
+        "--train-config",
+        default=None,
+        help="the authors' train.yaml the model was trained with, recorded (default: train.yaml beside CKPT, if "
+        "there; its encoder must be the checkpoint's)",
+    )
+    imp.add_argument(
+        "--license",
+        default=None,
+        help="the licence of the authors' code, copied into the record (default: LICENSE beside CKPT, if there)",
+    )
+    imp.add_argument(
+        "--source",
+        default=None,
+        help="where the checkpoint comes from, recorded (say the repository, commit and path in it)",
+    )
+    imp.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    add_output_options(imp, json="the record")
+    imp.set_defaults(func=cmd_import_weights)
+
+    cmp = sub.add_parser(
+        "compare-modes",
+        help="plan a maps file with the exact and the differentiable search; count the searches that part",
+    )
+    cmp.add_argument("--data", required=True, help="a maps file of moore maps (vinadv.maps), every start planned")
+    cmp.add_argument("--weights", default=None, help="Neural A* weights (default: the shipped mazes model)")
+    cmp.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
+    add_output_options(cmp, json="the counts", quiet=True)
+    cmp.set_defaults(func=cmd_compare_modes)
+
+
+def _beside(checkpoint: str, given: str | None, name: str) -> Path | None:
+    """`given`, or the file `name` in the checkpoint's folder when there (None if not)."""
+    if given is not None:
+        path = Path(given)
+        if not path.is_file():
+            raise InputError(f"{given}: no such file")
+        return path
+    path = Path(checkpoint).parent / name
+    return path if path.is_file() else None
+
+
+def cmd_import_weights(args: argparse.Namespace) -> int:
+    from vinadv.planners.neural_astar.checkpoint import (
+        check_train_config,
+        from_lightning_checkpoint,
+        read_train_config,
+    )
+    from vinadv.planners.neural_astar.model import save_neural_astar
+    from vinadv.planners.neural_astar.planner import MOVES
+
+    out = check_output_path(args.out, mkdir=True)
+    if not Path(args.checkpoint).is_file():
+        raise InputError(f"{args.checkpoint}: no such checkpoint file")
+    config_path = _beside(args.checkpoint, args.train_config, "train.yaml")
+    license_path = _beside(args.checkpoint, args.license, "LICENSE")
+    model, source = from_lightning_checkpoint(args.checkpoint)
+    train_config = None
+    if config_path is not None:
+        train_config = read_train_config(config_path)
+        check_train_config(train_config, model.config.depth, str(config_path))
+    license_text = None
+    if license_path is not None:
+        try:
+            license_text = license_path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InputError(f"{license_path}: cannot read the licence ({exc})") from None
+    record = {
+        "format": IMPORT_RECORD_FORMAT,
+        "planner": "neural-astar",
+        "imported_from": {
+            **source,
+            "sha256": weights_checksum(args.checkpoint),
+            "source": args.source,
+        },
+        "train_config": train_config,
+        "train_config_file": None
+        if config_path is None
+        else {"path": str(config_path), "sha256": weights_checksum(config_path)},
+        "license": license_text,
+        "model": model.config.to_dict(),
+        "moves": MOVES,
+        "corner_cutting": True,
+        "command": command_line(),
+        "vinadv": __version__,
+        "imported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    }
+    save_neural_astar(model, out, record)
+    record_path = out.with_suffix(".json")
+    with atomic_output(record_path, "w") as fh:
+        fh.write(json.dumps(record, indent=2) + "\n")
+    return emit(
+        args,
+        record,
+        f"wrote {out} and {record_path}: Neural A* (CNN encoder, depth {model.config.depth}) from {args.checkpoint} "
+        f"(epoch {source['epoch']}); use --planner neural-astar --weights {out}",
+    )
+
+
+def cmd_compare_modes(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from vinadv.grid.mapset import MapSet
+    from vinadv.planners.registry import load_planner
+
+    maps = MapSet.load(args.data)
+    planner = load_planner(
+        "neural-astar",
+        maps.size,
+        weights=args.weights,
+        corner_cutting=maps.corner_cutting,
+        device=args.device,
+        moves=maps.moves,
+    )
+    rows = maps.start_mask.reshape(-1)
+    starts = maps.starts.reshape(-1, 2)[rows]
+    map_of_row = np.repeat(np.arange(len(maps)), maps.n_starts)[rows]
+    obstacles, goals = maps.obstacles[map_of_row], maps.goals[map_of_row]
+    chunk = 256
+    same_path = np.zeros(len(starts), dtype=bool)
+    same_expanded = np.zeros(len(starts), dtype=bool)
+    seconds = {"exact": 0.0, "differentiable": 0.0}
+    with progress_bar(args, total=len(starts), unit="search", desc="comparing modes") as bar:
+        for i in range(0, len(starts), chunk):
+            sl = slice(i, i + chunk)
+            t0 = time.perf_counter()
+            exact = planner.plan_paths(obstacles[sl], starts[sl], goals[sl], maps.corner_cutting)
+            t1 = time.perf_counter()
+            diff = planner.plan_paths_differentiable(obstacles[sl], starts[sl], goals[sl], maps.corner_cutting)
+            seconds["exact"] += t1 - t0
+            seconds["differentiable"] += time.perf_counter() - t1
+            same_path[sl] = exact.paths.same_as(diff.paths) & (exact.termination == diff.termination)
+            same_expanded[sl] = (exact.expanded == diff.expanded).all(axis=(1, 2))
+            bar.update(len(exact.termination))
+    n = len(starts)
+    differing = np.flatnonzero(~(same_path & same_expanded))
+    result = {
+        "data": args.data,
+        "weights": args.weights or "shipped",
+        "searches": n,
+        "identical_paths": int(same_path.sum()),
+        "identical_expansions": int(same_expanded.sum()),
+        "share_identical_paths": float(same_path.mean()) if n else float("nan"),
+        "share_identical_expansions": float(same_expanded.mean()) if n else float("nan"),
+        "differing": [{"map": int(map_of_row[r]), "start": [int(v) for v in starts[r]]} for r in differing[:20]],
+        "seconds": {k: round(v, 2) for k, v in seconds.items()},
+        "command": command_line(),
+    }
+    return emit(
+        args,
+        result,
+        f"{n} searches on {len(maps)} maps: identical paths {result['identical_paths']} "
+        f"({result['share_identical_paths']:.2%}), identical expanded cells {result['identical_expansions']} "
+        f"({result['share_identical_expansions']:.2%}); exact {seconds['exact']:.1f} s, differentiable "
+        f"{seconds['differentiable']:.1f} s",
+    )
