@@ -8,10 +8,12 @@ import pytest
 from tests.classify.oracle import rule_oracle
 from tests.classify.test_harm import optimal_path, path_cost
 from vinadv.attacks.strategies import make_attack
+from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
 from vinadv.identify import objective_strength
 from vinadv.planners.reference import plan_reference
+from vinadv.store import Store
 from vinadv.testing.planners import planning_vin
 
 SIZE = 10
@@ -55,3 +57,24 @@ def test_exhaustive_with_the_harm_objective_keeps_the_most_harmful_cell_of_a_bru
 def test_unknown_objective_is_refused():
     with pytest.raises(InputError, match="objective"):
         objective_strength("fastest")
+
+
+@pytest.mark.parametrize("moves", ["moore", "news"])
+def test_identify_stores_the_pairs_movement_model_and_its_harm(moves, tmp_path):
+    """A pairs file of `moore` or `news` maps is stored as a run of that model (`runs.moves`); its optimal costs are
+    a plain Dijkstra's of the model (tests.classify.test_harm), so a diagonal move costs 1 on moore maps."""
+    maps, pairs, db = tmp_path / "m.npz", tmp_path / "p.npz", f"sqlite:///{tmp_path / 'v.db'}"
+    generate_maps(5, 9, seed=4, n_starts=1, moves=moves).save(maps)
+    attack = ["attack", "--maps", str(maps), "--planner", "optimal", "--strategy", "random", "--per-map", "2"]
+    assert main([*attack, "--out", str(pairs), "--quiet"]) == 0
+    assert main(["identify", "--pairs", str(pairs), "--db", db, "--quiet"]) == 0
+    with Store.open(db) as store:
+        run_id = store.list_runs()[-1]["id"]
+        assert store.run_moves(run_id) == moves
+        records = store.read_pairs(run_id)
+    assert len(records) and set(records.harm) <= {"harmless", "invalid"}
+    for i in range(len(records)):
+        expert = optimal_path(
+            records.obstacles_a[i].tolist(), tuple(records.starts[i]), tuple(records.goals[i]), True, moves
+        )
+        assert records.opt_cost_a[i] == pytest.approx(path_cost(expert, moves), abs=1e-9)

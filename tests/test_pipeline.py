@@ -401,6 +401,43 @@ def test_a_planner_that_exits_is_one_line_and_the_run_is_marked_failed(tmp_path,
     assert capsys.readouterr().err.strip() == f"vinadv: error: planner {planner!r}: forward failed: SystemExit: 0"
 
 
+@pytest.mark.parametrize("moves", ["moore", "news"])
+def test_a_run_follows_its_movement_model_from_maps_to_the_stored_harm(moves, sqlite_url):
+    """`--moves`: the maps, the expert costs, the harm and the run row are the model's; `optimal` is never harmful;
+    the stored optimal costs match a plain-Python Dijkstra of the model (tests.classify.test_harm)."""
+    kw = dict(n=16, size=9, seed=2, shard_size=8, planner="optimal", attack="random", per_map=3, moves=moves)
+    summary = run_pipeline(RunConfig(**kw), db=sqlite_url, name=f"r-{moves}", progress=False)
+    assert summary.n_pairs > 0
+    with Store.open(sqlite_url) as store:
+        info = store.run_info(summary.run_id)
+        records = store.read_pairs(summary.run_id)
+    assert info["moves"] == moves and info["config"]["moves"] == moves
+    assert set(records.harm) <= {"harmless", "invalid"}  # the control is never harmful
+    for i in range(len(records)):
+        start, goal = tuple(records.starts[i]), tuple(records.goals[i])
+        for obstacles, stored in (
+            (records.obstacles_o[i], records.opt_cost_o[i]),
+            (records.obstacles_a[i], records.opt_cost_a[i]),
+        ):
+            expert = optimal_path(obstacles.tolist(), start, goal, True, moves)
+            assert stored == pytest.approx(path_cost(expert, moves), abs=1e-9)
+    # the same settings resume it; an octile run's config holds no moves (as before movement models)
+    again = run_pipeline(RunConfig(**kw), db=sqlite_url, name=f"r-{moves}", resume=True, progress=False)
+    assert again.skipped_shards == 2
+    octile = run_pipeline(RunConfig(**{**kw, "moves": "octile", "n": 2}), db=sqlite_url, progress=False)
+    with Store.open(sqlite_url) as store:
+        assert "moves" not in store.run_info(octile.run_id)["config"]
+        assert store.run_moves(octile.run_id) == "octile"
+
+
+def test_a_planner_of_another_model_is_refused_before_the_run_is_made(sqlite_url, capsys):
+    line = ["run", "--n", "2", "--size", "28", "--moves", "moore", "--db", sqlite_url, "--quiet"]
+    assert main(line) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "plans octile moves" in err and "'moore'" in err
+    assert not os.path.exists(sqlite_url.removeprefix("sqlite:///"))  # refused before the database was made
+
+
 def test_a_maps_file_run_takes_the_file_s_maps_in_shards_and_refuses_a_changed_file(tmp_path):
     """`maps_file_config` + `compute_shard`: shard k holds the file's maps k * shard_size .., first start each (the
     oracle: the file's own arrays); a file changed under the recorded path is refused by its checksum."""
@@ -418,3 +455,17 @@ def test_a_maps_file_run_takes_the_file_s_maps_in_shards_and_refuses_a_changed_f
     changed = RunConfig(**{**config.to_dict(), "maps": str(tmp_path / "other.npz")})
     with pytest.raises(InputError, match="its SHA-256 is not the one the run recorded"):
         shard_maps(changed, 0)
+
+
+def test_a_maps_file_of_another_model_runs_as_that_model(tmp_path, sqlite_url):
+    """`--maps FILE` takes the file's movement model (a moore MP import, say): the config, the shards' maps and the
+    stored run are the file's model; `--moves` beside `--maps` is refused (the file says it)."""
+    path = tmp_path / "moore.npz"
+    generate_maps(4, 8, seed=2, n_starts=2, moves="moore").save(path)
+    config = RunConfig(**maps_file_config(str(path)), planner="optimal", attack="random", shard_size=2)
+    assert config.moves == "moore" and shard_maps(config, 1).moves == "moore"
+    summary = run_pipeline(config, db=sqlite_url, progress=False)
+    with Store.open(sqlite_url) as store:
+        assert store.run_moves(summary.run_id) == "moore"
+    line = ["run", "--maps", str(path), "--planner", "optimal", "--db", sqlite_url, "--quiet"]
+    assert main([*line, "--moves", "moore"]) == 2

@@ -21,7 +21,6 @@ from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_
 from vinadv.classify.rule import label_batch, path_distances
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
-from vinadv.grid.moves import require_moves
 from vinadv.planners.interface import Planner, as_planner
 from vinadv.planners.registry import PlannerRef, load_planner
 from vinadv.planners.spec import PlannerSpec
@@ -240,7 +239,6 @@ def identify_and_store(
             "weights",
         )
     pairs = PairSet.load(pairs_path)
-    require_moves(pairs.moves, ("octile",), "the database")  # its runs and pairs have no movement model yet
     t0 = time.perf_counter()
     replanner = None
     if planner is not None or weights is not None:
@@ -282,6 +280,7 @@ def identify_and_store(
             weights_checksum=None if used is None else used["weights_sha256"],
             attack=pairs.strategy,
             classifier=classifier_name,
+            moves=pairs.moves,
         )
         store.write_pairs(run_id, ident.records())
         store.finish_run(run_id, timings={"identify": elapsed})

@@ -34,7 +34,7 @@ from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, har
 from vinadv.errors import InputError, OutputError
 from vinadv.grid.generator import MIN_SIZE, check_limits, default_obstacle_params, generate_maps
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.moves import require_moves
+from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import PLANNER_SPEC, Identification, identify, load_classifier, objective_strength
 from vinadv.planners.interface import EMPTY_SHA256, Planner
 from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
@@ -66,6 +66,7 @@ class RunConfig:
     harm_rtol: float = 0.0
     objective: str = "paper"
     obstacles: int = 1
+    moves: str = DEFAULT_MOVES
     #: a maps file (absolute path) to attack instead of generated maps, and its SHA-256 (`maps_file_config`)
     maps: str | None = None
     maps_sha256: str | None = None
@@ -83,6 +84,7 @@ class RunConfig:
         check_limits(min(self.n, self.shard_size), self.size, 1, default_obstacle_params(self.size)[0])
         check_tolerances(self.harm_tolerance, self.harm_rtol)
         objective_strength(self.objective)  # InputError for an unknown objective
+        check_moves(self.moves, self.corner_cutting)
         if (self.maps is None) != (self.maps_sha256 is None):
             raise InputError("maps and maps_sha256 go together (maps_file_config gives both)", "maps")
 
@@ -97,20 +99,22 @@ class RunConfig:
 
     def to_dict(self) -> dict:
         """The config as stored with the run; without a maps file, its two fields are left out (the runs of
-        generated maps are stored as before)."""
+        generated maps are stored as before), and `moves` when `octile` (an octile run's config is what it was
+        before movement models; the run's model is also in `runs.moves`, which the store reads)."""
         out = asdict(self)
         if self.maps is None:
             del out["maps"], out["maps_sha256"]
+        if out["moves"] == DEFAULT_MOVES:
+            del out["moves"]
         return out
 
 
 def maps_file_config(path: str, n: int | None = None) -> dict:
     """`RunConfig`'s settings for attacking the maps file `path` (first start of each map) instead of generated maps:
     `n` (its first `n` maps; None: all), `size` and `corner_cutting` from the file, `maps` (absolute path) and
-    `maps_sha256`. The file is read and checked here (InputError naming it and the field), before anything is
-    written; a map set of another movement model than `octile` is refused (the database has none yet)."""
+    `maps_sha256`, and its movement model `moves`. The file is read and checked here (InputError naming it and the
+    field), before anything is written."""
     maps = MapSet.load(path)
-    require_moves(maps.moves, ("octile",), "a run's database")
     if n is None:
         n = len(maps)
     if n < 1:
@@ -121,6 +125,7 @@ def maps_file_config(path: str, n: int | None = None) -> dict:
         "n": int(n),
         "size": maps.size,
         "corner_cutting": bool(maps.corner_cutting),
+        "moves": maps.moves,
         "maps": str(Path(path).resolve()),
         "maps_sha256": weights_checksum(path),
     }
@@ -144,7 +149,12 @@ def shard_maps(config: RunConfig, shard: int) -> MapSet:
     n_maps = min(config.shard_size, config.n - first_map)
     if config.maps is None:
         return generate_maps(
-            n_maps, config.size, seed=(config.seed, shard), n_starts=1, corner_cutting=config.corner_cutting
+            n_maps,
+            config.size,
+            seed=(config.seed, shard),
+            n_starts=1,
+            corner_cutting=config.corner_cutting,
+            moves=config.moves,
         )
     maps = _maps_file(config.maps, config.maps_sha256).take(slice(first_map, first_map + n_maps))
     return MapSet(
@@ -284,10 +294,16 @@ class RunSummary:
 
 
 def resolve_planner(config: RunConfig, device: str | None = None) -> Planner:
-    """The planner of a run (`config.planner` with `config.weights`, for the run's map size and move rule), its
-    forward on `device` (`load_planner`; None: the planner's default)."""
+    """The planner of a run (`config.planner` with `config.weights`, for the run's map size, move rule and movement
+    model: a planner of another model is refused, see `Planner.for_moves`), its forward on `device`
+    (`load_planner`; None: the planner's default)."""
     return load_planner(
-        config.planner, config.size, weights=config.weights, corner_cutting=config.corner_cutting, device=device
+        config.planner,
+        config.size,
+        weights=config.weights,
+        corner_cutting=config.corner_cutting,
+        device=device,
+        moves=config.moves,
     )
 
 
@@ -324,6 +340,7 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         attack=config.attack,
         classifier=classifier_name,
         version=__version__,
+        moves=config.moves,
     )
 
 

@@ -41,7 +41,7 @@ from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances
 from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
-from vinadv.grid.moves import require_moves
+from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.identify import identify, objective_strength
 from vinadv.planners.interface import as_planner
 from vinadv.planners.spec import PlannerSpec
@@ -60,9 +60,12 @@ BENCHMARK_SEED = 1000
 WORST_CASE = "worst case"
 
 
-def benchmark_maps(n: int = 1000, size: int = 28, seed: int = BENCHMARK_SEED, corner_cutting: bool = True):
-    """The benchmark's fixed maps: the generator's first `n` maps of `seed`, one start each (a `MapSet`)."""
-    return generate_maps(n, size, seed=seed, n_starts=1, corner_cutting=corner_cutting)
+def benchmark_maps(
+    n: int = 1000, size: int = 28, seed: int = BENCHMARK_SEED, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
+):
+    """The benchmark's fixed maps: the generator's first `n` maps of `seed`, one start each, of the movement model
+    `moves` (a `MapSet`)."""
+    return generate_maps(n, size, seed=seed, n_starts=1, corner_cutting=corner_cutting, moves=moves)
 
 
 @dataclass(kw_only=True, eq=False)
@@ -297,10 +300,9 @@ def robustness(
     strength = objective_strength(objective)
     if len(maps) < 1:
         raise InputError("maps: no maps to attack", "n")
-    # the clean paths' regret, the stored results and the report are octile's for now
-    require_moves(maps.moves, ("octile",), "the robustness benchmark")
     t_start = time.perf_counter()
-    planner = as_planner(planner, maps.size)
+    # the maps' movement model: costs, regret and harm are its; a planner of another model is refused in one line
+    planner = as_planner(planner, maps.size).for_moves(maps.moves)
     n = len(maps)
     starts, goals, cc = maps.starts[:, 0], maps.goals, maps.corner_cutting
     clean = _clean(planner, maps)
@@ -335,6 +337,8 @@ def robustness(
         "radius": radius,
         "harm_tolerance": harm_tol,
         "harm_rtol": harm_rtol,
+        # an octile benchmark's settings are what they were before movement models
+        **({} if maps.moves == DEFAULT_MOVES else {"moves": maps.moves}),
         **(maps_source or {}),
     }
     return RobustnessResult(
@@ -352,7 +356,7 @@ def _clean(planner, maps) -> dict:
     """The planner on the unattacked maps: rollout success and the mean regret of the reached paths."""
     plans = planner.plan_batch(maps.obstacles, maps.starts[:, 0], maps.goals, maps.corner_cutting)
     reached = plans.reached
-    regret = plans.paths.costs()[reached] - maps.expert_costs[reached, 0]
+    regret = plans.paths.costs(maps.moves)[reached] - maps.expert_costs[reached, 0]
     return {
         "maps": len(maps),
         "reached": int(reached.sum()),

@@ -13,6 +13,7 @@ from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.npzfile import save_npz
+from vinadv.store import Store
 
 
 @pytest.fixture(scope="module")
@@ -46,10 +47,9 @@ def test_moves_are_checked(pairs_file, tmp_path):
         PairSet.load(tmp_path / "news.npz")
 
 
-def test_identify_refuses_other_movement_models(pairs_file, tmp_path, capsys):
+def test_identify_stores_the_pairs_movement_model(pairs_file, tmp_path, capsys):
     dataclasses.replace(PairSet.load(pairs_file), moves="moore").save(tmp_path / "m.npz")
-    db = tmp_path / "x.db"
-    assert main(["identify", "--pairs", str(tmp_path / "m.npz"), "--db", str(db), "--quiet"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert err == "vinadv: error: the maps use 'moore' moves: the database follows 'octile' moves only"
-    assert not db.exists()
+    db = f"sqlite:///{tmp_path / 'x.db'}"
+    assert main(["identify", "--pairs", str(tmp_path / "m.npz"), "--db", db, "--quiet"]) == 0
+    with Store.open(db) as store:
+        assert [r["moves"] for r in store.list_runs()] == ["moore"]  # the database records the run's model

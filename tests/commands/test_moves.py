@@ -1,6 +1,7 @@
-"""Movement models through the commands: `optimal` plans and is attacked on `moore` and `news` maps (never harmful:
-it is optimal under the maps' own costs), and the stages that do not follow other models yet refuse such maps with
-one line naming the model (exit status 2), before any work, instead of computing with octile costs."""
+"""Movement models through the commands: `optimal` plans, is evaluated, benchmarked and attacked on `moore` and
+`news` maps (never harmful: it is optimal under the maps' own costs), and the stages that do not follow other
+models yet (octile planners, the VIN's protocols, training) refuse such maps with one line naming the model (exit
+status 2), before any work, instead of computing with octile costs."""
 
 from __future__ import annotations
 
@@ -38,7 +39,7 @@ def maps_file(request, tmp_path_factory):
             ["attack", "--maps", "{maps}", "--strategy", "random", "--weights", "{weights}", "--out", "{out}"],
             "planner 'vin' plans octile moves",
         ),
-        (["eval", "--data", "{maps}", "--planner", "optimal"], "planner evaluation follows 'octile'"),
+        (["eval", "--data", "{maps}", "--weights", "{weights}"], "planner 'vin' plans octile moves"),
         (["vin", "eval", "--data", "{maps}", "--weights", "{weights}"], "the vinadv protocol follows 'octile'"),
         (["vin", "train", "--data", "{maps}", "--out", "{out}", "--epochs", "1"], "training follows 'octile'"),
     ],
@@ -57,11 +58,14 @@ def test_commands_refuse_other_movement_models(maps_file, argv, message, tmp_pat
     assert not out.exists()
 
 
-def test_library_refuses_too(maps_file):
+def test_library_follows_the_model_or_refuses(maps_file):
     moves, path = maps_file
     maps = MapSet.load(path)
-    with pytest.raises(InputError, match=f"the maps use '{moves}' moves: planner evaluation follows 'octile'"):
-        evaluate_planner(load_planner("optimal", 8), maps)
+    figures = evaluate_planner(load_planner("optimal", 8), maps)  # the control, for the maps' own model
+    assert figures["optimal_rate"] == figures["success_rate"] == figures["action_accuracy"] == 1.0
+    assert figures["mean_extra_cost"] == 0.0
+    with pytest.raises(InputError, match=f"planner 'vin' plans octile moves .*the maps use '{moves}' moves"):
+        evaluate_planner(_vin8(path.parent), maps)
     with pytest.raises(InputError, match=f"planner 'vin' plans octile moves .*the maps use '{moves}' moves"):
         load_planner("vin", 28, moves=moves)
     with pytest.raises(InputError, match=f"the maps use '{moves}' moves: training follows 'octile'"):
@@ -92,7 +96,32 @@ def test_optimal_plans_and_is_never_harmful_on_every_movement_model(moves, tmp_p
         assert all(m.sum(axis=1).max(initial=1) == 1 for m in moved)  # straight moves only
 
 
-def test_robustness_refuses_other_movement_models(maps_file):
+def _vin8(folder):
+    weights = folder / "vin8.pt"
+    save_vin(planning_vin(8), weights)
+    return load_planner("vin", 8, weights=str(weights))
+
+
+def test_robustness_follows_the_model_and_optimal_is_never_harmful(maps_file):
     moves, path = maps_file
-    with pytest.raises(InputError, match=f"the maps use '{moves}' moves: the robustness benchmark follows 'octile'"):
-        robustness(load_planner("optimal", 8, moves=moves), MapSet.load(path), ["random"])
+    maps = MapSet.load(path)
+    result = robustness(load_planner("optimal", 8, moves=moves), maps, ["random", "near-path"], 2).to_dict()
+    assert result["settings"]["moves"] == moves and result["clean"]["mean_regret"] == 0.0
+    for row in result["overall"]:
+        assert row["harmful_rate"] in (0.0, None)
+    with pytest.raises(InputError, match=f"planner 'vin' plans octile moves .*the maps use '{moves}' moves"):
+        robustness(_vin8(path.parent), maps, ["random"])
+
+
+def test_commands_that_generate_maps_take_moves(tmp_path, capsys):
+    assert main(["eval", "--planner", "optimal", "--n", "3", "--size", "8", "--moves", "news", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["generated"]["moves"] == "news" and out["vinadv"]["optimal_rate"] == 1.0
+    assert out["gppn"]["percent_optimal"] == out["gppn"]["percent_success"] == 1.0  # NEWS's shortest paths
+    line = ["robustness", "--planner", "optimal", "--n", "4", "--size", "8", "--max-obstacles", "1"]
+    assert main([*line, "--moves", "moore", "--strategies", "random", "--json", "--quiet"]) == 0
+    assert json.loads(capsys.readouterr().out)["settings"]["moves"] == "moore"
+    assert main([*line, "--moves", "hex"]) == 2
+    assert "--moves 'hex': expected one of octile, moore, news" in capsys.readouterr().err
+    assert main(["eval", "--planner", "optimal", "--data", str(tmp_path / "x.npz"), "--moves", "moore"]) == 2
+    assert "--moves: only with --n" in capsys.readouterr().err

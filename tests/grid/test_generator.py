@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from tests.classify.test_harm import dijkstra, optimal_path
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps, obstacle_fraction, shortest_distances
 from vinadv.grid.generator import _paint_shapes
@@ -97,3 +98,19 @@ def test_painted_shapes_equal_testing_every_cell(size, max_obs, max_size):
     expected = _shapes_by_testing_every_cell(*draws.values(), size)
     assert np.array_equal(painted, expected)
     assert not painted[np.arange(n), draws["goals"][:, 0], draws["goals"][:, 1]].any()
+
+
+@pytest.mark.parametrize("moves", ["octile", "moore", "news"])
+def test_expert_costs_and_paths_of_each_model_match_a_plain_python_dijkstra(moves):
+    """The generator's expert costs are a heapq Dijkstra's over the model's moves and costs (tests.classify.test_harm,
+    written from DESIGN.md), and its expert paths are the lowest-index optimal paths of that oracle."""
+    maps = generate_maps(6, 10, seed=8, n_starts=3, moves=moves)
+    for i in range(len(maps)):
+        rows = maps.obstacles[i].tolist()
+        dist = dijkstra(rows, tuple(maps.goals[i]), True, moves)
+        for s in range(maps.n_starts):
+            start = tuple(maps.starts[i, s])
+            assert maps.expert_costs[i, s] == pytest.approx(dist[start], abs=1e-12)
+            assert maps.expert_path(i, s).tolist() == [
+                list(c) for c in optimal_path(rows, start, tuple(maps.goals[i]), True, moves)
+            ]

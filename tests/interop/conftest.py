@@ -10,10 +10,10 @@ import pytest
 from vinadv.grid import generate_maps
 
 
-def shared_data(name: str) -> Path | None:
-    """`../shared/data/avivt/<name>` relative to the repository root (CI), else /work/shared; None if absent."""
+def shared_data(name: str, folder: str = "avivt") -> Path | None:
+    """`../shared/data/<folder>/<name>` relative to the repository root (CI), else /work/shared; None if absent."""
     for base in (Path(__file__).resolve().parents[2] / ".." / "shared", Path("/work/shared")):
-        path = base / "data" / "avivt" / name
+        path = base / "data" / folder / name
         if path.exists():
             return path
     return None
@@ -23,6 +23,15 @@ def real_file(name: str) -> Path:
     path = shared_data(name)
     if path is None:
         pytest.skip(f"the real avivt file {name} is not present (../shared/data/avivt/)")
+    return path
+
+
+def mpd_file(family: str) -> Path:
+    """The MP dataset file of `family` (`../shared/data/mpd/<family>_032_moore_c8.npz`); the test is skipped
+    without it."""
+    path = shared_data(f"{family}_032_moore_c8.npz", "mpd")
+    if path is None:
+        pytest.skip(f"the MP dataset file of {family} is not present (../shared/data/mpd/)")
     return path
 
 

@@ -148,6 +148,7 @@ def test_cli_train_writes_weights_and_record(tmp_path, capsys):
     for key in ("command", "seed", "data", "epochs", "wall_time_s", "hardware", "train_config"):
         assert key in record
     assert record["command"].startswith("vinadv ") and len(record["data"]["sha256"]) == 64
+    assert record["data"]["moves"] == "octile"  # the maps' movement model, recorded
     model = load_vin(out, size=8)
     assert model.record["epochs_done"] == 1 and model.config.k == 10
     assert not out.with_name("w.pt.ckpt").exists()

@@ -11,6 +11,7 @@ import math
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pytest
 import sqlalchemy as sa
 from tests.classify.test_harm import optimal_path, path_cost
@@ -18,6 +19,7 @@ from tests.report.test_report import _check_complete
 from tests.store.oracle import parse_map, parse_path
 from tests.store.test_store_harm import HARM_COLUMNS, HARM_INDEX
 
+from vinadv.pipeline import RunConfig, run_pipeline
 from vinadv.report import write_report
 from vinadv.report.build import report_context
 from vinadv.report.render import render_report
@@ -210,3 +212,22 @@ def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_pat
     assert 'id="harm-unavailable"' in _section((out / "index.html").read_text())
     # opened read-only: the file as it was, nothing written ahead (SQLite may leave an empty log of a reader)
     assert hashlib.sha256(path.read_bytes()).hexdigest() == digest and (not wal.exists() or not wal.stat().st_size)
+
+
+def test_a_moore_run_reports_its_model_and_recomputes_expert_paths_with_it(sqlite_url, tmp_path):
+    """The run table names the model; the harm examples' expert paths are the model's (a plain Dijkstra of
+    `moore`, tests.classify.test_harm), their costs the stored optimal costs."""
+    config = RunConfig(n=12, size=9, seed=3, shard_size=12, planner="optimal", attack="exhaustive", per_map=0)
+    run_id = run_pipeline(RunConfig(**{**config.to_dict(), "moves": "moore"}), db=sqlite_url, progress=False).run_id
+    out = tmp_path / "r"
+    out.mkdir()
+    with Store.open(sqlite_url, create=False) as store:
+        data = gather_report(report_context(store, out, run_id, None), order=["run", "harm"])
+    assert ("movement model", "moore") in data.sections["run"].rows
+    shown = data.sections["harm"].examples["harmless FP"]
+    assert shown  # the control forks onto other optimal routes: harmless forks to show
+    for ex in shown:
+        with Store.open(sqlite_url, create=False) as store:
+            rec = store.read_pairs(run_id, pair_indices=np.array([ex.pair_index]))
+        want = optimal_path(rec.obstacles_o[0].tolist(), tuple(rec.starts[0]), tuple(rec.goals[0]), True, "moore")
+        assert list(ex.expert_path_o) == want and path_cost(want, "moore") == pytest.approx(ex.opt_cost_o)

@@ -15,15 +15,17 @@ Undo = Callable[[sa.Connection, Callable[[str], str]], None]
 
 def old_database(url: str, version: int, n_pairs: int, undo: Undo, name: str = "old") -> int:
     """Write one run `name` of `n_pairs` random 7x7 one-obstacle pairs with today's schema, then undo what the
-    versions after `version` added (version 5: the run name's binary collation on MariaDB; version 4: the table
-    `measurements`) and `undo(conn, quote)` what the versions after `version` added before those (in one
-    transaction), and stamp the schema `version`; the run's id."""
+    versions after `version` added (version 6: the run's `moves`; version 5: the run name's binary collation on
+    MariaDB; version 4: the table `measurements`) and `undo(conn, quote)` what the versions after `version` added
+    before those (in one transaction), and stamp the schema `version`; the run's id."""
     with Store.open(url) as store:
         run_id = store.create_run(name)
         store.write_pairs(run_id, random_records(n_pairs, size=7, seed=3))
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     quote = engine.dialect.identifier_preparer.quote
     with engine.begin() as conn:
+        if version < 6:
+            conn.execute(sa.text(f"ALTER TABLE runs DROP COLUMN {quote('moves')}"))  # schema version 6's column
         if version < 5 and engine.dialect.name == "mysql":  # the database's own collation, as before version 5
             conn.execute(sa.text("ALTER TABLE runs MODIFY name VARCHAR(255) CHARACTER SET utf8mb4 NULL"))
         if version < 4:
@@ -89,9 +91,19 @@ def columns_and_version(url: str) -> tuple[set, str]:
     return columns, version
 
 
-def table_names(url: str) -> set[str]:
+def inspected(url: str, read: Callable[[sa.Inspector], object]):
+    """`read(inspector)` of the database at `url`, on a connection of its own."""
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     with engine.connect() as conn:
-        names = set(sa.inspect(conn).get_table_names())
+        found = read(sa.inspect(conn))
     engine.dispose()
-    return names
+    return found
+
+
+def run_columns(url: str) -> set[str]:
+    """The `runs` columns."""
+    return inspected(url, lambda inspector: {c["name"] for c in inspector.get_columns("runs")})
+
+
+def table_names(url: str) -> set[str]:
+    return inspected(url, lambda inspector: set(inspector.get_table_names()))

@@ -66,6 +66,7 @@ def test_export_npz_round_trips(stored, tmp_path):
     assert main(["export", "--db", url, "--run", str(run_id), "--format", "npz", "--out", str(out), "--quiet"]) == 0
     with np.load(out) as data:
         assert str(data["format"]) == "vinadv.labelled_pairs/1" and str(data["strategy"]) == "near-path"
+        assert str(data["moves"]) == "octile"  # the run's movement model
         for name in ("obstacles_o", "obstacles_a", "starts", "goals", "attack", "dh", "dv", "pair_index"):
             assert np.array_equal(data[name], getattr(records, name)), name
         assert np.array_equal(data["added"], records.added[:, 0])  # one obstacle per pair: (n, 2), as ever

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
-from tests.store.old_schemas import columns_and_version, version_1_database
+from tests.store.old_schemas import columns_and_version, run_columns, version_1_database
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
 from vinadv.store.schema import map_pairs
@@ -52,12 +52,14 @@ def test_version_1_database_is_upgraded_on_open(db_url):
             store.write_pairs(run_id, random_records(2, size=7, seed=9, first_index=500))
     assert columns_and_version(db_url) == (columns, "1")
     with Store.open(db_url) as store:
+        assert store.run_moves(run_id) == "octile"  # chained up to version 6: the run's model reads as octile
         assert store.read_pairs(run_id).equals(old)  # the old rows: same values, harm NULL
         new = random_records(10, size=7, seed=4, first_index=100)
         store.write_pairs(run_id, new)
         assert store.read_pairs(run_id, pair_indices=new.pair_index).equals(new)
     columns, version = columns_and_version(db_url)
-    assert version == SCHEMA_VERSION == "5" and {*HARM_COLUMNS, "added_more"} <= columns
+    assert version == SCHEMA_VERSION == "6" and {*HARM_COLUMNS, "added_more"} <= columns
+    assert "moves" in run_columns(db_url)
     with Store.open(db_url) as store:  # opening again changes nothing
         assert store.count_pairs(run_id) == 40
 

@@ -446,3 +446,19 @@ def test_html_escapes_stored_text(tmp_path):
         for url in ("/", f"/runs/{run_id}/pairs", f"/pairs/{run_id}/0"):
             html = client.get(url).get_data(as_text=True)
             assert "<script>alert" not in html and "<b>src" not in html
+
+
+def test_pair_page_and_json_say_the_runs_movement_model(tmp_path):
+    url = f"sqlite:///{tmp_path / 'm.db'}"
+    with Store.open(url) as store:
+        moore = store.create_run("m", moves="moore")
+        store.write_pairs(moore, random_records(3, size=7, seed=2))
+        octile = store.create_run("o")
+        store.write_pairs(octile, random_records(3, size=7, seed=3))
+    store = Store.open(url)
+    client = create_app(store, secret_key="k").test_client()
+    for run_id, moves in ((moore, "moore"), (octile, "octile")):
+        assert client.get(f"/api/pairs/{run_id}/0").get_json()["moves"] == moves
+        page = client.get(f"/pairs/{run_id}/0").get_data(as_text=True)
+        assert f'<span class="hint" id="moves">({moves} moves)</span>' in page
+    store.close()

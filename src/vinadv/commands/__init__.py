@@ -89,6 +89,18 @@ def planner_device(args) -> str | None:
     return str(resolve_device(name))
 
 
+def add_moves_argument(parser, default: str | None = "octile", what: str = "") -> None:
+    """`--moves MODEL`: the movement model of the maps a command makes or imports (`vinadv.grid.moves`)."""
+    parser.add_argument(
+        "--moves",
+        default=default,
+        metavar="MOVES",  # checked by the library (`vinadv.grid.moves`): argparse choices would load it for --help
+        help=(what or "movement model")
+        + ": octile (default: 8 moves, diagonal sqrt 2, the original data's), moore (8 moves, all "
+        "cost 1: GPPN's and the MP dataset's) or news (4 moves N, S, E, W, cost 1; not with --no-corner-cutting)",
+    )
+
+
 #: library parameters whose flag is not `--` plus the name with dashes
 FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tolerance", "warmup_steps": "--warmup"}
 

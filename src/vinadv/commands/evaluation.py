@@ -10,7 +10,7 @@ import textwrap
 import time
 from typing import TYPE_CHECKING
 
-from vinadv.commands import command_line, set_threads
+from vinadv.commands import add_moves_argument, command_line, set_threads
 from vinadv.commands.output import add_output_options, emit
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output
@@ -29,6 +29,7 @@ def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
     ev.add_argument("--seed", type=int, default=1000, help="seed of the generated maps (default 1000)")
     ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
     ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
+    add_moves_argument(ev, default=None, what="with --n: movement model of the generated maps")
     ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
     ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
     add_output_options(ev, json="the figures", quiet=True)
@@ -42,11 +43,17 @@ def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:
 
     set_threads(args.threads)
     if args.data is not None:
+        if args.moves is not None:
+            raise InputError("--moves: only with --n (a maps file has its own movement model)")
         return MapSet.load(args.data), {"data": args.data}
     if args.n < 1:
         raise InputError(f"--n must be >= 1, got {args.n}")
-    maps = generate_maps(args.n, args.size, args.seed, args.starts)
-    return maps, {"generated": {"n": args.n, "seed": args.seed, "size": args.size}}
+    moves = args.moves or "octile"
+    maps = generate_maps(args.n, args.size, args.seed, args.starts, moves=moves)
+    generated = {"n": args.n, "seed": args.seed, "size": args.size}
+    if moves != "octile":  # an octile record is what it was before movement models
+        generated["moves"] = moves
+    return maps, {"generated": generated}
 
 
 def emit_metrics(args: argparse.Namespace, measured: dict, source: dict, figures: dict, started: float) -> int:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
+from vinadv.commands import add_moves_argument
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -25,13 +26,7 @@ def register(subparsers) -> None:
         action="store_true",
         help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
     )
-    gen.add_argument(
-        "--moves",
-        default="octile",
-        metavar="MOVES",  # checked by the library (`vinadv.grid.moves`): argparse choices would load it for --help
-        help="movement model: octile (default: 8 moves, diagonal sqrt 2, the original data's), moore (8 moves, all "
-        "cost 1: GPPN's and the MP dataset's) or news (4 moves N, S, E, W, cost 1; not with --no-corner-cutting)",
-    )
+    add_moves_argument(gen)
     gen.add_argument("--out", required=True, help="output maps file (.npz)")
     add_output_options(gen, json="the summary", quiet=True)
     gen.set_defaults(func=cmd_generate)
@@ -113,40 +108,50 @@ def cmd_show(args: argparse.Namespace) -> int:
     return 0
 
 
-FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn")
+FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn", "mpd")
 
 
 def _register_interop(sub) -> None:
     imp = sub.add_parser(
         "import",
-        help="read maps of the kentsommer PyTorch port, avivt's .mat files or GPPN",
+        help="read maps of the kentsommer PyTorch port, avivt's .mat files, GPPN or the MP dataset (mpd)",
         description="Regroup another codebase's samples into maps and trajectories; expert costs "
-        "are vinadv's (diagonal cost sqrt 2). See docs/guide/interop.md.",
+        "are vinadv's under the maps' movement model (kentsommer, avivt: octile; gppn: the file's moore or news; "
+        "mpd: moore). See docs/guide/interop.md.",
     )
-    imp.add_argument("input", metavar="IN", help="the file to read (.npz for kentsommer and gppn, .mat for avivt)")
+    imp.add_argument("input", metavar="IN", help="the file to read (.npz for kentsommer, gppn and mpd, .mat for avivt)")
     imp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the file's layout")
     imp.add_argument("--out", required=True, help="output maps file (.npz)")
     imp.add_argument(
         "--split",
         default=None,
         help="kentsommer: train|test|all (default test); gppn: train|valid|test|all (default test); "
-        "avivt: test|train layout (default: the one the file has)",
+        "mpd: train|valid|test (default test); avivt: test|train layout (default: the one the file has)",
     )
     imp.add_argument(
-        "--starts", type=int, default=None, help="starts drawn per map where the file has none (gppn; default 7)"
+        "--starts",
+        type=int,
+        default=None,
+        help="starts drawn per map where the file has none (gppn: default 7; mpd: default 1, by Neural A*'s rule)",
     )
     imp.add_argument("--seed", type=int, default=0, help="seed of the drawn starts (default 0)")
+    add_moves_argument(
+        imp,
+        default=None,
+        what="movement model of the maps (default: the file's; gppn: moore for 8 actions, news for 4, or octile "
+        "for an 8-action file to get sqrt 2 expert costs)",
+    )
     add_output_options(imp, json="the summary", quiet=True)
     imp.set_defaults(func=cmd_import)
 
-    exp = sub.add_parser("export", help="write a maps file in the kentsommer, avivt or GPPN layout")
+    exp = sub.add_parser("export", help="write a maps file in the kentsommer, avivt, GPPN or MP dataset (mpd) layout")
     exp.add_argument("maps", help="maps file (.npz)")
     exp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the layout to write")
-    exp.add_argument("--out", required=True, help="output file (.npz for kentsommer and gppn, .mat for avivt)")
+    exp.add_argument("--out", required=True, help="output file (.npz for kentsommer, gppn and mpd, .mat for avivt)")
     exp.add_argument(
         "--split",
         default=None,
-        help="kentsommer: train|test; gppn: train|valid|test; avivt: test|train layout (default test)",
+        help="kentsommer: train|test; gppn, mpd: train|valid|test; avivt: test|train layout (default test)",
     )
     add_output_options(exp, json="the summary")
     exp.set_defaults(func=cmd_export)
@@ -157,7 +162,10 @@ def cmd_import(args: argparse.Namespace) -> int:
 
     if args.starts is not None and args.starts < 1:
         raise InputError(f"--starts must be >= 1, got {args.starts}")
-    maps, info = read_maps(args.input, args.format, split=args.split, starts=args.starts, seed=args.seed)
+    check_output_path(args.out)  # before the work: a folder in the way or a missing folder
+    maps, info = read_maps(
+        args.input, args.format, split=args.split, starts=args.starts, seed=args.seed, moves=args.moves
+    )
     if len(maps) == 0:  # a maps file holds at least one map (`MapSet.save`): say so of the file read
         split = args.split or info.get("split")
         raise InputError(f"{args.input}: no maps to import{f' (split {split})' if split else ''}")
@@ -170,7 +178,7 @@ def cmd_import(args: argparse.Namespace) -> int:
             f"wrote {info['maps']} maps of {info['size']}x{info['size']} (up to {info['starts_per_map']} starts"
             f"{padded}) to {args.out}; expert paths: {info['expert_paths']}"
         )
-        for key in ("file_paths_optimal", "movement", "maps_left_out_no_start"):
+        for key in ("moves", "file_paths_optimal", "movement", "starts_rule", "maps_left_out_no_start"):
             if info.get(key):
                 print(f"  {key.replace('_', ' ')}: {info[key]}")
 

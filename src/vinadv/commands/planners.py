@@ -171,7 +171,7 @@ def print_eval(name: str, maps, figures: dict) -> None:
     if theirs is not None:
         print(
             f"  gppn:   %Suc {_pct(theirs['percent_success'])}, %Opt {_pct(theirs['percent_optimal'])} over "
-            f"{theirs['cells']} free cells (every Moore move costs 1)"
+            f"{theirs['cells']} free cells (every {'NEWS' if maps.moves == 'news' else 'Moore'} move costs 1)"
         )
     port = figures.get("kentsommer")
     if port is not None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments, load_args_planner, planner_device
+from vinadv.commands import add_moves_argument, add_planner_arguments, planner_device
 from vinadv.commands.attack import add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
@@ -33,6 +33,9 @@ def register(subparsers) -> None:
         default=1000,
         help="seed of the maps and of the randomised strategies (default 1000: the held-out maps of the "
         "evaluation tables)",
+    )
+    add_moves_argument(
+        p, default=None, what="movement model of the benchmark maps (the planner must plan it; with --maps, the file's)"
     )
     p.add_argument(
         "--strategies",
@@ -74,6 +77,7 @@ def register(subparsers) -> None:
 
 def cmd_robustness(args: argparse.Namespace) -> int:
     from vinadv.classify.harm import check_tolerances
+    from vinadv.grid.moves import check_moves
     from vinadv.robustness import check_strategies
 
     # every option checked before the maps are made and the planner loaded
@@ -84,26 +88,38 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     if args.radius < 0:
         raise InputError(f"radius must be >= 0, got {args.radius}", "radius")
     check_tolerances(args.harm_tolerance, args.harm_rtol)
+    if args.moves is not None:
+        check_moves(args.moves)
     device = planner_device(args)
     if args.report:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
     settings = maps_settings(args, n=1000)  # a maps file is read and checked here, before anything is written
+    from vinadv.planners.registry import load_planner
+    from vinadv.robustness import benchmark_maps, robustness, save_robustness
+
+    # the planner too (a planner of another movement model than the maps' is refused in one line)
+    planner = load_planner(
+        args.planner,
+        settings["size"],
+        weights=args.weights,
+        corner_cutting=settings["corner_cutting"],
+        moves=settings["moves"],
+        device=device,
+    )
     if args.db is not None:  # a database that will be refused is refused now, not after the benchmark
         from vinadv.store import Store
 
         with Store.open(args.db):
             pass
-    from vinadv.robustness import benchmark_maps, robustness, save_robustness
-
     if args.maps is None:
-        maps, source = benchmark_maps(settings["n"], settings["size"], seed=args.seed), None
+        maps = benchmark_maps(settings["n"], settings["size"], seed=args.seed, moves=settings["moves"])
+        source = None
     else:
         from vinadv.grid.mapset import MapSet
 
         maps = MapSet.load(args.maps).take(slice(0, settings["n"]))
         source = {"maps": settings["maps"], "maps_sha256": settings["maps_sha256"]}
-    planner = load_args_planner(args, maps, device)
     result = robustness(
         planner,
         maps,

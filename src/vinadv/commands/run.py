@@ -6,7 +6,7 @@ import argparse
 import time
 
 from vinadv.cluster import ClusterIdentify, ClusterShards, add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments, planner_device
+from vinadv.commands import LazyChoices, add_moves_argument, add_planner_arguments, planner_device
 from vinadv.commands.attack import (
     add_harm_arguments,
     add_objective_argument,
@@ -34,6 +34,9 @@ def register(subparsers) -> None:
     run.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
     add_obstacles_argument(run)
     run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
+    add_moves_argument(
+        run, default=None, what="movement model of the generated maps (the planner plans it; with --maps, the file's)"
+    )
     run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
     run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
     add_planner_arguments(run)
@@ -139,20 +142,23 @@ def add_maps_arguments(parser, n: int, instead: str, record: str) -> None:
 
 
 def maps_settings(args: argparse.Namespace, n: int = 5000, size: int = 28) -> dict:
-    """The maps of `run` or `robustness` as `RunConfig` settings: `--n`, `--size` and the corner-cutting rule of
-    generated maps (defaults `n`, `size`), or with `--maps FILE` the file's (`pipeline.maps_file_config`, which reads
-    and checks it): then `--size` and `--no-corner-cutting` are the file's to say, and refused."""
+    """The maps of `run` or `robustness` as `RunConfig` settings: `--n`, `--size`, the corner-cutting rule and the
+    movement model (`--moves`, default octile) of generated maps (defaults `n`, `size`), or with `--maps FILE` the
+    file's (`pipeline.maps_file_config`, which reads and checks it): then `--size`, `--no-corner-cutting` and
+    `--moves` are the file's to say, and refused."""
     if args.maps is None:
         return {
             "n": n if args.n is None else args.n,
             "size": size if args.size is None else args.size,
             "corner_cutting": not getattr(args, "no_corner_cutting", False),
+            "moves": args.moves or "octile",
         }
     from vinadv.pipeline import maps_file_config
 
     for flag_name, given in (
         ("--size", args.size is not None),
         ("--no-corner-cutting", getattr(args, "no_corner_cutting", False)),
+        ("--moves", args.moves is not None),
     ):
         if given:
             raise InputError(f"{flag_name}: with --maps the maps file says it ({args.maps})")

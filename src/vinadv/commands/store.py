@@ -77,6 +77,7 @@ def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
         "format": np.array(EXPORT_FORMAT),
         "run_id": np.array(run_id, dtype=np.int64),
         "strategy": np.array(info.get("attack") or ""),
+        "moves": np.array(info["moves"]),  # the run's movement model: what the costs count
         "size": np.array(records.size if len(records) else 0, dtype=np.int64),
         "no": records.no,
         "pair_index": records.pair_index,

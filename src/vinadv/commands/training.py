@@ -177,6 +177,7 @@ def run_training(
             "size": maps.size,
             "seed": int(maps.seed),
             "corner_cutting": bool(maps.corner_cutting),
+            "moves": maps.moves,
         },
     }
     augment = None

@@ -15,6 +15,7 @@ from pathlib import Path
 from vinadv.errors import InputError
 from vinadv.evaluation.classifiers import jsonable
 from vinadv.grid.generator import generate_maps
+from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.evaluation import evaluate_planner
 from vinadv.planners.registry import default_weights, load_planner
 from vinadv.vocabulary import PLANNER_QUALITY
@@ -23,18 +24,19 @@ QUICK_EVAL_MAPS = 50
 QUICK_EVAL_SEED = 20_240_601
 
 
-def planner_quality(config: dict, checksum: str | None, size: int) -> tuple[dict, str]:
+def planner_quality(config: dict, checksum: str | None, size: int, moves: str = DEFAULT_MOVES) -> tuple[dict, str]:
     """The quality of the planner a run used (`config["planner"]`, default the VIN): `(metrics, source)`; metrics as
     `vinadv.planners.evaluation.evaluate_planner` (success_rate, optimal_rate, action_accuracy, ...), `{}` when the
     planner or its weights are not on this machine, or are not the ones the run used (`checksum`); `source` says
-    where the metrics come from, or why there are none."""
+    where the metrics come from, or why there are none. `moves`: the run's movement model (the quick evaluation's
+    maps are of that model)."""
     name = config.get("planner") or "vin"
     corner_cutting = bool(config.get("corner_cutting", True))
     path = Path(config["weights"]) if config.get("weights") else default_weights(name, size)
     if path is not None and not path.exists():
         return {}, f"not available: the run's weights file {path} is not on this machine"
     try:
-        planner = load_planner(name, size, weights=config.get("weights"), corner_cutting=corner_cutting)
+        planner = load_planner(name, size, weights=config.get("weights"), corner_cutting=corner_cutting, moves=moves)
     except InputError as exc:
         return {}, f"not available: {exc}"
     if checksum and planner.checksum != checksum:
@@ -59,7 +61,7 @@ def planner_quality(config: dict, checksum: str | None, size: int) -> tuple[dict
         found = find_metrics(getattr(model, "record", None) or {})
         if found:
             return found, f"the training record inside the weights file {path.name}"
-    maps = generate_maps(QUICK_EVAL_MAPS, size, seed=QUICK_EVAL_SEED, corner_cutting=corner_cutting)
+    maps = generate_maps(QUICK_EVAL_MAPS, size, seed=QUICK_EVAL_SEED, corner_cutting=corner_cutting, moves=moves)
     start = time.perf_counter()
     metrics = evaluate_planner(planner, maps)
     seconds = time.perf_counter() - start
@@ -97,7 +99,7 @@ def evaluate_planner_quality(store, run_id: int) -> dict:
     if size is None:  # a run stored before the config held the size: its first pair's
         index, _ = store.pair_labels(run_id)
         size = store.read_pairs(run_id, pair_indices=index[:1]).size
-    metrics, source = planner_quality(config, info.get("weights_checksum"), int(size))
+    metrics, source = planner_quality(config, info.get("weights_checksum"), int(size), info["moves"])
     result = {"metrics": jsonable(metrics), "source": source}
     store.add_measurement(run_id, PLANNER_QUALITY, result)
     return result

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from vinadv.errors import InputError
-from vinadv.grid.actions import SQRT2
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.npzfile import check_cells_in_grid, check_offsets
 
 
@@ -134,15 +134,17 @@ class PackedPaths:
 
     # --- figures ----------------------------------------------------------------------------------------------------
 
-    def costs(self) -> np.ndarray:
-        """`(n,)` float64 cost of each path: 1 per orthogonal move, sqrt(2) per diagonal move (0 for <= 1 cell)."""
+    def costs(self, moves: str = DEFAULT_MOVES) -> np.ndarray:
+        """`(n,)` float64 cost of each path under the movement model `moves` (`vinadv.grid.moves`): 1 per
+        orthogonal move, a diagonal move sqrt(2) on `octile` and 1 on `moore` (0 for <= 1 cell)."""
+        diagonal = move_model(moves).diagonal_cost  # sqrt 2, 1 (news paths have no diagonal move)
         if len(self.cells) == 0:
             return np.zeros(len(self))
         cells = self.cells.astype(np.int64)
         move = np.abs(np.diff(cells, axis=0))
         step = move[:, 0] + move[:, 1]  # not .sum(axis=1): NumPy's reduction over a length-2 axis is ~50x slower
         # cost[k] is the move from cell k to cell k + 1; the last cell of each path makes no move
-        cost = np.append(np.where(step == 2, SQRT2, step.astype(np.float64)), 0.0)
+        cost = np.append(np.where(step == 2, diagonal, step.astype(np.float64)), 0.0)
         nonempty = self.lengths > 0
         cost[self.offsets[1:][nonempty] - 1] = 0.0
         out = np.zeros(len(self))

@@ -12,10 +12,11 @@ prior is a VIN input).
   stop;
   success when the agent stands on the goal at the end. Accuracy is single-label: over the states of the expert
   trajectories (goal excluded), the share where the argmax equals the trajectory's own action.
-- `gppn` (GPPN's utils/runner.py): every Moore move costs 1; from every free cell the argmax policy is followed
-  (an illegal move stays put, no step limit); %Suc is the share of free cells (goal included) whose policy reaches
-  the goal, %Opt the share whose policy path has as few moves as a shortest path (free cells that cannot reach the
-  goal at all count as optimal, as GPPN's code counts them), averaged over maps.
+- `gppn` (GPPN's utils/runner.py): every Moore move costs 1 (every NEWS move on `news` maps); from every free
+  cell the argmax policy is followed (an illegal move stays put, no step limit); %Suc is the share of free cells
+  (goal included) whose policy reaches the goal, %Opt the share whose policy path has as few moves as a shortest
+  path (free cells that cannot reach the goal at all count as optimal, as GPPN's code counts them), averaged over
+  maps.
 Ties between logits go to the lowest vinadv action index in all three. `gppn` and `kentsommer` read a policy at every
 cell: a search planner (`vinadv.planners.search.SearchPlanner`, paths only) is refused with one line; `vinadv` measures
 its paths (`evaluate_planner`).
@@ -140,7 +141,9 @@ def gppn_protocol(planner, maps: MapSet) -> dict:
         succ = succ[rows, succ]
     reached = succ == goal[:, None]
     free = ~maps.obstacles.reshape(n, size * size)
-    opt = unit_cost_distances(maps.obstacles, maps.goals).reshape(n, size * size)
+    # GPPN's shortest paths count moves of cost 1: Moore's 8 moves, or NEWS's 4 on `news` maps
+    mechanism = "news" if maps.moves == "news" else "moore"
+    opt = unit_cost_distances(maps.obstacles, maps.goals, mechanism).reshape(n, size * size)
     optimal = free & (~np.isfinite(opt) | (reached & (length == opt)))
     open_cells = free.sum(axis=1)
     return {
@@ -159,7 +162,11 @@ def evaluate_protocol(
     """`model`'s figures on `maps` measured by `protocol` ('vinadv', 'kentsommer' or 'gppn')."""
     if protocol not in PROTOCOLS:
         raise InputError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
-    require_moves(maps.moves, ("octile",), f"the {protocol} protocol")
+    # GPPN's %Opt and %Suc count moves of cost 1 whatever the maps' costs (NEWS's on news maps); the others judge
+    # paths by octile costs
+    require_moves(
+        maps.moves, ("octile", "moore", "news") if protocol == "gppn" else ("octile",), f"the {protocol} protocol"
+    )
     if prior is not None and protocol != "kentsommer":
         raise InputError("prior applies to the kentsommer protocol only")
     if protocol == "vinadv":

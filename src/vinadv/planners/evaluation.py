@@ -21,7 +21,7 @@ import torch
 from tqdm import tqdm
 
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.moves import require_moves
+from vinadv.grid.moves import DEFAULT_MOVES, move_model, require_moves
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
 from vinadv.planners.records import LengthBucketMetrics, PlannerMetrics, RolloutMetrics
 from vinadv.planners.result import PlanResult
@@ -51,12 +51,18 @@ def action_accuracy_counts(
 
 
 def accuracy_counts_from_logits(
-    logits: np.ndarray, obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+    logits: np.ndarray,
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
 ) -> tuple[int, int]:
-    """`(correct, cells)` for logits `(B, N, N, A)` of the maps `obstacles (B, N, N)`, `goals (B, 2)`."""
-    dist, _ = shortest_distances(obstacles, goals, corner_cutting)
-    optimal = optimal_actions(dist, obstacles, corner_cutting)
-    best = np.argmax(logits, axis=-1)  # lowest index on ties, as the rollout rule
+    """`(correct, cells)` for logits `(B, N, N, A)` of the maps `obstacles (B, N, N)`, `goals (B, 2)`, under the
+    movement model `moves` (its optimal actions; the argmax over its actions, as the rollouts take it)."""
+    model = move_model(moves)
+    dist, _ = shortest_distances(obstacles, goals, corner_cutting, model)
+    optimal = optimal_actions(dist, obstacles, corner_cutting, model)
+    best = np.argmax(logits[..., : model.n_actions], axis=-1)  # lowest index on ties, as the rollout rule
     supervised = optimal.any(axis=-1)
     hit = np.take_along_axis(optimal, best[..., None], axis=-1)[..., 0]
     return int((hit & supervised).sum()), int(supervised.sum())
@@ -79,17 +85,19 @@ def rollout_metrics(
     expert_costs: np.ndarray,
     mask: np.ndarray | None = None,
     expert_moves: np.ndarray | None = None,
+    moves: str = DEFAULT_MOVES,
 ) -> RolloutMetrics:
     """Rollout figures from a `PlanResult` and the expert (optimal) cost of each path `(B,)`.
 
     `mask` `(B,)` bool, if given, keeps only those paths (a MapSet's padded start slots are left out).
     `expert_moves` `(B,)`, if given, the optimal path's move count L of each path: the figures then also come
     `by_length`, in buckets of `LENGTH_BUCKET` moves (where a planner fails: long paths take more decisions).
+    `moves`: the maps' movement model (the paths' costs are its costs).
     """
     keep = np.ones(len(result), dtype=bool) if mask is None else np.asarray(mask, dtype=bool).reshape(-1)
     expert_costs = np.asarray(expert_costs, dtype=np.float64).reshape(-1)[keep]
     n = int(keep.sum())
-    costs = result.paths.costs()[keep]
+    costs = result.paths.costs(moves)[keep]
     reached = np.asarray(result.reached, dtype=bool)[keep]
     optimal = reached & (np.abs(costs - expert_costs) <= COST_TOL)
     extra = costs[reached] - expert_costs[reached]
@@ -104,8 +112,8 @@ def rollout_metrics(
         "terminations": {t: int((names == t).sum()) for t in TERMINATIONS},
     }
     if expert_moves is not None:
-        moves = np.asarray(expert_moves, dtype=np.int64).reshape(-1)[keep]
-        metrics["by_length"] = _by_length(moves, reached, optimal, result.termination[keep])
+        lengths = np.asarray(expert_moves, dtype=np.int64).reshape(-1)[keep]
+        metrics["by_length"] = _by_length(lengths, reached, optimal, result.termination[keep])
     return metrics
 
 
@@ -138,6 +146,8 @@ def evaluate_vin(
     """All figures for `model` on `maps` (rollouts from every start). `planner` defaults to the engine."""
     planner = planner or _engine_planner
 
+    require_moves(maps.moves, ("octile",), "the VIN's evaluation")  # the engine plans octile moves
+
     def counts(obs, goals):
         return action_accuracy_counts(model, obs, goals, maps.corner_cutting, batch_size)
 
@@ -152,12 +162,14 @@ def evaluate_vin(
 
 def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> PlannerMetrics:
     """All figures for any `vinadv.planners.interface.Planner` on `maps`: action accuracy from its logits, rollouts
-    (from every start) by its `plan_maps`. A search planner's paths get the rollout figures, and no action accuracy
-    (it has no policy)."""
+    (from every start) by its `plan_maps`, under the maps' movement model, which the planner must plan
+    (`Planner.for_moves`: one of another model is refused in one line). A search planner's paths get the rollout
+    figures, and no action accuracy (it has no policy)."""
+    planner = planner.for_moves(maps.moves)
 
     def counts(obs, goals):
         logits = planner.logits(obs, goals).transpose(0, 2, 3, 1)
-        return accuracy_counts_from_logits(logits, obs, goals, maps.corner_cutting)
+        return accuracy_counts_from_logits(logits, obs, goals, maps.corner_cutting, maps.moves)
 
     return _evaluate(
         maps,
@@ -171,7 +183,6 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
 def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> PlannerMetrics:
     """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)` (None: no action accuracy, a search
     planner's), `plan(obs, goals, starts)`."""
-    require_moves(maps.moves, ("octile",), "planner evaluation")  # path costs and accuracy are octile's here
     obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
     chunks = range(0, len(maps), batch_size)
     if progress:
@@ -185,7 +196,7 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> Pl
             cells += n
         parts.append(plan(obstacles[sl], goals[sl], starts[sl]))
     result = PlanResult.concat(parts)
-    moves = maps.expert.lengths - 1  # cells - 1: an optimal path's move count L, the same for all of them
+    lengths = maps.expert.lengths - 1  # cells - 1: an optimal path's move count L, the same for all of them
     return {
         "maps": len(maps),
         "size": maps.size,
@@ -194,5 +205,5 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> Pl
         "corner_cutting": bool(maps.corner_cutting),
         "action_accuracy": None if counts is None else (correct / cells if cells else float("nan")),
         "action_cells": cells,
-        **rollout_metrics(result, maps.expert_costs, maps.start_mask, moves),
+        **rollout_metrics(result, maps.expert_costs, maps.start_mask, lengths, maps.moves),
     }

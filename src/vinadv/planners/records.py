@@ -74,7 +74,8 @@ class EpochRecord(TypedDict):
 
 
 class DataRecord(TypedDict):
-    """The maps file a training read (the `train` commands)."""
+    """The maps file a training read (the `train` commands), its movement model included (`moves`; records
+    written before movement models have none: their maps were `octile`)."""
 
     path: str
     sha256: str
@@ -82,6 +83,7 @@ class DataRecord(TypedDict):
     size: int
     seed: int
     corner_cutting: bool
+    moves: str
 
 
 class TrainingRecord(TypedDict, total=False):

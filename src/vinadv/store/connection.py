@@ -31,11 +31,13 @@ from sqlalchemy import exc as sa_exc
 from vinadv.errors import InputError, OutputError, first_line
 from vinadv.store.schema import (
     ADDITIVE_TABLES,
+    RUN_UPGRADE_COLUMNS,
     SCHEMA_VERSION,
     TABLES,
     UPGRADABLE_VERSIONS,
     UPGRADE_COLUMNS,
     UPGRADE_TABLES,
+    UPGRADE_TABLES_SINCE,
     exact_collation,
     map_pairs,
     meta_table,
@@ -195,7 +197,12 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
         for table in TABLES:
             if table.name not in present and table in ADDITIVE_TABLES:
                 continue  # created below (or, read-only, treated as empty)
-            if table.name not in present and version in UPGRADABLE_VERSIONS and table in UPGRADE_TABLES:
+            if (
+                table.name not in present
+                and version in UPGRADABLE_VERSIONS
+                and table in UPGRADE_TABLES
+                and int(version) < UPGRADE_TABLES_SINCE
+            ):
                 continue  # created by `upgrade` (or, read-only, treated as empty)
             if table.name not in present:
                 raise InputError(f"database {shown}: wrong schema: table {table.name} is missing")
@@ -203,6 +210,8 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
             missing = {c.name for c in table.columns} - have
             if version in UPGRADABLE_VERSIONS and table is map_pairs:
                 missing -= set(UPGRADE_COLUMNS)  # added by `upgrade`
+            if version in UPGRADABLE_VERSIONS and table is runs:
+                missing -= set(RUN_UPGRADE_COLUMNS)  # added by `upgrade`
             if missing:
                 raise InputError(f"database {shown}: wrong schema: table {table.name} lacks columns {sorted(missing)}")
     absent: frozenset[str] = frozenset()
@@ -211,7 +220,10 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
         if create:
             upgrade(engine)
         else:  # read-only use: nothing changes, the columns it lacks read as NULL
-            absent = frozenset(UPGRADE_COLUMNS) - {c["name"] for c in sa.inspect(engine).get_columns(map_pairs.name)}
+            inspector = sa.inspect(engine)
+            absent = (frozenset(UPGRADE_COLUMNS) - {c["name"] for c in inspector.get_columns(map_pairs.name)}) | (
+                frozenset(RUN_UPGRADE_COLUMNS) - {c["name"] for c in inspector.get_columns(runs.name)}
+            )
     if readonly:
         return absent
     with engine.connect() as conn:
@@ -278,11 +290,12 @@ def create_tables(engine: sa.Engine) -> bool:
 
 
 def upgrade(engine: sa.Engine) -> None:
-    """Schema version 1 to 4 -> 5, under the `schema_lock` (two processes opening one old database at once upgrade
+    """Schema version 1 to 5 -> 6, under the `schema_lock` (two processes opening one old database at once upgrade
     it once; the second finds it done): add the `UPGRADE_COLUMNS` the database lacks (the harm columns,
-    `added_more`; all nullable, existing rows read them as NULL), the `UPGRADE_TABLES` (`measurements`) and
-    `ADDITIVE_TABLES` it lacks, give `runs.name` its exact collation on MySQL/MariaDB (version 5: the column is
-    changed in place, its rows kept), then record the new version. Only what is missing is done, so an upgrade cut
+    `added_more`; all nullable, existing rows read them as NULL), the `RUN_UPGRADE_COLUMNS` (`runs.moves`, version
+    6: NULL reads as octile), the `UPGRADE_TABLES` (`measurements`) and `ADDITIVE_TABLES` it lacks, give `runs.name`
+    its exact collation on MySQL/MariaDB (version 5: the column is changed in place, its rows kept), then record the
+    new version. Only what is missing is done, so an upgrade cut
     short (MariaDB commits each ALTER on its own) is finished by the next open."""
     prep = engine.dialect.identifier_preparer
     with engine.connect() as conn, schema_lock(conn):
@@ -292,12 +305,13 @@ def upgrade(engine: sa.Engine) -> None:
         if version not in (SCHEMA_VERSION, *UPGRADABLE_VERSIONS):  # changed by another program meanwhile
             raise InputError(f"database {safe_url(engine.url)}: schema version {version!r} changed while opening it")
         inspector = sa.inspect(conn)
-        have = {c["name"] for c in inspector.get_columns(map_pairs.name)}
-        for name in UPGRADE_COLUMNS:
-            if name not in have:
-                kind = map_pairs.c[name].type.compile(dialect=engine.dialect)
-                table, column = prep.format_table(map_pairs), prep.quote(name)
-                conn.execute(sa.text(f"ALTER TABLE {table} ADD COLUMN {column} {kind}"))
+        for table, names in ((map_pairs, UPGRADE_COLUMNS), (runs, RUN_UPGRADE_COLUMNS)):
+            have = {c["name"] for c in inspector.get_columns(table.name)}
+            for name in names:
+                if name not in have:
+                    kind = table.c[name].type.compile(dialect=engine.dialect)
+                    shown, column = prep.format_table(table), prep.quote(name)
+                    conn.execute(sa.text(f"ALTER TABLE {shown} ADD COLUMN {column} {kind}"))
         for new_table in (*UPGRADE_TABLES, *ADDITIVE_TABLES):
             new_table.create(conn, checkfirst=True)
         _exact_run_names(conn)

@@ -8,6 +8,7 @@ import sqlalchemy as sa
 
 from vinadv import __version__
 from vinadv.errors import InputError
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.store.connection import Database, utcnow
 from vinadv.store.schema import exact_collation, map_pairs, meta_table, runs
 
@@ -59,9 +60,17 @@ class RunQueries(Database):
         classifier: str | None = None,
         version: str = __version__,
         status: str = "running",
+        moves: str = DEFAULT_MOVES,
     ) -> int:
         """Insert a run and return its id. A `name` is unique in a database (`--resume` finds a run by it) and
-        follows `check_run_name`: InputError otherwise."""
+        follows `check_run_name`: InputError otherwise. `moves`: the movement model of the run's maps
+        (`vinadv.grid.moves`), stored in `runs.moves`."""
+        moves = move_model(moves).name
+        if "moves" in self.absent_columns:
+            raise InputError(
+                f"database {self.url}: an older schema version opened without create; "
+                "open it with create to upgrade it before writing"
+            )
         if name is not None:
             check_run_name(name)
             found = self.find_run(name)
@@ -86,6 +95,7 @@ class RunQueries(Database):
                     version=version,
                     timings=None,
                     status=status,
+                    moves=moves,
                 )
             )
             return int(result.inserted_primary_key[0])
@@ -126,27 +136,38 @@ class RunQueries(Database):
         return found
 
     def run_info(self, run_id: int) -> dict:
-        """The run's row as a dict; `InputError` when there is no such run."""
+        """The run's row as a dict; `InputError` when there is no such run. Its `moves` is the run's movement
+        model: `octile` for a run stored before schema version 6 (NULL, or no column in an older database read
+        read-only)."""
         with self.engine.connect() as conn:
-            row = conn.execute(sa.select(runs).where(runs.c.id == int(run_id))).mappings().one_or_none()
+            row = conn.execute(sa.select(*self._run_columns()).where(runs.c.id == int(run_id))).mappings().one_or_none()
         if row is None:
             raise InputError(f"run_id: no run {run_id} in database {self.url}", "run_id")
-        return dict(row)
+        return _run_row(row)
+
+    def run_moves(self, run_id: int) -> str:
+        """The movement model of the run (`run_info`'s `moves`)."""
+        return self.run_info(run_id)["moves"]
+
+    def _run_columns(self) -> list:
+        """The `runs` columns to select: a column an older database lacks (read-only) reads as NULL."""
+        return [sa.null().label(c.name) if c.name in self.absent_columns else c for c in runs.columns]
 
     def list_runs(self, with_counts: bool = True) -> list[dict]:
         """All runs, oldest first, each with its stored pair count (`n_pairs`) unless `with_counts` is False
         (counting reads every pair's index entry: ~0.1 s per million pairs on SQLite)."""
         if not with_counts:
             with self.engine.connect() as conn:
-                return [dict(r) for r in conn.execute(sa.select(runs).order_by(runs.c.id)).mappings()]
+                query = sa.select(*self._run_columns()).order_by(runs.c.id)
+                return [_run_row(r) for r in conn.execute(query).mappings()]
         counts = sa.select(map_pairs.c.run_id, sa.func.count().label("n_pairs")).group_by(map_pairs.c.run_id).subquery()
         query = (
-            sa.select(runs, sa.func.coalesce(counts.c.n_pairs, 0).label("n_pairs"))
+            sa.select(*self._run_columns(), sa.func.coalesce(counts.c.n_pairs, 0).label("n_pairs"))
             .select_from(runs.outerjoin(counts, counts.c.run_id == runs.c.id))
             .order_by(runs.c.id)
         )
         with self.engine.connect() as conn:
-            return [dict(r) for r in conn.execute(query).mappings()]
+            return [_run_row(r) for r in conn.execute(query).mappings()]
 
     def finish_run(self, run_id: int, timings: dict | None = None, status: str = "done") -> None:
         """Record the run's timings (seconds per stage) and final status."""
@@ -186,6 +207,13 @@ class RunQueries(Database):
             except sa.exc.IntegrityError:
                 if attempt:
                     raise
+
+
+def _run_row(row) -> dict:
+    """A `runs` row as a dict, its `moves` `octile` where NULL (a run stored before schema version 6)."""
+    info = dict(row)
+    info["moves"] = info.get("moves") or DEFAULT_MOVES
+    return info
 
 
 def _shards_key(run_id: int) -> str:

@@ -21,10 +21,12 @@ obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair, so thos
 Version 4 adds the table `measurements` (`UPGRADE_TABLES`). Version 5 compares run names exactly on every backend:
 on MySQL/MariaDB `runs.name` gets a binary collation without padding (`exact_collation`), so names differing in
 case, accents, emoji or trailing spaces are different runs there too (SQLite and PostgreSQL compare bytes
-already); an older MariaDB database has the column changed in place, its rows kept. A database of an older version
-(`UPGRADABLE_VERSIONS`) gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`), tables and collation it
-lacks on open (see `connection.upgrade`); opened read-only it reads the columns as NULL and the tables as empty; any
-other version is refused untouched.
+already); an older MariaDB database has the column changed in place, its rows kept. Version 6 adds `runs.moves`
+(nullable, `RUN_UPGRADE_COLUMNS`): the run's movement model (`vinadv.grid.moves`); NULL, as every run stored before
+version 6 reads, is `octile`, the only model there was. A database of an older version (`UPGRADABLE_VERSIONS`)
+gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`), tables and collation it lacks on open (see
+`connection.upgrade`); opened read-only it reads the columns as NULL and the tables as empty; any other version is
+refused untouched.
 
 Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
 VARCHAR would cap both.
@@ -40,10 +42,10 @@ from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exp
 from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
-SCHEMA_VERSION = "5"
+SCHEMA_VERSION = "6"
 #: the versions before: upgraded on open by adding what they lack (`UPGRADE_COLUMNS`, `UPGRADE_TABLES`, the run
 #: name's collation; nothing existing is lost)
-UPGRADABLE_VERSIONS = ("1", "2", "3", "4")
+UPGRADABLE_VERSIONS = ("1", "2", "3", "4", "5")
 
 metadata = sa.MetaData()
 
@@ -103,6 +105,8 @@ runs = sa.Table(
     sa.Column("version", sa.String(64), nullable=False),
     sa.Column("timings", sa.JSON(), nullable=True),
     sa.Column("status", sa.String(32), nullable=False),
+    # the movement model of the run's maps (schema version 6, `vinadv.grid.moves`); NULL = octile (older runs)
+    sa.Column("moves", sa.String(16), nullable=True),
     sa.Index("ix_runs_name", "name"),
 )
 
@@ -212,8 +216,12 @@ HARM_COLUMNS = HARM_FIELDS
 MORE_ADDED_COLUMN = "added_more"
 #: `map_pairs` columns added after version 1: an older database gains those it lacks on open
 UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN)
+#: `runs` column added by schema version 6: an older database gains it on open (NULL reads as octile)
+RUN_UPGRADE_COLUMNS = ("moves",)
 #: tables added by schema version 4: an older database gains them on open
 UPGRADE_TABLES = (measurements,)
+#: the version that added the `UPGRADE_TABLES`: a database of that version or later without them is refused
+UPGRADE_TABLES_SINCE = 4
 
 TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness, measurements)
 #: tables added to the schema later: created when missing, never a reason to refuse a database

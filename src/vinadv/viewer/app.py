@@ -399,6 +399,7 @@ class _ViewerState:
             **{name: _none_if_nan(float(getattr(r, name)[0])) for name in HARM_FLOAT_FIELDS},
             "expert_label": r.expert_label[0],
             "harm": r.harm[0],
+            "moves": self.store.run_moves(run_id),  # the run's movement model: what the costs count
             "start": r.starts[0].tolist(),
             "goal": r.goals[0].tolist(),
             "added": r.added[0, 0].tolist(),

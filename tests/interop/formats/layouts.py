@@ -110,6 +110,56 @@ def gppn_policy(obstacles, goal):
     return policy
 
 
+def gppn_generator_policy(free, goal, mechanism, rng):
+    """The arrays GPPN's own generator (lileee/gated-path-planning-networks, `generate_dataset.py`) writes for one
+    maze, written from its description in plain Python: `(policy (A, 1, n, n), value (n, n))`. Its Dijkstra gives
+    every reachable cell minus its move count (every move costs 1; a move into a wall or off the grid stays put)
+    and every other cell `-n*n`; its policy, at EVERY cell (walls, walled-off cells and the goal included), is one
+    of the actions whose resulting cell has the largest value, picked at random: at the goal that is any move that
+    stays put (into a wall) or the goal itself, at a wall or walled-off cell anything."""
+    n = len(free)
+    order = GPPN[:4] if mechanism == "news" else GPPN
+
+    def step(r, c, dr, dc):
+        rr, cc = r + dr, c + dc
+        return (rr, cc) if 0 <= rr < n and 0 <= cc < n and free[rr][cc] else (r, c)
+
+    value = np.full((n, n), -float(n * n))
+    value[goal] = 0.0
+    frontier = [tuple(goal)]
+    while frontier:
+        nxt = []
+        for r, c in frontier:
+            for dr, dc in order:  # moves are symmetric: a predecessor is a neighbour
+                rr, cc = step(r, c, dr, dc)
+                if value[rr, cc] == -n * n:
+                    value[rr, cc] = value[r, c] - 1
+                    nxt.append((rr, cc))
+        frontier = nxt
+    policy = np.zeros((len(order), 1, n, n), np.float32)
+    for r in range(n):
+        for c in range(n):
+            vals = [value[step(r, c, dr, dc)] for dr, dc in order]
+            best = [a for a, v in enumerate(vals) if v == max(vals)]
+            policy[best[rng.integers(len(best))], 0, r, c] = 1
+    return policy, value
+
+
+def write_gppn_generated(path, obstacles, goals, mechanism, seed=0):
+    """A file as GPPN's generator writes it (`np.savez_compressed` of train, valid, test x mazes 1 = free, goal maps,
+    optimal policies; float32), the maps in the test split, the others empty."""
+    n = obstacles.shape[1]
+    rng = np.random.default_rng(seed)
+    a = 4 if mechanism == "news" else 8
+    goal_maps = np.zeros((len(goals), 1, n, n), np.float32)
+    goal_maps[np.arange(len(goals)), 0, goals[:, 0], goals[:, 1]] = 1
+    free = (~obstacles).astype(np.float32)
+    policies = np.array([gppn_generator_policy(f, tuple(g), mechanism, rng)[0] for f, g in zip(free, goals)])
+    empty = [np.zeros((0, n, n), np.float32), np.zeros((0, 1, n, n), np.float32), np.zeros((0, a, 1, n, n), np.float32)]
+    np.savez_compressed(path, *empty, *empty, free, goal_maps, policies)
+    return policies
+
+
 def gppn_arrays(obstacles, goals):
     n = obstacles.shape[1]
     goal_maps = np.zeros((len(goals), 1, n, n), np.float32)

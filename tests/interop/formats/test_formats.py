@@ -120,10 +120,13 @@ def test_empty_splits(tmp_path, small_maps):
     np.testing.assert_array_equal(got.obstacles, small_maps.obstacles)
 
 
-@pytest.mark.parametrize("fmt", ["kentsommer", "avivt", "gppn"])
-def test_export_refuses_maps_of_other_movement_models(tmp_path, fmt, capsys):
-    generate_maps(3, 10, seed=1, n_starts=2, moves="moore").save(tmp_path / "m.npz")
+@pytest.mark.parametrize(
+    ("fmt", "moves", "held"),
+    [("kentsommer", "moore", "'octile'"), ("avivt", "news", "'octile'"), ("mpd", "octile", "'moore'")],
+)
+def test_export_refuses_maps_of_other_movement_models(tmp_path, fmt, moves, held, capsys):
+    generate_maps(3, 10, seed=1, n_starts=2, moves=moves).save(tmp_path / "m.npz")
     out = tmp_path / ("x.mat" if fmt == "avivt" else "x.npz")
     assert main(["maps", "export", str(tmp_path / "m.npz"), "--format", fmt, "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert f"the maps use 'moore' moves: export to {fmt} follows 'octile' moves only" in err and not out.exists()
+    assert f"the maps use '{moves}' moves: export to {fmt} follows {held} moves only" in err and not out.exists()

@@ -1,10 +1,11 @@
 """Maps of other VIN/GPPN code read into a MapSet and written back out, one module per layout.
 
 The layouts (conventions checked against the real files in docs/guide/interop.md, "Data and models from other VIN/GPPN
-code"): `kentsommer` (the common PyTorch port, `.npz`), `avivt` (the VIN authors' `.mat`) and `gppn` (`.npz`); each
-module's docstring says what its arrays hold. `FORMATS` maps a layout's name to its `Format`: what `read_maps` and
-`export_maps` dispatch on. What the layouts share (samples regrouped into maps and trajectories, the file's expert
-paths reconciled with vinadv's, drawn starts) is in `vinadv.interop.formats.samples`.
+code"): `kentsommer` (the common PyTorch port, `.npz`), `avivt` (the VIN authors' `.mat`), `gppn` (`.npz`) and `mpd`
+(the MP dataset of Neural A*, `.npz`); each module's docstring says what its arrays hold. `FORMATS` maps a layout's
+name to its `Format`: what `read_maps` and `export_maps` dispatch on. What the layouts share (samples regrouped into
+maps and trajectories, the file's expert paths reconciled with vinadv's, drawn starts) is in
+`vinadv.interop.formats.samples`.
 """
 
 from __future__ import annotations
@@ -16,8 +17,8 @@ from pathlib import Path
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.moves import require_moves
-from vinadv.interop.formats import avivt, gppn, kentsommer
+from vinadv.grid.moves import check_moves, require_moves
+from vinadv.interop.formats import avivt, gppn, kentsommer, mpd
 
 
 @dataclass(frozen=True)
@@ -25,14 +26,18 @@ class Format:
     """One foreign layout of maps.
 
     Attributes:
-        read: `read(path, split, starts, seed) -> (MapSet, info)`; `split` None is the layout's default.
+        read: `read(path, split, starts, seed, moves) -> (MapSet, info)`; `split` None is the layout's default,
+            `moves` None the file's own movement model.
         write: `write(maps, path, split) -> counts` (a dict: maps and what else was written), `split` checked.
         splits: the splits `read` takes; `write` takes them but `all`.
+        moves: the movement models the layout holds (`vinadv.grid.moves`): what `read` may be asked for and what
+            `write` takes.
     """
 
-    read: Callable[[str, str | None, int | None, int], tuple[MapSet, dict]]
+    read: Callable[[str, str | None, int | None, int, str | None], tuple[MapSet, dict]]
     write: Callable[[MapSet, Path, str], dict]
     splits: tuple[str, ...]
+    moves: tuple[str, ...] = ("octile",)
 
     @property
     def export_splits(self) -> tuple[str, ...]:
@@ -40,10 +45,16 @@ class Format:
         return tuple(s for s in self.splits if s != "all")
 
 
+def _octile(read: Callable[[str, str | None, int | None, int], tuple[MapSet, dict]]):
+    """`read` of a layout of the VIN's own `octile` data, which has no other movement model (`Format.moves`)."""
+    return lambda path, split, starts, seed, moves: read(path, split, starts, seed)
+
+
 FORMATS: dict[str, Format] = {
-    "kentsommer": Format(kentsommer.read, kentsommer.write, tuple(kentsommer.SPLITS)),
-    "avivt": Format(avivt.read, avivt.write, avivt.SPLITS),
-    "gppn": Format(gppn.read, gppn.write, tuple(gppn.SPLITS)),
+    "kentsommer": Format(_octile(kentsommer.read), kentsommer.write, tuple(kentsommer.SPLITS)),
+    "avivt": Format(_octile(avivt.read), avivt.write, avivt.SPLITS),
+    "gppn": Format(gppn.read, gppn.write, tuple(gppn.SPLITS), ("moore", "news", "octile")),
+    "mpd": Format(mpd.read, mpd.write, mpd.SPLITS, ("moore",)),
 }
 
 
@@ -54,7 +65,12 @@ def _format(format: str) -> Format:
 
 
 def read_maps(
-    path: str | os.PathLike, format: str, split: str | None = None, starts: int | None = None, seed: int = 0
+    path: str | os.PathLike,
+    format: str,
+    split: str | None = None,
+    starts: int | None = None,
+    seed: int = 0,
+    moves: str | None = None,
 ) -> tuple[MapSet, dict]:
     """Read maps in another codebase's layout: `(MapSet, info)`; `info` says what was found and done.
 
@@ -65,6 +81,9 @@ def read_maps(
         starts: starts per map where the file has none (gppn, avivt's batched-only layout; default 7); files
             with trajectories take theirs and refuse `starts`.
         seed: seed of the drawn starts.
+        moves: the movement model of the maps read (`vinadv.grid.moves`); None: the file's own (gppn: `moore` for
+            8 actions, `news` for 4; mpd: `moore`; kentsommer and avivt: `octile`). A model the layout cannot hold
+            is refused.
 
     Raises InputError naming the file and array for a missing array, a wrong shape, other polarity, a goal value
     or label out of range, or a path that is not a legal move sequence to the goal.
@@ -74,16 +93,16 @@ def read_maps(
         raise InputError(f"split must be one of {', '.join(layout.splits)} for format {format}, got {split!r}")
     if starts is not None and starts < 1:
         raise InputError(f"starts must be >= 1, got {starts}")
+    if moves is not None and check_moves(moves) not in layout.moves:
+        raise InputError(f"moves {moves!r}: format {format} holds {' or '.join(layout.moves)} maps", "moves")
     path = str(path)
-    maps, info = layout.read(path, split, starts, seed)
-    return maps, {"format": format, "file": path, **info}
+    maps, info = layout.read(path, split, starts, seed, moves)
+    return maps, {"format": format, "file": path, "moves": maps.moves, **info}
 
 
-def import_maps(
-    path: str | os.PathLike, format: str, split: str | None = None, starts: int | None = None, seed: int = 0
-) -> MapSet:
-    """`read_maps` without the info dict."""
-    return read_maps(path, format, split, starts, seed)[0]
+def import_maps(path: str | os.PathLike, format: str, *args, **kwargs) -> MapSet:
+    """`read_maps` (the same arguments) without the info dict."""
+    return read_maps(path, format, *args, **kwargs)[0]
 
 
 def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str | None = None) -> dict:
@@ -93,10 +112,12 @@ def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str |
     test), the other split is written empty; goal prior 10 at the goal, 0 elsewhere. avivt: `split` test (default)
     writes the test layout (one row per real start), train the per-sample training arrays (no batched arrays).
     gppn: the mazes go to `split` (train|valid|test, default test), the others are empty; the policies are
-    GPPN's (diagonal cost 1). Every layout is written from `octile` maps only, for now (InputError otherwise).
+    GPPN's (every move cost 1: `news` maps get 4 actions, `moore` and `octile` maps 8). mpd: the maps go to `split`,
+    the others are empty, with their goals, policies and distances (`moore` maps only). A layout is written from the
+    movement models it holds (`Format.moves`; InputError otherwise).
     """
     layout = _format(format)
-    require_moves(maps.moves, ("octile",), f"export to {format}")
+    require_moves(maps.moves, layout.moves, f"export to {format}")
     split = split or "test"
     if split not in layout.export_splits:
         allowed = ", ".join(layout.export_splits)

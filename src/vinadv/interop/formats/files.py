@@ -44,14 +44,15 @@ class ForeignArrays:
         return arr.astype(np.int64)
 
 
-def load_npz(path: str) -> ForeignArrays:
+def load_npz(path: str, names: tuple[str, ...] | None = None) -> ForeignArrays:
+    """The arrays of the `.npz` file at `path` (only `names` where given, those it has: a split of a large file)."""
     if not os.path.exists(path):
         raise InputError(f"{path}: no such file")
     if not zipfile.is_zipfile(path):
         raise InputError(f"{path}: not an .npz file (not a zip archive)")
     try:
         with np.load(path, allow_pickle=False) as npz:
-            return ForeignArrays(path, {k: npz[k] for k in npz.files})
+            return ForeignArrays(path, {k: npz[k] for k in npz.files if names is None or k in names})
     except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
         raise InputError(f"{path}: not a readable .npz file ({exc})") from None
 

@@ -17,6 +17,7 @@ from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.generator import MIN_START_MOVES
 from vinadv.grid.mapset import MapSet
+from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import COST_TOL, expert_paths_from, shortest_distances
 from vinadv.interop.formats.files import ForeignArrays
@@ -156,9 +157,10 @@ def padded_map_set(
     counts: np.ndarray,
     per_map: int,
     seed: int,
+    moves: str = DEFAULT_MOVES,
 ) -> MapSet:
-    """The MapSet (corner cutting allowed) of imported maps whose map i has `counts[i]` real starts of `per_map`:
-    `start_counts` marks the padding where some map has fewer."""
+    """The MapSet (corner cutting allowed, movement model `moves`) of imported maps whose map i has `counts[i]` real
+    starts of `per_map`: `start_counts` marks the padding where some map has fewer."""
     return MapSet(
         obstacles=obstacles,
         goals=goals,
@@ -168,16 +170,19 @@ def padded_map_set(
         corner_cutting=True,
         seed=seed,
         start_counts=counts.astype(np.int64) if len(counts) and counts.min() < per_map else None,
+        moves=moves,
     )
 
 
-def with_drawn_starts(obstacles: np.ndarray, goals: np.ndarray, k: int, seed: int) -> tuple[MapSet, dict]:
-    """A MapSet with up to `k` distinct starts per map drawn uniformly (seeded) among cells at least
-    MIN_START_MOVES moves from the goal; maps with fewer such cells keep all of them (padded), maps with none are
-    left out and counted."""
+def with_drawn_starts(
+    obstacles: np.ndarray, goals: np.ndarray, k: int, seed: int, moves: str = DEFAULT_MOVES
+) -> tuple[MapSet, dict]:
+    """A MapSet of the movement model `moves` with up to `k` distinct starts per map drawn uniformly (seeded) among
+    cells at least MIN_START_MOVES moves from the goal; maps with fewer such cells keep all of them (padded), maps
+    with none are left out and counted."""
     n, size = obstacles.shape[0], obstacles.shape[1]
-    dist, moves = shortest_distances(obstacles, goals)
-    eligible = (moves >= MIN_START_MOVES).reshape(n, size * size)
+    dist, counts_of_moves = shortest_distances(obstacles, goals, True, moves)
+    eligible = (counts_of_moves >= MIN_START_MOVES).reshape(n, size * size)
     keys = np.where(eligible, np.random.default_rng(seed).random(eligible.shape), np.inf)
     picks = np.argsort(keys, axis=1, kind="stable")[:, :k]
     counts = np.minimum(eligible.sum(axis=1), k)
@@ -186,8 +191,8 @@ def with_drawn_starts(obstacles: np.ndarray, goals: np.ndarray, k: int, seed: in
     pad = np.arange(k)[None, :] >= counts[:, None]
     starts[pad] = np.repeat(goals[:, None, :], k, axis=1)[pad]
     obstacles, goals, starts, dist, counts = obstacles[keep], goals[keep], starts[keep], dist[keep], counts[keep]
-    costs, expert = expert_paths_from(dist, obstacles, goals, starts)
-    maps = padded_map_set(obstacles, goals, starts, costs, expert, counts, k, seed=int(seed))
+    costs, expert = expert_paths_from(dist, obstacles, goals, starts, True, moves)
+    maps = padded_map_set(obstacles, goals, starts, costs, expert, counts, k, seed=int(seed), moves=moves)
     info = {
         "maps": int(keep.sum()),
         "size": size,
@@ -195,7 +200,8 @@ def with_drawn_starts(obstacles: np.ndarray, goals: np.ndarray, k: int, seed: in
         "starts_seed": int(seed),
         "maps_padded": int((counts < k).sum()),
         "maps_left_out_no_start": int((~keep).sum()),
-        "expert_paths": "vinadv's own (Dijkstra, diagonal cost sqrt 2), from starts drawn with the seed",
+        "expert_paths": f"vinadv's own (Dijkstra, {move_model(moves).name} moves: {move_model(moves).description}), "
+        "from starts drawn with the seed",
     }
     return maps, info
 

@@ -114,7 +114,8 @@ def change_bins(values: np.ndarray, tol: float) -> np.ndarray:
 
 
 def gather(ctx: Context) -> HarmData:
-    config = ctx.store.run_info(ctx.run_id).get("config") or {}
+    info = ctx.store.run_info(ctx.run_id)
+    config = info.get("config") or {}
     tol, rtol = float(config.get("harm_tolerance", DEFAULT_TOL)), float(config.get("harm_rtol", 0.0))
     stored = ctx.store.harm_counts(ctx.run_id)
     not_computed = sum(row.get(None, 0) for row in stored.values())
@@ -155,7 +156,7 @@ def gather(ctx: Context) -> HarmData:
         ],
     )
     _harm_regrets(ctx, data)
-    _harm_examples(ctx, data, bool(config.get("corner_cutting", True)))
+    _harm_examples(ctx, data, bool(config.get("corner_cutting", True)), info["moves"])
     return data
 
 
@@ -230,9 +231,10 @@ def _harm_regrets(ctx: Context, data: HarmData) -> None:
     )
 
 
-def _harm_examples(ctx: Context, data: HarmData, corner_cutting: bool) -> None:
+def _harm_examples(ctx: Context, data: HarmData, corner_cutting: bool, moves: str) -> None:
     """Up to `HARM_EXAMPLES_SHOWN` pairs of each `HARM_EXAMPLES` kind (the first by pair index), their expert
-    paths recomputed on both maps (`grid.shortest_paths.expert_paths`: the few pairs shown, nothing stored)."""
+    paths recomputed on both maps under the run's movement model `moves` (`grid.shortest_paths.expert_paths`: the
+    few pairs shown, nothing stored)."""
     from vinadv.report import figures  # noqa: PLC0415 (Matplotlib: drawn when gathered)
 
     for label, harm in HARM_EXAMPLES:
@@ -245,8 +247,8 @@ def _harm_examples(ctx: Context, data: HarmData, corner_cutting: bool) -> None:
             continue
         records = ctx.store.read_pairs(ctx.run_id, pair_indices=np.array(chosen, dtype=np.int64))
         starts = records.starts[:, None, :]
-        cost_o, paths_o = expert_paths(records.obstacles_o, records.goals, starts, corner_cutting)
-        cost_a, paths_a = expert_paths(records.obstacles_a, records.goals, starts, corner_cutting)
+        cost_o, paths_o = expert_paths(records.obstacles_o, records.goals, starts, corner_cutting, moves)
+        cost_a, paths_a = expert_paths(records.obstacles_a, records.goals, starts, corner_cutting, moves)
         shown = [
             HarmExample(
                 pair_index=int(records.pair_index[i]),

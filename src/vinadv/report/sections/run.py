@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 
+from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.report.data import Context, Figure, Table
 
 
@@ -40,6 +41,8 @@ def gather(ctx: Context) -> RunData:
         ("planner weights (SHA-256)", info.get("weights_checksum")),
         ("vinadv version", info["version"]),
     ]
+    if info["moves"] != DEFAULT_MOVES:  # an octile run's table is what it was before movement models
+        rows.insert(rows.index(("seed", info.get("seed"))), ("movement model", info["moves"]))
     config = [
         (k, json.dumps(v) if isinstance(v, (dict, list)) else v) for k, v in sorted((info.get("config") or {}).items())
     ]
