@@ -18,7 +18,9 @@ Tables:
 Version 2 adds the harm columns of `map_pairs` (`HARM_COLUMNS`, all nullable: DESIGN.md "Harm"). Version 3 adds
 `added_more` (nullable): the obstacles a pair adds after the first (`added_obstacle`), for pairs of several added
 obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair, so those rows are stored as before.
-Version 4 adds the table `measurements` (`UPGRADE_TABLES`). A database of an older version (`UPGRADABLE_VERSIONS`)
+Version 4 adds the table `measurements` (`UPGRADE_TABLES`). The step to version 7 adds `edit` (nullable): each pair's
+edit, `add` or `remove` (DESIGN.md "Obstacle removal"); NULL, in the rows of an older database, reads as `add`. A
+database of an older version (`UPGRADABLE_VERSIONS`)
 gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`) and tables it lacks on open (see
 `connection.upgrade`); opened read-only it reads the columns as NULL and the tables as empty; any other version is
 refused untouched.
@@ -37,9 +39,9 @@ from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exp
 from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
-SCHEMA_VERSION = "4"
+SCHEMA_VERSION = "7"
 #: the versions before: upgraded on open by adding the `UPGRADE_COLUMNS` they lack (nothing existing changes)
-UPGRADABLE_VERSIONS = ("1", "2", "3")
+UPGRADABLE_VERSIONS = ("1", "2", "3", "4")
 
 metadata = sa.MetaData()
 
@@ -106,6 +108,8 @@ map_pairs = sa.Table(
     # several obstacles (schema version 3): the cells added after `added_obstacle`, in order, "r,c;r,c" (as a path);
     # NULL for a one-obstacle pair
     sa.Column("added_more", _LongText, nullable=True),
+    # obstacle removal (the step to schema version 7): 'add' or 'remove' (`vocabulary.EDITS`); NULL reads as 'add'
+    sa.Column("edit", sa.String(8), nullable=True),
     sa.UniqueConstraint("run_id", "pair_index", name="uq_map_pairs_run_pair"),
     # pair_index last: a filtered page of a run (`Store.page_pairs`, the viewer's grid) is one ordered index range
     sa.Index("ix_map_pairs_run_label", "run_id", "label", "pair_index"),
@@ -177,8 +181,10 @@ HARM_FLOAT_COLUMNS = HARM_FLOAT_FIELDS
 HARM_COLUMNS = HARM_FIELDS
 #: `map_pairs` column added by schema version 3
 MORE_ADDED_COLUMN = "added_more"
+#: `map_pairs` column added by the step to schema version 7
+EDIT_COLUMN = "edit"
 #: `map_pairs` columns added after version 1: an older database gains those it lacks on open
-UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN)
+UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN, EDIT_COLUMN)
 #: tables added by schema version 4: an older database gains them on open
 UPGRADE_TABLES = (measurements,)
 
