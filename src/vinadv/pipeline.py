@@ -32,7 +32,7 @@ from vinadv.planners.interface import EMPTY_SHA256, Planner
 from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
 from vinadv.planners.spec import PlannerSpec
 from vinadv.seeds import check_seed
-from vinadv.vocabulary import LABEL_STRENGTH, success_count
+from vinadv.vocabulary import ADD, LABEL_STRENGTH, success_count
 
 STAGES = ("generate", "attack", "identify", "store")
 
@@ -57,6 +57,7 @@ class RunConfig:
     harm_rtol: float = 0.0
     objective: str = "paper"
     obstacles: int = 1
+    edit: str = ADD
 
     def __post_init__(self):
         # every setting is checked here, before `run_pipeline` opens the database: a value refused only when the
@@ -67,7 +68,7 @@ class RunConfig:
             if getattr(self, name) < bound:
                 raise InputError(f"{name} must be >= {bound}, got {getattr(self, name)}", name)
         check_seed(self.seed)
-        make_attack(self.attack, self.per_map, self.seed, self.budget, self.radius, self.obstacles)  # its name
+        make_attack(self.attack, self.per_map, self.seed, self.budget, self.radius, self.obstacles, self.edit)
         check_limits(min(self.n, self.shard_size), self.size, 1, default_obstacle_params(self.size)[0])
         check_tolerances(self.harm_tolerance, self.harm_rtol)
         objective_strength(self.objective)  # InputError for an unknown objective
@@ -82,7 +83,12 @@ class RunConfig:
         return self.per_map if self.per_map > 0 else self.size * self.size
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The settings, stored with the run; `edit` only when it is `remove` (a run that adds obstacles is stored as
+        it was before removal existed, and a stored config without `edit` reads as `add`)."""
+        out = asdict(self)
+        if self.edit == ADD:
+            del out["edit"]
+        return out
 
 
 @dataclass
@@ -117,6 +123,7 @@ def compute_shard(
         budget=config.budget,
         radius=config.radius,
         obstacles=config.obstacles,
+        edit=config.edit,
     )
     result = attack.attack(
         maps.obstacles,

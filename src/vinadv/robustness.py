@@ -23,6 +23,9 @@ largest `regret_a`, so the exhaustive harmful rate is exactly the share of maps 
 (UrP > FP > DP > UcP). The paper success rate is that of the kept pairs, so under `harm` it can be below what
 `vinadv attack --objective paper` finds, and the other way round.
 
+With `edit="remove"` every strategy frees obstacle cells instead of adding them (DESIGN.md "Obstacle removal"): k
+cells freed greedily, the same figures; the settings then say `edit: remove` (absent: `add`).
+
 `benchmark_maps(n, size, seed)` makes the fixed maps: the generator's first `n` maps of `seed` (default 1000, the
 held-out seed of the evaluation tables), one start each. Results go to a database's `robustness` table
 (`save_robustness`) and into the report (`vinadv.report`).
@@ -45,7 +48,7 @@ from vinadv.grid.moves import require_moves
 from vinadv.identify import identify, objective_strength
 from vinadv.planners.interface import as_planner
 from vinadv.planners.spec import PlannerSpec
-from vinadv.vocabulary import SUCCESS_LABELS, label_counts
+from vinadv.vocabulary import ADD, SUCCESS_LABELS, label_counts
 
 if TYPE_CHECKING:  # names for the annotations only: the planners and the grid load when a benchmark runs
     from vinadv.grid.mapset import MapSet
@@ -264,6 +267,7 @@ def robustness(
     radius: int = 2,
     harm_tol: float | None = None,
     harm_rtol: float = 0.0,
+    edit: str = ADD,
     progress: bool = False,
 ) -> RobustnessResult:
     """Run the robustness benchmark of `planner` on `maps` (see the module doc).
@@ -280,6 +284,7 @@ def robustness(
         radius: near-path's distance to the path.
         harm_tol: the harm test's absolute tolerance (default `vinadv.classify.harm.DEFAULT_TOL`).
         harm_rtol: the harm test's relative tolerance (times the optimal cost), default 0.
+        edit: `add` obstacles (default) or `remove` them (`vinadv.vocabulary.EDITS`).
         progress: show a progress bar.
     """
     harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
@@ -301,7 +306,9 @@ def robustness(
     results: dict[str, StrategyResult] = {}
     for name in strategies:
         t0 = time.perf_counter()
-        attack = make_attack(name, per_map=1, seed=seed, budget=budget, radius=radius, obstacles=max_obstacles)
+        attack = make_attack(
+            name, per_map=1, seed=seed, budget=budget, radius=radius, obstacles=max_obstacles, edit=edit
+        )
         result = attack.attack(maps.obstacles, starts, goals, planner, cc, strength=strength, progress=progress)
         by_k, outcomes = [], []
         for k, pairs in enumerate(result.steps, start=1):
@@ -326,6 +333,7 @@ def robustness(
         "radius": radius,
         "harm_tolerance": harm_tol,
         "harm_rtol": harm_rtol,
+        **({} if edit == ADD else {"edit": edit}),  # absent: add, as every result stored before removal existed
     }
     return RobustnessResult(
         planner=planner.spec(),

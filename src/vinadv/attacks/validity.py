@@ -242,7 +242,11 @@ def valid_additions(
 
 
 def solvable(
-    obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
+    obstacles: np.ndarray,
+    starts: np.ndarray,
+    goals: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
 ) -> np.ndarray:
     """`(B,)` bool: the goal is reachable from the start on each map (`obstacles (B, N, N)`, starts/goals `(B, 2)`);
     never from a start or to a goal on an obstacle."""

@@ -262,9 +262,9 @@ def create_tables(engine: sa.Engine) -> bool:
 
 def upgrade(engine: sa.Engine) -> None:
     """An older schema version -> `SCHEMA_VERSION`: add the `UPGRADE_COLUMNS` the database lacks (the harm columns,
-    `added_more`, and with the step to 7 `edit`; all nullable, existing rows read them as NULL) and the `UPGRADE_TABLES` (`measurements`), then record the new
-    version. Only what is missing is added, so an upgrade cut short (MySQL commits each ALTER on its own) is
-    finished by the next open."""
+    `added_more`, and with the step to 7 `edit`; all nullable, existing rows read them as NULL) and the
+    `UPGRADE_TABLES` (`measurements`), then record the new version. Only what is missing is added, so an upgrade cut
+    short (MySQL commits each ALTER on its own) is finished by the next open, and steps compose."""
     prep = engine.dialect.identifier_preparer
     with engine.begin() as conn:
         have = {c["name"] for c in sa.inspect(conn).get_columns(map_pairs.name)}
