@@ -268,6 +268,7 @@ def robustness(
     harm_tol: float | None = None,
     harm_rtol: float = 0.0,
     edit: str = ADD,
+    first_map: int = 0,
     progress: bool = False,
 ) -> RobustnessResult:
     """Run the robustness benchmark of `planner` on `maps` (see the module doc).
@@ -285,6 +286,8 @@ def robustness(
         harm_tol: the harm test's absolute tolerance (default `vinadv.classify.harm.DEFAULT_TOL`).
         harm_rtol: the harm test's relative tolerance (times the optimal cost), default 0.
         edit: `add` obstacles (default) or `remove` them (`vinadv.vocabulary.EDITS`).
+        first_map: `maps` are maps `first_map..` of a larger benchmark (`Attack.attack`): the randomised strategies
+            draw as they would for those maps there, so a benchmark run in chunks makes the whole one's pairs.
         progress: show a progress bar.
     """
     harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
@@ -309,7 +312,9 @@ def robustness(
         attack = make_attack(
             name, per_map=1, seed=seed, budget=budget, radius=radius, obstacles=max_obstacles, edit=edit
         )
-        result = attack.attack(maps.obstacles, starts, goals, planner, cc, strength=strength, progress=progress)
+        result = attack.attack(
+            maps.obstacles, starts, goals, planner, cc, strength=strength, progress=progress, first_map=first_map
+        )
         by_k, outcomes = [], []
         for k, pairs in enumerate(result.steps, start=1):
             expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))

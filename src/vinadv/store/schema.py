@@ -11,6 +11,8 @@ Tables:
   creates it in an older database instead of refusing it (`ADDITIVE_TABLES`).
 - `robustness`: robustness benchmarks of planners (`vinadv robustness` writes them, the report reads them): one row
   per benchmark, its settings and figures as JSON. Additive, as `evaluations`.
+- `bench_chunks` (the step to schema version 7): the finished chunks of maps of a benchmark entry (`vinadv bench run
+  --db --resume`), one JSON result per (entry, chunk). Additive, as `evaluations`.
 - `measurements`: what the evaluation stage measures of a run besides the classifier comparison
   (`vinadv.vocabulary.MEASUREMENTS`: the planner's quality, the processing time), one JSON result per row; the
   newest row of a run and kind is the one the report shows.
@@ -164,6 +166,18 @@ robustness = sa.Table(
     sa.Index("ix_robustness_planner", "planner", "id"),
 )
 
+bench_chunks = sa.Table(
+    "bench_chunks",
+    metadata,
+    sa.Column("id", _BigId, primary_key=True, autoincrement=True),
+    sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive
+    sa.Column("entry", sa.String(64), nullable=False),  # sha256 of (suite checksum, planner spec): one bench entry
+    sa.Column("chunk", sa.Integer(), nullable=False),  # maps chunk * suite.chunk .. of the suite
+    sa.Column("result", sa.JSON(), nullable=False),  # the chunk's per-map outcomes (`vinadv.bench.entry`)
+    sa.Column("version", sa.String(64), nullable=False),
+    sa.UniqueConstraint("entry", "chunk", name="uq_bench_chunks_entry_chunk"),
+)
+
 measurements = sa.Table(
     "measurements",
     metadata,
@@ -188,6 +202,7 @@ UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN, EDIT_COLUMN)
 #: tables added by schema version 4: an older database gains them on open
 UPGRADE_TABLES = (measurements,)
 
-TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness, measurements)
-#: tables added to the schema later: created when missing, never a reason to refuse a database
-ADDITIVE_TABLES = (evaluations, robustness)
+TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness, measurements, bench_chunks)
+#: tables added to the schema later: created when missing, never a reason to refuse a database (`bench_chunks`: the
+#: step to 7, the resumable units of `vinadv bench run --db`)
+ADDITIVE_TABLES = (evaluations, robustness, bench_chunks)
