@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from vinadv.bench.entry import ENTRY_FORMAT
+from vinadv.bench.suites import ENTRY_FORMAT
 from vinadv.bench.leaderboard import read_entries, render_markdown, rows
 from vinadv.cli import main
 

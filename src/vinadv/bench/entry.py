@@ -34,15 +34,13 @@ import numpy as np
 
 from vinadv import __version__
 from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags
-from vinadv.bench.suites import Suite, maps_sha256
+from vinadv.bench.suites import ENTRY_FORMAT, Suite, maps_sha256
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.interop.protocols import gppn_protocol
 from vinadv.planners.interface import Planner
 from vinadv.robustness import Figures, MapOutcomes, benchmark_maps, robustness, worst_case
 
-#: the format of an entry file
-ENTRY_FORMAT = "vinadv.bench_entry/1"
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
 VOLATILE_FIELDS = ("time", "machine")
 #: a path is optimal when its cost is within this of the optimum

@@ -9,7 +9,7 @@ import json
 import os
 from pathlib import Path
 
-from vinadv.bench.entry import ENTRY_FORMAT
+from vinadv.bench.suites import ENTRY_FORMAT
 from vinadv.errors import InputError
 
 #: the columns: title, and how each reads an entry

@@ -28,6 +28,8 @@ from vinadv.errors import InputError
 
 #: the format of a suite's spec (part of what its checksum covers)
 SUITE_FORMAT = "vinadv.bench_suite/1"
+#: the format of a result entry file (`vinadv.bench.entry`)
+ENTRY_FORMAT = "vinadv.bench_entry/1"
 
 
 @dataclass(frozen=True)
