@@ -224,21 +224,24 @@ def valid_additions(
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
-    b, n = obstacles.shape[0], obstacles.shape[1]
-    added = np.asarray(added, dtype=np.int64).reshape(b, -1, 2)
-    on_grid = ((added >= 0) & (added < n)).all(axis=(1, 2))
-    cells = np.where(on_grid[:, None, None], added, 0)
-    idx = np.arange(b)[:, None]
-    ok = on_grid & ~obstacles[idx, cells[..., 0], cells[..., 1]].any(axis=1)
+    ok, cells = _distinct_cells(obstacles, added)
+    idx = np.arange(len(obstacles))[:, None]
+    ok &= ~obstacles[idx, cells[..., 0], cells[..., 1]].any(axis=1)
     ok &= ~((cells == starts[:, None]).all(axis=2) | (cells == goals[:, None]).all(axis=2)).any(axis=1)
-    flat = np.sort(cells[..., 0] * n + cells[..., 1], axis=1)
-    ok &= ~(np.diff(flat, axis=1) == 0).any(axis=1)
     blocked = obstacles.copy()
     blocked[idx, cells[..., 0], cells[..., 1]] = True
-    reach = np.zeros(b, dtype=bool)
-    if b:
-        _reachable_all(blocked, starts, goals, bool(corner_cutting), move_model(moves).deltas, reach)
-    return ok & reach
+    return ok & solvable(blocked, starts, goals, corner_cutting, moves)
+
+
+def _distinct_cells(obstacles: np.ndarray, cells) -> tuple[np.ndarray, np.ndarray]:
+    """`(ok (B,), cells (B, K, 2))`: whether each map's K cells are distinct cells on the grid, and the cells as int64
+    (a map's cells set to (0, 0) where one is off the grid, so they index safely)."""
+    b, n = obstacles.shape[0], obstacles.shape[1]
+    cells = np.asarray(cells, dtype=np.int64).reshape(b, -1, 2)
+    on_grid = ((cells >= 0) & (cells < n)).all(axis=(1, 2))
+    cells = np.where(on_grid[:, None, None], cells, 0)
+    flat = np.sort(cells[..., 0] * n + cells[..., 1], axis=1)
+    return on_grid & ~(np.diff(flat, axis=1) == 0).any(axis=1), cells
 
 
 def solvable(
@@ -287,13 +290,8 @@ def valid_removals(
     map: `(B,)` bool. Valid when they are K distinct cells on the grid, each an obstacle of the original map and not
     a border wall, and the goal is reachable from the start on the original map (so on the edited one too)."""
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-    b, n = obstacles.shape[0], obstacles.shape[1]
-    removed = np.asarray(removed, dtype=np.int64).reshape(b, -1, 2)
-    on_grid = ((removed >= 0) & (removed < n)).all(axis=(1, 2))
-    cells = np.where(on_grid[:, None, None], removed, 0)
-    idx = np.arange(b)[:, None]
-    ok = on_grid & obstacles[idx, cells[..., 0], cells[..., 1]].all(axis=1)
+    ok, cells = _distinct_cells(obstacles, removed)
+    idx = np.arange(len(obstacles))[:, None]
+    ok &= obstacles[idx, cells[..., 0], cells[..., 1]].all(axis=1)
     ok &= ~border_walls(obstacles)[idx, cells[..., 0], cells[..., 1]].any(axis=1)
-    flat = np.sort(cells[..., 0] * n + cells[..., 1], axis=1)
-    ok &= ~(np.diff(flat, axis=1) == 0).any(axis=1)
     return ok & solvable(obstacles, starts, goals, corner_cutting, moves)
