@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import json
 
-from vinadv.bench.suites import ENTRY_FORMAT
 from vinadv.bench.leaderboard import read_entries, render_markdown, rows
+from vinadv.bench.suites import ENTRY_FORMAT
 from vinadv.cli import main
 
 
