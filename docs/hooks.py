@@ -8,13 +8,16 @@ the README's markers: `python docs/hooks.py` rewrites it there, and a test (`tes
 
 Markers: `<!-- vinadv:weights-table -->` (one row per shipped weights file), `<!-- vinadv:weights-commands -->`
 (the command and checksum behind each row), `<!-- vinadv:by-length -->` (rollout success by the optimal path's move
-count, for the metrics files that have it).
+count, for the metrics files that have it), `<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
+benchmark entries `docs/results/bench/*.json`).
 """
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+
+from vinadv.bench.leaderboard import read_entries, render_markdown, rows  # the one renderer of a leaderboard
 
 ROOT = Path(__file__).resolve().parents[1]
 WEIGHTS_DIR = ROOT / "src" / "vinadv" / "weights"
@@ -26,6 +29,9 @@ README_TABLE_END = "\n<!-- /results-table -->"
 WEIGHTS_TABLE = "<!-- vinadv:weights-table -->"
 WEIGHTS_COMMANDS = "<!-- vinadv:weights-commands -->"
 BY_LENGTH = "<!-- vinadv:by-length -->"
+BENCH_LEADERBOARD = "<!-- vinadv:bench-leaderboard -->"
+#: the committed benchmark entries (`vinadv bench run --out`), the leaderboard's rows
+BENCH_DIR = ROOT / "docs" / "results" / "bench"
 
 
 def percent(fraction: float | None) -> str:
@@ -108,12 +114,19 @@ def by_length_table(folder: Path = WEIGHTS_DIR) -> str:
     return "\n".join(rows)
 
 
+def bench_leaderboard(folder: Path = BENCH_DIR) -> str:
+    """The leaderboard of the committed benchmark entries in `folder` (`vinadv bench leaderboard`'s Markdown), each
+    row linking to its entry file (relative to docs/results/)."""
+    return render_markdown(rows(read_entries(folder)), "bench/")
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
     for marker, build in (
         (WEIGHTS_TABLE, weights_table),
         (WEIGHTS_COMMANDS, weights_commands),
         (BY_LENGTH, by_length_table),
+        (BENCH_LEADERBOARD, bench_leaderboard),
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())

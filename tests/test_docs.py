@@ -144,3 +144,14 @@ def test_the_formats_page_names_every_file_format_version():
     page = (DOCS / "formats.md").read_text()
     for name in (MAPS_FORMAT, PATHS_FORMAT, PAIRS_FORMAT, WEIGHTS_FORMAT, GPPN_FORMAT, MODEL_FORMAT, EXPORT_FORMAT):
         assert f'"{name}"' in page or f"`{name}`" in page, f"docs/formats.md does not describe {name}"
+
+
+def test_the_benchmark_page_carries_the_leaderboard_of_the_committed_entries():
+    hooks = docs_module("hooks")
+    page = (DOCS / "results" / "bench.md").read_text()
+    assert hooks.BENCH_LEADERBOARD in page
+    board = hooks.on_page_markdown(page)
+    entries = sorted((DOCS / "results" / "bench").glob("*.json"))
+    assert entries, "no committed benchmark entry"
+    for path in entries:  # every committed entry is a row, linked from the page
+        assert f"(bench/{path.name})" in board

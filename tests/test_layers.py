@@ -39,6 +39,7 @@ LAYERS = {
     "pipeline": 8,
     "evaluation": 8,
     "report": 9,
+    "bench": 9,
     "viewer": 9,
     "cluster": 9,
     "analysis": 10,

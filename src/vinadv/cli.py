@@ -33,6 +33,7 @@ COMMAND_MODULES = [
     "vinadv.commands.classify",
     "vinadv.commands.run",
     "vinadv.commands.robustness",
+    "vinadv.commands.bench",
     "vinadv.commands.store",
     "vinadv.commands.report",
     "vinadv.commands.serve",

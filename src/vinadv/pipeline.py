@@ -41,7 +41,7 @@ from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.weights import weights_checksum
 from vinadv.seeds import check_seed
-from vinadv.vocabulary import LABEL_STRENGTH, success_count
+from vinadv.vocabulary import ADD, LABEL_STRENGTH, success_count
 
 STAGES = ("generate", "attack", "identify", "store")
 
@@ -70,6 +70,7 @@ class RunConfig:
     #: a maps file (absolute path) to attack instead of generated maps, and its SHA-256 (`maps_file_config`)
     maps: str | None = None
     maps_sha256: str | None = None
+    edit: str = ADD
 
     def __post_init__(self):
         # every setting is checked here, before `run_pipeline` opens the database: a value refused only when the
@@ -80,7 +81,7 @@ class RunConfig:
             if getattr(self, name) < bound:
                 raise InputError(f"{name} must be >= {bound}, got {getattr(self, name)}", name)
         check_seed(self.seed)
-        make_attack(self.attack, self.per_map, self.seed, self.budget, self.radius, self.obstacles)  # its name
+        make_attack(self.attack, self.per_map, self.seed, self.budget, self.radius, self.obstacles, self.edit)
         check_limits(min(self.n, self.shard_size), self.size, 1, default_obstacle_params(self.size)[0])
         check_tolerances(self.harm_tolerance, self.harm_rtol)
         objective_strength(self.objective)  # InputError for an unknown objective
@@ -99,9 +100,12 @@ class RunConfig:
 
     def to_dict(self) -> dict:
         """The config as stored with the run; without a maps file, its two fields are left out (the runs of
-        generated maps are stored as before), and `moves` when `octile` (an octile run's config is what it was
+        generated maps are stored as before), `edit` when `add` (a stored config without it reads as `add`), and
+        `moves` when `octile` (an octile run's config is what it was
         before movement models; the run's model is also in `runs.moves`, which the store reads)."""
         out = asdict(self)
+        if self.edit == ADD:  # a run that adds obstacles is stored as it was before removal existed
+            del out["edit"]
         if self.maps is None:
             del out["maps"], out["maps_sha256"]
         if out["moves"] == DEFAULT_MOVES:
@@ -199,6 +203,7 @@ def compute_shard(
         budget=config.budget,
         radius=config.radius,
         obstacles=config.obstacles,
+        edit=config.edit,
     )
     result = attack.attack(
         maps.obstacles,

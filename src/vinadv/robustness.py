@@ -23,6 +23,9 @@ largest `regret_a`, so the exhaustive harmful rate is exactly the share of maps 
 (UrP > FP > DP > UcP). The paper success rate is that of the kept pairs, so under `harm` it can be below what
 `vinadv attack --objective paper` finds, and the other way round.
 
+With `edit="remove"` every strategy frees obstacle cells instead of adding them (DESIGN.md "Obstacle removal"): k
+cells freed greedily, the same figures; the settings then say `edit: remove` (absent: `add`).
+
 `benchmark_maps(n, size, seed)` makes the fixed maps: the generator's first `n` maps of `seed` (default 1000, the
 held-out seed of the evaluation tables), one start each. Results go to a database's `robustness` table
 (`save_robustness`) and into the report (`vinadv.report`).
@@ -45,7 +48,7 @@ from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.identify import identify, objective_strength
 from vinadv.planners.interface import as_planner
 from vinadv.planners.spec import PlannerSpec
-from vinadv.vocabulary import SUCCESS_LABELS, label_counts
+from vinadv.vocabulary import ADD, SUCCESS_LABELS, label_counts
 
 if TYPE_CHECKING:  # names for the annotations only: the planners and the grid load when a benchmark runs
     from vinadv.grid.mapset import MapSet
@@ -271,6 +274,8 @@ def robustness(
     radius: int = 2,
     harm_tol: float | None = None,
     harm_rtol: float = 0.0,
+    edit: str = ADD,
+    first_map: int = 0,
     progress: bool = False,
     maps_source: dict | None = None,
 ) -> RobustnessResult:
@@ -288,6 +293,9 @@ def robustness(
         radius: near-path's distance to the path.
         harm_tol: the harm test's absolute tolerance (default `vinadv.classify.harm.DEFAULT_TOL`).
         harm_rtol: the harm test's relative tolerance (times the optimal cost), default 0.
+        edit: `add` obstacles (default) or `remove` them (`vinadv.vocabulary.EDITS`).
+        first_map: `maps` are maps `first_map..` of a larger benchmark (`Attack.attack`): the randomised strategies
+            draw as they would for those maps there, so a benchmark run in chunks makes the whole one's pairs.
         progress: show a progress bar.
         maps_source: where `maps` came from when not from `benchmark_maps` (a maps file: `{"maps": path,
             "maps_sha256": ...}`), recorded in the settings.
@@ -310,8 +318,12 @@ def robustness(
     results: dict[str, StrategyResult] = {}
     for name in strategies:
         t0 = time.perf_counter()
-        attack = make_attack(name, per_map=1, seed=seed, budget=budget, radius=radius, obstacles=max_obstacles)
-        result = attack.attack(maps.obstacles, starts, goals, planner, cc, strength=strength, progress=progress)
+        attack = make_attack(
+            name, per_map=1, seed=seed, budget=budget, radius=radius, obstacles=max_obstacles, edit=edit
+        )
+        result = attack.attack(
+            maps.obstacles, starts, goals, planner, cc, strength=strength, progress=progress, first_map=first_map
+        )
         by_k, outcomes = [], []
         for k, pairs in enumerate(result.steps, start=1):
             expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
@@ -340,6 +352,7 @@ def robustness(
         # an octile benchmark's settings are what they were before movement models
         **({} if maps.moves == DEFAULT_MOVES else {"moves": maps.moves}),
         **(maps_source or {}),
+        **({} if edit == ADD else {"edit": edit}),  # absent: add, as every result stored before removal existed
     }
     return RobustnessResult(
         planner=planner.spec(),

@@ -23,6 +23,12 @@ LABEL_STRENGTH = {label: strength for strength, label in enumerate(reversed(STRE
 #: The identification result of each valid label (paper, Algorithm 1); `invalid` pairs have none.
 RESULT_NAMES = {"UrP": "Success-UrP", "FP": "Success-FP", "DP": "Unsuccess-DP", "UcP": "Unsuccess-UcP"}
 
+#: The edits an adversarial map makes to the original (DESIGN.md "Obstacle removal"): `add` obstacle cells (the
+#: paper's setting) or `remove` them (free obstacle cells; never a border wall). Files and databases written before
+#: removal existed read as `add`.
+EDITS = ("add", "remove")
+ADD, REMOVE = EDITS
+
 #: Why a rollout ended, by code: `termination` int arrays hold indices into this tuple.
 TERMINATIONS = ("goal", "collision", "loop", "step_limit")
 GOAL, COLLISION, LOOP, STEP_LIMIT = range(len(TERMINATIONS))

@@ -1,4 +1,4 @@
-"""The pairs file's movement model (vinadv.pairs/2): kept on a round trip, read as octile from a vinadv.pairs/1
+"""The pairs file's movement model (vinadv.pairs/2, /3): kept on a round trip, read as octile from a vinadv.pairs/1
 file with the same arrays, checked against the paths, and refused by the database (`vinadv identify`)."""
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ def pairs_file(tmp_path_factory):
 
 def test_round_trip_and_version_1(pairs_file, tmp_path):
     pairs = PairSet.load(pairs_file)
-    assert pairs.moves == "octile" and str(np.load(pairs_file)["format"]) == "vinadv.pairs/2"
+    assert pairs.moves == "octile" and str(np.load(pairs_file)["format"]) == "vinadv.pairs/3"
     dataclasses.replace(pairs, moves="moore").save(tmp_path / "m.npz")
     assert PairSet.load(tmp_path / "m.npz").moves == "moore"
     old = {k: v for k, v in read_npz(pairs_file).items() if k not in ("format", "moves")}
@@ -38,7 +38,7 @@ def test_round_trip_and_version_1(pairs_file, tmp_path):
 def test_moves_are_checked(pairs_file, tmp_path):
     pairs = PairSet.load(pairs_file)
     fields = {k: v for k, v in read_npz(pairs_file).items() if k != "format"}
-    save_npz(tmp_path / "bad.npz", "vinadv.pairs/2", {**fields, "moves": np.array("hex")})
+    save_npz(tmp_path / "bad.npz", "vinadv.pairs/3", {**fields, "moves": np.array("hex")})
     with pytest.raises(InputError, match="field 'moves' is 'hex'"):
         PairSet.load(tmp_path / "bad.npz")
     assert any(np.abs(np.diff(p, axis=0)).sum(axis=1).max(initial=0) == 2 for p in pairs.path_o.unpack())

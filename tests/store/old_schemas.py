@@ -15,15 +15,17 @@ Undo = Callable[[sa.Connection, Callable[[str], str]], None]
 
 def old_database(url: str, version: int, n_pairs: int, undo: Undo, name: str = "old") -> int:
     """Write one run `name` of `n_pairs` random 7x7 one-obstacle pairs with today's schema, then undo what the
-    versions after `version` added (version 6: the run's `moves`; version 5: the run name's binary collation on
-    MariaDB; version 4: the table `measurements`) and `undo(conn, quote)` what the versions after `version` added
-    before those (in one transaction), and stamp the schema `version`; the run's id."""
+    versions after `version` added (version 7: `map_pairs.edit`; version 6: the run's `moves`; version 5: the run
+    name's binary collation on MariaDB; version 4: the table `measurements`) and `undo(conn, quote)` what the
+    versions after `version` added before those (in one transaction), and stamp the schema `version`; the run's id."""
     with Store.open(url) as store:
         run_id = store.create_run(name)
         store.write_pairs(run_id, random_records(n_pairs, size=7, seed=3))
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     quote = engine.dialect.identifier_preparer.quote
     with engine.begin() as conn:
+        if version < 7:
+            conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote('edit')}"))  # the step to 7's column
         if version < 6:
             conn.execute(sa.text(f"ALTER TABLE runs DROP COLUMN {quote('moves')}"))  # schema version 6's column
         if version < 5 and engine.dialect.name == "mysql":  # the database's own collation, as before version 5

@@ -35,6 +35,7 @@ def test_export_csv_matches_oracle(stored, tmp_path):
     # the format's columns, in order (vinadv.labelled_pairs/1: Table 2's first; one-obstacle readers rely on it)
     header = "no map_o map_a path_o path_a label attack run_id pair_index start goal added_obstacle label_source score"
     header += " term_o term_a dh dv opt_cost_o opt_cost_a cost_o cost_a regret_o regret_a expert_label harm added_more"
+    header += " edit"
     assert list(rows[0]) == header.split()
     paths_a = records.path_a.unpack()
     for i, row in enumerate(rows):

@@ -53,6 +53,7 @@ def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
                 records.expert_label[i],
                 records.harm[i],
                 ";".join("{},{}".format(*c) for c in records.added[i, 1:].tolist()) or None,  # NULL: one obstacle
+                str(records.edit[i]),
             )
         )
     return sorted(rows, key=lambda r: r[1])
@@ -63,7 +64,7 @@ def _raw_rows(url: str) -> list[tuple]:
     cols = (
         "run_id pair_index map_o map_a path_o path_a label attack start goal added_obstacle label_source "
         "score term_o term_a dh dv"
-    ).split() + [*HARM_FLOATS, "expert_label", "harm", "added_more"]
+    ).split() + [*HARM_FLOATS, "expert_label", "harm", "added_more", "edit"]
     with engine.connect() as conn:
         table = schema.map_pairs  # not reflected: a reflected MySQL DOUBLE reads back as a 10-digit Decimal
         rows = conn.execute(sa.select(*[table.c[c] for c in cols]).order_by(table.c.pair_index)).all()

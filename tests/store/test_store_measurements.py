@@ -50,12 +50,17 @@ def test_version_3_database_is_upgraded_on_open_and_read_only_reads_no_measureme
         assert store.read_measurement(run_id, TIMING) == {"pairs": 20}
         fresh = store.create_run("new")
         store.write_pairs(fresh, random_records(4, size=7, seed=5))
-    assert columns_and_version(db_url) == (before[0], SCHEMA_VERSION) and SCHEMA_VERSION == "6"
+    assert columns_and_version(db_url) == (before[0] | {"edit"}, SCHEMA_VERSION) and SCHEMA_VERSION == "7"
     assert "measurements" in table_names(db_url)
 
 
-def test_a_version_6_database_without_the_table_is_refused(sqlite_url):
-    # stamped version 6 without the table version 4 created: not a database this vinadv wrote
-    old_database(sqlite_url, 6, 5, lambda conn, quote: conn.execute(sa.text("DROP TABLE measurements")))
+def test_a_current_database_without_the_table_is_refused(sqlite_url):
+    # stamped with today's version without the table version 4 created: not a database this vinadv wrote
+    with Store.open(sqlite_url):
+        pass
+    engine = sa.create_engine(sqlite_url, poolclass=sa.pool.NullPool)
+    with engine.begin() as conn:
+        conn.execute(sa.text("DROP TABLE measurements"))
+    engine.dispose()
     with pytest.raises(InputError, match="table measurements is missing"):
         Store.open(sqlite_url)

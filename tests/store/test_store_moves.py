@@ -59,6 +59,6 @@ def test_an_older_database_is_upgraded_on_open_and_its_runs_read_as_octile(db_ur
         }
         fresh = store.create_run("new", moves="moore")
         store.write_pairs(fresh, random_records(4, size=7, seed=5))
-    assert columns_and_version(db_url) == (before[0], SCHEMA_VERSION) and SCHEMA_VERSION == "6"
+    assert columns_and_version(db_url) == (before[0] | {"edit"}, SCHEMA_VERSION) and SCHEMA_VERSION == "7"
     assert "moves" in run_columns(db_url)
     assert _stored_moves(db_url) == {run_id: None, fresh: "moore"}  # the old run keeps NULL: it reads as octile

@@ -1,8 +1,10 @@
-"""Map pairs (original map + K added obstacles, K >= 1) with both planned paths; file format "vinadv.pairs/2".
+"""Map pairs (original map + K added obstacles, K >= 1, or minus K freed ones) with both planned paths; file format
+"vinadv.pairs/3".
 
 The field `added` is `(n, 2)` in a file of one-obstacle pairs (as before there were several: such a file is the same
 as ever, and every vinadv reads it) and `(n, K, 2)` in a file of K > 1 obstacles per pair. Version 2 added the
-movement model (field `moves`); a "vinadv.pairs/1" file is read as `octile`.
+movement model (field `moves`); a "vinadv.pairs/1" file is read as `octile`. Version 3 added each pair's edit
+(field `edit`, `(n,)` str: `add` or `remove`, `vocabulary.EDITS`); a file of an older version is read as `add`.
 """
 
 from __future__ import annotations
@@ -19,11 +21,11 @@ from vinadv.grid.pairs import PathPairs, int_column
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 from vinadv.planners.spec import is_planner_spec
-from vinadv.vocabulary import TERMINATIONS
+from vinadv.vocabulary import ADD, EDITS, REMOVE, TERMINATIONS
 
-PAIRS_FORMAT = "vinadv.pairs/2"
-#: older versions still read (as `octile` pairs)
-OLDER_PAIRS_FORMATS = ("vinadv.pairs/1",)
+PAIRS_FORMAT = "vinadv.pairs/3"
+#: older versions still read (`/1` as `octile` pairs; both as edit `add`)
+OLDER_PAIRS_FORMATS = ("vinadv.pairs/1", "vinadv.pairs/2")
 
 
 @dataclass(kw_only=True, eq=False)
@@ -69,6 +71,7 @@ class PairSet(PathPairs):
                 **self.path_a.to_fields("path_a"),
                 "term_o": np.asarray(self.term_o, dtype=str),
                 "term_a": np.asarray(self.term_a, dtype=str),
+                "edit": np.asarray(self.edit, dtype=str),
                 "strategy": np.array(self.strategy),
                 "params": np.array(json.dumps(self.params, sort_keys=True)),
                 "corner_cutting": np.array(bool(self.corner_cutting)),
@@ -101,7 +104,10 @@ class PairSet(PathPairs):
             check_cells_in_grid(r, name, cells, size)
         corner_cutting = bool(r.scalar("corner_cutting", "b", default=True))
         moves = read_moves(r, corner_cutting)
-        check_pairs(r.path, obs_o, obs_a, starts, goals, added, paths, terms, corner_cutting, moves)
+        edit = _read_edit(r, n)
+        check_pairs(
+            r.path, obs_o, obs_a, starts, goals, added, paths, terms, corner_cutting, moves, removes=edit == REMOVE
+        )
         params = r.json("params")
         if not isinstance(params, dict):
             raise r.fail("params", "must be a JSON object")
@@ -118,11 +124,23 @@ class PairSet(PathPairs):
             path_a=paths["a"],
             term_o=terms["o"],
             term_a=terms["a"],
+            edit=edit,
             strategy=str(r.scalar("strategy", "U")),
             params=params,
             corner_cutting=corner_cutting,
             moves=moves,
         )
+
+
+def _read_edit(r: NpzReader, n: int) -> np.ndarray:
+    """The file's `edit` `(n,)` (absent before version 3: every pair `add`)."""
+    if not r.has("edit"):
+        return np.full(n, ADD, dtype="<U6")
+    edit = r.array("edit", "U", 1, (n,))
+    bad = ~np.isin(edit, EDITS)
+    if bad.any():
+        raise r.fail("edit", f"has value '{edit[bad][0]}', expected one of {'|'.join(EDITS)}")
+    return edit.astype("<U6")
 
 
 def _read_added(r: NpzReader, n: int) -> np.ndarray:

@@ -1,5 +1,5 @@
 """Attack strategies, from random to exhaustive, batched, on any planner (`vinadv.planners`): one added obstacle
-per map (the paper's setting), or K added greedily.
+per map (the paper's setting), or K added greedily; or, with `edit="remove"`, one (or K) obstacle cells freed.
 
 Every strategy follows the same three steps, and differs only in the first:
 
@@ -37,6 +37,22 @@ gradient, with respect to the obstacles, of the planner's differentiable path ma
 negative first (an obstacle there pulls the path off its cells the most, to first order); a search planner without
 one is ranked as by `key-points`, recorded as `ranked_as: "key-points"` as for `optimal`.
 
+Obstacle removal (`edit="remove"`, DESIGN.md "Obstacle removal"): the candidates are the removable cells
+(`validity.removable_cells`: obstacle cells, never a border wall) instead of the valid free cells, and the chosen cell
+is freed instead of filled. Freeing a cell makes the world easier (the optimum never gets longer), so any harm it
+causes is the planner's own failure. Each strategy's removal candidates:
+- `random`: uniform over the removable cells.
+- `near-path`: uniform over the removable cells within Chebyshev distance `radius` of the original planner path.
+- `key-points`: the same tiers and signal as for additions, on obstacle cells: (2) the corners a diagonal move of the
+  path passes (with corner cutting they may be obstacles), earlier first; (3) other obstacles next to the path, by
+  the value change across the cell (the largest |value difference| between two free 8-neighbours of the cell: what a
+  shortcut through it would skip); (4) every other removable cell, by the same value change. (Tiers 1 and the path
+  cells of tier 4 hold only free cells.)
+- `saliency`: the same gradient, the sign flipped for the direction of the edit: freeing a cell lowers its obstacle
+  input from 1 to 0, so the most positive gradient lowers the planner's confidence in its own path the most.
+- `exhaustive`: every removable cell.
+K cells (`obstacles=K`) are freed greedily exactly as K are added (each step on the map with the cells freed so far).
+
 K obstacles (`obstacles=K`, DESIGN.md "Several obstacles"): greedy. Step 1 is the attack above; each later step runs
 the same strategy again on the maps with the cells chosen so far added (their valid cells, the planner's paths on
 them, the strategy's candidates, a fresh random stream: `SeedSequence(seed, spawn_key=(step,))`). Every candidate is
@@ -55,12 +71,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vinadv.attacks.pairs import PairSet
-from vinadv.attacks.validity import valid_cells
+from vinadv.attacks.validity import removable_cells, valid_cells
 from vinadv.errors import InputError
 from vinadv.planners.device import full_precision
 from vinadv.planners.interface import Planner, PlannerError, as_planner
 from vinadv.planners.result import PlanResult
 from vinadv.planners.search import SearchPlanner
+from vinadv.vocabulary import ADD, EDITS, REMOVE
 
 #: candidates planned together; bounds memory (each holds an N x N map and a path)
 EVAL_CHUNK = 8192
@@ -106,7 +123,7 @@ class AttackContext:
         plans: the planner's paths on `obstacles`. planner; rng: this step's random stream.
         base_obstacles, base: the original maps and the planner's paths on them (the pairs are made against them;
             default: `obstacles` and `plans`). added: `(B, k, 2)`, the k cells chosen at the steps before (default
-            none).
+            none). edit: `add` (the candidates are free cells to fill) or `remove` (obstacle cells to free).
     """
 
     obstacles: np.ndarray
@@ -119,6 +136,7 @@ class AttackContext:
     base_obstacles: np.ndarray | None = None
     base: PlanResult | None = None
     added: np.ndarray | None = None
+    edit: str = ADD
 
     def __post_init__(self) -> None:
         if self.base_obstacles is None:
@@ -143,7 +161,9 @@ class Attack:
     name = ""
     ranked = True  # keep the strongest evaluated candidates; False: keep every evaluated candidate
 
-    def __init__(self, per_map: int = 1, budget: int | None = 8, seed: int = 0, obstacles: int = 1):
+    def __init__(self, per_map: int = 1, budget: int | None = 8, seed: int = 0, obstacles: int = 1, edit: str = ADD):
+        if edit not in EDITS:
+            raise InputError(f"edit must be one of {'|'.join(EDITS)}, got {edit!r}", "edit")
         if per_map < 0:
             raise InputError(f"per_map must be >= 0, got {per_map}", "per_map")
         if budget is not None and budget < 1:
@@ -154,10 +174,18 @@ class Attack:
         self.budget = budget
         self.seed = seed
         self.obstacles = int(obstacles)
+        self.edit = edit
 
     def params(self) -> dict:
-        """The strategy's parameters, stored with its pairs."""
-        return {"per_map": self.per_map, "budget": self.budget, "seed": self.seed, "obstacles": self.obstacles}
+        """The strategy's parameters, stored with its pairs (`_edited`: `edit` only for removal)."""
+        return self._edited(
+            {"per_map": self.per_map, "budget": self.budget, "seed": self.seed, "obstacles": self.obstacles}
+        )
+
+    def _edited(self, params: dict) -> dict:
+        """`params` plus `edit` when the attack removes: an adding attack's parameters stay those written before
+        removal existed (and an absent `edit` reads as `add`)."""
+        return params if self.edit == ADD else {**params, "edit": self.edit}
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         raise NotImplementedError
@@ -206,7 +234,8 @@ class Attack:
             if step:
                 plans = planner.plan_batch(current, starts, goals, corner_cutting)
                 calls += b
-            valid = valid_cells(current, starts, goals, corner_cutting, planner.moves) & alive[:, None, None]
+            candidates = removable_cells if self.edit == REMOVE else valid_cells
+            valid = candidates(current, starts, goals, corner_cutting, planner.moves) & alive[:, None, None]
             ctx = AttackContext(
                 current,
                 starts,
@@ -218,6 +247,7 @@ class Attack:
                 base_obstacles=obstacles,
                 base=base,
                 added=chosen,
+                edit=self.edit,
             )
             scores = np.where(valid, self.candidate_scores(ctx), -np.inf)
             alive &= np.isfinite(scores).any(axis=(1, 2))
@@ -294,7 +324,7 @@ class Attack:
 
     def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength, keep, ranked) -> PairSet:
         obstacles_a = ctx.obstacles[map_idx].copy()
-        obstacles_a[np.arange(len(map_idx)), cells[:, 0], cells[:, 1]] = True
+        obstacles_a[np.arange(len(map_idx)), cells[:, 0], cells[:, 1]] = ctx.edit == ADD
         planned = ctx.planner.plan_batch(obstacles_a, ctx.starts[map_idx], ctx.goals[map_idx], corner_cutting)
         pairs = _make_pairs(ctx, map_idx, cells, obstacles_a, planned, corner_cutting)
         if not ranked or keep == 0:
@@ -335,6 +365,7 @@ def _make_pairs(ctx: AttackContext, map_idx, cells, obstacles_a, planned: PlanRe
         path_a=planned.paths,
         term_o=ctx.base.termination_names[map_idx],
         term_a=planned.termination_names,
+        edit=ctx.edit,
         corner_cutting=corner_cutting,
         moves=ctx.planner.moves,
     )
@@ -345,7 +376,7 @@ class RandomAttack(Attack):
     ranked = False
 
     def params(self) -> dict:
-        return {"per_map": self.per_map, "seed": self.seed, "obstacles": self.obstacles}
+        return self._edited({"per_map": self.per_map, "seed": self.seed, "obstacles": self.obstacles})
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         return ctx.rng.random(ctx.obstacles.shape)
@@ -355,14 +386,16 @@ class NearPathAttack(Attack):
     name = "near-path"
     ranked = False
 
-    def __init__(self, per_map: int = 1, radius: int = 2, seed: int = 0, obstacles: int = 1):
-        super().__init__(per_map=per_map, budget=None, seed=seed, obstacles=obstacles)
+    def __init__(self, per_map: int = 1, radius: int = 2, seed: int = 0, obstacles: int = 1, edit: str = ADD):
+        super().__init__(per_map=per_map, budget=None, seed=seed, obstacles=obstacles, edit=edit)
         if radius < 0:
             raise InputError(f"radius must be >= 0, got {radius}", "radius")
         self.radius = radius
 
     def params(self) -> dict:
-        return {"per_map": self.per_map, "radius": self.radius, "seed": self.seed, "obstacles": self.obstacles}
+        return self._edited(
+            {"per_map": self.per_map, "radius": self.radius, "seed": self.seed, "obstacles": self.obstacles}
+        )
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         near = within_distance(ctx.path_mask(), self.radius)
@@ -397,13 +430,20 @@ class KeyPointsAttack(Attack):
         on_path = ctx.path_mask()
         scores = np.full((b, n, n), -np.inf)
 
-        # tier 4 (lowest): any path cell
-        scores[on_path] = 0.0
-        # tier 3: other cells next to the path, by the steepest value change to a neighbour, in [1, 2)
         value = ctx.planner.value_maps(ctx.obstacles, ctx.goals)
-        steep = _steepness(value, ctx.obstacles)
         near = within_distance(on_path, 1) & ~on_path
-        scale = np.maximum(steep.reshape(b, -1).max(axis=1), 1e-12)[:, None, None]
+        if ctx.edit == REMOVE:
+            # tier 4 (lowest): every obstacle, in [0, 1); tier 3: those next to the path, in [1, 2); both by the
+            # value change across the cell
+            steep = _steepness_across(value, ctx.obstacles)
+            scale = np.maximum(steep.reshape(b, -1).max(axis=1), 1e-12)[:, None, None]
+            scores = np.where(ctx.obstacles, 0.999 * steep / scale, scores)
+        else:
+            # tier 4 (lowest): any path cell; tier 3: other cells next to the path, by the steepest value change to
+            # a neighbour, in [1, 2)
+            scores[on_path] = 0.0
+            steep = _steepness(value, ctx.obstacles)
+            scale = np.maximum(steep.reshape(b, -1).max(axis=1), 1e-12)[:, None, None]
         scores = np.where(near, 1.0 + 0.999 * steep / scale, scores)
         # moves of the path: move k goes from cell k to cell k + 1 of the same path
         same = np.append(owner[1:] == owner[:-1], False)
@@ -440,6 +480,23 @@ def _steepness(value: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
                 diff = np.abs(padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m] - v)
                 steep = np.fmax(steep, diff)
     return np.nan_to_num(steep)
+
+
+def _steepness_across(value: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
+    """Largest |value difference| between two free 8-neighbours of each cell, `(B, N, N)` (0 with fewer than two):
+    what a path through the cell, were it free, would skip."""
+    b, n, m = value.shape
+    padded = np.full((b, n + 2, m + 2), np.nan)
+    padded[:, 1:-1, 1:-1] = np.where(obstacles, np.nan, value.astype(np.float64))
+    hi = np.full((b, n, m), -np.inf)
+    lo = np.full((b, n, m), np.inf)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            if dr or dc:
+                v = padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m]
+                hi = np.fmax(hi, v)
+                lo = np.fmin(lo, v)
+    return np.where(hi > lo, hi - lo, 0.0)
 
 
 class SaliencyAttack(Attack):
@@ -484,7 +541,8 @@ class SaliencyAttack(Attack):
                 chosen = picked.detach().argmax(dim=-1)
                 objective = picked.gather(1, chosen[:, None]).sum()
                 (grad,) = torch.autograd.grad(objective, x)
-                out[lo:hi] = -grad.cpu().numpy()
+                # adding raises a cell's input (0 -> 1): the most negative gradient first; removing lowers it (1 -> 0)
+                out[lo:hi] = grad.cpu().numpy() if ctx.edit == REMOVE else -grad.cpu().numpy()
         return out
 
 
@@ -519,11 +577,11 @@ def _path_saliency(ctx: AttackContext, module) -> np.ndarray:
 class ExhaustiveAttack(Attack):
     name = "exhaustive"
 
-    def __init__(self, per_map: int = 1, seed: int = 0, obstacles: int = 1):
-        super().__init__(per_map=per_map, budget=None, seed=seed, obstacles=obstacles)
+    def __init__(self, per_map: int = 1, seed: int = 0, obstacles: int = 1, edit: str = ADD):
+        super().__init__(per_map=per_map, budget=None, seed=seed, obstacles=obstacles, edit=edit)
 
     def params(self) -> dict:
-        return {"per_map": self.per_map, "obstacles": self.obstacles}
+        return self._edited({"per_map": self.per_map, "obstacles": self.obstacles})
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         return np.zeros(ctx.obstacles.shape)  # every valid cell, in row-major order
@@ -535,14 +593,20 @@ STRATEGIES: dict[str, type[Attack]] = {
 
 
 def make_attack(
-    name: str, per_map: int = 1, seed: int = 0, budget: int = 8, radius: int = 2, obstacles: int = 1
+    name: str,
+    per_map: int = 1,
+    seed: int = 0,
+    budget: int = 8,
+    radius: int = 2,
+    obstacles: int = 1,
+    edit: str = ADD,
 ) -> Attack:
     """The strategy `name` with its parameters (those it does not use are ignored); `obstacles`: K, the cells
-    added per pair (greedily, see the module doc)."""
+    edited per pair (greedily, see the module doc); `edit`: `add` obstacles or `remove` them."""
     if name not in STRATEGIES:
         raise InputError(f"unknown attack strategy '{name}'; choose one of {', '.join(STRATEGIES)}")
     if name == "near-path":
-        return NearPathAttack(per_map=per_map, radius=radius, seed=seed, obstacles=obstacles)
+        return NearPathAttack(per_map=per_map, radius=radius, seed=seed, obstacles=obstacles, edit=edit)
     if name in ("key-points", "saliency"):
-        return STRATEGIES[name](per_map=per_map, budget=budget, seed=seed, obstacles=obstacles)
-    return STRATEGIES[name](per_map=per_map, seed=seed, obstacles=obstacles)
+        return STRATEGIES[name](per_map=per_map, budget=budget, seed=seed, obstacles=obstacles, edit=edit)
+    return STRATEGIES[name](per_map=per_map, seed=seed, obstacles=obstacles, edit=edit)

@@ -11,6 +11,11 @@ Numba and run in parallel over maps. They follow the map set's movement model (`
 depends only on which moves exist, so `octile` and `moore` have the same valid cells, and `news` (4 moves, no
 diagonal to cut) takes the cut-vertex search over its 4 moves.
 
+Which cells may be freed (edit `remove`, DESIGN.md "Obstacle removal"): an obstacle cell that is not a border wall
+(`vinadv.grid.checks.border_walls`: the outer ring of a map whose ring is all obstacles), on a map whose goal is
+reachable from the start. Freeing a cell only adds moves, so the goal stays reachable, and K cells are valid exactly
+when each is a valid one-cell removal of the map with the cells before it freed (`valid_removals`).
+
 K obstacles (`valid_additions`): K distinct cells, each free on the original map and neither the start nor the
 goal, with the goal still reachable from the start once all K are added. Adding obstacles only removes paths, so a
 set is valid exactly when each of its cells, added one after the other in any order, is a valid cell
@@ -22,6 +27,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from vinadv.grid.checks import border_walls
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.shortest_paths import expert_paths
 from vinadv.planners.batching import over_maps
@@ -218,18 +224,74 @@ def valid_additions(
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
-    b, n = obstacles.shape[0], obstacles.shape[1]
-    added = np.asarray(added, dtype=np.int64).reshape(b, -1, 2)
-    on_grid = ((added >= 0) & (added < n)).all(axis=(1, 2))
-    cells = np.where(on_grid[:, None, None], added, 0)
-    idx = np.arange(b)[:, None]
-    ok = on_grid & ~obstacles[idx, cells[..., 0], cells[..., 1]].any(axis=1)
+    ok, cells = _distinct_cells(obstacles, added)
+    idx = np.arange(len(obstacles))[:, None]
+    ok &= ~obstacles[idx, cells[..., 0], cells[..., 1]].any(axis=1)
     ok &= ~((cells == starts[:, None]).all(axis=2) | (cells == goals[:, None]).all(axis=2)).any(axis=1)
-    flat = np.sort(cells[..., 0] * n + cells[..., 1], axis=1)
-    ok &= ~(np.diff(flat, axis=1) == 0).any(axis=1)
     blocked = obstacles.copy()
     blocked[idx, cells[..., 0], cells[..., 1]] = True
-    reach = np.zeros(b, dtype=bool)
-    if b:
-        _reachable_all(blocked, starts, goals, bool(corner_cutting), move_model(moves).deltas, reach)
-    return ok & reach
+    return ok & solvable(blocked, starts, goals, corner_cutting, moves)
+
+
+def _distinct_cells(obstacles: np.ndarray, cells) -> tuple[np.ndarray, np.ndarray]:
+    """`(ok (B,), cells (B, K, 2))`: whether each map's K cells are distinct cells on the grid, and the cells as int64
+    (a map's cells set to (0, 0) where one is off the grid, so they index safely)."""
+    b, n = obstacles.shape[0], obstacles.shape[1]
+    cells = np.asarray(cells, dtype=np.int64).reshape(b, -1, 2)
+    on_grid = ((cells >= 0) & (cells < n)).all(axis=(1, 2))
+    cells = np.where(on_grid[:, None, None], cells, 0)
+    flat = np.sort(cells[..., 0] * n + cells[..., 1], axis=1)
+    return on_grid & ~(np.diff(flat, axis=1) == 0).any(axis=1), cells
+
+
+def solvable(
+    obstacles: np.ndarray,
+    starts: np.ndarray,
+    goals: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
+) -> np.ndarray:
+    """`(B,)` bool: the goal is reachable from the start on each map (`obstacles (B, N, N)`, starts/goals `(B, 2)`);
+    never from a start or to a goal on an obstacle."""
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    idx = np.arange(len(obstacles))
+    reach = np.zeros(len(obstacles), dtype=bool)
+    if len(obstacles):
+        _reachable_all(obstacles, starts, goals, bool(corner_cutting), move_model(moves).deltas, reach)
+    return reach & ~obstacles[idx, starts[:, 0], starts[:, 1]] & ~obstacles[idx, goals[:, 0], goals[:, 1]]
+
+
+def removable_cells(
+    obstacles: np.ndarray,
+    starts: np.ndarray,
+    goals: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
+) -> np.ndarray:
+    """Cells where freeing one obstacle makes a valid adversarial map (edit `remove`): `(B, N, N)` bool, the obstacle
+    cells that are not border walls, on the maps whose goal is reachable from the start (arguments as for
+    `valid_cells`)."""
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+    ok = solvable(obstacles, starts, goals, corner_cutting, moves)
+    return obstacles & ~border_walls(obstacles) & ok[:, None, None]
+
+
+def valid_removals(
+    obstacles: np.ndarray,
+    starts: np.ndarray,
+    goals: np.ndarray,
+    removed: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str = DEFAULT_MOVES,
+) -> np.ndarray:
+    """Whether freeing the cells `removed` (`(B, K, 2)`, or `(B, 2)` for K = 1) of each map makes a valid adversarial
+    map: `(B,)` bool. Valid when they are K distinct cells on the grid, each an obstacle of the original map and not
+    a border wall, and the goal is reachable from the start on the original map (so on the edited one too)."""
+    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
+    ok, cells = _distinct_cells(obstacles, removed)
+    idx = np.arange(len(obstacles))[:, None]
+    ok &= obstacles[idx, cells[..., 0], cells[..., 1]].all(axis=1)
+    ok &= ~border_walls(obstacles)[idx, cells[..., 0], cells[..., 1]].any(axis=1)
+    return ok & solvable(obstacles, starts, goals, corner_cutting, moves)

@@ -33,6 +33,7 @@ def register(subparsers) -> None:
     )
     p.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
     add_obstacles_argument(p)
+    add_edit_argument(p)
     add_planner_arguments(p)
     add_harm_arguments(p)
     add_objective_argument(p)
@@ -51,6 +52,17 @@ def add_obstacles_argument(parser) -> None:
         help="obstacles added per pair (default 1, the paper's setting); K > 1: greedily, the "
         "strategy run again on the map with the cells chosen so far, keeping the strongest cell "
         "against the original map's path each time",
+    )
+
+
+def add_edit_argument(parser) -> None:
+    """`--edit add|remove`: whether the attack adds obstacles or frees them (DESIGN.md "Obstacle removal")."""
+    parser.add_argument(
+        "--edit",
+        choices=("add", "remove"),  # vinadv.vocabulary.EDITS
+        default="add",
+        help="add obstacles (default, the paper's setting) or remove them: free obstacle cells, never a border wall "
+        "(the world gets easier, so any harm is the planner's own failure); --obstacles K frees K greedily",
     )
 
 
@@ -144,7 +156,12 @@ def cmd_attack(args: argparse.Namespace) -> int:
     planner = load_args_planner(args, maps, device)
     # `make_attack`'s options, kept: on a cluster every worker builds its own attack from them
     options = dict(
-        per_map=args.per_map, seed=args.seed, budget=args.budget, radius=args.radius, obstacles=args.obstacles
+        per_map=args.per_map,
+        seed=args.seed,
+        budget=args.budget,
+        radius=args.radius,
+        obstacles=args.obstacles,
+        edit=args.edit,
     )
     attack = make_attack(args.strategy, **options)
     t0 = time.perf_counter()
@@ -178,23 +195,28 @@ def cmd_attack(args: argparse.Namespace) -> int:
         ident.labels, len(maps), len(result.no_valid_cell), result.planner_calls, elapsed, harm_table=ident.harm_table()
     )
     summary.update(
-        strategy=args.strategy, params=attack.params(), planner=planner.spec(), out=args.out, objective=args.objective
+        strategy=args.strategy,
+        params=attack.params(),
+        planner=planner.spec(),
+        out=args.out,
+        objective=args.objective,
+        edit=args.edit,
     )
     fallback = attack.ranked_as(planner)
     if fallback:  # saliency without gradients (optimal, most search planners): ranked as key-points
         summary["ranked_as"] = fallback
 
     def report() -> None:
+        removing = " (obstacles removed)" if args.edit == "remove" else ""
         print(
-            f"{args.strategy} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps in "
-            f"{elapsed:.1f} s -> {args.out}"
+            f"{args.strategy}{removing} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps "
+            f"in {elapsed:.1f} s -> {args.out}"
         )
         if fallback:
             print(f"planner {planner.name} has no gradients: {args.strategy} ranked the cells as {fallback}")
         if result.no_valid_cell.size:
-            print(
-                f"{len(result.no_valid_cell)} maps had no valid cell for an added obstacle; no pair was made for them"
-            )
+            what = "an obstacle to remove" if args.edit == "remove" else "an added obstacle"
+            print(f"{len(result.no_valid_cell)} maps had no valid cell for {what}; no pair was made for them")
         print_counts(summary)
         per = summary["planner_calls_per_success"]
         per_text = "n/a" if per is None else f"{per:.1f}"

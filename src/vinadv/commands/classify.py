@@ -22,7 +22,7 @@ def register(subparsers) -> None:
         "classifier trained on the pairs of the file that the labels call FP or DP. The pairs are split "
         "train:test stratified by label; the test indices are kept in the model file for `classify eval`.",
     )
-    train.add_argument("--pairs", default=None, help="pairs file (.npz, vinadv.pairs/2); needed with --labels rule")
+    train.add_argument("--pairs", default=None, help="pairs file (.npz, vinadv.pairs/3); needed with --labels rule")
     train.add_argument("--model", required=True, choices=KINDS, help="FP/DP classifier")
     train.add_argument("--out", required=True, help="output model file")
     train.add_argument(
@@ -65,7 +65,7 @@ def register(subparsers) -> None:
         "eval",
         help="evaluate a model on a pairs file (its held-out test split when it is the training file)",
     )
-    ev.add_argument("--pairs", required=True, help="pairs file (.npz, vinadv.pairs/2)")
+    ev.add_argument("--pairs", required=True, help="pairs file (.npz, vinadv.pairs/3)")
     ev.add_argument("--model", required=True, help="model file written by `vinadv classify train`")
     ev.add_argument(
         "--all",

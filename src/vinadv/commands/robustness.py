@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from vinadv.commands import add_moves_argument, add_planner_arguments, planner_device
-from vinadv.commands.attack import add_harm_arguments
+from vinadv.commands.attack import add_edit_argument, add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
 from vinadv.errors import InputError, OutputError
@@ -64,6 +64,7 @@ def register(subparsers) -> None:
     )
     p.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map and step")
     p.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
+    add_edit_argument(p)
     add_harm_arguments(p)
     p.add_argument("--db", help="store the benchmark in this database (URL or SQLite file)")
     p.add_argument(
@@ -131,6 +132,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         radius=args.radius,
         harm_tol=args.harm_tolerance,
         harm_rtol=args.harm_rtol,
+        edit=args.edit,
         progress=shows_progress(args),
         maps_source=source,
     )
@@ -170,6 +172,7 @@ def print_robustness(out: dict) -> None:
     print(
         f"robustness of planner {planner['name']}{f' (weights {weights})' if weights else ''} on {s['n']:,} maps "
         f"{s['size']}x{s['size']} ({origin}), kept by {s['objective']}, in {out['seconds']:.1f} s"
+        + (", obstacles removed" if s.get("edit") == "remove" else "")
     )
     regret = "—" if clean["mean_regret"] is None else f"{clean['mean_regret']:.3f}"
     print(

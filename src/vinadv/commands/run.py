@@ -8,6 +8,7 @@ import time
 from vinadv.cluster import ClusterIdentify, ClusterShards, add_cluster_arguments, open_cluster
 from vinadv.commands import LazyChoices, add_moves_argument, add_planner_arguments, planner_device
 from vinadv.commands.attack import (
+    add_edit_argument,
     add_harm_arguments,
     add_objective_argument,
     add_obstacles_argument,
@@ -33,6 +34,7 @@ def register(subparsers) -> None:
     run.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map")
     run.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
     add_obstacles_argument(run)
+    add_edit_argument(run)
     run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
     add_moves_argument(
         run, default=None, what="movement model of the generated maps (the planner plans it; with --maps, the file's)"
@@ -97,6 +99,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         harm_rtol=args.harm_rtol,
         objective=args.objective,
         obstacles=args.obstacles,
+        edit=args.edit,
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(

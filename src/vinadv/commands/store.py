@@ -101,6 +101,7 @@ def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
         **{name: getattr(records, name) for name in HARM_FLOAT_COLUMNS},
         "expert_label": np.where(np.equal(records.expert_label, None), "", records.expert_label).astype(str),
         "harm": np.where(np.equal(records.harm, None), "", records.harm).astype(str),
+        "edit": records.edit,  # add | remove (vocabulary.EDITS)
     }
     with atomic_output(out, "wb") as fh:  # a failed export never leaves a half-written file behind
         np.savez_compressed(fh, **arrays)
@@ -130,6 +131,7 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
                 for row in chunk:
                     row["run_id"] = run_id
                     row["attack"] = bool(row["attack"])
+                    row["edit"] = row["edit"] or "add"  # NULL: a row stored before the step to schema 7
                 if writer is not None:
                     writer.writerows(
                         [["" if r[c] is None else int(r[c]) if c == "attack" else r[c] for c in columns] for r in chunk]

@@ -11,7 +11,8 @@ path or pair, so a file that would be stored wrong is refused at the door. What 
   the first cell the path's start; a path that reached its goal (termination `goal`) ends there and one that did
   not does not (DESIGN.md: it reaches the goal when its last cell is the goal).
 - pairs: the adversarial map is the original plus exactly the added cells (K >= 1), distinct, each free and
-  neither the start nor the goal.
+  neither the start nor the goal; for a pair of edit `remove`, the original minus exactly the freed cells, distinct,
+  each an obstacle of the original map and none a border wall (`border_walls`).
 
 Maps without a border wall are legitimate (the grid edge is a wall): no border is required.
 """
@@ -180,6 +181,18 @@ def check_maps(
     )
 
 
+def border_walls(obstacles: np.ndarray) -> np.ndarray:
+    """`(B, N, N)` bool: the cells of the outer ring of each map of `obstacles (B, N, N)` whose outer ring is all
+    obstacles (a map with a border wall, as the generator makes them); all False for a map without one. A border
+    wall is never removed (`vocabulary.REMOVE`): a freed border cell opens the world onto the grid's edge."""
+    obstacles = np.asarray(obstacles, dtype=bool)
+    ring = np.zeros(obstacles.shape[1:], dtype=bool)
+    ring[[0, -1], :] = True
+    ring[:, [0, -1]] = True
+    walled = (obstacles | ~ring).all(axis=(1, 2))
+    return ring[None] & walled[:, None, None]
+
+
 def check_pairs(
     where,
     obstacles_o: np.ndarray,
@@ -191,12 +204,15 @@ def check_pairs(
     terms: dict,
     corner_cutting: bool = True,
     moves: str = DEFAULT_MOVES,
+    removes: np.ndarray | None = None,
 ) -> None:
     """A pairs file's content: maps `(n, N, N)`, `starts`/`goals` `(n, 2)`, `added` `(n, K, 2)` (or `(n, 2)`, K = 1),
     `paths[side]` (`PackedPaths`) and `terms[side] (n,)` termination names for side "o" (original map) and "a"
-    (adversarial map), made of `moves`. The added cells of a pair are K distinct cells, free on the original map,
-    none the start or the goal, and the adversarial map is the original plus exactly them (reachability is not
-    checked here: see `vinadv.attacks.validity.valid_additions`)."""
+    (adversarial map), made of `moves`; `removes (n,)` bool: the pairs of edit `remove` (default none). The added
+    cells of a pair are K distinct cells, free on the original map, none the start or the goal, and the adversarial
+    map is the original plus exactly them; the freed cells of a `remove` pair are K distinct obstacle cells of the
+    original map, none a border wall (`border_walls`), and the adversarial map is the original minus exactly them
+    (reachability is not checked here: see `vinadv.attacks.validity.valid_additions` and `valid_removals`)."""
     n, size = len(obstacles_o), obstacles_o.shape[-1]
     if n == 0:
         return
@@ -207,24 +223,23 @@ def check_pairs(
     _check(obstacles_o[idx, starts[:, 0], starts[:, 1]], where, "starts", "has a start on an obstacle", "pair")
     _check(obstacles_o[idx, goals[:, 0], goals[:, 1]], where, "goals", "has a goal on an obstacle", "pair")
     _check((starts == goals).all(axis=1), where, "starts", "has a start on its goal", "pair")
+    removes = np.zeros(n, dtype=bool) if removes is None else np.asarray(removes, dtype=bool)
     _check((added == starts[:, None]).all(axis=2).any(axis=1), where, "added", "is on the start", "pair")
     _check((added == goals[:, None]).all(axis=2).any(axis=1), where, "added", "is on the goal", "pair")
-    _check(
-        obstacles_o[idx[:, None], added[..., 0], added[..., 1]].any(axis=1),
-        where,
-        "added",
-        "is already an obstacle on the original map",
-        "pair",
-    )
+    on_obstacle = obstacles_o[idx[:, None], added[..., 0], added[..., 1]]
+    _check(~removes & on_obstacle.any(axis=1), where, "added", "is already an obstacle on the original map", "pair")
+    _check(removes & ~on_obstacle.all(axis=1), where, "added", "frees a cell that is no obstacle (edit remove)", "pair")
+    walls = border_walls(obstacles_o)[idx[:, None], added[..., 0], added[..., 1]]
+    _check(removes & walls.any(axis=1), where, "added", "frees a border wall cell (edit remove)", "pair")
     flat = np.sort(added[..., 0] * size + added[..., 1], axis=1)
     _check((np.diff(flat, axis=1) == 0).any(axis=1), where, "added", "has the same cell twice", "pair")
     expected = obstacles_o.copy()
-    expected[idx[:, None], added[..., 0], added[..., 1]] = True
+    expected[idx[:, None], added[..., 0], added[..., 1]] = ~removes[:, None]
     _check(
         (obstacles_a != expected).any(axis=(1, 2)),
         where,
         "obstacles_a",
-        "is not obstacles_o plus exactly the cells 'added'",
+        "is not obstacles_o plus (edit add) or minus (edit remove) exactly the cells 'added'",
         "pair",
     )
     for side, obstacles in (("o", obstacles_o), ("a", obstacles_a)):

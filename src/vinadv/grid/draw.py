@@ -27,12 +27,14 @@ def draw_map(
     paths: Sequence[tuple[str, np.ndarray]] = (),
     added: np.ndarray | None = None,
     title: str | None = None,
+    removed: bool = False,
 ) -> None:
     """Draw one N x N map on `ax`: obstacles black, start green circle, goal red star, paths as lines.
 
     `start` is one cell `(2,)` or several `(k, 2)` (each gets a marker). `paths` is a sequence of
     `(label, cells (L, 2))`; a label in PATH_STYLES gets its colour. `added`, one cell `(2,)` or several `(k, 2)`,
-    marks the adversarial obstacles with orange squares. Every artist carries its label, for `map_legend`.
+    marks the adversarial obstacles with orange squares; with `removed` (edit `remove`) they are freed cells, drawn as
+    orange outlines. Every artist carries its label, for `map_legend`.
     """
     n = obstacles.shape[0]
     ax.imshow(~np.asarray(obstacles, dtype=bool), cmap="gray", vmin=0, vmax=1, interpolation="nearest")
@@ -42,9 +44,14 @@ def draw_map(
         ax.plot(cells[:, 1], cells[:, 0], style, color=colour, lw=2, label=label, alpha=0.9)
     if added is not None:
         cells = np.asarray(added).reshape(-1, 2)
+        what = "removed obstacle" if removed else "added obstacle"
         for k, (r, c) in enumerate(cells):
-            label = ("added obstacle" if len(cells) == 1 else "added obstacles") if k == 0 else None
-            ax.add_patch(plt.Rectangle((c - 0.5, r - 0.5), 1, 1, color="#ff7f0e", label=label))
+            label = (what if len(cells) == 1 else what + "s") if k == 0 else None
+            if removed:
+                square = plt.Rectangle((c - 0.45, r - 0.45), 0.9, 0.9, fill=False, ec="#ff7f0e", lw=2, label=label)
+            else:
+                square = plt.Rectangle((c - 0.5, r - 0.5), 1, 1, color="#ff7f0e", label=label)
+            ax.add_patch(square)
     if start is not None:
         starts = np.asarray(start).reshape(-1, 2)
         ax.plot(

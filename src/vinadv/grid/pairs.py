@@ -16,7 +16,7 @@ import numpy as np
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
 from vinadv.grid.paths import PackedPaths
-from vinadv.vocabulary import GOAL, TERMINATIONS
+from vinadv.vocabulary import ADD, EDITS, GOAL, TERMINATIONS
 
 
 @dataclass(kw_only=True, eq=False)
@@ -24,13 +24,17 @@ class PathPairs(Columns):
     """n map pairs of N x N cells, one start and goal each, and both planned paths.
 
     Attributes (cells are `(row, col)`):
-        obstacles_o, obstacles_a: `(n, N, N)` bool, True = obstacle; `obstacles_a` is `obstacles_o` plus `added`.
+        obstacles_o, obstacles_a: `(n, N, N)` bool, True = obstacle; `obstacles_a` is `obstacles_o` plus `added`
+            (edit `add`), or minus them (edit `remove`).
         starts, goals: `(n, 2)` int64: start and goal of each pair.
-        added: `(n, K, 2)` int64, K >= 1: the K added obstacle cells of each pair, in the order they were added
-            (K = 1, the paper's setting, for one-obstacle pairs; every pair of one object has the same K). An
-            `(n, 2)` array given here is read as K = 1.
+        added: `(n, K, 2)` int64, K >= 1: the K edited cells of each pair, in the order they were edited: added
+            obstacles, or freed obstacle cells for a pair of edit `remove` (K = 1, the paper's setting, for
+            one-obstacle pairs; every pair of one object has the same K). An `(n, 2)` array given here is read as
+            K = 1.
         path_o, path_a: `PackedPaths` of n paths each, the planned paths on the original and adversarial map.
         term_o, term_a: `(n,)` str, why each path ended: one of `vocabulary.TERMINATIONS`.
+        edit: `(n,)` str, each pair's edit, one of `vocabulary.EDITS` (`add`: obstacles added, the paper's
+            setting; `remove`: obstacle cells freed); a single str is broadcast (default `add`).
     """
 
     obstacles_o: np.ndarray
@@ -42,6 +46,7 @@ class PathPairs(Columns):
     path_a: PackedPaths
     term_o: np.ndarray
     term_a: np.ndarray
+    edit: np.ndarray | str = ADD
 
     def __post_init__(self) -> None:
         name = type(self).__name__
@@ -65,6 +70,7 @@ class PathPairs(Columns):
             if term.shape != (n,):
                 raise InputError(f"{name}.{field}: expected shape ({n},), got {term.shape}")
             setattr(self, field, term)
+        self.edit = edit_column(self.edit, f"{name}.edit", n)
 
     @classmethod
     def concat(cls, parts, size: int | None = None, n_added: int | None = None, **settings):
@@ -116,6 +122,11 @@ class PathPairs(Columns):
         return int(self.added.shape[1])
 
     @property
+    def removes(self) -> np.ndarray:
+        """`(n,)` bool: the pair frees obstacle cells (edit `remove`) rather than adding them."""
+        return self.edit == EDITS[1]
+
+    @property
     def reached_o(self) -> np.ndarray:
         """`(n,)` bool: the original path ends at the goal."""
         return np.asarray(self.term_o) == TERMINATIONS[GOAL]
@@ -138,6 +149,21 @@ def added_column(value, name: str, n: int) -> np.ndarray:
     if arr.size and not np.issubdtype(arr.dtype, np.integer):
         raise InputError(f"{name}: expected integers, got {arr.dtype}")
     return arr.astype(np.int64, copy=False)
+
+
+def edit_column(value, name: str, n: int) -> np.ndarray:
+    """The edits `value` (one str, broadcast, or n of them) as a `(n,)` str array of `vocabulary.EDITS`; InputError
+    naming `name` else."""
+    arr = np.asarray(value)
+    if arr.ndim == 0:
+        arr = np.full(n, arr.item() if arr.dtype != object else str(arr.item()))
+    if arr.shape != (n,):
+        raise InputError(f"{name}: expected shape ({n},), got {arr.shape}")
+    arr = arr.astype(str) if arr.size else np.zeros(0, "<U6")
+    bad = ~np.isin(arr, EDITS)
+    if bad.any():
+        raise InputError(f"{name}: {arr[bad][0]!r} is not one of {'|'.join(EDITS)}")
+    return arr.astype("<U6")
 
 
 def int_column(value, name: str, shape: tuple) -> np.ndarray:

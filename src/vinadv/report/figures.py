@@ -55,7 +55,16 @@ def _draw_pair(axes, records, i: int, paths_o, paths_a, title_o: str, title_a: s
     the adversarial map (its added obstacles marked) with `paths_a` on `axes[1]`."""
     goal, start = records.goals[i], records.starts[i]
     draw_map(axes[0], records.obstacles_o[i], goal, start, paths=paths_o, title=title_o)
-    draw_map(axes[1], records.obstacles_a[i], goal, start, paths=paths_a, added=records.added[i], title=title_a)
+    draw_map(
+        axes[1],
+        records.obstacles_a[i],
+        goal,
+        start,
+        paths=paths_a,
+        added=records.added[i],
+        title=title_a,
+        removed=bool(records.removes[i]),
+    )
 
 
 def _distances(pair) -> str:
@@ -194,7 +203,16 @@ def harm_pairs(records, examples, stem: Path, per_row: int = 2) -> list[str]:
             ),
         ):
             ax.axis("on")
-            draw_map(ax, obstacles, records.goals[i], records.starts[i], paths=paths, added=added, title=title)
+            draw_map(
+                ax,
+                obstacles,
+                records.goals[i],
+                records.starts[i],
+                paths=paths,
+                added=added,
+                title=title,
+                removed=bool(records.removes[i]),
+            )
             cost, optimum, regret = (_cost(v) for v in costs)
             ax.set_xlabel(f"cost {cost}, optimal {optimum}: regret {regret}", fontsize=8)
     map_legend(fig, axes)

@@ -24,7 +24,8 @@ import numpy as np
 from vinadv.errors import InputError
 from vinadv.grid.paths import PackedPaths
 from vinadv.store.records import PairRecords
-from vinadv.store.schema import HARM_COLUMNS, HARM_FLOAT_COLUMNS, MORE_ADDED_COLUMN, map_pairs
+from vinadv.store.schema import EDIT_COLUMN, HARM_COLUMNS, HARM_FLOAT_COLUMNS, MORE_ADDED_COLUMN, map_pairs
+from vinadv.vocabulary import ADD
 
 if TYPE_CHECKING:
     import sqlalchemy as sa
@@ -309,6 +310,7 @@ PAIR_COLUMNS = (
     "dv",
     *HARM_COLUMNS,
     MORE_ADDED_COLUMN,
+    EDIT_COLUMN,
 )
 
 
@@ -400,6 +402,7 @@ def encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, s
         "expert_label": records.expert_label[rows].tolist(),  # None = NULL
         "harm": records.harm[rows].tolist(),
         MORE_ADDED_COLUMN: _encode_more_added(records.added[rows], "" if sqlite else None),
+        EDIT_COLUMN: records.edit[rows].tolist(),
     }
     assert tuple(columns) == INSERT_COLUMNS
     return list(columns.values())
@@ -463,4 +466,5 @@ def decode_rows(rows: Sequence) -> PairRecords:
         **{name: nullable(col[name], np.nan, np.float64) for name in HARM_FLOAT_COLUMNS},
         expert_label=np.array(col["expert_label"], dtype=object),
         harm=np.array(col["harm"], dtype=object),
+        edit=np.array([ADD if e is None else e for e in col[EDIT_COLUMN]], dtype=str).reshape(-1),  # NULL: before 7
     )

@@ -290,13 +290,13 @@ def create_tables(engine: sa.Engine) -> bool:
 
 
 def upgrade(engine: sa.Engine) -> None:
-    """Schema version 1 to 5 -> 6, under the `schema_lock` (two processes opening one old database at once upgrade
-    it once; the second finds it done): add the `UPGRADE_COLUMNS` the database lacks (the harm columns,
-    `added_more`; all nullable, existing rows read them as NULL), the `RUN_UPGRADE_COLUMNS` (`runs.moves`, version
-    6: NULL reads as octile), the `UPGRADE_TABLES` (`measurements`) and `ADDITIVE_TABLES` it lacks, give `runs.name`
-    its exact collation on MySQL/MariaDB (version 5: the column is changed in place, its rows kept), then record the
-    new version. Only what is missing is done, so an upgrade cut
-    short (MariaDB commits each ALTER on its own) is finished by the next open."""
+    """Schema version 1 to 6 -> 7, under the `schema_lock` (two processes opening one old database at once upgrade
+    it once; the second finds it done): add the `UPGRADE_COLUMNS` the database lacks (the harm columns, `added_more`,
+    version 7's `edit`; all nullable, existing rows read them as NULL), the `RUN_UPGRADE_COLUMNS` (`runs.moves`,
+    version 6: NULL reads as octile), the `UPGRADE_TABLES` (`measurements`) and `ADDITIVE_TABLES` it lacks, give
+    `runs.name` its exact collation on MySQL/MariaDB (version 5: the column is changed in place, its rows kept), then
+    record the new version. Only what is missing is done, so an upgrade cut short (MariaDB commits each ALTER on its
+    own) is finished by the next open, and the steps compose."""
     prep = engine.dialect.identifier_preparer
     with engine.connect() as conn, schema_lock(conn):
         version = conn.execute(

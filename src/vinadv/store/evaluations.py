@@ -13,7 +13,7 @@ from vinadv import __version__
 from vinadv.errors import InputError
 from vinadv.store.connection import utcnow
 from vinadv.store.runs import RunQueries
-from vinadv.store.schema import evaluations, measurements, robustness
+from vinadv.store.schema import bench_chunks, evaluations, measurements, robustness
 from vinadv.vocabulary import MEASUREMENTS
 
 
@@ -107,6 +107,25 @@ class EvaluationQueries(RunQueries):
                 )
             )
             return int(row.inserted_primary_key[0])
+
+    def add_bench_chunk(self, entry: str, chunk: int, result: dict, version: str = __version__) -> None:
+        """Store the finished chunk `chunk` of benchmark entry `entry` (`vinadv.bench.entry`), in one transaction: a
+        run killed before it commits leaves nothing of the chunk, one killed after leaves all of it."""
+        self.ensure_table(bench_chunks)
+        with self.engine.begin() as conn:
+            conn.execute(
+                bench_chunks.insert().values(
+                    created=utcnow(), entry=str(entry), chunk=int(chunk), result=result, version=version
+                )
+            )
+
+    def read_bench_chunks(self, entry: str) -> dict[int, dict]:
+        """The stored chunks of benchmark entry `entry`: {chunk: result} (`{}` when none, or no table yet)."""
+        with self.engine.connect() as conn:
+            if not sa.inspect(conn).has_table(bench_chunks.name):
+                return {}
+            query = sa.select(bench_chunks.c.chunk, bench_chunks.c.result).where(bench_chunks.c.entry == str(entry))
+            return {int(r.chunk): r.result for r in conn.execute(query)}
 
     def read_robustness(self, ids: Sequence[int] | None = None) -> list[dict]:
         """The stored robustness benchmarks (of `ids` only, if given), oldest first: dicts of the table's columns

@@ -19,7 +19,7 @@ class PairRecords(PathPairs):
 
     Shapes (n pairs, N x N maps; cells are (row, col)), besides those of `PathPairs` (obstacles_o/obstacles_a
     `(n, N, N)` bool, starts/goals `(n, 2)` int64, added `(n, K, 2)` int64 (stored as `added_obstacle`, the first,
-    and `added_more`, the rest), path_o/path_a `PackedPaths`, term_o/term_a `(n,)` str):
+    and `added_more`, the rest), path_o/path_a `PackedPaths`, term_o/term_a `(n,)` str, edit `(n,)` str):
       pair_index (n,) int64 — position of the pair in its run, unique per run (the resume key)
       label (n,) str in 'invalid|UrP|UcP|DP|FP'; attack (n,) bool (success: UrP or FP)
       label_source (n,) str — who labelled it ('rule', a classifier name, ...); a single str is broadcast
@@ -114,6 +114,7 @@ class PairRecords(PathPairs):
             attack=attack,
             term_o=pairs.term_o,
             term_a=pairs.term_a,
+            edit=pairs.edit,
             label_source=label_source,
             score=score,
             dh=dh,

@@ -11,6 +11,8 @@ Tables:
   creates it in an older database instead of refusing it (`ADDITIVE_TABLES`).
 - `robustness`: robustness benchmarks of planners (`vinadv robustness` writes them, the report reads them): one row
   per benchmark, its settings and figures as JSON. Additive, as `evaluations`.
+- `bench_chunks` (the step to schema version 7): the finished chunks of maps of a benchmark entry (`vinadv bench run
+  --db --resume`), one JSON result per (entry, chunk). Additive, as `evaluations`.
 - `measurements`: what the evaluation stage measures of a run besides the classifier comparison
   (`vinadv.vocabulary.MEASUREMENTS`: the planner's quality, the processing time), one JSON result per row; the
   newest row of a run and kind is the one the report shows.
@@ -23,7 +25,9 @@ on MySQL/MariaDB `runs.name` gets a binary collation without padding (`exact_col
 case, accents, emoji or trailing spaces are different runs there too (SQLite and PostgreSQL compare bytes
 already); an older MariaDB database has the column changed in place, its rows kept. Version 6 adds `runs.moves`
 (nullable, `RUN_UPGRADE_COLUMNS`): the run's movement model (`vinadv.grid.moves`); NULL, as every run stored before
-version 6 reads, is `octile`, the only model there was. A database of an older version (`UPGRADABLE_VERSIONS`)
+version 6 reads, is `octile`, the only model there was. Version 7 adds `map_pairs.edit` (nullable): each pair's
+edit, `add` or `remove` (DESIGN.md "Obstacle removal"; NULL, in the rows of an older database, reads as `add`)
+and the table `bench_chunks`. A database of an older version (`UPGRADABLE_VERSIONS`)
 gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`), tables and collation it lacks on open (see
 `connection.upgrade`); opened read-only it reads the columns as NULL and the tables as empty; any other version is
 refused untouched.
@@ -42,10 +46,10 @@ from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exp
 from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
-SCHEMA_VERSION = "6"
+SCHEMA_VERSION = "7"
 #: the versions before: upgraded on open by adding what they lack (`UPGRADE_COLUMNS`, `UPGRADE_TABLES`, the run
 #: name's collation; nothing existing is lost)
-UPGRADABLE_VERSIONS = ("1", "2", "3", "4", "5")
+UPGRADABLE_VERSIONS = ("1", "2", "3", "4", "5", "6")
 
 metadata = sa.MetaData()
 
@@ -143,6 +147,8 @@ map_pairs = sa.Table(
     # several obstacles (schema version 3): the cells added after `added_obstacle`, in order, "r,c;r,c" (as a path);
     # NULL for a one-obstacle pair
     sa.Column("added_more", _LongText, nullable=True),
+    # obstacle removal (the step to schema version 7): 'add' or 'remove' (`vocabulary.EDITS`); NULL reads as 'add'
+    sa.Column("edit", sa.String(8), nullable=True),
     sa.UniqueConstraint("run_id", "pair_index", name="uq_map_pairs_run_pair"),
     # pair_index last: a filtered page of a run (`Store.page_pairs`, the viewer's grid) is one ordered index range
     sa.Index("ix_map_pairs_run_label", "run_id", "label", "pair_index"),
@@ -197,6 +203,18 @@ robustness = sa.Table(
     sa.Index("ix_robustness_planner", "planner", "id"),
 )
 
+bench_chunks = sa.Table(
+    "bench_chunks",
+    metadata,
+    sa.Column("id", _BigId, primary_key=True, autoincrement=True),
+    sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive
+    sa.Column("entry", sa.String(64), nullable=False),  # sha256 of (suite checksum, planner spec): one bench entry
+    sa.Column("chunk", sa.Integer(), nullable=False),  # maps chunk * suite.chunk .. of the suite
+    sa.Column("result", sa.JSON(), nullable=False),  # the chunk's per-map outcomes (`vinadv.bench.entry`)
+    sa.Column("version", sa.String(64), nullable=False),
+    sa.UniqueConstraint("entry", "chunk", name="uq_bench_chunks_entry_chunk"),
+)
+
 measurements = sa.Table(
     "measurements",
     metadata,
@@ -214,8 +232,10 @@ HARM_FLOAT_COLUMNS = HARM_FLOAT_FIELDS
 HARM_COLUMNS = HARM_FIELDS
 #: `map_pairs` column added by schema version 3
 MORE_ADDED_COLUMN = "added_more"
+#: `map_pairs` column added by the step to schema version 7
+EDIT_COLUMN = "edit"
 #: `map_pairs` columns added after version 1: an older database gains those it lacks on open
-UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN)
+UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN, EDIT_COLUMN)
 #: `runs` column added by schema version 6: an older database gains it on open (NULL reads as octile)
 RUN_UPGRADE_COLUMNS = ("moves",)
 #: tables added by schema version 4: an older database gains them on open
@@ -223,6 +243,7 @@ UPGRADE_TABLES = (measurements,)
 #: the version that added the `UPGRADE_TABLES`: a database of that version or later without them is refused
 UPGRADE_TABLES_SINCE = 4
 
-TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness, measurements)
-#: tables added to the schema later: created when missing, never a reason to refuse a database
-ADDITIVE_TABLES = (evaluations, robustness)
+TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness, measurements, bench_chunks)
+#: tables added to the schema later: created when missing, never a reason to refuse a database (`bench_chunks`: the
+#: step to 7, the resumable units of `vinadv bench run --db`)
+ADDITIVE_TABLES = (evaluations, robustness, bench_chunks)

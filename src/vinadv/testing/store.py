@@ -8,14 +8,21 @@ import numpy as np
 from vinadv.grid.paths import PackedPaths
 from vinadv.store.records import PairRecords
 from vinadv.store.schema import HARM_FLOAT_COLUMNS
-from vinadv.vocabulary import HARMS, LABELS, TERMINATIONS, is_success
+from vinadv.vocabulary import ADD, HARMS, LABELS, REMOVE, TERMINATIONS, is_success
 
 
 def random_records(
-    n: int, size: int = 28, seed: int = 0, max_path: int = 80, first_index: int = 0, n_added: int = 1
+    n: int,
+    size: int = 28,
+    seed: int = 0,
+    max_path: int = 80,
+    first_index: int = 0,
+    n_added: int = 1,
+    removes: float = 0.0,
 ) -> PairRecords:
     """n random pairs on `size` x `size` maps, `n_added` added cells each; paths of 0..max_path random cells; some
-    NULL scores and dh/dv."""
+    NULL scores and dh/dv. `removes`: the share of pairs (drawn last, so the rest is as without it) of edit `remove`,
+    whose cells are freed instead of added."""
     rng = np.random.default_rng(seed)
     obstacles_o = rng.random((n, size, size)) < 0.3
     obstacles_a = obstacles_o.copy()
@@ -37,6 +44,12 @@ def random_records(
     costs = {name: np.where(rng.random(n) < 0.2, np.nan, rng.random(n) * 4 * size) for name in HARM_FLOAT_COLUMNS}
     expert_label = np.array([None, *LABELS], dtype=object)[rng.integers(0, len(LABELS) + 1, n)]
     harm = np.array([None, *HARMS], dtype=object)[rng.integers(0, len(HARMS) + 1, n)]
+    edit = np.full(n, ADD, dtype="<U6")
+    if removes:
+        edit[rng.random(n) < removes] = REMOVE
+        freed = obstacles_o.copy()
+        freed[np.arange(n)[:, None], added[..., 0], added[..., 1]] = False
+        obstacles_a = np.where((edit == REMOVE)[:, None, None], freed, obstacles_a)
     return PairRecords(
         pair_index=first_index + np.arange(n),
         obstacles_o=obstacles_o,
@@ -57,4 +70,5 @@ def random_records(
         **costs,
         expert_label=expert_label,
         harm=harm,
+        edit=edit,
     )

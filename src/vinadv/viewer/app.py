@@ -404,6 +404,7 @@ class _ViewerState:
             "goal": r.goals[0].tolist(),
             "added": r.added[0, 0].tolist(),
             "added_cells": r.added[0].tolist(),  # every added obstacle, in the order added (`added`: the first)
+            "edit": str(r.edit[0]),  # add | remove: `added` are then the freed cells
             "path_o": o.tolist(),
             "path_a": a.tolist(),
             "map_o": ["".join("1" if v else "0" for v in row) for row in r.obstacles_o[0]],

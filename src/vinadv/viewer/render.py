@@ -91,7 +91,16 @@ def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
         fig = Figure(figsize=(_MAP_INCHES, _MAP_INCHES), dpi=_MAP_DPI)
         FigureCanvasAgg(fig)
         ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
-        draw_map(ax, obstacles, goal=records.goals[i], start=records.starts[i], paths=paths, added=added, title=title)
+        draw_map(
+            ax,
+            obstacles,
+            goal=records.goals[i],
+            start=records.starts[i],
+            paths=paths,
+            added=added,
+            title=title,
+            removed=bool(records.removes[i]),
+        )
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=_MAP_DPI)
     return buf.getvalue()

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from vinadv.report import paper
 from vinadv.report.data import ALL_LABELS, CATEGORY_ORDER, RULE_SOURCE, Context, Figure, Table
+from vinadv.report.sections.run import run_edit
 
 
 @dataclass(frozen=True)
@@ -57,7 +58,9 @@ def gather(ctx: Context) -> DistributionData:
             RunCounts(
                 run_id=rid,
                 name=info.get("name"),
-                attack=info.get("attack"),
+                # a run that frees obstacles says so; one that adds them is shown as before removal existed
+                attack=info.get("attack")
+                and info["attack"] + (" (remove)" if run_edit(info.get("config")) == "remove" else ""),
                 labelled_by=", ".join(sources) or (info.get("classifier") or RULE_SOURCE),
                 by_model=any(s != RULE_SOURCE for s in sources),
                 counts={lab: int(ctx.store.label_counts(rid).get(lab, 0)) for lab in ALL_LABELS},

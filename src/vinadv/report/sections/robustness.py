@@ -30,12 +30,19 @@ class Benchmark:
     worst: list[dict]
     by_strategy: dict[str, list[dict]]
     seconds: dict[str, float]
+    edit: str = "add"
 
     @property
     def name(self) -> str:
-        """The benchmark in a legend: planner, weights (first 8 hex digits) and id."""
+        """The benchmark in a legend: planner, weights (first 8 hex digits), `removal` for a benchmark that frees
+        obstacles, and id."""
         weights = f" {self.weights[:8]}" if self.weights else ""
-        return f"{self.planner}{weights}" + (f" (#{self.id})" if self.id is not None else "")
+        removal = " removal" if self.edit == "remove" else ""
+        return f"{self.planner}{weights}{removal}" + (f" (#{self.id})" if self.id is not None else "")
+
+    def strategy_name(self, name: str) -> str:
+        """A strategy (or the worst case) in the table: `(remove)` added where the benchmark frees obstacles."""
+        return f"{name} (remove)" if self.edit == "remove" else name
 
 
 @dataclass
@@ -84,6 +91,7 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
                     **{name: s["seconds"] for name, s in result["strategies"].items()},
                     "total": result["seconds"],
                 },
+                edit=str(settings.get("edit", "add")),  # absent: stored before removal existed
             )
         )
     data = RobustnessData(benchmarks=benchmarks)
@@ -116,7 +124,7 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
                 b.maps_seed,
                 b.objective,
                 b.clean_success,
-                name,
+                b.strategy_name(name),
                 f["k"],
                 *(f[key] for key in keys),
                 b.seconds.get(name, b.seconds["total"]),

@@ -23,15 +23,24 @@ class RunData:
         return []
 
 
+def run_edit(config: dict | None) -> str:
+    """What a run's attack did to the maps, from its stored config: `remove` (obstacle cells freed: `vinadv run
+    --edit remove`, or `vinadv identify` of a pairs file so made) or `add` (every run stored before removal existed)."""
+    config = config or {}
+    return str(config.get("edit") or (config.get("params") or {}).get("edit") or "add")
+
+
 def gather(ctx: Context) -> RunData:
     info = ctx.store.run_info(ctx.run_id)
     sources = ctx.store.label_sources(ctx.run_id)
+    removal = [("edit", "remove (obstacle cells freed)")] if run_edit(info.get("config")) == "remove" else []
     rows = [
         ("run id", info["id"]),
         ("name", info.get("name")),
         ("created (UTC)", info["created"]),
         ("status", info["status"]),
         ("attack strategy", info.get("attack")),
+        *removal,  # a run that adds obstacles shows no row: its report is as before removal existed
         ("labelled by", info.get("classifier") or ", ".join(sources)),
         ("label sources", ", ".join(sources)),
         ("seed", info.get("seed")),

@@ -1,0 +1,286 @@
+"""A benchmark result entry: one planner (with its weights) run on one suite (`vinadv.bench.suites`).
+
+The suite's maps are run in chunks of `suite.chunk` maps (`compute_chunk`): the clean planner on them, then every
+attack group of the suite through the robustness benchmark (`vinadv.robustness.robustness`: one pair per map, 1..k
+cells edited greedily, labelled and judged for harm), keeping every map's outcome. With a database each finished
+chunk is stored in one transaction (`Store.add_bench_chunk`), so `--resume` after a crash, even kill -9, recomputes
+only the chunks not stored; the randomised strategies draw as they would over the whole suite (`first_map`), so the
+chunks make the whole suite's pairs. The entry (`make_entry`) is then computed from the per-map outcomes of all
+chunks, in map order:
+
+- `clean`: the unattacked maps. vinadv's convention: rollout success from the start (`success_rate`), the share of
+  maps whose path is optimal (`percent_optimal`), the mean regret of the reached paths; GPPN's convention (`gppn`:
+  `percent_optimal`, `percent_success` over every free cell, `vinadv.interop.protocols.gppn_protocol`, averaged over
+  the maps).
+- `attacks`: per attack (`edit:strategy`), its figures at k = 1..max (`vinadv.robustness.Figures`: paper success rate,
+  harmful rate, mean regret, label counts), the k curve.
+- `worst_case`: per k, the worst case per map over the attacks that reach k (`vinadv.robustness.worst_case`).
+- `flags` (`vinadv.bench.flags`), `time` (wall seconds, per chunk) and `machine` (where it ran).
+
+Everything but `time` and `machine` is a function of the suite, the planner and its weights: the same on the same
+device type, byte for byte (`entry_json` writes sorted keys, fixed indentation).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import platform
+import time
+
+import numpy as np
+
+from vinadv import __version__
+from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags
+from vinadv.bench.suites import ENTRY_FORMAT, Suite, maps_sha256
+from vinadv.errors import InputError
+from vinadv.grid.mapset import MapSet
+from vinadv.interop.protocols import gppn_protocol
+from vinadv.planners.interface import Planner
+from vinadv.robustness import Figures, MapOutcomes, benchmark_maps, robustness, worst_case
+
+#: an entry's fields that depend on when and where it ran (the rest is deterministic)
+VOLATILE_FIELDS = ("time", "machine")
+#: a path is optimal when its cost is within this of the optimum
+OPTIMAL_TOL = 1e-9
+
+
+def suite_maps(suite: Suite) -> MapSet:
+    """The suite's maps, checked against its frozen sha256 (InputError when the generator makes other maps)."""
+    maps = benchmark_maps(suite.n, suite.size, seed=suite.maps_seed)
+    digest = maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals)
+    if digest != suite.maps_sha256:
+        raise InputError(
+            f"suite {suite.name}: this vinadv's generator makes other maps (sha256 {digest[:12]}, the suite froze "
+            f"{suite.maps_sha256[:12]}); its results would not compare",
+            "suite",
+        )
+    return maps
+
+
+def entry_key(suite: Suite, planner: Planner) -> str:
+    """The entry's identity in a database: sha256 of the suite's checksum and the planner's spec."""
+    text = json.dumps([suite.checksum, planner.spec()], sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def chunk_maps(maps: MapSet, lo: int, hi: int) -> MapSet:
+    """Maps `lo:hi` of `maps` (with their starts and expert paths)."""
+    s = maps.n_starts
+    return dataclasses.replace(
+        maps,
+        obstacles=maps.obstacles[lo:hi],
+        goals=maps.goals[lo:hi],
+        starts=maps.starts[lo:hi],
+        expert_costs=maps.expert_costs[lo:hi],
+        expert=maps.expert.take(np.arange(lo * s, hi * s)),
+        start_counts=None if maps.start_counts is None else maps.start_counts[lo:hi],
+    )
+
+
+def _floats(values) -> list:
+    return [None if np.isnan(v) else float(v) for v in np.asarray(values, dtype=np.float64)]
+
+
+def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> dict:
+    """Chunk `chunk` of the suite (maps `chunk * suite.chunk ..`): the clean planner and every attack, per map."""
+    t0 = time.perf_counter()
+    lo = chunk * suite.chunk
+    sub = chunk_maps(maps, lo, min(len(maps), lo + suite.chunk))
+    plans = planner.plan_batch(sub.obstacles, sub.starts[:, 0], sub.goals, sub.corner_cutting)
+    regret = np.where(plans.reached, plans.paths.costs() - sub.expert_costs[:, 0], np.nan)
+    gppn = gppn_protocol(planner, sub)
+    attacks = {}
+    for group in suite.attacks:
+        result = robustness(
+            planner,
+            sub,
+            group.strategies,
+            group.max_obstacles,
+            objective=suite.objective,
+            seed=suite.seed,
+            budget=suite.budget,
+            radius=suite.radius,
+            harm_tol=suite.harm_tolerance,
+            harm_rtol=suite.harm_rtol,
+            edit=group.edit,
+            first_map=lo,
+        )
+        for name, strategy in result.strategies.items():
+            attacks[f"{group.edit}:{name}"] = [
+                {
+                    "pair": o.pair.tolist(),
+                    "valid": o.valid.tolist(),
+                    "broken": o.broken.tolist(),
+                    "harmful": o.harmful.tolist(),
+                    "regret": _floats(o.regret),
+                    "label": o.label.tolist(),
+                    "counts": f.counts,
+                }
+                for o, f in zip(strategy.outcomes, strategy.by_k)
+            ]
+    return {
+        "first_map": lo,
+        "maps": len(sub),
+        "clean": {
+            "reached": plans.reached.tolist(),
+            "regret": _floats(regret),
+            "gppn_percent_optimal": gppn["percent_optimal"],
+            "gppn_percent_success": gppn["percent_success"],
+        },
+        "attacks": attacks,
+        "seconds": round(time.perf_counter() - t0, 3),
+    }
+
+
+def _outcome(parts: list[dict]) -> MapOutcomes:
+    """One attack's per-map outcomes at one k, the chunks' joined in map order."""
+
+    def join(name, dtype):
+        return np.array([v for p in parts for v in p[name]], dtype=dtype)
+
+    regret = np.array([np.nan if v is None else v for p in parts for v in p["regret"]], dtype=np.float64)
+    return MapOutcomes(
+        pair=join("pair", bool),
+        valid=join("valid", bool),
+        broken=join("broken", bool),
+        harmful=join("harmful", bool),
+        regret=regret,
+        label=join("label", "<U7"),
+    )
+
+
+def _counts(parts: list[dict]) -> dict:
+    total: dict[str, int] = {}
+    for p in parts:
+        for label, count in p["counts"].items():
+            total[label] = total.get(label, 0) + int(count)
+    return total
+
+
+def make_entry(suite: Suite, planner: Planner, chunks: dict[int, dict], checks: dict, seconds: float) -> dict:
+    """The entry of `planner` on `suite` from its chunks' results (`compute_chunk`, {chunk: result}, all of them)."""
+    order = [chunks[c] for c in sorted(chunks)]
+    reached = np.array([v for c in order for v in c["clean"]["reached"]], dtype=bool)
+    regret = np.array([np.nan if v is None else v for c in order for v in c["clean"]["regret"]], dtype=np.float64)
+    n = len(reached)
+    weights = np.array([c["maps"] for c in order], dtype=np.float64)
+
+    def gppn(name):  # the chunks' means, weighted by their maps: the mean over every map
+        return float(np.dot(weights, [c["clean"][name] for c in order]) / weights.sum())
+
+    clean = {
+        "maps": n,
+        "reached": int(reached.sum()),
+        "success_rate": float(reached.mean()),
+        "percent_optimal": float((reached & (np.abs(regret) <= OPTIMAL_TOL)).mean()),
+        "mean_regret": float(np.nanmean(regret)) if reached.any() else None,
+        "gppn": {"percent_optimal": gppn("gppn_percent_optimal"), "percent_success": gppn("gppn_percent_success")},
+    }
+    outcomes: dict[str, list[MapOutcomes]] = {}
+    attacks = {}
+    for group in suite.attacks:
+        for key in group.keys():
+            per_k = [[c["attacks"][key][k] for c in order] for k in range(group.max_obstacles)]
+            outcomes[key] = [_outcome(parts) for parts in per_k]
+            attacks[key] = {
+                "strategy": key.split(":", 1)[1],
+                "edit": group.edit,
+                "by_obstacles": [
+                    Figures.of(k + 1, o, counts=_counts(parts)).to_dict()
+                    for k, (o, parts) in enumerate(zip(outcomes[key], per_k))
+                ],
+            }
+    max_k = max(g.max_obstacles for g in suite.attacks)
+    worst = []
+    for k in range(max_k):
+        at_k = [outs[k] for outs in outcomes.values() if len(outs) > k]
+        worst.append({**Figures.of(k + 1, worst_case(at_k)).to_dict(), "attacks": len(at_k)})
+    spec = planner.spec()
+    return {
+        "format": ENTRY_FORMAT,
+        "suite": {"name": suite.name, "checksum": suite.checksum},
+        "vinadv_version": __version__,
+        "planner": spec,
+        "weights_sha256": spec.get("weights_sha256"),
+        "clean": clean,
+        "attacks": attacks,
+        "worst_case": worst,
+        "flags": raise_flags(suite, checks, clean["success_rate"], attacks),
+        "time": {"wall_s": round(seconds, 3), "chunks_s": [c["seconds"] for c in order]},
+        "machine": machine(),
+    }
+
+
+def machine() -> dict:
+    """Where the entry was computed (not part of what must reproduce)."""
+    import torch  # noqa: PLC0415 (PyTorch: the planners loaded it already)
+
+    return {
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "torch": torch.__version__,
+        "device": "cuda" if torch.cuda.is_available() else "cpu",
+        "torch_threads": torch.get_num_threads(),
+    }
+
+
+def planner_checks(suite: Suite, planner: Planner, maps: MapSet) -> dict:
+    """The flags' checks on the suite's first maps: is the gradient masked, do two forward passes differ."""
+    sub = chunk_maps(maps, 0, min(len(maps), CHECK_MAPS))
+    args = (planner, sub.obstacles, sub.starts[:, 0], sub.goals, sub.corner_cutting)
+    return {"gradient_masked": gradient_is_masked(*args), "non_deterministic": differs_between_passes(*args)}
+
+
+def run_bench(
+    suite: Suite, planner: Planner, db: str | None = None, resume: bool = False, progress: bool = False
+) -> dict:
+    """The entry of `planner` on `suite` (module doc). With `db` each chunk is stored when done; with `resume` the
+    chunks stored there are read, not recomputed (without it, a database already holding chunks of this entry is
+    refused: say --resume, or use another database)."""
+    t0 = time.perf_counter()
+    maps = suite_maps(suite)
+    checks = planner_checks(suite, planner, maps)
+    key = entry_key(suite, planner)
+    n_chunks = -(-suite.n // suite.chunk)
+    done: dict[int, dict] = {}
+    store = None
+    if db is not None:
+        from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only with --db)
+
+        store = Store.open(db)
+        done = {c: r for c, r in store.read_bench_chunks(key).items() if c < n_chunks}
+        if done and not resume:
+            store.close()
+            raise InputError(
+                f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
+            )
+    todo = [c for c in range(n_chunks) if c not in done]
+    if progress:
+        from tqdm import tqdm  # noqa: PLC0415 (only with a progress bar)
+
+        todo = tqdm(todo, desc=f"bench {suite.name}", unit="chunk", initial=len(done), total=n_chunks)
+    try:
+        for chunk in todo:
+            result = compute_chunk(suite, planner, maps, chunk)
+            if store is not None:
+                store.add_bench_chunk(key, chunk, result)
+            done[chunk] = result
+    finally:
+        if store is not None:
+            store.close()
+    return make_entry(suite, planner, done, checks, time.perf_counter() - t0)
+
+
+def entry_json(entry: dict) -> str:
+    """The entry as written: sorted keys, two-space indentation, a final newline."""
+    return json.dumps(entry, sort_keys=True, indent=2) + "\n"
+
+
+def deterministic_part(entry: dict) -> dict:
+    """The entry without its time and machine fields: what must reproduce byte for byte."""
+    return {k: v for k, v in entry.items() if k not in VOLATILE_FIELDS}

@@ -1,0 +1,136 @@
+"""The leaderboard: benchmark entries (`vinadv.bench.entry`) of one folder as a Markdown and an HTML table, per suite,
+sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at the
+largest k, then by name), each row linking to its entry file, its flags shown beside it."""
+
+from __future__ import annotations
+
+import html
+import json
+import os
+from pathlib import Path
+
+from vinadv.bench.suites import ENTRY_FORMAT
+from vinadv.errors import InputError
+
+#: the columns: title, and how each reads an entry
+COLUMNS = (
+    "planner",
+    "weights",
+    "clean success",
+    "worst-case harmful (k = 1)",
+    "worst-case paper success (k = 1)",
+    "worst-case harmful (largest k)",
+    "removal harmful",
+    "flags",
+)
+
+
+def read_entries(folder: str | os.PathLike) -> list[tuple[Path, dict]]:
+    """Every entry file (`*.json` of format `ENTRY_FORMAT`) in `folder`, in name order; InputError for a folder that
+    is not there, or a JSON file that is not an entry's or is not valid JSON."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(f"{folder}: no such folder", "folder")
+    entries = []
+    for path in sorted(folder.glob("*.json")):
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise InputError(f"{path}: not a readable JSON file ({str(exc).splitlines()[0]})") from None
+        if not isinstance(data, dict) or data.get("format") != ENTRY_FORMAT:
+            raise InputError(f"{path}: field 'format' is not {ENTRY_FORMAT!r}: not a benchmark entry")
+        entries.append((path, data))
+    return entries
+
+
+def _pct(value) -> str:
+    return "—" if value is None else f"{100 * value:.1f}%"
+
+
+def _removal_harmful(entry: dict) -> float | None:
+    """The share of valid maps some removal attack harms (the worst over the removal attacks, at one cell)."""
+    rates = [a["by_obstacles"][0]["harmful_rate"] for a in entry["attacks"].values() if a["edit"] == "remove"]
+    rates = [r for r in rates if r is not None]
+    return max(rates) if rates else None
+
+
+def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
+    """{suite name: rows, sorted}: each row the entry's file, its cells' values and its raised flags."""
+    by_suite: dict[str, list[dict]] = {}
+    for path, e in entries:
+        worst = e["worst_case"]
+        weights = e.get("weights_sha256")
+        row = {
+            "file": path.name,
+            "suite": f"{e['suite']['name']} ({e['suite']['checksum'][:12]})",
+            "planner": e["planner"]["name"],
+            "weights": weights[:12] if weights else "—",
+            "clean": e["clean"]["success_rate"],
+            "harmful": worst[0]["harmful_rate"],
+            "paper": worst[0]["paper_success_rate"],
+            "harmful_k": worst[-1]["harmful_rate"],
+            "k": worst[-1]["k"],
+            "removal": _removal_harmful(e),
+            "flags": [name for name, f in e["flags"].items() if f["raised"]],
+        }
+        by_suite.setdefault(e["suite"]["name"], []).append(row)
+
+    def order(r):
+        return (
+            1.0 if r["harmful"] is None else r["harmful"],
+            1.0 if r["harmful_k"] is None else r["harmful_k"],
+            r["planner"],
+            r["weights"],
+        )
+
+    return {suite: sorted(rs, key=order) for suite, rs in sorted(by_suite.items())}
+
+
+def _cells(r: dict) -> list[str]:
+    return [
+        r["planner"],
+        r["weights"],
+        _pct(r["clean"]),
+        _pct(r["harmful"]),
+        _pct(r["paper"]),
+        f"{_pct(r['harmful_k'])} (k = {r['k']})",
+        _pct(r["removal"]),
+        ", ".join(r["flags"]) or "—",
+    ]
+
+
+def render_markdown(table: dict[str, list[dict]], link_prefix: str = "") -> str:
+    """The leaderboard as Markdown: one table per suite, the planner cell linking to `link_prefix` + entry file."""
+    out = []
+    for rs in table.values():
+        out.append(f"### {rs[0]['suite']}\n")
+        out.append("| # | " + " | ".join(COLUMNS) + " |")
+        out.append("|" + " --- |" * (len(COLUMNS) + 1))
+        for i, r in enumerate(rs, start=1):
+            cells = _cells(r)
+            cells[0] = f"[{cells[0]}]({link_prefix}{r['file']})"
+            out.append(f"| {i} | " + " | ".join(cells) + " |")
+        out.append("")
+    return "\n".join(out)
+
+
+def render_html(table: dict[str, list[dict]], link_prefix: str = "") -> str:
+    """The leaderboard as a standalone HTML page (escaped), the planner cell linking to its entry file."""
+    parts = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8"><title>vinadv robustness leaderboard</title>',
+        "<style>table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px}</style></head><body>",
+        "<h1>vinadv robustness leaderboard</h1>",
+        "<p>Sorted by the worst-case harmful rate at one edited cell (the most robust first).</p>",
+    ]
+    for rs in table.values():
+        parts.append(f"<h2>{html.escape(rs[0]['suite'])}</h2><table>")
+        parts.append("<tr><th>#</th>" + "".join(f"<th>{html.escape(c)}</th>" for c in COLUMNS) + "</tr>")
+        for i, r in enumerate(rs, start=1):
+            cells = [html.escape(c) for c in _cells(r)]
+            link = html.escape(link_prefix + r["file"], quote=True)
+            cells[0] = f'<a href="{link}">{cells[0]}</a>'
+            parts.append(f"<tr><td>{i}</td>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+        parts.append("</table>")
+    parts.append("</body></html>\n")
+    return "\n".join(parts)

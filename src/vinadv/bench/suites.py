@@ -1,0 +1,152 @@
+"""Benchmark suites: frozen specifications under a version name, in a registry (`register`, `get_suite`).
+
+A suite says exactly what is run: the maps (our generator, its seed, the number of maps, one start each, and the
+sha256 of the maps it makes, checked before a run so a changed generator is refused, not silently compared), the
+attack ensemble (groups of strategies, each with its edit, add or remove, and its largest number of edited cells k),
+the objective the ranking strategies keep, the randomised strategies' seed, the budget and radius, the harm
+tolerances, the flags' thresholds, and the chunk size (maps per resumable unit). Its checksum is the sha256 of its
+canonical JSON (`Suite.checksum`); a released suite never changes (`FROZEN` holds every released checksum and a test
+holds the registry to it): a change is a new version under a new name.
+
+Released suites (28x28; the MP suites wait for the MP import):
+- `vin28-v1`: the generator's first 1,000 maps of seed 1000 (the held-out maps of the evaluation tables), one start
+  each; key-points, saliency, near-path and random adding 1..3 cells greedily, exhaustive adding one, and all five
+  removing one.
+- `vin28-quick-v1`: the first 100 of those maps; the cheap attacks only: key-points, saliency, near-path and random
+  adding 1..3 cells, and the same four removing one (no exhaustive). For trying and for tests.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from vinadv.errors import InputError
+
+#: the format of a suite's spec (part of what its checksum covers)
+SUITE_FORMAT = "vinadv.bench_suite/1"
+#: the format of a result entry file (`vinadv.bench.entry`)
+ENTRY_FORMAT = "vinadv.bench_entry/1"
+
+
+@dataclass(frozen=True)
+class AttackGroup:
+    """Strategies run together under one edit, each making one pair per map with 1..`max_obstacles` cells edited
+    greedily (`vinadv.robustness.robustness`)."""
+
+    strategies: tuple[str, ...]
+    edit: str
+    max_obstacles: int
+
+    def keys(self) -> list[str]:
+        """The attacks' names in entries: `edit:strategy` (say `add:saliency`, `remove:random`)."""
+        return [f"{self.edit}:{s}" for s in self.strategies]
+
+
+@dataclass(frozen=True)
+class Suite:
+    """A frozen benchmark specification (see the module doc)."""
+
+    name: str
+    description: str
+    n: int
+    size: int
+    maps_seed: int
+    maps_sha256: str
+    attacks: tuple[AttackGroup, ...]
+    objective: str = "harm"
+    seed: int = 1000
+    budget: int = 8
+    radius: int = 2
+    harm_tolerance: float = 1e-6
+    harm_rtol: float = 0.0
+    chunk: int = 50
+    #: the flags' thresholds (`vinadv.bench.flags`)
+    masking_ratio: float = 3.0
+    masking_min_rate: float = 0.10
+    weak_clean_success: float = 0.5
+
+    def spec(self) -> dict:
+        """The canonical specification: every field, as JSON types."""
+        out = asdict(self)
+        out["attacks"] = [asdict(g) | {"strategies": list(g.strategies)} for g in self.attacks]
+        return {"format": SUITE_FORMAT, **out}
+
+    @property
+    def checksum(self) -> str:
+        """sha256 of the canonical JSON of `spec()`: the suite's identity."""
+        text = json.dumps(self.spec(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def attack_keys(self) -> list[str]:
+        return [k for g in self.attacks for k in g.keys()]
+
+
+def maps_sha256(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> str:
+    """sha256 of a suite's maps: the obstacles (bool bytes), then the starts and goals (int64 bytes), `(n, 2)` each."""
+    digest = hashlib.sha256()
+    digest.update(np.ascontiguousarray(obstacles, dtype=bool).tobytes())
+    for cells in (starts, goals):
+        digest.update(np.ascontiguousarray(cells, dtype=np.int64).tobytes())
+    return digest.hexdigest()
+
+
+SUITES: dict[str, Suite] = {}
+
+
+def register(suite: Suite) -> Suite:
+    """Register `suite` under its name; refuses a name already registered."""
+    if suite.name in SUITES:
+        raise InputError(f"suite {suite.name!r}: a suite of that name is already registered", "suite")
+    SUITES[suite.name] = suite
+    return suite
+
+
+def get_suite(name: str) -> Suite:
+    """The registered suite `name`; InputError (one line, naming the known suites) for an unknown one."""
+    if name not in SUITES:
+        raise InputError(f"unknown suite {name!r}; the suites are {', '.join(sorted(SUITES))}", "suite")
+    return SUITES[name]
+
+
+_CHEAP = ("key-points", "saliency", "near-path", "random")
+
+register(
+    Suite(
+        name="vin28-v1",
+        description="1,000 held-out 28x28 maps (seed 1000); key-points, saliency, near-path, random adding k = 1..3; "
+        "exhaustive adding 1; all five removing 1",
+        n=1000,
+        size=28,
+        maps_seed=1000,
+        maps_sha256="631227302404d67d5e959361bf5ae8e5894f0e6a0e0630edfbb238dd821c4e1f",
+        attacks=(
+            AttackGroup(_CHEAP, "add", 3),
+            AttackGroup(("exhaustive",), "add", 1),
+            AttackGroup((*_CHEAP, "exhaustive"), "remove", 1),
+        ),
+        chunk=50,
+    )
+)
+register(
+    Suite(
+        name="vin28-quick-v1",
+        description="the first 100 of vin28-v1's maps; the cheap attacks only: key-points, saliency, near-path, "
+        "random adding k = 1..3 and removing 1",
+        n=100,
+        size=28,
+        maps_seed=1000,
+        maps_sha256="3692472c7376f8107fc948abf8eeeaffa0198bfcccf1e1ba8ebdda322ae19a80",
+        attacks=(AttackGroup(_CHEAP, "add", 3), AttackGroup(_CHEAP, "remove", 1)),
+        chunk=25,
+    )
+)
+
+#: the checksum of every released suite: a released suite never changes (a test holds the registry to these)
+FROZEN = {
+    "vin28-v1": "1dad52e25d05f3eca3fab2960c02af1cc15d81736c4e50acf7d569dfdbb92203",
+    "vin28-quick-v1": "5d96a8431b05e56aac524464fe37b3794ba7763ca17233523073ad69b78d6157",
+}

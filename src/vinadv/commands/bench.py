@@ -1,0 +1,100 @@
+"""`vinadv bench run` (a planner on a frozen benchmark suite: one result entry) and `vinadv bench leaderboard` (the
+entries of a folder as a leaderboard); `vinadv.bench`."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from vinadv.commands import add_planner_arguments
+from vinadv.commands.output import add_output_options, emit, shows_progress
+from vinadv.errors import InputError
+from vinadv.outfile import atomic_output, check_output_path
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "bench", help="the standard robustness benchmark: frozen suites, result entries, a leaderboard"
+    )
+    sub = p.add_subparsers(dest="bench_command", required=True, metavar="{run,leaderboard}")
+    run = sub.add_parser(
+        "run",
+        help="run a planner on a frozen benchmark suite and write its result entry",
+        description="Run a planner on a frozen, versioned benchmark suite (vin28-v1, vin28-quick-v1): the attack "
+        "ensemble on the suite's maps, worst case per map, and write one schema-versioned result entry (JSON).",
+    )
+    run.add_argument("--suite", required=True, help="the suite: vin28-v1 or vin28-quick-v1")
+    add_planner_arguments(run)
+    run.add_argument("--db", help="store each finished chunk of maps in this database (URL or SQLite file)")
+    run.add_argument("--resume", action="store_true", help="with --db: continue, computing only the chunks not stored")
+    run.add_argument("--out", help="write the entry to this file (.json; default: print it)")
+    add_output_options(run, json="the entry", quiet=True)
+    run.set_defaults(func=cmd_bench_run)
+
+    board = sub.add_parser(
+        "leaderboard",
+        help="render the entries of a folder as a leaderboard (HTML and Markdown)",
+        description="Read every result entry (*.json) of DIR and write OUT/leaderboard.html and OUT/leaderboard.md, "
+        "one table per suite sorted by the worst-case harmful rate, each row linking to its entry.",
+    )
+    board.add_argument("dir", metavar="DIR", help="folder of result entries (*.json)")
+    board.add_argument("--out", required=True, metavar="OUT", help="folder to write leaderboard.html and .md to")
+    add_output_options(board, json="the rows", quiet=True)
+    board.set_defaults(func=cmd_bench_leaderboard)
+
+
+def cmd_bench_run(args: argparse.Namespace) -> int:
+    from vinadv.bench.suites import get_suite
+
+    suite = get_suite(args.suite)  # an unknown suite: one line, before anything loads
+    if args.resume and args.db is None:
+        raise InputError("--resume: only with --db")
+    if args.out:
+        check_output_path(args.out)
+    from vinadv.bench.entry import entry_json, run_bench
+    from vinadv.planners.registry import load_planner
+
+    planner = load_planner(args.planner, suite.size, weights=args.weights)
+    entry = run_bench(suite, planner, db=args.db, resume=args.resume, progress=shows_progress(args))
+    text = entry_json(entry)
+    if args.out:
+        with atomic_output(args.out, "w", encoding="utf-8") as fh:
+            fh.write(text)
+
+    def report() -> None:
+        if not args.out:
+            print(text, end="")
+            return
+        worst = entry["worst_case"][0]
+        flags = [name for name, f in entry["flags"].items() if f["raised"]]
+        print(
+            f"{suite.name} on planner {entry['planner']['name']}: clean success "
+            f"{entry['clean']['success_rate']:.1%}, worst-case harmful rate {worst['harmful_rate'] or 0:.1%} "
+            f"at one cell, flags: {', '.join(flags) or 'none'}, in {entry['time']['wall_s']:.1f} s -> {args.out}"
+        )
+
+    return emit(args, entry, report)
+
+
+def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
+    from vinadv.bench.leaderboard import read_entries, render_html, render_markdown, rows
+
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out: {out} exists and is not a folder")
+    table = rows(read_entries(args.dir))
+    out.mkdir(parents=True, exist_ok=True)
+    prefix = os.path.relpath(Path(args.dir), out).replace(os.sep, "/") + "/"
+    for name, text in (
+        ("leaderboard.md", render_markdown(table, prefix)),
+        ("leaderboard.html", render_html(table, prefix)),
+    ):
+        with atomic_output(out / name, "w", encoding="utf-8") as fh:
+            fh.write(text)
+
+    def report() -> None:
+        n = sum(len(r) for r in table.values())
+        print(f"{n} entries of {len(table)} suites -> {out / 'leaderboard.html'}, {out / 'leaderboard.md'}")
+
+    return emit(args, {"suites": table}, report)

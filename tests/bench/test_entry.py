@@ -1,0 +1,128 @@
+"""Result entries: per-map outcomes aggregated against a plain robustness run of the same maps, resumable chunks
+(a run stopped part way and resumed gives the same entry), determinism on the quick suite (slow), the command."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from vinadv.bench import entry as bench_entry
+from vinadv.bench.entry import deterministic_part, entry_json, make_entry, run_bench
+from vinadv.bench.suites import AttackGroup, Suite, get_suite, maps_sha256
+from vinadv.cli import main
+from vinadv.errors import InputError
+from vinadv.planners.interface import as_planner
+from vinadv.robustness import benchmark_maps, robustness
+from vinadv.testing.planners import planning_vin
+
+SIZE = 10
+
+
+def tiny_suite(n: int = 9, chunk: int = 4) -> Suite:
+    maps = benchmark_maps(n, SIZE, seed=1000)
+    return Suite(
+        name="tiny",
+        description="a test suite",
+        n=n,
+        size=SIZE,
+        maps_seed=1000,
+        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
+        attacks=(AttackGroup(("random", "key-points"), "add", 2), AttackGroup(("random",), "remove", 1)),
+        budget=3,
+        chunk=chunk,
+    )
+
+
+@pytest.fixture(scope="module")
+def planner():
+    return as_planner(planning_vin(SIZE, seed=1, noise=0.2), SIZE)
+
+
+@pytest.mark.slow
+def test_entry_figures_are_a_whole_robustness_run(planner):
+    suite = tiny_suite()
+    entry = run_bench(suite, planner)
+    maps = benchmark_maps(suite.n, SIZE, seed=1000)
+    kw = dict(objective="harm", seed=suite.seed, budget=suite.budget, radius=suite.radius)
+    added = robustness(planner, maps, ["random", "key-points"], 2, **kw)
+    removed = robustness(planner, maps, ["random"], 1, edit="remove", **kw)
+    for name in ("random", "key-points"):
+        got = entry["attacks"][f"add:{name}"]["by_obstacles"]
+        assert got == [f.to_dict() for f in added.strategies[name].by_k]
+    assert entry["attacks"]["remove:random"]["by_obstacles"] == [f.to_dict() for f in removed.strategies["random"].by_k]
+    # the worst case at k = 1 over all three attacks, by hand from the per-map outcomes
+    outs = [added.strategies["random"].outcomes[0], added.strategies["key-points"].outcomes[0]]
+    outs.append(removed.strategies["random"].outcomes[0])
+    valid = np.any([o.valid for o in outs], axis=0)
+    harmful = np.any([o.harmful for o in outs], axis=0)
+    worst = entry["worst_case"][0]
+    assert worst["valid"] == valid.sum() and worst["harmful"] == harmful.sum() and worst["attacks"] == 3
+    assert entry["worst_case"][1]["attacks"] == 2  # removal runs to k = 1 only
+    assert entry["clean"]["success_rate"] == added.clean["success_rate"]
+    assert entry["suite"] == {"name": "tiny", "checksum": suite.checksum}
+
+
+@pytest.mark.slow
+def test_resume_after_a_crash_gives_the_same_entry(planner, tmp_path, monkeypatch):
+    suite = tiny_suite()
+    db = f"sqlite:///{tmp_path / 'b.db'}"
+    whole = run_bench(suite, planner)
+    real = bench_entry.compute_chunk
+    calls = []
+
+    def crash_on_third(*args):
+        calls.append(args[-1])
+        if len(calls) == 3:
+            raise KeyboardInterrupt  # killed during the third chunk
+        return real(*args)
+
+    monkeypatch.setattr(bench_entry, "compute_chunk", crash_on_third)
+    with pytest.raises(KeyboardInterrupt):
+        run_bench(suite, planner, db=db)
+    with pytest.raises(InputError, match="pass --resume"):
+        run_bench(suite, planner, db=db)
+    calls.clear()
+    monkeypatch.setattr(bench_entry, "compute_chunk", lambda *a: calls.append(a[-1]) or real(*a))
+    resumed = run_bench(suite, planner, db=db, resume=True)
+    assert calls == [2]  # only the chunk not stored
+    assert entry_json(deterministic_part(resumed)) == entry_json(deterministic_part(whole))
+
+
+@pytest.mark.slow
+def test_run_twice_is_byte_identical_but_for_time_and_machine(planner):
+    suite = tiny_suite(n=5, chunk=5)
+    first, second = run_bench(suite, planner), run_bench(suite, planner)
+    assert entry_json(deterministic_part(first)) == entry_json(deterministic_part(second))
+    assert set(first) - set(deterministic_part(first)) == {"time", "machine"}
+
+
+@pytest.mark.slow
+def test_quick_suite_entries_are_deterministic(tmp_path):
+    """The quick suite, twice, on the optimal planner: byte-identical apart from time and machine."""
+    outs = []
+    for i in range(2):
+        out = tmp_path / f"e{i}.json"
+        argv = ["bench", "run", "--suite", "vin28-quick-v1", "--planner", "optimal", "--out", str(out), "--quiet"]
+        assert main(argv) == 0
+        outs.append(json.loads(out.read_text()))
+    assert entry_json(deterministic_part(outs[0])) == entry_json(deterministic_part(outs[1]))
+    assert outs[0]["suite"]["checksum"] == get_suite("vin28-quick-v1").checksum
+    assert outs[0]["clean"]["success_rate"] == 1.0 and outs[0]["worst_case"][0]["harmful"] == 0
+
+
+@pytest.mark.slow
+def test_make_entry_needs_every_chunk(planner):
+    suite = tiny_suite()
+    maps = bench_entry.suite_maps(suite)
+    chunks = {c: bench_entry.compute_chunk(suite, planner, maps, c) for c in range(3)}
+    entry = make_entry(suite, planner, chunks, {"gradient_masked": False, "non_deterministic": False}, 1.0)
+    assert entry["clean"]["maps"] == suite.n and entry["format"] == "vinadv.bench_entry/1"
+    assert dataclasses.replace(suite, n=8).checksum != suite.checksum
+
+
+def test_resume_without_db_is_refused_before_the_work(capsys):
+    assert main(["bench", "run", "--suite", "vin28-quick-v1", "--resume", "--planner", "optimal"]) == 2
+    assert "--resume: only with --db" in capsys.readouterr().err

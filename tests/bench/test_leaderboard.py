@@ -1,0 +1,49 @@
+"""The leaderboard: sorted by the worst-case harmful rate, each row linking to its entry, flags shown; Markdown and
+HTML written by `vinadv bench leaderboard`; a file that is not an entry refused in one line."""
+
+from __future__ import annotations
+
+import json
+
+from vinadv.bench.leaderboard import read_entries, render_markdown, rows
+from vinadv.bench.suites import ENTRY_FORMAT
+from vinadv.cli import main
+
+
+def _entry(planner: str, harmful: float, flags=(), removal: float = 0.0) -> dict:
+    figures = {"k": 1, "harmful_rate": harmful, "paper_success_rate": harmful / 2}
+    return {
+        "format": ENTRY_FORMAT,
+        "suite": {"name": "vin28-quick-v1", "checksum": "ab" * 32},
+        "planner": {"name": planner},
+        "weights_sha256": None,
+        "clean": {"success_rate": 0.9},
+        "attacks": {"remove:random": {"edit": "remove", "by_obstacles": [{"harmful_rate": removal}]}},
+        "worst_case": [figures, {**figures, "k": 3}],
+        "flags": {name: {"raised": name in flags, "why": ""} for name in ("gradient_masking", "too_weak")},
+    }
+
+
+def test_sorted_by_worst_case_harmful_rate_with_links_and_flags(tmp_path, capsys):
+    entries = tmp_path / "entries"
+    entries.mkdir()
+    for name, harmful, flags in (("b", 0.30, ()), ("a", 0.05, ("too_weak",)), ("c", 0.10, ())):
+        (entries / f"{name}.json").write_text(json.dumps(_entry(name, harmful, flags)))
+    table = rows(read_entries(entries))
+    assert [r["planner"] for r in table["vin28-quick-v1"]] == ["a", "c", "b"]
+    md = render_markdown(table, "e/")
+    assert md.index("[a](e/a.json)") < md.index("[c](e/c.json)") < md.index("[b](e/b.json)")
+    assert "too_weak" in md and "5.0%" in md
+    out = tmp_path / "board"
+    assert main(["bench", "leaderboard", str(entries), "--out", str(out), "--quiet"]) == 0
+    html = (out / "leaderboard.html").read_text()
+    assert '<a href="../entries/a.json">a</a>' in html and html.index(">a</a>") < html.index(">b</a>")
+    assert "[a](../entries/a.json)" in (out / "leaderboard.md").read_text()
+
+
+def test_a_file_that_is_not_an_entry_is_one_line(tmp_path, capsys):
+    (tmp_path / "x.json").write_text(json.dumps({"format": "something/1"}))
+    assert main(["bench", "leaderboard", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "not a benchmark entry" in err
+    assert main(["bench", "leaderboard", str(tmp_path / "missing"), "--out", str(tmp_path / "o")]) == 2
