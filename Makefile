@@ -6,6 +6,8 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 DEMO_DIR ?= demo-out
 DEMO_FLAGS ?=
+# pytest's worker processes (pytest-xdist): the tests run PyTorch on one thread each, so two keep a 2-core machine busy
+TEST_WORKERS ?= 2
 
 .PHONY: venv browser test test-fast demo docs bench clean
 
@@ -22,11 +24,11 @@ browser:
 		|| echo "warning: could not install chromium; the browser test will be skipped (it fails when CI=true)"
 
 test: venv browser
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(TEST_WORKERS)
 
 # the quick part of the suite while working (under a minute): everything not marked slow
 test-fast: venv
-	$(PY) -m pytest -m "not slow"
+	$(PY) -m pytest -n $(TEST_WORKERS) -m "not slow"
 
 # the whole paper: run, classifier comparison (quick profile; DEMO_FLAGS=--no-evaluate skips it), report
 demo: venv

@@ -65,6 +65,14 @@ def pytest_collection_modifyitems(config, items) -> None:
     config.stash[COLLECTED] = [(item.nodeid, item.get_closest_marker("slow") is not None) for item in items]
 
 
+@pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook, called only under `pytest -n N`
+def pytest_xdist_make_scheduler(config, log):
+    """Under `pytest -n N` a worker takes a whole module at a time, and the report tests whole (tests/scheduling.py)."""
+    from tests.scheduling import ModuleScheduling  # noqa: PLC0415 (pytest-xdist: imported only where it runs)
+
+    return ModuleScheduling(config, log)
+
+
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"
 POSTGRES_DEFAULT = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 BACKENDS = ("sqlite", "mysql", "postgres")
