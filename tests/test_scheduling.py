@@ -1,5 +1,5 @@
 """How `pytest -n 2` shares the tests between its workers (tests/scheduling.py): a module whole, a package of
-`ONE_WORKER` whole, and `make test` / `make test-fast` run with workers."""
+`ONE_WORKER` whole, and `TEST_WORKERS=2 make test` / `make test-fast` run with workers."""
 
 from pathlib import Path
 
@@ -33,9 +33,9 @@ def test_one_worker_packages_exist_and_the_scheduler_is_xdists_loadscope():
     assert ModuleScheduling._split_scope(None, "tests/report/test_report.py::test_x") == "tests/report"
 
 
-def test_make_runs_the_tests_with_workers():
+def test_make_runs_the_tests_with_workers_when_asked():
     makefile = (ROOT / "Makefile").read_text(encoding="utf-8")
     for target in ("test", "test-fast"):
         recipe = makefile.split(f"\n{target}:", 1)[1].split("\n\n", 1)[0]
-        assert "-m pytest -n $(TEST_WORKERS)" in recipe, target
-    assert "\nTEST_WORKERS ?= 2\n" in makefile
+        assert "-m pytest $(WORKERS_FLAG)" in recipe, target
+    assert "\nWORKERS_FLAG := $(if $(TEST_WORKERS),-n $(TEST_WORKERS))\n" in makefile
