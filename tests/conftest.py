@@ -17,6 +17,7 @@ import pytest
 import sqlalchemy as sa
 
 from tests.needs import skip_or_fail
+from tests.scheduling import make_scheduler
 from vinadv.planners.batching import set_torch_threads
 from vinadv.planners.vin.weights import save_vin
 from vinadv.testing.planners import planning_vin
@@ -68,9 +69,7 @@ def pytest_collection_modifyitems(config, items) -> None:
 @pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook, called only under `pytest -n N`
 def pytest_xdist_make_scheduler(config, log):
     """Under `pytest -n N` a worker takes a whole module at a time, and the report tests whole (tests/scheduling.py)."""
-    from tests.scheduling import ModuleScheduling  # noqa: PLC0415 (pytest-xdist: imported only where it runs)
-
-    return ModuleScheduling(config, log)
+    return make_scheduler(config, log)
 
 
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"

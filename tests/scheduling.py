@@ -7,8 +7,6 @@ session fixtures their modules share (the report tests' stored runs and their cl
 
 from __future__ import annotations
 
-from xdist.scheduler import LoadScopeScheduling
-
 #: test packages whose modules share session fixtures: one worker runs all of them
 ONE_WORKER = {"report"}
 
@@ -22,8 +20,12 @@ def scope(node_id: str) -> str:
     return module
 
 
-class ModuleScheduling(LoadScopeScheduling):
-    """xdist's `--dist loadscope`, with the scopes of `scope` (loadscope's own splits classes apart)."""
+def make_scheduler(config, log):
+    """xdist's `--dist loadscope` scheduler, with the units of `scope` (loadscope's own splits classes apart)."""
+    from xdist.scheduler import LoadScopeScheduling  # noqa: PLC0415 (pytest-xdist: only where `pytest -n` runs)
 
-    def _split_scope(self, nodeid: str) -> str:
-        return scope(nodeid)
+    class ModuleScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return scope(nodeid)
+
+    return ModuleScheduling(config, log)

@@ -4,9 +4,8 @@
 from pathlib import Path
 
 import pytest
-from xdist.scheduler import LoadScopeScheduling
 
-from tests.scheduling import ONE_WORKER, ModuleScheduling, scope
+from tests.scheduling import ONE_WORKER, scope
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -27,10 +26,8 @@ def test_a_worker_takes_a_module_or_a_one_worker_package_whole(node_id, unit):
     assert scope(node_id) == unit
 
 
-def test_one_worker_packages_exist_and_the_scheduler_is_xdists_loadscope():
+def test_one_worker_packages_exist():
     assert ONE_WORKER and all((ROOT / "tests" / name / "conftest.py").is_file() for name in ONE_WORKER)
-    assert issubclass(ModuleScheduling, LoadScopeScheduling)
-    assert ModuleScheduling._split_scope(None, "tests/report/test_report.py::test_x") == "tests/report"
 
 
 def test_make_runs_the_tests_with_workers_when_asked():
