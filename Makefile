@@ -6,6 +6,9 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 DEMO_DIR ?= demo-out
 DEMO_FLAGS ?=
+# pytest's worker processes (pytest-xdist), e.g. TEST_WORKERS=2: unset, one process (docs/development.md says why)
+TEST_WORKERS ?=
+WORKERS_FLAG := $(if $(TEST_WORKERS),-n $(TEST_WORKERS))
 
 .PHONY: venv browser test test-fast demo docs bench clean
 
@@ -22,11 +25,11 @@ browser:
 		|| echo "warning: could not install chromium; the browser test will be skipped (it fails when CI=true)"
 
 test: venv browser
-	$(PY) -m pytest
+	$(PY) -m pytest $(WORKERS_FLAG)
 
 # the quick part of the suite while working (under a minute): everything not marked slow
 test-fast: venv
-	$(PY) -m pytest -m "not slow"
+	$(PY) -m pytest $(WORKERS_FLAG) -m "not slow"
 
 # the whole paper: run, classifier comparison (quick profile; DEMO_FLAGS=--no-evaluate skips it), report
 demo: venv

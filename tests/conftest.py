@@ -17,6 +17,7 @@ import pytest
 import sqlalchemy as sa
 
 from tests.needs import skip_or_fail
+from tests.scheduling import make_scheduler
 from vinadv.planners.batching import set_torch_threads
 from vinadv.planners.vin.weights import save_vin
 from vinadv.testing.planners import planning_vin
@@ -74,6 +75,12 @@ def pytest_runtest_setup(item) -> None:
 
         if not torch.cuda.is_available():
             pytest.skip("needs a CUDA GPU (PyTorch sees none here); benchmarks/device_check.sh runs it on one")
+
+
+@pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook, called only under `pytest -n N`
+def pytest_xdist_make_scheduler(config, log):
+    """Under `pytest -n N` a worker takes a whole module at a time, and the report tests whole (tests/scheduling.py)."""
+    return make_scheduler(config, log)
 
 
 MYSQL_DEFAULT = "mysql+pymysql://root@127.0.0.1:3306/test"

@@ -67,7 +67,7 @@ def planner_quality(config: dict, checksum: str | None, size: int, moves: str = 
     seconds = time.perf_counter() - start
     weights = "" if path is None else f", weights {path.name}"
     return metrics, (
-        f"quick evaluation of planner {name!r} while writing this report: {QUICK_EVAL_MAPS} fresh "
+        f"quick evaluation of planner {name!r} by vinadv evaluate: {QUICK_EVAL_MAPS} fresh "
         f"{size}x{size} maps (seed {QUICK_EVAL_SEED}), {maps.n_starts} starts each{weights}, "
         f"{seconds:.1f} s"
     )
