@@ -8,7 +8,10 @@ the README's markers: `python docs/hooks.py` rewrites it there, and a test (`tes
 
 Markers: `<!-- vinadv:weights-table -->` (one row per shipped weights file), `<!-- vinadv:weights-commands -->`
 (the command and checksum behind each row), `<!-- vinadv:by-length -->` (rollout success by the optimal path's move
-count, for the metrics files that have it).
+count, for the metrics files that have it). The MP benchmark's page (`docs/results/mpd.md`) reads
+`docs/results/mpd.json`, written by `benchmarks/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
+(Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (harm at one added obstacle) and
+`<!-- vinadv:mpd-commands -->` (the commands).
 """
 
 from __future__ import annotations
@@ -26,6 +29,10 @@ README_TABLE_END = "\n<!-- /results-table -->"
 WEIGHTS_TABLE = "<!-- vinadv:weights-table -->"
 WEIGHTS_COMMANDS = "<!-- vinadv:weights-commands -->"
 BY_LENGTH = "<!-- vinadv:by-length -->"
+MPD_TABLE = "<!-- vinadv:mpd-table -->"
+MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
+MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
+MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
 
 
 def percent(fraction: float | None) -> str:
@@ -108,12 +115,70 @@ def by_length_table(folder: Path = WEIGHTS_DIR) -> str:
     return "\n".join(rows)
 
 
+def decimal(value: float | None, digits: int = 3) -> str:
+    """A figure with `digits` decimals; an em dash where the planner has none (Exp without expansions)."""
+    return "—" if value is None else f"{value:.{digits}f}"
+
+
+def mpd_table(path: Path = MPD_JSON) -> str:
+    """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `benchmarks/mpd_table.py`'s
+    JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
+    data = json.loads(path.read_text())
+    rows = [
+        "| family (test split) | planner | searches | Opt | Exp | Hmean | success | expansions (A*'s) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for family in sorted(data["families"], key=lambda f: f["family"]):
+        for entry in family["planners"]:
+            fig = entry["search"]
+            expansions = (
+                "—" if fig["expansions"] is None else f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"
+            )
+            rows.append(
+                f"| {family['family']} | `{entry['planner']}` | {fig['rows']} | {decimal(fig['opt'])} | "
+                f"{decimal(fig['exp'])} | {decimal(fig['hmean'])} | {percent(fig['success'])} | {expansions} |"
+            )
+    return "\n".join(rows)
+
+
+def mpd_robustness(path: Path = MPD_JSON) -> str:
+    """The robustness runs of `benchmarks/mpd_table.py`'s JSON: per planner and strategy, harm at k = 1."""
+    data = json.loads(path.read_text())
+    rows = [
+        "| planner | strategy | maps | clean success | harmful (k = 1) | paper success (k = 1) | valid | mean regret |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for run in data["robustness"]:
+        figures = run["figures"]
+        by_strategy = [(name, s["by_obstacles"][0]) for name, s in figures["strategies"].items()]
+        for name, fig in [*by_strategy, ("worst case", figures["overall"][0])]:
+            rows.append(
+                f"| `{run['planner']}` | {name} | {fig['maps']} | {percent(figures['clean']['success_rate'])} | "
+                f"{percent(fig['harmful_rate'])} | {percent(fig['paper_success_rate'])} | {fig['valid']} | "
+                f"{decimal(fig['mean_regret'])} |"
+            )
+    return "\n".join(rows)
+
+
+def mpd_commands(path: Path = MPD_JSON) -> str:
+    """Every command behind `mpd_table` and `mpd_robustness`, as a shell block."""
+    data = json.loads(path.read_text())
+    lines = []
+    for family in data["families"]:
+        lines += [family["import"], *(entry["command"] for entry in family["planners"])]
+    lines += [run["command"] for run in data["robustness"]]
+    return "```sh\n" + "\n".join(lines) + "\n```"
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
     for marker, build in (
         (WEIGHTS_TABLE, weights_table),
         (WEIGHTS_COMMANDS, weights_commands),
         (BY_LENGTH, by_length_table),
+        (MPD_TABLE, mpd_table),
+        (MPD_ROBUSTNESS, mpd_robustness),
+        (MPD_COMMANDS, mpd_commands),
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())
