@@ -120,44 +120,45 @@ def decimal(value: float | None, digits: int = 3) -> str:
     return "—" if value is None else f"{value:.{digits}f}"
 
 
+def markdown_table(header: list[str], rows: list[list[str]]) -> str:
+    """A Markdown table of `rows` (lists of cell texts) under `header`."""
+    lines = [header, ["---"] * len(header), *rows]
+    return "\n".join("| " + " | ".join(cells) + " |" for cells in lines)
+
+
 def mpd_table(path: Path = MPD_JSON) -> str:
     """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `benchmarks/mpd_table.py`'s
     JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
     data = json.loads(path.read_text())
-    rows = [
-        "| family (test split) | planner | searches | Opt | Exp | Hmean | success | expansions (A*'s) |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+    rows = []
     for family in sorted(data["families"], key=lambda f: f["family"]):
         for entry in family["planners"]:
             fig = entry["search"]
-            expansions = (
-                "—" if fig["expansions"] is None else f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"
-            )
             rows.append(
-                f"| {family['family']} | `{entry['planner']}` | {fig['rows']} | {decimal(fig['opt'])} | "
-                f"{decimal(fig['exp'])} | {decimal(fig['hmean'])} | {percent(fig['success'])} | {expansions} |"
+                [family["family"], f"`{entry['planner']}`", str(fig["rows"])]
+                + [decimal(fig[key]) for key in ("opt", "exp", "hmean")]
+                + [percent(fig["success"])]
+                + ["—" if fig["expansions"] is None else f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"]
             )
-    return "\n".join(rows)
+    header = ["family (test split)", "planner", "searches", "Opt", "Exp", "Hmean", "success", "expansions (A*'s)"]
+    return markdown_table(header, rows)
 
 
 def mpd_robustness(path: Path = MPD_JSON) -> str:
     """The robustness runs of `benchmarks/mpd_table.py`'s JSON: per planner and strategy, harm at k = 1."""
     data = json.loads(path.read_text())
-    rows = [
-        "| planner | strategy | maps | clean success | harmful (k = 1) | paper success (k = 1) | valid | mean regret |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+    rows = []
     for run in data["robustness"]:
         figures = run["figures"]
         by_strategy = [(name, s["by_obstacles"][0]) for name, s in figures["strategies"].items()]
-        for name, fig in [*by_strategy, ("worst case", figures["overall"][0])]:
-            rows.append(
-                f"| `{run['planner']}` | {name} | {fig['maps']} | {percent(figures['clean']['success_rate'])} | "
-                f"{percent(fig['harmful_rate'])} | {percent(fig['paper_success_rate'])} | {fig['valid']} | "
-                f"{decimal(fig['mean_regret'])} |"
-            )
-    return "\n".join(rows)
+        rows += [
+            [f"`{run['planner']}`", name, str(fig["maps"]), percent(figures["clean"]["success_rate"])]
+            + [percent(fig["harmful_rate"]), percent(fig["paper_success_rate"]), str(fig["valid"])]
+            + [decimal(fig["mean_regret"])]
+            for name, fig in [*by_strategy, ("worst case", figures["overall"][0])]
+        ]
+    header = ["planner", "strategy", "maps", "clean success", "harmful (k = 1)", "paper success (k = 1)", "valid"]
+    return markdown_table([*header, "mean regret"], rows)
 
 
 def mpd_commands(path: Path = MPD_JSON) -> str:
