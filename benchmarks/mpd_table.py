@@ -28,12 +28,15 @@ DEFAULT_OUT = Path(__file__).resolve().parents[1] / "docs" / "results" / "mpd.js
 
 
 def run(args: list[str], data_dir: Path, work: Path) -> tuple[str, str]:
-    """Run `vinadv ARGS`; the command as recorded (placeholders for the folders) and its standard output."""
+    """Run `vinadv ARGS`; the command and its standard output as recorded (placeholders for the folders)."""
     result = subprocess.run(["vinadv", *args], capture_output=True, text=True, check=False)
     if result.returncode != 0:
         sys.exit(f"vinadv {' '.join(args)} failed ({result.returncode}): {result.stderr.strip()[-2000:]}")
-    shown = " ".join(args).replace(str(data_dir), "<data-dir>").replace(str(work), "<work>")
-    return "vinadv " + shown, result.stdout
+
+    def shown(text: str) -> str:
+        return text.replace(str(data_dir), "<data-dir>").replace(str(work), "<work>")
+
+    return "vinadv " + shown(" ".join(args)), shown(result.stdout)
 
 
 def main() -> None:
