@@ -9,7 +9,10 @@ the README's markers: `python docs/hooks.py` rewrites it there, and a test (`tes
 Markers: `<!-- vinadv:weights-table -->` (one row per shipped weights file), `<!-- vinadv:weights-commands -->`
 (the command and checksum behind each row), `<!-- vinadv:by-length -->` (rollout success by the optimal path's move
 count, for the metrics files that have it), `<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
-benchmark entries `docs/results/bench/*.json`).
+benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/results/mpd.md`) reads
+`docs/results/mpd.json`, written by `benchmarks/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
+(Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (harm at one added obstacle) and
+`<!-- vinadv:mpd-commands -->` (the commands).
 """
 
 from __future__ import annotations
@@ -32,6 +35,10 @@ BY_LENGTH = "<!-- vinadv:by-length -->"
 BENCH_LEADERBOARD = "<!-- vinadv:bench-leaderboard -->"
 #: the committed benchmark entries (`vinadv bench run --out`), the leaderboard's rows
 BENCH_DIR = ROOT / "docs" / "results" / "bench"
+MPD_TABLE = "<!-- vinadv:mpd-table -->"
+MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
+MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
+MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
 
 
 def percent(fraction: float | None) -> str:
@@ -120,6 +127,62 @@ def bench_leaderboard(folder: Path = BENCH_DIR) -> str:
     return render_markdown(rows(read_entries(folder)), "bench/")
 
 
+def decimal(value: float | None, digits: int = 3) -> str:
+    """A figure with `digits` decimals; an em dash where the planner has none (Exp without expansions)."""
+    return "—" if value is None else f"{value:.{digits}f}"
+
+
+def markdown_table(header: list[str], rows: list[list[str]]) -> str:
+    """A Markdown table of `rows` (lists of cell texts) under `header`."""
+    lines = [header, ["---"] * len(header), *rows]
+    return "\n".join("| " + " | ".join(cells) + " |" for cells in lines)
+
+
+def mpd_table(path: Path = MPD_JSON) -> str:
+    """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `benchmarks/mpd_table.py`'s
+    JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
+    data = json.loads(path.read_text())
+    rows = []
+    for family in sorted(data["families"], key=lambda f: f["family"]):
+        for entry in family["planners"]:
+            fig = entry["search"]
+            rows.append(
+                [family["family"], f"`{entry['planner']}`", str(fig["rows"])]
+                + [decimal(fig[key]) for key in ("opt", "exp", "hmean")]
+                + [percent(fig["success"])]
+                + ["—" if fig["expansions"] is None else f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"]
+            )
+    header = ["family (test split)", "planner", "searches", "Opt", "Exp", "Hmean", "success", "expansions (A*'s)"]
+    return markdown_table(header, rows)
+
+
+def mpd_robustness(path: Path = MPD_JSON) -> str:
+    """The robustness runs of `benchmarks/mpd_table.py`'s JSON: per planner and strategy, harm at k = 1."""
+    data = json.loads(path.read_text())
+    rows = []
+    for run in data["robustness"]:
+        figures = run["figures"]
+        by_strategy = [(name, s["by_obstacles"][0]) for name, s in figures["strategies"].items()]
+        rows += [
+            [f"`{run['planner']}`", name, str(fig["maps"]), percent(figures["clean"]["success_rate"])]
+            + [percent(fig["harmful_rate"]), percent(fig["paper_success_rate"]), str(fig["valid"])]
+            + [decimal(fig["mean_regret"])]
+            for name, fig in [*by_strategy, ("worst case", figures["overall"][0])]
+        ]
+    header = ["planner", "strategy", "maps", "clean success", "harmful (k = 1)", "paper success (k = 1)", "valid"]
+    return markdown_table([*header, "mean regret"], rows)
+
+
+def mpd_commands(path: Path = MPD_JSON) -> str:
+    """Every command behind `mpd_table` and `mpd_robustness`, as a shell block."""
+    data = json.loads(path.read_text())
+    lines = []
+    for family in data["families"]:
+        lines += [family["import"], *(entry["command"] for entry in family["planners"])]
+    lines += [run["command"] for run in data["robustness"]]
+    return "```sh\n" + "\n".join(lines) + "\n```"
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
     for marker, build in (
@@ -127,6 +190,9 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (WEIGHTS_COMMANDS, weights_commands),
         (BY_LENGTH, by_length_table),
         (BENCH_LEADERBOARD, bench_leaderboard),
+        (MPD_TABLE, mpd_table),
+        (MPD_ROBUSTNESS, mpd_robustness),
+        (MPD_COMMANDS, mpd_commands),
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())

@@ -87,6 +87,55 @@ def test_the_hook_fills_the_results_page():
     assert "| 25-29 |" in hooks.by_length_table()
 
 
+def _mpd_record(opt: float) -> dict:
+    search = {"rows": 100, "opt": opt, "exp": None, "hmean": None, "success": 0.5, "expansions": None}
+    by_k = {"k": 1, "maps": 20, "valid": 19, "harmful_rate": 0.25, "paper_success_rate": 0.1, "mean_regret": 0.5}
+    return {
+        "families": [
+            {
+                "family": "forest",
+                "import": "vinadv maps import F",
+                "planners": [{"planner": "optimal", "command": "vinadv eval --planner optimal", "search": search}],
+            }
+        ],
+        "robustness": [
+            {
+                "planner": "astar",
+                "command": "vinadv robustness --planner astar",
+                "figures": {
+                    "clean": {"success_rate": 1.0},
+                    "strategies": {"random": {"by_obstacles": [by_k]}},
+                    "overall": [by_k],
+                },
+            }
+        ],
+    }
+
+
+def test_the_mp_benchmark_page_is_read_from_its_json(tmp_path):
+    hooks = docs_module("hooks")
+    page = (DOCS / "results" / "mpd.md").read_text()
+    filled = hooks.on_page_markdown(page, page=None, config=None, files=None)
+    assert "<!-- vinadv:" not in filled
+    data = json.loads(hooks.MPD_JSON.read_text())
+    assert len(data["families"]) == 6 and "a982a04" in data["source"]
+    for family in data["families"]:
+        assert family["import"] in filled
+        for entry in family["planners"]:
+            assert entry["command"] in filled and "shared" not in entry["command"]
+            fig = entry["search"]
+            assert f"| {family['family']} | `{entry['planner']}` | {fig['rows']} | {fig['opt']:.3f} |" in filled
+    assert {run["planner"] for run in data["robustness"]} == {"wastar:w=2", "neural-astar"}
+    # another JSON gives another table: nothing is copied by hand
+    path = tmp_path / "mpd.json"
+    path.write_text(json.dumps(_mpd_record(0.125)))
+    assert hooks.mpd_table(path).splitlines()[2] == "| forest | `optimal` | 100 | 0.125 | — | — | 50.0% | — |"
+    assert (
+        hooks.mpd_robustness(path).splitlines()[2] == "| `astar` | random | 20 | 100.0% | 25.0% | 10.0% | 19 | 0.500 |"
+    )
+    assert "vinadv robustness --planner astar" in hooks.mpd_commands(path)
+
+
 def test_user_facing_pages_name_public_sources_not_the_workspace():
     pages = [ROOT / "README.md", *DOCS.rglob("*.md")]
     for page in pages:

@@ -1,18 +1,24 @@
-"""`vinadv neural-astar import-weights` and `compare-modes` from the command line."""
+"""`vinadv neural-astar import-weights` and `compare-modes` from the command line; the planner end to end through
+plan, attack, run and robustness on an MP import and on our generator's moore maps."""
 
 from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 import torch
 
 from tests.planners.neural_astar.literal import CHECKPOINT, checkpoint_state, shared_file
+from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.grid import generate_maps
+from vinadv.grid.mapset import MapSet
 from vinadv.planners.neural_astar.model import load_neural_astar
+from vinadv.planners.pathset import PathSet
 from vinadv.planners.registry import load_planner
 from vinadv.planners.weights import weights_checksum
+from vinadv.store import Store
 
 
 def test_import_weights_converts_the_authors_checkpoint_with_its_record(tmp_path, capsys):
@@ -75,3 +81,67 @@ def test_compare_modes_refuses_octile_maps(tmp_path, capsys):
     assert main(["neural-astar", "compare-modes", "--data", str(maps)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "plans moore moves" in err and "'octile' moves" in err
+
+
+def _mp_import(tmp_path) -> str:
+    """The first three maps of the mazes family's test split, imported by the CLI (the Neural A* start rule)."""
+    full, small = tmp_path / "mazes_full.npz", tmp_path / "mazes.npz"
+    source = shared_file("mpd/mazes_032_moore_c8.npz")
+    line = ["maps", "import", "--format", "mpd", str(source), "--split", "test", "--seed", "0", "--out", str(full)]
+    assert main([*line, "--quiet"]) == 0
+    MapSet.load(full).take(np.arange(3)).save(small)
+    return str(small)
+
+
+def _generated(tmp_path) -> str:
+    """Three maps of our generator at 32x32 with moore moves, by the CLI."""
+    out = tmp_path / "gen.npz"
+    line = ["maps", "generate", "--n", "3", "--size", "32", "--moves", "moore", "--starts", "1", "--seed", "4"]
+    assert main([*line, "--out", str(out), "--quiet"]) == 0
+    return str(out)
+
+
+def _json(capsys, argv) -> dict:
+    capsys.readouterr()
+    assert main([*argv, "--json", "--quiet"]) == 0, capsys.readouterr().err
+    return json.loads(capsys.readouterr().out)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("source", ["mp", "generated"])
+def test_neural_astar_end_to_end_on_mp_and_generated_maps(source, tmp_path, capsys):
+    maps_file = _mp_import(tmp_path) if source == "mp" else _generated(tmp_path)
+    maps = MapSet.load(maps_file)
+    assert maps.moves == "moore" and maps.obstacles.shape[1:] == (32, 32)
+    # plan: a path per map from its start to its goal through free cells, one Moore step at a time (checked by hand)
+    paths_file = tmp_path / "p.npz"
+    summary = _json(capsys, ["plan", "--maps", maps_file, "--planner", "neural-astar", "--out", str(paths_file)])
+    assert summary["paths"] == 3
+    paths = PathSet.load(paths_file)
+    for m in range(3):
+        path = [tuple(int(v) for v in cell) for cell in paths.paths[m]]
+        assert path[0] == tuple(maps.starts[m, 0]) and path[-1] == tuple(maps.goals[m])
+        assert all(not maps.obstacles[m][cell] for cell in path)
+        assert all(max(abs(a[0] - b[0]), abs(a[1] - b[1])) == 1 for a, b in zip(path, path[1:]))
+    # attack by saliency: the differentiable search's gradient, so no key-points fallback is recorded
+    pairs_file = tmp_path / "a.npz"
+    line = ["attack", "--maps", maps_file, "--planner", "neural-astar", "--strategy", "saliency", "--budget", "4"]
+    summary = _json(capsys, [*line, "--out", str(pairs_file)])
+    assert "ranked_as" not in summary
+    pairs = PairSet.load(pairs_file)
+    assert pairs.params["planner"]["name"] == "neural-astar" and "ranked_as" not in pairs.params
+    # run, stored
+    db = str(tmp_path / "r.db")
+    line = ["run", "--maps", maps_file, "--n", "3", "--db", db, "--planner", "neural-astar", "--attack", "saliency"]
+    summary = _json(capsys, line)
+    with Store.open(db) as store:
+        info = store.run_info(summary["run_id"])
+    assert summary["maps"] == 3 and info["config"]["planner"] == "neural-astar"
+    # robustness: harm on unit costs; saliency by gradient here too
+    out = _json(
+        capsys,
+        ["robustness", "--maps", maps_file, "--planner", "neural-astar", "--max-obstacles", "1"]
+        + ["--strategies", "saliency,random", "--budget", "4"],
+    )
+    assert out["clean"]["maps"] == 3 and out["settings"]["n"] == 3
+    assert "ranked_as" not in out["strategies"]["saliency"] and "ranked_as" not in out["strategies"]["random"]
