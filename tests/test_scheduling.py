@@ -1,5 +1,5 @@
 """How `pytest -n 2` shares the tests between its workers (tests/scheduling.py): a module whole, a package of
-`ONE_WORKER` whole, and `TEST_WORKERS=2 make test` / `make test-fast` run with workers."""
+`ONE_WORKER` whole, and `make test` / `make test-fast` run with two workers unless `TEST_WORKERS` says otherwise."""
 
 from pathlib import Path
 
@@ -36,3 +36,4 @@ def test_make_runs_the_tests_with_workers_when_asked():
         recipe = makefile.split(f"\n{target}:", 1)[1].split("\n\n", 1)[0]
         assert "-m pytest $(WORKERS_FLAG)" in recipe, target
     assert "\nWORKERS_FLAG := $(if $(TEST_WORKERS),-n $(TEST_WORKERS))\n" in makefile
+    assert "\nTEST_WORKERS ?= 2\n" in makefile  # two workers by default: measured faster (docs/development.md)
