@@ -17,11 +17,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 
 import numba
 import numpy as np
 
+from common import add_output_arguments, timed_side_by_side  # benchmarks/common.py
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import make_attack
 from vinadv.classify import PathPairBatch, label_batch
@@ -29,19 +29,6 @@ from vinadv.classify.harm import pairset_harm
 from vinadv.grid.generator import generate_maps
 from vinadv.grid.shortest_paths import expert_paths
 from vinadv.planners.vin.weights import load_vin
-
-
-def timed_side_by_side(fns, rounds: int):
-    """Best time of each of `fns` over `rounds` rounds, the functions taking turns within a round, so that load
-    from other work (this machine is shared) hits them alike; and each one's last result."""
-    best = [np.inf] * len(fns)
-    results = [None] * len(fns)
-    for _ in range(rounds):
-        for k, fn in enumerate(fns):
-            start = time.perf_counter()
-            results[k] = fn()
-            best[k] = min(best[k], time.perf_counter() - start)
-    return best, results
 
 
 def make_pairs(n_maps: int, attack: str, seed: int = 0):
@@ -66,8 +53,7 @@ def main(argv=None) -> int:
     parser.add_argument("--n", type=int, default=100_000, help="pairs to time (default 100000)")
     parser.add_argument("--maps", type=int, default=10_000, help="maps generated and attacked (default 10000)")
     parser.add_argument("--attack", default="near-path", help="attack strategy for generated pairs")
-    parser.add_argument("--rounds", type=int, default=5, help="rounds of timing, best kept (default 5)")
-    parser.add_argument("--json", action="store_true")
+    add_output_arguments(parser, rounds=5)
     args = parser.parse_args(argv)
 
     if args.pairs:

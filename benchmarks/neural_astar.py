@@ -25,9 +25,7 @@ import numba
 import numpy as np
 import torch
 
-from harm import timed_side_by_side  # the benchmarks' side-by-side timer (this folder is on a script's path)
-from search import mpd_rows  # the same rows as benchmarks/search.py
-from vinadv.grid.generator import generate_maps
+from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # benchmarks/common.py
 from vinadv.planners.astar import AStarPlanner
 from vinadv.planners.neural_astar.model import load_neural_astar
 from vinadv.planners.neural_astar.planner import NeuralAstarPlanner
@@ -35,22 +33,13 @@ from vinadv.planners.neural_astar.planner import NeuralAstarPlanner
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", help="an MP dataset file (<family>_032_moore_c8.npz): its test maps")
-    parser.add_argument("--n", type=int, default=200, help="generated maps (default 200)")
-    parser.add_argument("--size", type=int, default=32, help="side of the generated maps (default 32)")
+    add_rows_arguments(parser, n=200, size=32)
     parser.add_argument("--batch", type=int, default=64, help="rows per torch forward (default 64)")
     parser.add_argument("--device", default="cpu", help="torch device (default cpu)")
-    parser.add_argument("--rounds", type=int, default=3, help="rounds of timing, best kept (default 3)")
-    parser.add_argument("--json", action="store_true")
+    add_output_arguments(parser, rounds=3)
     args = parser.parse_args(argv)
 
-    if args.data:
-        obstacles, starts, goals = mpd_rows(args.data)
-        source = f"{args.data}: {len(obstacles)} test maps"
-    else:
-        maps = generate_maps(args.n, args.size, seed=0, n_starts=1, moves="moore")
-        obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
-        source = f"{args.n} generated {args.size}x{args.size} moore maps"
+    obstacles, starts, goals, source = search_rows(args)
     size = obstacles.shape[1]
     astar = AStarPlanner(size, "moore")
     neural = NeuralAstarPlanner(load_neural_astar(), size, device=args.device, batch_size=args.batch)

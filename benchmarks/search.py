@@ -20,39 +20,19 @@ import json
 import numba
 import numpy as np
 
-from harm import timed_side_by_side  # the benchmarks' side-by-side timer (benchmarks/harm.py)
-from vinadv.grid.generator import generate_maps
+from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # benchmarks/common.py
 from vinadv.planners.astar import AStarPlanner
-
-
-def mpd_rows(path: str, seed: int = 0):
-    """The test split of an MP dataset file: obstacles, one start per map that reaches the goal, goals."""
-    with np.load(path) as data:
-        free = data["arr_8"] == 1
-        goals = np.argwhere(data["arr_9"][:, 0] == 1)[:, 1:]
-        reachable = data["arr_11"][:, 0] > data["arr_11"].min()
-    rng = np.random.default_rng(seed)
-    starts = np.array([rng.choice(np.argwhere(r)) for r in reachable])
-    return ~free, starts, goals
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", help="an MP dataset file (<family>_032_moore_c8.npz): its test maps")
-    parser.add_argument("--n", type=int, default=1000, help="generated maps (default 1000)")
-    parser.add_argument("--size", type=int, default=32, help="side of the generated maps (default 32)")
+    add_rows_arguments(parser, n=1000, size=32)
     parser.add_argument("--moves", default="moore", help="movement model of the generated maps (default moore)")
-    parser.add_argument("--rounds", type=int, default=3, help="rounds of timing, best kept (default 3)")
-    parser.add_argument("--json", action="store_true")
+    add_output_arguments(parser, rounds=3)
     args = parser.parse_args(argv)
 
-    if args.data:
-        obstacles, starts, goals = mpd_rows(args.data)
-        moves, source = "moore", f"{args.data}: {len(obstacles)} test maps"
-    else:
-        maps = generate_maps(args.n, args.size, seed=0, n_starts=1, moves=args.moves)
-        obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
-        moves, source = args.moves, f"{args.n} generated {args.size}x{args.size} maps"
+    obstacles, starts, goals, source = search_rows(args, args.moves)
+    moves = "moore" if args.data else args.moves
     planner = AStarPlanner(obstacles.shape[1], moves)
     planner.plan_paths(obstacles[:2], starts[:2], goals[:2])  # compile (or load the cache) before timing
 

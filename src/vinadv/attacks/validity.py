@@ -139,6 +139,15 @@ def _cut_vertices_batch(lo, hi, obstacles, starts, goals, deltas, separator, rea
         )
 
 
+def _contiguous(obstacles, starts, goals) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The kernels' inputs: `obstacles` as C-contiguous bool, `starts` and `goals` as C-contiguous int64."""
+    return (
+        np.ascontiguousarray(obstacles, dtype=bool),
+        np.ascontiguousarray(starts, dtype=np.int64),
+        np.ascontiguousarray(goals, dtype=np.int64),
+    )
+
+
 def valid_cells(
     obstacles: np.ndarray,
     starts: np.ndarray,
@@ -156,9 +165,7 @@ def valid_cells(
         moves: the maps' movement model (`vinadv.grid.moves`).
     """
     deltas = move_model(moves).deltas
-    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-    starts = np.ascontiguousarray(starts, dtype=np.int64)
-    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    obstacles, starts, goals = _contiguous(obstacles, starts, goals)
     b = len(obstacles)
     idx = np.arange(b)
     valid = ~obstacles
@@ -221,9 +228,7 @@ def valid_additions(
         corner_cutting: the maps' move rule (whether a diagonal move may cut a corner).
         moves: the maps' movement model (`vinadv.grid.moves`).
     """
-    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-    starts = np.ascontiguousarray(starts, dtype=np.int64)
-    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    obstacles, starts, goals = _contiguous(obstacles, starts, goals)
     ok, cells = _distinct_cells(obstacles, added)
     idx = np.arange(len(obstacles))[:, None]
     ok &= ~obstacles[idx, cells[..., 0], cells[..., 1]].any(axis=1)
@@ -253,9 +258,7 @@ def solvable(
 ) -> np.ndarray:
     """`(B,)` bool: the goal is reachable from the start on each map (`obstacles (B, N, N)`, starts/goals `(B, 2)`);
     never from a start or to a goal on an obstacle."""
-    obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-    starts = np.ascontiguousarray(starts, dtype=np.int64)
-    goals = np.ascontiguousarray(goals, dtype=np.int64)
+    obstacles, starts, goals = _contiguous(obstacles, starts, goals)
     idx = np.arange(len(obstacles))
     reach = np.zeros(len(obstacles), dtype=bool)
     if len(obstacles):

@@ -161,6 +161,15 @@ def shortest_distances(
     return dist, counts
 
 
+def negative_cost_to_go(
+    obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True, moves: str | MoveModel = DEFAULT_MOVES
+) -> np.ndarray:
+    """Minus the optimal cost-to-goal of every cell, `(B, N, N)` float64, NaN where the goal cannot be reached
+    (obstacles included): the exact value map, the ranking signal of planners without one of their own."""
+    dist, _ = shortest_distances(obstacles, np.asarray(goals, dtype=np.int64), corner_cutting, moves)
+    return np.where(np.isfinite(dist), -dist, np.nan)
+
+
 def optimal_actions(
     dist: np.ndarray, obstacles: np.ndarray, corner_cutting: bool = True, moves: str | MoveModel = DEFAULT_MOVES
 ) -> np.ndarray:

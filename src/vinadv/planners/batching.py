@@ -9,7 +9,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 
 #: maps per chunk of the planning engine: bounds the memory of its path buffers (N * N cells per rollout, touched
@@ -18,6 +18,17 @@ DEFAULT_CHUNK = 4096
 #: threads of `over_maps`: the cores this process may use, at most 8. A Dask worker sets it to 1
 #: (`set_threads`).
 N_THREADS = max(1, min(len(os.sched_getaffinity(0)), 8))
+
+
+def chunk_slices(total: int, chunk_size: int, progress: bool = False, desc: str = "planning") -> Iterable[slice]:
+    """`range(total)` as slices of `chunk_size` (at least 1) items, under a tqdm bar named `desc` when `progress`."""
+    chunk_size = max(1, int(chunk_size))
+    slices = [slice(i, i + chunk_size) for i in range(0, total, chunk_size)]
+    if not progress:
+        return slices
+    from tqdm import tqdm  # noqa: PLC0415 (tqdm: planning without a bar does not load it)
+
+    return tqdm(slices, unit="chunk", desc=desc)
 
 
 def set_threads(threads: int) -> None:

@@ -27,7 +27,7 @@ from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.shortest_paths import shortest_distances, valid_moves
-from vinadv.planners.batching import over_maps, torch_threads
+from vinadv.planners.batching import chunk_slices, over_maps, torch_threads
 from vinadv.planners.device import full_precision
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
@@ -217,15 +217,8 @@ class Planner(ABC):
         """Paths from `starts (B, S, 2)`: path `b * S + s` from start `s` of map `b`, `chunk_size` maps at a time."""
         obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
         self._check_size(obstacles)
-        chunk_size = max(1, int(chunk_size))
-        chunks = range(0, len(obstacles), chunk_size)
-        if progress:
-            from tqdm import tqdm
-
-            chunks = tqdm(chunks, unit="chunk", desc=f"planning ({self.name})")
         parts = []
-        for i in chunks:
-            sl = slice(i, i + chunk_size)
+        for sl in chunk_slices(len(obstacles), chunk_size, progress, f"planning ({self.name})"):
             logits = self.logits(obstacles[sl], goals[sl])
             check_masking(self.name, logits, obstacles[sl], goals[sl], corner_cutting, self.moves)
             parts.append(

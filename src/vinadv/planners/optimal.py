@@ -18,7 +18,7 @@ import numpy as np
 from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves, move_model
-from vinadv.grid.shortest_paths import optimal_actions, shortest_distances, valid_moves
+from vinadv.grid.shortest_paths import negative_cost_to_go, optimal_actions, shortest_distances, valid_moves
 from vinadv.planners.interface import DEFAULT_CHUNK, Planner
 
 #: logit of an illegal move: below the excess cost of any legal move (at most about 2 * sqrt(2) * N * N).
@@ -67,8 +67,7 @@ class OptimalPlanner(Planner):
         """Minus the exact cost-to-go, `(B, N, N)` float64; NaN where the goal cannot be reached (and on obstacles)."""
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         self._check_size(obstacles)
-        dist, _ = shortest_distances(obstacles, np.asarray(goals, dtype=np.int64), self.corner_cutting, self.moves)
-        return np.where(np.isfinite(dist), -dist, np.nan)
+        return negative_cost_to_go(obstacles, goals, self.corner_cutting, self.moves)
 
     def plan_maps(
         self,

@@ -34,7 +34,8 @@ from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS, N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves, move_model
 from vinadv.grid.paths import PackedPaths
-from vinadv.grid.shortest_paths import shortest_distances
+from vinadv.grid.shortest_paths import negative_cost_to_go
+from vinadv.planners.batching import chunk_slices
 from vinadv.planners.interface import DEFAULT_CHUNK, Planner, PlannerError, check_multi_inputs
 from vinadv.planners.result import GOAL, STEP_LIMIT, TERMINATIONS, PlanResult, check_plan_inputs
 
@@ -248,8 +249,9 @@ class SearchPlanner(Planner):
         cannot be reached): the ranking signal of a search planner without a cost or heuristic map of its own."""
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         self._check_size(obstacles)
-        dist, _ = shortest_distances(obstacles, np.asarray(goals, dtype=np.int64), True, self.moves)
-        return np.where(np.isfinite(dist), -dist, np.nan)
+        # with corner cutting, whatever the maps' rule: a ranking signal, and the planner is told the rule only when
+        # it plans
+        return negative_cost_to_go(obstacles, goals, True, self.moves)
 
     def plan_maps(
         self,
@@ -267,20 +269,9 @@ class SearchPlanner(Planner):
         per_map = starts.shape[1]
         map_of_row = np.repeat(np.arange(len(obstacles)), per_map)
         rows = starts.reshape(-1, 2)
-        chunk_size = max(1, int(chunk_size))
-        chunks = range(0, len(rows), chunk_size)
-        if progress:
-            from tqdm import tqdm
-
-            chunks = tqdm(chunks, unit="chunk", desc=f"planning ({self.name})")
         parts = [
-            self.paths(
-                obstacles[map_of_row[i : i + chunk_size]],
-                rows[i : i + chunk_size],
-                goals[map_of_row[i : i + chunk_size]],
-                corner_cutting,
-            )
-            for i in chunks
+            self.paths(obstacles[map_of_row[sl]], rows[sl], goals[map_of_row[sl]], corner_cutting)
+            for sl in chunk_slices(len(rows), chunk_size, progress, f"planning ({self.name})")
         ]
         return SearchResult.concat(parts)
 

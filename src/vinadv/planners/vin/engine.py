@@ -26,7 +26,7 @@ import numpy as np
 
 from vinadv.grid.actions import ACTION_DELTAS, SQRT2
 from vinadv.grid.optimal_moves import optimal_moves_kernel
-from vinadv.planners.batching import DEFAULT_CHUNK, over_maps
+from vinadv.planners.batching import DEFAULT_CHUNK, chunk_slices, over_maps
 from vinadv.planners.replay import best_and_gap, exact_actions
 from vinadv.planners.result import (
     GOAL,
@@ -476,22 +476,9 @@ def plan_maps(
     for s in range(starts.shape[1]):
         check_plan_inputs(obstacles, starts[:, s], goals)
     weights = as_vin_weights(model)  # a PyTorch VIN is read now, once for the whole batch
-    chunk_size = max(1, int(chunk_size))
-    chunks = range(0, len(obstacles), chunk_size)
-    if progress:
-        from tqdm import tqdm  # noqa: PLC0415 (tqdm: the engine plans without it)
-
-        chunks = tqdm(chunks, unit="chunk", desc="planning")
     parts = [
-        _plan_chunk(
-            obstacles[i : i + chunk_size],
-            goals[i : i + chunk_size],
-            starts[i : i + chunk_size],
-            weights,
-            corner_cutting,
-            stats if stats is not None else {},
-        )
-        for i in chunks
+        _plan_chunk(obstacles[sl], goals[sl], starts[sl], weights, corner_cutting, stats if stats is not None else {})
+        for sl in chunk_slices(len(obstacles), chunk_size, progress)
     ]
     return PlanResult.concat(parts)
 

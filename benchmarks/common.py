@@ -1,0 +1,61 @@
+"""What the benchmark scripts share: the side-by-side timer, their common options and the rows they search.
+
+The scripts run as `python benchmarks/NAME.py`, so this folder is on their path and `from common import ...` finds
+this module.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from vinadv.grid.generator import generate_maps
+
+
+def timed_side_by_side(fns, rounds: int):
+    """Best time of each of `fns` over `rounds` rounds, the functions taking turns within a round, so that load
+    from other work (this machine is shared) hits them alike; and each one's last result."""
+    best = [np.inf] * len(fns)
+    results = [None] * len(fns)
+    for _ in range(rounds):
+        for k, fn in enumerate(fns):
+            start = time.perf_counter()
+            results[k] = fn()
+            best[k] = min(best[k], time.perf_counter() - start)
+    return best, results
+
+
+def add_output_arguments(parser: argparse.ArgumentParser, rounds: int) -> None:
+    """`--rounds` (best of, default `rounds`) and `--json`."""
+    parser.add_argument("--rounds", type=int, default=rounds, help=f"rounds of timing, best kept (default {rounds})")
+    parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
+
+
+def add_rows_arguments(parser: argparse.ArgumentParser, n: int, size: int) -> None:
+    """`--data MPD.npz` or `--n` generated maps of `--size`: the rows of `search_rows`."""
+    parser.add_argument("--data", help="an MP dataset file (<family>_032_moore_c8.npz): its test maps")
+    parser.add_argument("--n", type=int, default=n, help=f"generated maps (default {n})")
+    parser.add_argument("--size", type=int, default=size, help=f"side of the generated maps (default {size})")
+
+
+def mpd_rows(path: str, seed: int = 0):
+    """The test split of an MP dataset file: obstacles, one start per map that reaches the goal, goals."""
+    with np.load(path) as data:
+        free = data["arr_8"] == 1
+        goals = np.argwhere(data["arr_9"][:, 0] == 1)[:, 1:]
+        reachable = data["arr_11"][:, 0] > data["arr_11"].min()
+    rng = np.random.default_rng(seed)
+    starts = np.array([rng.choice(np.argwhere(r)) for r in reachable])
+    return ~free, starts, goals
+
+
+def search_rows(args: argparse.Namespace, moves: str = "moore"):
+    """`(obstacles, starts, goals, source)` for the options of `add_rows_arguments`: the MP file's test maps (always
+    `moore`) or `args.n` generated maps on `moves` with their first start; `source` says which."""
+    if args.data:
+        obstacles, starts, goals = mpd_rows(args.data)
+        return obstacles, starts, goals, f"{args.data}: {len(obstacles)} test maps"
+    maps = generate_maps(args.n, args.size, seed=0, n_starts=1, moves=moves)
+    return maps.obstacles, maps.starts[:, 0], maps.goals, f"{args.n} generated {args.size}x{args.size} {moves} maps"
