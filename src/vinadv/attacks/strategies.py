@@ -61,6 +61,9 @@ last keeps the strongest candidate of each map (per_map 1 of a ranking strategy,
 and `near-path` the strongest of their `per_map` drawn cells); the last step keeps `per_map` pairs as a one-obstacle
 attack does. So the pairs of K obstacles with per_map 1 extend those of K - 1 (`AttackResult.steps` holds every
 step's pairs). A map with no valid cell at some step gets no pair.
+
+One file of about 600 lines on purpose, as CleanRL keeps an algorithm in one file: the strategies differ only in
+how they score candidates, and the shared steps (evaluate, keep, greedy K, removal) read best beside them.
 """
 
 from __future__ import annotations
