@@ -8,7 +8,9 @@ the README's markers: `python docs/hooks.py` rewrites it there, and a test (`tes
 
 Markers: `<!-- vinadv:weights-table -->` (one row per shipped weights file), `<!-- vinadv:weights-commands -->`
 (the command and checksum behind each row), `<!-- vinadv:by-length -->` (rollout success by the optimal path's move
-count, for the metrics files that have it), `<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
+count, for the metrics files that have it), `<!-- vinadv:by-length-figure -->` (the same as a curve, drawn by
+`vinadv.planners.length_curve` as `vinadv eval --figure` draws it, inlined as SVG),
+`<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
 benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/results/mpd.md`) reads
 `docs/results/mpd.json`, written by `benchmarks/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
 (Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (harm at one added obstacle) and
@@ -17,6 +19,7 @@ benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/r
 
 from __future__ import annotations
 
+import base64
 import json
 from pathlib import Path
 
@@ -32,6 +35,7 @@ README_TABLE_END = "\n<!-- /results-table -->"
 WEIGHTS_TABLE = "<!-- vinadv:weights-table -->"
 WEIGHTS_COMMANDS = "<!-- vinadv:weights-commands -->"
 BY_LENGTH = "<!-- vinadv:by-length -->"
+BY_LENGTH_FIGURE = "<!-- vinadv:by-length-figure -->"
 BENCH_LEADERBOARD = "<!-- vinadv:bench-leaderboard -->"
 #: the committed benchmark entries (`vinadv bench run --out`), the leaderboard's rows
 BENCH_DIR = ROOT / "docs" / "results" / "bench"
@@ -102,23 +106,48 @@ def weights_commands(folder: Path = WEIGHTS_DIR) -> str:
 
 def by_length_table(folder: Path = WEIGHTS_DIR) -> str:
     """Rollout success by the optimal path's move count (buckets of 5 moves), one column per metrics file that has
-    the `by_length` figures."""
+    the `by_length` figures (named by its weights file: the same planner ships for several map sizes)."""
     entries = [e for e in weights_metrics(folder) if e["vinadv"].get("by_length")]
     if not entries:
         return "(no metrics file has figures by path length yet)"
     buckets: dict[tuple[int, int], dict[str, dict]] = {}
     for entry in entries:
         for bucket in entry["vinadv"]["by_length"]:
-            buckets.setdefault(tuple(bucket["moves"]), {})[entry["planner"]] = bucket
-    head = "| optimal moves | " + " | ".join(f"`{e['planner']}`: success (starts)" for e in entries) + " |"
+            buckets.setdefault(tuple(bucket["moves"]), {})[entry["weights"]] = bucket
+    head = "| optimal moves | " + " | ".join(f"`{e['weights']}`: success (starts)" for e in entries) + " |"
     rows = [head, "|---|" + "---|" * len(entries)]
-    for (low, high), by_planner in sorted(buckets.items()):
+    for (low, high), by_weights in sorted(buckets.items()):
         cells = []
         for entry in entries:
-            bucket = by_planner.get(entry["planner"])
+            bucket = by_weights.get(entry["weights"])
             cells.append(f"{percent(bucket['success_rate'])} ({bucket['rollouts']:,})" if bucket else "")
         rows.append(f"| {low}-{high} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
+
+
+def by_length_svg(folder: Path = WEIGHTS_DIR) -> str:
+    """The success-by-path-length curves of the metrics files that have `by_length`, one per weights file, as SVG
+    text (no date in it, so an unchanged metrics file gives the same bytes)."""
+    # the curve `vinadv eval --figure` draws; late, as matplotlib is a second to import and only this page needs it
+    from vinadv.planners.length_curve import success_by_length_figure, svg_text  # noqa: PLC0415
+
+    entries = [e for e in weights_metrics(folder) if e["vinadv"].get("by_length")]
+    curves = [
+        (
+            f"{e['weights']} ({e['vinadv']['size']}x{e['vinadv']['size']}, {e['vinadv']['maps']:,} maps)",
+            e["vinadv"]["by_length"],
+        )
+        for e in entries
+    ]
+    return svg_text(success_by_length_figure(curves, "Rollout success by optimal path length, held-out maps"))
+
+
+def by_length_figure(folder: Path = WEIGHTS_DIR) -> str:
+    """`by_length_svg` as a Markdown image (a data URI: the page carries it, nothing is written beside the docs)."""
+    if not any(e["vinadv"].get("by_length") for e in weights_metrics(folder)):
+        return "(no metrics file has figures by path length yet)"
+    data = base64.b64encode(by_length_svg(folder).encode()).decode()
+    return f"![Rollout success by optimal path length](data:image/svg+xml;base64,{data})"
 
 
 def bench_leaderboard(folder: Path = BENCH_DIR) -> str:
@@ -188,6 +217,7 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
     for marker, build in (
         (WEIGHTS_TABLE, weights_table),
         (WEIGHTS_COMMANDS, weights_commands),
+        (BY_LENGTH_FIGURE, by_length_figure),
         (BY_LENGTH, by_length_table),
         (BENCH_LEADERBOARD, bench_leaderboard),
         (MPD_TABLE, mpd_table),

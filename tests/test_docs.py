@@ -9,6 +9,8 @@ import json
 import re
 from pathlib import Path
 
+import pytest
+
 from vinadv.attacks.pairs import PAIRS_FORMAT
 from vinadv.classify.base import MODEL_FORMAT
 from vinadv.cli import build_parser
@@ -77,14 +79,29 @@ def test_the_results_table_is_read_from_the_metrics_files(tmp_path):
     )
 
 
-def test_the_hook_fills_the_results_page():
+def test_the_hook_fills_the_results_page(monkeypatch):
     hooks = docs_module("hooks")
+    monkeypatch.setattr(hooks, "by_length_svg", lambda folder: "<svg/>")  # drawn for real in the slow test below
     page = (DOCS / "results" / "index.md").read_text()
-    for marker in (hooks.WEIGHTS_TABLE, hooks.WEIGHTS_COMMANDS, hooks.BY_LENGTH):
+    for marker in (hooks.WEIGHTS_TABLE, hooks.WEIGHTS_COMMANDS, hooks.BY_LENGTH, hooks.BY_LENGTH_FIGURE):
         assert marker in page
     filled = hooks.on_page_markdown(page, page=None, config=None, files=None)
     assert "<!-- vinadv:" not in filled and hooks.weights_table() in filled
     assert "| 25-29 |" in hooks.by_length_table()
+    assert "](data:image/svg+xml;base64,PHN2Zy8+)" in filled  # base64 of "<svg/>"
+
+
+@pytest.mark.slow  # matplotlib's import and a figure: about two seconds
+def test_the_length_curve_draws_every_metrics_file_with_rows_by_length():
+    hooks = docs_module("hooks")
+    svg = hooks.by_length_svg()
+    drawn = [e for e in hooks.weights_metrics() if e["vinadv"].get("by_length")]
+    assert drawn  # the shipped files record rows by length
+    for entry in drawn:
+        assert entry["weights"] in svg  # the legend names each file
+        for row in entry["vinadv"]["by_length"]:
+            assert f"{row['moves'][0]}-{row['moves'][1]}" in svg  # each bucket labelled
+    assert svg == hooks.by_length_svg()  # same files, same bytes: the page changes only with the data
 
 
 def _mpd_record(opt: float) -> dict:
