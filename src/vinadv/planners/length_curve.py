@@ -127,7 +127,7 @@ def success_by_length_figure(curves: Sequence[tuple[str, Sequence[LengthBucketMe
     top = max(float(c.ci_low.min()) for _, c in drawn)
     ax.set_ylim(max(0.0, 100 * top - 5) if top > 0.5 else 0.0, 100.5)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="lower left")
+    ax.legend(fontsize=8, loc="best")
     ax_n.set_yscale("log")
     ax_n.set_ylabel("rollouts")
     ax_n.set_xlabel("optimal path length (moves), buckets")
