@@ -14,7 +14,9 @@ count, for the metrics files that have it), `<!-- vinadv:by-length-figure -->` (
 benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/results/mpd.md`) reads
 `docs/results/mpd.json`, written by `benchmarks/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
 (Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (harm at one added obstacle) and
-`<!-- vinadv:mpd-commands -->` (the commands).
+`<!-- vinadv:mpd-commands -->` (the commands). `<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine
+and the exhaustive attack at 28x28 to 64x64 beside the FMA count, from `docs/results/map_size.json`
+(`benchmarks/map_size.py --out`), with its command and the machine's load.
 """
 
 from __future__ import annotations
@@ -43,6 +45,8 @@ MPD_TABLE = "<!-- vinadv:mpd-table -->"
 MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
 MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
 MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
+MAP_SIZE_TABLE = "<!-- vinadv:map-size-table -->"
+MAP_SIZE_JSON = ROOT / "docs" / "results" / "map_size.json"
 
 
 def percent(fraction: float | None) -> str:
@@ -212,6 +216,59 @@ def mpd_commands(path: Path = MPD_JSON) -> str:
     return "```sh\n" + "\n".join(lines) + "\n```"
 
 
+#: the growth columns of `map_size_table`: FMA per map, then the time per value map and per plan
+GROWTH_KEYS = ("fma_per_map", "value_map_time_per_map", "engine_time_per_map")
+
+
+def map_size_table(path: Path = MAP_SIZE_JSON) -> str:
+    """The VIN's value maps/s, the engine's plans/s (near-tie replays included) and the exhaustive attack's seconds
+    per map by map size, beside the multiply-adds per map and the rate they allow at the CPU's FMA peak, and each
+    figure's growth from the first size; then the machine, its load and the command (`benchmarks/map_size.py`)."""
+    data = json.loads(path.read_text())
+    rows = []
+    for row in data["sizes"]:
+        grow = row["growth_from_first"]
+        rows.append(
+            [
+                f"{row['size']}x{row['size']}",
+                str(row["k"]),
+                f"{row['fma_per_map']['engine'] / 1e6:.1f} M ({row['fma_per_map']['forward'] / 1e6:.1f} M)",
+                f"{row['fma_limit_plans_per_s']:,.0f}",
+                f"{row['value_maps_per_s']:,.0f} ({percent(row['value_maps_share_of_fma_peak'])})",
+                f"{row['engine_plans_per_s']:,.0f} ({row['near_tie_maps']} of {row['maps']:,})",
+                f"{row['candidates_per_map']:,.0f}",
+                f"{row['attack_s_per_map']:.3g} s ({percent(row['attack_share_of_fma_peak'])})",
+                " / ".join(
+                    f"{grow[key]:.1f}x" for key in ("fma_per_map", "value_map_time_per_map", "engine_time_per_map")
+                ),
+                f"{grow['attack_fma_per_map']:.0f}x / {grow['attack_time_per_map']:.0f}x",
+            ]
+        )
+    first = data["sizes"][0]["size"]
+    header = [
+        "maps",
+        "k",
+        "FMA per map: engine (forward)",
+        "maps/s at the FMA peak",
+        "value maps/s (share of peak)",
+        "engine plans/s (near-tie maps)",
+        "attack candidates per map",
+        "exhaustive attack per map (share of peak)",
+        f"x {first}x{first}: FMA / value map / plan",
+        f"x {first}x{first}: attack FMA / time",
+    ]
+    m = data["machine"]
+    weights = ", ".join(sorted({f"`{row['weights']}`" for row in data["sizes"]}))
+    note = (
+        f"Measured on {m['cpu']} ({m['cores']} cores, {m['engine_threads']} engine threads, "
+        f"FMA peak {m['fma_peak_per_s'] / 1e9:.0f} G/s), load average {m['load_average_before']} before and "
+        f"{m['load_average_after']} after: a loaded, shared machine, so the absolute rates are low and noisy; the "
+        f"sizes ran in one run, minutes apart, so the ratios are the figures to read. Weights {weights}. Command: "
+        f"`{data['command']}`"
+    )
+    return markdown_table(header, rows) + "\n\n" + note
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
     for marker, build in (
@@ -223,6 +280,7 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (MPD_TABLE, mpd_table),
         (MPD_ROBUSTNESS, mpd_robustness),
         (MPD_COMMANDS, mpd_commands),
+        (MAP_SIZE_TABLE, map_size_table),
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())
