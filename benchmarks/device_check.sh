@@ -79,7 +79,7 @@ if [ "$DEVICE" = cuda ] && step 3; then
 fi
 
 if step 4 && [ -f src/vinadv/weights/vin64.pt ]; then
-    echo "== 4. the 64x64 VIN's forward on $DEVICE, 1,000 held-out maps, success by path length"
+    echo "== 4. the 64x64 VIN's forward on $DEVICE, $N64 held-out maps, success by path length"
     timeout 60 "$PY" -m vinadv.cli eval --planner vin --size 64 --n "$N64" --seed 1000 --device "$DEVICE" \
         --protocol vinadv --quiet --out "$OUT/vin64_cuda.json" --figure "$OUT/vin64_cuda_by_length.svg" \
         2>&1 | tee "$OUT/vin64_cuda.log" | head -3
