@@ -56,8 +56,9 @@ status=0
 
 if step 1; then
     echo "== 1. plans per second, GPPN and Neural A*, on the CPU and on $DEVICE"
-    timeout 85 "$PY" benchmarks/device.py --device "$DEVICE" --planners gppn --batches "$BATCHES" --seconds "$BENCH_SECONDS" \
-        --tie-maps 0 --robustness-maps 0 --json "$OUT/speed_gppn.json" > "$OUT/speed_gppn.log" 2>&1 || status=1
+    timeout 85 "$PY" benchmarks/device.py --device "$DEVICE" --planners gppn \
+        --batches "$BATCHES" --seconds "$BENCH_SECONDS" --tie-maps 0 --robustness-maps 0 \
+        --json "$OUT/speed_gppn.json" > "$OUT/speed_gppn.log" 2>&1 || status=1
     timeout 85 "$PY" benchmarks/device.py --device "$DEVICE" --planners neural-astar --moves moore \
         --batches "$BATCHES" --seconds "$BENCH_SECONDS" --tie-maps 0 --robustness-maps 0 \
         --json "$OUT/speed_neural_astar.json" > "$OUT/speed_neural_astar.log" 2>&1 || status=1
