@@ -1,7 +1,7 @@
 """Planners on a GPU (`--device`) against the CPU, side by side in one run: speed, and how often the two differ.
 
     python benchmarks/device.py [--device cuda] [--planners gppn,vin] [--batches 1,64,1024] [--tie-maps 1000]
-        [--robustness-maps 4] [--full-robustness 0] [--json FILE]
+        [--robustness-maps 4] [--full-robustness 0] [--full-chunk 100] [--moves octile] [--json FILE]
 
 For each planner of `--planners`, its default (a torch planner on the CPU, the VIN's exact engine) against the same
 planner loaded with `--device` (for the VIN: its PyTorch forward there):
@@ -9,11 +9,15 @@ planner loaded with `--device` (for the VIN: its PyTorch forward there):
   calls repeated for at least `--seconds`;
 - `ties`: on `--tie-maps` held-out 28x28 maps (7 starts each), the paths that differ, the cells whose action differs
   (`vinadv.testing.planners.tie_flips`, against the CPU's logits: for the VIN its PyTorch forward on the CPU) and
-  those of them that are not near ties (expected 0);
+  those of them that are not near ties (expected 0); policy planners only (a search planner has no logits);
 - `robustness`: `vinadv.robustness.robustness` on `--robustness-maps` maps, every strategy and the exhaustive search,
   one obstacle: seconds on each, and whether the figures are equal;
 - `full_robustness` (with `--full-robustness N`): the exhaustive robustness of N maps on the device alone (issue 36:
-  the GPPN's on 1,000 maps, target under 5 minutes on one H100-class GPU).
+  the GPPN's on 1,000 maps, target under 5 minutes on one H100-class GPU), `--full-chunk` maps a call, the JSON
+  written after each call: a run stopped at its time limit still gives the maps done and their seconds (each chunk's
+  figures are kept; the maps are the first N of the seed, whatever the chunking).
+`--moves`: the movement model of the maps and planners (Neural A* plans `moore` moves: `--planners neural-astar
+--moves moore`).
 With `--device cpu` it compares the defaults with the forwards on the CPU (the VIN: forward against engine).
 `benchmarks/device_check.sh` runs it on a lent GPU machine.
 """
@@ -31,6 +35,7 @@ import torch
 
 from vinadv.grid import generate_maps
 from vinadv.planners.registry import load_planner
+from vinadv.planners.search import SearchPlanner
 from vinadv.robustness import DEFAULT_STRATEGIES, robustness
 from vinadv.testing.planners import tie_flips
 
@@ -105,20 +110,25 @@ def main() -> None:
     parser.add_argument("--tie-maps", type=int, default=1000)
     parser.add_argument("--robustness-maps", type=int, default=4)
     parser.add_argument("--full-robustness", type=int, default=0, metavar="N")
+    parser.add_argument("--full-chunk", type=int, default=100, metavar="M", help="maps a robustness call")
+    parser.add_argument("--moves", default="octile", help="movement model of the maps (neural-astar: moore)")
     parser.add_argument("--json", metavar="FILE", help="also write the figures here")
     args = parser.parse_args()
     batches = [int(b) for b in args.batches.split(",")]
-    out = {"device": args.device, "machine": machine(args.device), "planners": {}}
+    out = {"device": args.device, "machine": machine(args.device), "moves": args.moves, "planners": {}}
 
     def save() -> None:  # after every part: a run stopped at its time limit keeps what it measured
         if args.json:
             with open(args.json, "w") as fh:
                 json.dump(out, fh, indent=1)
 
-    maps = generate_maps(max(batches), SIZE, seed=SEED)
+    moves = args.moves
+    maps = generate_maps(max(batches), SIZE, seed=SEED, moves=moves)
     for spec in args.planners.split(","):
-        default, device = load_planner(spec, SIZE), load_planner(spec, SIZE, device=args.device)
-        reference = load_planner(spec, SIZE, device="cpu")  # the CPU's logits (the VIN's engine has none of its own)
+        default = load_planner(spec, SIZE, moves=moves)
+        device = load_planner(spec, SIZE, device=args.device, moves=moves)
+        # the CPU's logits (the VIN's engine has none of its own)
+        reference = load_planner(spec, SIZE, device="cpu", moves=moves)
         got = out["planners"][spec] = {"device_record": device.spec().get("device")}
         for batch in batches:
             rates = {
@@ -129,12 +139,12 @@ def main() -> None:
             got.setdefault("plans_per_s", {})[str(batch)] = rates
             print(spec, "batch", batch, rates, flush=True)
             save()
-        if args.tie_maps:
-            got["ties"] = ties(reference, default, device, generate_maps(args.tie_maps, SIZE, seed=SEED))
+        if args.tie_maps and not isinstance(reference, SearchPlanner):
+            got["ties"] = ties(reference, default, device, generate_maps(args.tie_maps, SIZE, seed=SEED, moves=moves))
             print(spec, "ties", got["ties"], flush=True)
             save()
         if args.robustness_maps:
-            few = generate_maps(args.robustness_maps, SIZE, seed=SEED)
+            few = generate_maps(args.robustness_maps, SIZE, seed=SEED, moves=moves)
             strategies = [*DEFAULT_STRATEGIES, "exhaustive"]
             a, ta = robustness_figures(default, few, strategies)
             b, tb = robustness_figures(device, few, strategies)
@@ -147,16 +157,18 @@ def main() -> None:
             print(spec, "robustness", got["robustness"], flush=True)
             save()
         if args.full_robustness:
-            t0 = time.perf_counter()
-            full = generate_maps(args.full_robustness, SIZE, seed=SEED)
-            result = robustness(device, full, ["exhaustive"], 1).to_dict()
-            got["full_robustness"] = {
-                "maps": args.full_robustness,
-                "seconds": round(time.perf_counter() - t0, 1),
-                "exhaustive": result["strategies"]["exhaustive"]["by_obstacles"][0],
-            }
-            print(spec, "full robustness", got["full_robustness"], flush=True)
-            save()
+            full = generate_maps(args.full_robustness, SIZE, seed=SEED, moves=moves)
+            done = got["full_robustness"] = {"maps": args.full_robustness, "maps_done": 0, "seconds": 0.0, "chunks": []}
+            for lo in range(0, len(full), args.full_chunk):
+                t0 = time.perf_counter()
+                result = robustness(device, full.take(slice(lo, lo + args.full_chunk)), ["exhaustive"], 1).to_dict()
+                seconds = time.perf_counter() - t0
+                chunk = result["strategies"]["exhaustive"]["by_obstacles"][0]
+                done["chunks"].append({"first_map": lo, "seconds": round(seconds, 1), "exhaustive": chunk})
+                done["maps_done"] += chunk["maps"]
+                done["seconds"] = round(done["seconds"] + seconds, 1)
+                print(spec, "full robustness", {k: done[k] for k in ("maps_done", "seconds")}, flush=True)
+                save()
     print(json.dumps(out, indent=1))
 
 

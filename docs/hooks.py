@@ -8,15 +8,20 @@ the README's markers: `python docs/hooks.py` rewrites it there, and a test (`tes
 
 Markers: `<!-- vinadv:weights-table -->` (one row per shipped weights file), `<!-- vinadv:weights-commands -->`
 (the command and checksum behind each row), `<!-- vinadv:by-length -->` (rollout success by the optimal path's move
-count, for the metrics files that have it), `<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
+count, for the metrics files that have it), `<!-- vinadv:by-length-figure -->` (the same as a curve, drawn by
+`vinadv.planners.length_curve` as `vinadv eval --figure` draws it, inlined as SVG),
+`<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
 benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/results/mpd.md`) reads
 `docs/results/mpd.json`, written by `benchmarks/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
 (Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (harm at one added obstacle) and
-`<!-- vinadv:mpd-commands -->` (the commands).
+`<!-- vinadv:mpd-commands -->` (the commands). `<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine
+and the exhaustive attack at 28x28 to 64x64 beside the FMA count, from `docs/results/map_size.json`
+(`benchmarks/map_size.py --out`), with its command and the machine's load.
 """
 
 from __future__ import annotations
 
+import base64
 import json
 from pathlib import Path
 
@@ -32,6 +37,7 @@ README_TABLE_END = "\n<!-- /results-table -->"
 WEIGHTS_TABLE = "<!-- vinadv:weights-table -->"
 WEIGHTS_COMMANDS = "<!-- vinadv:weights-commands -->"
 BY_LENGTH = "<!-- vinadv:by-length -->"
+BY_LENGTH_FIGURE = "<!-- vinadv:by-length-figure -->"
 BENCH_LEADERBOARD = "<!-- vinadv:bench-leaderboard -->"
 #: the committed benchmark entries (`vinadv bench run --out`), the leaderboard's rows
 BENCH_DIR = ROOT / "docs" / "results" / "bench"
@@ -39,6 +45,8 @@ MPD_TABLE = "<!-- vinadv:mpd-table -->"
 MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
 MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
 MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
+MAP_SIZE_TABLE = "<!-- vinadv:map-size-table -->"
+MAP_SIZE_JSON = ROOT / "docs" / "results" / "map_size.json"
 
 
 def percent(fraction: float | None) -> str:
@@ -102,23 +110,48 @@ def weights_commands(folder: Path = WEIGHTS_DIR) -> str:
 
 def by_length_table(folder: Path = WEIGHTS_DIR) -> str:
     """Rollout success by the optimal path's move count (buckets of 5 moves), one column per metrics file that has
-    the `by_length` figures."""
+    the `by_length` figures (named by its weights file: the same planner ships for several map sizes)."""
     entries = [e for e in weights_metrics(folder) if e["vinadv"].get("by_length")]
     if not entries:
         return "(no metrics file has figures by path length yet)"
     buckets: dict[tuple[int, int], dict[str, dict]] = {}
     for entry in entries:
         for bucket in entry["vinadv"]["by_length"]:
-            buckets.setdefault(tuple(bucket["moves"]), {})[entry["planner"]] = bucket
-    head = "| optimal moves | " + " | ".join(f"`{e['planner']}`: success (starts)" for e in entries) + " |"
+            buckets.setdefault(tuple(bucket["moves"]), {})[entry["weights"]] = bucket
+    head = "| optimal moves | " + " | ".join(f"`{e['weights']}`: success (starts)" for e in entries) + " |"
     rows = [head, "|---|" + "---|" * len(entries)]
-    for (low, high), by_planner in sorted(buckets.items()):
+    for (low, high), by_weights in sorted(buckets.items()):
         cells = []
         for entry in entries:
-            bucket = by_planner.get(entry["planner"])
+            bucket = by_weights.get(entry["weights"])
             cells.append(f"{percent(bucket['success_rate'])} ({bucket['rollouts']:,})" if bucket else "")
         rows.append(f"| {low}-{high} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
+
+
+def by_length_svg(folder: Path = WEIGHTS_DIR) -> str:
+    """The success-by-path-length curves of the metrics files that have `by_length`, one per weights file, as SVG
+    text (no date in it, so an unchanged metrics file gives the same bytes)."""
+    # the curve `vinadv eval --figure` draws; late, as matplotlib is a second to import and only this page needs it
+    from vinadv.planners.length_curve import success_by_length_figure, svg_text  # noqa: PLC0415
+
+    entries = [e for e in weights_metrics(folder) if e["vinadv"].get("by_length")]
+    curves = [
+        (
+            f"{e['weights']} ({e['vinadv']['size']}x{e['vinadv']['size']}, {e['vinadv']['maps']:,} maps)",
+            e["vinadv"]["by_length"],
+        )
+        for e in entries
+    ]
+    return svg_text(success_by_length_figure(curves, "Rollout success by optimal path length, held-out maps"))
+
+
+def by_length_figure(folder: Path = WEIGHTS_DIR) -> str:
+    """`by_length_svg` as a Markdown image (a data URI: the page carries it, nothing is written beside the docs)."""
+    if not any(e["vinadv"].get("by_length") for e in weights_metrics(folder)):
+        return "(no metrics file has figures by path length yet)"
+    data = base64.b64encode(by_length_svg(folder).encode()).decode()
+    return f"![Rollout success by optimal path length](data:image/svg+xml;base64,{data})"
 
 
 def bench_leaderboard(folder: Path = BENCH_DIR) -> str:
@@ -183,16 +216,71 @@ def mpd_commands(path: Path = MPD_JSON) -> str:
     return "```sh\n" + "\n".join(lines) + "\n```"
 
 
+#: the growth columns of `map_size_table`: FMA per map, then the time per value map and per plan
+GROWTH_KEYS = ("fma_per_map", "value_map_time_per_map", "engine_time_per_map")
+
+
+def map_size_table(path: Path = MAP_SIZE_JSON) -> str:
+    """The VIN's value maps/s, the engine's plans/s (near-tie replays included) and the exhaustive attack's seconds
+    per map by map size, beside the multiply-adds per map and the rate they allow at the CPU's FMA peak, and each
+    figure's growth from the first size; then the machine, its load and the command (`benchmarks/map_size.py`)."""
+    data = json.loads(path.read_text())
+    rows = []
+    for row in data["sizes"]:
+        grow = row["growth_from_first"]
+        rows.append(
+            [
+                f"{row['size']}x{row['size']}",
+                str(row["k"]),
+                f"{row['fma_per_map']['engine'] / 1e6:.1f} M ({row['fma_per_map']['forward'] / 1e6:.1f} M)",
+                f"{row['fma_limit_plans_per_s']:,.0f}",
+                f"{row['value_maps_per_s']:,.0f} ({percent(row['value_maps_share_of_fma_peak'])})",
+                f"{row['engine_plans_per_s']:,.0f} ({row['near_tie_maps']} of {row['maps']:,})",
+                f"{row['candidates_per_map']:,.0f}",
+                f"{row['attack_s_per_map']:.3g} s ({percent(row['attack_share_of_fma_peak'])})",
+                " / ".join(
+                    f"{grow[key]:.1f}x" for key in ("fma_per_map", "value_map_time_per_map", "engine_time_per_map")
+                ),
+                f"{grow['attack_fma_per_map']:.0f}x / {grow['attack_time_per_map']:.0f}x",
+            ]
+        )
+    first = data["sizes"][0]["size"]
+    header = [
+        "maps",
+        "k",
+        "FMA per map: engine (forward)",
+        "maps/s at the FMA peak",
+        "value maps/s (share of peak)",
+        "engine plans/s (near-tie maps)",
+        "attack candidates per map",
+        "exhaustive attack per map (share of peak)",
+        f"x {first}x{first}: FMA / value map / plan",
+        f"x {first}x{first}: attack FMA / time",
+    ]
+    m = data["machine"]
+    weights = ", ".join(sorted({f"`{row['weights']}`" for row in data["sizes"]}))
+    note = (
+        f"Measured on {m['cpu']} ({m['cores']} cores, {m['engine_threads']} engine threads, "
+        f"FMA peak {m['fma_peak_per_s'] / 1e9:.0f} G/s), load average {m['load_average_before']} before and "
+        f"{m['load_average_after']} after: a loaded, shared machine, so the absolute rates are low and noisy; the "
+        f"sizes ran in one run, minutes apart, so the ratios are the figures to read. Weights {weights}. Command: "
+        f"`{data['command']}`"
+    )
+    return markdown_table(header, rows) + "\n\n" + note
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
     for marker, build in (
         (WEIGHTS_TABLE, weights_table),
         (WEIGHTS_COMMANDS, weights_commands),
+        (BY_LENGTH_FIGURE, by_length_figure),
         (BY_LENGTH, by_length_table),
         (BENCH_LEADERBOARD, bench_leaderboard),
         (MPD_TABLE, mpd_table),
         (MPD_ROBUSTNESS, mpd_robustness),
         (MPD_COMMANDS, mpd_commands),
+        (MAP_SIZE_TABLE, map_size_table),
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())

@@ -9,6 +9,10 @@ import json
 import re
 from pathlib import Path
 
+import pytest
+import torch
+from torch.utils.flop_counter import FlopCounterMode
+
 from vinadv.attacks.pairs import PAIRS_FORMAT
 from vinadv.classify.base import MODEL_FORMAT
 from vinadv.cli import build_parser
@@ -16,6 +20,8 @@ from vinadv.commands.store import EXPORT_FORMAT
 from vinadv.grid.mapset import MAPS_FORMAT
 from vinadv.planners.gppn import GPPN_FORMAT
 from vinadv.planners.pathset import PATHS_FORMAT
+from vinadv.planners.vin.arrays import VINConfig
+from vinadv.planners.vin.model import VIN
 from vinadv.planners.vin.weights import WEIGHTS_FORMAT
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -77,14 +83,29 @@ def test_the_results_table_is_read_from_the_metrics_files(tmp_path):
     )
 
 
-def test_the_hook_fills_the_results_page():
+def test_the_hook_fills_the_results_page(monkeypatch):
     hooks = docs_module("hooks")
+    monkeypatch.setattr(hooks, "by_length_svg", lambda folder: "<svg/>")  # drawn for real in the slow test below
     page = (DOCS / "results" / "index.md").read_text()
-    for marker in (hooks.WEIGHTS_TABLE, hooks.WEIGHTS_COMMANDS, hooks.BY_LENGTH):
+    for marker in (hooks.WEIGHTS_TABLE, hooks.WEIGHTS_COMMANDS, hooks.BY_LENGTH, hooks.BY_LENGTH_FIGURE):
         assert marker in page
     filled = hooks.on_page_markdown(page, page=None, config=None, files=None)
     assert "<!-- vinadv:" not in filled and hooks.weights_table() in filled
     assert "| 25-29 |" in hooks.by_length_table()
+    assert "](data:image/svg+xml;base64,PHN2Zy8+)" in filled  # base64 of "<svg/>"
+
+
+@pytest.mark.slow  # matplotlib's import and a figure: about two seconds
+def test_the_length_curve_draws_every_metrics_file_with_rows_by_length():
+    hooks = docs_module("hooks")
+    svg = hooks.by_length_svg()
+    drawn = [e for e in hooks.weights_metrics() if e["vinadv"].get("by_length")]
+    assert drawn  # the shipped files record rows by length
+    for entry in drawn:
+        assert entry["weights"] in svg  # the legend names each file
+        for row in entry["vinadv"]["by_length"]:
+            assert f"{row['moves'][0]}-{row['moves'][1]}" in svg  # each bucket labelled
+    assert svg == hooks.by_length_svg()  # same files, same bytes: the page changes only with the data
 
 
 def _mpd_record(opt: float) -> dict:
@@ -204,3 +225,75 @@ def test_the_benchmark_page_carries_the_leaderboard_of_the_committed_entries():
     assert entries, "no committed benchmark entry"
     for path in entries:  # every committed entry is a row, linked from the page
         assert f"(bench/{path.name})" in board
+
+
+def _map_size_record() -> dict:
+    fma = {"h_conv": 1, "r_conv": 1, "q_conv_of_r": 1, "value_iteration": 1, "forward": 4_500_000, "engine": 2_000_000}
+    row = {
+        "size": 28,
+        "weights": "w.pt",
+        "k": 36,
+        "maps": 500,
+        "value_maps_per_s": 4321.0,
+        "value_maps_share_of_fma_peak": 0.125,
+        "engine_plans_per_s": 12345.6,
+        "near_tie_maps": 3,
+        "attack_share_of_fma_peak": 0.5,
+        "attack_s_per_map": 0.0456,
+        "candidates_per_map": 401.2,
+        "fma_per_map": fma,
+        "fma_limit_plans_per_s": 50000.0,
+        "engine_share_of_fma_peak": 0.25,
+        "growth_from_first": {
+            "value_map_time_per_map": 1.0,
+            "engine_time_per_map": 1.0,
+            "fma_per_map": 1.0,
+            "attack_time_per_map": 1.0,
+            "attack_fma_per_map": 1.0,
+        },
+    }
+    machine = {"cpu": "C", "cores": 2, "engine_threads": 2, "fma_peak_per_s": 1e11}
+    return {
+        "command": "python benchmarks/map_size.py --sizes 28",
+        "machine": {**machine, "load_average_before": 1.5, "load_average_after": 2.5},
+        "sizes": [row],
+    }
+
+
+def test_the_map_size_table_is_read_from_its_json(tmp_path):
+    hooks = docs_module("hooks")
+    page = (DOCS / "guide" / "gpu.md").read_text()
+    assert hooks.MAP_SIZE_TABLE in page
+    filled = hooks.on_page_markdown(page, page=None, config=None, files=None)
+    data = json.loads(hooks.MAP_SIZE_JSON.read_text())
+    assert "<!-- vinadv:" not in filled and data["command"] in filled
+    assert [row["size"] for row in data["sizes"]] == [28, 32, 64]
+    for row in data["sizes"]:
+        assert f"| {row['size']}x{row['size']} | {row['k']} | {row['fma_per_map']['engine'] / 1e6:.1f} M" in filled
+        assert f"| {row['engine_plans_per_s']:,.0f} ({row['near_tie_maps']} of {row['maps']:,}) |" in filled
+    # another JSON gives another table: nothing is copied by hand
+    path = tmp_path / "map_size.json"
+    path.write_text(json.dumps(_map_size_record()))
+    table = hooks.map_size_table(path)
+    assert table.splitlines()[2] == (
+        "| 28x28 | 36 | 2.0 M (4.5 M) | 50,000 | 4,321 (12.5%) | 12,346 (3 of 500) | 401 | 0.0456 s (50.0%) "
+        "| 1.0x / 1.0x / 1.0x | 1x / 1x |"
+    )
+    assert "load average 1.5 before and 2.5 after" in table
+
+
+@pytest.mark.slow  # loads the benchmark script and what it imports: seconds
+def test_the_published_fma_count_is_the_forwards_as_pytorch_counts_it():
+    # benchmarks/map_size.py's formula against PyTorch's own count of the VIN's convolutions (2 flops a multiply-add)
+    spec = importlib.util.spec_from_file_location("map_size", ROOT / "benchmarks" / "map_size.py")
+    map_size = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(map_size)
+    for size, k, l_h in ((8, 3, 150), (11, 5, 7)):
+        config = VINConfig(k=k, l_h=l_h)
+        with FlopCounterMode(display=False) as counter:
+            VIN(config).q_values(torch.zeros(1, 2, size, size))
+        fma = map_size.fma_per_map(size, k, config.l_i, config.l_h, config.l_q)
+        assert 2 * fma["forward"] == counter.get_total_flops()
+        assert fma["forward"] == fma["h_conv"] + fma["r_conv"] + fma["q_conv_of_r"] + fma["value_iteration"]
+        # the engine's count: h and r folded into one 2 -> 1 convolution, the rest as the forward
+        assert fma["engine"] == fma["forward"] - fma["h_conv"] - fma["r_conv"] + size * size * 9 * config.l_i

@@ -32,6 +32,13 @@ def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
     add_moves_argument(ev, default=None, what="with --n: movement model of the generated maps")
     ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
     ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
+    ev.add_argument(
+        "--figure",
+        default=None,
+        metavar="FILE",
+        help="also draw rollout success against the optimal path's length (buckets of 5 moves, 95%% Wilson band, "
+        "rollouts per bucket) to FILE (.png, .svg or .pdf); needs the vinadv protocol",
+    )
     add_output_options(ev, json="the figures", quiet=True)
 
 
@@ -41,6 +48,7 @@ def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:
     from vinadv.grid.generator import generate_maps
     from vinadv.grid.mapset import MapSet
 
+    check_figure_option(args)
     set_threads(args.threads)
     if args.data is not None:
         if args.moves is not None:
@@ -54,6 +62,24 @@ def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:
     if moves != "octile":  # an octile record is what it was before movement models
         generated["moves"] = moves
     return maps, {"generated": generated}
+
+
+def check_figure_option(args: argparse.Namespace) -> None:
+    """Refuse `--figure` before any work: a file name matplotlib cannot write, or protocols without the vinadv
+    one (only it records rollouts by path length). `args.protocol` is one name (`vin eval`, `gppn eval`) or the
+    comma-joined list of `vinadv eval` (None: the planner's default, which holds vinadv)."""
+    if getattr(args, "figure", None) is None:
+        return
+    from vinadv.grid.draw import figure_format
+
+    try:
+        figure_format(args.figure)
+    except InputError as exc:
+        raise InputError(str(exc).replace("out:", "--figure:", 1)) from None
+    protocol = getattr(args, "protocol", None)
+    names = [] if protocol is None else [p.strip() for p in str(protocol).split(",")]
+    if names and "vinadv" not in names and names != ["all"]:
+        raise InputError(f"--figure: needs the vinadv protocol (rollouts by path length), not {protocol}")
 
 
 def emit_metrics(args: argparse.Namespace, measured: dict, source: dict, figures: dict, started: float) -> int:
@@ -70,10 +96,26 @@ def emit_metrics(args: argparse.Namespace, measured: dict, source: dict, figures
 
 
 def write_figures(args: argparse.Namespace, figures: dict) -> None:
-    """Write an `eval` command's record `figures` as indented JSON to `--out`, where one is given."""
+    """Write an `eval` command's record `figures` as indented JSON to `--out`, and its success-by-path-length
+    curve to `--figure` (`vinadv.planners.length_curve`), where they are given."""
     if args.out:
         with atomic_output(args.out, "w") as fh:
             fh.write(json.dumps(figures, indent=2) + "\n")
+    if getattr(args, "figure", None):
+        from vinadv.planners.length_curve import by_length_rows, save_success_by_length
+
+        ours = figures.get("vinadv", figures)  # `vinadv eval` nests each protocol's figures, `vin eval` is flat
+        title = f"{ours['maps']:,} maps of {ours['size']}x{ours['size']}, {ours['rollouts']:,} rollouts"
+        save_success_by_length([(figure_label(figures), by_length_rows(figures))], args.figure, title)
+
+
+def figure_label(figures: dict) -> str:
+    """The legend entry of an `eval` record: the planner (`vinadv eval`'s spec name) and the weights file's name."""
+    planner = figures.get("planner")
+    name = planner.get("name") if isinstance(planner, dict) else None
+    weights = str(figures.get("weights") or "")
+    weights = weights.removeprefix("shipped:").rsplit("/", 1)[-1]
+    return " ".join(part for part in (name, f"({weights})" if weights and name else weights) if part) or "planner"
 
 
 def _pct(x: float) -> str:
