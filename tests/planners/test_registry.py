@@ -29,7 +29,17 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
 def test_list_names_the_registered_planners():
     names = [p["name"] for p in list_planners(28)]
-    assert names == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar", "neural-astar"]
+    assert names == [
+        "vin",
+        "vin_robust",
+        "gppn",
+        "vin-mpd32",
+        "gppn-mpd32",
+        "optimal",
+        "astar",
+        "wastar",
+        "neural-astar",
+    ]
     vin = list_planners(28)[0]
     assert vin["weights"].endswith("vin28.pt") and vin["weights_available"] is True
 
@@ -115,6 +125,8 @@ def test_planners_command(capsys):
         "vin",
         "vin_robust",
         "gppn",
+        "vin-mpd32",
+        "gppn-mpd32",
         "optimal",
         "astar",
         "wastar",
