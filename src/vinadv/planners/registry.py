@@ -291,7 +291,7 @@ register(
 )
 register(
     "gppn",
-    description="Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, 8 actions",
+    description="Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, the actions of its moves",
     load=_load_gppn,
     default_weights=_gppn_weights_path,
     takes_weights=True,
