@@ -62,8 +62,9 @@ def weights_metrics(folder: Path = WEIGHTS_DIR) -> list[dict]:
 
     Both layouts are read: `vinadv vin eval --json` (the vinadv protocol's figures at the top level) and
     `vinadv eval --json` (`{"planner", "vinadv": {...}, "gppn": {...}}`). Each entry has `weights` (the file name),
-    `planner` (the registry name: the file name without the map size), `sha256`, `command`, `vinadv` (figures) and
-    `gppn` (figures or None).
+    `planner` (the registry name: the measured planner's name, or the file name without the map size), `sha256`,
+    `command`, `vinadv` (figures), `gppn` (figures or None) and `data` (the maps file measured on, None for
+    generated maps).
     """
     entries = []
     for path in sorted(folder.glob("*.metrics.json")):
@@ -71,14 +72,17 @@ def weights_metrics(folder: Path = WEIGHTS_DIR) -> list[dict]:
         weights = path.name.removesuffix(".metrics.json") + ".pt"
         figures = data.get("vinadv", data)
         size = figures["size"]
+        planner = data.get("planner") if isinstance(data.get("planner"), dict) else {}
         entries.append(
             {
                 "weights": weights,
-                "planner": weights.removesuffix(".pt").replace(str(size), "", 1),
+                # the planner the figures were measured with (`vin-mpd32`), else the file name without the size
+                "planner": planner.get("name") or weights.removesuffix(".pt").replace(str(size), "", 1),
                 "sha256": data.get("weights_sha256") or data["planner"]["weights_sha256"],
                 "command": data["command"],
                 "vinadv": figures,
                 "gppn": data.get("gppn"),
+                "data": data.get("data"),
             }
         )
     return entries
@@ -92,9 +96,11 @@ def weights_table(folder: Path = WEIGHTS_DIR) -> str:
     ]
     for entry in weights_metrics(folder):
         fig, gppn = entry["vinadv"], entry["gppn"] or {}
+        # figures measured on a maps file (the MP test splits), not the generated maps, say which file
+        where = f" ({Path(entry['data']).name})" if entry.get("data") else ""
         rows.append(
             f"| `{entry['planner']}` | `{entry['weights']}` | {percent(fig['success_rate'])} of "
-            f"{fig['rollouts']:,} | {percent(fig['optimal_rate'])} | {percent(fig['action_accuracy'])} | "
+            f"{fig['rollouts']:,}{where} | {percent(fig['optimal_rate'])} | {percent(fig['action_accuracy'])} | "
             f"{percent(gppn.get('percent_success'))} | {percent(gppn.get('percent_optimal'))} |"
         )
     return "\n".join(rows)

@@ -1,7 +1,8 @@
 """Movement models through the commands: `optimal` plans, is evaluated, benchmarked and attacked on `moore` and
 `news` maps (never harmful: it is optimal under the maps' own costs), and the stages that do not follow other
-models yet (octile planners, the VIN's protocols, training) refuse such maps with one line naming the model (exit
-status 2), before any work, instead of computing with octile costs."""
+models (planners trained on octile maps, the port's protocol) refuse such maps with one line naming the model (exit
+status 2), before any work, instead of computing with octile costs. Training on them: tests/planners/
+test_training_moves.py."""
 
 from __future__ import annotations
 
@@ -18,7 +19,6 @@ from vinadv.grid import MapSet, generate_maps
 from vinadv.planners.evaluation import evaluate_planner
 from vinadv.planners.pathset import PathSet
 from vinadv.planners.registry import load_planner
-from vinadv.planners.training import TrainConfig, train_vin
 from vinadv.planners.vin.weights import save_vin
 from vinadv.robustness import robustness
 from vinadv.testing.planners import planning_vin
@@ -40,10 +40,13 @@ def maps_file(request, tmp_path_factory):
             "planner 'vin' plans octile moves",
         ),
         (["eval", "--data", "{maps}", "--weights", "{weights}"], "planner 'vin' plans octile moves"),
-        (["vin", "eval", "--data", "{maps}", "--weights", "{weights}"], "the vinadv protocol follows 'octile'"),
-        (["vin", "train", "--data", "{maps}", "--out", "{out}", "--epochs", "1"], "training follows 'octile'"),
+        (["vin", "eval", "--data", "{maps}", "--weights", "{weights}"], "planner 'vin' plans octile moves"),
+        (
+            ["vin", "eval", "--data", "{maps}", "--weights", "{weights}", "--protocol", "kentsommer"],
+            "planner 'vin' plans octile moves",
+        ),
     ],
-    ids=["plan", "attack", "eval", "vin-eval", "vin-train"],
+    ids=["plan", "attack", "eval", "vin-eval", "vin-eval-port"],
 )
 def test_commands_refuse_other_movement_models(maps_file, argv, message, tmp_path, capsys):
     moves, path = maps_file
@@ -68,8 +71,6 @@ def test_library_follows_the_model_or_refuses(maps_file):
         evaluate_planner(_vin8(path.parent), maps)
     with pytest.raises(InputError, match=f"planner 'vin' plans octile moves .*the maps use '{moves}' moves"):
         load_planner("vin", 28, moves=moves)
-    with pytest.raises(InputError, match=f"the maps use '{moves}' moves: training follows 'octile'"):
-        train_vin(maps, TrainConfig(epochs=1), progress=False)
 
 
 @pytest.mark.parametrize("moves", ["octile", "moore", "news"])

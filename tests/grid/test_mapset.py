@@ -144,3 +144,32 @@ def test_cli_generate_moves(tmp_path, capsys):
     assert "vinadv: error: --moves 'news' has no diagonal moves, so it is refused without corner cutting" in err
     assert main([*argv, "--moves", "hex"]) == 2
     assert "vinadv: error: --moves 'hex': expected one of octile, moore, news" in capsys.readouterr().err
+
+
+def test_concat_keeps_every_map_in_order_and_refuses_unlike_sets(tmp_path, capsys):
+    a = generate_maps(3, 8, seed=1, n_starts=2, moves="moore")
+    b = generate_maps(2, 8, seed=2, n_starts=2, moves="moore")
+    a.save(tmp_path / "a.npz")
+    b.save(tmp_path / "b.npz")
+    assert (
+        main(["maps", "concat", str(tmp_path / "a.npz"), str(tmp_path / "b.npz"), "--out", str(tmp_path / "c.npz")])
+        == 0
+    )
+    both = MapSet.load(tmp_path / "c.npz")
+    assert len(both) == 5 and both.moves == "moore" and both.seed == -1  # two seeds: unknown
+    for i, (part, j) in enumerate([(a, 0), (a, 1), (a, 2), (b, 0), (b, 1)]):  # map by map, against the parts
+        np.testing.assert_array_equal(both.obstacles[i], part.obstacles[j])
+        np.testing.assert_array_equal(both.starts[i], part.starts[j])
+        np.testing.assert_array_equal(both.expert_costs[i], part.expert_costs[j])
+        for s in range(2):
+            np.testing.assert_array_equal(both.expert_path(i, s), part.expert_path(j, s))
+    generate_maps(2, 8, seed=2, n_starts=2).save(tmp_path / "octile.npz")
+    capsys.readouterr()
+    assert (
+        main(
+            ["maps", "concat", str(tmp_path / "a.npz"), str(tmp_path / "octile.npz"), "--out", str(tmp_path / "d.npz")]
+        )
+        == 2
+    )
+    err = capsys.readouterr().err.strip()
+    assert "octile.npz: moves is 'octile'" in err and "'moore'" in err and len(err.splitlines()) == 1

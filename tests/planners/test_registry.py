@@ -29,7 +29,17 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
 def test_list_names_the_registered_planners():
     names = [p["name"] for p in list_planners(28)]
-    assert names == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar", "neural-astar"]
+    assert names == [
+        "vin",
+        "vin_robust",
+        "gppn",
+        "vin-mpd32",
+        "gppn-mpd32",
+        "optimal",
+        "astar",
+        "wastar",
+        "neural-astar",
+    ]
     vin = list_planners(28)[0]
     assert vin["weights"].endswith("vin28.pt") and vin["weights_available"] is True
 
@@ -115,6 +125,8 @@ def test_planners_command(capsys):
         "vin",
         "vin_robust",
         "gppn",
+        "vin-mpd32",
+        "gppn-mpd32",
         "optimal",
         "astar",
         "wastar",
@@ -251,3 +263,20 @@ def test_the_cli_lists_parameters_and_refuses_bad_ones_with_exit_2(tmp_path, cap
     err = capsys.readouterr().err.strip()
     assert err == "vinadv: error: planner 'wastar:w=x': parameter w must be a number >= 1, got 'x'"
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name", ["vin-mpd32", "gppn-mpd32"])
+def test_the_mp_trained_planners_plan_32x32_moore_maps_and_refuse_others(name):
+    maps = generate_maps(2, 32, seed=1, n_starts=1, moves="moore")
+    planner = load_planner(name, 32, moves="moore")
+    assert planner.name == name and planner.moves == "moore" and planner.spec()["name"] == name
+    record = json.loads(registry.default_weights(name, 32).with_suffix(".json").read_text())
+    assert record["moves"] == "moore" and record["size"] == 32  # what the refusals below read
+    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    assert len(result.termination) == 2
+    with pytest.raises(InputError, match=f"planner '{name}' plans moore moves .*the maps use 'octile' moves"):
+        load_planner(name, 32)
+    with pytest.raises(InputError, match="trained on 32x32 maps, the maps are 28x28"):
+        load_planner(name, 28, moves="moore")
+    with pytest.raises(PlannerError, match="takes no weights file"):
+        load_planner(name, 32, weights="w.pt", moves="moore")

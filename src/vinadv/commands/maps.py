@@ -1,4 +1,4 @@
-"""`vinadv maps generate`, `vinadv maps show`, `vinadv maps import` and `vinadv maps export`."""
+"""`vinadv maps generate`, `vinadv maps show`, `vinadv maps concat`, `vinadv maps import` and `vinadv maps export`."""
 
 from __future__ import annotations
 
@@ -37,7 +37,40 @@ def register(subparsers) -> None:
     show.add_argument("--out", required=True, help="output image (.png, .svg or .pdf)")
     show.add_argument("--all-starts", action="store_true", help="draw the expert paths of every start")
     show.set_defaults(func=cmd_show)
+
+    cat = sub.add_parser(
+        "concat",
+        help="write the maps of several maps files as one (same size, starts per map, corner cutting and moves)",
+    )
+    cat.add_argument("maps", nargs="+", metavar="MAPS", help="maps files (.npz), in order")
+    cat.add_argument("--out", required=True, help="output maps file (.npz)")
+    add_output_options(cat, json="the summary", quiet=True)
+    cat.set_defaults(func=cmd_concat)
     _register_interop(sub)
+
+
+def cmd_concat(args: argparse.Namespace) -> int:
+    from vinadv.grid.mapset import MapSet
+
+    check_output_path(args.out)
+    maps = MapSet.concat([MapSet.load(path) for path in args.maps], [str(path) for path in args.maps])
+    maps.save(args.out)
+    summary = {
+        "out": args.out,
+        "inputs": [str(path) for path in args.maps],
+        "maps": len(maps),
+        "size": maps.size,
+        "starts": maps.n_starts,
+        "corner_cutting": maps.corner_cutting,
+        "moves": maps.moves,
+        "seed": int(maps.seed),
+    }
+    return emit(
+        args,
+        summary,
+        f"wrote {len(maps)} maps of {maps.size}x{maps.size} ({maps.moves} moves) from {len(args.maps)} files to "
+        f"{args.out}",
+    )
 
 
 def cmd_generate(args: argparse.Namespace) -> int:

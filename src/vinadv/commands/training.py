@@ -182,7 +182,11 @@ def run_training(
     }
     augment = None
     if config.adversarial is not None:
+        from vinadv.grid.moves import require_moves
         from vinadv.hardening import AdversarialConfig, AdversarialMaps
+
+        # its attacks judge harm on octile costs: refused on other maps rather than mislabelled
+        require_moves(maps.moves, ("octile",), "adversarial training (--adversarial)")
 
         augment = AdversarialMaps(maps, AdversarialConfig(**config.adversarial), seed=config.seed)
     model, record = train(

@@ -76,11 +76,13 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.interop.protocols import evaluate_protocol
+    from vinadv.planners.interface import as_planner
     from vinadv.planners.vin.weights import default_weights_path, load_vin
 
     maps, source = start_eval(args)
     model = load_vin(args.weights, size=maps.size, k=args.k)
     check_trained_size(model.weights_path, model.record, maps.size, "VIN")
+    as_planner(model, maps.size).for_moves(maps.moves)  # a VIN trained on another movement model: one line
     data_seed = model.record.get("data", {}).get("seed")
     if data_seed is not None and data_seed == maps.seed:
         note(args, f"vinadv: warning: these maps use seed {maps.seed}, the seed of the training data")

@@ -88,6 +88,40 @@ class MapSet:
             moves=self.moves,
         )
 
+    @classmethod
+    def concat(cls, parts: list[MapSet], names: list[str] | None = None) -> MapSet:
+        """The maps of `parts`, in order: one set of the same size, starts per map, corner cutting and movement
+        model (a part that differs raises InputError naming it, `names[i]` or its index, and the field). The seed is
+        the parts' common one, else -1 (unknown: the maps came from several)."""
+        if not parts:
+            raise InputError("no maps sets to concatenate")
+        names = names or [f"part {i}" for i in range(len(parts))]
+        first = parts[0]
+        for name, part in zip(names[1:], parts[1:], strict=True):
+            for field, want, got in (
+                ("size", first.size, part.size),
+                ("starts per map", first.n_starts, part.n_starts),
+                ("corner_cutting", first.corner_cutting, part.corner_cutting),
+                ("moves", first.moves, part.moves),
+            ):
+                if want != got:
+                    raise InputError(
+                        f"{name}: {field} is {got!r}, {names[0]}'s is {want!r}: only like sets concatenate"
+                    )
+        padded = any(p.start_counts is not None for p in parts)
+        seeds = {int(p.seed) for p in parts}
+        return cls(
+            obstacles=np.concatenate([p.obstacles for p in parts]),
+            goals=np.concatenate([p.goals for p in parts]),
+            starts=np.concatenate([p.starts for p in parts]),
+            expert_costs=np.concatenate([p.expert_costs for p in parts]),
+            expert=PackedPaths.concat([p.expert for p in parts]),
+            corner_cutting=first.corner_cutting,
+            seed=seeds.pop() if len(seeds) == 1 else -1,
+            start_counts=np.concatenate([p.start_mask.sum(axis=1) for p in parts]).astype(np.int64) if padded else None,
+            moves=first.moves,
+        )
+
     def expert_path(self, i: int, s: int = 0) -> np.ndarray:
         """The optimal path from start `s` of map `i`, `(L, 2)` int16."""
         return self.expert[i * self.n_starts + s]

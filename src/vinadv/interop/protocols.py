@@ -30,10 +30,10 @@ import torch
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.moves import require_moves
+from vinadv.grid.moves import DEFAULT_MOVES, require_moves
 from vinadv.interop.formats.gppn import unit_cost_distances
 from vinadv.interop.formats.samples import expert_steps
-from vinadv.planners.evaluation import evaluate_vin
+from vinadv.planners.evaluation import evaluate_planner, evaluate_vin
 from vinadv.planners.interface import PlannerError, as_planner
 from vinadv.planners.search import SearchPlanner
 from vinadv.planners.vin.model import VIN, make_input
@@ -162,14 +162,17 @@ def evaluate_protocol(
     """`model`'s figures on `maps` measured by `protocol` ('vinadv', 'kentsommer' or 'gppn')."""
     if protocol not in PROTOCOLS:
         raise InputError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
-    # GPPN's %Opt and %Suc count moves of cost 1 whatever the maps' costs (NEWS's on news maps); the others judge
-    # paths by octile costs
+    # GPPN's %Opt and %Suc count moves of cost 1 whatever the maps' costs (NEWS's on news maps), vinadv's follow the
+    # maps' model; the port's judges paths by octile costs
     require_moves(
-        maps.moves, ("octile", "moore", "news") if protocol == "gppn" else ("octile",), f"the {protocol} protocol"
+        maps.moves, ("octile",) if protocol == "kentsommer" else ("octile", "moore", "news"), f"the {protocol} protocol"
     )
     if prior is not None and protocol != "kentsommer":
         raise InputError("prior applies to the kentsommer protocol only")
     if protocol == "vinadv":
+        if maps.moves != DEFAULT_MOVES:  # the engine plans octile moves: the VIN planner of the VIN's own model
+            planner = as_planner(model, maps.size).for_moves(maps.moves)
+            return {"protocol": "vinadv", **evaluate_planner(planner, maps, progress=progress)}
         return {"protocol": "vinadv", **evaluate_vin(model, maps, progress=progress)}
     if protocol == "kentsommer":
         return kentsommer_protocol(model, maps, PORT_TEST_PRIOR if prior is None else prior)

@@ -34,7 +34,7 @@ from vinadv.planners.rollout import rollout_logits
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin import engine
 from vinadv.planners.vin.arrays import VINWeights
-from vinadv.planners.weights import weights_checksum
+from vinadv.planners.weights import check_action_count, trained_moves, weights_checksum
 
 if TYPE_CHECKING:  # PyTorch is loaded only by the planners that run it
     import torch
@@ -347,6 +347,10 @@ class VINPlanner(Planner):
     None (the default) keeps the exact engine, the reference. On the CPU the forward gives the engine's paths (the
     engine replays PyTorch's float32 arithmetic at near ties; docs/guide/gpu.md gives the count measured on 1,000 maps);
     on a GPU other float sums may break a near tie the other way.
+
+    `moves`: the movement model the VIN was trained on (`trained_moves` of its record; `octile` for records without
+    one). The engine plans `octile` moves, so a VIN of another model plans with its PyTorch forward on the CPU and
+    the rollout every planner shares, which follows the model's moves and costs.
     """
 
     def __init__(self, vin, size: int, checksum: str | None = None, device: str | torch.device | None = None):
@@ -359,6 +363,8 @@ class VINPlanner(Planner):
 
             self.device_type = torch.device(device).type
         path = vin.path if isinstance(vin, VINWeights) else getattr(vin, "weights_path", None)
+        self.moves = trained_moves(path, getattr(vin, "record", None) or {})
+        check_action_count(path, vin.config.n_actions, self.moves, "VIN")
         if checksum is None:
             checksum = weights_checksum(path) if path is not None else state_checksum(self.vin)
         self._checksum = checksum
@@ -434,7 +440,9 @@ class VINPlanner(Planner):
         chunk_size: int | None = None,
         progress: bool = False,
     ) -> PlanResult:
-        if self._device is not None:  # the PyTorch forward on the device, the rollout every planner shares
+        # the PyTorch forward on the device, or for a movement model the engine does not plan (it plans octile
+        # moves), then the rollout every planner shares
+        if self._device is not None or self.moves != DEFAULT_MOVES:
             chunk = DEFAULT_CHUNK if chunk_size is None else chunk_size
             return super().plan_maps(obstacles, goals, starts, corner_cutting, chunk, progress)
         obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)

@@ -5,6 +5,9 @@
 - `vin_robust`: the same VIN architecture with the shipped weights `vin{N}_robust.pt`, trained from the shift start
   (`vinadv.planners.vin.init_shift_kernels`) with adversarial rounds (`vinadv.hardening`).
 - `gppn`: the Gated Path Planning Network; weights from `weights=` or the shipped `gppn{N}.pt`.
+- `vin-mpd32`, `gppn-mpd32`: the VIN and the GPPN trained by `vin train` / `gppn train` on the MP dataset's 32x32
+  `moore` maps (six families' train and valid splits, `maps import --format mpd` then `maps concat`), shipped as
+  `vin_mpd32.pt` and `gppn_mpd32.pt`: they plan `moore` maps of 32x32 and refuse others (size, movement model).
 - `optimal`: exact shortest paths (the control: what a perfect planner does).
 - `astar`: vanilla A* on the maps' movement model, with its expansions (`vinadv.planners.astar`; on `moore` maps the
   Neural A* authors' vanilla A*).
@@ -35,6 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vinadv.errors import InputError
+from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.astar import AStarPlanner, WeightedAStarPlanner
 from vinadv.planners.device import resolve_device
@@ -42,7 +46,13 @@ from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPl
 from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.search import SearchPlanner, UserSearchPlanner
 from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
-from vinadv.planners.weights import WEIGHTS_DIR, check_trained_size, weights_checksum
+from vinadv.planners.weights import (
+    WEIGHTS_DIR,
+    check_action_count,
+    check_trained_size,
+    trained_moves,
+    weights_checksum,
+)
 
 #: `load(size, weights, corner_cutting, device, **params)`: a registered planner for `size x size` maps, with the
 #: values of its `PlannerParam`s as keyword arguments (none for a planner without parameters); `device` a checked
@@ -178,7 +188,7 @@ def _gppn_weights_path(size: int) -> Path:
 def _load_vin(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     loaded = load_vin_weights(weights, size=size)
     check_trained_size(loaded.path, loaded.record, size, "VIN")
-    return VINPlanner(loaded, size=size, device=device)
+    return VINPlanner(loaded, size=size, device=device)  # its `moves` from the record: `load_planner` checks them
 
 
 def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
@@ -197,19 +207,50 @@ def _load_vin_robust(size: int, weights: str | None, corner_cutting: bool, devic
 
 def _load_gppn(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     from vinadv.planners.gppn import load_gppn  # noqa: PLC0415 (PyTorch: the VIN planners load without it)
+    from vinadv.planners.padding import ActionPadding  # noqa: PLC0415 (PyTorch, as above)
 
     model = load_gppn(weights, size=size)
     if device is not None:
         model = model.to(device)
     check_trained_size(model.weights_path, model.record, size, "GPPN")
-    return TorchPlanner(
-        model,
+    moves = trained_moves(model.weights_path, model.record)
+    check_action_count(model.weights_path, model.config.n_actions, moves, "GPPN")
+    planner = TorchPlanner(
+        model if model.config.n_actions == N_ACTIONS else ActionPadding(model),  # news: 4 actions, -inf on the rest
         "gppn",
         size,
         checksum=weights_checksum(model.weights_path),
         config=model.config.to_dict(),
         device=device,
     )
+    planner.moves = moves  # the model it was trained on: `load_planner` refuses maps of another
+    return planner
+
+
+#: the learned planners trained on the MP dataset's 32x32 moore maps: registry name -> shipped weights file
+MPD_WEIGHTS = {"vin-mpd32": "vin_mpd32.pt", "gppn-mpd32": "gppn_mpd32.pt"}
+
+
+def _shipped_mpd(name: str) -> Path:
+    path = WEIGHTS_DIR / MPD_WEIGHTS[name]
+    if not path.exists():
+        raise PlannerError(
+            f"planner {name!r}: its weights {path} are not shipped in this copy; train them as "
+            "docs/guide/mpd.md says and load them as planner 'vin' or 'gppn' with --weights"
+        )
+    return path
+
+
+def _load_vin_mpd32(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
+    planner = _load_vin(size, str(_shipped_mpd("vin-mpd32")), corner_cutting, device)  # size checked: 32
+    planner.name = "vin-mpd32"
+    return planner
+
+
+def _load_gppn_mpd32(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
+    planner = _load_gppn(size, str(_shipped_mpd("gppn-mpd32")), corner_cutting, device)
+    planner.name = "gppn-mpd32"
+    return planner
 
 
 def _neural_astar_weights_path(size: int) -> Path:
@@ -250,10 +291,22 @@ register(
 )
 register(
     "gppn",
-    description="Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, 8 actions",
+    description="Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, the actions of its moves",
     load=_load_gppn,
     default_weights=_gppn_weights_path,
     takes_weights=True,
+)
+register(
+    "vin-mpd32",  # fixed weights, as vin_robust: another file is planner 'vin' with --weights
+    description="the VIN trained on the MP dataset's 32x32 moore maps (six families; docs/guide/mpd.md)",
+    load=_load_vin_mpd32,
+    default_weights=lambda size: WEIGHTS_DIR / MPD_WEIGHTS["vin-mpd32"],
+)
+register(
+    "gppn-mpd32",
+    description="the GPPN trained on the MP dataset's 32x32 moore maps (six families; docs/guide/mpd.md)",
+    load=_load_gppn_mpd32,
+    default_weights=lambda size: WEIGHTS_DIR / MPD_WEIGHTS["gppn-mpd32"],
 )
 register(
     "optimal",
@@ -313,10 +366,10 @@ def load_planner(
             engine; with a device the VIN plans with its PyTorch forward there (`VINPlanner`). `optimal` has no
             forward and ignores it.
         moves: the movement model of the maps (`vinadv.grid.moves`): the planner is `Planner.for_moves(moves)`.
-            `optimal`, `astar` and `wastar` follow every model; the others plan `octile` moves (the learned ones
-            were trained on them) and refuse maps of another model with one line naming both, rather than planning
-            with masked logits: an 8-action policy on `news` maps would be judged on moves it was trained to make
-            and the maps lack.
+            `optimal`, `astar` and `wastar` follow every model; `vin` and `gppn` plan the model their weights were
+            trained on (their record's `moves`; `octile` for records without one) and the others `octile` moves;
+            maps of another model are refused with one line naming both, rather than planning with masked logits:
+            an 8-action policy on `news` maps would be judged on moves it was trained to make and the maps lack.
 
     Raises `PlannerError` (an `InputError`) naming the spec for anything that cannot be loaded.
     """
@@ -374,7 +427,8 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
     base_spec = spec[: -len(SUFFIX)].strip()
     if not base_spec or base_spec.endswith(SUFFIX):
         raise PlannerError(f"planner {spec!r}: {SUFFIX} follows one planner name or spec, once (e.g. gppn{SUFFIX})")
-    base = load_planner(base_spec, size, weights=weights, corner_cutting=corner_cutting, device=device)
+    # `_load`, not `load_planner`: the base's movement model is checked once, on the average (`load_planner`)
+    base = _load(base_spec, size, weights, corner_cutting, device)
     module = base.differentiable
     if isinstance(base, SearchPlanner):  # the average is over policies: a search planner has none
         raise PlannerError(
@@ -385,7 +439,7 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
         raise PlannerError(
             f"planner {spec!r}: {base.name!r} has no torch module to average ({SUFFIX} takes vin, gppn or your own)"
         )
-    return TorchPlanner(
+    average = TorchPlanner(
         DihedralAverage(module).to(base.device),
         f"{base.name}{SUFFIX}",
         size,
@@ -393,6 +447,8 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
         config={**base.config, "average": "d4"},
         device=device,
     )
+    average.moves = base.moves  # the symmetries map each model's moves onto its own
+    return average
 
 
 def _is_file(source: str) -> bool:

@@ -28,7 +28,7 @@ from tqdm import tqdm
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.moves import require_moves
+from vinadv.grid.moves import DEFAULT_MOVES, MoveModel, move_model
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
 from vinadv.outfile import atomic_output
 from vinadv.planners.device import resolve_device
@@ -38,7 +38,7 @@ from vinadv.planners.vin import value_iteration
 from vinadv.planners.vin.arrays import VINConfig, default_k
 from vinadv.planners.vin.model import VI_INITS, VIN, init_shift_kernels, make_input
 from vinadv.planners.vin.weights import load_vin
-from vinadv.planners.weights import torch_load, weights_checksum
+from vinadv.planners.weights import torch_load, trained_moves, weights_checksum
 
 CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
 _BITS = 1 << np.arange(8, dtype=np.uint16)
@@ -117,12 +117,18 @@ class TrainConfig:
 
 
 def optimal_action_bits(maps: MapSet) -> np.ndarray:
-    """Optimal actions of every cell of `maps` as a bit mask: see `action_bits`."""
-    return action_bits(maps.obstacles, maps.goals, maps.corner_cutting)
+    """Optimal actions of every cell of `maps` under their movement model, as a bit mask: see `action_bits`."""
+    return action_bits(maps.obstacles, maps.goals, maps.corner_cutting, maps.moves)
 
 
-def action_bits(obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool = True) -> np.ndarray:
-    """Optimal actions of every cell as a bit mask: `(n, N, N)` uint8, bit `a` set when action `a` is optimal, for
+def action_bits(
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    corner_cutting: bool = True,
+    moves: str | MoveModel = DEFAULT_MOVES,
+) -> np.ndarray:
+    """Optimal actions of every cell as a bit mask: `(n, N, N)` uint8, bit `a` set when action `a` is optimal under
+    the movement model `moves` (`vinadv.grid.moves`: its costs; on `news` only bits 0..3, its actions), for
     obstacles `(n, N, N)` bool and goals `(n, 2)`.
 
     Zero at obstacles, the goal and cells that cannot reach the goal (they are not supervised).
@@ -130,8 +136,8 @@ def action_bits(obstacles: np.ndarray, goals: np.ndarray, corner_cutting: bool =
     out = np.zeros(obstacles.shape, dtype=np.uint8)
     for i in range(0, len(obstacles), 1024):  # bounds the (chunk, N, N, 8) temporaries
         obs, g = obstacles[i : i + 1024], goals[i : i + 1024]
-        dist, _ = shortest_distances(obs, g, corner_cutting)
-        opt = optimal_actions(dist, obs, corner_cutting)
+        dist, _ = shortest_distances(obs, g, corner_cutting, moves)
+        opt = optimal_actions(dist, obs, corner_cutting, moves)
         out[i : i + 1024] = (opt.astype(np.uint16) * _BITS).sum(axis=-1).astype(np.uint8)
     return out
 
@@ -245,13 +251,15 @@ def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, Traini
     the training record). `config.init` names a VIN weights file to start from."""
     config.validate()
     torch.manual_seed(config.seed)
-    vin_config = VINConfig(k=config.k or default_k(maps.size), l_h=config.l_h, l_q=config.l_q)
+    n_actions = move_model(maps.moves).n_actions  # the maps' moves: 8, or 4 on `news`
+    vin_config = VINConfig(k=config.k or default_k(maps.size), l_h=config.l_h, l_q=config.l_q, n_actions=n_actions)
     model = VIN(vin_config)
     if config.vi_init == "shift":
         init_shift_kernels(model)
     record = options.get("record")
     if config.init:
-        record = _start_from(model, load_vin(config.init, size=maps.size, k=vin_config.k), config.init, record)
+        start = load_vin(config.init, size=maps.size, k=vin_config.k)
+        record = _start_from(model, start, config.init, record, maps.moves)
     cpu = resolve_device(config.device).type == "cpu"
     options["record"] = {
         **(record or {}),
@@ -265,18 +273,24 @@ def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, Trai
     result as `train_model`'s. `config.init` names a GPPN weights file to start from."""
     config.validate()
     torch.manual_seed(config.seed)
-    gppn_config = GPPNConfig(k=config.k or default_k(maps.size), l_h=config.l_h, f=config.kernel)
+    n_actions = move_model(maps.moves).n_actions  # the maps' moves: 8, or 4 on `news`
+    gppn_config = GPPNConfig(k=config.k or default_k(maps.size), l_h=config.l_h, f=config.kernel, n_actions=n_actions)
     model = GPPN(gppn_config)
     if config.init:
         options["record"] = _start_from(
-            model, load_gppn(config.init, size=maps.size), config.init, options.get("record")
+            model, load_gppn(config.init, size=maps.size), config.init, options.get("record"), maps.moves
         )
     return train_model(model, maps, config, gppn_config.to_dict(), **options)
 
 
-def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: TrainingRecord | None) -> TrainingRecord:
+def _start_from(
+    model: torch.nn.Module, start: torch.nn.Module, path, record: TrainingRecord | None, moves: str = DEFAULT_MOVES
+) -> TrainingRecord:
     """Load `start`'s weights (read from `path`, `--init`) into `model`; the record gains their checksum (and
-    their k where it differs: the iterations are not weights, so training may go on with more or fewer)."""
+    their k where it differs: the iterations are not weights, so training may go on with more or fewer; and the
+    movement model they were trained on where it is not `moves`, the maps': an octile model may start a moore one,
+    the same 8 actions with other costs, while a news model's 4 actions do not fit 8 and are refused by the
+    config check)."""
     if replace(start.config, k=model.config.k) != model.config:
         raise InputError(
             f"init {path}: its {type(start).__name__} ({start.config}) is not the one to train ({model.config})", "init"
@@ -285,6 +299,9 @@ def _start_from(model: torch.nn.Module, start: torch.nn.Module, path, record: Tr
     rec: TrainingRecord = {**(record or {}), "init_sha256": weights_checksum(path)}
     if start.config.k != model.config.k:
         rec["init_k"] = start.config.k
+    start_moves = trained_moves(path, getattr(start, "record", {}))
+    if start_moves != moves:
+        rec["init_moves"] = start_moves
     return rec
 
 
@@ -317,9 +334,11 @@ def train_model(
         log: called with one line per epoch (None: silent).
     """
     config.validate()
-    # the supervision (optimal actions) would follow the maps' model, but the record and the planners that load
-    # the weights know octile only: refused until both carry the model
-    require_moves(maps.moves, ("octile",), "training")
+    n_actions = move_model(maps.moves).n_actions
+    if getattr(getattr(model, "config", None), "n_actions", n_actions) != n_actions:
+        raise InputError(
+            f"the model has {model.config.n_actions} actions; the maps use {maps.moves!r} moves, which have {n_actions}"
+        )
     device = resolve_device(config.device)
     size = maps.size
     model = model.to(device)
@@ -340,6 +359,8 @@ def train_model(
         n_train=len(train_idx),
         n_val=len(val_idx),
         corner_cutting=bool(maps.corner_cutting),
+        # the supervision's movement model: the planners that load the weights plan it (`trained_moves`)
+        moves=maps.moves,
         hardware=hardware_info(device),
         loss="-log sum_{a optimal} softmax(logits)_a, mean over free reachable non-goal cells",
         optimizer="RMSprop(eps=1e-6), cosine lr schedule per step, grad-norm clipping",
@@ -355,7 +376,8 @@ def train_model(
     if state.added_obstacles is not None and len(state.added_obstacles):  # resumed with added maps
         obstacles = np.concatenate([maps.obstacles, state.added_obstacles])
         goals = np.concatenate([maps.goals, state.added_goals])
-        bits = np.concatenate([bits, action_bits(state.added_obstacles, state.added_goals, maps.corner_cutting)])
+        added = action_bits(state.added_obstacles, state.added_goals, maps.corner_cutting, maps.moves)
+        bits = np.concatenate([bits, added])
     started = time.time() - state.wall_s
     stopped = None
     last_save = time.time()
@@ -373,7 +395,7 @@ def train_model(
                 )
                 obstacles = np.concatenate([obstacles, new_obs])
                 goals = np.concatenate([goals, new_goals])
-                bits = np.concatenate([bits, action_bits(new_obs, new_goals, maps.corner_cutting)])
+                bits = np.concatenate([bits, action_bits(new_obs, new_goals, maps.corner_cutting, maps.moves)])
             state.augment_rounds.append(
                 {
                     "epoch": epoch + 1,

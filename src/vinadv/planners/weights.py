@@ -18,7 +18,15 @@ from vinadv.errors import InputError
 
 #: the weights shipped with vinadv (`vin28.pt`, `gppn28.pt`, ...)
 WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
-__all__ = ["WEIGHTS_DIR", "check_trained_size", "torch_load", "weights_checksum", "weights_file"]
+__all__ = [
+    "WEIGHTS_DIR",
+    "check_action_count",
+    "check_trained_size",
+    "torch_load",
+    "trained_moves",
+    "weights_checksum",
+    "weights_file",
+]
 
 
 def weights_checksum(path: str | os.PathLike) -> str:
@@ -55,6 +63,37 @@ def check_trained_size(name: str | os.PathLike | None, record: dict, size: int, 
         raise InputError(
             f"{name or 'the weights'}: {planner} weights trained on {trained}x{trained} maps, the maps are "
             f"{size}x{size}"
+        )
+
+
+def trained_moves(name: str | os.PathLike | None, record: dict) -> str:
+    """The movement model (`vinadv.grid.moves`) the weights were trained on, from their training `record`: its
+    `moves`, else its data's `moves`, else `octile` (records written before movement models, and weights from
+    elsewhere, were trained on octile maps or say nothing). A name that is not a model raises InputError naming the
+    file `name`."""
+    # late: the commands import this module to start, and `vinadv.grid` brings Numba (tests/test_cli_imports.py)
+    from vinadv.grid.moves import DEFAULT_MOVES, MOVES  # noqa: PLC0415
+
+    record = record if isinstance(record, dict) else {}
+    data = record.get("data") if isinstance(record.get("data"), dict) else {}
+    moves = record.get("moves", data.get("moves", DEFAULT_MOVES))
+    if moves not in MOVES:
+        raise InputError(
+            f"{name or 'the weights'}: record field 'moves' is {moves!r}, expected one of {', '.join(MOVES)}"
+        )
+    return moves
+
+
+def check_action_count(name: str | os.PathLike | None, n_actions: int, moves: str, planner: str) -> None:
+    """Refuse (InputError naming the file `name`) weights whose action count does not fit the movement model
+    `moves` they plan (a 4-action model is a `news` model, an 8-action one `octile` or `moore`)."""
+    from vinadv.grid.moves import move_model  # noqa: PLC0415 (late, as in `trained_moves`)
+
+    expected = move_model(moves).n_actions
+    if int(n_actions) != expected:
+        raise InputError(
+            f"{name or 'the weights'}: {planner} weights with {n_actions} actions plan {moves!r} moves, which have "
+            f"{expected}"
         )
 
 

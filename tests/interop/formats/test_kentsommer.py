@@ -65,3 +65,26 @@ def test_kentsommer_consecutive_trajectories_are_split_by_the_move_rule(tmp_path
     write_kentsommer(tmp_path / "k.npz", maps, [], trajs)
     got = import_maps(tmp_path / "k.npz", "kentsommer")
     np.testing.assert_array_equal(got.starts[0], [[4, 1], [3, 1]])
+
+
+def test_kentsommer_a_repeated_start_is_dropped_and_the_file_loads(tmp_path):
+    # the file's generator may start two trajectories of a map on one cell: the maps file keeps the first (a maps
+    # file's starts differ; before, the import wrote a file that MapSet.load refused)
+    obstacles = np.zeros((1, 6, 6), bool)
+    obstacles[0, [0, -1], :] = obstacles[0, :, [0, -1]] = True
+    maps = MapSet(
+        obstacles=obstacles,
+        goals=np.array([[1, 4]]),
+        starts=np.zeros((1, 0, 2), int),
+        expert_costs=np.zeros((1, 0)),
+        expert=PackedPaths.empty(),
+    )
+    path = [(4, 1), (3, 2), (2, 3), (1, 4)]
+    trajs = [(0, path), (0, [(3, 1), (2, 2), (1, 3), (1, 4)]), (0, [(4, 1), (3, 1), (2, 2), (1, 3), (1, 4)])]
+    write_kentsommer(tmp_path / "k.npz", maps, [], trajs)
+    got, info = read_maps(tmp_path / "k.npz", "kentsommer")
+    assert info["trajectories"] == 2 and info["trajectories_repeated_start"] == 1
+    np.testing.assert_array_equal(got.starts[0], [[4, 1], [3, 1]])
+    np.testing.assert_array_equal(got.expert_path(0, 0), path)  # the first trajectory's path, not the repeat's
+    got.save(tmp_path / "m.npz")
+    np.testing.assert_array_equal(MapSet.load(tmp_path / "m.npz").starts, got.starts)

@@ -14,6 +14,7 @@ from tests.interop.conftest import mpd_file
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
+from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import shortest_distances
 from vinadv.interop import export_maps, import_maps, read_maps
 from vinadv.interop.formats.mpd import draw_starts, start_bands
@@ -66,21 +67,62 @@ def test_start_bands_match_a_plain_implementation_of_the_loader_rule():
     assert [set(np.flatnonzero(b)) for b in bands[0]] == [{8}] * 3 and not bands[1].any()
 
 
-def test_drawn_starts_follow_the_plain_rule_band_then_cell():
+def plain_draw(stored, k, seed):
+    """The documented draw, one map and one start at a time: the loader's rule (a non-empty band at random, then a
+    cell of it) for every slot from `rng.random((n, k, 2))`; then, round after round, every slot that repeats an
+    earlier slot of its map (maps with at least k band cells) is drawn again, in (map, slot) order, from two more
+    uniforms each; a map with fewer band cells than k gets them all, in order. Returns (starts, counts) as lists."""
+    rng = np.random.default_rng(seed)
+    sets = [[sorted(b) for b in plain_bands(m)] for m in stored]
+    u = rng.random((len(stored), k, 2))
+
+    def pick(i, a, b):
+        nonempty = [band for band in sets[i] if band]
+        band = nonempty[min(int(a * len(nonempty)), len(nonempty) - 1)]
+        return band[min(int(b * len(band)), len(band) - 1)]
+
+    union = [sorted(set().union(*map(set, s))) for s in sets]
+    drawn = [[pick(i, *u[i, j]) if union[i] else 0 for j in range(k)] for i in range(len(stored))]
+    while True:
+        repeats = [
+            (i, j) for i in range(len(stored)) if len(union[i]) >= k for j in range(k) if drawn[i][j] in drawn[i][:j]
+        ]
+        if not repeats:
+            break
+        for i, j in repeats:
+            a, b = rng.random(2)
+            drawn[i][j] = pick(i, a, b)
+    counts = [min(len(c), k) for c in union]
+    for i, c in enumerate(union):
+        if len(c) < k:
+            drawn[i] = [c[j] if j < len(c) else 0 for j in range(k)]
+    return drawn, counts
+
+
+@pytest.mark.parametrize("k", [1, 4, 9])
+def test_drawn_starts_follow_the_plain_rule_distinct_per_map(k):
     rng = np.random.default_rng(3)
     stored = random_stored(rng, 30, 6)
-    bands = start_bands(stored)
-    drawn, keep = draw_starts(bands, 4, np.random.default_rng(11))
-    u = np.random.default_rng(11).random((len(stored), 4, 2))  # the documented stream: band, then cell
-    for i in range(len(stored)):
-        sets = [sorted(b) for b in plain_bands(stored[i])]
-        nonempty = [b for b in sets if b]
-        assert bool(keep[i]) == bool(nonempty)
-        for s in range(4):
-            if not nonempty:
-                continue
-            band = nonempty[min(int(u[i, s, 0] * len(nonempty)), len(nonempty) - 1)]
-            assert drawn[i, s] == band[min(int(u[i, s, 1] * len(band)), len(band) - 1)]
+    stored[3] = -36.0  # three cells above the minimum, of which only -3 lies in a band (85-100): padded at k > 1
+    stored[3, 0, :3] = (-1.0, -2.0, -3.0)
+    drawn, counts = draw_starts(start_bands(stored), k, np.random.default_rng(11))
+    want, want_counts = plain_draw(stored, k, 11)
+    assert drawn.tolist() == want and counts.tolist() == want_counts
+    for i in range(len(stored)):  # the real starts of a map differ
+        assert len(set(drawn[i, : counts[i]].tolist())) == counts[i]
+    assert counts[1] == 0 and counts[3] == 1 and drawn[3, 0] == 2
+
+
+def test_many_starts_import_distinct_and_the_file_loads(tmp_path):
+    export_maps(generate_maps(4, 12, seed=3, n_starts=1, moves="moore"), tmp_path / "mp.npz", "mpd", split="test")
+    out = tmp_path / "m.npz"
+    args = ["maps", "import", "--format", "mpd", str(tmp_path / "mp.npz"), "--split", "test", "--starts", "10"]
+    assert main([*args, "--out", str(out), "--json"]) == 0
+    maps = MapSet.load(out)  # refused a file with a repeated start before
+    assert maps.n_starts == 10 and len(maps) == 4
+    for i in range(len(maps)):
+        real = maps.starts[i][maps.start_mask[i]]
+        assert len({tuple(c) for c in real.tolist()}) == len(real) == 10  # 12x12 maps: enough band cells
 
 
 def _check_family(family: str, split: str, starts: int = 2, seed: int = 5):

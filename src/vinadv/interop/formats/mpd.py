@@ -17,7 +17,12 @@ Starts (the file has none) are drawn as the Neural A* loader draws them (github.
 distance is above the map's minimum (obstacles and walled-off cells excluded), NumPy's default (linear) percentile
 gives the bands 55-70, 70-85 and 85-100 of the distance to the goal, bounds inclusive; a band is chosen at random,
 then a cell in it, both uniformly, seeded. A band without a cell is skipped (the loader would fail there); a map
-whose bands are all empty is left out and counted. Each start is drawn on its own, so a map's starts may repeat.
+whose bands are all empty is left out and counted. The loader draws one start per map (a new one at each visit);
+with `--starts K` the K starts of a map are distinct, as a maps file's starts must be: each is drawn by that rule
+and a start that repeats an earlier start of its map is drawn again by the same rule (in rounds, until the K
+differ). So `--starts 1` draws the loader's start (the same starts as before starts were made distinct). A map
+with fewer cells in its bands than K keeps all of them (row-major order) and is padded (`MapSet.start_counts`),
+counted in `maps_padded`, as the other imports' start rule (`samples.with_drawn_starts`) does.
 """
 
 from __future__ import annotations
@@ -71,11 +76,13 @@ def _read(f: ForeignArrays, split: str, k: int, seed: int) -> tuple[MapSet, dict
     dist, _ = shortest_distances(obstacles, goals, True, MOVES)
     check_distances(f, names[3], stored, dist)
     bands = start_bands(stored)
-    drawn, keep = draw_starts(bands, k, np.random.default_rng(seed))
-    obstacles, goals, dist, drawn = obstacles[keep], goals[keep], dist[keep], drawn[keep]
+    drawn, counts = draw_starts(bands, k, np.random.default_rng(seed))
+    keep = counts > 0
+    obstacles, goals, dist, drawn, counts = obstacles[keep], goals[keep], dist[keep], drawn[keep], counts[keep]
     starts = np.stack(np.divmod(drawn, m), axis=-1).astype(np.int64)
+    pad = np.arange(k)[None, :] >= counts[:, None]  # a map with fewer band cells than k: its slots past them
+    starts[pad] = np.repeat(goals[:, None, :], k, axis=1)[pad]
     costs, expert = expert_paths_from(dist, obstacles, goals, starts, True, MOVES)
-    counts = np.full(len(starts), k, dtype=np.int64)  # every start real: no padding
     out = padded_map_set(obstacles, goals, starts, costs, expert, counts, k, seed=int(seed), moves=MOVES)
     return out, {
         "split": split,
@@ -83,8 +90,9 @@ def _read(f: ForeignArrays, split: str, k: int, seed: int) -> tuple[MapSet, dict
         "size": m,
         "starts_per_map": k,
         "starts_seed": int(seed),
-        "starts_rule": "Neural A*'s: a percentile band of the distance (55-70, 70-85, 85-100) at random, then a cell",
-        "maps_padded": 0,
+        "starts_rule": "Neural A*'s: a percentile band of the distance (55-70, 70-85, 85-100) at random, then a cell; "
+        "a repeat of an earlier start of the map drawn again",
+        "maps_padded": int((counts < k).sum()),
         "maps_left_out_no_start": int((~keep).sum()),
         "expert_paths": "vinadv's own (Dijkstra, moore moves: every move costs 1, corner cutting allowed); the "
         "file's distances checked equal",
@@ -124,23 +132,49 @@ def start_bands(stored: np.ndarray) -> np.ndarray:
 
 
 def draw_starts(bands: np.ndarray, k: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """`(drawn (n, k) flat cell indices, keep (n,) bool)`: for each map and start, `u = rng.random((n, k, 2))`;
-    `u[..., 0]` picks one of the map's non-empty bands (in band order), `u[..., 1]` a cell of it (row-major), both
-    uniformly. A map without a non-empty band is not kept (its row is 0)."""
+    """`(drawn (n, k) flat cell indices, counts (n,) int64)`: K distinct starts per map by the loader's rule.
+
+    First round: `u = rng.random((n, k, 2))`; for each map and slot `u[..., 0]` picks one of the map's non-empty bands
+    (in band order), `u[..., 1]` a cell of it (row-major), both uniformly (`_pick`). Then, while some slot repeats an
+    earlier slot of its map, those slots (in row-major order of (map, slot)) are drawn again the same way, with
+    `rng.random((repeats, 2))`. A map with fewer cells in its bands (their union: bounds are inclusive, so a cell on
+    a bound is in two) than k gets them all in row-major order, the rest of its row 0; `counts` is k, that number,
+    or 0 for a map without a non-empty band (not kept)."""
+    n, k = len(bands), int(k)
     counts = bands.sum(axis=2)  # (n, 3)
+    in_bands = bands.any(axis=1)  # (n, M*M)
+    n_cells = in_bands.sum(axis=1)
+    drawn = _pick(bands, counts, rng.random((n, k, 2)))
+    full = n_cells >= k  # maps whose k starts can differ: redraw their repeats
+    while True:
+        same = drawn[:, :, None] == drawn[:, None, :]  # (n, k, k): slot j equals slot i
+        repeat = np.tril(same, -1).any(axis=2) & full[:, None]  # equals an earlier slot i < j
+        if not repeat.any():
+            break
+        rows, slots = np.nonzero(repeat)
+        drawn[rows, slots] = _pick(bands[rows], counts[rows], rng.random((len(rows), 1, 2)))[:, 0]
+    few = np.flatnonzero(~full & (n_cells > 0))
+    if len(few):  # all their band cells, row-major, first in the row
+        order = np.argsort(~in_bands[few], axis=1, kind="stable")[:, :k]
+        drawn[few] = np.where(np.arange(k)[None, :] < n_cells[few, None], order, 0)
+    out_counts = np.minimum(n_cells, k).astype(np.int64)
+    return np.where(out_counts[:, None] > 0, drawn, 0), out_counts
+
+
+def _pick(bands: np.ndarray, counts: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """`(m, j)` flat cell indices, one per uniform pair `u (m, j, 2)`: `u[..., 0]` one of the map's non-empty bands
+    of `bands (m, 3, C)` (cell counts `counts (m, 3)`), `u[..., 1]` a cell of it; a map without a non-empty band 0."""
     nonempty = counts > 0
-    n_bands = nonempty.sum(axis=1)  # (n,)
-    u = rng.random((len(bands), k, 2))
-    keep = n_bands > 0
+    n_bands = nonempty.sum(axis=1)  # (m,)
     which = np.minimum((u[..., 0] * n_bands[:, None]).astype(np.int64), np.maximum(n_bands - 1, 0)[:, None])
     # the which-th non-empty band: the first band whose running count of non-empty bands exceeds `which`
-    band = np.argmax(np.cumsum(nonempty, axis=1)[:, None, :] > which[..., None], axis=2)  # (n, k)
+    band = np.argmax(np.cumsum(nonempty, axis=1)[:, None, :] > which[..., None], axis=2)  # (m, j)
     rows = np.arange(len(bands))[:, None]
     size = counts[rows, band]
     rank = np.minimum((u[..., 1] * size).astype(np.int64), np.maximum(size - 1, 0))
-    running = np.cumsum(bands, axis=2)[rows, band]  # (n, k, M*M)
+    running = np.cumsum(bands, axis=2)[rows, band]  # (m, j, C)
     drawn = np.argmax(running > rank[..., None], axis=2)
-    return np.where(keep[:, None], drawn, 0), keep
+    return np.where((n_bands > 0)[:, None], drawn, 0)
 
 
 def write(maps: MapSet, path: Path, split: str) -> dict:

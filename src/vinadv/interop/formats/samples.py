@@ -3,9 +3,11 @@ reconciled with vinadv's, drawn starts, and the per-step samples of a MapSet to 
 
 Samples are regrouped into maps (a new map starts where the image or goal changes from the previous sample/row)
 and trajectories (a new one starts where a state is not the previous state plus its labelled move). A map's
-starts are the first cells of its trajectories; expert costs are vinadv's (Dijkstra, diagonal cost sqrt 2, corner
-cutting allowed as in all three codebases) and the expert paths the file's own where they are optimal under that
-model (so their labels are kept), vinadv's where not; how many were optimal is reported.
+starts are the first cells of its trajectories (a trajectory from a cell an earlier trajectory of its map started
+from is dropped, counted in `trajectories_repeated_start`: a maps file's starts differ); expert costs are
+vinadv's (Dijkstra, diagonal cost sqrt 2, corner cutting allowed as in all three codebases) and the expert paths
+the file's own where they are optimal under that model (so their labels are kept), vinadv's where not; how many
+were optimal is reported.
 Maps with fewer trajectories than others are padded explicitly (`MapSet.start_counts`).
 """
 
@@ -118,6 +120,17 @@ def from_trajectories(
         raise f.fail(cells_name, "has a step that is not one of the 8 moves (is the action order different?)")
     if np.any(cells[offsets[1:] - 1] != goals[traj_map]):
         raise f.fail(cells_name, "has a trajectory that does not end at its map's goal")
+    # a trajectory from a cell an earlier trajectory of its map started from: a maps file's starts differ, so the
+    # first is kept and the repeat dropped (counted), instead of writing a file `MapSet.load` refuses
+    first = cells[offsets[:-1]]
+    key = (traj_map * size + first[:, 0]) * size + first[:, 1]
+    keep = np.zeros(t, dtype=bool)
+    keep[np.unique(key, return_index=True)[1]] = True
+    repeated = int(t - keep.sum())
+    if repeated:
+        kept = PackedPaths(cells.astype(np.int16), offsets).take(np.flatnonzero(keep))
+        cells, offsets, traj_map = kept.cells.astype(np.int64), kept.offsets, traj_map[keep]
+        t = len(offsets) - 1
     counts = np.bincount(traj_map, minlength=n)
     if np.any(counts == 0):
         raise f.fail(cells_name, f"has no trajectory for map {int(np.flatnonzero(counts == 0)[0])}")
@@ -139,6 +152,7 @@ def from_trajectories(
         "maps": n,
         "size": size,
         "trajectories": t,
+        "trajectories_repeated_start": repeated,
         "starts_per_map": s,
         "maps_padded": int((counts < s).sum()),
         "file_paths_optimal": int(optimal.sum()),

@@ -19,6 +19,7 @@ from torch import nn
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.planners.padding import pad_actions
 from vinadv.planners.vin.arrays import GOAL_VALUE, VINConfig, input_array
 
 __all__ = ["VI_INITS", "VIN", "VINPolicy", "init_shift_kernels", "make_input"]
@@ -87,7 +88,7 @@ def init_shift_kernels(model: VIN) -> VIN:
 
 class VINPolicy(nn.Module):
     """A `VIN` behind the bring-your-own contract: `forward(obstacles (B,N,N) float, goals (B,2) int64)` ->
-    `(B, 8, N, N)` logits (`VIN.action_logits` with the channels first)."""
+    `(B, 8, N, N)` logits (`VIN.action_logits` with the channels first; a 4-action VIN's padded with -inf)."""
 
     def __init__(self, vin: VIN):
         super().__init__()
@@ -98,7 +99,8 @@ class VINPolicy(nn.Module):
         goal_image = torch.zeros_like(obstacles)
         goal_image[torch.arange(b, device=goals.device), goals[:, 0], goals[:, 1]] = GOAL_VALUE
         x = torch.stack([obstacles, goal_image], dim=1)
-        return self.vin.action_logits(x).permute(0, 3, 1, 2)
+        # a `news` VIN's 4 actions padded to the contract's 8 with -inf (`vinadv.planners.padding`)
+        return pad_actions(self.vin.action_logits(x).permute(0, 3, 1, 2))
 
 
 def make_input(obstacles: np.ndarray, goals: np.ndarray) -> torch.Tensor:

@@ -23,6 +23,7 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.grid.moves import MOVES, move_model
 from vinadv.outfile import atomic_output
 from vinadv.planners.torchfile import read_torch_file
 from vinadv.planners.vin.arrays import STATE_KEYS, VINConfig, VINWeights, default_k
@@ -139,22 +140,27 @@ def _torch_load(name: str) -> Any:
 
 def _check_planner_shapes(name: str, state: dict, config: VINConfig) -> None:
     """Refuse weights whose input or output size the planner cannot feed: 2 input channels (obstacles, goal),
-    one logit per move of `ACTION_DELTAS`. Other shapes are checked against the config by `_check_state`."""
-    for key, axis, want in (("h.weight", 1, VINConfig.l_i), ("fc.weight", 0, len(ACTION_DELTAS))):
-        got = state.get(key)
-        if not isinstance(got, np.ndarray) or got.ndim <= axis:
-            continue  # reported by `_check_state`
-        if got.shape[axis] != want:
-            expected = list(got.shape)
-            expected[axis] = want
-            raise InputError(
-                f"{name}: '{key}' has shape {tuple(got.shape)}, expected {tuple(expected)} "
-                f"(the planner has {want} {'input channels' if axis else 'actions'})"
-            )
-    if config.l_i != VINConfig.l_i or config.n_actions != len(ACTION_DELTAS):
+    one logit per move of a movement model (`vinadv.grid.moves`: 8, or 4 for `news`; which model the weights plan
+    is their record's, checked by the planner, `check_action_count`). Other shapes are checked against the config by
+    `_check_state`."""
+    counts = sorted({move_model(m).n_actions for m in MOVES})
+    got = state.get("h.weight")
+    if isinstance(got, np.ndarray) and got.ndim > 1 and got.shape[1] != VINConfig.l_i:
+        expected = (got.shape[0], VINConfig.l_i, *got.shape[2:])
+        raise InputError(
+            f"{name}: 'h.weight' has shape {tuple(got.shape)}, expected {expected} "
+            f"(the planner has {VINConfig.l_i} input channels)"
+        )
+    got = state.get("fc.weight")
+    if isinstance(got, np.ndarray) and got.ndim > 0 and got.shape[0] not in counts:
+        raise InputError(
+            f"{name}: 'fc.weight' has shape {tuple(got.shape)}, expected ({len(ACTION_DELTAS)}, ...) "
+            f"(the planner has {' or '.join(map(str, counts))} actions)"
+        )
+    if config.l_i != VINConfig.l_i or config.n_actions not in counts:
         raise InputError(
             f"{name}: config has l_i={config.l_i}, n_actions={config.n_actions}; the planner needs "
-            f"l_i={VINConfig.l_i}, n_actions={len(ACTION_DELTAS)}"
+            f"l_i={VINConfig.l_i}, n_actions {' or '.join(map(str, counts))}"
         )
 
 
