@@ -53,15 +53,16 @@ COLLECTED = pytest.StashKey[list[tuple[str, bool]]]()
 
 @pytest.hookimpl(tryfirst=True)  # before `-m` selects: the marks set here count
 def pytest_collection_modifyitems(config, items) -> None:
-    """Tests on the database servers are slow, whether a variant of a backend test (`db_url` = mysql/postgres) or a
-    test that takes a server's fixture (`SERVER_FIXTURES`): the quick selection checks every backend test on SQLite
-    and needs no server. So are the GPU tests (marked `cuda`). The rest of the slow tier (`make test-fast` is
-    `pytest -m "not slow"`) is marked in the test modules themselves (`pytestmark = pytest.mark.slow` or
-    `@pytest.mark.slow`): the ones that start Dask clusters, a browser or subprocesses, train networks or
-    classifiers, or run the whole pipeline."""
+    """Tests on the database servers are slow, whether a variant of a backend test (`db_url` or `module_db_url` =
+    mysql/postgres) or a test that takes a server's fixture (`SERVER_FIXTURES`): the quick selection checks every
+    backend test on SQLite and needs no server. So are the GPU tests (marked `cuda`). The rest of the slow tier
+    (`make test-fast` is `pytest -m "not slow"`) is marked in the test modules themselves (`pytestmark =
+    pytest.mark.slow` or `@pytest.mark.slow`): the ones that start Dask clusters, a browser or subprocesses, train
+    networks or classifiers, or run the whole pipeline."""
     for item in items:
         callspec = getattr(item, "callspec", None)
-        on_server = callspec is not None and callspec.params.get("db_url") in SERVERS
+        params = callspec.params if callspec is not None else {}
+        on_server = params.get("db_url") in SERVERS or params.get("module_db_url") in SERVERS
         on_gpu = item.get_closest_marker("cuda") is not None  # the GPU tests: never in the quick tier
         if on_server or on_gpu or SERVER_FIXTURES & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
@@ -156,6 +157,17 @@ def sqlite_url(tmp_path):
 def db_url(request):
     """A fresh empty database on each backend in turn."""
     return request.getfixturevalue(f"{request.param}_url")
+
+
+@pytest.fixture(scope="module", params=BACKENDS)
+def module_db_url(request, tmp_path_factory):
+    """A fresh empty database on each backend in turn, made once per module (and dropped after it), for a module's
+    tests that only read what a module-scoped fixture stored there: a MariaDB database costs seconds of the server's
+    DDL to create and fill, a test that writes takes `db_url`."""
+    if request.param == "sqlite":
+        yield f"sqlite:///{tmp_path_factory.mktemp('db') / 'vinadv.db'}"
+    else:
+        yield from _fresh_database(request.getfixturevalue(f"{request.param}_server"))
 
 
 @pytest.fixture(scope="session")

@@ -45,9 +45,11 @@ NULLABLE_FLOATS = ("score", *HARM_FLOAT_COLUMNS)
 NULLABLE_STRINGS = ("expert_label", "harm")
 
 
-@pytest.fixture
-def stored(db_url):
-    """Two runs: 'one' (40 pairs of one added obstacle, config stored) and 'three' (23 pairs of three)."""
+@pytest.fixture(scope="module")
+def stored(module_db_url):
+    """Two runs: 'one' (40 pairs of one added obstacle, config stored) and 'three' (23 pairs of three); stored once
+    per module and backend: the tests only read them."""
+    db_url = module_db_url
     with Store.open(db_url) as store:
         one = store.create_run("one", config={"n": 40, "size": 7, "attack": "near-path"}, seed=5, attack="near-path")
         store.write_pairs(one, random_records(40, size=7, seed=11))

@@ -74,7 +74,7 @@ def test_run_name_taken_is_refused_without_resume(weights, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_full_disk_during_a_run_is_one_line_with_the_resume_hint(weights, tmp_path):
-    with tmpfs(tmp_path / "full", "2M") as folder:
+    with tmpfs(tmp_path / "full", "1M") as folder:
         db = str(folder / "full.db")
         done = subprocess.run(
             [sys.executable, "-m", "vinadv.cli", *_args(weights, db, "--name", "big", n=3000, shard=500)],

@@ -32,6 +32,8 @@ from vinadv.testing.planners import planning_vin
 SIZE = 10
 TOL = 1e-6
 T = round(4 * SIZE / 28)
+#: maps of the exhaustive oracle test: harmed and unharmed ones among them
+EXHAUSTIVE_MAPS = 6
 
 
 @pytest.fixture(scope="module")
@@ -128,6 +130,8 @@ def test_figures_per_strategy_and_worst_case_agree_with_a_plain_python_computati
 
 @pytest.mark.slow
 def test_exhaustive_harmful_rate_is_the_share_of_maps_some_single_cell_harms(model, maps):
+    # the first EXHAUSTIVE_MAPS maps: the oracle plans every cell of every map step by step (the suite's time)
+    maps = maps.take(slice(0, EXHAUSTIVE_MAPS))
     result = robustness(model, maps, ["exhaustive"], max_obstacles=1)
     harmed = valid = 0
     for i in range(len(maps)):  # every cell of every map, the slow way
@@ -150,7 +154,7 @@ def test_exhaustive_harmful_rate_is_the_share_of_maps_some_single_cell_harms(mod
         valid += any_cell
         harmed += any_harm
     figures = result.figures(k=1)
-    assert (figures.valid, figures.harmful) == (valid, harmed) and harmed > 0
+    assert (figures.valid, figures.harmful) == (valid, harmed) and 0 < harmed < valid
 
 
 def test_the_optimal_planner_is_never_harmed(maps):

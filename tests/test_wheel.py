@@ -19,11 +19,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_the_wheel_installs_outside_the_repository_and_runs_the_main_job(tmp_path):
+    # no PYTHONPATH anywhere: with the checkout's src/ on it, pip would take the build's src/vinadv.egg-info for an
+    # installed vinadv and skip the wheel
+    clean_env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     dist = tmp_path / "dist"
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(dist), str(ROOT)],
         check=True,
         capture_output=True,
+        env=clean_env,
     )
     (wheel,) = dist.glob("vinadv-*.whl")
     env_dir = tmp_path / "env"
@@ -41,11 +45,11 @@ def test_the_wheel_installs_outside_the_repository_and_runs_the_main_job(tmp_pat
         [sys.executable, "-m", "pip", "--python", str(python), "install", "--no-deps", "--no-index", "-q", str(wheel)],
         check=True,
         capture_output=True,
+        env=clean_env,
     )
     (site / "zz_test_dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
     work = tmp_path / "elsewhere"
     work.mkdir()
-    clean_env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     where = subprocess.run(
         [str(python), "-c", "import vinadv.planners.weights as w; print(w.WEIGHTS_DIR)"],
         cwd=work,

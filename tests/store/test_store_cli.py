@@ -17,8 +17,10 @@ from vinadv.store import Store
 from vinadv.testing.store import random_records
 
 
-@pytest.fixture
-def stored(db_url):
+@pytest.fixture(scope="module")
+def stored(module_db_url):
+    """A run of 40 pairs, stored once per module and backend: the export tests only read it."""
+    db_url = module_db_url
     records = random_records(40, size=7, seed=11)
     with Store.open(db_url) as store:
         run_id = store.create_run("exported", attack="near-path")
