@@ -161,7 +161,13 @@ def mpd_table(path: Path = MPD_JSON) -> str:
 def _robustness_runs(data: dict) -> list[dict]:
     """The robustness runs of the MP JSON by family (in the table's order), then in the order they were run."""
     order = {f["family"]: i for i, f in enumerate(sorted(data["families"], key=lambda f: f["family"]))}
-    return sorted(data["robustness"], key=lambda r: order.get(r.get("family", "mazes"), len(order)))
+    planners = list(dict.fromkeys(r["planner"] for r in data["robustness"] if r.get("family", "mazes") != "mazes"))
+
+    def key(run: dict) -> tuple[int, int]:
+        planner = planners.index(run["planner"]) if run["planner"] in planners else len(planners)
+        return order.get(run.get("family", "mazes"), len(order)), planner
+
+    return sorted(data["robustness"], key=key)
 
 
 def _by_k(curve: list[dict], key: str) -> str:

@@ -128,7 +128,9 @@ def test_the_mp_benchmark_page_is_read_from_its_json(tmp_path):
             assert entry["command"] in filled and "shared" not in entry["command"]
             fig = entry["search"]
             assert f"| {family['family']} | `{entry['planner']}` | {fig['rows']} | {fig['opt']:.3f} |" in filled
-    assert {run["planner"] for run in data["robustness"]} == {"wastar:w=2", "neural-astar"}
+    assert {"wastar:w=2", "neural-astar", "astar", "optimal"} <= {run["planner"] for run in data["robustness"]}
+    assert {run["family"] for run in data["robustness"]} == {family["family"] for family in data["families"]}
+    assert all(len(run["figures"]["overall"]) == 3 for run in data["robustness"])
     # another JSON gives another table: nothing is copied by hand
     path = tmp_path / "mpd.json"
     path.write_text(json.dumps(_mpd_record(0.125)))
