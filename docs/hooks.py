@@ -217,10 +217,14 @@ def mpd_commands(path: Path = MPD_JSON) -> str:
     for family in data["families"]:
         lines += [family["import"], *(entry["command"] for entry in family["planners"])]
     lines += [run["command"] for run in data["robustness"]]
-    weights = {run["planner"]: run["weights_sha256"] for run in data["robustness"] if run.get("weights_sha256")}
+    weights = {}
+    for run in data["robustness"]:  # the checksum the run recorded (a --weighted file's, or a shipped one's)
+        sha = run.get("weights_sha256") or run["figures"].get("planner", {}).get("weights_sha256")
+        if sha:
+            weights[run["planner"]] = sha
     for entry in (e for f in data["families"] for e in f["planners"] if e.get("weights_sha256")):
         weights[entry["planner"]] = entry["weights_sha256"]
-    lines += [f"# {name}: <weights> file with SHA-256 {sha}" for name, sha in weights.items()]
+    lines += [f"# {name}: weights with SHA-256 {sha}" for name, sha in weights.items()]
     return "```sh\n" + "\n".join(lines) + "\n```"
 
 

@@ -139,7 +139,8 @@ def test_the_mp_benchmark_page_is_read_from_its_json(tmp_path):
     assert hooks.mpd_robustness(path).splitlines()[2] == row
     assert hooks.mpd_robustness_strategies(path).splitlines()[2] == "| forest | `vin` | 25.0% / 50.0% |"
     commands = hooks.mpd_commands(path)
-    assert "vinadv robustness --planner vin --weights <weights>/vin32.pt" in commands and "SHA-256 ab12" in commands
+    assert "vinadv robustness --planner vin --weights <weights>/vin32.pt" in commands
+    assert "vin: weights with SHA-256 ab12" in commands
 
 
 def test_user_facing_pages_name_public_sources_not_the_workspace():
