@@ -29,7 +29,7 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
 def test_list_names_the_registered_planners():
     names = [p["name"] for p in list_planners(28)]
-    assert names == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar", "neural-astar"]
+    assert names == ["vin", "vin_robust", "gppn", "optimal", "astar", "wastar", "neural-astar", "neural-astar-mpd5"]
     vin = list_planners(28)[0]
     assert vin["weights"].endswith("vin28.pt") and vin["weights_available"] is True
 
@@ -119,6 +119,7 @@ def test_planners_command(capsys):
         "astar",
         "wastar",
         "neural-astar",
+        "neural-astar-mpd5",
     ]
     assert main(["planners"]) == 0
     text = capsys.readouterr().out

@@ -4,6 +4,8 @@ uninterrupted run, model selection, refusals. Tiny maps (10x10, depth-1 encoder)
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import torch
@@ -11,13 +13,17 @@ import torch
 from tests.planners.neural_astar.literal import literal_search
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
+from vinadv.planners.interface import PlannerError
 from vinadv.planners.neural_astar.model import NeuralAstar, NeuralAstarConfig
 from vinadv.planners.neural_astar.training import (
+    RECORD_FORMAT,
     NeuralAstarTrainConfig,
     history_loss,
     optimal_path_maps,
     train_neural_astar,
 )
+from vinadv.planners.registry import load_planner
+from vinadv.planners.weights import WEIGHTS_DIR, weights_checksum
 
 SIZE = 10
 
@@ -116,3 +122,18 @@ def test_training_refuses_bad_settings_and_other_movement_models(maps, val_maps)
         train_neural_astar(octile, val_maps, config())
     with pytest.raises(InputError, match="validation maps are 12x12"):
         train_neural_astar(maps, generate_maps(2, 12, seed=1, n_starts=1, moves="moore"), config())
+
+
+def test_the_shipped_mpd5_model_is_registered_with_its_training_record():
+    path = WEIGHTS_DIR / "neural_astar_mpd5.pt"
+    planner = load_planner("neural-astar-mpd5", 32, moves="moore")
+    assert planner.name == "neural-astar-mpd5" and planner.checksum == weights_checksum(path)
+    record = planner.model.record
+    assert record == json.loads(path.with_suffix(".json").read_text())
+    assert record["format"] == RECORD_FORMAT and record["train_config"]["tmax"] == 0.25
+    assert record["best_epoch"] == max(record["epochs"], key=lambda e: e["val_h_mean"])["epoch"]
+    assert {d["path"].rsplit("/", 1)[-1] for d in record["data"]} == {
+        f"{f}_train.npz" for f in ("alternating_gaps", "forest", "multiple_bugtraps", "shifting_gaps", "single_bugtrap")
+    }
+    with pytest.raises(PlannerError, match="takes no weights file"):
+        load_planner("neural-astar-mpd5", 32, weights=str(path), moves="moore")
