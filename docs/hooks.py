@@ -13,10 +13,12 @@ count, for the metrics files that have it), `<!-- vinadv:by-length-figure -->` (
 `<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
 benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/results/mpd.md`) reads
 `docs/results/mpd.json`, written by `benchmarks/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
-(Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (harm at one added obstacle) and
-`<!-- vinadv:mpd-commands -->` (the commands). `<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine
-and the exhaustive attack at 28x28 to 64x64 beside the FMA count, from `docs/results/map_size.json`
-(`benchmarks/map_size.py --out`), with its command and the machine's load.
+(Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (the worst case per map: harmful and
+paper success rates at k = 1..K added obstacles), `<!-- vinadv:mpd-robustness-strategies -->` (the harmful rates per
+strategy) and `<!-- vinadv:mpd-commands -->` (the commands, and the checksums of the weights files they name).
+`<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine and the exhaustive attack at 28x28 to 64x64
+beside the FMA count, from `docs/results/map_size.json` (`benchmarks/map_size.py --out`), with its command and the
+machine's load.
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ BENCH_LEADERBOARD = "<!-- vinadv:bench-leaderboard -->"
 BENCH_DIR = ROOT / "docs" / "results" / "bench"
 MPD_TABLE = "<!-- vinadv:mpd-table -->"
 MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
+MPD_ROBUSTNESS_STRATEGIES = "<!-- vinadv:mpd-robustness-strategies -->"
 MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
 MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
 MAP_SIZE_TABLE = "<!-- vinadv:map-size-table -->"
@@ -195,21 +198,56 @@ def mpd_table(path: Path = MPD_JSON) -> str:
     return markdown_table(header, rows)
 
 
+def _robustness_runs(data: dict) -> list[dict]:
+    """The robustness runs of the MP JSON by family (in the table's order), then in the order they were run."""
+    order = {f["family"]: i for i, f in enumerate(sorted(data["families"], key=lambda f: f["family"]))}
+    planners = list(dict.fromkeys(r["planner"] for r in data["robustness"] if r.get("family", "mazes") != "mazes"))
+
+    def key(run: dict) -> tuple[int, int]:
+        planner = planners.index(run["planner"]) if run["planner"] in planners else len(planners)
+        return order.get(run.get("family", "mazes"), len(order)), planner
+
+    return sorted(data["robustness"], key=key)
+
+
+def _by_k(curve: list[dict], key: str) -> str:
+    """A curve's `key` rates at k = 1, 2, ... joined by slashes."""
+    return " / ".join(percent(point[key]) for point in curve)
+
+
 def mpd_robustness(path: Path = MPD_JSON) -> str:
-    """The robustness runs of `benchmarks/mpd_table.py`'s JSON: per planner and strategy, harm at k = 1."""
+    """The robustness runs of `benchmarks/mpd_table.py`'s JSON, worst case per map over the strategies: per family
+    and planner, the harmful rate and the paper's success rate at k = 1..K added obstacles."""
     data = json.loads(path.read_text())
     rows = []
-    for run in data["robustness"]:
+    for run in _robustness_runs(data):
         figures = run["figures"]
-        by_strategy = [(name, s["by_obstacles"][0]) for name, s in figures["strategies"].items()]
-        rows += [
-            [f"`{run['planner']}`", name, str(fig["maps"]), percent(figures["clean"]["success_rate"])]
-            + [percent(fig["harmful_rate"]), percent(fig["paper_success_rate"]), str(fig["valid"])]
-            + [decimal(fig["mean_regret"])]
-            for name, fig in [*by_strategy, ("worst case", figures["overall"][0])]
+        overall = figures["overall"]
+        rows.append(
+            [run.get("family", "mazes"), f"`{run['planner']}`", str(overall[0]["maps"])]
+            + [percent(figures["clean"]["success_rate"]), _by_k(overall, "harmful_rate")]
+            + [_by_k(overall, "paper_success_rate"), decimal(overall[-1]["mean_regret"])]
+        )
+    header = ["family (test split)", "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
+    return markdown_table([*header, "mean regret at the largest k"], rows)
+
+
+def mpd_robustness_strategies(path: Path = MPD_JSON) -> str:
+    """The same runs per strategy: the harmful rate at k = 1..K of each strategy, and its seconds."""
+    data = json.loads(path.read_text())
+    runs = _robustness_runs(data)
+    names = list(dict.fromkeys(name for run in runs for name in run["figures"]["strategies"]))
+    rows = [
+        [run.get("family", "mazes"), f"`{run['planner']}`"]
+        + [
+            _by_k(run["figures"]["strategies"][name]["by_obstacles"], "harmful_rate")
+            if name in run["figures"]["strategies"]
+            else "—"
+            for name in names
         ]
-    header = ["planner", "strategy", "maps", "clean success", "harmful (k = 1)", "paper success (k = 1)", "valid"]
-    return markdown_table([*header, "mean regret"], rows)
+        for run in runs
+    ]
+    return markdown_table(["family", "planner", *(f"{name}: harmful, k = 1 / 2 / ..." for name in names)], rows)
 
 
 def mpd_commands(path: Path = MPD_JSON) -> str:
@@ -219,6 +257,14 @@ def mpd_commands(path: Path = MPD_JSON) -> str:
     for family in data["families"]:
         lines += [family["import"], *(entry["command"] for entry in family["planners"])]
     lines += [run["command"] for run in data["robustness"]]
+    weights = {}
+    for run in data["robustness"]:  # the checksum the run recorded (a --weighted file's, or a shipped one's)
+        sha = run.get("weights_sha256") or run["figures"].get("planner", {}).get("weights_sha256")
+        if sha:
+            weights[run["planner"]] = sha
+    for entry in (e for f in data["families"] for e in f["planners"] if e.get("weights_sha256")):
+        weights[entry["planner"]] = entry["weights_sha256"]
+    lines += [f"# {name}: weights with SHA-256 {sha}" for name, sha in weights.items()]
     return "```sh\n" + "\n".join(lines) + "\n```"
 
 
@@ -284,6 +330,7 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (BY_LENGTH, by_length_table),
         (BENCH_LEADERBOARD, bench_leaderboard),
         (MPD_TABLE, mpd_table),
+        (MPD_ROBUSTNESS_STRATEGIES, mpd_robustness_strategies),
         (MPD_ROBUSTNESS, mpd_robustness),
         (MPD_COMMANDS, mpd_commands),
         (MAP_SIZE_TABLE, map_size_table),

@@ -111,6 +111,7 @@ def test_the_length_curve_draws_every_metrics_file_with_rows_by_length():
 def _mpd_record(opt: float) -> dict:
     search = {"rows": 100, "opt": opt, "exp": None, "hmean": None, "success": 0.5, "expansions": None}
     by_k = {"k": 1, "maps": 20, "valid": 19, "harmful_rate": 0.25, "paper_success_rate": 0.1, "mean_regret": 0.5}
+    k2 = {**by_k, "k": 2, "harmful_rate": 0.5, "paper_success_rate": 0.2, "mean_regret": 1.25}
     return {
         "families": [
             {
@@ -121,12 +122,14 @@ def _mpd_record(opt: float) -> dict:
         ],
         "robustness": [
             {
-                "planner": "astar",
-                "command": "vinadv robustness --planner astar",
+                "family": "forest",
+                "planner": "vin",
+                "command": "vinadv robustness --planner vin --weights <weights>/vin32.pt",
+                "weights_sha256": "ab12",
                 "figures": {
                     "clean": {"success_rate": 1.0},
-                    "strategies": {"random": {"by_obstacles": [by_k]}},
-                    "overall": [by_k],
+                    "strategies": {"random": {"by_obstacles": [by_k, k2]}},
+                    "overall": [by_k, k2],
                 },
             }
         ],
@@ -146,15 +149,19 @@ def test_the_mp_benchmark_page_is_read_from_its_json(tmp_path):
             assert entry["command"] in filled and "shared" not in entry["command"]
             fig = entry["search"]
             assert f"| {family['family']} | `{entry['planner']}` | {fig['rows']} | {fig['opt']:.3f} |" in filled
-    assert {run["planner"] for run in data["robustness"]} == {"wastar:w=2", "neural-astar"}
+    assert {"wastar:w=2", "neural-astar", "astar", "optimal"} <= {run["planner"] for run in data["robustness"]}
+    assert {run["family"] for run in data["robustness"]} == {family["family"] for family in data["families"]}
+    assert all(len(run["figures"]["overall"]) == 3 for run in data["robustness"])
     # another JSON gives another table: nothing is copied by hand
     path = tmp_path / "mpd.json"
     path.write_text(json.dumps(_mpd_record(0.125)))
     assert hooks.mpd_table(path).splitlines()[2] == "| forest | `optimal` | 100 | 0.125 | — | — | 50.0% | — |"
-    assert (
-        hooks.mpd_robustness(path).splitlines()[2] == "| `astar` | random | 20 | 100.0% | 25.0% | 10.0% | 19 | 0.500 |"
-    )
-    assert "vinadv robustness --planner astar" in hooks.mpd_commands(path)
+    row = "| forest | `vin` | 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | 1.250 |"
+    assert hooks.mpd_robustness(path).splitlines()[2] == row
+    assert hooks.mpd_robustness_strategies(path).splitlines()[2] == "| forest | `vin` | 25.0% / 50.0% |"
+    commands = hooks.mpd_commands(path)
+    assert "vinadv robustness --planner vin --weights <weights>/vin32.pt" in commands
+    assert "vin: weights with SHA-256 ab12" in commands
 
 
 def test_user_facing_pages_name_public_sources_not_the_workspace():

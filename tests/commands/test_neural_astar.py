@@ -145,3 +145,47 @@ def test_neural_astar_end_to_end_on_mp_and_generated_maps(source, tmp_path, caps
     )
     assert out["clean"]["maps"] == 3 and out["settings"]["n"] == 3
     assert "ranked_as" not in out["strategies"]["saliency"] and "ranked_as" not in out["strategies"]["random"]
+
+
+@pytest.mark.slow
+def test_train_writes_weights_and_record_loadable_by_the_planner(tmp_path, capsys):
+    train, val = tmp_path / "train.npz", tmp_path / "val.npz"
+    generate_maps(4, 10, seed=2, n_starts=1, moves="moore").save(train)
+    generate_maps(3, 10, seed=3, n_starts=1, moves="moore").save(val)
+    out = tmp_path / "na.pt"
+    args = ["neural-astar", "train", "--data", str(train), "--data", str(train), "--val-data", str(val)]
+    assert main([*args, "--out", str(out), "--epochs", "2", "--depth", "1", "--batch-size", "4", "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    record = json.loads(out.with_suffix(".json").read_text())
+    assert printed == record and not out.with_name("na.pt.ckpt").exists()
+    assert record["format"] == "vinadv.neural-astar-training-record/1" and record["n_train"] == 8
+    assert record["train_config"]["tmax"] == 0.25 and record["train_config"]["lr"] == 0.001
+    assert [d["sha256"] for d in record["data"]] == [weights_checksum(train)] * 2
+    assert record["val_data"][0]["sha256"] == weights_checksum(val) and record["epochs_done"] == 2
+    assert record["best_epoch"] == max(record["epochs"], key=lambda e: e["val_h_mean"])["epoch"]
+    assert load_neural_astar(out).record == record
+    assert main(["eval", "--data", str(val), "--planner", "neural-astar", "--weights", str(out), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["search"]["rows"] == 3
+
+
+def test_train_refuses_in_one_line(tmp_path, capsys):
+    moore, octile = tmp_path / "moore.npz", tmp_path / "octile.npz"
+    generate_maps(3, 10, seed=2, n_starts=1, moves="moore").save(moore)
+    generate_maps(3, 10, seed=2, n_starts=1).save(octile)
+    out = tmp_path / "na.pt"
+    base = ["neural-astar", "train", "--out", str(out), "--depth", "1", "--quiet"]
+    cases = [
+        ([*base, "--data", str(octile)], "'octile'"),
+        ([*base, "--data", str(moore), "--tmax", "0"], "--tmax"),
+        ([*base, "--data", str(moore), "--data", str(octile)], "moves"),
+        ([*base, "--data", str(moore), "--val-fraction", "1.5"], "--val-fraction"),
+        ([*base, "--data", str(tmp_path / "none.npz")], "none.npz"),
+    ]
+    for argv, word in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and word in err, err
+    out.with_name("na.pt.ckpt").write_bytes(b"")
+    assert main([*base, "--data", str(moore)]) == 2
+    assert "--resume" in capsys.readouterr().err
+    assert not out.exists()

@@ -39,6 +39,7 @@ def test_list_names_the_registered_planners():
         "astar",
         "wastar",
         "neural-astar",
+        "neural-astar-mpd5",
     ]
     vin = list_planners(28)[0]
     assert vin["weights"].endswith("vin28.pt") and vin["weights_available"] is True
@@ -131,6 +132,7 @@ def test_planners_command(capsys):
         "astar",
         "wastar",
         "neural-astar",
+        "neural-astar-mpd5",
     ]
     assert main(["planners"]) == 0
     text = capsys.readouterr().out

@@ -1,16 +1,17 @@
-"""`vinadv neural-astar import-weights` and `vinadv neural-astar compare-modes`."""
+"""`vinadv neural-astar import-weights`, `vinadv neural-astar compare-modes` and `vinadv neural-astar train`."""
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import hashlib
 import json
 import time
 from pathlib import Path
 
 from vinadv import __version__
-from vinadv.commands import command_line
-from vinadv.commands.output import add_output_options, emit, progress_bar
+from vinadv.commands import add_device_argument, command_line, planner_device, set_threads
+from vinadv.commands.output import add_output_options, emit, progress_bar, progress_lines, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 from vinadv.planners.weights import weights_checksum
@@ -58,6 +59,47 @@ def register(subparsers) -> None:
     cmp.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
     add_output_options(cmp, json="the counts", quiet=True)
     cmp.set_defaults(func=cmd_compare_modes)
+
+    tr = sub.add_parser(
+        "train",
+        help="train Neural A* as its authors do (L1 between the search history and the optimal path; train.yaml's "
+        "settings), selected by validation Hmean",
+    )
+    tr.add_argument(
+        "--data",
+        required=True,
+        action="append",
+        metavar="MAPS",
+        help="moore maps file(s) to train on (repeat for several: they are joined), e.g. from `vinadv maps import "
+        "--format mpd FILE --split train`",
+    )
+    tr.add_argument(
+        "--val-data",
+        action="append",
+        metavar="MAPS",
+        help="maps file(s) to validate on, each map's first start (repeatable; default: the last --val-fraction "
+        "of the training maps after a seeded shuffle)",
+    )
+    tr.add_argument("--val-fraction", type=float, default=0.1, help="held out without --val-data (default 0.1)")
+    tr.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    tr.add_argument("--epochs", type=int, default=50, help="epochs (default 50, as train.yaml)")
+    tr.add_argument("--lr", type=float, default=0.001, help="RMSprop learning rate (default 0.001)")
+    tr.add_argument("--batch-size", type=int, default=100, help="maps per step and per validation batch (default 100)")
+    tr.add_argument("--tmax", type=float, default=0.25, help="share of cells the search may select (default 0.25)")
+    tr.add_argument("--seed", type=int, default=1234, help="initialisation, shuffles and starts (default 1234)")
+    tr.add_argument("--depth", type=int, default=4, help="encoder blocks, 1..4 (default 4)")
+    tr.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="MIN",
+        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
+    )
+    tr.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
+    tr.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    add_device_argument(tr)
+    add_output_options(tr, json="the training record", quiet=True)
+    tr.set_defaults(func=cmd_train)
 
 
 def _beside(checkpoint: str, given: str | None, name: str) -> Path | None:
@@ -184,4 +226,130 @@ def cmd_compare_modes(args: argparse.Namespace) -> int:
         f"({result['share_identical_paths']:.2%}), identical expanded cells {result['identical_expansions']} "
         f"({result['share_identical_expansions']:.2%}); exact {seconds['exact']:.1f} s, differentiable "
         f"{seconds['differentiable']:.1f} s",
+    )
+
+
+def _joined_maps(paths: list[str]):
+    """The maps files `paths` loaded and joined (one size, movement model and corner-cutting rule), and what the
+    record says of them."""
+    import numpy as np
+
+    from vinadv.grid.mapset import MapSet
+    from vinadv.grid.paths import PackedPaths
+
+    parts = [MapSet.load(p) for p in paths]
+    first = parts[0]
+    for path, maps in zip(paths[1:], parts[1:], strict=True):
+        for field in ("size", "moves", "corner_cutting"):
+            if getattr(maps, field) != getattr(first, field):
+                mine, theirs = getattr(maps, field), getattr(first, field)
+                raise InputError(f"{path}: {field} {mine!r}, but {paths[0]} has {theirs!r}")
+    records = [
+        {"path": str(p), "sha256": weights_checksum(p), "maps": len(m), "seed": int(m.seed)}
+        for p, m in zip(paths, parts, strict=True)
+    ]
+    if len(parts) == 1:
+        return first, records
+    s = max(m.n_starts for m in parts)
+
+    def padded(m, field):  # starts padded to s slots with the goal (as `MapSet.start_counts` pads)
+        value = getattr(m, field)
+        if m.n_starts == s:
+            return value
+        extra = s - m.n_starts
+        if field == "starts":
+            return np.concatenate([value, np.repeat(m.goals[:, None], extra, axis=1)], axis=1)
+        return np.concatenate([value, np.zeros((len(m), extra))], axis=1)
+
+    expert = []
+    for m in parts:
+        paths_of = m.expert.unpack()
+        for i in range(len(m)):
+            expert += paths_of[i * m.n_starts : (i + 1) * m.n_starts]
+            expert += [m.goals[i][None].astype(np.int64)] * (s - m.n_starts)
+    counts = np.concatenate([m.start_mask.sum(axis=1) for m in parts]).astype(np.int64)
+    joined = MapSet(
+        obstacles=np.concatenate([m.obstacles for m in parts]),
+        goals=np.concatenate([m.goals for m in parts]),
+        starts=np.concatenate([padded(m, "starts") for m in parts]),
+        expert_costs=np.concatenate([padded(m, "expert_costs") for m in parts]),
+        expert=PackedPaths.pack(expert),
+        corner_cutting=first.corner_cutting,
+        seed=-1,
+        start_counts=None if (counts == s).all() else counts,
+        moves=first.moves,
+    )
+    return joined, records
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from vinadv.planners.neural_astar.model import save_neural_astar
+    from vinadv.planners.neural_astar.training import NeuralAstarTrainConfig, train_neural_astar
+
+    set_threads(args.threads)
+    device = planner_device(args) or "cpu"
+    config = NeuralAstarTrainConfig(
+        epochs=args.epochs,
+        lr=args.lr,
+        batch_size=args.batch_size,
+        tmax=args.tmax,
+        seed=args.seed,
+        depth=args.depth,
+        device=device,
+        time_limit_min=args.time_limit,
+    )
+    config.validate()
+    if not args.val_data and not 0 < args.val_fraction < 1:
+        raise InputError(f"--val-fraction must be in (0, 1), got {args.val_fraction}")
+    out = check_output_path(args.out, mkdir=True)
+    checkpoint = out.with_name(out.name + ".ckpt")
+    if checkpoint.exists() and not args.resume:
+        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
+    maps, data = _joined_maps(args.data)
+    if args.val_data:
+        val_maps, val_data = _joined_maps(args.val_data)
+        train_maps = maps
+    else:
+        order = np.random.default_rng([args.seed, 0x5EED]).permutation(len(maps))
+        n_val = max(1, int(round(len(maps) * args.val_fraction)))
+        if len(maps) - n_val < 1:
+            raise InputError(f"{args.data[0]}: {len(maps)} maps; training needs at least 2")
+        train_maps, val_maps = maps.take(np.sort(order[:-n_val])), maps.take(np.sort(order[-n_val:]))
+        val_data = None
+    digest = hashlib.sha256(
+        "".join(d["sha256"] for d in data + (val_data or [])).encode() + str(args.val_fraction).encode()
+    ).hexdigest()
+    record = {
+        "command": command_line(),
+        "vinadv": __version__,
+        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "data": data,
+        "val_data": val_data if val_data is not None else f"{args.val_fraction} of the training maps held out",
+    }
+    model, record = train_neural_astar(
+        train_maps,
+        val_maps,
+        config,
+        checkpoint=checkpoint,
+        resume=args.resume,
+        progress=shows_progress(args),
+        record=record,
+        log=progress_lines(args),
+        data_sha256=digest,
+    )
+    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    save_neural_astar(model, out, record)
+    record_path = out.with_suffix(".json")
+    with atomic_output(record_path, "w") as fh:
+        fh.write(json.dumps(record, indent=2) + "\n")
+    checkpoint.unlink(missing_ok=True)
+    best = record["best"]
+    return emit(
+        args,
+        record,
+        f"wrote {out} and {record_path}: {record['epochs_done']} epochs in {record['wall_time_s']:.0f} s; best epoch "
+        f"{best['epoch']}: val Opt {best['val_p_opt']:.3f} Exp {best['val_p_exp']:.3f} Hmean {best['val_h_mean']:.3f}; "
+        f"use --planner neural-astar --weights {out}",
     )

@@ -15,6 +15,8 @@
 - `neural-astar`: Neural A* (Yonetani et al. 2021), the authors' CNN encoder and search on `moore` maps; weights from
   `weights=` or the shipped `neural_astar_mazes32.pt` (converted from the authors' mazes checkpoint; the encoder is
   fully convolutional, so the same file serves every map size).
+- `neural-astar-mpd5`: Neural A* with the shipped `neural_astar_mpd5.pt`, trained by `vinadv neural-astar train` on
+  the train splits of the five MP families other than mazes (its record beside it).
 - `path/to/file.py:factory` or `package.module:factory`: `factory(size: int)` returns a `torch.nn.Module` whose
   `forward(obstacles, goals)` takes obstacles as 0/1 float32 `(B, N, N)` and goals as int64 `(B, 2)` and returns
   `(B, 8, N, N)` logits in DESIGN.md's action order; or an object with `plan_paths` (a search planner,
@@ -264,6 +266,19 @@ def _load_neural_astar(size: int, weights: str | None, corner_cutting: bool, dev
     return NeuralAstarPlanner(load_neural_astar(weights), size, device=device)
 
 
+def _neural_astar_mpd5_path(size: int) -> Path:
+    return WEIGHTS_DIR / "neural_astar_mpd5.pt"  # one model for every size, as `neural-astar`'s
+
+
+def _load_neural_astar_mpd5(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
+    from vinadv.planners.neural_astar.model import load_neural_astar  # noqa: PLC0415 (PyTorch: loaded when used)
+    from vinadv.planners.neural_astar.planner import NeuralAstarPlanner  # noqa: PLC0415 (PyTorch, as above)
+
+    planner = NeuralAstarPlanner(load_neural_astar(_neural_astar_mpd5_path(size)), size, device=device)
+    planner.name = "neural-astar-mpd5"
+    return planner
+
+
 def _load_optimal(size: int, weights: str | None, corner_cutting: bool, device: str | None) -> Planner:
     return OptimalPlanner(size, corner_cutting)
 
@@ -330,6 +345,12 @@ register(
     load=_load_neural_astar,
     default_weights=_neural_astar_weights_path,
     takes_weights=True,
+)
+register(
+    "neural-astar-mpd5",  # its own weights: other weights are planner 'neural-astar' with weights
+    description="Neural A* trained by `vinadv neural-astar train` on the five MP families other than mazes",
+    load=_load_neural_astar_mpd5,
+    default_weights=_neural_astar_mpd5_path,
 )
 
 

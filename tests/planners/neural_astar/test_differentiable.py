@@ -157,3 +157,28 @@ def test_where_exp_is_subnormal_or_zero_the_smallest_f_goes_first_as_in_the_exac
     # the regime was entered: f / sqrt(N) of some goal above 87 (exp below the smallest normal float32)
     f_goal = [0.5 * cost[b][tuple(p[:-1].T)].sum() + 0.5 * cost[b][tuple(goals[b])] for b, p in enumerate(exact.paths)]
     assert max(f_goal) / 3 > 87
+
+
+def test_solved_gradients_change_gradients_of_solved_maps_only_not_values():
+    # map 0 is solved in two selections, map 1 searches on: with the authors' batched gradient map 0 keeps adding
+    # the softmax term after its goal (off the goal cell); values and map 1's gradient stay the same
+    free = np.ones((2, 6, 6), dtype=bool)
+    starts, goals = np.array([[0, 0], [0, 0]]), np.array([[1, 1], [5, 5]])
+    cost = np.random.default_rng(1).random((2, 6, 6)).astype(np.float32)
+    grads, values = [], []
+    for solved in (False, True):
+        c = torch.from_numpy(cost).requires_grad_(True)
+        out = differentiable_astar(
+            c,
+            torch.from_numpy(free.astype(np.float32)),
+            torch.from_numpy(starts),
+            torch.from_numpy(goals),
+            solved_gradients=solved,
+        )
+        weights = torch.from_numpy(np.random.default_rng(2).random((2, 6, 6)).astype(np.float32))
+        (out.histories * weights).sum().backward()
+        grads.append(c.grad.clone())
+        values.append(out.histories.detach().clone())
+    assert torch.equal(values[0], values[1])
+    assert torch.equal(grads[0][1], grads[1][1])
+    assert not torch.allclose(grads[0][0], grads[1][0])

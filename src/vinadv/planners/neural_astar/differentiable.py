@@ -102,6 +102,7 @@ def differentiable_astar(
     goals: torch.Tensor,
     g_ratio: float = 0.5,
     tmax: float = 1.0,
+    solved_gradients: bool = False,
 ) -> DifferentiableSearch:
     """The authors' differentiable A* on B maps (module docstring).
 
@@ -111,6 +112,11 @@ def differentiable_astar(
         starts, goals: `(B, 2)` int64 `(row, col)`.
         g_ratio: f = g_ratio * g + (1 - g_ratio) * h.
         tmax: the share of the N * N cells the search may select (the authors' Tmax: 0.25 in training, 1 to plan).
+        solved_gradients: training as the authors' batched loop trains (`vinadv neural-astar train`): a map whose
+            search reached its goal goes on adding the softmax's straight-through term `y - detach(y)` (0 in value)
+            to its history, off its goal cell (their history is clamped to [0, 1]: the re-selected goal's sum is 2,
+            where the clamp passes no gradient), until every map of the batch is solved or Tmax. Values are the same
+            either way; only the gradient with respect to the cost maps differs.
     """
     b, n = cost_maps.shape[0], cost_maps.shape[-1]
     device = cost_maps.device
@@ -155,6 +161,9 @@ def differentiable_astar(
         hard = torch.zeros_like(y)
         hard[rows, selected] = 1.0
         histories = histories + (hard + (y - y.detach())) * active[:, None]
+        if solved_gradients and bool(reached.any()):
+            done = reached[:, None] & (torch.arange(cells, device=device)[None, :] != goal_idx[:, None])
+            histories = histories + (y - y.detach()) * done
         at_goal = active & (selected == goal_idx)
         closed[rows[active], selected[active]] = True
         expand = active & ~at_goal
