@@ -70,7 +70,7 @@ def register(subparsers) -> None:
         required=True,
         action="append",
         metavar="MAPS",
-        help="moore maps file(s) to train on (repeat for several: they are joined), e.g. from `vinadv maps import "
+        help="moore maps file(s) to train on (repeat for several: joined as `vinadv maps concat` joins them, so of one size and starts per map), e.g. from `vinadv maps import "
         "--format mpd FILE --split train`",
     )
     tr.add_argument(
@@ -230,56 +230,16 @@ def cmd_compare_modes(args: argparse.Namespace) -> int:
 
 
 def _joined_maps(paths: list[str]):
-    """The maps files `paths` loaded and joined (one size, movement model and corner-cutting rule), and what the
-    record says of them."""
-    import numpy as np
-
+    """The maps files `paths` loaded and joined by `MapSet.concat` (one size, starts per map, movement model and
+    corner-cutting rule), and what the record says of them."""
     from vinadv.grid.mapset import MapSet
-    from vinadv.grid.paths import PackedPaths
 
     parts = [MapSet.load(p) for p in paths]
-    first = parts[0]
-    for path, maps in zip(paths[1:], parts[1:], strict=True):
-        for field in ("size", "moves", "corner_cutting"):
-            if getattr(maps, field) != getattr(first, field):
-                mine, theirs = getattr(maps, field), getattr(first, field)
-                raise InputError(f"{path}: {field} {mine!r}, but {paths[0]} has {theirs!r}")
     records = [
         {"path": str(p), "sha256": weights_checksum(p), "maps": len(m), "seed": int(m.seed)}
         for p, m in zip(paths, parts, strict=True)
     ]
-    if len(parts) == 1:
-        return first, records
-    s = max(m.n_starts for m in parts)
-
-    def padded(m, field):  # starts padded to s slots with the goal (as `MapSet.start_counts` pads)
-        value = getattr(m, field)
-        if m.n_starts == s:
-            return value
-        extra = s - m.n_starts
-        if field == "starts":
-            return np.concatenate([value, np.repeat(m.goals[:, None], extra, axis=1)], axis=1)
-        return np.concatenate([value, np.zeros((len(m), extra))], axis=1)
-
-    expert = []
-    for m in parts:
-        paths_of = m.expert.unpack()
-        for i in range(len(m)):
-            expert += paths_of[i * m.n_starts : (i + 1) * m.n_starts]
-            expert += [m.goals[i][None].astype(np.int64)] * (s - m.n_starts)
-    counts = np.concatenate([m.start_mask.sum(axis=1) for m in parts]).astype(np.int64)
-    joined = MapSet(
-        obstacles=np.concatenate([m.obstacles for m in parts]),
-        goals=np.concatenate([m.goals for m in parts]),
-        starts=np.concatenate([padded(m, "starts") for m in parts]),
-        expert_costs=np.concatenate([padded(m, "expert_costs") for m in parts]),
-        expert=PackedPaths.pack(expert),
-        corner_cutting=first.corner_cutting,
-        seed=-1,
-        start_counts=None if (counts == s).all() else counts,
-        moves=first.moves,
-    )
-    return joined, records
+    return MapSet.concat(parts, names=[str(p) for p in paths]), records
 
 
 def cmd_train(args: argparse.Namespace) -> int:
