@@ -70,7 +70,8 @@ def register(subparsers) -> None:
         required=True,
         action="append",
         metavar="MAPS",
-        help="moore maps file(s) to train on (repeat for several: joined as `vinadv maps concat` joins them, so of one size and starts per map), e.g. from `vinadv maps import "
+        help="moore maps file(s) to train on (repeat for several: joined as `vinadv maps concat` joins them, "
+        "so of one size and starts per map), e.g. from `vinadv maps import "
         "--format mpd FILE --split train`",
     )
     tr.add_argument(
