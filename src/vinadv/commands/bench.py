@@ -7,6 +7,7 @@ import argparse
 import os
 from pathlib import Path
 
+from vinadv.bench.index import index_json, make_index
 from vinadv.commands import add_planner_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
@@ -40,6 +41,12 @@ def register(subparsers) -> None:
     )
     board.add_argument("dir", metavar="DIR", help="folder of result entries (*.json)")
     board.add_argument("--out", required=True, metavar="OUT", help="folder to write leaderboard.html and .md to")
+    board.add_argument(
+        "--index",
+        metavar="FILE",
+        help="also write the entries' index (JSON) to FILE: what the model zoo lists (`vinadv planners`); the shipped "
+        "one is src/vinadv/bench/entries.json, of docs/results/bench",
+    )
     add_output_options(board, json="the rows", quiet=True)
     board.set_defaults(func=cmd_bench_leaderboard)
 
@@ -83,7 +90,13 @@ def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out: {out} exists and is not a folder")
-    table = rows(read_entries(args.dir))
+    if args.index:
+        check_output_path(args.index)
+    entries = read_entries(args.dir)
+    table = rows(entries)
+    if args.index:  # the folder as given: the index names the files the way the user does
+        with atomic_output(args.index, "w", encoding="utf-8") as fh:
+            fh.write(index_json(make_index(entries, Path(args.dir).as_posix())))
     out.mkdir(parents=True, exist_ok=True)
     prefix = os.path.relpath(Path(args.dir), out).replace(os.sep, "/") + "/"
     for name, text in (
