@@ -8,7 +8,7 @@ import os
 from pathlib import Path
 
 from vinadv.bench.index import index_json, make_index
-from vinadv.commands import add_planner_arguments
+from vinadv.commands import add_planner_arguments, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
@@ -22,11 +22,18 @@ def register(subparsers) -> None:
     run = sub.add_parser(
         "run",
         help="run a planner on a frozen benchmark suite and write its result entry",
-        description="Run a planner on a frozen, versioned benchmark suite (vin28-v1, vin28-quick-v1): the attack "
+        description="Run a planner on a frozen, versioned benchmark suite (vin28-v1, vin28-quick-v1, mpd32-v1, "
+        "mpd32-quick-v1): the attack "
         "ensemble on the suite's maps, worst case per map, and write one schema-versioned result entry (JSON).",
     )
-    run.add_argument("--suite", required=True, help="the suite: vin28-v1 or vin28-quick-v1")
+    run.add_argument("--suite", required=True, help="the suite: vin28-v1, vin28-quick-v1, mpd32-v1 or mpd32-quick-v1")
     add_planner_arguments(run)
+    run.add_argument(
+        "--data",
+        metavar="DIR",
+        help="the MP suites: the folder holding the MP dataset's six <family>_032_moore_c8.npz files "
+        "(docs/guide/mpd.md)",
+    )
     run.add_argument("--db", help="store each finished chunk of maps in this database (URL or SQLite file)")
     run.add_argument("--resume", action="store_true", help="with --db: continue, computing only the chunks not stored")
     run.add_argument("--out", help="write the entry to this file (.json; default: print it)")
@@ -62,8 +69,9 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     from vinadv.bench.entry import entry_json, run_bench
     from vinadv.planners.registry import load_planner
 
-    planner = load_planner(args.planner, suite.size, weights=args.weights)
-    entry = run_bench(suite, planner, db=args.db, resume=args.resume, progress=shows_progress(args))
+    device = planner_device(args)
+    planner = load_planner(args.planner, suite.size, weights=args.weights, device=device, moves=suite.movement())
+    entry = run_bench(suite, planner, db=args.db, resume=args.resume, progress=shows_progress(args), data=args.data)
     text = entry_json(entry)
     if args.out:
         with atomic_output(args.out, "w", encoding="utf-8") as fh:

@@ -88,6 +88,43 @@ class MapSet:
             moves=self.moves,
         )
 
+    @classmethod
+    def concat(cls, parts: list[MapSet]) -> MapSet:
+        """The maps of `parts` (at least one), in order; they must agree on size, starts per map, corner cutting and
+        movement model (InputError naming the first that differs). The seed is the first part's; starts padded in
+        some part stay padded (`start_counts`)."""
+        first = parts[0]
+        for i, p in enumerate(parts):
+            if (p.size, p.n_starts, p.corner_cutting, p.moves) != (
+                first.size,
+                first.n_starts,
+                first.corner_cutting,
+                first.moves,
+            ):
+                raise InputError(
+                    f"maps part {i}: {p.size}x{p.size}, {p.n_starts} starts, corner cutting {p.corner_cutting}, "
+                    f"{p.moves}; part 0 has {first.size}x{first.size}, {first.n_starts}, {first.corner_cutting}, "
+                    f"{first.moves}"
+                )
+        padded = any(p.start_counts is not None for p in parts)
+        return MapSet(
+            obstacles=np.concatenate([p.obstacles for p in parts]),
+            goals=np.concatenate([p.goals for p in parts]),
+            starts=np.concatenate([p.starts for p in parts]),
+            expert_costs=np.concatenate([p.expert_costs for p in parts]),
+            expert=PackedPaths.concat([p.expert for p in parts]),
+            corner_cutting=first.corner_cutting,
+            seed=first.seed,
+            start_counts=np.concatenate([np.asarray(p.start_counts_or_all()) for p in parts]) if padded else None,
+            moves=first.moves,
+        )
+
+    def start_counts_or_all(self) -> np.ndarray:
+        """`(n,)` int64: the real starts of each map (`start_counts`, or every slot where none is padded)."""
+        if self.start_counts is None:
+            return np.full(len(self), self.n_starts, dtype=np.int64)
+        return np.asarray(self.start_counts, dtype=np.int64)
+
     def expert_path(self, i: int, s: int = 0) -> np.ndarray:
         """The optimal path from start `s` of map `i`, `(L, 2)` int16."""
         return self.expert[i * self.n_starts + s]
