@@ -8,12 +8,20 @@ tolerances, the flags' thresholds, and the chunk size (maps per resumable unit).
 canonical JSON (`Suite.checksum`); a released suite never changes (`FROZEN` holds every released checksum and a test
 holds the registry to it): a change is a new version under a new name.
 
-Released suites (28x28; the MP suites wait for the MP import):
+A `DataSuite` reads its maps from public files instead (`--data DIR`): the spec names each file with its sha256 and
+the maps it takes, the layout and split read, the seed of the start draw and the movement model.
+
+Released suites:
 - `vin28-v1`: the generator's first 1,000 maps of seed 1000 (the held-out maps of the evaluation tables), one start
   each; key-points, saliency, near-path and random adding 1..3 cells greedily, exhaustive adding one, and all five
   removing one.
 - `vin28-quick-v1`: the first 100 of those maps; the cheap attacks only: key-points, saliency, near-path and random
   adding 1..3 cells, and the same four removing one (no exhaustive). For trying and for tests.
+- `mpd32-v1`: the test splits of the MP dataset's six families (`docs/guide/mpd.md`: 600 32x32 `moore` maps, corner
+  cutting), one start per map drawn by the MP import's rule (the Neural A* loader's) with seed 0; the ensemble of
+  `vin28-v1`.
+- `mpd32-quick-v1`: 100 of those maps (the first 17 of the first four families in name order, the first 16 of the
+  last two); the ensemble of `vin28-quick-v1`.
 """
 
 from __future__ import annotations
