@@ -312,3 +312,56 @@ def test_a_search_planner_on_a_maps_file_runs_on_the_cluster_as_locally(cluster,
     assert on_cluster.stored == local.stored == 30
     a, b = stored(local_db, local.run_id), stored(cluster_db, on_cluster.run_id)
     assert np.array_equal(a.pair_index, b.pair_index) and a.equals(b)
+
+
+def tiny_bench_suite():
+    from vinadv.bench.suites import AttackGroup, Suite, maps_sha256
+    from vinadv.robustness import benchmark_maps
+
+    maps = benchmark_maps(12, SIZE, seed=1000)
+    return Suite(
+        name="tiny-cluster",
+        description="a test suite",
+        n=12,
+        size=SIZE,
+        maps_seed=1000,
+        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
+        attacks=(AttackGroup(("random", "key-points"), "add", 2), AttackGroup(("random",), "remove", 1)),
+        budget=3,
+        chunk=4,
+    )
+
+
+@pytest.mark.slow
+def test_bench_run_on_the_cluster_gives_the_local_entry(weights, cluster, tmp_path, monkeypatch):
+    """`vinadv bench run --cluster`: the chunks on the workers (in any order), stored and resumed by the client, give
+    the local run's entry byte for byte but for time and machine; through the command line too."""
+    import json
+
+    from vinadv.bench import suites
+    from vinadv.bench.entry import deterministic_part, entry_json, run_bench
+    from vinadv.cluster import ClusterBenchChunks
+    from vinadv.planners.registry import load_planner
+
+    local_cluster, client = cluster
+    suite = tiny_bench_suite()
+    planner = load_planner("vin", SIZE, weights=weights)
+    local = entry_json(deterministic_part(run_bench(suite, planner)))
+    chunks = ClusterBenchChunks(client, PlannerRef.of(planner, "vin", weights, True))
+    db = f"sqlite:///{tmp_path / 'b.db'}"
+    assert entry_json(deterministic_part(run_bench(suite, planner, db=db, chunk_results=chunks))) == local
+    assert entry_json(deterministic_part(run_bench(suite, planner, db=db, resume=True))) == local  # all stored
+    monkeypatch.setitem(suites.SUITES, suite.name, suite)  # the workers get the suite by value, not by name
+    out = tmp_path / "e.json"
+    argv = ["bench", "run", "--suite", suite.name, "--weights", weights, "--out", str(out), "--quiet"]
+    assert main([*argv, "--cluster", local_cluster.scheduler_address]) == 0
+    assert entry_json(deterministic_part(json.loads(out.read_text()))) == local
+
+
+def test_bench_run_refuses_bad_cluster_options_in_one_line(tmp_path, capsys):
+    base = ["bench", "run", "--suite", "vin28-quick-v1", "--planner", "optimal", "--out", str(tmp_path / "e.json")]
+    assert main([*base, "--cluster", "tcp://127.0.0.1:1"]) == 2
+    assert "cannot connect" in capsys.readouterr().err
+    assert main([*base, "--workers", "0"]) == 2
+    assert "--workers must be >= 1, got 0" in capsys.readouterr().err
+    assert not (tmp_path / "e.json").exists()

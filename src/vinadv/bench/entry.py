@@ -29,6 +29,7 @@ import json
 import os
 import platform
 import time
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -310,6 +311,12 @@ def planner_checks(suite: Suite, planner: Planner, maps: MapSet) -> dict:
     return {"gradient_masked": gradient_is_masked(*args), "non_deterministic": differs_between_passes(*args)}
 
 
+def local_chunks(suite: Suite, planner: Planner, maps: MapSet, chunks: Iterable[int]) -> Iterator[tuple[int, dict]]:
+    """`(chunk, compute_chunk(...))` for each of `chunks`, in this process, in order."""
+    for chunk in chunks:
+        yield chunk, compute_chunk(suite, planner, maps, chunk)
+
+
 def run_bench(
     suite: Suite,
     planner: Planner,
@@ -317,10 +324,14 @@ def run_bench(
     resume: bool = False,
     progress: bool = False,
     data: str | os.PathLike | None = None,
+    chunk_results: Callable[..., Iterable[tuple[int, dict]]] | None = None,
 ) -> dict:
     """The entry of `planner` on `suite` (module doc). With `db` each chunk is stored when done; with `resume` the
     chunks stored there are read, not recomputed (without it, a database already holding chunks of this entry is
-    refused: say --resume, or use another database). `data`: the folder of a data suite's files."""
+    refused: say --resume, or use another database). `data`: the folder of a data suite's files.
+
+    `chunk_results(suite, planner, maps, chunks)` computes the chunks `chunks` and yields `(chunk, result)` pairs in
+    any order (default `local_chunks`, here, in order; `vinadv.cluster.ClusterBenchChunks` on a Dask cluster)."""
     t0 = time.perf_counter()
     maps = suite_maps(suite, data)
     checks = planner_checks(suite, planner, maps)
@@ -339,17 +350,21 @@ def run_bench(
                 f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
             )
     todo = [c for c in range(n_chunks) if c not in done]
+    bar = None
     if progress:
         from tqdm import tqdm  # noqa: PLC0415 (only with a progress bar)
 
-        todo = tqdm(todo, desc=f"bench {suite.name}", unit="chunk", initial=len(done), total=n_chunks)
+        bar = tqdm(desc=f"bench {suite.name}", unit="chunk", initial=len(done), total=n_chunks)
     try:
-        for chunk in todo:
-            result = compute_chunk(suite, planner, maps, chunk)
+        for chunk, result in (chunk_results or local_chunks)(suite, planner, maps, todo):
             if store is not None:
                 store.add_bench_chunk(key, chunk, result)
             done[chunk] = result
+            if bar is not None:
+                bar.update(1)
     finally:
+        if bar is not None:
+            bar.close()
         if store is not None:
             store.close()
     return make_entry(suite, planner, done, checks, time.perf_counter() - t0)

@@ -8,6 +8,7 @@ import os
 from pathlib import Path
 
 from vinadv.bench.index import index_json, make_index
+from vinadv.cluster import ClusterBenchChunks, add_cluster_arguments, open_cluster
 from vinadv.commands import add_planner_arguments, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
@@ -37,6 +38,7 @@ def register(subparsers) -> None:
     run.add_argument("--db", help="store each finished chunk of maps in this database (URL or SQLite file)")
     run.add_argument("--resume", action="store_true", help="with --db: continue, computing only the chunks not stored")
     run.add_argument("--out", help="write the entry to this file (.json; default: print it)")
+    add_cluster_arguments(run)
     add_output_options(run, json="the entry", quiet=True)
     run.set_defaults(func=cmd_bench_run)
 
@@ -67,11 +69,24 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     if args.out:
         check_output_path(args.out)
     from vinadv.bench.entry import entry_json, run_bench
-    from vinadv.planners.registry import load_planner
+    from vinadv.planners.registry import PlannerRef, load_planner
 
     device = planner_device(args)
     planner = load_planner(args.planner, suite.size, weights=args.weights, device=device, moves=suite.movement())
-    entry = run_bench(suite, planner, db=args.db, resume=args.resume, progress=shows_progress(args), data=args.data)
+    with open_cluster(args.cluster, args.workers) as client:
+        chunk_results = None
+        if client is not None:  # every suite's maps cut corners (the generator's default, the MP layout's)
+            ref = PlannerRef.of(planner, args.planner, args.weights, corner_cutting=True)
+            chunk_results = ClusterBenchChunks(client, ref, data=args.data)
+        entry = run_bench(
+            suite,
+            planner,
+            db=args.db,
+            resume=args.resume,
+            progress=shows_progress(args),
+            data=args.data,
+            chunk_results=chunk_results,
+        )
     text = entry_json(entry)
     if args.out:
         with atomic_output(args.out, "w", encoding="utf-8") as fh:
