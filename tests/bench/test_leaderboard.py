@@ -47,3 +47,12 @@ def test_a_file_that_is_not_an_entry_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "not a benchmark entry" in err
     assert main(["bench", "leaderboard", str(tmp_path / "missing"), "--out", str(tmp_path / "o")]) == 2
+
+
+def test_a_planner_with_parameters_is_named_with_their_values():
+    from vinadv.bench.leaderboard import planner_label
+
+    assert planner_label({"name": "wastar", "config": {"moves": "moore", "w": 2.0}}) == "wastar:w=2"
+    assert planner_label({"name": "wastar", "config": {"moves": "moore", "w": 2.5}}) == "wastar:w=2.5"
+    assert planner_label({"name": "astar", "config": {"moves": "moore"}}) == "astar"
+    assert planner_label({"name": "mine.py:make", "config": {"w": 1}}) == "mine.py:make"  # not registered

@@ -54,6 +54,19 @@ def _removal_harmful(entry: dict) -> float | None:
     return max(rates) if rates else None
 
 
+def planner_label(spec: dict) -> str:
+    """The planner as `--planner` names it: its name, with the values of its registered parameters
+    (`wastar:w=2`), so that two settings of one planner read apart."""
+    from vinadv.planners.registry import REGISTRY  # noqa: PLC0415 (the registry: only to render)
+
+    info = REGISTRY.get(spec["name"])
+    config = spec.get("config") or {}
+    given = [] if info is None else [p.name for p in info.params if p.name in config]
+    if not given:
+        return spec["name"]
+    return spec["name"] + ":" + ",".join(f"{k}={config[k]:g}" for k in given)
+
+
 def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
     """{suite name: rows, sorted}: each row the entry's file, its cells' values and its raised flags."""
     by_suite: dict[str, list[dict]] = {}
@@ -63,7 +76,7 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
         row = {
             "file": path.name,
             "suite": f"{e['suite']['name']} ({e['suite']['checksum'][:12]})",
-            "planner": e["planner"]["name"],
+            "planner": planner_label(e["planner"]),
             "weights": weights[:12] if weights else "—",
             "clean": e["clean"]["success_rate"],
             "harmful": worst[0]["harmful_rate"],
