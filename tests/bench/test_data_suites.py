@@ -10,6 +10,7 @@ import hashlib
 import numpy as np
 import pytest
 
+from tests.interop.conftest import mpd_file
 from vinadv.bench.entry import deterministic_part, entry_json, run_bench, suite_maps
 from vinadv.bench.suites import AttackGroup, DataFile, DataSuite, get_suite, maps_sha256
 from vinadv.cli import main
@@ -107,3 +108,16 @@ def test_a_search_planners_entry_joins_opt_and_exp_over_chunks_and_repeats_byte_
     assert first["clean"]["gppn"] is None and first["planner"]["config"]["moves"] == "moore"
     second = run_bench(suite, planner, data=data_dir)
     assert entry_json(deterministic_part(first)) == entry_json(deterministic_part(second))
+
+
+@pytest.mark.slow
+def test_the_mp_suites_maps_are_the_frozen_ones_from_the_shared_files():
+    """The six real files (skipped without them): their sha256 and the joined maps' sha256 are the frozen ones, and
+    the quick suite's maps are the full suite's first maps of each family."""
+    folder = mpd_file("mazes").parent
+    full = suite_maps(get_suite("mpd32-v1"), folder)
+    quick = suite_maps(get_suite("mpd32-quick-v1"), folder)
+    assert (len(full), len(quick), full.size, full.moves) == (600, 100, 32, "moore")
+    take = np.concatenate([np.arange(100 * i, 100 * i + (17 if i < 4 else 16)) for i in range(6)])
+    np.testing.assert_array_equal(quick.obstacles, full.obstacles[take])
+    np.testing.assert_array_equal(quick.starts, full.starts[take])

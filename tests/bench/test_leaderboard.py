@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from vinadv.bench.leaderboard import read_entries, render_markdown, rows
+from vinadv.bench.leaderboard import planner_label, read_entries, render_markdown, rows
 from vinadv.bench.suites import ENTRY_FORMAT
 from vinadv.cli import main
 
@@ -50,8 +50,6 @@ def test_a_file_that_is_not_an_entry_is_one_line(tmp_path, capsys):
 
 
 def test_a_planner_with_parameters_is_named_with_their_values():
-    from vinadv.bench.leaderboard import planner_label
-
     assert planner_label({"name": "wastar", "config": {"moves": "moore", "w": 2.0}}) == "wastar:w=2"
     assert planner_label({"name": "wastar", "config": {"moves": "moore", "w": 2.5}}) == "wastar:w=2.5"
     assert planner_label({"name": "astar", "config": {"moves": "moore"}}) == "astar"

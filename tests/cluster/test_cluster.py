@@ -8,6 +8,7 @@ are quick.
 """
 
 import builtins
+import json
 import os
 import signal
 from pathlib import Path
@@ -21,8 +22,11 @@ from distributed import Client  # noqa: E402
 
 from tests.cli_files import command_line, generate_and_attack  # noqa: E402
 from vinadv.attacks.pairs import PairSet  # noqa: E402
+from vinadv.bench import suites  # noqa: E402
+from vinadv.bench.entry import deterministic_part, entry_json, run_bench  # noqa: E402
+from vinadv.bench.suites import AttackGroup, Suite, maps_sha256  # noqa: E402
 from vinadv.cli import main  # noqa: E402
-from vinadv.cluster import ClusterShards, start_local_cluster  # noqa: E402
+from vinadv.cluster import ClusterBenchChunks, ClusterShards, start_local_cluster  # noqa: E402
 from vinadv.cluster.worker import (
     plugin_class,  # noqa: E402
     worker_planner,  # noqa: E402
@@ -30,8 +34,9 @@ from vinadv.cluster.worker import (
 from vinadv.errors import InputError  # noqa: E402
 from vinadv.grid import generate_maps  # noqa: E402
 from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run_pipeline  # noqa: E402
-from vinadv.planners.registry import PlannerRef  # noqa: E402
+from vinadv.planners.registry import PlannerRef, load_planner  # noqa: E402
 from vinadv.planners.vin.weights import load_vin, save_vin  # noqa: E402
+from vinadv.robustness import benchmark_maps  # noqa: E402
 from vinadv.store import Store  # noqa: E402
 from vinadv.testing.planners import planning_vin  # noqa: E402
 
@@ -315,9 +320,6 @@ def test_a_search_planner_on_a_maps_file_runs_on_the_cluster_as_locally(cluster,
 
 
 def tiny_bench_suite():
-    from vinadv.bench.suites import AttackGroup, Suite, maps_sha256
-    from vinadv.robustness import benchmark_maps
-
     maps = benchmark_maps(12, SIZE, seed=1000)
     return Suite(
         name="tiny-cluster",
@@ -336,13 +338,6 @@ def tiny_bench_suite():
 def test_bench_run_on_the_cluster_gives_the_local_entry(weights, cluster, tmp_path, monkeypatch):
     """`vinadv bench run --cluster`: the chunks on the workers (in any order), stored and resumed by the client, give
     the local run's entry byte for byte but for time and machine; through the command line too."""
-    import json
-
-    from vinadv.bench import suites
-    from vinadv.bench.entry import deterministic_part, entry_json, run_bench
-    from vinadv.cluster import ClusterBenchChunks
-    from vinadv.planners.registry import load_planner
-
     local_cluster, client = cluster
     suite = tiny_bench_suite()
     planner = load_planner("vin", SIZE, weights=weights)
