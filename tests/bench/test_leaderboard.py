@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from vinadv.bench.leaderboard import planner_label, read_entries, render_markdown, rows
+from vinadv.bench.leaderboard import compute_time, planner_label, read_entries, render_markdown, rows
 from vinadv.bench.suites import ENTRY_FORMAT
 from vinadv.cli import main
 
@@ -34,6 +34,9 @@ def test_sorted_by_worst_case_harmful_rate_with_links_and_flags(tmp_path, capsys
     md = render_markdown(table, "e/")
     assert md.index("[a](e/a.json)") < md.index("[c](e/c.json)") < md.index("[b](e/b.json)")
     assert "too_weak" in md and "5.0%" in md
+    assert {r["time"] for r in table["vin28-quick-v1"]} == {"—"}  # no time recorded
+    timed = {**_entry("t", 0.1), "time": {"wall_s": 5.0, "chunks_s": [60.0, 30.0]}, "machine": {"device": "cpu"}}
+    assert compute_time(timed) == "1.5 min (cpu)"
     out = tmp_path / "board"
     assert main(["bench", "leaderboard", str(entries), "--out", str(out), "--quiet"]) == 0
     html = (out / "leaderboard.html").read_text()
