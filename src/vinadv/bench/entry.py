@@ -11,7 +11,8 @@ chunks, in map order:
 - `clean`: the unattacked maps. vinadv's convention: rollout success from the start (`success_rate`), the share of
   maps whose path is optimal (`percent_optimal`), the mean regret of the reached paths; GPPN's convention (`gppn`:
   `percent_optimal`, `percent_success` over every free cell, `vinadv.interop.protocols.gppn_protocol`, averaged over
-  the maps).
+  the maps); for a search planner, which has no policy to follow from every cell, `gppn` is None and `search` holds
+  the Neural A* authors' Opt / Exp / Hmean, success, cost ratio and expansions (`join_search`).
 - `attacks`: per attack (`edit:strategy`), its figures at k = 1..max (`vinadv.robustness.Figures`: paper success rate,
   harmful rate, mean regret, label counts), the k curve.
 - `worst_case`: per k, the worst case per map over the attacks that reach k (`vinadv.robustness.worst_case`).
@@ -269,11 +270,12 @@ def join_search(parts: list[dict]) -> dict:
     harmonic mean of the joined Opt and Exp, as the authors take it with one start per map."""
     rows = np.array([p["rows"] for p in parts], dtype=np.float64)
 
-    def mean(name, weights=rows):
-        values = [p[name] for p in parts]
-        if any(v is None for v in values) or weights.sum() == 0:
+    def mean(name, weights=rows):  # over the chunks that weigh (a chunk where nothing reached has no cost ratio)
+        used = [(w, p[name]) for w, p in zip(weights, parts) if w > 0]
+        if not used or any(v is None for _, v in used):
             return None
-        return float(np.dot(weights, values) / weights.sum())
+        w, v = np.array(used, dtype=np.float64).T
+        return float(np.dot(w, v) / w.sum())
 
     reached = rows * np.array([p["success"] or 0.0 for p in parts])
     out = {
