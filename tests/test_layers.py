@@ -41,7 +41,8 @@ LAYERS = {
     "report": 9,
     "bench": 9,
     "viewer": 9,
-    "cluster": 9,
+    # runs the stages on workers, the benchmark's chunks included; only the commands import it
+    "cluster": 10,
     "analysis": 10,
     "commands": 11,
     "cli": 12,

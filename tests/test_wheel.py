@@ -71,3 +71,10 @@ def test_the_wheel_installs_outside_the_repository_and_runs_the_main_job(tmp_pat
     summary = json.loads(ran.stdout)
     assert (summary["maps"], summary["pairs"], summary["stored"]) == (50, 50, 50), summary
     assert (work / "out.db").is_file()
+    # the model zoo and its bench entries come with the wheel (package data), not from the repository's docs
+    listed = subprocess.run(
+        [str(env_dir / "bin" / "vinadv"), "planners", "--json"], cwd=work, env=clean_env, capture_output=True, text=True
+    )
+    assert listed.returncode == 0, listed.stderr
+    by_name = {p["name"]: p for p in json.loads(listed.stdout)["planners"]}
+    assert by_name["vin"]["zoo"] == "vin28" and by_name["vin"]["bench_entries"], by_name["vin"]

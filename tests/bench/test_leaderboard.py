@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from vinadv.bench.leaderboard import read_entries, render_markdown, rows
+from vinadv.bench.leaderboard import compute_time, planner_label, read_entries, render_markdown, rows
 from vinadv.bench.suites import ENTRY_FORMAT
 from vinadv.cli import main
 
@@ -34,6 +34,9 @@ def test_sorted_by_worst_case_harmful_rate_with_links_and_flags(tmp_path, capsys
     md = render_markdown(table, "e/")
     assert md.index("[a](e/a.json)") < md.index("[c](e/c.json)") < md.index("[b](e/b.json)")
     assert "too_weak" in md and "5.0%" in md
+    assert {r["time"] for r in table["vin28-quick-v1"]} == {"—"}  # no time recorded
+    timed = {**_entry("t", 0.1), "time": {"wall_s": 5.0, "chunks_s": [60.0, 30.0]}, "machine": {"device": "cpu"}}
+    assert compute_time(timed) == "1.5 min (cpu)"
     out = tmp_path / "board"
     assert main(["bench", "leaderboard", str(entries), "--out", str(out), "--quiet"]) == 0
     html = (out / "leaderboard.html").read_text()
@@ -47,3 +50,10 @@ def test_a_file_that_is_not_an_entry_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "not a benchmark entry" in err
     assert main(["bench", "leaderboard", str(tmp_path / "missing"), "--out", str(tmp_path / "o")]) == 2
+
+
+def test_a_planner_with_parameters_is_named_with_their_values():
+    assert planner_label({"name": "wastar", "config": {"moves": "moore", "w": 2.0}}) == "wastar:w=2"
+    assert planner_label({"name": "wastar", "config": {"moves": "moore", "w": 2.5}}) == "wastar:w=2.5"
+    assert planner_label({"name": "astar", "config": {"moves": "moore"}}) == "astar"
+    assert planner_label({"name": "mine.py:make", "config": {"w": 1}}) == "mine.py:make"  # not registered

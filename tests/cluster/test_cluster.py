@@ -8,6 +8,7 @@ are quick.
 """
 
 import builtins
+import json
 import os
 import signal
 from pathlib import Path
@@ -21,8 +22,11 @@ from distributed import Client  # noqa: E402
 
 from tests.cli_files import command_line, generate_and_attack  # noqa: E402
 from vinadv.attacks.pairs import PairSet  # noqa: E402
+from vinadv.bench import suites  # noqa: E402
+from vinadv.bench.entry import deterministic_part, entry_json, run_bench  # noqa: E402
+from vinadv.bench.suites import AttackGroup, Suite, maps_sha256  # noqa: E402
 from vinadv.cli import main  # noqa: E402
-from vinadv.cluster import ClusterShards, start_local_cluster  # noqa: E402
+from vinadv.cluster import ClusterBenchChunks, ClusterShards, start_local_cluster  # noqa: E402
 from vinadv.cluster.worker import (
     plugin_class,  # noqa: E402
     worker_planner,  # noqa: E402
@@ -30,8 +34,9 @@ from vinadv.cluster.worker import (
 from vinadv.errors import InputError  # noqa: E402
 from vinadv.grid import generate_maps  # noqa: E402
 from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run_pipeline  # noqa: E402
-from vinadv.planners.registry import PlannerRef  # noqa: E402
+from vinadv.planners.registry import PlannerRef, load_planner  # noqa: E402
 from vinadv.planners.vin.weights import load_vin, save_vin  # noqa: E402
+from vinadv.robustness import benchmark_maps  # noqa: E402
 from vinadv.store import Store  # noqa: E402
 from vinadv.testing.planners import planning_vin  # noqa: E402
 
@@ -312,3 +317,46 @@ def test_a_search_planner_on_a_maps_file_runs_on_the_cluster_as_locally(cluster,
     assert on_cluster.stored == local.stored == 30
     a, b = stored(local_db, local.run_id), stored(cluster_db, on_cluster.run_id)
     assert np.array_equal(a.pair_index, b.pair_index) and a.equals(b)
+
+
+def tiny_bench_suite():
+    maps = benchmark_maps(12, SIZE, seed=1000)
+    return Suite(
+        name="tiny-cluster",
+        description="a test suite",
+        n=12,
+        size=SIZE,
+        maps_seed=1000,
+        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
+        attacks=(AttackGroup(("random", "key-points"), "add", 2), AttackGroup(("random",), "remove", 1)),
+        budget=3,
+        chunk=4,
+    )
+
+
+@pytest.mark.slow
+def test_bench_run_on_the_cluster_gives_the_local_entry(weights, cluster, tmp_path, monkeypatch):
+    """`vinadv bench run --cluster`: the chunks on the workers (in any order), stored and resumed by the client, give
+    the local run's entry byte for byte but for time and machine; through the command line too."""
+    local_cluster, client = cluster
+    suite = tiny_bench_suite()
+    planner = load_planner("vin", SIZE, weights=weights)
+    local = entry_json(deterministic_part(run_bench(suite, planner)))
+    chunks = ClusterBenchChunks(client, PlannerRef.of(planner, "vin", weights, True))
+    db = f"sqlite:///{tmp_path / 'b.db'}"
+    assert entry_json(deterministic_part(run_bench(suite, planner, db=db, chunk_results=chunks))) == local
+    assert entry_json(deterministic_part(run_bench(suite, planner, db=db, resume=True))) == local  # all stored
+    monkeypatch.setitem(suites.SUITES, suite.name, suite)  # the workers get the suite by value, not by name
+    out = tmp_path / "e.json"
+    argv = ["bench", "run", "--suite", suite.name, "--weights", weights, "--out", str(out), "--quiet"]
+    assert main([*argv, "--cluster", local_cluster.scheduler_address]) == 0
+    assert entry_json(deterministic_part(json.loads(out.read_text()))) == local
+
+
+def test_bench_run_refuses_bad_cluster_options_in_one_line(tmp_path, capsys):
+    base = ["bench", "run", "--suite", "vin28-quick-v1", "--planner", "optimal", "--out", str(tmp_path / "e.json")]
+    assert main([*base, "--cluster", "tcp://127.0.0.1:1"]) == 2
+    assert "cannot connect" in capsys.readouterr().err
+    assert main([*base, "--workers", "0"]) == 2
+    assert "--workers must be >= 1, got 0" in capsys.readouterr().err
+    assert not (tmp_path / "e.json").exists()

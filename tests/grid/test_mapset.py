@@ -1,3 +1,4 @@
+import dataclasses
 import json
 
 import numpy as np
@@ -173,3 +174,15 @@ def test_concat_keeps_every_map_in_order_and_refuses_unlike_sets(tmp_path, capsy
     )
     err = capsys.readouterr().err.strip()
     assert "octile.npz: moves is 'octile'" in err and "'moore'" in err and len(err.splitlines()) == 1
+
+
+def test_concat_of_parts_gives_the_whole_and_refuses_mismatched_parts(maps):
+    whole = MapSet.concat([maps.take(np.arange(0, 2)), maps.take(np.arange(2, len(maps)))])
+    for name in ("obstacles", "goals", "starts", "expert_costs"):
+        np.testing.assert_array_equal(getattr(whole, name), getattr(maps, name))
+    assert whole.expert == maps.expert and whole.moves == maps.moves and whole.start_counts is None
+    other = generate_maps(2, maps.size, seed=1, n_starts=maps.n_starts, moves="moore")
+    with pytest.raises(InputError, match="part 1: moves is 'moore', part 0's is 'octile'"):
+        MapSet.concat([maps, other])
+    padded = dataclasses.replace(maps.take(np.arange(2)), start_counts=np.array([4, 2]))
+    assert MapSet.concat([padded, maps.take(np.arange(2, 4))]).start_counts.tolist() == [4, 2, 4, 4]

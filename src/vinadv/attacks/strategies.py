@@ -506,17 +506,17 @@ class SaliencyAttack(Attack):
     name = "saliency"
 
     @staticmethod
-    def _module(planner: Planner):
+    def gradient_module(planner: Planner):
         """The planner's differentiable module: its path map for a search planner, its logits otherwise; None."""
         if isinstance(planner, SearchPlanner):
             return planner.differentiable_paths
         return planner.differentiable
 
     def ranked_as(self, planner: Planner) -> str | None:
-        return KeyPointsAttack.name if self._module(planner) is None else None
+        return KeyPointsAttack.name if self.gradient_module(planner) is None else None
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
-        module = self._module(ctx.planner)
+        module = self.gradient_module(ctx.planner)
         if module is None:  # no gradients (the `optimal` control, most search planners): rank as key-points does
             return KeyPointsAttack.candidate_scores(self, ctx)
         if isinstance(ctx.planner, SearchPlanner):

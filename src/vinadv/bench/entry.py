@@ -11,7 +11,8 @@ chunks, in map order:
 - `clean`: the unattacked maps. vinadv's convention: rollout success from the start (`success_rate`), the share of
   maps whose path is optimal (`percent_optimal`), the mean regret of the reached paths; GPPN's convention (`gppn`:
   `percent_optimal`, `percent_success` over every free cell, `vinadv.interop.protocols.gppn_protocol`, averaged over
-  the maps).
+  the maps); for a search planner, which has no policy to follow from every cell, `gppn` is None and `search` holds
+  the Neural A* authors' Opt / Exp / Hmean, success, cost ratio and expansions (`join_search`).
 - `attacks`: per attack (`edit:strategy`), its figures at k = 1..max (`vinadv.robustness.Figures`: paper success rate,
   harmful rate, mean regret, label counts), the k curve.
 - `worst_case`: per k, the worst case per map over the attacks that reach k (`vinadv.robustness.worst_case`).
@@ -29,16 +30,20 @@ import json
 import os
 import platform
 import time
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
 
 import numpy as np
 
 from vinadv import __version__
 from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags
-from vinadv.bench.suites import ENTRY_FORMAT, Suite, maps_sha256
+from vinadv.bench.suites import ENTRY_FORMAT, DataSuite, Suite, maps_sha256
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.interop.protocols import gppn_protocol
 from vinadv.planners.interface import Planner
+from vinadv.planners.search import SearchPlanner
+from vinadv.planners.search_metrics import evaluate_search, harmonic_mean, path_costs
 from vinadv.robustness import Figures, MapOutcomes, benchmark_maps, robustness, worst_case
 
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
@@ -47,17 +52,51 @@ VOLATILE_FIELDS = ("time", "machine")
 OPTIMAL_TOL = 1e-9
 
 
-def suite_maps(suite: Suite) -> MapSet:
-    """The suite's maps, checked against its frozen sha256 (InputError when the generator makes other maps)."""
-    maps = benchmark_maps(suite.n, suite.size, seed=suite.maps_seed)
+def suite_maps(suite: Suite, data: str | os.PathLike | None = None) -> MapSet:
+    """The suite's maps, checked against its frozen sha256: generated, or for a `DataSuite` read from the folder
+    `data` (`data_suite_maps`). InputError when they differ (a generator or reader that makes other maps), or for
+    `data` given to a suite that makes its maps, or missing for one that reads them."""
+    if isinstance(suite, DataSuite):
+        maps, what = data_suite_maps(suite, data), "reader"
+    else:
+        if data is not None:
+            raise InputError(f"suite {suite.name} makes its maps: data (a folder of files) is for data suites", "data")
+        maps, what = benchmark_maps(suite.n, suite.size, seed=suite.maps_seed), "generator"
     digest = maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals)
     if digest != suite.maps_sha256:
         raise InputError(
-            f"suite {suite.name}: this vinadv's generator makes other maps (sha256 {digest[:12]}, the suite froze "
+            f"suite {suite.name}: this vinadv's {what} makes other maps (sha256 {digest[:12]}, the suite froze "
             f"{suite.maps_sha256[:12]}); its results would not compare",
             "suite",
         )
     return maps
+
+
+def data_suite_maps(suite: DataSuite, data: str | os.PathLike | None) -> MapSet:
+    """A data suite's maps from the folder `data`: each file checked against its sha256 (InputError naming the file
+    and both checksums), its split imported with one start per map (`vinadv.interop.formats.read_maps`, seed
+    `suite.maps_seed`), its first maps taken, the files joined in order."""
+    if data is None:
+        names = ", ".join(f.name for f in suite.files)
+        raise InputError(f"suite {suite.name} reads public files: give data, the folder holding {names}", "data")
+    from vinadv.interop.formats import read_maps  # noqa: PLC0415 (the readers: only for a data suite)
+
+    parts = []
+    for f in suite.files:
+        path = Path(data) / f.name
+        if not path.is_file():
+            raise InputError(f"{path}: no such file (suite {suite.name} reads it from data)", "data")
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        if digest != f.sha256:
+            raise InputError(
+                f"{path}: sha256 {digest} is not the {f.sha256} suite {suite.name} froze (another version of the file)"
+            )
+        # one start per map: the reader's k > 1 draws are not needed (and each is its own draw)
+        maps, _ = read_maps(str(path), suite.layout, split=suite.split, starts=1, seed=suite.maps_seed)
+        if len(maps) < f.maps:
+            raise InputError(f"{path}: {len(maps)} maps in split {suite.split}, suite {suite.name} takes {f.maps}")
+        parts.append(maps.take(np.arange(f.maps)))
+    return MapSet.concat(parts)
 
 
 def entry_key(suite: Suite, planner: Planner) -> str:
@@ -90,8 +129,13 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     lo = chunk * suite.chunk
     sub = chunk_maps(maps, lo, min(len(maps), lo + suite.chunk))
     plans = planner.plan_batch(sub.obstacles, sub.starts[:, 0], sub.goals, sub.corner_cutting)
-    regret = np.where(plans.reached, plans.paths.costs() - sub.expert_costs[:, 0], np.nan)
-    gppn = gppn_protocol(planner, sub)
+    # costs under the maps' movement model (every move 1 on `moore`), as their expert costs
+    regret = np.where(plans.reached, path_costs(plans.paths, sub.moves) - sub.expert_costs[:, 0], np.nan)
+    if isinstance(planner, SearchPlanner):  # no policy at every cell: the Neural A* authors' Opt / Exp instead
+        clean = {"search": dict(evaluate_search(planner, sub))}
+    else:
+        gppn = gppn_protocol(planner, sub)
+        clean = {"gppn_percent_optimal": gppn["percent_optimal"], "gppn_percent_success": gppn["percent_success"]}
     attacks = {}
     for group in suite.attacks:
         result = robustness(
@@ -127,8 +171,7 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
         "clean": {
             "reached": plans.reached.tolist(),
             "regret": _floats(regret),
-            "gppn_percent_optimal": gppn["percent_optimal"],
-            "gppn_percent_success": gppn["percent_success"],
+            **clean,
         },
         "attacks": attacks,
         "seconds": round(time.perf_counter() - t0, 3),
@@ -177,8 +220,15 @@ def make_entry(suite: Suite, planner: Planner, chunks: dict[int, dict], checks: 
         "success_rate": float(reached.mean()),
         "percent_optimal": float((reached & (np.abs(regret) <= OPTIMAL_TOL)).mean()),
         "mean_regret": float(np.nanmean(regret)) if reached.any() else None,
-        "gppn": {"percent_optimal": gppn("gppn_percent_optimal"), "percent_success": gppn("gppn_percent_success")},
     }
+    if "search" in order[0]["clean"]:
+        clean["gppn"] = None  # a search planner has no policy to follow from every cell
+        clean["search"] = join_search([c["clean"]["search"] for c in order])
+    else:
+        clean["gppn"] = {
+            "percent_optimal": gppn("gppn_percent_optimal"),
+            "percent_success": gppn("gppn_percent_success"),
+        }
     outcomes: dict[str, list[MapOutcomes]] = {}
     attacks = {}
     for group in suite.attacks:
@@ -214,6 +264,33 @@ def make_entry(suite: Suite, planner: Planner, chunks: dict[int, dict], checks: 
     }
 
 
+def join_search(parts: list[dict]) -> dict:
+    """The search metrics (`vinadv.planners.search_metrics`) over every row of the chunks `parts` (each chunk's, one
+    start per map): the means weighted by their rows (the cost ratio by the rows that reached the goal), Hmean the
+    harmonic mean of the joined Opt and Exp, as the authors take it with one start per map."""
+    rows = np.array([p["rows"] for p in parts], dtype=np.float64)
+
+    def mean(name, weights=rows):  # over the chunks that weigh (a chunk where nothing reached has no cost ratio)
+        used = [(w, p[name]) for w, p in zip(weights, parts) if w > 0]
+        if not used or any(v is None for _, v in used):
+            return None
+        w, v = np.array(used, dtype=np.float64).T
+        return float(np.dot(w, v) / w.sum())
+
+    reached = rows * np.array([p["success"] or 0.0 for p in parts])
+    out = {
+        "rows": int(rows.sum()),
+        "opt": mean("opt"),
+        "exp": mean("exp"),
+        "success": mean("success"),
+        "cost_ratio": mean("cost_ratio", reached) if reached.sum() else None,
+        "expansions": mean("expansions"),
+        "astar_expansions": mean("astar_expansions"),
+    }
+    out["hmean"] = None if out["exp"] is None else float(harmonic_mean(out["opt"], out["exp"]))
+    return out
+
+
 def machine() -> dict:
     """Where the entry was computed (not part of what must reproduce)."""
     import torch  # noqa: PLC0415 (PyTorch: the planners loaded it already)
@@ -236,14 +313,29 @@ def planner_checks(suite: Suite, planner: Planner, maps: MapSet) -> dict:
     return {"gradient_masked": gradient_is_masked(*args), "non_deterministic": differs_between_passes(*args)}
 
 
+def local_chunks(suite: Suite, planner: Planner, maps: MapSet, chunks: Iterable[int]) -> Iterator[tuple[int, dict]]:
+    """`(chunk, compute_chunk(...))` for each of `chunks`, in this process, in order."""
+    for chunk in chunks:
+        yield chunk, compute_chunk(suite, planner, maps, chunk)
+
+
 def run_bench(
-    suite: Suite, planner: Planner, db: str | None = None, resume: bool = False, progress: bool = False
+    suite: Suite,
+    planner: Planner,
+    db: str | None = None,
+    resume: bool = False,
+    progress: bool = False,
+    data: str | os.PathLike | None = None,
+    chunk_results: Callable[..., Iterable[tuple[int, dict]]] | None = None,
 ) -> dict:
     """The entry of `planner` on `suite` (module doc). With `db` each chunk is stored when done; with `resume` the
     chunks stored there are read, not recomputed (without it, a database already holding chunks of this entry is
-    refused: say --resume, or use another database)."""
+    refused: say --resume, or use another database). `data`: the folder of a data suite's files.
+
+    `chunk_results(suite, planner, maps, chunks)` computes the chunks `chunks` and yields `(chunk, result)` pairs in
+    any order (default `local_chunks`, here, in order; `vinadv.cluster.ClusterBenchChunks` on a Dask cluster)."""
     t0 = time.perf_counter()
-    maps = suite_maps(suite)
+    maps = suite_maps(suite, data)
     checks = planner_checks(suite, planner, maps)
     key = entry_key(suite, planner)
     n_chunks = -(-suite.n // suite.chunk)
@@ -260,17 +352,21 @@ def run_bench(
                 f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
             )
     todo = [c for c in range(n_chunks) if c not in done]
+    bar = None
     if progress:
         from tqdm import tqdm  # noqa: PLC0415 (only with a progress bar)
 
-        todo = tqdm(todo, desc=f"bench {suite.name}", unit="chunk", initial=len(done), total=n_chunks)
+        bar = tqdm(desc=f"bench {suite.name}", unit="chunk", initial=len(done), total=n_chunks)
     try:
-        for chunk in todo:
-            result = compute_chunk(suite, planner, maps, chunk)
+        for chunk, result in (chunk_results or local_chunks)(suite, planner, maps, todo):
             if store is not None:
                 store.add_bench_chunk(key, chunk, result)
             done[chunk] = result
+            if bar is not None:
+                bar.update(1)
     finally:
+        if bar is not None:
+            bar.close()
         if store is not None:
             store.close()
     return make_entry(suite, planner, done, checks, time.perf_counter() - t0)

@@ -1,6 +1,7 @@
 """The leaderboard: benchmark entries (`vinadv.bench.entry`) of one folder as a Markdown and an HTML table, per suite,
 sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at the
-largest k, then by name), each row linking to its entry file, its flags shown beside it."""
+largest k, then by name), each row linking to its entry file, its flags shown beside it, and how long it took (the
+sum of its chunks' seconds: on the machine and load of the time, not a speed figure)."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ COLUMNS = (
     "worst-case harmful (largest k)",
     "removal harmful",
     "flags",
+    "time",
 )
 
 
@@ -54,6 +56,29 @@ def _removal_harmful(entry: dict) -> float | None:
     return max(rates) if rates else None
 
 
+def planner_label(spec: dict) -> str:
+    """The planner as `--planner` names it: its name, with the values of its registered parameters
+    (`wastar:w=2`), so that two settings of one planner read apart."""
+    from vinadv.planners.registry import REGISTRY  # noqa: PLC0415 (the registry: only to render)
+
+    info = REGISTRY.get(spec["name"])
+    config = spec.get("config") or {}
+    given = [] if info is None else [p.name for p in info.params if p.name in config]
+    if not given:
+        return spec["name"]
+    return spec["name"] + ":" + ",".join(f"{k}={config[k]:g}" for k in given)
+
+
+def compute_time(entry: dict) -> str:
+    """How long the entry took: the sum of its chunks' seconds (a resumed entry's too, whatever the sessions), in
+    minutes, and the device type it ran on; "—" for an entry without them."""
+    chunks = (entry.get("time") or {}).get("chunks_s")
+    if not chunks:
+        return "—"
+    device = (entry.get("machine") or {}).get("device")
+    return f"{sum(chunks) / 60:.1f} min" + (f" ({device})" if device else "")
+
+
 def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
     """{suite name: rows, sorted}: each row the entry's file, its cells' values and its raised flags."""
     by_suite: dict[str, list[dict]] = {}
@@ -63,7 +88,7 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
         row = {
             "file": path.name,
             "suite": f"{e['suite']['name']} ({e['suite']['checksum'][:12]})",
-            "planner": e["planner"]["name"],
+            "planner": planner_label(e["planner"]),
             "weights": weights[:12] if weights else "—",
             "clean": e["clean"]["success_rate"],
             "harmful": worst[0]["harmful_rate"],
@@ -72,6 +97,7 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
             "k": worst[-1]["k"],
             "removal": _removal_harmful(e),
             "flags": [name for name, f in e["flags"].items() if f["raised"]],
+            "time": compute_time(e),
         }
         by_suite.setdefault(e["suite"]["name"], []).append(row)
 
@@ -96,6 +122,7 @@ def _cells(r: dict) -> list[str]:
         f"{_pct(r['harmful_k'])} (k = {r['k']})",
         _pct(r["removal"]),
         ", ".join(r["flags"]) or "—",
+        r["time"],
     ]
 
 

@@ -8,12 +8,20 @@ tolerances, the flags' thresholds, and the chunk size (maps per resumable unit).
 canonical JSON (`Suite.checksum`); a released suite never changes (`FROZEN` holds every released checksum and a test
 holds the registry to it): a change is a new version under a new name.
 
-Released suites (28x28; the MP suites wait for the MP import):
+A `DataSuite` reads its maps from public files instead (`--data DIR`): the spec names each file with its sha256 and
+the maps it takes, the layout and split read, the seed of the start draw and the movement model.
+
+Released suites:
 - `vin28-v1`: the generator's first 1,000 maps of seed 1000 (the held-out maps of the evaluation tables), one start
   each; key-points, saliency, near-path and random adding 1..3 cells greedily, exhaustive adding one, and all five
   removing one.
 - `vin28-quick-v1`: the first 100 of those maps; the cheap attacks only: key-points, saliency, near-path and random
   adding 1..3 cells, and the same four removing one (no exhaustive). For trying and for tests.
+- `mpd32-v1`: the test splits of the MP dataset's six families (`docs/guide/mpd.md`: 600 32x32 `moore` maps, corner
+  cutting), one start per map drawn by the MP import's rule (the Neural A* loader's) with seed 0; the ensemble of
+  `vin28-v1`.
+- `mpd32-quick-v1`: 100 of those maps (the first 17 of the first four families in name order, the first 16 of the
+  last two); the ensemble of `vin28-quick-v1`.
 """
 
 from __future__ import annotations
@@ -84,6 +92,36 @@ class Suite:
     def attack_keys(self) -> list[str]:
         return [k for g in self.attacks for k in g.keys()]
 
+    def movement(self) -> str:
+        """The movement model of the suite's maps (`vinadv.grid.moves`): the generator's `octile`."""
+        return "octile"
+
+
+@dataclass(frozen=True)
+class DataFile:
+    """A public file a data suite reads from `--data DIR`: its name there, its sha256 (checked before it is read),
+    and how many of its split's maps the suite takes (the first, in the file's order, after the import)."""
+
+    name: str
+    sha256: str
+    maps: int
+
+
+@dataclass(frozen=True)
+class DataSuite(Suite):
+    """A suite whose maps are read from public files (`files`, in `--data DIR`) rather than generated: each file's
+    `split` imported by vinadv's reader of the `layout` (`vinadv.interop.formats`) with one start per map drawn with
+    seed `maps_seed` by that reader's start rule, its first `DataFile.maps` maps taken, the files' maps joined in
+    order (`maps_sha256` covers the join). `moves`: their movement model."""
+
+    layout: str = "mpd"
+    split: str = "test"
+    moves: str = "moore"
+    files: tuple[DataFile, ...] = ()
+
+    def movement(self) -> str:
+        return self.moves
+
 
 def maps_sha256(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> str:
     """sha256 of a suite's maps: the obstacles (bool bytes), then the starts and goals (int64 bytes), `(n, 2)` each."""
@@ -145,8 +183,55 @@ register(
     )
 )
 
+#: the six families of the MP dataset shipped by planning-datasets (commit a982a04, `data/mpd/`), in name order, with
+#: the sha256 of each file (`docs/guide/mpd.md`); each test split holds 100 maps
+_MPD_FILES = (
+    ("alternating_gaps_032_moore_c8.npz", "3f105d69d68a35738084e658911c877ae09d6ce55c2ea63fa070517cd47ae35e"),
+    ("forest_032_moore_c8.npz", "6ec48417fe4d4845e4b73df4c1be0fb2c9cfaedbb456e2c54ae6f49c404361fc"),
+    ("mazes_032_moore_c8.npz", "8153402e23dc20098d4f4135de34b5c88316b36e56f5d0c8d59410307499b426"),
+    ("multiple_bugtraps_032_moore_c8.npz", "a68a2e2dc65a639b12bb1458ca256972d89859990c65b60d6fd733278e01f32c"),
+    ("shifting_gaps_032_moore_c8.npz", "957512936811284f63d2bd9f2d5d533e517b87af9a4f30d8cf307b98af7302e1"),
+    ("single_bugtrap_032_moore_c8.npz", "addc67d04432b60f360c275fea43f1b80b77bdb6f5590dbacaf4af532ea020a3"),
+)
+register(
+    DataSuite(
+        name="mpd32-v1",
+        description="the test splits of the MP dataset's six families (600 32x32 moore maps), one start each drawn "
+        "by the Neural A* rule (seed 0); key-points, saliency, near-path, random adding k = 1..3; exhaustive adding "
+        "1; all five removing 1",
+        n=600,
+        size=32,
+        maps_seed=0,
+        maps_sha256="e99bb4ada1494c2163c8bf54347954f20c77adf392aa1fc46dff65bd951de4d8",
+        attacks=(
+            AttackGroup(_CHEAP, "add", 3),
+            AttackGroup(("exhaustive",), "add", 1),
+            AttackGroup((*_CHEAP, "exhaustive"), "remove", 1),
+        ),
+        chunk=50,
+        files=tuple(DataFile(name, sha, 100) for name, sha in _MPD_FILES),
+    )
+)
+register(
+    DataSuite(
+        name="mpd32-quick-v1",
+        description="100 of mpd32-v1's maps: the first 17 of the test split of alternating_gaps, forest, mazes and "
+        "multiple_bugtraps, the first 16 of shifting_gaps and single_bugtrap; the cheap attacks only: key-points, "
+        "saliency, near-path, random adding k = 1..3 and removing 1",
+        n=100,
+        size=32,
+        maps_seed=0,
+        maps_sha256="b72f05ac1d9b17f5953e40fe1489142e42cbd1c50730201dbdf8540255aaaf60",
+        attacks=(AttackGroup(_CHEAP, "add", 3), AttackGroup(_CHEAP, "remove", 1)),
+        chunk=25,
+        files=tuple(DataFile(name, sha, 17 if i < 4 else 16) for i, (name, sha) in enumerate(_MPD_FILES)),
+    )
+)
+
 #: the checksum of every released suite: a released suite never changes (a test holds the registry to these)
 FROZEN = {
     "vin28-v1": "1dad52e25d05f3eca3fab2960c02af1cc15d81736c4e50acf7d569dfdbb92203",
     "vin28-quick-v1": "5d96a8431b05e56aac524464fe37b3794ba7763ca17233523073ad69b78d6157",
+    "mpd32-v1": "7f077bd76099849020090308ff5ea0913f609d74e5e6d7643466646c184d92a4",
+    "mpd32-quick-v1": "76f5d309d15f7d68838e18cd0c405dd6b4eefe391b4a2ddc02e9f3a4bc59a400",
 }

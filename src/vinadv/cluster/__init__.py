@@ -1,5 +1,5 @@
 """Scale out on a Dask cluster: `--cluster tcp://HOST:PORT` (an existing scheduler) or `--workers N` (a LocalCluster
-of N single-threaded worker processes) on `vinadv run`, `vinadv attack` and `vinadv identify`.
+of N single-threaded worker processes) on `vinadv run`, `vinadv attack`, `vinadv identify` and `vinadv bench run`.
 
 Who computes and who writes:
 - `run`: shard `k` is `pipeline.compute_shard(config, k)` on a worker, from its own seed `(seed, k)`, so the stored
@@ -12,6 +12,10 @@ Who computes and who writes:
   also bounds the client's memory.
 - `attack` / `identify`: the maps (pairs) are split in shards of `--shard-size`, sent to the workers, and the
   results gathered in order: the same pairs/labels as the local command.
+- `bench run`: chunk `c` of the suite is `bench.entry.compute_chunk(suite, planner, maps, c)` on a worker (the suite
+  sent by value; its maps made, or read from `--data`, once per worker process); results come back as they
+  complete and the client stores each (`--db`: one transaction per chunk, keyed by its index, so the order does not
+  matter to `--resume`) and builds the entry from all of them: the same entry as the local run, but for its time.
 - A lost worker's shard is recomputed by Dask (the scheduler reschedules the tasks of a dead worker; tasks that
   raise are retried `retries` times); a shard's future yields its result once, and the client writes with
   `skip_stored` on the unique `(run_id, pair_index)`, so a shard is never stored twice.
@@ -37,6 +41,7 @@ from urllib.parse import urlsplit
 from vinadv.cluster.worker import (
     SINGLE_THREAD_ENV,
     attack_shard_task,
+    bench_chunk_task,
     identify_shard_task,
     plugin_class,
     run_shard_task,
@@ -57,6 +62,7 @@ __all__ = [
     "start_local_cluster",
     "ClusterShards",
     "ClusterIdentify",
+    "ClusterBenchChunks",
     "attack_on_cluster",
     "identify_on_cluster",
     "require_dask",
@@ -383,3 +389,44 @@ def identify_on_cluster(
 
         return identify(pairs, None, label_source, harm_tol=harm_tol, harm_rtol=harm_rtol)
     return Identification.concat(parts, label_source=label_source)
+
+
+class ClusterBenchChunks:
+    """`vinadv.bench.entry.run_bench`'s `chunk_results` on a Dask cluster: every chunk to compute is submitted (a
+    suite has tens of chunks), and `(chunk, result)` pairs are yielded as they complete, in any order.
+
+    Args:
+        client: a connected `distributed.Client`.
+        planner_ref: the planner, by reference (`vinadv.planners.registry.PlannerRef`): workers load it once each,
+            checked against the client's checksum.
+        data: a data suite's folder (`--data`), made absolute for the workers (the same files at the same path).
+    """
+
+    def __init__(self, client, planner_ref, data=None, retries: int = RETRIES):
+        self.client = client
+        self.planner_ref = planner_ref
+        self.data = None if data is None else _absolute(data)
+        self.retries = retries
+
+    def __call__(self, suite, planner, maps, chunks):
+        from dask.base import tokenize
+        from distributed import as_completed
+
+        token = tokenize(suite.checksum, self.planner_ref, self.data)
+        futures = [
+            self.client.submit(
+                bench_chunk_task,
+                suite,
+                chunk,
+                self.planner_ref,
+                self.data,
+                key=f"vinadv-bench-{token}-{chunk}",
+                retries=self.retries,
+                pure=False,
+            )
+            for chunk in chunks
+        ]
+        for future in as_completed(futures):
+            chunk, result = future.result()  # a task that failed for good raises here (InputError included)
+            future.release()
+            yield chunk, result

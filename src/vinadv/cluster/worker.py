@@ -1,5 +1,5 @@
 """What runs on a Dask worker: single-threaded numerics, planners and classifiers rebuilt from their files, and the
-shard tasks of `vinadv run`, `vinadv attack` and `vinadv identify`.
+shard tasks of `vinadv run`, `vinadv attack` and `vinadv identify`, and the chunk task of `vinadv bench run`.
 
 Nothing here imports Dask at module level except the plugin class, so the tasks also run (and are tested) in
 plain Python. Models are never pickled: a task gets the path of the weights (or classifier) file and its checksum,
@@ -132,6 +132,17 @@ def identify_shard_task(
     return identify(
         pairs, worker_classifier(classifier_spec, classifier_sum), label_source, harm_tol=harm_tol, harm_rtol=harm_rtol
     )
+
+
+def bench_chunk_task(suite, chunk: int, planner_ref, data: str | None):
+    """`vinadv bench run`: chunk `chunk` of `suite` (a `vinadv.bench.suites.Suite`, sent by value) on a worker,
+    `(chunk, vinadv.bench.entry.compute_chunk(...))`, with the planner of `planner_ref`. The suite's maps are made
+    (or read from the folder `data`, an absolute path, checked by sha256) once per worker process."""
+    from vinadv.bench.entry import compute_chunk, suite_maps
+
+    single_threaded()
+    maps = _cached(("bench-maps", suite.checksum, data), lambda: suite_maps(suite, data))
+    return chunk, compute_chunk(suite, worker_planner(planner_ref), maps, chunk)
 
 
 def plugin_class():

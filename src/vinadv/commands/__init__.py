@@ -52,7 +52,9 @@ def add_planner_arguments(parser, weights_help: str | None = None) -> None:
     parser.add_argument(
         "--weights",
         default=None,
-        help=weights_help or "weights file of the vin or gppn planner (default: the shipped weights for the map size)",
+        help=weights_help
+        or "weights file of the vin, gppn or neural-astar planner, or a model zoo name (vin28_robust: `vinadv "
+        "planners`) (default: the shipped weights for the map size)",
     )
     add_device_argument(parser)
 

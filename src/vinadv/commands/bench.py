@@ -7,7 +7,9 @@ import argparse
 import os
 from pathlib import Path
 
-from vinadv.commands import add_planner_arguments
+from vinadv.bench.index import index_json, make_index
+from vinadv.cluster import ClusterBenchChunks, add_cluster_arguments, open_cluster
+from vinadv.commands import add_planner_arguments, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
@@ -21,14 +23,22 @@ def register(subparsers) -> None:
     run = sub.add_parser(
         "run",
         help="run a planner on a frozen benchmark suite and write its result entry",
-        description="Run a planner on a frozen, versioned benchmark suite (vin28-v1, vin28-quick-v1): the attack "
+        description="Run a planner on a frozen, versioned benchmark suite (vin28-v1, vin28-quick-v1, mpd32-v1, "
+        "mpd32-quick-v1): the attack "
         "ensemble on the suite's maps, worst case per map, and write one schema-versioned result entry (JSON).",
     )
-    run.add_argument("--suite", required=True, help="the suite: vin28-v1 or vin28-quick-v1")
+    run.add_argument("--suite", required=True, help="the suite: vin28-v1, vin28-quick-v1, mpd32-v1 or mpd32-quick-v1")
     add_planner_arguments(run)
+    run.add_argument(
+        "--data",
+        metavar="DIR",
+        help="the MP suites: the folder holding the MP dataset's six <family>_032_moore_c8.npz files "
+        "(docs/guide/mpd.md)",
+    )
     run.add_argument("--db", help="store each finished chunk of maps in this database (URL or SQLite file)")
     run.add_argument("--resume", action="store_true", help="with --db: continue, computing only the chunks not stored")
     run.add_argument("--out", help="write the entry to this file (.json; default: print it)")
+    add_cluster_arguments(run)
     add_output_options(run, json="the entry", quiet=True)
     run.set_defaults(func=cmd_bench_run)
 
@@ -40,6 +50,12 @@ def register(subparsers) -> None:
     )
     board.add_argument("dir", metavar="DIR", help="folder of result entries (*.json)")
     board.add_argument("--out", required=True, metavar="OUT", help="folder to write leaderboard.html and .md to")
+    board.add_argument(
+        "--index",
+        metavar="FILE",
+        help="also write the entries' index (JSON) to FILE: what the model zoo lists (`vinadv planners`); the shipped "
+        "one is src/vinadv/bench/entries.json, of docs/results/bench",
+    )
     add_output_options(board, json="the rows", quiet=True)
     board.set_defaults(func=cmd_bench_leaderboard)
 
@@ -53,10 +69,24 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     if args.out:
         check_output_path(args.out)
     from vinadv.bench.entry import entry_json, run_bench
-    from vinadv.planners.registry import load_planner
+    from vinadv.planners.registry import PlannerRef, load_planner
 
-    planner = load_planner(args.planner, suite.size, weights=args.weights)
-    entry = run_bench(suite, planner, db=args.db, resume=args.resume, progress=shows_progress(args))
+    device = planner_device(args)
+    planner = load_planner(args.planner, suite.size, weights=args.weights, device=device, moves=suite.movement())
+    with open_cluster(args.cluster, args.workers) as client:
+        chunk_results = None
+        if client is not None:  # every suite's maps cut corners (the generator's default, the MP layout's)
+            ref = PlannerRef.of(planner, args.planner, args.weights, corner_cutting=True)
+            chunk_results = ClusterBenchChunks(client, ref, data=args.data)
+        entry = run_bench(
+            suite,
+            planner,
+            db=args.db,
+            resume=args.resume,
+            progress=shows_progress(args),
+            data=args.data,
+            chunk_results=chunk_results,
+        )
     text = entry_json(entry)
     if args.out:
         with atomic_output(args.out, "w", encoding="utf-8") as fh:
@@ -83,7 +113,13 @@ def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out: {out} exists and is not a folder")
-    table = rows(read_entries(args.dir))
+    if args.index:
+        check_output_path(args.index)
+    entries = read_entries(args.dir)
+    table = rows(entries)
+    if args.index:  # the folder as given: the index names the files the way the user does
+        with atomic_output(args.index, "w", encoding="utf-8") as fh:
+            fh.write(index_json(make_index(entries, Path(args.dir).as_posix())))
     out.mkdir(parents=True, exist_ok=True)
     prefix = os.path.relpath(Path(args.dir), out).replace(os.sep, "/") + "/"
     for name, text in (

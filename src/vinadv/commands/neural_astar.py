@@ -55,7 +55,9 @@ def register(subparsers) -> None:
         help="plan a maps file with the exact and the differentiable search; count the searches that part",
     )
     cmp.add_argument("--data", required=True, help="a maps file of moore maps (vinadv.maps), every start planned")
-    cmp.add_argument("--weights", default=None, help="Neural A* weights (default: the shipped mazes model)")
+    cmp.add_argument(
+        "--weights", default=None, help="Neural A* weights file or model zoo name (default: the shipped mazes model)"
+    )
     cmp.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:1 ... (default cpu)")
     add_output_options(cmp, json="the counts", quiet=True)
     cmp.set_defaults(func=cmd_compare_modes)

@@ -6,10 +6,12 @@ import argparse
 import time
 from pathlib import Path
 
+from vinadv.bench.index import entries_of, read_index
 from vinadv.commands import add_planner_arguments, command_line, load_args_planner, planner_device
 from vinadv.commands.evaluation import add_eval_arguments, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
+from vinadv.planners.zoo import model_of_file, read_zoo
 
 #: `vinadv.interop.protocols.PROTOCOLS`, not imported: building the parser loads no PyTorch
 PROTOCOLS = ("vinadv", "gppn", "kentsommer", "search")
@@ -50,12 +52,38 @@ def register(subparsers) -> None:
     ev.set_defaults(func=cmd_eval)
 
 
+def zoo_listing(planners: list[dict]) -> list[dict]:
+    """The model zoo (`vinadv.planners.zoo`), each model with its bench entries (the shipped index,
+    `vinadv.bench.index`); and, in place, each of `planners` (`list_planners`) with its zoo model (the shipped
+    weights it loads by default, or None), weights sha256, training record, licence and bench entries."""
+    index = read_index()
+    models = []
+    for model in read_zoo().values():
+        models.append({**model.to_dict(), "bench_entries": entries_of(index, model.planner, model.sha256)})
+    by_name = {m["name"]: m for m in models}
+    for p in planners:
+        model = None if p["weights"] is None else model_of_file(p["weights"])
+        m = None if model is None or not p["weights_available"] else by_name[model.name]
+        p["zoo"] = None if m is None else m["name"]
+        p["weights_sha256"] = None if m is None else m["sha256"]
+        p["training"] = None if m is None else m["training"]
+        p["licence"] = "MIT (vinadv's own licence)" if p["weights"] is None else (None if m is None else m["licence"])
+        p["bench_entries"] = (
+            entries_of(index, p["name"], None)
+            if p["weights"] is None
+            else ([] if m is None else entries_of(index, p["name"], m["sha256"]))
+        )
+    return models
+
+
 def cmd_planners(args: argparse.Namespace) -> int:
     from vinadv.planners.registry import SUFFIX, list_planners
 
     planners = list_planners(args.size)
+    models = zoo_listing(planners)
     listing = {
         "planners": planners,
+        "zoo": models,
         "bring_your_own": "FILE.py:FACTORY or MODULE:FACTORY",
         "parameters": "NAME:KEY=VALUE[,KEY=VALUE...] for a planner that lists parameters (wastar:w=3)",
         "symmetric": f"NAME{SUFFIX} or SPEC{SUFFIX}: the planner averaged over the 8 rotations and flips",
@@ -71,6 +99,14 @@ def cmd_planners(args: argparse.Namespace) -> int:
             )
             params = ", ".join(f"{q['name']}={q['default']:g}" for q in p["params"])
             print(f"{p['name']:<{width}} {p['description']}{weights}{f'  [parameters {params}]' if params else ''}")
+        print("model zoo (--weights NAME; checked against its sha256 when loaded):")
+        zoo_width = max(len(m["name"]) for m in models)
+        for m in models:
+            entries = ", ".join(e["suite"] for e in m["bench_entries"]) or "none"
+            print(
+                f"  {m['name']:<{zoo_width}} planner {m['planner']}, sha256 {m['sha256'][:12]}, {m['licence']}; "
+                f"bench entries: {entries}"
+            )
         print(
             "your own: --planner FILE.py:FACTORY or MODULE:FACTORY, FACTORY(size) -> torch.nn.Module with "
             "forward(obstacles (B,N,N) float 0/1, goals (B,2) int64) -> (B,8,N,N) logits (docs/own-planner.md)"

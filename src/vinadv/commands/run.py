@@ -66,7 +66,7 @@ def register(subparsers) -> None:
     ident.add_argument("--pairs", required=True, help="pairs file (.npz from `vinadv attack`)")
     ident.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
     ident.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
-    add_planner_arguments(ident, weights_help="weights file of the vin or gppn planner")
+    add_planner_arguments(ident, weights_help="weights file of the vin or gppn planner, or a model zoo name")
     ident.epilog = (
         "With --planner or --weights, both maps of every pair are planned again by that planner (the "
         "attacks of the file, tried on another planner: transfer); without, the file's paths are kept."

@@ -55,6 +55,7 @@ from vinadv.planners.weights import (
     trained_moves,
     weights_checksum,
 )
+from vinadv.planners.zoo import zoo_model
 
 #: `load(size, weights, corner_cutting, device, **params)`: a registered planner for `size x size` maps, with the
 #: values of its `PlannerParam`s as keyword arguments (none for a planner without parameters); `device` a checked
@@ -540,10 +541,10 @@ def load_custom(spec: str, size: int, device: str | None = None) -> Planner:
 @dataclass(frozen=True)
 class PlannerRef:
     """A loaded planner by reference, for another process (a Dask worker) to load the same one: the spec and weights
-    file as absolute paths (None: the shipped weights there), the map size, the move rule, the checksum the
-    client's planner has (`Planner.checksum`), its movement model and the device its forward runs on where one was
-    chosen (None: the planner's default; a worker without that device refuses it with one line). `load` refuses a
-    planner whose checksum differs."""
+    file as absolute paths (None: the shipped weights there; a model of the zoo by its name), the map size, the move
+    rule, the checksum the client's planner has (`Planner.checksum`), its movement model and the device its forward
+    runs on where one was chosen (None: the planner's default; a worker without that device refuses it with one
+    line). `load` refuses a planner whose checksum differs."""
 
     spec: str
     weights: str | None
@@ -560,7 +561,8 @@ class PlannerRef:
         source, sep, factory = spec.rpartition(":")
         if sep and _is_file(source):
             spec = f"{Path(source).resolve()}:{factory}"
-        weights = None if weights is None else str(Path(weights).resolve())
+        if weights is not None and (Path(weights).exists() or zoo_model(str(weights)) is None):
+            weights = str(Path(weights).resolve())  # a file; a zoo name stays a name, the same on every machine
         device = str(planner.device) if planner.device_type is not None else None
         return cls(spec, weights, int(planner.size), bool(corner_cutting), planner.checksum, planner.moves, device)
 

@@ -112,16 +112,17 @@ def search_metrics(
     out["expansions"] = float(expansions.mean())
     out["astar_expansions"] = float(reference.mean())
     if maps is None or len(np.unique(maps)) == n:  # one row per map: the harmonic mean of the means
-        out["hmean"] = float(_hmean(optimal.mean(), saved.mean()))
+        out["hmean"] = float(harmonic_mean(optimal.mean(), saved.mean()))
     else:  # several starts per map: each map's harmonic mean over its starts, averaged over the maps
         _, owner = np.unique(np.asarray(maps).reshape(-1), return_inverse=True)
         rows = np.bincount(owner)
-        per_map = _hmean(np.bincount(owner, weights=optimal) / rows, np.bincount(owner, weights=saved) / rows)
+        per_map = harmonic_mean(np.bincount(owner, weights=optimal) / rows, np.bincount(owner, weights=saved) / rows)
         out["hmean"] = float(per_map.mean())
     return out
 
 
-def _hmean(opt, exp):
+def harmonic_mean(opt, exp):
+    """The authors' Hmean of Opt and Exp (scalars or arrays): `2 / (1 / (opt + EPS) + 1 / (exp + EPS))`."""
     return 2.0 / (1.0 / (opt + EPS) + 1.0 / (exp + EPS))
 
 

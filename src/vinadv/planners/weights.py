@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from vinadv.errors import InputError
+from vinadv.planners import zoo
 
 #: the weights shipped with vinadv (`vin28.pt`, `gppn28.pt`, ...)
 WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
@@ -39,8 +40,12 @@ def weights_checksum(path: str | os.PathLike) -> str:
 
 
 def weights_file(path: str | os.PathLike | None, shipped: Path, planner: str, size: int) -> str:
-    """The weights file to read: `path`, or the `shipped` weights of `planner` for `size x size` maps when None.
-    Raises InputError naming a missing file (and, for shipped weights, how to make some)."""
+    """The weights file to read: `path` (a file, or the name of a model of the zoo holding `planner` weights:
+    `vinadv.planners.zoo`), or the `shipped` weights of `planner` for `size x size` maps when None. A file of the zoo
+    is checked against the zoo's sha256 before it is read. Raises InputError naming a missing file (and, for shipped
+    weights, how to make some), or a zoo file whose checksum differs (both checksums)."""
+    if path is not None:
+        path = zoo.resolve(path, planner.lower())
     if path is None:
         if not shipped.exists():
             raise InputError(
@@ -50,7 +55,8 @@ def weights_file(path: str | os.PathLike | None, shipped: Path, planner: str, si
         path = shipped
     name = str(path)
     if not os.path.exists(name):
-        raise InputError(f"{name}: no such weights file")
+        raise InputError(f"{name}: no such weights file (nor a model of the zoo: `vinadv planners` lists them)")
+    zoo.verify(name)
     return name
 
 
