@@ -47,14 +47,14 @@ NULLABLE_STRINGS = ("expert_label", "harm")
 
 @pytest.fixture(scope="module")
 def stored(module_db_url):
-    """Two runs: 'one' (40 pairs of one added obstacle, config stored) and 'three' (23 pairs of three); stored once
-    per module and backend: the tests only read them."""
+    """Two runs: 'one' (40 pairs of one added obstacle, config stored) and 'three' (23 pairs of three cells, some
+    added, some freed: edit `remove`); stored once per module and backend: the tests only read them."""
     db_url = module_db_url
     with Store.open(db_url) as store:
         one = store.create_run("one", config={"n": 40, "size": 7, "attack": "near-path"}, seed=5, attack="near-path")
         store.write_pairs(one, random_records(40, size=7, seed=11))
         three = store.create_run("three", attack="greedy")
-        store.write_pairs(three, random_records(23, size=6, seed=3, n_added=3))
+        store.write_pairs(three, random_records(23, size=6, seed=3, n_added=3, removes=0.4))
     return db_url, {"one": one, "three": three}
 
 
@@ -86,6 +86,7 @@ def check_row(row: dict, db: dict) -> None:
     for side in ("o", "a"):
         assert [tuple(int(v) for v in c) for c in row[f"path_{side}"]] == parse_path(db[f"path_{side}"])
     assert cell_text(row["start"]) == db["start"] and cell_text(row["goal"]) == db["goal"]
+    assert row["edit"] == (db["edit"] or "add")  # NULL: a database before schema 7, additions only
     assert cell_text(row["added"][0]) == db["added_obstacle"]
     more = [tuple(int(v) for v in c) for c in row["added"][1:]]
     assert more == (parse_path(db["added_more"]) if db["added_more"] is not None else [])
@@ -110,6 +111,7 @@ def test_parquet_read_with_pyarrow_equals_the_database(stored, tmp_path):
         assert all(table[c].null_count > 0 for c in (*NULLABLE_FLOATS, *NULLABLE_STRINGS, "dh", "dv"))
         assert {f.name for f in table.schema if f.nullable} == {*NULLABLE_FLOATS, *NULLABLE_STRINGS, "dh", "dv"}
     assert {len(r["added"]) for r in pq.read_table(tmp_path / "three.parquet").to_pylist()} == {3}
+    assert set(pq.read_table(tmp_path / "three.parquet")["edit"].to_pylist()) == {"add", "remove"}
 
 
 def test_parquet_read_with_pandas_equals_the_database_and_the_api(stored, tmp_path):

@@ -13,7 +13,8 @@ the exported file as `read_parquet` reads it). One row per pair, in pair-index o
 - `score` float64, `dh`, `dv` int32, the harm costs (`opt_cost_o` ... `regret_a`, move units) float64,
   `expert_label`, `harm` string: null where the database holds NULL (in pandas NaN, or None for the strings);
 - `start`, `goal`: a cell, fixed_size_list<int16>[2] (row, col);
-- `added`: the added obstacles, list<fixed_size_list<int16>[2]> (one cell per added obstacle, in order);
+- `edit` string: `add` (the pair's cells were obstacles added to the original map) or `remove` (obstacles freed);
+- `added`: the edited cells, list<fixed_size_list<int16>[2]> (one cell per added, or freed, obstacle, in order);
 - `map_o`, `map_a`: the maps, list<list<bool>>, N rows of N cells (True = obstacle);
 - `path_o`, `path_a`: the paths, list<fixed_size_list<int16>[2]>, the (row, col) cells in order (empty: no path).
 
@@ -54,7 +55,7 @@ if TYPE_CHECKING:
     import pyarrow as pa
 
 #: the layout of an exported Parquet file, in its metadata (`parquet_metadata(path)["format"]`)
-PARQUET_FORMAT = "vinadv.pairs.parquet/1"
+PARQUET_FORMAT = "vinadv.pairs.parquet/2"
 #: the Parquet file metadata key that holds the run (JSON)
 METADATA_KEY = "vinadv"
 #: pairs read from the database at a time: one Parquet row group, one DataFrame of `iter_pairs`
@@ -75,6 +76,7 @@ PAIR_COLUMNS = (
     *HARM_COLUMNS,
     "start",
     "goal",
+    "edit",
     "added",
     "map_o",
     "map_a",
@@ -130,6 +132,7 @@ def pair_schema() -> pa.Schema:
         "harm": pa.string(),
         "start": cell,
         "goal": cell,
+        "edit": pa.string(),
         "added": pa.list_(cell),
         "map_o": pa.list_(pa.list_(pa.bool_())),
         "map_a": pa.list_(pa.list_(pa.bool_())),
@@ -192,6 +195,7 @@ def pairs_table(records: PairRecords, run_id: int) -> pa.Table:
         "harm": pa.array(records.harm.tolist(), pa.string()),
         "start": cell(records.starts),
         "goal": cell(records.goals),
+        "edit": pa.array(records.edit.tolist(), pa.string()),
         "added": cell_lists(records.added.reshape(-1, 2), records.added.shape[1]),
         "map_o": maps(records.obstacles_o),
         "map_a": maps(records.obstacles_a),
