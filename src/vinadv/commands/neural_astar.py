@@ -12,6 +12,7 @@ from pathlib import Path
 from vinadv import __version__
 from vinadv.commands import add_device_argument, command_line, planner_device, set_threads
 from vinadv.commands.output import add_output_options, emit, progress_bar, progress_lines, shows_progress
+from vinadv.commands.training import save_trained
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 from vinadv.planners.weights import weights_checksum
@@ -302,12 +303,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         log=progress_lines(args),
         data_sha256=digest,
     )
-    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
-    save_neural_astar(model, out, record)
-    record_path = out.with_suffix(".json")
-    with atomic_output(record_path, "w") as fh:
-        fh.write(json.dumps(record, indent=2) + "\n")
-    checkpoint.unlink(missing_ok=True)
+    record_path = save_trained(model, out, record, save_neural_astar, checkpoint)
     best = record["best"]
     return emit(
         args,

@@ -150,6 +150,18 @@ def adversarial_config(args: argparse.Namespace) -> dict | None:
     return config.to_dict()
 
 
+def save_trained(model, out: Path, record: dict, save: Callable, checkpoint: Path) -> Path:
+    """The end of a training command: `record` stamped finished, `save(model, out, record)`, the record written beside
+    the weights as JSON (`out` with `.json`, returned), and the resumable checkpoint dropped."""
+    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    save(model, out, record)
+    record_path = out.with_suffix(".json")
+    with atomic_output(record_path, "w") as fh:
+        fh.write(json.dumps(record, indent=2) + "\n")
+    checkpoint.unlink(missing_ok=True)
+    return record_path
+
+
 def run_training(
     args: argparse.Namespace, config: TrainConfig, train: Callable[..., tuple], save: Callable[..., None]
 ) -> int:
@@ -199,12 +211,7 @@ def run_training(
         log=progress_lines(args),
         augment=augment,
     )
-    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
-    save(model, out, record)
-    record_path = out.with_suffix(".json")
-    with atomic_output(record_path, "w") as fh:
-        fh.write(json.dumps(record, indent=2) + "\n")
-    checkpoint.unlink(missing_ok=True)
+    record_path = save_trained(model, out, record, save, checkpoint)
     return emit(
         args,
         record,
