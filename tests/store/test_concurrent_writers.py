@@ -10,10 +10,12 @@ import threading
 from collections.abc import Iterator
 
 import numpy as np
+import pytest
 import sqlalchemy as sa
 
 from tests.store.old_schemas import LATER_COLUMNS, columns_and_version, table_names, version_1_database
 from vinadv.store import SCHEMA_VERSION, Store
+from vinadv.store.connection import DeadlockError, is_deadlock
 from vinadv.store.pairs import PairQueries
 from vinadv.store.schema import evaluations
 from vinadv.testing.store import random_records
@@ -160,3 +162,48 @@ def test_two_writers_of_a_missing_additive_table_create_it_once(db_url):
     assert done == [True, True], done
     assert len(seen["ddl"]) == 1 and len(seen["lock"]) == 2
     assert "evaluations" in table_names(db_url)
+
+
+def test_a_resumed_batch_the_server_rolled_back_for_a_deadlock_is_written_again(tmp_path, monkeypatch):
+    # the server's side of a deadlock, made by hand: the first batch's transaction is rolled back whole (nothing of it
+    # stored) with MariaDB's error 1213; the resume writes it again, a fresh write raises it
+    url = f"sqlite:///{tmp_path / 'dead.db'}"
+    records = random_records(40, size=8, seed=3)
+    original = PairQueries._insert_batch
+    calls = []
+
+    def deadlock_once(self, run_id, recs, lo, hi):
+        calls.append((lo, hi))
+        if len(calls) == 1:
+            raise DeadlockError("database x: (1213, 'Deadlock found when trying to get lock')")
+        return original(self, run_id, recs, lo, hi)
+
+    monkeypatch.setattr(PairQueries, "_insert_batch", deadlock_once)
+    with Store.open(url) as store:
+        run_id = store.create_run("dead")
+        assert store.write_pairs(run_id, records, batch_size=16, skip_stored=True) == 40
+        np.testing.assert_array_equal(store.stored_indices(run_id), records.pair_index)
+        calls.clear()
+        fresh = store.create_run("fresh")
+        with pytest.raises(DeadlockError):
+            store.write_pairs(fresh, records, batch_size=16, skip_stored=False)
+        calls.clear()
+        again = store.create_run("again")
+        with pytest.raises(DeadlockError):  # retries used up
+            store.write_pairs(again, records, batch_size=16, skip_stored=True, deadlock_retries=0)
+
+
+def test_deadlocks_are_told_apart_from_other_faults():
+    class MySQLError(Exception):
+        pass
+
+    class PgError(Exception):
+        sqlstate = "40P01"
+
+    def wrapped(orig):
+        return sa.exc.OperationalError("INSERT ...", {}, orig)
+
+    assert is_deadlock(wrapped(MySQLError(1213, "Deadlock found")))
+    assert is_deadlock(wrapped(PgError("deadlock detected")))
+    assert not is_deadlock(wrapped(MySQLError(1205, "Lock wait timeout exceeded")))
+    assert not is_deadlock(wrapped(MySQLError("disk full")))

@@ -383,6 +383,20 @@ def _sqlite_reader(path: str):
 _FAULTS = (sa_exc.OperationalError, sa_exc.InternalError)
 
 
+class DeadlockError(OutputError):
+    """The server rolled a transaction back to break a lock cycle with another writer (MySQL/MariaDB error 1213,
+    PostgreSQL SQLSTATE 40P01): nothing of it is stored, and it may be run again."""
+
+
+def is_deadlock(exc: BaseException) -> bool:
+    """Whether `exc` (a SQLAlchemy error) is the server breaking a deadlock (`DeadlockError`)."""
+    orig = getattr(exc, "orig", None)
+    if orig is None:
+        return False
+    code = orig.args[0] if getattr(orig, "args", None) else None
+    return code == 1213 or getattr(orig, "sqlstate", None) == "40P01"
+
+
 def _one_line_error(shown: str):
     """A `handle_error` listener: a fault of the database (see `_FAULTS`) becomes an `OutputError` naming it,
     without SQLAlchemy's multi-line text (the statement and its parameters: maps and paths)."""
@@ -391,6 +405,7 @@ def _one_line_error(shown: str):
         exc = context.sqlalchemy_exception
         if context.connection is None or not (isinstance(exc, _FAULTS) or type(exc) is sa_exc.DatabaseError):
             return None  # connect errors: `open_engine` words them; integrity/programming errors are bugs
-        return OutputError(f"database {shown}: {_error_line(exc)}")
+        error = DeadlockError if is_deadlock(exc) else OutputError
+        return error(f"database {shown}: {_error_line(exc)}")
 
     return handle

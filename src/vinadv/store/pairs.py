@@ -24,7 +24,7 @@ from vinadv.store.codec import (
     encode_columns,
     encode_rows,
 )
-from vinadv.store.connection import Database
+from vinadv.store.connection import Database, DeadlockError
 from vinadv.store.records import PairRecords
 from vinadv.store.schema import map_pairs
 
@@ -65,11 +65,14 @@ class PairQueries(Database):
         batch_size: int = DEFAULT_BATCH,
         skip_stored: bool = True,
         progress=None,
+        deadlock_retries: int = 3,
     ) -> int:
         """Insert `records` for the run, `batch_size` rows per transaction; return how many were written.
 
-        With `skip_stored` (the resume path) pairs whose index is already stored are skipped. A batch is
-        all-or-nothing: a crash leaves whole batches only. `progress(n_rows)` is called after each batch.
+        With `skip_stored` (the resume path) pairs whose index is already stored are skipped, and a batch the
+        server rolled back to break a deadlock with another writer of the run (a concurrent resume) is written again,
+        what is stored by then skipped, up to `deadlock_retries` times. A batch is all-or-nothing: a crash leaves
+        whole batches only. `progress(n_rows)` is called after each batch.
         """
         run_id = int(run_id)
         if self.absent_columns:
@@ -96,6 +99,14 @@ class PairQueries(Database):
                 if not skip_stored:
                     raise
                 done = self._insert_missing(run_id, records.take(slice(lo, hi)), batch_size, conflict)
+            except DeadlockError:
+                if not skip_stored or deadlock_retries < 1:
+                    raise
+                # rolled back whole: the retry waits on the other writer's locks, then skips what it stored
+                batch = records.take(slice(lo, hi))
+                done = self.write_pairs(
+                    run_id, batch, batch_size=batch_size, skip_stored=True, deadlock_retries=deadlock_retries - 1
+                )
             written += done
             if progress is not None:
                 progress(hi - lo)
