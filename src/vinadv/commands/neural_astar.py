@@ -247,10 +247,10 @@ def _joined_maps(paths: list[str]):
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    import numpy as np
 
     from vinadv.planners.neural_astar.model import save_neural_astar
     from vinadv.planners.neural_astar.training import NeuralAstarTrainConfig, train_neural_astar
+    from vinadv.planners.training import split_indices
 
     set_threads(args.threads)
     device = planner_device(args) or "cpu"
@@ -276,11 +276,11 @@ def cmd_train(args: argparse.Namespace) -> int:
         val_maps, val_data = _joined_maps(args.val_data)
         train_maps = maps
     else:
-        order = np.random.default_rng([args.seed, 0x5EED]).permutation(len(maps))
-        n_val = max(1, int(round(len(maps) * args.val_fraction)))
-        if len(maps) - n_val < 1:
-            raise InputError(f"{args.data[0]}: {len(maps)} maps; training needs at least 2")
-        train_maps, val_maps = maps.take(np.sort(order[:-n_val])), maps.take(np.sort(order[-n_val:]))
+        try:  # the held-out maps as `vin train` and `gppn train` draw them
+            train_rows, val_rows = split_indices(len(maps), args.val_fraction, args.seed)
+        except InputError as exc:
+            raise InputError(f"{args.data[0]}: {exc}") from None
+        train_maps, val_maps = maps.take(train_rows), maps.take(val_rows)
         val_data = None
     digest = hashlib.sha256(
         "".join(d["sha256"] for d in data + (val_data or [])).encode() + str(args.val_fraction).encode()
