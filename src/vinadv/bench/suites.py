@@ -151,6 +151,13 @@ def get_suite(name: str) -> Suite:
 
 
 _CHEAP = ("key-points", "saliency", "near-path", "random")
+#: the ensembles of the full suites and of the quick ones (the same on 28x28 and on MP maps)
+_FULL_ENSEMBLE = (
+    AttackGroup(_CHEAP, "add", 3),
+    AttackGroup(("exhaustive",), "add", 1),
+    AttackGroup((*_CHEAP, "exhaustive"), "remove", 1),
+)
+_QUICK_ENSEMBLE = (AttackGroup(_CHEAP, "add", 3), AttackGroup(_CHEAP, "remove", 1))
 
 register(
     Suite(
@@ -161,11 +168,7 @@ register(
         size=28,
         maps_seed=1000,
         maps_sha256="631227302404d67d5e959361bf5ae8e5894f0e6a0e0630edfbb238dd821c4e1f",
-        attacks=(
-            AttackGroup(_CHEAP, "add", 3),
-            AttackGroup(("exhaustive",), "add", 1),
-            AttackGroup((*_CHEAP, "exhaustive"), "remove", 1),
-        ),
+        attacks=_FULL_ENSEMBLE,
         chunk=50,
     )
 )
@@ -178,7 +181,7 @@ register(
         size=28,
         maps_seed=1000,
         maps_sha256="3692472c7376f8107fc948abf8eeeaffa0198bfcccf1e1ba8ebdda322ae19a80",
-        attacks=(AttackGroup(_CHEAP, "add", 3), AttackGroup(_CHEAP, "remove", 1)),
+        attacks=_QUICK_ENSEMBLE,
         chunk=25,
     )
 )
@@ -203,11 +206,7 @@ register(
         size=32,
         maps_seed=0,
         maps_sha256="e99bb4ada1494c2163c8bf54347954f20c77adf392aa1fc46dff65bd951de4d8",
-        attacks=(
-            AttackGroup(_CHEAP, "add", 3),
-            AttackGroup(("exhaustive",), "add", 1),
-            AttackGroup((*_CHEAP, "exhaustive"), "remove", 1),
-        ),
+        attacks=_FULL_ENSEMBLE,
         chunk=50,
         files=tuple(DataFile(name, sha, 100) for name, sha in _MPD_FILES),
     )
@@ -222,7 +221,7 @@ register(
         size=32,
         maps_seed=0,
         maps_sha256="b72f05ac1d9b17f5953e40fe1489142e42cbd1c50730201dbdf8540255aaaf60",
-        attacks=(AttackGroup(_CHEAP, "add", 3), AttackGroup(_CHEAP, "remove", 1)),
+        attacks=_QUICK_ENSEMBLE,
         chunk=25,
         files=tuple(DataFile(name, sha, 17 if i < 4 else 16) for i, (name, sha) in enumerate(_MPD_FILES)),
     )
