@@ -26,21 +26,24 @@ from vinadv.planners.vin.weights import default_weights_path
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 
+#: the registered planners, in the order `vinadv planners` lists them
+REGISTERED = [
+    "vin",
+    "vin_robust",
+    "gppn",
+    "vin-mpd32",
+    "gppn-mpd32",
+    "optimal",
+    "astar",
+    "wastar",
+    "neural-astar",
+    "neural-astar-mpd5",
+]
+
 
 def test_list_names_the_registered_planners():
     names = [p["name"] for p in list_planners(28)]
-    assert names == [
-        "vin",
-        "vin_robust",
-        "gppn",
-        "vin-mpd32",
-        "gppn-mpd32",
-        "optimal",
-        "astar",
-        "wastar",
-        "neural-astar",
-        "neural-astar-mpd5",
-    ]
+    assert names == REGISTERED
     vin = list_planners(28)[0]
     assert vin["weights"].endswith("vin28.pt") and vin["weights_available"] is True
 
@@ -122,18 +125,7 @@ def test_plan_optimal_and_vin_from_the_cli(tmp_path, capsys):
 def test_planners_command(capsys):
     assert main(["planners", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert [p["name"] for p in out["planners"]] == [
-        "vin",
-        "vin_robust",
-        "gppn",
-        "vin-mpd32",
-        "gppn-mpd32",
-        "optimal",
-        "astar",
-        "wastar",
-        "neural-astar",
-        "neural-astar-mpd5",
-    ]
+    assert [p["name"] for p in out["planners"]] == REGISTERED
     assert main(["planners"]) == 0
     text = capsys.readouterr().out
     assert "optimal" in text and "FILE.py:FACTORY" in text
