@@ -49,18 +49,23 @@ def test_kentsommer_maps_with_fewer_trajectories_are_padded_not_dropped(tmp_path
     np.testing.assert_array_equal(MapSet.load(tmp_path / "m.npz").start_counts, counts)
 
 
-def test_kentsommer_consecutive_trajectories_are_split_by_the_move_rule(tmp_path):
-    # two trajectories on one map where the second starts next to where the first one was: only the labelled
-    # move decides where a trajectory ends
+def walled_map_without_starts() -> MapSet:
+    """One free 6x6 map inside a border wall, goal (1, 4), no starts: the trajectories written give them."""
     obstacles = np.zeros((1, 6, 6), bool)
     obstacles[0, [0, -1], :] = obstacles[0, :, [0, -1]] = True
-    maps = MapSet(
+    return MapSet(
         obstacles=obstacles,
         goals=np.array([[1, 4]]),
         starts=np.zeros((1, 0, 2), int),
         expert_costs=np.zeros((1, 0)),
         expert=PackedPaths.empty(),
     )
+
+
+def test_kentsommer_consecutive_trajectories_are_split_by_the_move_rule(tmp_path):
+    # two trajectories on one map where the second starts next to where the first one was: only the labelled
+    # move decides where a trajectory ends
+    maps = walled_map_without_starts()
     trajs = [(0, [(4, 1), (3, 2), (2, 3), (1, 4)]), (0, [(3, 1), (2, 2), (1, 3), (1, 4)])]
     write_kentsommer(tmp_path / "k.npz", maps, [], trajs)
     got = import_maps(tmp_path / "k.npz", "kentsommer")
@@ -70,15 +75,7 @@ def test_kentsommer_consecutive_trajectories_are_split_by_the_move_rule(tmp_path
 def test_kentsommer_a_repeated_start_is_dropped_and_the_file_loads(tmp_path):
     # the file's generator may start two trajectories of a map on one cell: the maps file keeps the first (a maps
     # file's starts differ; before, the import wrote a file that MapSet.load refused)
-    obstacles = np.zeros((1, 6, 6), bool)
-    obstacles[0, [0, -1], :] = obstacles[0, :, [0, -1]] = True
-    maps = MapSet(
-        obstacles=obstacles,
-        goals=np.array([[1, 4]]),
-        starts=np.zeros((1, 0, 2), int),
-        expert_costs=np.zeros((1, 0)),
-        expert=PackedPaths.empty(),
-    )
+    maps = walled_map_without_starts()
     path = [(4, 1), (3, 2), (2, 3), (1, 4)]
     trajs = [(0, path), (0, [(3, 1), (2, 2), (1, 3), (1, 4)]), (0, [(4, 1), (3, 1), (2, 2), (1, 3), (1, 4)])]
     write_kentsommer(tmp_path / "k.npz", maps, [], trajs)
