@@ -44,6 +44,22 @@ def test_sorted_by_worst_case_harmful_rate_with_links_and_flags(tmp_path, capsys
     assert "[a](../entries/a.json)" in (out / "leaderboard.md").read_text()
 
 
+def test_clean_optimal_for_every_planner_and_exp_for_search_planners_only(tmp_path):
+    policy = _entry("vin", 0.1)
+    policy["clean"]["percent_optimal"] = 0.862
+    search = _entry("astar", 0.0)
+    search["clean"].update(percent_optimal=0.71, search={"opt": 0.71, "exp": 0.3427})
+    for name, e in (("vin", policy), ("astar", search)):
+        (tmp_path / f"{name}.json").write_text(json.dumps(e))
+    by_planner = {r["planner"]: r for r in rows(read_entries(tmp_path))["vin28-quick-v1"]}
+    assert (by_planner["vin"]["optimal"], by_planner["vin"]["exp"]) == (0.862, None)
+    assert (by_planner["astar"]["optimal"], by_planner["astar"]["exp"]) == (0.71, 0.3427)
+    md = render_markdown(rows(read_entries(tmp_path)))
+    astar_line = next(line for line in md.splitlines() if "[astar]" in line)
+    vin_line = next(line for line in md.splitlines() if "[vin]" in line)
+    assert "| 71.0% | 34.3% |" in astar_line and "| 86.2% | — |" in vin_line
+
+
 def test_a_file_that_is_not_an_entry_is_one_line(tmp_path, capsys):
     (tmp_path / "x.json").write_text(json.dumps({"format": "something/1"}))
     assert main(["bench", "leaderboard", str(tmp_path), "--out", str(tmp_path / "o")]) == 2

@@ -18,6 +18,8 @@ COLUMNS = (
     "planner",
     "weights",
     "clean success",
+    "clean optimal",
+    "Exp",
     "worst-case harmful (k = 1)",
     "worst-case paper success (k = 1)",
     "worst-case harmful (largest k)",
@@ -47,6 +49,12 @@ def read_entries(folder: str | os.PathLike) -> list[tuple[Path, dict]]:
 
 def _pct(value) -> str:
     return "—" if value is None else f"{100 * value:.1f}%"
+
+
+def _search_exp(entry: dict) -> float | None:
+    """Exp, Neural A*'s share of A*'s expansions a search planner saves on the clean maps; None for a policy."""
+    search = entry["clean"].get("search")
+    return None if not search else search["exp"]
 
 
 def _removal_harmful(entry: dict) -> float | None:
@@ -91,6 +99,8 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
             "planner": planner_label(e["planner"]),
             "weights": weights[:12] if weights else "—",
             "clean": e["clean"]["success_rate"],
+            "optimal": e["clean"].get("percent_optimal"),
+            "exp": _search_exp(e),
             "harmful": worst[0]["harmful_rate"],
             "paper": worst[0]["paper_success_rate"],
             "harmful_k": worst[-1]["harmful_rate"],
@@ -117,6 +127,8 @@ def _cells(r: dict) -> list[str]:
         r["planner"],
         r["weights"],
         _pct(r["clean"]),
+        _pct(r["optimal"]),
+        _pct(r["exp"]),
         _pct(r["harmful"]),
         _pct(r["paper"]),
         f"{_pct(r['harmful_k'])} (k = {r['k']})",
