@@ -114,9 +114,17 @@ def test_init_continues_from_given_weights(tmp_path):
     same, rec = train_vin(
         maps, TrainConfig(**{**TINY, "lr": 1e-12, "seed": 5}, init=str(tmp_path / "first.pt")), progress=False
     )
-    assert rec["init_sha256"] == weights_checksum(tmp_path / "first.pt")
+    assert rec["init_sha256"] == weights_checksum(tmp_path / "first.pt") and "init_k" not in rec
     for key, value in first.state_dict().items():
         torch.testing.assert_close(same.state_dict()[key], value)
+    # k is iterations, not weights: another k starts from the same weights, and the record keeps the file's k
+    more_k, rec = train_vin(
+        maps, TrainConfig(**{**TINY, "lr": 1e-12, "k": first.config.k + 3}, init=str(tmp_path / "first.pt")),
+        progress=False,
+    )
+    assert more_k.config.k == first.config.k + 3 and rec["init_k"] == first.config.k
+    for key, value in first.state_dict().items():
+        torch.testing.assert_close(more_k.state_dict()[key], value)
     save_vin(VIN(VINConfig(k=10, l_h=12, l_q=8)), tmp_path / "other.pt")
     with pytest.raises(InputError, match="^init "):
         train_vin(maps, TrainConfig(**TINY, init=str(tmp_path / "other.pt")), progress=False)

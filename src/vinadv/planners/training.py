@@ -258,7 +258,8 @@ def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, Traini
         init_shift_kernels(model)
     record = options.get("record")
     if config.init:
-        start = load_vin(config.init, size=maps.size, k=vin_config.k)
+        # at the file's own k, so that the record keeps it (`init_k`) where this training's differs
+        start = load_vin(config.init, size=maps.size)
         record = _start_from(model, start, config.init, record, maps.moves)
     cpu = resolve_device(config.device).type == "cpu"
     options["record"] = {
