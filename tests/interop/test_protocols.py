@@ -13,8 +13,10 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps
 from vinadv.grid.shortest_paths import expert_paths
-from vinadv.interop.protocols import evaluate_protocol
+from vinadv.interop.protocols import evaluate_protocol, gppn_protocol
 from vinadv.planners.evaluation import evaluate_vin
+from vinadv.planners.interface import PlannerError
+from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.vin import make_input
 from vinadv.testing.planners import planning_vin
 
@@ -121,6 +123,26 @@ def test_gppn_protocol_matches_gppns_definitions(model, maps):
     assert got["percent_optimal"] == pytest.approx(opt)
     assert got["percent_success"] == pytest.approx(suc)
     assert 0 < got["percent_success"] < 1
+
+
+def test_gppn_protocol_plans_the_maps_movement_model():
+    # the exact planner for the maps' model is optimal from every cell, as GPPN counts moves (NEWS's on news maps);
+    # the planner is the one for the maps' moves, not the octile default's (which would cut across)
+    news = generate_maps(4, 12, seed=5, n_starts=1, moves="news")
+    got = gppn_protocol(OptimalPlanner(12), news)
+    reachable = []  # per map, the share of free cells with a NEWS path to the goal (breadth-first, plain Python)
+    for obstacles, goal in zip(news.obstacles, news.goals):
+        seen, frontier = {tuple(goal)}, [tuple(goal)]
+        while frontier:
+            r, c = frontier.pop()
+            for nr, nc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
+                if 0 <= nr < 12 and 0 <= nc < 12 and not obstacles[nr, nc] and (nr, nc) not in seen:
+                    seen.add((nr, nc))
+                    frontier.append((nr, nc))
+        reachable.append(len(seen) / (~obstacles).sum())
+    assert got["percent_optimal"] == 1.0 and got["percent_success"] == pytest.approx(np.mean(reachable))
+    with pytest.raises(PlannerError, match="plans octile moves .* the maps use 'news' moves"):
+        gppn_protocol(planning_vin(12), news)
 
 
 def test_vinadv_protocol_is_evaluate_vin(model, maps):

@@ -127,7 +127,7 @@ def gppn_protocol(planner, maps: MapSet) -> dict:
     """GPPN's %Opt and %Suc of `planner` (a `Planner` or a VIN) on `maps` (module doc); a search planner is
     refused (`require_policy`)."""
     n, size = len(maps), maps.size
-    planner = as_planner(planner, size)
+    planner = as_planner(planner, size).for_moves(maps.moves)  # a planner of another movement model is refused
     require_policy(planner, "the gppn protocol")
     actions = planner_actions(planner, maps.obstacles, maps.goals)
     succ = _moves(maps.obstacles, actions)
