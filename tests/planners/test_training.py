@@ -119,7 +119,8 @@ def test_init_continues_from_given_weights(tmp_path):
         torch.testing.assert_close(same.state_dict()[key], value)
     # k is iterations, not weights: another k starts from the same weights, and the record keeps the file's k
     more_k, rec = train_vin(
-        maps, TrainConfig(**{**TINY, "lr": 1e-12, "k": first.config.k + 3}, init=str(tmp_path / "first.pt")),
+        maps,
+        TrainConfig(**{**TINY, "lr": 1e-12, "k": first.config.k + 3}, init=str(tmp_path / "first.pt")),
         progress=False,
     )
     assert more_k.config.k == first.config.k + 3 and rec["init_k"] == first.config.k
