@@ -25,6 +25,10 @@
 # 5. (90) the command line: `vinadv plan` with --device cuda against the default, on 200 maps (cli.log);
 # 6. (240) benchmarks/device.py for the GPPN and the VIN: ties on 1,000 maps and the robustness suite of 4 maps on
 #    the CPU and on cuda (device.json).
+# 7. (ENTRY_SECONDS, default 570) issue 34's bench entry of the GPPN on vin28-v1 on cuda (vin28-v1.gppn.json): a
+#    call of its own, `STEPS=7`; commit the entry under docs/results/bench/ and refresh the leaderboard's index;
+# 8. (ENTRY_SECONDS) the same for Neural A* on mpd32-v1 (`STEPS=8`, MPD_DIR the six MP files: copy them to the
+#    git-ignored .mpd/ and carry it).
 # STEPS picks some (default "1 2 3 4").
 #
 # A dry run on any machine (the GPU tests left out, small sizes):
@@ -121,6 +125,24 @@ if step 6; then
         --json "$OUT/device.json" > "$OUT/device.log" 2>&1
     [ $? = 0 ] || status=1
     grep -v '^ \|^[{}]' "$OUT/device.log"
+fi
+if step 7; then
+    echo "== 7. issue 34's GPU entry: the GPPN on the full vin28-v1 suite, on $DEVICE (about 20 h on the 2-core CPU)"
+    # no --db: the device's python has no SQLAlchemy, so a run cut at the limit keeps nothing but its log
+    timeout "${ENTRY_SECONDS:-570}" "$PY" -m vinadv.cli bench run --suite "${GPPN_SUITE:-vin28-v1}" --planner gppn \
+        --device "$DEVICE" --out "$OUT/${GPPN_SUITE:-vin28-v1}.gppn.json" > "$OUT/entry_gppn.log" 2>&1
+    [ $? = 0 ] || status=1
+    tail -n 3 "$OUT/entry_gppn.log"
+fi
+
+if step 8; then
+    echo "== 8. issue 34's GPU entry: Neural A* on the full mpd32-v1 suite, on $DEVICE (about 3 h on the 2-core CPU)"
+    # MPD_DIR: the six MP files, e.g. copied to the git-ignored .mpd/ and carried (run(carry=[".mpd"]))
+    timeout "${ENTRY_SECONDS:-570}" "$PY" -m vinadv.cli bench run --suite "${MPD_SUITE:-mpd32-v1}" \
+        --planner neural-astar --data "${MPD_DIR:-.mpd}" --device "$DEVICE" \
+        --out "$OUT/${MPD_SUITE:-mpd32-v1}.neural-astar.json" > "$OUT/entry_neural_astar.log" 2>&1
+    [ $? = 0 ] || status=1
+    tail -n 3 "$OUT/entry_neural_astar.log"
 fi
 echo "device check: done (status $status); files: $(ls "$OUT" | tr '\n' ' ')"
 exit $status
