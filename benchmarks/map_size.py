@@ -17,7 +17,7 @@ turns, so the sizes do not take turns here: each runs its rounds in a row):
   else, maps/s;
 - `engine`: `VINPlanner.plan_batch`, the exact CPU engine, one plan per map (each its own value map): plans/s,
   with the maps whose rollout met a near tie (`near_tie_maps`): those are re-decided by replaying PyTorch's float32
-  arithmetic (`vinadv.planners.replay`), whose cost per map grows faster with the map than the value map's;
+  arithmetic (`vinadv.planners.replay`);
 - `attack`: the exhaustive attack (`make_attack("exhaustive")` with `vinadv robustness`' harm ranking: every valid
   cell of every map added in turn, each candidate map planned, paired, labelled, ranked) on the first `--attack-n`
   maps: seconds per map, and the candidate maps per map (valid cells, `vinadv.attacks.validity.valid_cells`).

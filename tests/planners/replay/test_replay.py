@@ -166,6 +166,37 @@ def test_unknown_modes_use_q_values(fresh_settings, monkeypatch):
     np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))
 
 
+def test_unknown_r_order_replays_the_rest_with_pytorchs_r(fresh_settings, monkeypatch):
+    model = planning_vin(16, seed=1).eval()
+    maps = generate_maps(4, 16, seed=2, n_starts=1)
+    threads = torch.get_num_threads()
+    require_replay(conv_modes(16, 150, 2, bias=True) is not None and conv_modes(16, 10) is not None, "conv replay")
+    CACHE.sum_orders[(16, 150, threads)] = None  # as MKL's 2-thread r layer at 32x32 and 64x64
+    kernel_calls = []
+
+    def counted(*args):
+        kernel_calls.append(1)
+        replay_kernel(*args)
+
+    monkeypatch.setattr(actions, "replay_kernel", counted)
+    for i in range(len(maps)):
+        x = make_input(maps.obstacles[i : i + 1], maps.goals[i : i + 1])
+        np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))
+    assert len(kernel_calls) == len(maps) and (16, 150, 10, threads) not in CACHE.q_failed
+
+
+@pytest.mark.parametrize("size, k", [(32, 42), (64, 100)])
+def test_vin64_replays_bit_for_bit_at_32_and_64(size, k, torch_threads):
+    model = load_vin(None, size=64, k=k).eval()
+    maps = generate_maps(3, size, seed=9, n_starts=1)
+    for i in range(len(maps)):
+        x = make_input(maps.obstacles[i : i + 1], maps.goals[i : i + 1])
+        np.testing.assert_array_equal(bits(replay_q_values(model, x)), bits(torch_q(model, x)))
+    setting = (size, 150, 10, torch_threads)
+    require_replay(conv_modes(size, 150, 2, bias=True) is not None and conv_modes(size, 10) is not None, "replay")
+    assert setting not in CACHE.q_failed
+
+
 def test_failed_verification_turns_the_replay_off(fresh_settings, monkeypatch):
     model = planning_vin(16, seed=1).eval()
     maps = generate_maps(3, 16, seed=2, n_starts=1)

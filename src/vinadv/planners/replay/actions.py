@@ -110,17 +110,20 @@ def _torch_fc(weights: VINWeights, q: np.ndarray) -> np.ndarray:
 
 def _q_values(p: _Weights, x: np.ndarray) -> np.ndarray:
     """q of one map `x (l_i, N, N)` float32: replayed where the setting's chains are known and verified, else
-    `VIN.q_values` itself. `(l_q, N, N)` float32."""
+    `VIN.q_values` itself. `(l_q, N, N)` float32. Where only the r layer's order is unknown (MKL on 2 threads sums
+    32x32 and 64x64 maps' 1x1 convolution in an order `sum_order` does not find), PyTorch computes r alone from
+    the replayed h, one small op instead of the k steps' thousands, and the rest is replayed."""
     l_i, n = x.shape[0], x.shape[-1]
     l_h, l_q = p.h.shape[0], p.q.shape[0]
     h_modes, q_modes, order = conv_modes(n, l_h, l_i, bias=True), conv_modes(n, l_q), sum_order(n, l_h)
     setting = (n, l_h, l_q, torch_threads_now())
-    if h_modes is None or q_modes is None or order is None or setting in CACHE.q_failed:
+    if h_modes is None or q_modes is None or setting in CACHE.q_failed:
         return _torch_q_values(p.vin, x)
     flat_x = to_flat(x)
     h = np.empty((l_h, flat_x.shape[1]), dtype=np.float32)
     conv_chains(flat_x, p.h, n, h_modes, h)
-    r = sum_channels(add_bias(from_flat(h, n), p.h_bias), p.r, *order)
+    h = add_bias(from_flat(h, n), p.h_bias)
+    r = _torch_r(p.vin, h) if order is None else sum_channels(h, p.r, *order)
     q = np.empty((l_q, flat_x.shape[1]), dtype=np.float32)
     conv_chains(to_flat(r[None]), p.q, n, q_modes, q)
     replay_kernel(q, p.w, p.k, n, q_modes)
@@ -132,6 +135,15 @@ def _q_values(p: _Weights, x: np.ndarray) -> np.ndarray:
             return want
         CACHE.passed("q_verified", setting, CACHE.q_verified, VERIFY_MAPS)
     return q
+
+
+def _torch_r(weights: VINWeights, h: np.ndarray) -> np.ndarray:
+    """PyTorch's r layer on one map's h `(l_h, N, N)`, as `VIN.q_values` applies it: `(N, N)` float32."""
+    import torch  # noqa: PLC0415 (as above)
+
+    with torch.no_grad():
+        # a copy in PyTorch's own (aligned) memory: MKL may sum otherwise for other alignments
+        return weights.module().r(torch.from_numpy(h).clone()[None])[0, 0].numpy()
 
 
 def _torch_q_values(weights: VINWeights, x: np.ndarray) -> np.ndarray:
