@@ -1,4 +1,5 @@
-"""A bring-your-own planner for vinadv: `vinadv plan --maps maps.npz --out paths.npz --planner examples/my_planner.py:make`.
+"""A bring-your-own planner for vinadv:
+`vinadv plan --maps maps.npz --out paths.npz --planner examples/my_planner.py:make`.
 
 `make(size)` returns a torch.nn.Module; `forward(obstacles, goals)` gets obstacles as 0/1 floats (B, N, N) and goals
 as int64 (B, 2) (row, col), and returns (B, 8, N, N) action logits in the order N, S, E, W, NE, NW, SE, SW.
