@@ -6,11 +6,15 @@ from __future__ import annotations
 import dataclasses
 import json
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from vinadv.bench import entry as bench_entry
-from vinadv.bench.entry import deterministic_part, entry_json, make_entry, run_bench
+from vinadv.bench.entry import deterministic_part, entry_json, make_entry, run_bench, weighted_mean
 from vinadv.bench.suites import AttackGroup, Suite, get_suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError
@@ -126,3 +130,18 @@ def test_make_entry_needs_every_chunk(planner):
 def test_resume_without_db_is_refused_before_the_work(capsys):
     assert main(["bench", "run", "--suite", "vin28-quick-v1", "--resume", "--planner", "optimal"]) == 2
     assert "--resume: only with --db" in capsys.readouterr().err
+
+
+@given(
+    st.lists(st.tuples(st.integers(1, 500), st.floats(0, 1, allow_nan=False)), min_size=1, max_size=40),
+    st.randoms(use_true_random=False),
+)
+def test_chunk_means_join_to_the_same_bits_in_any_order(chunks, rng):
+    # the entry's joined means do not depend on how a sum is ordered (a BLAS dot product's order is the CPU's)
+    weights, values = zip(*chunks)
+    got = weighted_mean(weights, values)
+    shuffled = list(chunks)
+    rng.shuffle(shuffled)
+    assert weighted_mean(*zip(*shuffled)) == got
+    exact = sum(Fraction(w) * Fraction(v) for w, v in chunks) / sum(Fraction(w) for w in weights)
+    assert abs(Fraction(got) - exact) <= abs(exact) * Fraction(2, 10**15)

@@ -27,6 +27,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import os
 import platform
 import time
@@ -203,6 +204,14 @@ def _counts(parts: list[dict]) -> dict:
     return total
 
 
+def weighted_mean(weights: Iterable[float], values: Iterable[float]) -> float:
+    """sum(w * v) / sum(w), each sum correctly rounded (`math.fsum`): the same bits on every CPU, where a BLAS dot
+    product sums in the order of the CPU's kernel (an entry made on an Intel and on an AMD CPU differed in the last
+    digit)."""
+    weights, values = list(weights), list(values)
+    return math.fsum(w * v for w, v in zip(weights, values)) / math.fsum(weights)
+
+
 def make_entry(suite: Suite, planner: Planner, chunks: dict[int, dict], checks: dict, seconds: float) -> dict:
     """The entry of `planner` on `suite` from its chunks' results (`compute_chunk`, {chunk: result}, all of them)."""
     order = [chunks[c] for c in sorted(chunks)]
@@ -212,7 +221,7 @@ def make_entry(suite: Suite, planner: Planner, chunks: dict[int, dict], checks: 
     weights = np.array([c["maps"] for c in order], dtype=np.float64)
 
     def gppn(name):  # the chunks' means, weighted by their maps: the mean over every map
-        return float(np.dot(weights, [c["clean"][name] for c in order]) / weights.sum())
+        return weighted_mean(weights, [c["clean"][name] for c in order])
 
     clean = {
         "maps": n,
@@ -274,8 +283,7 @@ def join_search(parts: list[dict]) -> dict:
         used = [(w, p[name]) for w, p in zip(weights, parts) if w > 0]
         if not used or any(v is None for _, v in used):
             return None
-        w, v = np.array(used, dtype=np.float64).T
-        return float(np.dot(w, v) / w.sum())
+        return weighted_mean(*zip(*used))
 
     reached = rows * np.array([p["success"] or 0.0 for p in parts])
     out = {
