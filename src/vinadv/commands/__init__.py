@@ -8,11 +8,13 @@ its result; `training` and `evaluation` the options every `train` and every `eva
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import re
 import shlex
 import sys
 from collections.abc import Iterator
+from typing import Any
 
 from vinadv.errors import InputError
 from vinadv.planners.batching import set_torch_threads
@@ -37,6 +39,15 @@ class LazyChoices:
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._load())
+
+
+def add_actions(subparsers, name: str, help: str) -> argparse._SubParsersAction:
+    """The command `vinadv NAME ACTION` (`help` its line in `vinadv --help`): its actions' subparsers, one of which
+    must be given; the action's name goes to `NAME_command`."""
+    parser = subparsers.add_parser(name, help=help)
+    actions = parser.add_subparsers(dest=name.replace("-", "_") + "_command", metavar="ACTION")
+    actions.required = True
+    return actions
 
 
 def add_planner_arguments(parser, weights_help: str | None = None) -> None:
@@ -103,6 +114,11 @@ def add_moves_argument(parser, default: str | None = "octile", what: str = "") -
     )
 
 
+def add_db_argument(parser) -> None:
+    """`--db`: the results database a command reads or writes (`vinadv.store.Store.open`)."""
+    parser.add_argument("--db", default=None, help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+
+
 #: library parameters whose flag is not `--` plus the name with dashes
 FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tolerance", "warmup_steps": "--warmup"}
 
@@ -110,6 +126,12 @@ FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tol
 def flag(parameter: str) -> str:
     """The command-line flag of a library parameter: `shard_size` -> `--shard-size`."""
     return FLAG_NAMES.get(parameter, "--" + parameter.replace("_", "-"))
+
+
+def option_values(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The options `names` (their `args` attributes) as keyword arguments of the same names, for a library call that
+    takes them as given: `option_values(args, "seed", "budget")` is `{"seed": args.seed, "budget": args.budget}`."""
+    return {name: getattr(args, name) for name in names}
 
 
 def cli_message(exc: InputError) -> str:

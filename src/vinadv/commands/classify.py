@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from vinadv.commands import add_actions
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
@@ -11,9 +12,7 @@ KINDS = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw")
 
 
 def register(subparsers) -> None:
-    classify = subparsers.add_parser("classify", help="train and evaluate FP/DP path pair classifiers")
-    sub = classify.add_subparsers(dest="classify_command", metavar="ACTION")
-    sub.required = True
+    sub = add_actions(subparsers, "classify", help="train and evaluate FP/DP path pair classifiers")
 
     train = sub.add_parser(
         "train",

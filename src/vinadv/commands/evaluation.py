@@ -42,6 +42,16 @@ def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
     add_output_options(ev, json="the figures", quiet=True)
 
 
+def add_prior_argument(ev: argparse.ArgumentParser) -> None:
+    """`--prior`: the goal-channel value of the kentsommer protocol (`vinadv eval`, `vin eval`)."""
+    ev.add_argument(
+        "--prior",
+        type=float,
+        default=None,
+        help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)",
+    )
+
+
 def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:
     """Start an `eval` command from `add_eval_arguments`' options: set the torch threads (`--threads`), then
     return `(MapSet, source)`, the maps and a record of where they came from."""

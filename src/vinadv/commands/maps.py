@@ -5,16 +5,14 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import add_moves_argument
+from vinadv.commands import add_actions, add_moves_argument
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
 
 
 def register(subparsers) -> None:
-    maps = subparsers.add_parser("maps", help="generate and look at grid-world maps")
-    sub = maps.add_subparsers(dest="maps_command", metavar="ACTION")
-    sub.required = True
+    sub = add_actions(subparsers, "maps", help="generate and look at grid-world maps")
 
     gen = sub.add_parser("generate", help="generate random maps with starts, goal and expert paths")
     gen.add_argument("--n", type=int, required=True, help="number of maps")

@@ -5,16 +5,15 @@ from __future__ import annotations
 import argparse
 import datetime
 import hashlib
-import json
 import time
 from pathlib import Path
 
 from vinadv import __version__
-from vinadv.commands import add_device_argument, command_line, planner_device, set_threads
-from vinadv.commands.output import add_output_options, emit, progress_bar, progress_lines, shows_progress
-from vinadv.commands.training import save_trained
+from vinadv.commands import add_actions, add_device_argument, command_line, planner_device, set_threads
+from vinadv.commands.output import add_output_options, emit, progress_bar
+from vinadv.commands.training import train_and_save, training_checkpoint, training_record, write_record
 from vinadv.errors import InputError
-from vinadv.outfile import atomic_output, check_output_path
+from vinadv.outfile import check_output_path
 from vinadv.planners.weights import weights_checksum
 
 #: the format of the record of an import, in the weights file and beside it
@@ -22,9 +21,7 @@ IMPORT_RECORD_FORMAT = "vinadv.neural-astar-import/1"
 
 
 def register(subparsers) -> None:
-    na = subparsers.add_parser("neural-astar", help="the Neural A* planner: import the authors' weights, check it")
-    sub = na.add_subparsers(dest="neural_astar_command", metavar="ACTION")
-    sub.required = True
+    sub = add_actions(subparsers, "neural-astar", help="the Neural A* planner: import the authors' weights, check it")
 
     imp = sub.add_parser(
         "import-weights",
@@ -163,9 +160,7 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
         "imported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     }
     save_neural_astar(model, out, record)
-    record_path = out.with_suffix(".json")
-    with atomic_output(record_path, "w") as fh:
-        fh.write(json.dumps(record, indent=2) + "\n")
+    record_path = write_record(out, record)
     return emit(
         args,
         record,
@@ -268,9 +263,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if not args.val_data and not 0 < args.val_fraction < 1:
         raise InputError(f"--val-fraction must be in (0, 1), got {args.val_fraction}")
     out = check_output_path(args.out, mkdir=True)
-    checkpoint = out.with_name(out.name + ".ckpt")
-    if checkpoint.exists() and not args.resume:
-        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
+    checkpoint = training_checkpoint(args, out)
     maps, data = _joined_maps(args.data)
     if args.val_data:
         val_maps, val_data = _joined_maps(args.val_data)
@@ -285,25 +278,22 @@ def cmd_train(args: argparse.Namespace) -> int:
     digest = hashlib.sha256(
         "".join(d["sha256"] for d in data + (val_data or [])).encode() + str(args.val_fraction).encode()
     ).hexdigest()
-    record = {
-        "command": command_line(),
-        "vinadv": __version__,
-        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "data": data,
-        "val_data": val_data if val_data is not None else f"{args.val_fraction} of the training maps held out",
-    }
-    model, record = train_neural_astar(
+    record = training_record(
+        data=data,
+        val_data=val_data if val_data is not None else f"{args.val_fraction} of the training maps held out",
+    )
+    record, record_path = train_and_save(
+        args,
+        train_neural_astar,
         train_maps,
         val_maps,
         config,
+        out=out,
         checkpoint=checkpoint,
-        resume=args.resume,
-        progress=shows_progress(args),
         record=record,
-        log=progress_lines(args),
+        save=save_neural_astar,
         data_sha256=digest,
     )
-    record_path = save_trained(model, out, record, save_neural_astar, checkpoint)
     best = record["best"]
     return emit(
         args,

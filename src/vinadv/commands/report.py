@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 
+from vinadv.commands import add_db_argument
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
@@ -23,7 +24,7 @@ def register(subparsers) -> None:
         "quality of the run's planner and the processing time of the paper's 100 pairs (table 7), stored with "
         "the run.",
     )
-    ev.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    add_db_argument(ev)
     ev.add_argument("--run", help="run id, or run name (its latest run); default: the latest run")
     ev.add_argument(
         "--classifiers",
@@ -55,7 +56,7 @@ def register(subparsers) -> None:
         "(table 7), the planner's quality (both as `vinadv evaluate` stored them) and the run's configuration; the "
         "paper's numbers beside ours.",
     )
-    rep.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    add_db_argument(rep)
     rep.add_argument(
         "--run", help="the main run to report, id or name (default: the first of --runs, else the latest run)"
     )

@@ -150,23 +150,68 @@ def adversarial_config(args: argparse.Namespace) -> dict | None:
     return config.to_dict()
 
 
-def save_trained(model, out: Path, record: dict, save: Callable, checkpoint: Path) -> Path:
-    """The end of a training command: `record` stamped finished, `save(model, out, record)`, the record written beside
-    the weights as JSON (`out` with `.json`, returned), and the resumable checkpoint dropped."""
-    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
-    save(model, out, record)
+def training_checkpoint(args: argparse.Namespace, out: Path) -> Path:
+    """OUT.ckpt, the resumable checkpoint of a training that writes `out`; refused where a killed run left one and
+    `--resume` was not given."""
+    checkpoint = out.with_name(out.name + ".ckpt")
+    if checkpoint.exists() and not args.resume:
+        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
+    return checkpoint
+
+
+def training_record(**fields: Any) -> dict:
+    """The head of a training record: the command line, vinadv's version and the time it started; then `fields`."""
+    return {
+        "command": command_line(),
+        "vinadv": __version__,
+        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        **fields,
+    }
+
+
+def write_record(out: Path, record: dict) -> Path:
+    """Write `record` as indented JSON beside the weights `out` (`out` with `.json`, returned)."""
     record_path = out.with_suffix(".json")
     with atomic_output(record_path, "w") as fh:
         fh.write(json.dumps(record, indent=2) + "\n")
-    checkpoint.unlink(missing_ok=True)
     return record_path
+
+
+def train_and_save(
+    args: argparse.Namespace,
+    train: Callable[..., tuple],
+    *data: Any,
+    out: Path,
+    checkpoint: Path,
+    record: dict,
+    save: Callable[..., None],
+    **options: Any,
+) -> tuple[dict, Path]:
+    """Train with `train(*data, ...)` (the checkpoint `checkpoint`, `--resume`, progress bars and lines as `--quiet`
+    and `--json` say, `record` to fill, and `options`), then write the weights with `save(model, out, record)` and the
+    record, stamped finished, beside them, and drop the checkpoint. Returns the record and the record file's path."""
+    model, record = train(
+        *data,
+        checkpoint=checkpoint,
+        resume=args.resume,
+        progress=shows_progress(args),
+        record=record,
+        log=progress_lines(args),
+        **options,
+    )
+    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    save(model, out, record)
+    record_path = write_record(out, record)
+    checkpoint.unlink(missing_ok=True)
+    return record, record_path
 
 
 def run_training(
     args: argparse.Namespace, config: TrainConfig, train: Callable[..., tuple], save: Callable[..., None]
 ) -> int:
     """Load the data, train with `train(maps, config, ...)` (checkpoint OUT.ckpt, `--resume`), write the weights
-    with `save(model, out, record)` and the record next to them; the body of every `train` command."""
+    with `save(model, out, record)` and the record next to them; the body of the `vin train` and `gppn train`
+    commands."""
     from vinadv.grid.mapset import MapSet
 
     set_threads(args.threads)
@@ -175,14 +220,9 @@ def run_training(
     if len(maps) < 2:
         raise InputError(f"{args.data}: {len(maps)} maps; training needs at least 2")
     out = Path(args.out)
-    checkpoint = out.with_name(out.name + ".ckpt")
-    if checkpoint.exists() and not args.resume:
-        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
-    record: TrainingRecord = {
-        "command": command_line(),
-        "vinadv": __version__,
-        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "data": {
+    checkpoint = training_checkpoint(args, out)
+    record: TrainingRecord = training_record(
+        data={
             "path": str(args.data),
             "sha256": weights_checksum(args.data),
             "maps": len(maps),
@@ -190,8 +230,8 @@ def run_training(
             "seed": int(maps.seed),
             "corner_cutting": bool(maps.corner_cutting),
             "moves": maps.moves,
-        },
-    }
+        }
+    )
     augment = None
     if config.adversarial is not None:
         from vinadv.grid.moves import require_moves
@@ -201,17 +241,9 @@ def run_training(
         require_moves(maps.moves, ("octile",), "adversarial training (--adversarial)")
 
         augment = AdversarialMaps(maps, AdversarialConfig(**config.adversarial), seed=config.seed)
-    model, record = train(
-        maps,
-        config,
-        checkpoint=checkpoint,
-        resume=args.resume,
-        progress=shows_progress(args),
-        record=record,
-        log=progress_lines(args),
-        augment=augment,
+    record, record_path = train_and_save(
+        args, train, maps, config, out=out, checkpoint=checkpoint, record=record, save=save, augment=augment
     )
-    record_path = save_trained(model, out, record, save, checkpoint)
     return emit(
         args,
         record,
