@@ -3,7 +3,9 @@
 Building the parser must stay light (`vinadv --help` and `--version` import no PyTorch, Numba, scikit-learn or
 SQLAlchemy): a command module imports the vinadv modules that pull those (and NumPy) inside the command's function,
 and reads names that live in them through `LazyChoices`. `output` holds `--json`, `--quiet` and how a command prints
-its result; `training` and `evaluation` the options every `train` and every `eval` command shares.
+its result; `training` and `evaluation` the options every `train` and every `eval` command shares. An option that
+several commands share is added by one `add_..._argument(s)` function (here, or in the module of the command it
+belongs to), so that its type, default and help are written once.
 """
 
 from __future__ import annotations
@@ -102,6 +104,15 @@ def planner_device(args) -> str | None:
     return str(resolve_device(name))
 
 
+def add_corner_cutting_argument(parser) -> None:
+    """`--no-corner-cutting`: the generated maps forbid a diagonal move between two obstacles."""
+    parser.add_argument(
+        "--no-corner-cutting",
+        action="store_true",
+        help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
+    )
+
+
 def add_moves_argument(parser, default: str | None = "octile", what: str = "") -> None:
     """`--moves MODEL`: the movement model of the maps a command makes or imports (`vinadv.grid.moves`)."""
     parser.add_argument(
@@ -146,6 +157,11 @@ def cli_message(exc: InputError) -> str:
 def command_line() -> str:
     """The command line this process was started with, as a shell would take it back (recorded in outputs)."""
     return "vinadv " + shlex.join(sys.argv[1:])
+
+
+def add_threads_argument(parser) -> None:
+    """`--threads N`: PyTorch's CPU threads, applied by `set_threads`."""
+    parser.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
 
 
 def set_threads(threads: int | None) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from vinadv.commands import add_actions
+from vinadv.commands import add_actions, option_values
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
@@ -24,13 +24,7 @@ def register(subparsers) -> None:
     train.add_argument("--pairs", default=None, help="pairs file (.npz, vinadv.pairs/3); needed with --labels rule")
     train.add_argument("--model", required=True, choices=KINDS, help="FP/DP classifier")
     train.add_argument("--out", required=True, help="output model file")
-    train.add_argument(
-        "--setting",
-        choices=("baseline", "tuned"),
-        default="baseline",
-        help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
-        "64), or tuned (row/column co-occurrence features of 'split' path images)",
-    )
+    add_setting_argument(train)
     train.add_argument(
         "--balance",
         action="store_true",
@@ -75,6 +69,18 @@ def register(subparsers) -> None:
     ev.set_defaults(func=cmd_eval)
 
 
+def add_setting_argument(parser) -> None:
+    """`--setting baseline|tuned`: the features and training of the FP/DP classifiers (`classify train`,
+    `evaluate`)."""
+    parser.add_argument(
+        "--setting",
+        choices=("baseline", "tuned"),
+        default="baseline",
+        help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
+        "64), or tuned (row/column co-occurrence features of 'split' path images)",
+    )
+
+
 def _load_pairs(path):
     from vinadv.attacks.pairs import PairSet
     from vinadv.classify.batch import PathPairBatch
@@ -109,12 +115,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     model, record, arrays = train_classifier(
         batch,
         labels,
-        model=args.model,
-        setting=args.setting,
-        threshold=args.threshold,
-        balance=args.balance,
-        test_fraction=args.test_fraction,
-        seed=args.seed,
+        **option_values(args, "model", "setting", "threshold", "balance", "test_fraction", "seed"),
         source=str(args.pairs),
         verbose=shows_progress(args),
     )

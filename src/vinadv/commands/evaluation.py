@@ -10,7 +10,7 @@ import textwrap
 import time
 from typing import TYPE_CHECKING
 
-from vinadv.commands import add_moves_argument, command_line, set_threads
+from vinadv.commands import add_moves_argument, add_threads_argument, command_line, set_threads
 from vinadv.commands.output import add_output_options, emit
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output
@@ -30,7 +30,7 @@ def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
     ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
     ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
     add_moves_argument(ev, default=None, what="with --n: movement model of the generated maps")
-    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    add_threads_argument(ev)
     ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
     ev.add_argument(
         "--figure",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import add_actions, add_moves_argument
+from vinadv.commands import add_actions, add_corner_cutting_argument, add_moves_argument
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -19,11 +19,7 @@ def register(subparsers) -> None:
     gen.add_argument("--size", type=int, default=28, help="map side N (>= 8; default 28)")
     gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     gen.add_argument("--starts", type=int, default=7, help="starts per map (default 7)")
-    gen.add_argument(
-        "--no-corner-cutting",
-        action="store_true",
-        help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
-    )
+    add_corner_cutting_argument(gen)
     add_moves_argument(gen)
     gen.add_argument("--out", required=True, help="output maps file (.npz)")
     add_output_options(gen, json="the summary", quiet=True)

@@ -9,9 +9,16 @@ import time
 from pathlib import Path
 
 from vinadv import __version__
-from vinadv.commands import add_actions, add_device_argument, command_line, planner_device, set_threads
+from vinadv.commands import add_actions, add_device_argument, command_line, option_values, planner_device, set_threads
 from vinadv.commands.output import add_output_options, emit, progress_bar
-from vinadv.commands.training import train_and_save, training_checkpoint, training_record, write_record
+from vinadv.commands.training import (
+    add_run_arguments,
+    add_weights_out_argument,
+    train_and_save,
+    training_checkpoint,
+    training_record,
+    write_record,
+)
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
 from vinadv.planners.weights import weights_checksum
@@ -44,7 +51,7 @@ def register(subparsers) -> None:
         default=None,
         help="where the checkpoint comes from, recorded (say the repository, commit and path in it)",
     )
-    imp.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    add_weights_out_argument(imp)
     add_output_options(imp, json="the record")
     imp.set_defaults(func=cmd_import_weights)
 
@@ -82,22 +89,14 @@ def register(subparsers) -> None:
         "of the training maps after a seeded shuffle)",
     )
     tr.add_argument("--val-fraction", type=float, default=0.1, help="held out without --val-data (default 0.1)")
-    tr.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    add_weights_out_argument(tr)
     tr.add_argument("--epochs", type=int, default=50, help="epochs (default 50, as train.yaml)")
     tr.add_argument("--lr", type=float, default=0.001, help="RMSprop learning rate (default 0.001)")
     tr.add_argument("--batch-size", type=int, default=100, help="maps per step and per validation batch (default 100)")
     tr.add_argument("--tmax", type=float, default=0.25, help="share of cells the search may select (default 0.25)")
     tr.add_argument("--seed", type=int, default=1234, help="initialisation, shuffles and starts (default 1234)")
     tr.add_argument("--depth", type=int, default=4, help="encoder blocks, 1..4 (default 4)")
-    tr.add_argument(
-        "--time-limit",
-        type=float,
-        default=None,
-        metavar="MIN",
-        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
-    )
-    tr.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
-    tr.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    add_run_arguments(tr)
     add_device_argument(tr)
     add_output_options(tr, json="the training record", quiet=True)
     tr.set_defaults(func=cmd_train)
@@ -250,12 +249,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     set_threads(args.threads)
     device = planner_device(args) or "cpu"
     config = NeuralAstarTrainConfig(
-        epochs=args.epochs,
-        lr=args.lr,
-        batch_size=args.batch_size,
-        tmax=args.tmax,
-        seed=args.seed,
-        depth=args.depth,
+        **option_values(args, "epochs", "lr", "batch_size", "tmax", "seed", "depth"),
         device=device,
         time_limit_min=args.time_limit,
     )

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from vinadv.commands import add_db_argument
+from vinadv.commands.classify import add_setting_argument
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
@@ -31,13 +32,7 @@ def register(subparsers) -> None:
         default=",".join(CLASSIFIER_NAMES),
         help=f"comma-separated, from {','.join(CLASSIFIER_NAMES)} (default: all)",
     )
-    ev.add_argument(
-        "--setting",
-        choices=("baseline", "tuned"),
-        default="baseline",
-        help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
-        "64), or tuned (row/column co-occurrence features of 'split' path images)",
-    )
+    add_setting_argument(ev)
     ev.add_argument(
         "--sizes",
         default=None,

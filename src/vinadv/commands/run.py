@@ -8,6 +8,7 @@ import time
 from vinadv.cluster import ClusterIdentify, ClusterShards, add_cluster_arguments, open_cluster
 from vinadv.commands import (
     LazyChoices,
+    add_corner_cutting_argument,
     add_db_argument,
     add_moves_argument,
     add_planner_arguments,
@@ -38,7 +39,7 @@ def register(subparsers) -> None:
         help="attack strategy: %(choices)s (default near-path)",
     )
     add_attack_arguments(run)
-    run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
+    add_corner_cutting_argument(run)
     add_moves_argument(
         run, default=None, what="movement model of the generated maps (the planner plans it; with --maps, the file's)"
     )

@@ -1,5 +1,6 @@
-"""The options every planner's `train` command shares (`vin train`, `gppn train`), and the body of those commands:
-the options' `TrainConfig`, the training run, the weights and the training record written."""
+"""The options every planner's `train` command shares (`vin train`, `gppn train`; `neural-astar train` those of the
+training run, `add_run_arguments`), and the body of those commands: the options' `TrainConfig`, the training run
+with its checkpoint, the weights and the training record written."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from vinadv import __version__
-from vinadv.commands import LazyChoices, command_line, set_threads
+from vinadv.commands import LazyChoices, add_threads_argument, command_line, option_values, set_threads
 from vinadv.commands.output import add_output_options, emit, progress_lines, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
@@ -25,7 +26,7 @@ if TYPE_CHECKING:  # PyTorch behind it: imported by the command that trains
 def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) -> None:
     """The options every planner's `train` command shares (`vin train`, `gppn train`)."""
     train.add_argument("--data", required=True, help="maps file (.npz, from `vinadv maps generate`)")
-    train.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    add_weights_out_argument(train)
     train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
     train.add_argument(
         "--lr", type=float, default=lr, help=f"peak RMSprop learning rate, cosine-decayed (default {lr})"
@@ -45,20 +46,12 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
         "--device", default="cpu", help="torch device: cpu, cuda, cuda:N, auto (cuda where available) (default cpu)"
     )
     train.add_argument("--k", type=int, default=None, help=k_help)
-    train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
-    train.add_argument(
-        "--time-limit",
-        type=float,
-        default=None,
-        metavar="MIN",
-        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
-    )
     train.add_argument(
         "--init",
         metavar="WEIGHTS",
         help="start from these weights (continue a training) instead of a fresh initialisation",
     )
-    train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    add_run_arguments(train)
     adv = train.add_argument_group("adversarial training (vinadv.hardening)")
     adv.add_argument(
         "--adversarial",
@@ -97,6 +90,25 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
     add_output_options(train, json="the training record", quiet=True)
 
 
+def add_weights_out_argument(parser: argparse.ArgumentParser) -> None:
+    """`--out`: the weights a command writes, with its record beside them (`write_record`)."""
+    parser.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+
+
+def add_run_arguments(train: argparse.ArgumentParser) -> None:
+    """The options of the training run that every `train` command shares (`vin`, `gppn`, `neural-astar`): torch CPU
+    threads, a time limit, and `--resume` from the checkpoint a killed run left (`training_checkpoint`)."""
+    add_threads_argument(train)
+    train.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="MIN",
+        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
+    )
+    train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+
+
 def add_compile_argument(train: argparse.ArgumentParser) -> None:
     """`--compile`: train through torch.compile (torch planners; the VIN's value iteration is compiled already)."""
     train.add_argument(
@@ -112,15 +124,8 @@ def train_config(args: argparse.Namespace, **extra: Any) -> TrainConfig:
     from vinadv.planners.training import TrainConfig
 
     config = TrainConfig(
-        epochs=args.epochs,
-        lr=args.lr,
-        batch_size=args.batch_size,
-        val_fraction=args.val_fraction,
-        seed=args.seed,
-        device=args.device,
-        k=args.k,
+        **option_values(args, "epochs", "lr", "batch_size", "val_fraction", "seed", "device", "k", "init"),
         time_limit_min=args.time_limit,
-        init=args.init,
         warmup_steps=args.warmup,
         adversarial=adversarial_config(args),
         **extra,
