@@ -3,16 +3,20 @@
 Building the parser must stay light (`vinadv --help` and `--version` import no PyTorch, Numba, scikit-learn or
 SQLAlchemy): a command module imports the vinadv modules that pull those (and NumPy) inside the command's function,
 and reads names that live in them through `LazyChoices`. `output` holds `--json`, `--quiet` and how a command prints
-its result; `training` and `evaluation` the options every `train` and every `eval` command shares.
+its result; `training` and `evaluation` the options every `train` and every `eval` command shares. An option that
+several commands share is added by one `add_..._argument(s)` function (here, or in the module of the command it
+belongs to), so that its type, default and help are written once.
 """
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import re
 import shlex
 import sys
 from collections.abc import Iterator
+from typing import Any
 
 from vinadv.errors import InputError
 from vinadv.planners.batching import set_torch_threads
@@ -37,6 +41,15 @@ class LazyChoices:
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._load())
+
+
+def add_actions(subparsers, name: str, help: str) -> argparse._SubParsersAction:
+    """The command `vinadv NAME ACTION` (`help` its line in `vinadv --help`): its actions' subparsers, one of which
+    must be given; the action's name goes to `NAME_command`."""
+    parser = subparsers.add_parser(name, help=help)
+    actions = parser.add_subparsers(dest=name.replace("-", "_") + "_command", metavar="ACTION")
+    actions.required = True
+    return actions
 
 
 def add_planner_arguments(parser, weights_help: str | None = None) -> None:
@@ -91,6 +104,15 @@ def planner_device(args) -> str | None:
     return str(resolve_device(name))
 
 
+def add_corner_cutting_argument(parser) -> None:
+    """`--no-corner-cutting`: the generated maps forbid a diagonal move between two obstacles."""
+    parser.add_argument(
+        "--no-corner-cutting",
+        action="store_true",
+        help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
+    )
+
+
 def add_moves_argument(parser, default: str | None = "octile", what: str = "") -> None:
     """`--moves MODEL`: the movement model of the maps a command makes or imports (`vinadv.grid.moves`)."""
     parser.add_argument(
@@ -103,6 +125,11 @@ def add_moves_argument(parser, default: str | None = "octile", what: str = "") -
     )
 
 
+def add_db_argument(parser) -> None:
+    """`--db`: the results database a command reads or writes (`vinadv.store.Store.open`)."""
+    parser.add_argument("--db", default=None, help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+
+
 #: library parameters whose flag is not `--` plus the name with dashes
 FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tolerance", "warmup_steps": "--warmup"}
 
@@ -110,6 +137,12 @@ FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tol
 def flag(parameter: str) -> str:
     """The command-line flag of a library parameter: `shard_size` -> `--shard-size`."""
     return FLAG_NAMES.get(parameter, "--" + parameter.replace("_", "-"))
+
+
+def option_values(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The options `names` (their `args` attributes) as keyword arguments of the same names, for a library call that
+    takes them as given: `option_values(args, "seed", "budget")` is `{"seed": args.seed, "budget": args.budget}`."""
+    return {name: getattr(args, name) for name in names}
 
 
 def cli_message(exc: InputError) -> str:
@@ -124,6 +157,11 @@ def cli_message(exc: InputError) -> str:
 def command_line() -> str:
     """The command line this process was started with, as a shell would take it back (recorded in outputs)."""
     return "vinadv " + shlex.join(sys.argv[1:])
+
+
+def add_threads_argument(parser) -> None:
+    """`--threads N`: PyTorch's CPU threads, applied by `set_threads`."""
+    parser.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
 
 
 def set_threads(threads: int | None) -> None:

@@ -6,7 +6,7 @@ import argparse
 import time
 
 from vinadv.cluster import add_cluster_arguments, attack_on_cluster, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments, load_args_planner, planner_device
+from vinadv.commands import LazyChoices, add_planner_arguments, load_args_planner, option_values, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.outfile import check_output_path
 
@@ -24,16 +24,7 @@ def register(subparsers) -> None:
         help="attack strategy: %(choices)s",
     )
     p.add_argument("--out", required=True, help="output pairs file (.npz)")
-    p.add_argument(
-        "--per-map", type=int, default=1, help="pairs per map (default 1; 0 with exhaustive: every valid cell)"
-    )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument(
-        "--budget", type=int, default=8, help="key-points and saliency: candidates evaluated per map (default 8)"
-    )
-    p.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
-    add_obstacles_argument(p)
-    add_edit_argument(p)
+    add_attack_arguments(p)
     add_planner_arguments(p)
     add_harm_arguments(p)
     add_objective_argument(p)
@@ -42,8 +33,18 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_attack)
 
 
-def add_obstacles_argument(parser) -> None:
-    """`--obstacles K`: obstacles added per pair, greedily (DESIGN.md "Several obstacles")."""
+def add_attack_arguments(parser) -> None:
+    """The options of the attack itself (`make_attack`'s, read by `attack_options`) that `attack` and `run` share:
+    `--per-map`, `--seed`, `--budget`, `--radius`, `--obstacles K` (added greedily: DESIGN.md "Several obstacles")
+    and `--edit`."""
+    parser.add_argument(
+        "--per-map", type=int, default=1, help="pairs per map (default 1; 0 with exhaustive: every valid cell)"
+    )
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument(
+        "--budget", type=int, default=8, help="key-points and saliency: candidates evaluated per map (default 8)"
+    )
+    parser.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
     parser.add_argument(
         "--obstacles",
         type=int,
@@ -53,6 +54,12 @@ def add_obstacles_argument(parser) -> None:
         "strategy run again on the map with the cells chosen so far, keeping the strongest cell "
         "against the original map's path each time",
     )
+    add_edit_argument(parser)
+
+
+def attack_options(args: argparse.Namespace) -> dict:
+    """The options of `add_attack_arguments` as `make_attack`'s (and `RunConfig`'s) keyword arguments."""
+    return option_values(args, "per_map", "seed", "budget", "radius", "obstacles", "edit")
 
 
 def add_edit_argument(parser) -> None:
@@ -83,6 +90,11 @@ def add_harm_arguments(parser) -> None:
         metavar="REL",
         help="relative harm tolerance, times the adversarial map's optimal cost (default 0)",
     )
+
+
+def harm_tolerances(args: argparse.Namespace) -> dict:
+    """The options of `add_harm_arguments` as the library's keyword arguments `harm_tol` and `harm_rtol`."""
+    return {"harm_tol": args.harm_tolerance, "harm_rtol": args.harm_rtol}
 
 
 def add_objective_argument(parser) -> None:
@@ -155,14 +167,7 @@ def cmd_attack(args: argparse.Namespace) -> int:
     maps = MapSet.load(args.maps)
     planner = load_args_planner(args, maps, device)
     # `make_attack`'s options, kept: on a cluster every worker builds its own attack from them
-    options = dict(
-        per_map=args.per_map,
-        seed=args.seed,
-        budget=args.budget,
-        radius=args.radius,
-        obstacles=args.obstacles,
-        edit=args.edit,
-    )
+    options = attack_options(args)
     attack = make_attack(args.strategy, **options)
     t0 = time.perf_counter()
     if args.cluster is None and args.workers is None:
@@ -190,7 +195,7 @@ def cmd_attack(args: argparse.Namespace) -> int:
             )
     elapsed = time.perf_counter() - t0
     result.pairs.save(args.out)
-    ident = identify(result.pairs, harm_tol=args.harm_tolerance, harm_rtol=args.harm_rtol)
+    ident = identify(result.pairs, **harm_tolerances(args))
     summary = attack_summary(
         ident.labels, len(maps), len(result.no_valid_cell), result.planner_calls, elapsed, harm_table=ident.harm_table()
     )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from vinadv.commands import add_actions, option_values
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
@@ -11,9 +12,7 @@ KINDS = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw")
 
 
 def register(subparsers) -> None:
-    classify = subparsers.add_parser("classify", help="train and evaluate FP/DP path pair classifiers")
-    sub = classify.add_subparsers(dest="classify_command", metavar="ACTION")
-    sub.required = True
+    sub = add_actions(subparsers, "classify", help="train and evaluate FP/DP path pair classifiers")
 
     train = sub.add_parser(
         "train",
@@ -25,13 +24,7 @@ def register(subparsers) -> None:
     train.add_argument("--pairs", default=None, help="pairs file (.npz, vinadv.pairs/3); needed with --labels rule")
     train.add_argument("--model", required=True, choices=KINDS, help="FP/DP classifier")
     train.add_argument("--out", required=True, help="output model file")
-    train.add_argument(
-        "--setting",
-        choices=("baseline", "tuned"),
-        default="baseline",
-        help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
-        "64), or tuned (row/column co-occurrence features of 'split' path images)",
-    )
+    add_setting_argument(train)
     train.add_argument(
         "--balance",
         action="store_true",
@@ -76,6 +69,18 @@ def register(subparsers) -> None:
     ev.set_defaults(func=cmd_eval)
 
 
+def add_setting_argument(parser) -> None:
+    """`--setting baseline|tuned`: the features and training of the FP/DP classifiers (`classify train`,
+    `evaluate`)."""
+    parser.add_argument(
+        "--setting",
+        choices=("baseline", "tuned"),
+        default="baseline",
+        help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
+        "64), or tuned (row/column co-occurrence features of 'split' path images)",
+    )
+
+
 def _load_pairs(path):
     from vinadv.attacks.pairs import PairSet
     from vinadv.classify.batch import PathPairBatch
@@ -110,12 +115,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     model, record, arrays = train_classifier(
         batch,
         labels,
-        model=args.model,
-        setting=args.setting,
-        threshold=args.threshold,
-        balance=args.balance,
-        test_fraction=args.test_fraction,
-        seed=args.seed,
+        **option_values(args, "model", "setting", "threshold", "balance", "test_fraction", "seed"),
         source=str(args.pairs),
         verbose=shows_progress(args),
     )

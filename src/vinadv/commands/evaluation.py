@@ -10,7 +10,7 @@ import textwrap
 import time
 from typing import TYPE_CHECKING
 
-from vinadv.commands import add_moves_argument, command_line, set_threads
+from vinadv.commands import add_moves_argument, add_threads_argument, command_line, set_threads
 from vinadv.commands.output import add_output_options, emit
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output
@@ -30,7 +30,7 @@ def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
     ev.add_argument("--size", type=int, default=28, help="side of the generated maps (default 28)")
     ev.add_argument("--starts", type=int, default=7, help="starts per generated map (default 7)")
     add_moves_argument(ev, default=None, what="with --n: movement model of the generated maps")
-    ev.add_argument("--threads", type=int, default=None, help="torch CPU threads")
+    add_threads_argument(ev)
     ev.add_argument("--out", default=None, help="also write the figures as JSON to this file")
     ev.add_argument(
         "--figure",
@@ -40,6 +40,16 @@ def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
         "rollouts per bucket) to FILE (.png, .svg or .pdf); needs the vinadv protocol",
     )
     add_output_options(ev, json="the figures", quiet=True)
+
+
+def add_prior_argument(ev: argparse.ArgumentParser) -> None:
+    """`--prior`: the goal-channel value of the kentsommer protocol (`vinadv eval`, `vin eval`)."""
+    ev.add_argument(
+        "--prior",
+        type=float,
+        default=None,
+        help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)",
+    )
 
 
 def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import command_line
+from vinadv.commands import add_actions, command_line
 from vinadv.commands.evaluation import add_eval_arguments, emit_metrics, start_eval
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.training import add_compile_argument, add_train_arguments, run_training, train_config
@@ -18,9 +18,7 @@ GPPN_DEFAULTS = {"l_h": 32, "k": 20, "kernel": 5, "lr": 0.001}
 
 
 def register(subparsers) -> None:
-    gppn = subparsers.add_parser("gppn", help="train and evaluate the GPPN planner")
-    sub = gppn.add_subparsers(dest="gppn_command", metavar="ACTION")
-    sub.required = True
+    sub = add_actions(subparsers, "gppn", help="train and evaluate the GPPN planner")
     train = sub.add_parser("train", help="train a GPPN on a maps file (every free cell is supervised)")
     add_train_arguments(train, lr=GPPN_DEFAULTS["lr"], k_help=f"iterations (default {GPPN_DEFAULTS['k']})")
     train.add_argument(

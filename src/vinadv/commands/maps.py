@@ -5,27 +5,21 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import add_moves_argument
+from vinadv.commands import add_actions, add_corner_cutting_argument, add_moves_argument
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
 
 
 def register(subparsers) -> None:
-    maps = subparsers.add_parser("maps", help="generate and look at grid-world maps")
-    sub = maps.add_subparsers(dest="maps_command", metavar="ACTION")
-    sub.required = True
+    sub = add_actions(subparsers, "maps", help="generate and look at grid-world maps")
 
     gen = sub.add_parser("generate", help="generate random maps with starts, goal and expert paths")
     gen.add_argument("--n", type=int, required=True, help="number of maps")
     gen.add_argument("--size", type=int, default=28, help="map side N (>= 8; default 28)")
     gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     gen.add_argument("--starts", type=int, default=7, help="starts per map (default 7)")
-    gen.add_argument(
-        "--no-corner-cutting",
-        action="store_true",
-        help="forbid diagonal moves between two obstacles (default: allowed, as in the original data)",
-    )
+    add_corner_cutting_argument(gen)
     add_moves_argument(gen)
     gen.add_argument("--out", required=True, help="output maps file (.npz)")
     add_output_options(gen, json="the summary", quiet=True)

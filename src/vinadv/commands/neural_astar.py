@@ -5,16 +5,22 @@ from __future__ import annotations
 import argparse
 import datetime
 import hashlib
-import json
 import time
 from pathlib import Path
 
 from vinadv import __version__
-from vinadv.commands import add_device_argument, command_line, planner_device, set_threads
-from vinadv.commands.output import add_output_options, emit, progress_bar, progress_lines, shows_progress
-from vinadv.commands.training import save_trained
+from vinadv.commands import add_actions, add_device_argument, command_line, option_values, planner_device, set_threads
+from vinadv.commands.output import add_output_options, emit, progress_bar
+from vinadv.commands.training import (
+    add_run_arguments,
+    add_weights_out_argument,
+    train_and_save,
+    training_checkpoint,
+    training_record,
+    write_record,
+)
 from vinadv.errors import InputError
-from vinadv.outfile import atomic_output, check_output_path
+from vinadv.outfile import check_output_path
 from vinadv.planners.weights import weights_checksum
 
 #: the format of the record of an import, in the weights file and beside it
@@ -22,9 +28,7 @@ IMPORT_RECORD_FORMAT = "vinadv.neural-astar-import/1"
 
 
 def register(subparsers) -> None:
-    na = subparsers.add_parser("neural-astar", help="the Neural A* planner: import the authors' weights, check it")
-    sub = na.add_subparsers(dest="neural_astar_command", metavar="ACTION")
-    sub.required = True
+    sub = add_actions(subparsers, "neural-astar", help="the Neural A* planner: import the authors' weights, check it")
 
     imp = sub.add_parser(
         "import-weights",
@@ -47,7 +51,7 @@ def register(subparsers) -> None:
         default=None,
         help="where the checkpoint comes from, recorded (say the repository, commit and path in it)",
     )
-    imp.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    add_weights_out_argument(imp)
     add_output_options(imp, json="the record")
     imp.set_defaults(func=cmd_import_weights)
 
@@ -85,22 +89,14 @@ def register(subparsers) -> None:
         "of the training maps after a seeded shuffle)",
     )
     tr.add_argument("--val-fraction", type=float, default=0.1, help="held out without --val-data (default 0.1)")
-    tr.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    add_weights_out_argument(tr)
     tr.add_argument("--epochs", type=int, default=50, help="epochs (default 50, as train.yaml)")
     tr.add_argument("--lr", type=float, default=0.001, help="RMSprop learning rate (default 0.001)")
     tr.add_argument("--batch-size", type=int, default=100, help="maps per step and per validation batch (default 100)")
     tr.add_argument("--tmax", type=float, default=0.25, help="share of cells the search may select (default 0.25)")
     tr.add_argument("--seed", type=int, default=1234, help="initialisation, shuffles and starts (default 1234)")
     tr.add_argument("--depth", type=int, default=4, help="encoder blocks, 1..4 (default 4)")
-    tr.add_argument(
-        "--time-limit",
-        type=float,
-        default=None,
-        metavar="MIN",
-        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
-    )
-    tr.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
-    tr.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    add_run_arguments(tr)
     add_device_argument(tr)
     add_output_options(tr, json="the training record", quiet=True)
     tr.set_defaults(func=cmd_train)
@@ -163,9 +159,7 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
         "imported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     }
     save_neural_astar(model, out, record)
-    record_path = out.with_suffix(".json")
-    with atomic_output(record_path, "w") as fh:
-        fh.write(json.dumps(record, indent=2) + "\n")
+    record_path = write_record(out, record)
     return emit(
         args,
         record,
@@ -255,12 +249,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     set_threads(args.threads)
     device = planner_device(args) or "cpu"
     config = NeuralAstarTrainConfig(
-        epochs=args.epochs,
-        lr=args.lr,
-        batch_size=args.batch_size,
-        tmax=args.tmax,
-        seed=args.seed,
-        depth=args.depth,
+        **option_values(args, "epochs", "lr", "batch_size", "tmax", "seed", "depth"),
         device=device,
         time_limit_min=args.time_limit,
     )
@@ -268,9 +257,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if not args.val_data and not 0 < args.val_fraction < 1:
         raise InputError(f"--val-fraction must be in (0, 1), got {args.val_fraction}")
     out = check_output_path(args.out, mkdir=True)
-    checkpoint = out.with_name(out.name + ".ckpt")
-    if checkpoint.exists() and not args.resume:
-        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
+    checkpoint = training_checkpoint(args, out)
     maps, data = _joined_maps(args.data)
     if args.val_data:
         val_maps, val_data = _joined_maps(args.val_data)
@@ -285,25 +272,22 @@ def cmd_train(args: argparse.Namespace) -> int:
     digest = hashlib.sha256(
         "".join(d["sha256"] for d in data + (val_data or [])).encode() + str(args.val_fraction).encode()
     ).hexdigest()
-    record = {
-        "command": command_line(),
-        "vinadv": __version__,
-        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "data": data,
-        "val_data": val_data if val_data is not None else f"{args.val_fraction} of the training maps held out",
-    }
-    model, record = train_neural_astar(
+    record = training_record(
+        data=data,
+        val_data=val_data if val_data is not None else f"{args.val_fraction} of the training maps held out",
+    )
+    record, record_path = train_and_save(
+        args,
+        train_neural_astar,
         train_maps,
         val_maps,
         config,
+        out=out,
         checkpoint=checkpoint,
-        resume=args.resume,
-        progress=shows_progress(args),
         record=record,
-        log=progress_lines(args),
+        save=save_neural_astar,
         data_sha256=digest,
     )
-    record_path = save_trained(model, out, record, save_neural_astar, checkpoint)
     best = record["best"]
     return emit(
         args,

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from vinadv.bench.index import entries_of, read_index
 from vinadv.commands import add_planner_arguments, command_line, load_args_planner, planner_device
-from vinadv.commands.evaluation import add_eval_arguments, by_length_text, start_eval, write_figures
+from vinadv.commands.evaluation import add_eval_arguments, add_prior_argument, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.planners.zoo import model_of_file, read_zoo
@@ -43,12 +43,7 @@ def register(subparsers) -> None:
         "policy planner, vinadv,search for a search planner; kentsommer measures a VIN, gppn and kentsommer need a "
         "policy; docs/guide/planners.md)",
     )
-    ev.add_argument(
-        "--prior",
-        type=float,
-        default=None,
-        help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)",
-    )
+    add_prior_argument(ev)
     ev.set_defaults(func=cmd_eval)
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 
+from vinadv.commands import add_db_argument
+from vinadv.commands.classify import add_setting_argument
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 
@@ -23,20 +25,14 @@ def register(subparsers) -> None:
         "quality of the run's planner and the processing time of the paper's 100 pairs (table 7), stored with "
         "the run.",
     )
-    ev.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    add_db_argument(ev)
     ev.add_argument("--run", help="run id, or run name (its latest run); default: the latest run")
     ev.add_argument(
         "--classifiers",
         default=",".join(CLASSIFIER_NAMES),
         help=f"comma-separated, from {','.join(CLASSIFIER_NAMES)} (default: all)",
     )
-    ev.add_argument(
-        "--setting",
-        choices=("baseline", "tuned"),
-        default="baseline",
-        help="baseline = the paper's (pixels of the paper's path images; CNN/MLP 10 epochs, batch "
-        "64), or tuned (row/column co-occurrence features of 'split' path images)",
-    )
+    add_setting_argument(ev)
     ev.add_argument(
         "--sizes",
         default=None,
@@ -55,7 +51,7 @@ def register(subparsers) -> None:
         "(table 7), the planner's quality (both as `vinadv evaluate` stored them) and the run's configuration; the "
         "paper's numbers beside ours.",
     )
-    rep.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    add_db_argument(rep)
     rep.add_argument(
         "--run", help="the main run to report, id or name (default: the first of --runs, else the latest run)"
     )

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vinadv.commands import add_moves_argument, add_planner_arguments, planner_device
-from vinadv.commands.attack import add_edit_argument, add_harm_arguments
+from vinadv.commands import add_moves_argument, add_planner_arguments, option_values, planner_device
+from vinadv.commands.attack import add_edit_argument, add_harm_arguments, harm_tolerances
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
 from vinadv.errors import InputError, OutputError
@@ -126,13 +126,8 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         maps,
         strategies,
         args.max_obstacles,
-        objective=args.objective,
-        seed=args.seed,
-        budget=args.budget,
-        radius=args.radius,
-        harm_tol=args.harm_tolerance,
-        harm_rtol=args.harm_rtol,
-        edit=args.edit,
+        **option_values(args, "objective", "seed", "budget", "radius", "edit"),
+        **harm_tolerances(args),
         progress=shows_progress(args),
         maps_source=source,
     )

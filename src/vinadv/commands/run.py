@@ -6,13 +6,22 @@ import argparse
 import time
 
 from vinadv.cluster import ClusterIdentify, ClusterShards, add_cluster_arguments, open_cluster
-from vinadv.commands import LazyChoices, add_moves_argument, add_planner_arguments, planner_device
+from vinadv.commands import (
+    LazyChoices,
+    add_corner_cutting_argument,
+    add_db_argument,
+    add_moves_argument,
+    add_planner_arguments,
+    option_values,
+    planner_device,
+)
 from vinadv.commands.attack import (
-    add_edit_argument,
+    add_attack_arguments,
     add_harm_arguments,
     add_objective_argument,
-    add_obstacles_argument,
+    attack_options,
     attack_summary,
+    harm_tolerances,
     print_counts,
 )
 from vinadv.commands.output import add_output_options, emit, shows_progress
@@ -29,22 +38,17 @@ def register(subparsers) -> None:
         metavar="STRATEGY",
         help="attack strategy: %(choices)s (default near-path)",
     )
-    run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    run.add_argument("--per-map", type=int, default=1, help="pairs per map (default 1)")
-    run.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map")
-    run.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
-    add_obstacles_argument(run)
-    add_edit_argument(run)
-    run.add_argument("--no-corner-cutting", action="store_true", help="forbid diagonal moves between obstacles")
+    add_attack_arguments(run)
+    add_corner_cutting_argument(run)
     add_moves_argument(
         run, default=None, what="movement model of the generated maps (the planner plans it; with --maps, the file's)"
     )
     run.add_argument("--shard-size", type=int, default=1000, help="maps per shard (default 1000)")
-    run.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
+    add_classifier_argument(run)
     add_planner_arguments(run)
     add_harm_arguments(run)
     add_objective_argument(run)
-    run.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+    add_db_argument(run)
     run.add_argument("--name", help="run name (needed to --resume)")
     run.add_argument("--resume", action="store_true", help="continue the latest run called --name")
     run.add_argument(
@@ -64,8 +68,8 @@ def register(subparsers) -> None:
 
     ident = subparsers.add_parser("identify", help="label the pairs of a pairs file and store them as a run")
     ident.add_argument("--pairs", required=True, help="pairs file (.npz from `vinadv attack`)")
-    ident.add_argument("--db", help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
-    ident.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
+    add_db_argument(ident)
+    add_classifier_argument(ident)
     add_planner_arguments(ident, weights_help="weights file of the vin or gppn planner, or a model zoo name")
     ident.epilog = (
         "With --planner or --weights, both maps of every pair are planned again by that planner (the "
@@ -78,6 +82,11 @@ def register(subparsers) -> None:
     ident.set_defaults(func=cmd_identify)
 
 
+def add_classifier_argument(parser) -> None:
+    """`--classifier`: what labels the pairs of `run` and `identify` (`vinadv.identify`)."""
+    parser.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from vinadv.pipeline import RunConfig, run_pipeline  # scikit-learn behind it: imported for this command only
 
@@ -86,27 +95,16 @@ def cmd_run(args: argparse.Namespace) -> int:
     device = planner_device(args)
     config = RunConfig(
         **maps_settings(args),
-        attack=args.attack,
-        seed=args.seed,
-        per_map=args.per_map,
-        budget=args.budget,
-        radius=args.radius,
-        shard_size=args.shard_size,
-        classifier=args.classifier,
+        **attack_options(args),
+        **option_values(
+            args, "attack", "shard_size", "classifier", "weights", "harm_tolerance", "harm_rtol", "objective"
+        ),
         planner=args.planner or "vin",
-        weights=args.weights,
-        harm_tolerance=args.harm_tolerance,
-        harm_rtol=args.harm_rtol,
-        objective=args.objective,
-        obstacles=args.obstacles,
-        edit=args.edit,
     )
     with open_cluster(args.cluster, args.workers) as client:
         summary = run_pipeline(
             config,
-            db=args.db,
-            name=args.name,
-            resume=args.resume,
+            **option_values(args, "db", "name", "resume"),
             progress=shows_progress(args),
             device=device,
             **_cluster_options(client),
@@ -213,12 +211,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     done = identify_and_store(
         args.pairs,
         args.db,
-        classifier=args.classifier,
-        planner=args.planner,
-        weights=args.weights,
-        name=args.name,
-        harm_tol=args.harm_tolerance,
-        harm_rtol=args.harm_rtol,
+        **option_values(args, "classifier", "planner", "weights", "name"),
+        **harm_tolerances(args),
         remote=remote,
         device=planner_device(args),
     )

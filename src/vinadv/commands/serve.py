@@ -6,6 +6,7 @@ import argparse
 import logging
 import socket
 
+from vinadv.commands import add_db_argument
 from vinadv.commands.output import add_output_options, is_quiet, note
 from vinadv.errors import InputError, OutputError
 
@@ -19,9 +20,7 @@ def register(subparsers) -> None:
         "next/previous). Human labels go to the annotations table, beside the automatic ones. Binds to "
         "127.0.0.1; there is no login, so serving other addresses needs --allow-remote.",
     )
-    serve.add_argument(
-        "--db", default=None, help="database URL or SQLite file (default: env VINADV_DB, else vinadv.db)"
-    )
+    add_db_argument(serve)
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     serve.add_argument("--port", type=int, default=8000, help="port (default 8000)")
     serve.add_argument(

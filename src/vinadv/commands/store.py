@@ -8,6 +8,7 @@ import csv
 import json
 import sys
 
+from vinadv.commands import add_db_argument
 from vinadv.commands.output import add_output_options, note, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
@@ -36,7 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         f"arrays ({EXPORT_FORMAT}: the pairs-file fields plus labels); parquet writes one typed row per pair, "
         "maps and paths as list columns, the run and its config in the file's metadata (for pandas and pyarrow).",
     )
-    p.add_argument("--db", default=None, help="database URL or SQLite file (default: $VINADV_DB, else vinadv.db)")
+    add_db_argument(p)
     p.add_argument("--run", required=True, help="run id, or run name (its latest run)")
     p.add_argument("--format", choices=("csv", "jsonl", "npz", "parquet"), default="csv")
     p.add_argument("--successful-only", action="store_true", help="only successful attacks (UrP or FP)")

@@ -1,5 +1,6 @@
-"""The options every planner's `train` command shares (`vin train`, `gppn train`), and the body of those commands:
-the options' `TrainConfig`, the training run, the weights and the training record written."""
+"""The options every planner's `train` command shares (`vin train`, `gppn train`; `neural-astar train` those of the
+training run, `add_run_arguments`), and the body of those commands: the options' `TrainConfig`, the training run
+with its checkpoint, the weights and the training record written."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from vinadv import __version__
-from vinadv.commands import LazyChoices, command_line, set_threads
+from vinadv.commands import LazyChoices, add_threads_argument, command_line, option_values, set_threads
 from vinadv.commands.output import add_output_options, emit, progress_lines, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
@@ -25,7 +26,7 @@ if TYPE_CHECKING:  # PyTorch behind it: imported by the command that trains
 def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) -> None:
     """The options every planner's `train` command shares (`vin train`, `gppn train`)."""
     train.add_argument("--data", required=True, help="maps file (.npz, from `vinadv maps generate`)")
-    train.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+    add_weights_out_argument(train)
     train.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
     train.add_argument(
         "--lr", type=float, default=lr, help=f"peak RMSprop learning rate, cosine-decayed (default {lr})"
@@ -45,20 +46,12 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
         "--device", default="cpu", help="torch device: cpu, cuda, cuda:N, auto (cuda where available) (default cpu)"
     )
     train.add_argument("--k", type=int, default=None, help=k_help)
-    train.add_argument("--threads", type=int, default=None, help="torch CPU threads (default: torch's choice)")
-    train.add_argument(
-        "--time-limit",
-        type=float,
-        default=None,
-        metavar="MIN",
-        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
-    )
     train.add_argument(
         "--init",
         metavar="WEIGHTS",
         help="start from these weights (continue a training) instead of a fresh initialisation",
     )
-    train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+    add_run_arguments(train)
     adv = train.add_argument_group("adversarial training (vinadv.hardening)")
     adv.add_argument(
         "--adversarial",
@@ -97,6 +90,25 @@ def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) 
     add_output_options(train, json="the training record", quiet=True)
 
 
+def add_weights_out_argument(parser: argparse.ArgumentParser) -> None:
+    """`--out`: the weights a command writes, with its record beside them (`write_record`)."""
+    parser.add_argument("--out", required=True, help="output weights (.pt); the record goes to the same name .json")
+
+
+def add_run_arguments(train: argparse.ArgumentParser) -> None:
+    """The options of the training run that every `train` command shares (`vin`, `gppn`, `neural-astar`): torch CPU
+    threads, a time limit, and `--resume` from the checkpoint a killed run left (`training_checkpoint`)."""
+    add_threads_argument(train)
+    train.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="MIN",
+        help="stop after the first epoch that ends past MIN minutes (recorded as stopped early)",
+    )
+    train.add_argument("--resume", action="store_true", help="continue from OUT.ckpt if a killed run left one")
+
+
 def add_compile_argument(train: argparse.ArgumentParser) -> None:
     """`--compile`: train through torch.compile (torch planners; the VIN's value iteration is compiled already)."""
     train.add_argument(
@@ -112,15 +124,8 @@ def train_config(args: argparse.Namespace, **extra: Any) -> TrainConfig:
     from vinadv.planners.training import TrainConfig
 
     config = TrainConfig(
-        epochs=args.epochs,
-        lr=args.lr,
-        batch_size=args.batch_size,
-        val_fraction=args.val_fraction,
-        seed=args.seed,
-        device=args.device,
-        k=args.k,
+        **option_values(args, "epochs", "lr", "batch_size", "val_fraction", "seed", "device", "k", "init"),
         time_limit_min=args.time_limit,
-        init=args.init,
         warmup_steps=args.warmup,
         adversarial=adversarial_config(args),
         **extra,
@@ -150,23 +155,68 @@ def adversarial_config(args: argparse.Namespace) -> dict | None:
     return config.to_dict()
 
 
-def save_trained(model, out: Path, record: dict, save: Callable, checkpoint: Path) -> Path:
-    """The end of a training command: `record` stamped finished, `save(model, out, record)`, the record written beside
-    the weights as JSON (`out` with `.json`, returned), and the resumable checkpoint dropped."""
-    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
-    save(model, out, record)
+def training_checkpoint(args: argparse.Namespace, out: Path) -> Path:
+    """OUT.ckpt, the resumable checkpoint of a training that writes `out`; refused where a killed run left one and
+    `--resume` was not given."""
+    checkpoint = out.with_name(out.name + ".ckpt")
+    if checkpoint.exists() and not args.resume:
+        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
+    return checkpoint
+
+
+def training_record(**fields: Any) -> dict:
+    """The head of a training record: the command line, vinadv's version and the time it started; then `fields`."""
+    return {
+        "command": command_line(),
+        "vinadv": __version__,
+        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        **fields,
+    }
+
+
+def write_record(out: Path, record: dict) -> Path:
+    """Write `record` as indented JSON beside the weights `out` (`out` with `.json`, returned)."""
     record_path = out.with_suffix(".json")
     with atomic_output(record_path, "w") as fh:
         fh.write(json.dumps(record, indent=2) + "\n")
-    checkpoint.unlink(missing_ok=True)
     return record_path
+
+
+def train_and_save(
+    args: argparse.Namespace,
+    train: Callable[..., tuple],
+    *data: Any,
+    out: Path,
+    checkpoint: Path,
+    record: dict,
+    save: Callable[..., None],
+    **options: Any,
+) -> tuple[dict, Path]:
+    """Train with `train(*data, ...)` (the checkpoint `checkpoint`, `--resume`, progress bars and lines as `--quiet`
+    and `--json` say, `record` to fill, and `options`), then write the weights with `save(model, out, record)` and the
+    record, stamped finished, beside them, and drop the checkpoint. Returns the record and the record file's path."""
+    model, record = train(
+        *data,
+        checkpoint=checkpoint,
+        resume=args.resume,
+        progress=shows_progress(args),
+        record=record,
+        log=progress_lines(args),
+        **options,
+    )
+    record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    save(model, out, record)
+    record_path = write_record(out, record)
+    checkpoint.unlink(missing_ok=True)
+    return record, record_path
 
 
 def run_training(
     args: argparse.Namespace, config: TrainConfig, train: Callable[..., tuple], save: Callable[..., None]
 ) -> int:
     """Load the data, train with `train(maps, config, ...)` (checkpoint OUT.ckpt, `--resume`), write the weights
-    with `save(model, out, record)` and the record next to them; the body of every `train` command."""
+    with `save(model, out, record)` and the record next to them; the body of the `vin train` and `gppn train`
+    commands."""
     from vinadv.grid.mapset import MapSet
 
     set_threads(args.threads)
@@ -175,14 +225,9 @@ def run_training(
     if len(maps) < 2:
         raise InputError(f"{args.data}: {len(maps)} maps; training needs at least 2")
     out = Path(args.out)
-    checkpoint = out.with_name(out.name + ".ckpt")
-    if checkpoint.exists() and not args.resume:
-        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
-    record: TrainingRecord = {
-        "command": command_line(),
-        "vinadv": __version__,
-        "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "data": {
+    checkpoint = training_checkpoint(args, out)
+    record: TrainingRecord = training_record(
+        data={
             "path": str(args.data),
             "sha256": weights_checksum(args.data),
             "maps": len(maps),
@@ -190,8 +235,8 @@ def run_training(
             "seed": int(maps.seed),
             "corner_cutting": bool(maps.corner_cutting),
             "moves": maps.moves,
-        },
-    }
+        }
+    )
     augment = None
     if config.adversarial is not None:
         from vinadv.grid.moves import require_moves
@@ -201,17 +246,9 @@ def run_training(
         require_moves(maps.moves, ("octile",), "adversarial training (--adversarial)")
 
         augment = AdversarialMaps(maps, AdversarialConfig(**config.adversarial), seed=config.seed)
-    model, record = train(
-        maps,
-        config,
-        checkpoint=checkpoint,
-        resume=args.resume,
-        progress=shows_progress(args),
-        record=record,
-        log=progress_lines(args),
-        augment=augment,
+    record, record_path = train_and_save(
+        args, train, maps, config, out=out, checkpoint=checkpoint, record=record, save=save, augment=augment
     )
-    record_path = save_trained(model, out, record, save, checkpoint)
     return emit(
         args,
         record,

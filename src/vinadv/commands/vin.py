@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import LazyChoices
-from vinadv.commands.evaluation import add_eval_arguments, emit_metrics, start_eval
+from vinadv.commands import LazyChoices, add_actions
+from vinadv.commands.evaluation import add_eval_arguments, add_prior_argument, emit_metrics, start_eval
 from vinadv.commands.output import add_output_options, emit, note, shows_progress
 from vinadv.commands.training import add_train_arguments, run_training, train_config
 from vinadv.errors import InputError
@@ -14,9 +14,7 @@ from vinadv.planners.weights import check_trained_size, weights_checksum
 
 
 def register(subparsers) -> None:
-    vin = subparsers.add_parser("vin", help="train and evaluate the VIN planner")
-    sub = vin.add_subparsers(dest="vin_command", metavar="ACTION")
-    sub.required = True
+    sub = add_actions(subparsers, "vin", help="train and evaluate the VIN planner")
 
     train = sub.add_parser("train", help="train a VIN on a maps file (every free cell is supervised)")
     add_train_arguments(train, lr=0.005, k_help="value-iteration steps (default: 10/20/36 at 8/16/28)")
@@ -48,12 +46,7 @@ def register(subparsers) -> None:
         help="measure as vinadv (default), the kentsommer port's test.py, or GPPN (%%Opt/%%Suc over every "
         "free cell); see docs/guide/interop.md",
     )
-    ev.add_argument(
-        "--prior",
-        type=float,
-        default=None,
-        help="kentsommer protocol: goal-channel value off the goal (default -1, as the port's test.py)",
-    )
+    add_prior_argument(ev)
     ev.set_defaults(func=cmd_eval)
 
     exw = sub.add_parser("export-weights", help="write VIN weights as a plain state dict for the PyTorch ports")
