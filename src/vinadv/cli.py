@@ -83,7 +83,7 @@ class VersionAction(argparse.Action):
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="vinadv",
-        description="Find and identify adversarial maps for Value Iteration Network path planning.",
+        description="Find and identify adversarial maps for learned path planners (VIN, GPPN, Neural A*, your own).",
     )
     parser.add_argument(
         "--version", action=VersionAction, help="show the version and the shipped weights' SHA-256 checksums, and exit"

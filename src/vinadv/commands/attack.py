@@ -13,7 +13,8 @@ from vinadv.outfile import check_output_path
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "attack", help="make adversarial maps (one added obstacle, or --obstacles K) from a maps file, on any planner"
+        "attack",
+        help="make adversarial maps (one obstacle added or removed, or --obstacles K) from a maps file, on any planner",
     )
     p.add_argument("--maps", required=True, help="maps file (.npz from `vinadv maps generate`)")
     p.add_argument(

@@ -28,7 +28,9 @@ IMPORT_RECORD_FORMAT = "vinadv.neural-astar-import/1"
 
 
 def register(subparsers) -> None:
-    sub = add_actions(subparsers, "neural-astar", help="the Neural A* planner: import the authors' weights, check it")
+    sub = add_actions(
+        subparsers, "neural-astar", help="the Neural A* planner: train it, import the authors' weights, check it"
+    )
 
     imp = sub.add_parser(
         "import-weights",
