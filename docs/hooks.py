@@ -19,6 +19,10 @@ strategy) and `<!-- vinadv:mpd-commands -->` (the commands, and the checksums of
 `<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine and the exhaustive attack at 28x28 to 64x64
 beside the FMA count, from `docs/results/map_size.json` (`benchmarks/map_size.py --out`), with its command and the
 machine's load.
+Neural A*'s page (`docs/guide/neural-astar.md`) reads `docs/results/neural_astar.json`, written by
+`benchmarks/neural_astar_table.py` with the commands it ran and the machine: `<!-- vinadv:neural-astar-modes -->` (the
+exact against the differentiable search per seed, beside Opt / Exp / Hmean), `<!-- vinadv:neural-astar-speed -->`
+(plans/s side by side, and the ratios the prose would otherwise copy) and `<!-- vinadv:neural-astar-commands -->`.
 """
 
 from __future__ import annotations
@@ -50,6 +54,10 @@ MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
 MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
 MAP_SIZE_TABLE = "<!-- vinadv:map-size-table -->"
 MAP_SIZE_JSON = ROOT / "docs" / "results" / "map_size.json"
+NEURAL_ASTAR_MODES = "<!-- vinadv:neural-astar-modes -->"
+NEURAL_ASTAR_SPEED = "<!-- vinadv:neural-astar-speed -->"
+NEURAL_ASTAR_COMMANDS = "<!-- vinadv:neural-astar-commands -->"
+NEURAL_ASTAR_JSON = ROOT / "docs" / "results" / "neural_astar.json"
 
 
 def percent(fraction: float | None) -> str:
@@ -321,6 +329,110 @@ def map_size_table(path: Path = MAP_SIZE_JSON) -> str:
     return markdown_table(header, rows) + "\n\n" + note
 
 
+def _machine_note(machine: dict) -> str:
+    """The machine of a Neural A* record in words: CPU, cores, PyTorch, niceness and load."""
+    return (
+        f"{machine['cpu']} ({machine['cores']} cores), PyTorch {machine['torch']}, niceness {machine['niceness']}, "
+        f"load average {machine['load_average_before']} before and {machine['load_average_after']} after"
+    )
+
+
+def neural_astar_modes(path: Path = NEURAL_ASTAR_JSON) -> str:
+    """Per seed of the mazes test split's import: the searches where the exact and the differentiable mode gave the
+    same path and the same expanded cells (`vinadv neural-astar compare-modes`), beside Opt / Exp / Hmean and the mean
+    expansions against A*'s (`vinadv eval`); a last row over all seeds (Opt, Exp and the expansions over all searches,
+    Hmean the mean of the seeds', as the authors average it over batches); then the machine."""
+    data = json.loads(path.read_text())
+    rows, searches, compared = [], [], []
+    for entry in data["modes"]:
+        same, fig = entry["compare_modes"]["figures"], entry["eval"]["search"]
+        searches.append(fig)
+        compared.append(same)
+        rows.append(
+            [str(entry["seed"]), str(same["searches"]), str(same["identical_paths"]), str(same["identical_expansions"])]
+            + [decimal(fig["opt"], 2), decimal(fig["exp"]), decimal(fig["hmean"]), percent(fig["success"])]
+            + [f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"]
+        )
+    total = sum(s["searches"] for s in compared)
+    weight = [fig["rows"] for fig in searches]
+
+    def mean(key: str) -> float:
+        return sum(fig[key] * w for fig, w in zip(searches, weight, strict=True)) / sum(weight)
+
+    paths, cells = sum(s["identical_paths"] for s in compared), sum(s["identical_expansions"] for s in compared)
+    rows.append(
+        ["all", str(total), f"{paths} ({percent(paths / total)})", f"{cells} ({percent(cells / total)})"]
+        + [decimal(mean("opt")), decimal(mean("exp"))]
+        + [f"{decimal(sum(fig['hmean'] for fig in searches) / len(searches))} (mean of the {len(searches)})"]
+        + [percent(mean("success")), f"{mean('expansions'):.1f} ({mean('astar_expansions'):.1f})"]
+    )
+    header = ["seed", "searches", "identical paths", "identical expanded cells", "Opt", "Exp", "Hmean", "success"]
+    note = f"Measured {data['date']} on {_machine_note(data['machine'])}."
+    return markdown_table([*header, "mean expansions (A*'s)"], rows) + "\n\n" + note
+
+
+#: the rows of `neural_astar_speed`: the key of `benchmarks/neural_astar.py`'s `plans_per_s`, and what it times
+SPEED_ROWS = (
+    ("astar", "`astar` (compiled, unit costs)"),
+    ("neural-astar exact", "`neural-astar`, exact mode (encoder, then the compiled search)"),
+    ("encoder only", "the encoder alone"),
+    ("differentiable", "the differentiable search (encoder, then the PyTorch search; no gradients)"),
+    (
+        "differentiable + gradient",
+        "the differentiable search with the gradient to the obstacles (`differentiable_paths`, forward and backward)",
+    ),
+)
+
+
+def neural_astar_speed(path: Path = NEURAL_ASTAR_JSON) -> str:
+    """Plans per second of `benchmarks/neural_astar.py` (best of its rounds, side by side in one run), then the
+    ratios between them: the exact mode against the differentiable search, the encoder's share of the exact mode's
+    time, `astar` against the exact mode; and the machine, its load and the command."""
+    data = json.loads(path.read_text())
+    speed = data["speed"]["figures"]
+    rate = speed["plans_per_s"]
+    expansions = speed["mean_expansions"]
+    rows = []
+    for key, label in SPEED_ROWS:
+        searched = {"astar": "astar", "neural-astar exact": "neural-astar"}.get(key)
+        mean = f"; {expansions[searched]:.1f} expansions per search" if searched else ""
+        rows.append([label + mean, f"{rate[key]:,.1f}"])
+    data_file, _, maps = speed["source"].partition(": ")  # `<data-dir>/NAME.npz: N test maps`: the path as code
+    measured_on = f"`{data_file}`: {maps}" if maps else speed["source"]
+    table = markdown_table([f"search ({measured_on}, one start each; torch on {speed['device']})", "plans/s"], rows)
+    encoder_share = rate["neural-astar exact"] / rate["encoder only"]  # the encoder's time over the exact mode's
+    # the exact mode is the encoder and then a search of a few ms: under load its best round can beat the encoder's
+    encoder = (
+        f"the encoder (the CNN) is {percent(encoder_share)} of its time"
+        if encoder_share < 1
+        else f"the encoder alone took as long as the whole of it ({percent(encoder_share)}: the compiled search's part "
+        "is within the timing noise)"
+    )
+    note = (
+        f"The exact mode plans {speed['exact_over_differentiable']:.1f} times as fast as the differentiable search "
+        f"and gives the same paths and expanded cells ({speed['identical_searches']} of {speed['rows']} in the same "
+        f"run); {encoder}. `astar` plans "
+        f"{speed['astar_over_neural_exact']:,.0f} times as fast as the exact mode: it has no network to run.\n\n"
+        f"Measured {data['date']} on {_machine_note(data['machine'])}: a shared machine, so the absolute rates are "
+        f"low and noisy; the searches took turns in one run, best of {data['speed']['rounds']} rounds, so the ratios "
+        f"are the figures to read "
+        f"({speed['numba_threads']} Numba threads, {speed['torch_threads']} torch threads). Command: "
+        f"`{data['speed']['command']}`"
+    )
+    return table + "\n\n" + note
+
+
+def neural_astar_commands(path: Path = NEURAL_ASTAR_JSON) -> str:
+    """The command that wrote the JSON and every command behind `neural_astar_modes` and `neural_astar_speed`, as a
+    shell block."""
+    data = json.loads(path.read_text())
+    lines = [f"# {data['command']}  (the data: {data['source']})"]
+    for entry in data["modes"]:
+        lines += [entry["import"], entry["compare_modes"]["command"], entry["eval"]["command"]]
+    lines.append(data["speed"]["command"])
+    return "```sh\n" + "\n".join(lines) + "\n```"
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
     for marker, build in (
@@ -334,6 +446,9 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (MPD_ROBUSTNESS, mpd_robustness),
         (MPD_COMMANDS, mpd_commands),
         (MAP_SIZE_TABLE, map_size_table),
+        (NEURAL_ASTAR_MODES, neural_astar_modes),
+        (NEURAL_ASTAR_SPEED, neural_astar_speed),
+        (NEURAL_ASTAR_COMMANDS, neural_astar_commands),
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())

@@ -289,6 +289,88 @@ def test_the_map_size_table_is_read_from_its_json(tmp_path):
     assert "load average 1.5 before and 2.5 after" in table
 
 
+def _neural_astar_record() -> dict:
+    same = {"searches": 100, "identical_paths": 99, "identical_expansions": 98}
+    search = {"rows": 100, "opt": 0.8, "exp": 0.5, "hmean": 0.6, "success": 1.0, "expansions": 60.0}
+    search["astar_expansions"] = 150.0
+    seed = {
+        "seed": 7,
+        "import": "vinadv maps import --format mpd <data-dir>/mazes_032_moore_c8.npz --seed 7",
+        "compare_modes": {"command": "vinadv neural-astar compare-modes --data <work>/m7.npz", "figures": same},
+        "eval": {"command": "vinadv eval --data <work>/m7.npz", "search": search},
+    }
+    seed8 = {**seed, "seed": 8, "eval": {**seed["eval"], "search": {**search, "opt": 0.9, "hmean": 0.7}}}
+    rate = {"astar": 5000.0, "neural-astar exact": 10.0, "encoder only": 12.5, "differentiable": 4.0}
+    speed = {
+        "source": "<data-dir>/mazes_032_moore_c8.npz: 100 test maps",
+        "rows": 100,
+        "device": "cpu",
+        "numba_threads": 2,
+        "torch_threads": 1,
+        "mean_expansions": {"astar": 62.5, "neural-astar": 35.25},
+        "plans_per_s": {**rate, "differentiable + gradient": 1.0},
+        "exact_over_differentiable": 2.5,
+        "astar_over_neural_exact": 500.0,
+        "identical_searches": 100,
+    }
+    machine = {"cpu": "C", "cores": 2, "torch": "9.9", "niceness": 10}
+    return {
+        "command": "python benchmarks/neural_astar_table.py --data-dir <data-dir>",
+        "date": "2026-01-02 03:04 UTC",
+        "source": "S",
+        "machine": {**machine, "load_average_before": 1.5, "load_average_after": 2.5},
+        "modes": [seed, seed8],
+        "speed": {"command": "python benchmarks/neural_astar.py --rounds 4", "rounds": 4, "figures": speed},
+    }
+
+
+def test_the_neural_astar_measurements_are_read_from_their_json(tmp_path):
+    hooks = docs_module("hooks")
+    page = (DOCS / "guide" / "neural-astar.md").read_text()
+    for marker in (hooks.NEURAL_ASTAR_MODES, hooks.NEURAL_ASTAR_SPEED, hooks.NEURAL_ASTAR_COMMANDS):
+        assert page.count(marker) == 1
+    # the section as written holds no table and no measured number: the hook brings them all
+    measured = page.split("\n## Measured\n", 1)[1].split("\n## ", 1)[0]
+    assert not [line for line in measured.splitlines() if line.startswith("|")]
+    assert not re.search(r"\d\.\d|times as fast|\d+ of \d+", measured)
+    filled = hooks.on_page_markdown(page, page=None, config=None, files=None)
+    assert "<!-- vinadv:" not in filled
+    data = json.loads(hooks.NEURAL_ASTAR_JSON.read_text())
+    assert [entry["seed"] for entry in data["modes"]] == [0, 1, 2, 3, 4] and "a982a04" in data["source"]
+    assert data["command"] in filled and data["speed"]["command"] in filled
+    for entry in data["modes"]:
+        commands = [entry["import"], entry["compare_modes"]["command"], entry["eval"]["command"]]
+        for command in commands:
+            assert command in filled and "shared" not in command and "/tmp" not in command
+        same, fig = entry["compare_modes"]["figures"], entry["eval"]["search"]
+        assert f"| {entry['seed']} | {same['searches']} | {same['identical_paths']} | " in filled
+        assert f" | {fig['opt']:.2f} | {fig['exp']:.3f} | {fig['hmean']:.3f} | " in filled
+    speed = data["speed"]["figures"]
+    assert "/tmp" not in json.dumps(data) and "shared" not in json.dumps(data)
+    assert f"| {speed['plans_per_s']['astar']:,.1f} |" in filled
+    assert f"load average {data['machine']['load_average_before']} before" in filled
+    # another JSON gives other tables and other ratios: nothing is copied by hand
+    path = tmp_path / "neural_astar.json"
+    path.write_text(json.dumps(_neural_astar_record()))
+    modes = hooks.neural_astar_modes(path).splitlines()
+    assert modes[2] == "| 7 | 100 | 99 | 98 | 0.80 | 0.500 | 0.600 | 100.0% | 60.0 (150.0) |"
+    assert modes[4] == (
+        "| all | 200 | 198 (99.0%) | 196 (98.0%) | 0.850 | 0.500 | 0.650 (mean of the 2) | 100.0% | 60.0 (150.0) |"
+    )
+    assert "Measured 2026-01-02 03:04 UTC on C (2 cores), PyTorch 9.9, niceness 10, load average 1.5" in modes[-1]
+    speed_text = hooks.neural_astar_speed(path)
+    assert speed_text.startswith("| search (`<data-dir>/mazes_032_moore_c8.npz`: 100 test maps, one start each; ")
+    assert "| `astar` (compiled, unit costs); 62.5 expansions per search | 5,000.0 |" in speed_text
+    assert "plans 2.5 times as fast as the differentiable search" in speed_text
+    assert "(100 of 100 in the same run); the encoder (the CNN) is 80.0% of its time" in speed_text
+    assert "`astar` plans 500 times as fast" in speed_text and "best of 4 rounds" in speed_text
+    assert "vinadv eval --data <work>/m7.npz" in hooks.neural_astar_commands(path)
+    record = _neural_astar_record()
+    record["speed"]["figures"]["plans_per_s"]["encoder only"] = 9.0  # the exact mode's best round beat the encoder's
+    path.write_text(json.dumps(record))
+    assert "the encoder alone took as long as the whole of it (111.1%: " in hooks.neural_astar_speed(path)
+
+
 @pytest.mark.slow  # loads the benchmark script and what it imports: seconds
 def test_the_published_fma_count_is_the_forwards_as_pytorch_counts_it():
     # benchmarks/map_size.py's formula against PyTorch's own count of the VIN's convolutions (2 flops a multiply-add)
