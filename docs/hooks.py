@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import base64
 import json
+import re
 from pathlib import Path
 
 from vinadv.bench.leaderboard import read_entries, render_markdown, rows  # the one renderer of a leaderboard
@@ -452,7 +453,25 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())
-    return markdown
+    return escape_algorithm_stars(markdown)
+
+
+#: the star of an algorithm's name (A*, Neural A*) where a word ends in it, outside code
+_ALGORITHM_STAR = re.compile(r"(?<=\bA)\*(?![*\w])")
+
+
+def escape_algorithm_stars(markdown: str) -> str:
+    """`A*` as text: Python-Markdown reads the stars of "A*, weighted A*" as emphasis (GitHub's CommonMark does not),
+    so the star closing a word is escaped, except in fenced blocks and code spans."""
+    out, fenced = [], False
+    for line in markdown.split("\n"):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
+        if not fenced and "*" in line:
+            spans = line.split("`")  # even pieces are text, odd ones code spans
+            line = "`".join(_ALGORITHM_STAR.sub(r"\\*", p) if i % 2 == 0 else p for i, p in enumerate(spans))
+        out.append(line)
+    return "\n".join(out)
 
 
 def readme_table(text: str) -> str:

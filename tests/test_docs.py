@@ -386,3 +386,11 @@ def test_the_published_fma_count_is_the_forwards_as_pytorch_counts_it():
         assert fma["forward"] == fma["h_conv"] + fma["r_conv"] + fma["q_conv_of_r"] + fma["value_iteration"]
         # the engine's count: h and r folded into one 2 -> 1 convolution, the rest as the forward
         assert fma["engine"] == fma["forward"] - fma["h_conv"] - fma["r_conv"] + size * size * 9 * config.l_i
+
+
+def test_algorithm_stars_are_text_not_emphasis_outside_code():
+    hooks = docs_module("hooks")
+    text = "Beside A*, weighted A* and **bold** `A*, A*`\n```sh\nA*, A*\n```\nNeural A*'s"
+    assert hooks.escape_algorithm_stars(text) == (
+        "Beside A\\*, weighted A\\* and **bold** `A*, A*`\n```sh\nA*, A*\n```\nNeural A\\*'s"
+    )

@@ -298,7 +298,8 @@ def best_first_search(
 
     Args:
         cost: `(B, N, N)` float, finite, >= 0: the cost of each cell (charged when the search leaves it, and added to
-            the heuristic): 1 on free cells for vanilla A*; a guidance map (Neural A*'s encoder output) otherwise.
+            the heuristic): 1 on free cells for vanilla A* and a guidance map otherwise (the encoder output of
+            Neural A*).
         obstacles: `(B, N, N)` bool, True = obstacle: never opened.
         starts: `(B, 2)` int `(row, col)` of each start.
         goals: `(B, 2)` int `(row, col)` of each goal.

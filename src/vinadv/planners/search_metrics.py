@@ -3,9 +3,9 @@
 Over the rows (one per map and start) a planner plans (Yonetani et al., ICML 2021; their evaluation code,
 omron-sinicx/neural-astar `utils/training.py`: `calc_metrics`, `calc_metrics_from_multiple_results`):
 
-- Opt: the share of rows whose path reaches the goal at the optimal cost (the cost of vanilla A*'s path: A* is exact,
-  `vinadv.planners.astar`; vinadv takes the exact cost of the maps' expert paths, the same number). A path that does
-  not reach the goal is not optimal.
+- Opt: the share of rows whose path reaches the goal at the optimal cost (the cost of the path vanilla A* finds: A*
+  is exact, `vinadv.planners.astar`; vinadv takes the exact cost of the maps' expert paths, the same number). A path
+  that does not reach the goal is not optimal.
 - Exp: the mean over rows of `max(0, (E_A* - E) / E_A*)`, `E` the cells the planner expanded and `E_A*` those
   vanilla A* (`astar`, on the maps' movement model) expanded from the same start: the share of A*'s search saved.
   Defined for planners that report their expansions (search planners); None for the others.
