@@ -185,19 +185,8 @@ class _State:
 
 
 def _save_checkpoint(path, model, optimizer, config, state: _State, data_sha256) -> None:
-    save_training_checkpoint(
-        path,
-        CHECKPOINT_FORMAT,
-        model.encoder,
-        optimizer,
-        config,
-        data_sha256,
-        epoch=state.epoch,
-        wall_s=state.wall_s,
-        epochs=state.epochs,
-        best=state.best,
-        best_state=state.best_state,
-    )
+    # every field of the state, as `_load_checkpoint` reads them back
+    save_training_checkpoint(path, CHECKPOINT_FORMAT, model.encoder, optimizer, config, data_sha256, **vars(state))
 
 
 #: settings a resumed run must share with its checkpoint (the epoch count and time limit may change)
