@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 
 import numpy as np
 
+from common import add_output_arguments, timed_side_by_side  # benchmarks/common.py
 from vinadv.attacks.strategies import EVAL_CHUNK, make_attack
 from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps
@@ -42,8 +42,7 @@ def main() -> None:
     parser.add_argument("--size", type=int, default=28)
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--planner", default="vin")
-    parser.add_argument("--rounds", type=int, default=2)
-    parser.add_argument("--json", action="store_true")
+    add_output_arguments(parser, rounds=2)
     args = parser.parse_args()
     planner = load_planner(args.planner, args.size)
     maps = generate_maps(args.n, args.size, seed=args.seed, n_starts=1)
@@ -52,27 +51,22 @@ def main() -> None:
     warm = generate_maps(8, args.size, seed=1, n_starts=1)  # compiles the engine and its checks before timing
     attack.attack(warm.obstacles, warm.starts[:, 0], warm.goals, planner, strength=harm_strength)
 
-    runs = {
-        "attack": lambda: attack.attack(obstacles, starts, goals, planner, strength=harm_strength).planner_calls,
-        "plan_batch": lambda: plan_candidates(planner, obstacles, starts, goals),
-    }
-    best = dict.fromkeys(runs, np.inf)
-    counted = {}
-    for _ in range(args.rounds):  # taking turns, so that load from other work hits both alike
-        for name, run in runs.items():
-            t0 = time.perf_counter()
-            counted[name] = run()
-            best[name] = min(best[name], time.perf_counter() - t0)
-    calls, candidates = counted["attack"], counted["plan_batch"]
+    (attack_s, plan_batch_s), (calls, candidates) = timed_side_by_side(
+        [
+            lambda: attack.attack(obstacles, starts, goals, planner, strength=harm_strength).planner_calls,
+            lambda: plan_candidates(planner, obstacles, starts, goals),
+        ],
+        args.rounds,
+    )
     row = {
         "planner": args.planner,
         "maps": args.n,
         "candidates": candidates,
         "attack_planner_calls": calls,
-        "attack_s": best["attack"],
-        "plan_batch_s": best["plan_batch"],
-        "ratio": best["attack"] / best["plan_batch"],
-        "plans_per_second": candidates / best["plan_batch"],
+        "attack_s": attack_s,
+        "plan_batch_s": plan_batch_s,
+        "ratio": attack_s / plan_batch_s,
+        "plans_per_second": candidates / plan_batch_s,
     }
     print(json.dumps(row) if args.json else describe(row, args.size, args.rounds))
 

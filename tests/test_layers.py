@@ -23,6 +23,7 @@ LAYERS = {
     "vocabulary": 1,
     "seeds": 1,
     "outfile": 1,
+    "jsonfile": 1,
     "npzfile": 2,
     "grid": 3,
     "planners": 4,

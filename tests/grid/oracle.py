@@ -54,6 +54,23 @@ def brute_distances(obstacles, goal, corner_cutting=True, moves="octile"):
     return best
 
 
+def optimal_action_mask(obstacles, goal, corner_cutting=True, moves="octile"):
+    """`[r][c][a]`: whether action `a` is optimal at cell (r, c) (False at obstacles, the goal and cells that cannot
+    reach it): a legal move to a cell whose brute-force cost plus the move's cost is the cell's own."""
+    n, m = len(obstacles), len(obstacles[0])
+    best = brute_distances(obstacles, goal, corner_cutting, moves)
+    mask = [[[False] * len(DELTAS) for _ in range(m)] for _ in range(n)]
+    for r in range(n):
+        for c in range(m):
+            cost = best[(r, c)][0]
+            if obstacles[r][c] or (r, c) == tuple(goal) or not math.isfinite(cost):
+                continue
+            for a, (dr, dc) in enumerate(DELTAS):
+                if legal(obstacles, r, c, a, corner_cutting, moves):
+                    mask[r][c][a] = abs(best[(r + dr, c + dc)][0] + step_cost(a, moves) - cost) < 1e-9
+    return mask
+
+
 def reachable(obstacles, start, goal, corner_cutting=True, moves="octile") -> bool:
     """Whether `start` reaches `goal` on `obstacles` (rows of bools: nested lists or a 2-D array): a flood fill from
     `start` over the legal moves (the attack oracles call it for every cell of a map; costs are not needed)."""

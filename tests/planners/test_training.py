@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch
 
-from tests.grid.oracle import DELTAS, brute_distances, legal
+from tests.grid.oracle import DELTAS, optimal_action_mask
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
@@ -50,19 +50,8 @@ def test_optimal_action_bits_match_the_brute_force_oracle():
     bits = optimal_action_bits(maps)
     mask = bits_to_mask(torch.from_numpy(bits)).numpy()
     for i in range(len(maps)):
-        obs = maps.obstacles[i].tolist()
-        goal = tuple(maps.goals[i])
-        best = brute_distances(obs, goal)
-        for r in range(8):
-            for c in range(8):
-                want = np.zeros(8, dtype=bool)
-                cost = best[(r, c)][0]
-                if not obs[r][c] and (r, c) != goal and math.isfinite(cost):
-                    for a, (dr, dc) in enumerate(DELTAS):
-                        if legal(obs, r, c, a):
-                            step = math.sqrt(2) if dr and dc else 1.0
-                            want[a] = abs(best[(r + dr, c + dc)][0] + step - cost) < 1e-9
-                np.testing.assert_array_equal(mask[i, r, c], want, err_msg=f"map {i} cell {(r, c)}")
+        want = optimal_action_mask(maps.obstacles[i].tolist(), tuple(maps.goals[i]))
+        np.testing.assert_array_equal(mask[i], np.array(want), err_msg=f"map {i}")
 
 
 def test_split_is_disjoint_and_seeded():

@@ -83,11 +83,16 @@ def store(db):
     store.close()
 
 
-@pytest.fixture
-def app(store):
+def testing_app(store: Store):
+    """The viewer over `store` in Flask's testing mode (errors raised in the test, not turned into 500 pages)."""
     app = create_app(store, secret_key="test-secret")
     app.config["TESTING"] = True
     return app
+
+
+@pytest.fixture
+def app(store):
+    return testing_app(store)
 
 
 @pytest.fixture

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+from tests.viewer.conftest import testing_app
 from vinadv.store import Store
 from vinadv.testing.store import random_records
-from vinadv.viewer.app import create_app
 
 
 def test_viewer_pair_json_carries_the_edit(tmp_path):
@@ -13,8 +13,6 @@ def test_viewer_pair_json_carries_the_edit(tmp_path):
     with Store.open(db) as store:
         run_id = store.create_run("v")
         store.write_pairs(run_id, records)
-        app = create_app(store, secret_key="k")
-        app.config["TESTING"] = True
-        client = app.test_client()
+        client = testing_app(store).test_client()
         got = [client.get(f"/api/pairs/{run_id}/{i}").get_json()["edit"] for i in range(6)]
     assert got == list(records.edit)

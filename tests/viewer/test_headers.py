@@ -3,9 +3,8 @@ browsed, and labelling it is refused."""
 
 from __future__ import annotations
 
-from tests.viewer.conftest import csrf_from
+from tests.viewer.conftest import csrf_from, testing_app
 from vinadv.store import Store
-from vinadv.viewer.app import create_app
 
 
 def _assert_headers(response):
@@ -38,9 +37,7 @@ def test_read_only_store_is_browsed_and_labelling_refused(db):
     url, runs = db
     run_id = runs["random"][0]
     with Store.open(url, readonly=True) as store:
-        app = create_app(store, secret_key="test-secret")
-        app.config["TESTING"] = True
-        client = app.test_client()
+        client = testing_app(store).test_client()
         page = client.get(f"/pairs/{run_id}/0")
         assert page.status_code == 200
         response = client.post(

@@ -17,6 +17,7 @@ import os
 from pathlib import Path
 
 from vinadv.errors import InputError
+from vinadv.jsonfile import read_json_document
 
 INDEX_FORMAT = "vinadv.bench_index/1"
 #: the index shipped with vinadv, of the entries committed under docs/results/bench/
@@ -52,12 +53,9 @@ def index_json(index: dict) -> str:
 
 def read_index(path: str | os.PathLike = SHIPPED_INDEX) -> list[dict]:
     """The entries of the index file `path` (default: the shipped one); InputError naming the file otherwise."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(f"{path}: not a readable benchmark index ({str(exc).splitlines()[0]})") from None
-    if not isinstance(data, dict) or data.get("format") != INDEX_FORMAT or not isinstance(data.get("entries"), list):
-        raise InputError(f"{path}: field 'format' is not {INDEX_FORMAT!r}, or 'entries' is not a list")
+    data = read_json_document(path, INDEX_FORMAT, "benchmark index")
+    if not isinstance(data.get("entries"), list):
+        raise InputError(f"{path}: field 'entries' is not a list")
     return data["entries"]
 
 

@@ -6,12 +6,12 @@ sum of its chunks' seconds: on the machine and load of the time, not a speed fig
 from __future__ import annotations
 
 import html
-import json
 import os
 from pathlib import Path
 
 from vinadv.bench.suites import ENTRY_FORMAT
 from vinadv.errors import InputError
+from vinadv.jsonfile import read_json_document
 
 #: the columns: title, and how each reads an entry
 COLUMNS = (
@@ -37,13 +37,7 @@ def read_entries(folder: str | os.PathLike) -> list[tuple[Path, dict]]:
         raise InputError(f"{folder}: no such folder", "folder")
     entries = []
     for path in sorted(folder.glob("*.json")):
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise InputError(f"{path}: not a readable JSON file ({str(exc).splitlines()[0]})") from None
-        if not isinstance(data, dict) or data.get("format") != ENTRY_FORMAT:
-            raise InputError(f"{path}: field 'format' is not {ENTRY_FORMAT!r}: not a benchmark entry")
-        entries.append((path, data))
+        entries.append((path, read_json_document(path, ENTRY_FORMAT, "benchmark entry")))
     return entries
 
 

@@ -18,7 +18,7 @@ import math
 import os
 import platform
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -487,63 +487,113 @@ def _lr_at(step: int, total: int, config: TrainConfig) -> float:
     return warmup * config.lr * (f + (1 - f) * 0.5 * (1 + math.cos(math.pi * min(step, total) / max(total, 1))))
 
 
-def _save_checkpoint(path, model, optimizer, config, state: _State, rec: TrainingRecord) -> None:
+def save_training_checkpoint(
+    path: str | os.PathLike,
+    checkpoint_format: str,
+    model: torch.nn.Module,
+    optimizer: torch.optim.Optimizer,
+    config,
+    data_sha256: str | None,
+    **position,
+) -> None:
+    """Write a trainer's checkpoint (atomically: a run killed while writing keeps the last one): its format, the
+    weights (on CPU), the optimiser, the settings (`config.to_dict()`), what identifies the training data, and the
+    trainer's own `position` fields (epoch, records ...)."""
     with atomic_output(path, "wb", mkdir=True) as fh:
         torch.save(
             {
-                "format": CHECKPOINT_FORMAT,
+                "format": checkpoint_format,
                 "model": {k: v.detach().cpu() for k, v in model.state_dict().items()},
                 "optimizer": optimizer.state_dict(),
                 "train_config": config.to_dict(),
-                "data_sha256": rec.get("data", {}).get("sha256"),
-                "epoch": state.epoch,
-                "step": state.step,
-                "wall_s": state.wall_s,
-                "epochs": state.epochs,
-                "partial": state.partial,
-                "augment_rounds": state.augment_rounds,
-                "added_obstacles": None if state.added_obstacles is None else torch.from_numpy(state.added_obstacles),
-                "added_goals": None if state.added_goals is None else torch.from_numpy(state.added_goals),
+                "data_sha256": data_sha256,
+                **position,
             },
             fh,
         )
 
 
-def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: TrainingRecord) -> _State:
+def read_training_checkpoint(
+    path: str | os.PathLike,
+    checkpoint_format: str,
+    trainer: str,
+    config: dict,
+    same_on_resume: Iterable[str],
+    defaults: dict | None = None,
+) -> dict:
+    """The checkpoint a run resumes from, refused (`InputError`) unless it is a `trainer` checkpoint of
+    `checkpoint_format` made with the same `same_on_resume` settings as `config` (a `to_dict()`): resuming under
+    other settings would silently mix two trainings. `defaults`: what a setting is in a checkpoint older than it."""
     ck = torch_load(path, "readable training checkpoint")
-    if not isinstance(ck, dict) or ck.get("format") != CHECKPOINT_FORMAT:
-        raise InputError(f"{path}: not a vinadv training checkpoint")
-    # Resuming under other settings would silently mix two trainings; only the epoch count may grow.
-    saved = dict(ck.get("train_config", {}))
-    now = config.to_dict()
-    defaults = TrainConfig().to_dict()  # checkpoints older than a key hold its default
-    for key in (
-        "planner",
-        "lr",
-        "lr_final_fraction",
-        "batch_size",
-        "val_fraction",
-        "seed",
-        "k",
-        "l_h",
-        "l_q",
-        "kernel",
-        "epochs",
-        "adversarial",
-    ):
-        if saved.get(key, defaults[key]) != now.get(key):
+    if not isinstance(ck, dict) or ck.get("format") != checkpoint_format:
+        raise InputError(f"{path}: not a {trainer} training checkpoint (expected format {checkpoint_format!r})")
+    saved, defaults = dict(ck.get("train_config") or {}), defaults or {}
+    for key in same_on_resume:
+        if saved.get(key, defaults.get(key)) != config.get(key):
             raise InputError(
-                f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {now.get(key)!r}; "
-                f"use the same options to resume, or remove the checkpoint"
+                f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {config.get(key)!r}; "
+                "use the same options to resume, or remove the checkpoint"
             )
-    data_sha = rec.get("data", {}).get("sha256")
-    if data_sha is not None and ck.get("data_sha256") not in (None, data_sha):
-        raise InputError(f"{path}: checkpoint was made on other data (checksum differs); remove it to start over")
+    return ck
+
+
+def restore_training(
+    path: str | os.PathLike, ck: dict, model: torch.nn.Module, optimizer: torch.optim.Optimizer
+) -> None:
+    """Load the weights and the optimiser of checkpoint `ck` (read from `path`) into `model` and `optimizer`;
+    `InputError` when they do not fit."""
     try:
         model.load_state_dict(ck["model"])
         optimizer.load_state_dict(ck["optimizer"])
     except (RuntimeError, KeyError, ValueError) as exc:
-        raise InputError(f"{path}: checkpoint does not match the model ({exc})") from None
+        raise InputError(f"{path}: checkpoint does not match the model ({str(exc).splitlines()[0]})") from None
+
+
+def _save_checkpoint(path, model, optimizer, config, state: _State, rec: TrainingRecord) -> None:
+    save_training_checkpoint(
+        path,
+        CHECKPOINT_FORMAT,
+        model,
+        optimizer,
+        config,
+        rec.get("data", {}).get("sha256"),
+        epoch=state.epoch,
+        step=state.step,
+        wall_s=state.wall_s,
+        epochs=state.epochs,
+        partial=state.partial,
+        augment_rounds=state.augment_rounds,
+        added_obstacles=None if state.added_obstacles is None else torch.from_numpy(state.added_obstacles),
+        added_goals=None if state.added_goals is None else torch.from_numpy(state.added_goals),
+    )
+
+
+#: settings a resumed run must share with its checkpoint
+_SAME_ON_RESUME = (
+    "planner",
+    "lr",
+    "lr_final_fraction",
+    "batch_size",
+    "val_fraction",
+    "seed",
+    "k",
+    "l_h",
+    "l_q",
+    "kernel",
+    "epochs",
+    "adversarial",
+)
+
+
+def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: TrainingRecord) -> _State:
+    # checkpoints older than a setting hold its default
+    ck = read_training_checkpoint(
+        path, CHECKPOINT_FORMAT, "vinadv", config.to_dict(), _SAME_ON_RESUME, TrainConfig().to_dict()
+    )
+    data_sha = rec.get("data", {}).get("sha256")
+    if data_sha is not None and ck.get("data_sha256") not in (None, data_sha):
+        raise InputError(f"{path}: checkpoint was made on other data (checksum differs); remove it to start over")
+    restore_training(path, ck, model, optimizer)
     added_obs, added_goals = ck.get("added_obstacles"), ck.get("added_goals")
     return _State(
         epoch=int(ck["epoch"]),

@@ -22,6 +22,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from vinadv.errors import InputError
+from vinadv.jsonfile import read_json_document
 
 ZOO_FORMAT = "vinadv.zoo/1"
 #: the weights formats a zoo model may be read by, by the name the loaders pass to `weights_file`
@@ -99,12 +100,7 @@ def read_zoo(folder: str | os.PathLike | None = None) -> dict[str, ZooModel]:
 @lru_cache(maxsize=8)
 def _read_zoo(folder: str) -> tuple[tuple[str, ZooModel], ...]:
     index = Path(folder) / "zoo.json"
-    try:
-        data = json.loads(index.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(f"{index}: not a readable model zoo index ({str(exc).splitlines()[0]})") from None
-    if not isinstance(data, dict) or data.get("format") != ZOO_FORMAT:
-        raise InputError(f"{index}: field 'format' is not {ZOO_FORMAT!r}")
+    data = read_json_document(index, ZOO_FORMAT, "model zoo index")
     models = data.get("models")
     if not isinstance(models, dict):
         raise InputError(f"{index}: field 'models' is not an object")

@@ -67,14 +67,7 @@ def _read(f: ForeignArrays, split: str, starts: int | None, seed: int, moves: st
                 f"has {policies.shape[1]} actions (GPPN's {mechanism}); moves {moves!r} has "
                 f"{move_model(moves).n_actions}",
             )
-        if not np.isin(goal_maps, (0, 1)).all():
-            raise f.fail(names[1], "has values other than 0 and 1 (GPPN: 1.0 at the goal)")
-        obstacles, goals = decode_images(
-            f, names[0], mazes, names[1], goal_maps[:, 0], one_is_free=True, goal_value=1, background=(0,)
-        )
-        if not np.isin(policies, (0, 1)).all() or np.any(policies.sum(axis=1) > 1):
-            raise f.fail(names[2], "has values other than one-hot 0 and 1 (one optimal action per cell)")
-        check_policies(f, names[2], obstacles, goals, policies[:, :, 0], mechanism)
+        obstacles, goals = decode_gppn_arrays(f, names, mazes, goal_maps, policies, mechanism)
         obstacles_l.append(obstacles)
         goals_l.append(goals)
     if len(found) > 1:
@@ -88,6 +81,29 @@ def _read(f: ForeignArrays, split: str, starts: int | None, seed: int, moves: st
         "(an optimal move at every cell that reaches the goal, the goal excepted), not used",
         **info,
     }
+
+
+def decode_gppn_arrays(
+    f: ForeignArrays,
+    names: list[str],
+    mazes: np.ndarray,
+    goal_maps: np.ndarray,
+    policies: np.ndarray,
+    mechanism: str,
+) -> tuple[np.ndarray, np.ndarray]:
+    """`(obstacles (n, M, M), goals (n, 2))` of GPPN's arrays, the ones the MP dataset keeps too: mazes `(n, M, M)`
+    (1 = free), goal maps `(n, 1, M, M)` (1 at the goal) and one-hot policies `(n, A, 1, M, M)` of `mechanism`,
+    the arrays `names` of `f`. Refused (one line naming the array) where a value is not GPPN's or a policy's action
+    is not optimal (`check_policies`)."""
+    if not np.isin(goal_maps, (0, 1)).all():
+        raise f.fail(names[1], "has values other than 0 and 1 (GPPN: 1.0 at the goal)")
+    obstacles, goals = decode_images(
+        f, names[0], mazes, names[1], goal_maps[:, 0], one_is_free=True, goal_value=1, background=(0,)
+    )
+    if not np.isin(policies, (0, 1)).all() or np.any(policies.sum(axis=1) > 1):
+        raise f.fail(names[2], "has values other than one-hot 0 and 1 (one optimal action per cell)")
+    check_policies(f, names[2], obstacles, goals, policies[:, :, 0], mechanism)
+    return obstacles, goals
 
 
 def check_policies(

@@ -35,8 +35,8 @@ from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
 from vinadv.interop.formats.files import ForeignArrays, load_npz
-from vinadv.interop.formats.gppn import check_policies, unit_cost_policies
-from vinadv.interop.formats.samples import decode_images, goal_images, padded_map_set
+from vinadv.interop.formats.gppn import decode_gppn_arrays, unit_cost_policies
+from vinadv.interop.formats.samples import goal_images, padded_map_set
 from vinadv.seeds import check_seed
 
 #: the splits read, and the index of the first array (maps) of each
@@ -65,14 +65,7 @@ def _read(f: ForeignArrays, split: str, k: int, seed: int) -> tuple[MapSet, dict
     goal_maps = f.get(names[1], 4, (n, 1, m, m))
     policies = f.get(names[2], 5, (n, 8, 1, m, m))
     stored = f.get(names[3], 4, (n, 1, m, m))[:, 0].astype(np.float64)
-    if not np.isin(goal_maps, (0, 1)).all():
-        raise f.fail(names[1], "has values other than 0 and 1 (one-hot goals)")
-    obstacles, goals = decode_images(
-        f, names[0], maps, names[1], goal_maps[:, 0], one_is_free=True, goal_value=1, background=(0,)
-    )
-    if not np.isin(policies, (0, 1)).all() or np.any(policies.sum(axis=1) > 1):
-        raise f.fail(names[2], "has values other than one-hot 0 and 1 (one optimal action per cell)")
-    check_policies(f, names[2], obstacles, goals, policies[:, :, 0], MOVES)
+    obstacles, goals = decode_gppn_arrays(f, names, maps, goal_maps, policies, MOVES)
     dist, _ = shortest_distances(obstacles, goals, True, MOVES)
     check_distances(f, names[3], stored, dist)
     bands = start_bands(stored)

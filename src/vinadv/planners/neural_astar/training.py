@@ -42,15 +42,13 @@ from tqdm import tqdm
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
-from vinadv.outfile import atomic_output
 from vinadv.planners.astar import AStarPlanner
 from vinadv.planners.device import resolve_device
 from vinadv.planners.neural_astar.differentiable import differentiable_astar
 from vinadv.planners.neural_astar.model import NeuralAstar, NeuralAstarConfig
 from vinadv.planners.neural_astar.planner import MOVES, NeuralAstarPlanner
 from vinadv.planners.search_metrics import EPS, path_costs
-from vinadv.planners.training import hardware_info
-from vinadv.planners.weights import torch_load
+from vinadv.planners.training import hardware_info, read_training_checkpoint, restore_training, save_training_checkpoint
 
 __all__ = [
     "CHECKPOINT_FORMAT",
@@ -187,22 +185,8 @@ class _State:
 
 
 def _save_checkpoint(path, model, optimizer, config, state: _State, data_sha256) -> None:
-    with atomic_output(path, "wb", mkdir=True) as fh:
-        torch.save(
-            {
-                "format": CHECKPOINT_FORMAT,
-                "model": {k: v.detach().cpu() for k, v in model.encoder.state_dict().items()},
-                "optimizer": optimizer.state_dict(),
-                "train_config": config.to_dict(),
-                "data_sha256": data_sha256,
-                "epoch": state.epoch,
-                "wall_s": state.wall_s,
-                "epochs": state.epochs,
-                "best": state.best,
-                "best_state": state.best_state,
-            },
-            fh,
-        )
+    # every field of the state, as `_load_checkpoint` reads them back
+    save_training_checkpoint(path, CHECKPOINT_FORMAT, model.encoder, optimizer, config, data_sha256, **vars(state))
 
 
 #: settings a resumed run must share with its checkpoint (the epoch count and time limit may change)
@@ -210,23 +194,10 @@ _SAME_ON_RESUME = ("lr", "batch_size", "tmax", "seed", "depth", "g_ratio")
 
 
 def _load_checkpoint(path, model, optimizer, config: NeuralAstarTrainConfig, data_sha256) -> _State:
-    ck = torch_load(path, "readable training checkpoint")
-    if not isinstance(ck, dict) or ck.get("format") != CHECKPOINT_FORMAT:
-        raise InputError(f"{path}: not a Neural A* training checkpoint (expected format {CHECKPOINT_FORMAT!r})")
-    saved, now = dict(ck.get("train_config") or {}), config.to_dict()
-    for key in _SAME_ON_RESUME:
-        if saved.get(key) != now[key]:
-            raise InputError(
-                f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {now[key]!r}; use the same options "
-                "to resume, or remove the checkpoint"
-            )
+    ck = read_training_checkpoint(path, CHECKPOINT_FORMAT, "Neural A*", config.to_dict(), _SAME_ON_RESUME)
     if ck.get("data_sha256") != data_sha256:
         raise InputError(f"{path}: checkpoint was made on other maps (checksums differ); remove it to start over")
-    try:
-        model.encoder.load_state_dict(ck["model"])
-        optimizer.load_state_dict(ck["optimizer"])
-    except (RuntimeError, KeyError, ValueError) as exc:
-        raise InputError(f"{path}: checkpoint does not match the model ({str(exc).splitlines()[0]})") from None
+    restore_training(path, ck, model.encoder, optimizer)
     return _State(
         epoch=int(ck["epoch"]),
         wall_s=float(ck["wall_s"]),

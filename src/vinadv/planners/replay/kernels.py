@@ -8,7 +8,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from vinadv.planners.vin.flat import layout, zero_row_gaps
+from vinadv.planners.vin.flat import kernel_taps, layout, zero_row_gaps
 
 __all__ = ["add_bias", "conv_chains", "conv_fused", "conv_plain", "replay_kernel", "sum_channels"]
 
@@ -24,10 +24,11 @@ def add_bias(x: np.ndarray, bias: np.ndarray | None) -> np.ndarray:
 # between channels (a float32 store is exact).
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"contract"})
-def conv_fused(v, w, n, out):
-    """out[o] = the taps of w[o] chained, acc = fma(w[o, c, tap], v[c, cell + tap], acc). v `(C, size)`,
-    w `(O, C, 3, 3)`, out `(O, size)` float32."""
+@numba.njit(inline="always")
+def _conv_taps(v, w, n, out):
+    """out[o] = the taps of w[o] chained, acc = w[o, c, tap] * v[c, cell + tap] + acc. v `(C, size)`,
+    w `(O, C, 3, 3)`, out `(O, size)` float32. Inlined, so whether a product fuses with its add is the caller's
+    `fastmath` (`conv_fused`, `conv_plain`)."""
     width, p0, length = layout(n)[:3]
     for o in range(w.shape[0]):
         acc = out[o, p0 : p0 + length]
@@ -35,7 +36,7 @@ def conv_fused(v, w, n, out):
         for c in range(w.shape[1]):
             x = v[c]
             u0, u1, u2 = x[p0 - width - 1 :], x[p0 - 1 :], x[p0 + width - 1 :]  # rows above, same, below
-            w00, w01, w02, w10, w11, w12, w20, w21, w22 = w[o, c].ravel()
+            w00, w01, w02, w10, w11, w12, w20, w21, w22 = kernel_taps(w[o, c])
             for t in range(length):
                 a = w00 * u0[t] + acc[t]
                 a = w01 * u0[t + 1] + a
@@ -46,29 +47,18 @@ def conv_fused(v, w, n, out):
                 a = w20 * u2[t] + a
                 a = w21 * u2[t + 1] + a
                 acc[t] = w22 * u2[t + 2] + a
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+def conv_fused(v, w, n, out):
+    """`_conv_taps` with every product fused with its add, acc = fma(w[o, c, tap], v[c, cell + tap], acc)."""
+    _conv_taps(v, w, n, out)
 
 
 @numba.njit(cache=True, nogil=True)
 def conv_plain(v, w, n, out):
-    """As `conv_fused`, each product rounded before it is added (compiled without `contract`: never fused)."""
-    width, p0, length = layout(n)[:3]
-    for o in range(w.shape[0]):
-        acc = out[o, p0 : p0 + length]
-        acc[:] = 0.0
-        for c in range(w.shape[1]):
-            x = v[c]
-            u0, u1, u2 = x[p0 - width - 1 :], x[p0 - 1 :], x[p0 + width - 1 :]
-            w00, w01, w02, w10, w11, w12, w20, w21, w22 = w[o, c].ravel()
-            for t in range(length):
-                a = w00 * u0[t] + acc[t]
-                a = w01 * u0[t + 1] + a
-                a = w02 * u0[t + 2] + a
-                a = w10 * u1[t] + a
-                a = w11 * u1[t + 1] + a
-                a = w12 * u1[t + 2] + a
-                a = w20 * u2[t] + a
-                a = w21 * u2[t + 1] + a
-                acc[t] = w22 * u2[t + 2] + a
+    """`_conv_taps` with each product rounded before it is added (compiled without `contract`: never fused)."""
+    _conv_taps(v, w, n, out)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -37,7 +37,7 @@ from vinadv.planners.result import (
 )
 from vinadv.planners.rollout import MOVED, rollout_step
 from vinadv.planners.vin.arrays import GOAL_VALUE, VINWeights, as_vin_weights
-from vinadv.planners.vin.flat import layout, zero_row_gaps
+from vinadv.planners.vin.flat import kernel_taps, layout, zero_row_gaps
 
 if TYPE_CHECKING:
     from vinadv.planners.vin.model import VIN
@@ -225,15 +225,7 @@ def _value_iteration(reward_q, v, vm, vp, best, best2, w, k, q, n):
             out = best if c % 2 == 0 else best2
             dst = out[p0 : p0 + length]
             rq = reward_q[c, p0 : p0 + length]
-            w00 = w[c, 0, 0]
-            w01 = w[c, 0, 1]
-            w02 = w[c, 0, 2]
-            w10 = w[c, 1, 0]
-            w11 = w[c, 1, 1]
-            w12 = w[c, 1, 2]
-            w20 = w[c, 2, 0]
-            w21 = w[c, 2, 1]
-            w22 = w[c, 2, 2]
+            w00, w01, w02, w10, w11, w12, w20, w21, w22 = kernel_taps(w[c])
             if not last:
                 for t in range(length):
                     a = (

@@ -30,6 +30,14 @@ def zero_row_gaps(flat, n):
             flat[p0 + i * width + j] = 0.0
 
 
+@numba.njit(inline="always")
+def kernel_taps(w):
+    """The nine taps of a 3x3 kernel `w (3, 3)`, row by row, as nine scalars: a kernel loads them once per channel and
+    keeps them in registers through its long loop over cells. Inlined into the caller: `w.ravel()` unpacked into
+    nine names instead measured 6-12% slower in the engine's planning (single thread)."""
+    return w[0, 0], w[0, 1], w[0, 2], w[1, 0], w[1, 1], w[1, 2], w[2, 0], w[2, 1], w[2, 2]
+
+
 def to_flat(maps: np.ndarray) -> np.ndarray:
     """`(C, N, N)` -> `(C, size)` float32 in the flat layout."""
     c, n = maps.shape[0], maps.shape[1]

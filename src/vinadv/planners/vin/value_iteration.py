@@ -19,6 +19,7 @@ import torch
 import torch.nn.functional as F
 
 from vinadv.planners.batching import over_maps
+from vinadv.planners.vin.flat import kernel_taps
 
 
 def _over_maps(kernel, b: int, *arrays) -> None:
@@ -62,15 +63,7 @@ def _forward(lo, hi, q_r, w, k, q_out, v_saved, arg_saved):
             arg[:] = 0.0
             for c in range(lq):
                 r = rq[c, p0 : p0 + length]
-                w00 = w[c, 0, 0]
-                w01 = w[c, 0, 1]
-                w02 = w[c, 0, 2]
-                w10 = w[c, 1, 0]
-                w11 = w[c, 1, 1]
-                w12 = w[c, 1, 2]
-                w20 = w[c, 2, 0]
-                w21 = w[c, 2, 1]
-                w22 = w[c, 2, 2]
+                w00, w01, w02, w10, w11, w12, w20, w21, w22 = kernel_taps(w[c])
                 if t == k:
                     out = q_out[b, c]
                     for i in range(n):
