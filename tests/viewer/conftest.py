@@ -83,7 +83,7 @@ def store(db):
     store.close()
 
 
-def testing_app(store: Store):
+def viewer_for_tests(store: Store):
     """The viewer over `store` in Flask's testing mode (errors raised in the test, not turned into 500 pages)."""
     app = create_app(store, secret_key="test-secret")
     app.config["TESTING"] = True
@@ -92,7 +92,7 @@ def testing_app(store: Store):
 
 @pytest.fixture
 def app(store):
-    return testing_app(store)
+    return viewer_for_tests(store)
 
 
 @pytest.fixture

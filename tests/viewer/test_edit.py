@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from tests.viewer.conftest import testing_app
+from tests.viewer.conftest import viewer_for_tests
 from vinadv.store import Store
 from vinadv.testing.store import random_records
 
@@ -13,6 +13,6 @@ def test_viewer_pair_json_carries_the_edit(tmp_path):
     with Store.open(db) as store:
         run_id = store.create_run("v")
         store.write_pairs(run_id, records)
-        client = testing_app(store).test_client()
+        client = viewer_for_tests(store).test_client()
         got = [client.get(f"/api/pairs/{run_id}/{i}").get_json()["edit"] for i in range(6)]
     assert got == list(records.edit)

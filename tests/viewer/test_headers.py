@@ -3,7 +3,7 @@ browsed, and labelling it is refused."""
 
 from __future__ import annotations
 
-from tests.viewer.conftest import csrf_from, testing_app
+from tests.viewer.conftest import csrf_from, viewer_for_tests
 from vinadv.store import Store
 
 
@@ -37,7 +37,7 @@ def test_read_only_store_is_browsed_and_labelling_refused(db):
     url, runs = db
     run_id = runs["random"][0]
     with Store.open(url, readonly=True) as store:
-        client = testing_app(store).test_client()
+        client = viewer_for_tests(store).test_client()
         page = client.get(f"/pairs/{run_id}/0")
         assert page.status_code == 200
         response = client.post(

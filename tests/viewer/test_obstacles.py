@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tests.viewer.conftest import testing_app
+from tests.viewer.conftest import viewer_for_tests
 from vinadv.store import Store
 from vinadv.testing.store import random_records
 
@@ -16,7 +16,7 @@ def test_pair_page_json_and_image_show_every_added_obstacle(tmp_path):
         run_id = store.create_run("three")
         store.write_pairs(run_id, records)
     with Store.open(url, create=False) as store:
-        client = testing_app(store).test_client()
+        client = viewer_for_tests(store).test_client()
         body = client.get(f"/api/pairs/{run_id}/2").get_json()
         assert body["added_cells"] == records.added[2].tolist() and body["added"] == records.added[2, 0].tolist()
         html = client.get(f"/pairs/{run_id}/2").get_data(as_text=True)
