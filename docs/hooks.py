@@ -23,6 +23,8 @@ Neural A*'s page (`docs/guide/neural-astar.md`) reads `docs/results/neural_astar
 `benchmarks/neural_astar_table.py` with the commands it ran and the machine: `<!-- vinadv:neural-astar-modes -->` (the
 exact against the differentiable search per seed, beside Opt / Exp / Hmean), `<!-- vinadv:neural-astar-speed -->`
 (plans/s side by side, and the ratios the prose would otherwise copy) and `<!-- vinadv:neural-astar-commands -->`.
+`<!-- vinadv:suite-times -->` (docs/development.md): the suite's wall times from `docs/results/suite_times.json`,
+written by `OUT=docs/results/suite_times.json bash .ci/suite-times`.
 """
 
 from __future__ import annotations
@@ -59,6 +61,8 @@ NEURAL_ASTAR_MODES = "<!-- vinadv:neural-astar-modes -->"
 NEURAL_ASTAR_SPEED = "<!-- vinadv:neural-astar-speed -->"
 NEURAL_ASTAR_COMMANDS = "<!-- vinadv:neural-astar-commands -->"
 NEURAL_ASTAR_JSON = ROOT / "docs" / "results" / "neural_astar.json"
+SUITE_TIMES = "<!-- vinadv:suite-times -->"
+SUITE_TIMES_JSON = ROOT / "docs" / "results" / "suite_times.json"
 
 
 def percent(fraction: float | None) -> str:
@@ -434,6 +438,30 @@ def neural_astar_commands(path: Path = NEURAL_ASTAR_JSON) -> str:
     return "```sh\n" + "\n".join(lines) + "\n```"
 
 
+def suite_times(path: Path = SUITE_TIMES_JSON) -> str:
+    """The suite's wall times as `.ci/suite-times` measured them (fresh clones, two workers, `CI=true`): each run's
+    whole suite and quick tier with the load average around it, the medians, the tests, the commit, the machine."""
+    data = json.loads(path.read_text())
+    rows = []
+    for i, run in enumerate(data["runs"]):
+        for tier, key in (
+            ("whole suite (fresh clone, cold caches)", "whole_suite"),
+            ("quick tier (warm)", "quick_tier"),
+        ):
+            r = run[key]
+            tests = ", ".join(f"{n:,} {kind}" for kind, n in r["tests"].items())
+            seconds = data["whole_suite_s" if key == "whole_suite" else "quick_tier_s"][i]
+            load = f"{r['load_average_before']} / {r['load_average_after']}"
+            rows.append([str(i + 1), tier, f"{seconds:.1f} s", tests, load])
+    header = ["clone", "what", "pytest's wall time", "tests", "load average before / after"]
+    m = data["machine"]
+    return (
+        markdown_table(header, rows)
+        + f"\n\nMedians: whole suite {data['whole_suite_median_s']:.1f} s, quick tier {data['quick_tier_median_s']:.1f} s."
+        + f" Measured on {data['date']} at {data['commit']}, on {m['cpu']} ({m['cores']} cores), by `{data['command']}`."
+    )
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
     for marker, build in (
@@ -450,6 +478,7 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (NEURAL_ASTAR_MODES, neural_astar_modes),
         (NEURAL_ASTAR_SPEED, neural_astar_speed),
         (NEURAL_ASTAR_COMMANDS, neural_astar_commands),
+        (SUITE_TIMES, suite_times),
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())
