@@ -455,11 +455,9 @@ def suite_times(path: Path = SUITE_TIMES_JSON) -> str:
             rows.append([str(i + 1), tier, f"{seconds:.1f} s", tests, load])
     header = ["clone", "what", "pytest's wall time", "tests", "load average before / after"]
     m = data["machine"]
-    return (
-        markdown_table(header, rows)
-        + f"\n\nMedians: whole suite {data['whole_suite_median_s']:.1f} s, quick tier {data['quick_tier_median_s']:.1f} s."
-        + f" Measured on {data['date']} at {data['commit']}, on {m['cpu']} ({m['cores']} cores), by `{data['command']}`."
-    )
+    medians = f"whole suite {data['whole_suite_median_s']:.1f} s, quick tier {data['quick_tier_median_s']:.1f} s"
+    where = f"on {data['date']} at {data['commit']}, on {m['cpu']} ({m['cores']} cores)"
+    return markdown_table(header, rows) + f"\n\nMedians: {medians}. Measured {where}, by `{data['command']}`."
 
 
 def on_page_markdown(markdown: str, **kwargs) -> str:
