@@ -25,6 +25,11 @@ exact against the differentiable search per seed, beside Opt / Exp / Hmean), `<!
 (plans/s side by side, and the ratios the prose would otherwise copy) and `<!-- vinadv:neural-astar-commands -->`.
 `<!-- vinadv:suite-times -->` (docs/development.md): the suite's wall times from `docs/results/suite_times.json`,
 written by `OUT=docs/results/suite_times.json bash .ci/suite-times`.
+The 64x64 VIN's section (docs/guide/planners.md) reads `docs/results/vin64_reach.json`, written by
+`benchmarks/vin64_reach.py` with its commands: `<!-- vinadv:vin64-transfer -->` (the 28x28 weights on 64x64 maps, and
+the commands) and `<!-- vinadv:vin64-reach -->` (the optimal move counts that set k); and the committed weights
+files: `<!-- vinadv:vin64-training -->` (`vin64.json`: the epochs' time and validation accuracy) and
+`<!-- vinadv:vin64-held-out -->` (`vin64.metrics.json`: success on the held-out maps, and on the starts beyond reach).
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ import re
 from pathlib import Path
 
 from vinadv.bench.leaderboard import read_entries, render_markdown, rows  # the one renderer of a leaderboard
+from vinadv.planners.evaluation import LENGTH_BUCKET  # the width of the `by_length` rows
 
 ROOT = Path(__file__).resolve().parents[1]
 WEIGHTS_DIR = ROOT / "src" / "vinadv" / "weights"
@@ -63,6 +69,11 @@ NEURAL_ASTAR_COMMANDS = "<!-- vinadv:neural-astar-commands -->"
 NEURAL_ASTAR_JSON = ROOT / "docs" / "results" / "neural_astar.json"
 SUITE_TIMES = "<!-- vinadv:suite-times -->"
 SUITE_TIMES_JSON = ROOT / "docs" / "results" / "suite_times.json"
+VIN64_TRANSFER = "<!-- vinadv:vin64-transfer -->"
+VIN64_REACH = "<!-- vinadv:vin64-reach -->"
+VIN64_TRAINING = "<!-- vinadv:vin64-training -->"
+VIN64_HELD_OUT = "<!-- vinadv:vin64-held-out -->"
+VIN64_JSON = ROOT / "docs" / "results" / "vin64_reach.json"
 
 
 def percent(fraction: float | None) -> str:
@@ -460,6 +471,88 @@ def suite_times(path: Path = SUITE_TIMES_JSON) -> str:
     return markdown_table(header, rows) + f"\n\nMedians: {medians}. Measured {where}, by `{data['command']}`."
 
 
+def _vi_start(weights: str, folder: Path) -> str:
+    """The value-iteration start a weights file was trained from, as its training record names it."""
+    record = json.loads((folder / weights).with_suffix(".json").read_text())
+    start = record.get("train_config", {}).get("vi_init") or "default"
+    return f"`{start}` (the paper's)" if start == "default" else f"`{start}`"
+
+
+def vin64_transfer(path: Path = VIN64_JSON, folder: Path = WEIGHTS_DIR) -> str:
+    """The shipped 28x28 weights on generated 64x64 maps (`benchmarks/vin64_reach.py`): per weights file and k, the
+    share of the starts from which the rollout reaches the goal; then the maps, the date and every command."""
+    data = json.loads(path.read_text())
+    rows, commands, settings = [], [], set()
+    for entry in data["transfer"]:
+        commands.append(entry["export"])
+        for run in entry["runs"]:
+            fig = run["figures"]
+            settings.add((fig["maps"], fig["seed"], fig["size"], fig["starts_per_map"]))
+            rows.append(
+                [f"`{entry['weights']}`", _vi_start(entry["weights"], folder), str(run["k"])]
+                + [f"{percent(fig['success_rate'])} of {fig['rollouts']:,}", percent(fig["optimal_rate"])]
+            )
+            commands.append(run["command"])
+    ((maps, seed, size, starts),) = settings  # one set of maps for every run, or the table would compare apples
+    header = ["weights", "value-iteration start", "k", "reaches the goal (of the starts)", "optimal paths"]
+    note = (
+        f"Measured {data['date']} on {maps:,} generated {size}x{size} maps (seed {seed}, {starts} starts each) by "
+        f"`{data['command']}`, which ran (`<work>`: a scratch folder):"
+    )
+    return markdown_table(header, rows) + "\n\n" + note + "\n\n```sh\n" + "\n".join(commands) + "\n```"
+
+
+def vin64_reach(path: Path = VIN64_JSON) -> str:
+    """The optimal move counts on the training set's generator (`benchmarks/vin64_reach.py`), as a sentence: the
+    longest from a start, the share of the cells that reach the goal within each k, each map's farthest cell."""
+    data = json.loads(path.read_text())
+    reach = data["reach"]
+    within = sorted(reach["cells_within"].items(), key=lambda item: -int(item[0]))
+    first, *others = within
+    also = "".join(f"; within {k} moves: {percent(share)}" for k, share in others)
+    starts = "one start" if reach["starts_per_map"] == 1 else f"{reach['starts_per_map']} starts"
+    return (
+        f"On the generator's first {reach['maps']:,} {reach['size']}x{reach['size']} maps of seed {reach['seed']} "
+        f"({starts} each, the training set's settings) the longest optimal path from a start has "
+        f"{reach['longest_from_a_start']} moves, and {percent(first[1])} of the {reach['cells']:,} free cells that "
+        f"reach the goal do so within {first[0]} moves{also}; the per-map farthest cell has median "
+        f"{reach['farthest_cell_median']:g}, 99th percentile {reach['farthest_cell_p99']:g} and at most "
+        f"{reach['farthest_cell_max']} moves (`{data['command']}`, {data['date']})"
+    )
+
+
+def vin64_training(folder: Path = WEIGHTS_DIR) -> str:
+    """`vin64.pt`'s training record as a sentence: the epochs, their wall time, the machine and the validation
+    action accuracy after each epoch."""
+    record = json.loads((folder / "vin64.json").read_text())
+    hardware = record["hardware"]
+    accuracy = " / ".join(percent(epoch["val_action_accuracy"]) for epoch in record["epochs"])
+    threads = hardware["torch_threads"]
+    return (
+        f"The {record['epochs_done']} epochs took {record['wall_time_s'] / 60:.1f} minutes on "
+        f"{hardware['cpu_model']} ({hardware['cpu_count']} cores, {threads} torch thread{'s' * (threads != 1)}; "
+        f"`vin64.json`); validation action accuracy after epochs 1 to {len(record['epochs'])}: {accuracy}"
+    )
+
+
+def vin64_held_out(folder: Path = WEIGHTS_DIR) -> str:
+    """`vin64.pt`'s figures on the held-out maps (`vin64.metrics.json`) as a sentence: its success, then the starts
+    whose optimal path is within one length bucket of k or longer (k from `vin64.json`), and how many of them reach
+    the goal."""
+    fig = json.loads((folder / "vin64.metrics.json").read_text())
+    k = json.loads((folder / "vin64.json").read_text())["model"]["k"]
+    far = [row for row in fig["by_length"] if row["moves"][0] >= k - LENGTH_BUCKET]
+    starts = sum(row["rollouts"] for row in far)
+    missed_far = starts - round(sum(row["success_rate"] * row["rollouts"] for row in far))
+    missed = fig["rollouts"] - fig["terminations"]["goal"]
+    return (
+        f"On the {fig['maps']:,} held-out {fig['size']}x{fig['size']} maps (seed {fig['seed']}, never trained on) it "
+        f"reaches the goal from {percent(fig['success_rate'])} of the {fig['rollouts']:,} starts (`{fig['command']}`); "
+        f"of the {missed} starts it misses, {missed_far} are among the {starts} ({percent(starts / fig['rollouts'])} "
+        f"of the starts) whose optimal path has {k - LENGTH_BUCKET} moves or more"
+    )
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
     for marker, build in (
@@ -477,6 +570,10 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (NEURAL_ASTAR_SPEED, neural_astar_speed),
         (NEURAL_ASTAR_COMMANDS, neural_astar_commands),
         (SUITE_TIMES, suite_times),
+        (VIN64_TRANSFER, vin64_transfer),
+        (VIN64_REACH, vin64_reach),
+        (VIN64_TRAINING, vin64_training),
+        (VIN64_HELD_OUT, vin64_held_out),
     ):
         if marker in markdown:
             markdown = markdown.replace(marker, build())

@@ -371,6 +371,93 @@ def test_the_neural_astar_measurements_are_read_from_their_json(tmp_path):
     assert "the encoder alone took as long as the whole of it (111.1%: " in hooks.neural_astar_speed(path)
 
 
+def _vin64_files(folder: Path) -> Path:
+    """A made-up `vin64_reach.json` and the weights records the 64x64 VIN's section reads, in `folder`."""
+    figures = {"maps": 10, "seed": 3, "size": 64, "starts_per_map": 7, "rollouts": 70}
+    runs = [
+        {"k": 9, "command": "vinadv vin eval --k 9", "figures": {**figures, "success_rate": 0.5, "optimal_rate": 0.25}}
+    ]
+    record = {
+        "command": "python benchmarks/vin64_reach.py --n 10",
+        "date": "2026-01-02 03:04 UTC",
+        "transfer": [{"weights": "a28.pt", "export": "vinadv vin export-weights a28.pt", "runs": runs}],
+        "reach": {
+            "maps": 20,
+            "size": 64,
+            "seed": 4,
+            "starts_per_map": 1,
+            "longest_from_a_start": 77,
+            "cells": 1234,
+            "cells_within": {"50": 0.75, "70": 0.875},
+            "farthest_cell_median": 40.5,
+            "farthest_cell_p99": 66.0,
+            "farthest_cell_max": 90,
+        },
+    }
+    (folder / "a28.json").write_text(json.dumps({"train_config": {"vi_init": "shift"}}))
+    epochs = [{"val_action_accuracy": 0.9}, {"val_action_accuracy": 0.95}]
+    hardware = {"cpu_model": "C", "cpu_count": 4, "torch_threads": 2}
+    training = {"epochs_done": 2, "wall_time_s": 90.0, "hardware": hardware, "epochs": epochs, "model": {"k": 20}}
+    (folder / "vin64.json").write_text(json.dumps(training))
+    by_length = [
+        {"moves": [10, 14], "rollouts": 90, "success_rate": 1.0},
+        {"moves": [15, 19], "rollouts": 8, "success_rate": 0.5},
+        {"moves": [20, 24], "rollouts": 2, "success_rate": 0.0},
+    ]
+    held_out = {"maps": 50, "size": 64, "seed": 1000, "rollouts": 100, "success_rate": 0.94, "command": "vinadv x"}
+    held_out |= {"terminations": {"goal": 94}, "by_length": by_length}
+    (folder / "vin64.metrics.json").write_text(json.dumps(held_out))
+    path = folder / "vin64_reach.json"
+    path.write_text(json.dumps(record))
+    return path
+
+
+def test_the_vin64_section_is_read_from_its_json_and_the_weights_files(tmp_path):
+    hooks = docs_module("hooks")
+    page = (DOCS / "guide" / "planners.md").read_text()
+    section = page.split("\n### The 64x64 VIN (`vin64.pt`)\n", 1)[1].split("\n## ", 1)[0]
+    markers = (hooks.VIN64_TRANSFER, hooks.VIN64_REACH, hooks.VIN64_TRAINING, hooks.VIN64_HELD_OUT)
+    for marker in markers:
+        assert page.count(marker) == 1 and marker in section
+    # the prose holds no measured number: no percentage, and no decimal but the settings (k = 1.3 N) outside code
+    prose = re.sub(r"```.*?```", "", section, flags=re.S)
+    assert "%" not in prose and re.findall(r"\d+\.\d+", prose) == ["1.3"]
+    assert not re.search(r"\d+ minutes|median \d|\d+ of the \d", prose)
+    filled = hooks.on_page_markdown(section, page=None, config=None, files=None)
+    assert "<!-- vinadv:" not in filled
+    data = json.loads(hooks.VIN64_JSON.read_text())
+    assert data["command"] in filled and "/tmp" not in json.dumps(data)
+    for entry in data["transfer"]:
+        assert entry["export"] in filled and (WEIGHTS / entry["weights"]).is_file()
+        for run in entry["runs"]:
+            assert run["command"] in filled
+            assert f" | {run['k']} | {hooks.percent(run['figures']['success_rate'])} of " in filled
+    assert f"within {max(data['reach']['cells_within'], key=int)} moves" in filled
+    training = json.loads((WEIGHTS / "vin64.json").read_text())
+    assert f"took {training['wall_time_s'] / 60:.1f} minutes" in filled
+    assert hooks.percent(training["epochs"][-1]["val_action_accuracy"]) in filled
+    metrics = json.loads((WEIGHTS / "vin64.metrics.json").read_text())
+    assert f"from {hooks.percent(metrics['success_rate'])} of the {metrics['rollouts']:,} starts" in filled
+    # other files give other text: nothing is copied by hand
+    path = _vin64_files(tmp_path)
+    assert hooks.vin64_transfer(path, tmp_path).splitlines()[2] == "| `a28.pt` | `shift` | 9 | 50.0% of 70 | 25.0% |"
+    assert "on 10 generated 64x64 maps (seed 3, 7 starts each)" in hooks.vin64_transfer(path, tmp_path)
+    assert hooks.vin64_reach(path) == (
+        "On the generator's first 20 64x64 maps of seed 4 (one start each, the training set's settings) the longest "
+        "optimal path from a start has 77 moves, and 87.5% of the 1,234 free cells that reach the goal do so within 70 "
+        "moves; within 50 moves: 75.0%; the per-map farthest cell has median 40.5, 99th percentile 66 and at most 90 "
+        "moves (`python benchmarks/vin64_reach.py --n 10`, 2026-01-02 03:04 UTC)"
+    )
+    assert hooks.vin64_training(tmp_path) == (
+        "The 2 epochs took 1.5 minutes on C (4 cores, 2 torch threads; `vin64.json`); validation action accuracy "
+        "after epochs 1 to 2: 90.0% / 95.0%"
+    )
+    assert hooks.vin64_held_out(tmp_path).endswith(
+        "from 94.0% of the 100 starts (`vinadv x`); of the 6 starts it misses, 6 are among the 10 (10.0% of the "
+        "starts) whose optimal path has 15 moves or more"
+    )
+
+
 @pytest.mark.slow  # loads the benchmark script and what it imports: seconds
 def test_the_published_fma_count_is_the_forwards_as_pytorch_counts_it():
     # benchmarks/map_size.py's formula against PyTorch's own count of the VIN's convolutions (2 flops a multiply-add)
