@@ -451,24 +451,37 @@ def neural_astar_commands(path: Path = NEURAL_ASTAR_JSON) -> str:
 
 def suite_times(path: Path = SUITE_TIMES_JSON) -> str:
     """The suite's wall times as `.ci/suite-times` measured them (fresh clones, two workers, `CI=true`): each run's
-    whole suite and quick tier with the load average around it, the medians, the tests, the commit, the machine."""
+    whole suite and quick tier with the load average around it, the medians, the tests, the commit, the machine; with
+    a `base` (`BASE=REV`), that commit's runs too, taken in turn with these, and the ratios of the medians."""
     data = json.loads(path.read_text())
+    blocks = [(data["commit"], data)] + ([(data["base"]["commit"], data["base"])] if "base" in data else [])
     rows = []
-    for i, run in enumerate(data["runs"]):
-        for tier, key in (
-            ("whole suite (fresh clone, cold caches)", "whole_suite"),
-            ("quick tier (warm)", "quick_tier"),
-        ):
-            r = run[key]
-            tests = ", ".join(f"{n:,} {kind}" for kind, n in r["tests"].items())
-            seconds = data["whole_suite_s" if key == "whole_suite" else "quick_tier_s"][i]
-            load = f"{r['load_average_before']} / {r['load_average_after']}"
-            rows.append([str(i + 1), tier, f"{seconds:.1f} s", tests, load])
-    header = ["clone", "what", "pytest's wall time", "tests", "load average before / after"]
+    for commit, block in blocks:
+        for i, run in enumerate(block["runs"]):
+            for what, key in (
+                ("whole suite (fresh clone, cold caches)", "whole_suite"),
+                ("quick tier (warm)", "quick_tier"),
+            ):
+                r = run[key]
+                tests = ", ".join(f"{n:,} {kind}" for kind, n in r["tests"].items())
+                load = f"{r['load_average_before']} / {r['load_average_after']}"
+                rows.append([f"`{commit}`", str(i + 1), what, f"{block[key + '_s'][i]:.1f} s", tests, load])
+    header = ["commit", "clone", "what", "pytest's wall time", "tests", "load average before / after"]
     m = data["machine"]
-    medians = f"whole suite {data['whole_suite_median_s']:.1f} s, quick tier {data['quick_tier_median_s']:.1f} s"
-    where = f"on {data['date']} at {data['commit']}, on {m['cpu']} ({m['cores']} cores)"
-    return markdown_table(header, rows) + f"\n\nMedians: {medians}. Measured {where}, by `{data['command']}`."
+    medians = [
+        f"`{c}`: whole suite {b['whole_suite_median_s']:.1f} s, quick tier {b['quick_tier_median_s']:.1f} s"
+        for c, b in blocks
+    ]
+    text = f"Medians: {'; '.join(medians)}."
+    if "base" in data:
+        base = data["base"]
+        text += (
+            f" `{data['commit']}` against `{base['commit']}`, in the same runs: whole suite "
+            f"{data['whole_suite_median_s'] / base['whole_suite_median_s']:.2f}x, quick tier "
+            f"{data['quick_tier_median_s'] / base['quick_tier_median_s']:.2f}x."
+        )
+    where = f"on {data['date']}, on {m['cpu']} ({m['cores']} cores)"
+    return markdown_table(header, rows) + f"\n\n{text} Measured {where}, by `{data['command']}`."
 
 
 def _vi_start(weights: str, folder: Path) -> str:
