@@ -481,3 +481,16 @@ def test_algorithm_stars_are_text_not_emphasis_outside_code():
     assert hooks.escape_algorithm_stars(text) == (
         "Beside A\\*, weighted A\\* and **bold** `A*, A*`\n```sh\nA*, A*\n```\nNeural A\\*'s"
     )
+
+
+def test_the_suite_times_render_from_their_committed_json():
+    hooks = docs_module("hooks")
+    data = json.loads(hooks.SUITE_TIMES_JSON.read_text())
+    page = hooks.on_page_markdown((DOCS / "development.md").read_text())
+    assert hooks.SUITE_TIMES not in page
+    table = hooks.suite_times()
+    assert table in page and data["commit"] in table and f"{data['whole_suite_median_s']:.1f} s" in table
+    assert len(data["runs"]) == len(data["whole_suite_s"]) == len(data["quick_tier_s"])
+    if "base" in data:  # both commits' rows, and the ratio of the whole suites' medians
+        ratio = data["whole_suite_median_s"] / data["base"]["whole_suite_median_s"]
+        assert f"`{data['base']['commit']}`" in table and f"whole suite {ratio:.2f}x" in table
