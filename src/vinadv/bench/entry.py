@@ -218,7 +218,7 @@ def make_entry(suite: Suite, planner: Planner, chunks: dict[int, dict], checks: 
     reached = np.array([v for c in order for v in c["clean"]["reached"]], dtype=bool)
     regret = np.array([np.nan if v is None else v for c in order for v in c["clean"]["regret"]], dtype=np.float64)
     n = len(reached)
-    weights = np.array([c["maps"] for c in order], dtype=np.float64)
+    weights = [c["maps"] for c in order]
 
     def gppn(name):  # the chunks' means, weighted by their maps: the mean over every map
         return weighted_mean(weights, [c["clean"][name] for c in order])

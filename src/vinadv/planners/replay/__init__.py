@@ -20,7 +20,9 @@ layer alone took 23 ms instead of 0.1 ms). Each op is cheap and simple to replay
 assumed: `conv_modes` and `sum_order` run PyTorch's convolutions on random data once for each (map size, widths,
 PyTorch threads) and keep the chains that reproduce them bit for bit; the first `VERIFY_MAPS` maps of each setting
 are also compared whole with `VIN.q_values`. If a check fails, that setting uses `VIN.q_values` itself (slow, but
-exact). So the only PyTorch calls are those checks, a few per setting and process.
+exact); where only r's order is not found (MKL on 2 threads at 32x32 and 64x64), PyTorch computes r alone from the
+replayed h, one small op per map, and the rest is replayed. Elsewhere the only PyTorch calls are those checks, a few
+per setting and process.
 
 "Bit for bit" means: equal to what PyTorch computes with the caller's `torch.get_num_threads()`, the setting the
 reference planner runs under (PyTorch's own float32 results depend on its thread count); in a process that has not
