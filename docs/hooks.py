@@ -204,6 +204,11 @@ def markdown_table(header: list[str], rows: list[list[str]]) -> str:
     return "\n".join("| " + " | ".join(cells) + " |" for cells in lines)
 
 
+def shell_block(lines: list[str]) -> str:
+    """Commands as a fenced `sh` block."""
+    return "```sh\n" + "\n".join(lines) + "\n```"
+
+
 def mpd_table(path: Path = MPD_JSON) -> str:
     """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `benchmarks/mpd_table.py`'s
     JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
@@ -289,7 +294,7 @@ def mpd_commands(path: Path = MPD_JSON) -> str:
     for entry in (e for f in data["families"] for e in f["planners"] if e.get("weights_sha256")):
         weights[entry["planner"]] = entry["weights_sha256"]
     lines += [f"# {name}: weights with SHA-256 {sha}" for name, sha in weights.items()]
-    return "```sh\n" + "\n".join(lines) + "\n```"
+    return shell_block(lines)
 
 
 #: the growth columns of `map_size_table`: FMA per map, then the time per value map and per plan
@@ -446,7 +451,7 @@ def neural_astar_commands(path: Path = NEURAL_ASTAR_JSON) -> str:
     for entry in data["modes"]:
         lines += [entry["import"], entry["compare_modes"]["command"], entry["eval"]["command"]]
     lines.append(data["speed"]["command"])
-    return "```sh\n" + "\n".join(lines) + "\n```"
+    return shell_block(lines)
 
 
 def suite_times(path: Path = SUITE_TIMES_JSON) -> str:
@@ -512,7 +517,7 @@ def vin64_transfer(path: Path = VIN64_JSON, folder: Path = WEIGHTS_DIR) -> str:
         f"Measured {data['date']} on {maps:,} generated {size}x{size} maps (seed {seed}, {starts} starts each) by "
         f"`{data['command']}`, which ran (`<work>`: a scratch folder):"
     )
-    return markdown_table(header, rows) + "\n\n" + note + "\n\n```sh\n" + "\n".join(commands) + "\n```"
+    return markdown_table(header, rows) + "\n\n" + note + "\n\n" + shell_block(commands)
 
 
 def vin64_reach(path: Path = VIN64_JSON) -> str:
