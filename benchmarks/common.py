@@ -1,4 +1,6 @@
-"""What the benchmark scripts share: the side-by-side timer, their common options and the rows they search.
+"""What the benchmark scripts share: the side-by-side timer, their common options and the rows they search; and for
+the scripts that record results for the docs, running `vinadv` on this checkout's code with the commands recorded
+(`run_vinadv`), the machine (`cpu_model`, `load_average`) and the files' checksums (`sha256`).
 
 The scripts run as `python benchmarks/NAME.py`, so this folder is on their path and `from common import ...` finds
 this module.
@@ -7,7 +9,14 @@ this module.
 from __future__ import annotations
 
 import argparse
+import hashlib
+import os
+import platform
+import shlex
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -59,3 +68,43 @@ def search_rows(args: argparse.Namespace, moves: str = "moore"):
         return obstacles, starts, goals, f"{args.data}: {len(obstacles)} test maps"
     maps = generate_maps(args.n, args.size, seed=0, n_starts=1, moves=moves)
     return maps.obstacles, maps.starts[:, 0], maps.goals, f"{args.n} generated {args.size}x{args.size} {moves} maps"
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def load_average() -> float:
+    return round(os.getloadavg()[0], 2)
+
+
+def cpu_model() -> str:
+    """The CPU's model name from /proc/cpuinfo, else what `platform` says."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            return next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
+    except (OSError, StopIteration):
+        return platform.processor() or platform.machine()
+
+
+def shown(text: str, folders: dict[str, str]) -> str:
+    """`text` with each folder written as its placeholder."""
+    for folder, placeholder in folders.items():
+        text = text.replace(folder, placeholder)
+    return text
+
+
+def run_vinadv(args: list[str], folders: dict[str, str]) -> tuple[str, str]:
+    """Run `vinadv ARGS` on this checkout's code (`python -m vinadv.cli`, its `src` first on the path); the command
+    and its standard output as recorded (the folders written as their placeholders). Exits on failure."""
+    src = str(ROOT / "src")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [src, os.environ.get("PYTHONPATH")]))}
+    result = subprocess.run(
+        [sys.executable, "-m", "vinadv.cli", *args], capture_output=True, text=True, check=False, env=env, cwd=ROOT
+    )
+    if result.returncode != 0:
+        sys.exit(f"vinadv {shlex.join(args)} failed ({result.returncode}): {result.stderr.strip()[-2000:]}")
+    return "vinadv " + shown(shlex.join(args), folders), shown(result.stdout, folders)

@@ -21,37 +21,19 @@ planner can be added without running the rest again.
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from common import run_vinadv, sha256  # benchmarks/common.py
 
 FAMILIES = ["mazes", "alternating_gaps", "forest", "multiple_bugtraps", "shifting_gaps", "single_bugtrap"]
 PLANNERS = ["astar", "wastar:w=2", "optimal", "neural-astar"]
 ROBUSTNESS_PLANNERS = ["neural-astar", "astar", "wastar:w=2", "optimal"]
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "docs" / "results" / "mpd.json"
 SOURCE = "omron-sinicx/planning-datasets, commit a982a04 (data/mpd/*_032_moore_c8.npz)"
-
-
-def sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def run(args: list[str], folders: dict[str, str]) -> tuple[str, str]:
-    """Run `vinadv ARGS`; the command and its standard output as recorded (placeholders for the folders)."""
-    result = subprocess.run(["vinadv", *args], capture_output=True, text=True, check=False)
-    if result.returncode != 0:
-        sys.exit(f"vinadv {' '.join(args)} failed ({result.returncode}): {result.stderr.strip()[-2000:]}")
-
-    def shown(text: str) -> str:
-        for folder, placeholder in folders.items():
-            text = text.replace(folder, placeholder)
-        return text
-
-    return "vinadv " + shown(" ".join(args)), shown(result.stdout)
 
 
 def weighted(spec: str) -> tuple[str, str, Path]:
@@ -116,14 +98,14 @@ def main() -> None:
         maps = work / f"{family}_test.npz"
         source = data_dir / f"{family}_032_moore_c8.npz"
         import_args = ["maps", "import", "--format", "mpd", str(source), "--split", "test", "--seed", "0"]
-        command, _ = run([*import_args, "--out", str(maps), "--quiet"], folders)
+        command, _ = run_vinadv([*import_args, "--out", str(maps), "--quiet"], folders)
         entry = {"family": family, "import": command, "planners": []}
         table = [] if args.skip_table else [(p, p, None) for p in args.planners.split(",") if p]
         table += [e for e in extra if args.weighted_in_table and not args.skip_table]
         for name, planner, file in table:
             started = time.perf_counter()
             weights = [] if file is None else ["--weights", str(file)]
-            command, out = run(
+            command, out = run_vinadv(
                 ["eval", "--data", str(maps), "--planner", planner, *weights, "--json", "--quiet"], folders
             )
             search = json.loads(out)["search"]
@@ -140,7 +122,7 @@ def main() -> None:
         for name, planner, file in robust:
             started = time.perf_counter()
             weights = [] if file is None else ["--weights", str(file)]
-            command, out = run(
+            command, out = run_vinadv(
                 ["robustness", "--maps", str(maps), "--n", str(args.robustness_n), "--planner", planner, *weights]
                 + ["--max-obstacles", str(args.max_obstacles), "--json", "--quiet"],
                 folders,

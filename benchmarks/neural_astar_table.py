@@ -24,39 +24,19 @@ import datetime
 import importlib.metadata
 import json
 import os
-import platform
 import shlex
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from mpd_table import SOURCE, run  # benchmarks/mpd_table.py: the same dataset, the same way of running `vinadv`
+from common import cpu_model, load_average, run_vinadv, shown  # benchmarks/common.py
+from mpd_table import SOURCE  # benchmarks/mpd_table.py: the same dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = ROOT / "docs" / "results" / "neural_astar.json"
 DATA_FILE = "mazes_032_moore_c8.npz"
 SPEED_SCRIPT = "benchmarks/neural_astar.py"
-
-
-def load_average() -> float:
-    return round(os.getloadavg()[0], 2)
-
-
-def cpu_model() -> str:
-    """The CPU's model name from /proc/cpuinfo, else what `platform` says."""
-    try:
-        with open("/proc/cpuinfo") as fh:
-            return next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
-    except (OSError, StopIteration):
-        return platform.processor() or platform.machine()
-
-
-def shown(text: str, folders: dict[str, str]) -> str:
-    """`text` with each folder written as its placeholder."""
-    for folder, placeholder in folders.items():
-        text = text.replace(folder, placeholder)
-    return text
 
 
 def speed(data: Path, rounds: int, folders: dict[str, str]) -> dict:
@@ -112,10 +92,10 @@ def main() -> None:
     for seed in [int(s) for s in args.seeds.split(",") if s]:
         maps = work / f"mazes_test_{seed}.npz"
         import_args = ["maps", "import", "--format", "mpd", str(data), "--split", "test", "--seed", str(seed)]
-        imported, _ = run([*import_args, "--out", str(maps), "--quiet"], folders)
+        imported, _ = run_vinadv([*import_args, "--out", str(maps), "--quiet"], folders)
         as_json = ["--json", "--quiet"]
-        compared, compare_out = run(["neural-astar", "compare-modes", "--data", str(maps), *as_json], folders)
-        evaluated, eval_out = run(["eval", "--data", str(maps), "--planner", "neural-astar", *as_json], folders)
+        compared, compare_out = run_vinadv(["neural-astar", "compare-modes", "--data", str(maps), *as_json], folders)
+        evaluated, eval_out = run_vinadv(["eval", "--data", str(maps), "--planner", "neural-astar", *as_json], folders)
         comparison = json.loads(compare_out)
         entry = {
             "seed": seed,

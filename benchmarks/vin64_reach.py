@@ -25,11 +25,9 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import hashlib
 import json
 import os
 import shlex
-import subprocess
 import sys
 import tempfile
 import time
@@ -37,12 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
-from neural_astar_table import cpu_model, load_average, shown  # the same record of the machine and the folders
-
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
 sys.path.insert(0, str(SRC))  # the library measured is this checkout's, as the commands' is
 
+from common import cpu_model, load_average, run_vinadv, sha256  # noqa: E402 (benchmarks/common.py)
 from vinadv.grid.generator import generate_maps  # noqa: E402
 from vinadv.grid.shortest_paths import shortest_distances  # noqa: E402
 
@@ -55,28 +52,13 @@ TRANSFER = (("vin28.pt", (100,)), ("vin28_robust.pt", (84, 128)))
 REACH_K = (84, 100)
 
 
-def sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def vinadv(args: list[str], folders: dict[str, str]) -> tuple[str, str]:
-    """Run `vinadv ARGS` on this checkout's code; the command and its standard output as recorded."""
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(SRC), os.environ.get("PYTHONPATH")]))}
-    result = subprocess.run(
-        [sys.executable, "-m", "vinadv.cli", *args], capture_output=True, text=True, check=False, env=env, cwd=ROOT
-    )
-    if result.returncode != 0:
-        sys.exit(f"vinadv {shlex.join(args)} failed ({result.returncode}): {result.stderr.strip()[-2000:]}")
-    return "vinadv " + shown(shlex.join(args), folders), shown(result.stdout, folders)
-
-
 def transfer(work: Path, n: int, seed: int, folders: dict[str, str]) -> list[dict]:
     """Each shipped 28x28 weights file, exported without its size and measured on generated 64x64 maps."""
     entries = []
     for name, ks in TRANSFER:
         source = WEIGHTS_DIR / name
         exported = work / (source.stem + ".pth")
-        export, _ = vinadv(
+        export, _ = run_vinadv(
             ["vin", "export-weights", os.path.relpath(source, ROOT), "--format", "state-dict", "--out", str(exported)],
             folders,
         )
@@ -85,7 +67,7 @@ def transfer(work: Path, n: int, seed: int, folders: dict[str, str]) -> list[dic
             started = time.perf_counter()
             eval_args = ["vin", "eval", "--weights", str(exported), "--n", str(n), "--seed", str(seed)]
             eval_args += ["--size", str(SIZE), "--k", str(k), "--threads", "1", "--json", "--quiet"]
-            command, out = vinadv(eval_args, folders)
+            command, out = run_vinadv(eval_args, folders)
             figures = json.loads(out)
             runs.append({"k": k, "command": command, "figures": figures})
             took = time.perf_counter() - started
