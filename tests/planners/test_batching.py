@@ -1,4 +1,5 @@
-"""`over_maps`: every map exactly once, in pieces, never more threads at once than asked for."""
+"""`over_maps`: every map exactly once, in pieces, never more threads at once than asked for; `forward_batches`:
+every map once, in batches that never fall under `CPU_MIN_BATCH` on the CPU."""
 
 import subprocess
 import sys
@@ -7,6 +8,8 @@ import time
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from vinadv.grid import generate_maps
 from vinadv.planners import batching
@@ -41,6 +44,22 @@ def test_set_threads_caps_the_threads(monkeypatch):
     callers = set()
     batching.over_maps(1000, lambda lo, hi: callers.add(threading.get_ident()), threads=4)
     assert callers == {threading.get_ident()}  # one thread: the caller's own
+
+
+@given(lo=st.integers(0, 50), length=st.integers(0, 300), batch_size=st.integers(1, 100), on_cpu=st.booleans())
+def test_forward_batches_cover_the_range_once(lo, length, batch_size, on_cpu):
+    hi = lo + length
+    batches = batching.forward_batches(lo, hi, on_cpu, batch_size)
+    covered = [i for sl in batches for i in range(sl.start, sl.stop)]
+    assert covered == list(range(lo, hi))  # in order, each map once
+    sizes = [sl.stop - sl.start for sl in batches]
+    if not on_cpu:
+        assert all(size == batch_size for size in sizes[:-1]) and (not sizes or 0 < sizes[-1] <= batch_size)
+    elif length < batching.CPU_MIN_BATCH:
+        assert sizes == [length]  # too few to split: one batch, as before batches were small
+    else:
+        assert min(sizes) >= batching.CPU_MIN_BATCH and max(sizes) < 2 * batching.CPU_MIN_BATCH
+        assert max(sizes) - min(sizes) <= 1
 
 
 @pytest.mark.slow

@@ -204,6 +204,29 @@ def test_a_planner_that_breaks_the_contract_is_refused_by_name(mode, message):
     assert issubclass(PlannerError, InputError)
 
 
+class BatchRecorder(nn.Module):
+    """Logits that say which map they came from, and the size of every batch it was called with."""
+
+    def __init__(self):
+        super().__init__()
+        self.sizes = []
+
+    def forward(self, obstacles, goals):
+        self.sizes.append(len(obstacles))  # list.append is atomic: the planner's threads may call at once
+        return (obstacles.sum(dim=(1, 2)) + 100 * goals[:, 0])[:, None, None, None].expand(-1, 8, *obstacles.shape[1:])
+
+
+@pytest.mark.parametrize("b", [5, 16, 47, 300])
+def test_cpu_forwards_take_16_to_31_maps_and_each_map_its_own_logits(b):
+    maps = generate_maps(b, 8, seed=2, n_starts=1)
+    module = BatchRecorder()
+    logits = TorchPlanner(module, "recorder", 8).policy_logits(maps.obstacles, maps.goals)
+    expected = maps.obstacles.sum(axis=(1, 2)) + 100 * maps.goals[:, 0]
+    np.testing.assert_array_equal(logits[:, 3, 2, 1], expected)
+    assert sum(module.sizes) == b
+    assert all(16 <= size < 32 for size in module.sizes) if b >= 16 else module.sizes == [b]
+
+
 @pytest.mark.parametrize("mode", ["-inf", "-inf on illegal moves"])
 def test_minus_infinity_masks_a_move(mode):
     maps = generate_maps(3, 8, seed=1, n_starts=1)

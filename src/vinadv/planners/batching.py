@@ -67,21 +67,24 @@ def over_maps(b: int, work: Callable[[int, int], None], threads: int | None = No
     list(_pool(threads).map(lambda lh: work(*lh), zip(bounds[:-1], bounds[1:])))
 
 
-#: the fewest maps in one CPU forward of a torch planner (`cpu_batches`): oneDNN convolves a batch of fewer than 16
+#: the fewest maps in one CPU forward of a torch planner (`forward_batches`): oneDNN convolves a batch of fewer than 16
 #: images with other kernels, whose float32 sums differ in the last bits (measured on the shipped GPPN: every batch
 #: of 16 or more gives each map the same logits bit for bit, every smaller one does not)
 CPU_MIN_BATCH = 16
 
 
-def cpu_batches(lo: int, hi: int, min_batch: int = CPU_MIN_BATCH) -> list[slice]:
-    """`range(lo, hi)` as batches of one CPU forward: as many as make each at least `min_batch` maps (all of them
-    in one batch where there are fewer), sizes differing by at most one.
+def forward_batches(lo: int, hi: int, on_cpu: bool, batch_size: int) -> list[slice]:
+    """`range(lo, hi)` as the batches of a torch planner's forwards: `batch_size` maps at a time on a GPU; on the
+    CPU as many batches as make each at least `CPU_MIN_BATCH` maps (all in one where there are fewer), their sizes
+    differing by at most one.
 
-    Small batches keep a forward's activations in the caches: the shipped GPPN computes a 28x28 map in half the
-    time in batches of 16 than of 64 (`benchmarks/torch_batch.py`). Never below `min_batch`, so a map's logits are
-    the same bits whatever batch it lands in.
+    Small CPU batches keep a forward's activations in the caches: the shipped GPPN plans a 28x28 map in about half
+    the time in batches of 16 as of 64, and the Neural A* encoder as much (`benchmarks/torch_batch.py`). Never
+    below `CPU_MIN_BATCH`, so a map's logits are the same bits in whatever batch it lands.
     """
-    count = max(1, (hi - lo) // max(1, int(min_batch)))
+    if not on_cpu:
+        return [slice(i, min(hi, i + batch_size)) for i in range(lo, hi, batch_size)]
+    count = max(1, (hi - lo) // CPU_MIN_BATCH)
     bounds = [lo + (hi - lo) * i // count for i in range(count + 1)]
     return [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
 

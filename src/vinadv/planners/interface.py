@@ -27,7 +27,7 @@ from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.shortest_paths import shortest_distances, valid_moves
-from vinadv.planners.batching import CPU_MIN_BATCH, chunk_slices, cpu_batches, over_maps, torch_threads
+from vinadv.planners.batching import chunk_slices, forward_batches, over_maps, torch_threads
 from vinadv.planners.device import full_precision
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
@@ -265,11 +265,11 @@ class TorchPlanner(Planner):
 
     The module runs in eval mode without gradients, on `device` (the module must be there already: the loaders move
     it). On the CPU the maps are split between threads (`vinadv.planners.batching.over_maps`), each running the
-    forward on one torch thread, so `forward` must not change the module's state, in batches of `cpu_batch` to
-    2 `cpu_batch` - 1 maps (`vinadv.planners.batching.cpu_batches`: small enough to stay in the caches, large enough
-    that a map's logits do not depend on its batch). On another device (a GPU) `device_batch_size` maps go in one forward, one batch
-    after another: each batch's maps are sent as one uint8 tensor (a quarter of float32's bytes) and its logits come
-    back in one copy. `module` stays available for gradient-based attacks.
+    forward on one torch thread, so `forward` must not change the module's state, in batches of 16 to 31 maps
+    where a thread has that many (`vinadv.planners.batching.forward_batches`: small enough to stay in the caches,
+    large enough that a map's logits do not depend on its batch). On another device (a GPU) `device_batch_size`
+    maps go in one forward, one batch after another: each batch's maps are sent as one uint8 tensor (a quarter of
+    float32's bytes) and its logits come back in one copy. `module` stays available for gradient-based attacks.
 
     `device` None is the CPU, not recorded in `spec()`; a device given is recorded by its type (`device_type`).
     """
@@ -281,7 +281,6 @@ class TorchPlanner(Planner):
         size: int,
         checksum: str | None = None,
         config: dict | None = None,
-        cpu_batch: int = CPU_MIN_BATCH,
         device: str | torch.device | None = None,
         device_batch_size: int = DEVICE_BATCH,
     ):
@@ -293,7 +292,6 @@ class TorchPlanner(Planner):
         self.module, self.name, self.size = module, name, int(size)
         self._checksum = checksum if checksum is not None else state_checksum(module)
         self._config = dict(config or {})
-        self.cpu_batch = max(1, int(cpu_batch))
         self.device_batch_size = max(1, int(device_batch_size))
         self.device = torch.device("cpu" if device is None else device)
         self.device_type = None if device is None else self.device.type
@@ -311,12 +309,8 @@ class TorchPlanner(Planner):
         on_cpu = self.device.type == "cpu"
 
         def forward(lo: int, hi: int) -> None:
-            if on_cpu:
-                batches = cpu_batches(lo, hi, self.cpu_batch)
-            else:
-                batches = [slice(i, min(hi, i + self.device_batch_size)) for i in range(lo, hi, self.device_batch_size)]
             with torch.no_grad():  # per thread: grad mode is thread-local
-                for sl in batches:
+                for sl in forward_batches(lo, hi, on_cpu, self.device_batch_size):
                     # sent as uint8 (a quarter of float32's bytes to a GPU), made 0/1 float32 where the forward runs
                     obs = torch.from_numpy(obstacles[sl].view(np.uint8)).to(self.device).float()
                     g = torch.from_numpy(goals[sl].astype(np.int64)).to(self.device)

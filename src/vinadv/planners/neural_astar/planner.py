@@ -26,7 +26,7 @@ import numpy as np
 import torch
 
 from vinadv.planners.astar import best_first_search
-from vinadv.planners.batching import over_maps, torch_threads
+from vinadv.planners.batching import forward_batches, over_maps, torch_threads
 from vinadv.planners.interface import PlannerError
 from vinadv.planners.neural_astar.differentiable import NeuralAstarPaths, authors_heuristic
 from vinadv.planners.neural_astar.model import NeuralAstar
@@ -45,7 +45,8 @@ class NeuralAstarPlanner(SearchPlanner):
 
     Attributes:
         model: the `NeuralAstar` module (eval mode), on `device`.
-        batch_size: maps per encoder forward.
+        batch_size: maps per encoder forward on a GPU, and per differentiable search (on the CPU the encoder runs
+            in batches of `vinadv.planners.batching.forward_batches`, as `TorchPlanner`).
     """
 
     moves = MOVES
@@ -80,14 +81,14 @@ class NeuralAstarPlanner(SearchPlanner):
 
     def guidance(self, obstacles: np.ndarray, starts: np.ndarray | None, goals: np.ndarray) -> np.ndarray:
         """The encoder's guidance cost maps `(B, N, N)` float32 in (0, 1), `batch_size` maps per forward (on the
-        CPU, split between threads of one torch thread each); `starts` None: the goal alone is marked."""
+        CPU, split between threads of one torch thread each, in `forward_batches`); `starts` None: the goal alone is
+        marked."""
         b = len(obstacles)
         out = np.empty(obstacles.shape, dtype=np.float32)
 
         def forward(lo: int, hi: int) -> None:
             with torch.no_grad():
-                for i in range(lo, hi, self.batch_size):
-                    sl = slice(i, min(hi, i + self.batch_size))
+                for sl in forward_batches(lo, hi, self.device.type == "cpu", self.batch_size):
                     obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
                     s = None if starts is None else torch.from_numpy(starts[sl]).to(self.device)
                     g = torch.from_numpy(goals[sl]).to(self.device)
