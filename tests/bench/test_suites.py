@@ -48,3 +48,11 @@ def test_registry_refuses_a_name_twice():
     with pytest.raises(InputError, match="already registered"):
         register(get_suite("vin28-v1"))
     assert isinstance(SUITES["vin28-v1"], Suite)
+
+
+def test_the_command_help_names_every_registered_suite(capsys):
+    with pytest.raises(SystemExit):
+        main(["bench", "run", "--help"])
+    text = " ".join(capsys.readouterr().out.split())  # argparse wraps the help
+    for name in SUITES:
+        assert name in text

@@ -9,25 +9,25 @@ from pathlib import Path
 
 from vinadv.bench.index import index_json, make_index
 from vinadv.cluster import ClusterBenchChunks, add_cluster_arguments, open_cluster
-from vinadv.commands import add_planner_arguments, planner_device
+from vinadv.commands import add_actions, add_planner_arguments, planner_device
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser(
-        "bench", help="the standard robustness benchmark: frozen suites, result entries, a leaderboard"
+    sub = add_actions(
+        subparsers, "bench", help="the standard robustness benchmark: frozen suites, result entries, a leaderboard"
     )
-    sub = p.add_subparsers(dest="bench_command", required=True, metavar="{run,leaderboard}")
+    # named here, not read from the registry: `vinadv --help` does not import the suites (tests/test_cli_imports.py)
+    suites = "vin28-v1, vin28-quick-v1, mpd32-v1, mpd32-quick-v1"
     run = sub.add_parser(
         "run",
         help="run a planner on a frozen benchmark suite and write its result entry",
-        description="Run a planner on a frozen, versioned benchmark suite (vin28-v1, vin28-quick-v1, mpd32-v1, "
-        "mpd32-quick-v1): the attack "
-        "ensemble on the suite's maps, worst case per map, and write one schema-versioned result entry (JSON).",
+        description=f"Run a planner on a frozen, versioned benchmark suite ({suites}): the attack ensemble on the "
+        "suite's maps, worst case per map, and write one schema-versioned result entry (JSON).",
     )
-    run.add_argument("--suite", required=True, help="the suite: vin28-v1, vin28-quick-v1, mpd32-v1 or mpd32-quick-v1")
+    run.add_argument("--suite", required=True, help=f"the suite: {suites} (docs/guide/bench.md)")
     add_planner_arguments(run)
     run.add_argument(
         "--data",
