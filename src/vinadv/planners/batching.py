@@ -79,7 +79,7 @@ def forward_batches(lo: int, hi: int, on_cpu: bool, batch_size: int) -> list[sli
     differing by at most one.
 
     Small CPU batches keep a forward's activations in the caches: the shipped GPPN plans a 28x28 map in about half
-    the time in batches of 16 as of 64, and the Neural A* encoder as much (`benchmarks/torch_batch.py`). Never
+    the time in batches of 16 as of 64, the Neural A* encoder in about 0.6 (`benchmarks/torch_batch.py`). Never
     below `CPU_MIN_BATCH`, so a map's logits are the same bits in whatever batch it lands.
     """
     if not on_cpu:
