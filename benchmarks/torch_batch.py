@@ -24,15 +24,15 @@ from vinadv.planners.batching import CPU_MIN_BATCH, forward_batches
 from vinadv.planners.registry import load_planner
 
 
-def batched(forward, n: int, slices) -> torch.Tensor:
-    return torch.cat([forward(sl) for sl in slices])[:n]
+def batched(forward, slices) -> torch.Tensor:
+    return torch.cat([forward(sl) for sl in slices])
 
 
 def compare(name: str, forward, n: int, rounds: int) -> dict:
     before = [slice(i, min(n, i + 64)) for i in range(0, n, 64)]
     now = forward_batches(0, n, True, 64)
     (t_before, t_now), (out_before, out_now) = timed_side_by_side(
-        [lambda: batched(forward, n, before), lambda: batched(forward, n, now)], rounds
+        [lambda: batched(forward, before), lambda: batched(forward, now)], rounds
     )
     reference = forward(slice(0, 64))
     differ = [b for b in range(1, 41) if not torch.equal(forward(slice(0, b)), reference[:b])]
