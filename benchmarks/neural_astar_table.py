@@ -30,10 +30,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-from common import cpu_model, load_average, run_vinadv, shown  # benchmarks/common.py
+from common import ROOT, cpu_model, load_average, run_vinadv, shown  # benchmarks/common.py
 from mpd_table import SOURCE  # benchmarks/mpd_table.py: the same dataset
 
-ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = ROOT / "docs" / "results" / "neural_astar.json"
 DATA_FILE = "mazes_032_moore_c8.npz"
 SPEED_SCRIPT = "benchmarks/neural_astar.py"

@@ -63,10 +63,8 @@ def main() -> None:
     mp = generate_maps(n, 32, seed=1000, moves="moore")
     neural = load_planner("neural-astar", 32, moves="moore").model
     mp_obstacles = torch.from_numpy(mp.obstacles.astype(np.float32))
-    mp_starts, mp_goals = (
-        torch.from_numpy(mp.starts[:, 0].astype(np.int64)),
-        torch.from_numpy(mp.goals.astype(np.int64)),
-    )
+    mp_starts = torch.from_numpy(mp.starts[:, 0].astype(np.int64))
+    mp_goals = torch.from_numpy(mp.goals.astype(np.int64))
 
     with torch.no_grad():
         rows = [

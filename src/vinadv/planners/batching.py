@@ -78,8 +78,9 @@ def forward_batches(lo: int, hi: int, on_cpu: bool, batch_size: int) -> list[sli
     CPU as many batches as make each at least `CPU_MIN_BATCH` maps (all in one where there are fewer), their sizes
     differing by at most one.
 
-    Small CPU batches keep a forward's activations in the caches: the shipped GPPN plans a 28x28 map in about half
-    the time in batches of 16 as of 64, the Neural A* encoder in about 0.6 (`benchmarks/torch_batch.py`). Never
+    Small CPU batches keep a forward's activations in the caches: the shipped GPPN's forward on 28x28 maps and the
+    Neural A* encoder's on 32x32 maps each take about 0.6 of the time in batches of 16 as of 64
+    (`benchmarks/torch_batch.py`). Never
     below `CPU_MIN_BATCH`, so a map's logits are the same bits in whatever batch it lands.
     """
     if not on_cpu:
