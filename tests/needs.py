@@ -1,9 +1,11 @@
-"""What tests need from the machine (database servers, a browser): skip without it, but fail under CI=true."""
+"""What tests need from the machine (database servers, a browser, the public data): skip without it, but fail under
+CI=true."""
 
 from __future__ import annotations
 
 import os
 import shutil
+from pathlib import Path
 
 import pytest
 
@@ -20,11 +22,25 @@ CHROMIUM_ARGS = [
 ]
 
 
-def skip_or_fail(problem: str) -> None:
-    """Skip the test for `problem`; under CI=true, fail it (CI must run every test)."""
+#: the public data files the tests read (the avivt, MP dataset and Neural A* files): `../shared/data` beside the
+#: repository root, found from this file only
+PUBLIC_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+def skip_or_fail(problem: str, *, module: bool = False) -> None:
+    """Skip the test for `problem` (`module`: the whole module, at import); under CI=true, fail it (CI must run
+    every test)."""
     if os.environ.get("CI") == "true":
         pytest.fail(f"CI=true and this test cannot run: {problem}")
-    pytest.skip(problem)
+    pytest.skip(problem, allow_module_level=module)
+
+
+def public_data(name: str) -> Path:
+    """The public data file `../shared/data/<name>` (`PUBLIC_DATA`); without it, `skip_or_fail` naming the file."""
+    path = PUBLIC_DATA / name
+    if not path.is_file():
+        skip_or_fail(f"the public data file ../shared/data/{name} is not present ({path})")
+    return path
 
 
 def chromium() -> str:

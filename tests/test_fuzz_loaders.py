@@ -1,9 +1,13 @@
 """Fuzzing every loader: random mutations of valid files (bytes truncated or flipped; arrays dropped, renamed,
-retyped, reshaped or given odd values; weights tensors reshaped) either load or raise InputError, never anything
-else (the CLI turns InputError into one line and exit status 2). ~30 examples per loader; well under a minute."""
+retyped, reshaped or given odd values; weights tensors reshaped) either load or raise InputError in one line, never
+anything else (the CLI turns InputError into one line and exit status 2). The mutations that make a file
+definitely invalid (a file cut short, a required field missing, a field of another shape or of text for numbers,
+a weights tensor changed) are refused, every one, and the tests count them so that a loader accepting everything
+fails. ~30 examples per loader; well under a minute."""
 
 from __future__ import annotations
 
+import functools
 import io
 import sqlite3
 import zipfile
@@ -31,6 +35,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.planners.pathset import PathSet
 from vinadv.planners.vin.weights import read_weights
 from vinadv.store import Store
+from vinadv.testing.classify import synthetic_pairs
 
 # torch warns about the odd pickle protocols of damaged files; the test is about what vinadv raises
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
@@ -63,8 +68,15 @@ def _load_weights(path):
     return model
 
 
+@functools.cache
+def _pairs():
+    return synthetic_pairs(4, size=8, seed=5)  # the size of `write_classifier`'s model
+
+
 def _load_classifier(path):
-    return load_model(path)
+    model = load_model(path)
+    model.predict(_pairs())  # the loaded model must run: arrays that only disagree in its kernel are a loader bug
+    return model
 
 
 def _load_database(path):
@@ -92,11 +104,39 @@ def valid(tmp_path_factory):
     }
 
 
-def _only_input_errors(load, path: Path) -> None:
+#: the kinds written as NumPy .npz archives (the weights are torch.save's zip, the database SQLite)
+NPZ = ("maps", "paths", "pairs", "classifier")
+
+#: the fields a loader reads with a default where a file lacks them (files written before the field existed):
+#: dropping or renaming one leaves a valid file. Every other field is required.
+OPTIONAL = {
+    "maps": {"corner_cutting", "seed"},
+    "paths": {"corner_cutting", "model"},
+    "pairs": {"corner_cutting", "edit"},
+    "classifier": {"record"},
+}
+
+
+def _refused(load, path: Path) -> bool:
+    """Whether `load` refused `path`: True after a one-line InputError, False when it loaded; anything else
+    propagates (a loader bug)."""
     try:
         load(path)
     except InputError as exc:
         assert str(exc) and "\n" not in str(exc).strip(), repr(exc)
+        return True
+    return False
+
+
+def _same_arrays(a: dict, b: dict) -> bool:
+    return a.keys() == b.keys() and all(
+        a[k].dtype == b[k].dtype and np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f") for k in a
+    )
+
+
+def _sqlite_page_size(data: bytes) -> int:
+    size = int.from_bytes(data[16:18], "big")  # the header's page size; 1 stands for 65536
+    return 65536 if size == 1 else size
 
 
 # ------------------------------------------------------------------------------------------- byte mutations
@@ -119,19 +159,35 @@ def _mutate_bytes(data: bytes, mutation) -> bytes:
 
 @pytest.mark.parametrize("kind", list(WRITERS))
 def test_byte_mutations_give_input_errors(kind, valid, tmp_path):
+    """Every cut is refused (a zip's directory is at its end; SQLite counts a database's pages by its size, so a
+    cut within the last page alone may go unseen); some flips are. A flipped .npz that loads holds the original
+    arrays (zip's CRC-32 covers them: the flip fell on a time stamp or the like)."""
     data = valid[kind].read_bytes()
     load = WRITERS[kind][1]
     target = tmp_path / valid[kind].name
+    # the shortest cut that must be refused: one byte, or for the database a whole page
+    cut = _sqlite_page_size(data) if kind == "database" else 1
+    original = read_npz(valid[kind]) if kind in NPZ else None
+    seen: list[tuple[str, int, bool]] = []  # (mutation, bytes removed, refused)
 
     @FUZZ
     @given(mutation=_bytes_mutation)
     def check(mutation):
-        target.write_bytes(_mutate_bytes(data, mutation))
+        mutated = _mutate_bytes(data, mutation)
+        target.write_bytes(mutated)
         for extra in tmp_path.glob(target.name + "-*"):  # a mutated database's leftover -wal/-shm
             extra.unlink()
-        _only_input_errors(load, target)
+        refused = _refused(load, target)
+        if not refused and original is not None:
+            assert _same_arrays(read_npz(target), original), mutation  # never a wrong read
+        if mutated != data:
+            seen.append((mutation[0], len(data) - len(mutated), refused))
 
     check()
+    cuts = [refused for what, removed, refused in seen if what == "truncate" and removed >= cut]
+    flips = [refused for what, _, refused in seen if what == "flip"]
+    assert cuts and all(cuts), seen
+    assert flips and any(flips), seen
 
 
 # ------------------------------------------------------------------------------------------- array mutations
@@ -190,11 +246,22 @@ def _mutate_arrays(arrays: dict, mutation, draw_value) -> dict:
     return arrays
 
 
-@pytest.mark.parametrize("kind", ["maps", "paths", "pairs", "classifier"])
+def _definitely_invalid(kind: str, arrays: dict, mutated: dict, name: str) -> bool:
+    """Whether the mutation of field `name` made the file invalid whatever the loader: a required field missing, a
+    field of another shape, or text where numbers were (or the other way round). Other dtypes and odd values may
+    be valid."""
+    if name not in mutated:
+        return name not in OPTIONAL[kind]
+    before, after = arrays[name], mutated[name]
+    return after.shape != before.shape or (after.dtype.kind == "U") != (before.dtype.kind == "U")
+
+
+@pytest.mark.parametrize("kind", NPZ)
 def test_array_mutations_give_input_errors(kind, valid, tmp_path):
     arrays = read_npz(valid[kind])
     load = WRITERS[kind][1]
     target = tmp_path / f"{kind}.npz"
+    invalid: list[tuple[tuple, bool]] = []  # (mutation, refused) of the definitely invalid files
 
     @FUZZ
     @given(data=st.data())
@@ -203,14 +270,56 @@ def test_array_mutations_give_input_errors(kind, valid, tmp_path):
         mutated = _mutate_arrays(arrays, mutation, lambda arr: _odd_value(data.draw, arr))
         with open(target, "wb") as fh:
             np.savez(fh, **mutated)
-        _only_input_errors(load, target)
+        refused = _refused(load, target)
+        if _definitely_invalid(kind, arrays, mutated, mutation[1]):
+            invalid.append((mutation[:2], refused))
 
     check()
+    assert invalid and all(refused for _, refused in invalid), invalid
+
+
+class _Pick:
+    """A stand-in for `random.Random` in `_mutate_arrays`: picks choice `i` (of its dtypes, of its reshapes)."""
+
+    def __init__(self, i: int):
+        self.i = i
+
+    def choice(self, seq):
+        return seq[self.i]
+
+    def randrange(self, n: int) -> int:
+        return self.i
+
+
+@pytest.mark.parametrize("kind", NPZ)
+def test_every_structural_mutation_of_every_field_is_refused_when_definitely_invalid(kind, valid, tmp_path):
+    """Each field dropped, renamed, reshaped (each way), emptied and retyped (each dtype), one at a time: every
+    definitely invalid file (`_definitely_invalid`) is refused; the others load or are refused."""
+    arrays = read_npz(valid[kind])
+    load = WRITERS[kind][1]
+    target = tmp_path / f"{kind}.npz"
+    accepted = []
+    invalid = 0
+    for name in sorted(arrays):
+        for op, picks in (("drop", 1), ("rename", 1), ("reshape", 3), ("empty", 1), ("dtype", 6)):
+            for i in range(picks):
+                mutated = _mutate_arrays(arrays, (op, name, _Pick(i)), None)
+                with open(target, "wb") as fh:
+                    np.savez(fh, **mutated)
+                refused = _refused(load, target)
+                if _definitely_invalid(kind, arrays, mutated, name):
+                    invalid += 1
+                    if not refused:
+                        accepted.append((op, i, name))
+    assert invalid >= len(arrays) and not accepted, accepted
 
 
 def test_weights_mutations_give_input_errors(valid, tmp_path):
+    """Every mutation that changed a tensor, the config or the layout is refused (a shape that stayed the same
+    loads)."""
     payload = torch.load(valid["weights"], weights_only=True)
     target = tmp_path / "w.pt"
+    seen: list[tuple[str, str, bool]] = []  # (op, key, refused) of the changed files
 
     @FUZZ
     @given(
@@ -223,9 +332,11 @@ def test_weights_mutations_give_input_errors(valid, tmp_path):
         state = dict(payload["state_dict"])
         tensor = state[key]
         data = {**payload, "state_dict": state}
+        changed = True
         if op == "shape":
             shape = list(tensor.shape)
             shape[axis % len(shape)] = max(1, shape[axis % len(shape)] + by)
+            changed = shape != list(tensor.shape)
             state[key] = torch.zeros(shape)
         elif op == "drop":
             del state[key]
@@ -242,9 +353,12 @@ def test_weights_mutations_give_input_errors(valid, tmp_path):
         buf = io.BytesIO()
         torch.save(data, buf)
         target.write_bytes(buf.getvalue())
-        _only_input_errors(_load_weights, target)
+        refused = _refused(_load_weights, target)
+        if changed:
+            seen.append((op, key, refused))
 
     check()
+    assert seen and all(refused for _, _, refused in seen), seen
 
 
 def test_random_bytes_as_weights_say_what_the_file_is_not(tmp_path):

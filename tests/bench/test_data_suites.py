@@ -10,7 +10,7 @@ import hashlib
 import numpy as np
 import pytest
 
-from tests.interop.conftest import mpd_file
+from tests.needs import public_data
 from vinadv.bench.entry import deterministic_part, entry_json, run_bench, suite_maps
 from vinadv.bench.suites import AttackGroup, DataFile, DataSuite, get_suite, maps_sha256
 from vinadv.cli import main
@@ -112,9 +112,10 @@ def test_a_search_planners_entry_joins_opt_and_exp_over_chunks_and_repeats_byte_
 
 @pytest.mark.slow
 def test_the_mp_suites_maps_are_the_frozen_ones_from_the_shared_files():
-    """The six real files (skipped without them): their sha256 and the joined maps' sha256 are the frozen ones, and
-    the quick suite's maps are the full suite's first maps of each family."""
-    folder = mpd_file("mazes").parent
+    """The six real files (`skip_or_fail` without them): their sha256 and the joined maps' sha256 are the frozen
+    ones, and the quick suite's maps are the full suite's first maps of each family."""
+    files = [public_data(f"mpd/{f.name}") for f in get_suite("mpd32-v1").files]  # names the first one missing
+    folder = files[0].parent
     full = suite_maps(get_suite("mpd32-v1"), folder)
     quick = suite_maps(get_suite("mpd32-quick-v1"), folder)
     assert (len(full), len(quick), full.size, full.moves) == (600, 100, 32, "moore")

@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+import torch
 from sklearn.metrics import balanced_accuracy_score, roc_auc_score
 
 from vinadv.classify import balance_batch, label_batch, make_fp_classifier, render_batch
@@ -92,7 +93,6 @@ def test_transpose_swaps_rows_and_columns():
 
 @pytest.mark.parametrize("features", FEATURES)
 def test_image_features_are_presence_and_match_torch(features):
-    torch = pytest.importorskip("torch")
     images = _random_images(5, 6, seed=2)
     flat = image_features(images, features)
     assert flat.shape == (5, int(np.prod(feature_shape(features, 6)))) and set(np.unique(flat)) <= {0.0, 1.0}

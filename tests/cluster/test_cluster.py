@@ -16,7 +16,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("distributed")
+from tests.needs import skip_or_fail
+
+try:
+    import distributed  # noqa: F401 (installed with the cluster extra, which `make test` and CI install)
+except ImportError:
+    skip_or_fail("Dask's distributed is not installed (pip install -e '.[cluster]')", module=True)
 
 from distributed import Client  # noqa: E402
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 import torch
 
-from tests.planners.neural_astar.literal import CHECKPOINT, checkpoint_state, shared_file
+from tests.needs import public_data
+from tests.planners.neural_astar.literal import CHECKPOINT, checkpoint_state
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.grid import generate_maps
@@ -23,7 +24,7 @@ from vinadv.store import Store
 
 def test_import_weights_converts_the_authors_checkpoint_with_its_record(tmp_path, capsys):
     out = tmp_path / "na.pt"
-    ckpt = shared_file(CHECKPOINT)
+    ckpt = public_data(CHECKPOINT)
     assert main(["neural-astar", "import-weights", str(ckpt), "--source", "the repo", "--out", str(out), "--json"]) == 0
     printed = json.loads(capsys.readouterr().out)
     record = json.loads(out.with_suffix(".json").read_text())
@@ -58,7 +59,7 @@ def test_import_weights_refuses_a_training_configuration_of_another_model(tmp_pa
     config = tmp_path / "train.yaml"
     config.write_text("encoder:\n  input: m+\n  arch: Unet\n  depth: 4\n")
     out = tmp_path / "na.pt"
-    args = ["neural-astar", "import-weights", str(shared_file(CHECKPOINT)), "--train-config", str(config)]
+    args = ["neural-astar", "import-weights", str(public_data(CHECKPOINT)), "--train-config", str(config)]
     assert main([*args, "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "encoder.arch is 'Unet'" in err
@@ -86,7 +87,7 @@ def test_compare_modes_refuses_octile_maps(tmp_path, capsys):
 def _mp_import(tmp_path) -> str:
     """The first three maps of the mazes family's test split, imported by the CLI (the Neural A* start rule)."""
     full, small = tmp_path / "mazes_full.npz", tmp_path / "mazes.npz"
-    source = shared_file("mpd/mazes_032_moore_c8.npz")
+    source = public_data("mpd/mazes_032_moore_c8.npz")
     line = ["maps", "import", "--format", "mpd", str(source), "--split", "test", "--seed", "0", "--out", str(full)]
     assert main([*line, "--quiet"]) == 0
     MapSet.load(full).take(np.arange(3)).save(small)

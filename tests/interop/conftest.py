@@ -7,32 +7,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.needs import public_data
 from vinadv.grid import generate_maps
 
 
-def shared_data(name: str, folder: str = "avivt") -> Path | None:
-    """`../shared/data/<folder>/<name>` relative to the repository root (CI), else /work/shared; None if absent."""
-    for base in (Path(__file__).resolve().parents[2] / ".." / "shared", Path("/work/shared")):
-        path = base / "data" / folder / name
-        if path.exists():
-            return path
-    return None
-
-
 def real_file(name: str) -> Path:
-    path = shared_data(name)
-    if path is None:
-        pytest.skip(f"the real avivt file {name} is not present (../shared/data/avivt/)")
-    return path
+    """The real avivt file `name` (`../shared/data/avivt/<name>`); `skip_or_fail` without it."""
+    return public_data(f"avivt/{name}")
 
 
 def mpd_file(family: str) -> Path:
-    """The MP dataset file of `family` (`../shared/data/mpd/<family>_032_moore_c8.npz`); the test is skipped
-    without it."""
-    path = shared_data(f"{family}_032_moore_c8.npz", "mpd")
-    if path is None:
-        pytest.skip(f"the MP dataset file of {family} is not present (../shared/data/mpd/)")
-    return path
+    """The MP dataset file of `family` (`../shared/data/mpd/<family>_032_moore_c8.npz`); `skip_or_fail` without
+    it."""
+    return public_data(f"mpd/{family}_032_moore_c8.npz")
 
 
 @pytest.fixture(scope="module")

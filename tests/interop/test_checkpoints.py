@@ -15,6 +15,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+from tests.needs import skip_or_fail
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.interop import read_checkpoint
@@ -85,7 +86,7 @@ def test_export_weights_loads_into_the_port_class(tmp_path, capsys):
 
 def test_export_shipped_weights(tmp_path):
     if not default_weights_path(28).exists():
-        pytest.skip("no shipped 28x28 weights")
+        skip_or_fail(f"the shipped 28x28 weights {default_weights_path(28)} are not present")
     assert (
         main(
             [

@@ -7,24 +7,16 @@ a thousand batched steps.
 """
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
 import torch.nn.functional as F
 
+from tests.needs import public_data
 from vinadv.planners.astar import AStarPlanner, best_first_search
 
 pytestmark = pytest.mark.slow
-
-
-def mpd_file(name: str) -> Path:
-    for base in (Path(__file__).resolve().parents[2] / ".." / "shared", Path("/work/shared")):
-        path = base / "data" / "mpd" / name
-        if path.exists():
-            return path
-    pytest.skip(f"the MP dataset file {name} is not present (../shared/data/mpd/)")
 
 
 def authors_forward(cost, free, starts, goals, g_ratio=0.5):
@@ -80,7 +72,7 @@ def authors_forward(cost, free, starts, goals, g_ratio=0.5):
 
 
 def problems(family: str, count: int, seed: int):
-    with np.load(mpd_file(f"{family}_032_moore_c8.npz")) as data:
+    with np.load(public_data(f"mpd/{family}_032_moore_c8.npz")) as data:
         free = data["arr_8"][:count].astype(np.float32)
         goals = np.argwhere(data["arr_9"][:count, 0] == 1)[:, 1:]
         reachable = data["arr_11"][:count, 0] > -32 * 32  # the file's distance: -H*W where the goal is out of reach

@@ -132,11 +132,24 @@ class SVMImageClassifier(PairClassifier):
     def _from_state(cls, kind, params, meta, arrays):
         model = cls(**params)
         model.classes_ = FP_DP_CLASSES.copy()
-        model.support_vectors_ = arrays["support_vectors"].astype(np.float32)
-        model.dual_coef_ = arrays["dual_coef"].astype(np.float64)
+        vectors, dual = arrays["support_vectors"], arrays["dual_coef"]
+        model.size_ = int(meta["size"])
+        width = int(np.prod(feature_shape(model.features, model.size_)))
+        # numbers, one coefficient per support vector of the features' width (load_model names the file)
+        if (
+            vectors.dtype.kind not in "biuf"
+            or dual.dtype.kind not in "biuf"
+            or vectors.shape[1:] != (width,)
+            or dual.shape != vectors.shape[:1]
+        ):
+            raise ValueError(
+                f"support vectors {vectors.dtype}{vectors.shape} and dual coefficients {dual.dtype}{dual.shape} "
+                f"do not fit {width} features"
+            )
+        model.support_vectors_ = vectors.astype(np.float32)
+        model.dual_coef_ = dual.astype(np.float64)
         model.intercept_ = float(meta["intercept"])
         model.gamma_ = float(meta["gamma"])
-        model.size_ = int(meta["size"])
         model.training_time_s_ = float(meta.get("training_time_s", 0.0))
         model._prepare()
         return model

@@ -15,33 +15,24 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
-import pytest
 import torch
 import torch.nn.functional as F
+
+from tests.needs import public_data
 
 CHECKPOINT = "neural-astar/mazes_032_moore_c8.ckpt"
 MAZES = "mpd/mazes_032_moore_c8.npz"
 
 
-def shared_file(name: str) -> Path:
-    """`../shared/data/<name>` relative to the repository root, else /work/shared/data; skips when absent."""
-    for base in (Path(__file__).resolve().parents[3] / ".." / "shared", Path("/work/shared")):
-        path = base / "data" / name
-        if path.exists():
-            return path
-    pytest.skip(f"the public data file {name} is not present (../shared/data/)")
-
-
 def checkpoint_state() -> dict[str, torch.Tensor]:
-    return torch.load(shared_file(CHECKPOINT), map_location="cpu", weights_only=True)["state_dict"]
+    return torch.load(public_data(CHECKPOINT), map_location="cpu", weights_only=True)["state_dict"]
 
 
 def mazes_test_split(seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """`(free (100, 32, 32) bool, starts (100, 2), goals (100, 2))` of the mazes test split (module doc)."""
-    data = np.load(shared_file(MAZES))
+    data = np.load(public_data(MAZES))
     free = data["arr_8"] > 0.5
     goals = np.argwhere(data["arr_9"][:, 0] > 0.5)[:, 1:]
     dist = data["arr_11"][:, 0]

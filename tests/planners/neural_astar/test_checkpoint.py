@@ -6,7 +6,8 @@ from __future__ import annotations
 import pytest
 import torch
 
-from tests.planners.neural_astar.literal import CHECKPOINT, shared_file
+from tests.needs import public_data
+from tests.planners.neural_astar.literal import CHECKPOINT
 from vinadv.errors import InputError
 from vinadv.planners.neural_astar.checkpoint import (
     check_train_config,
@@ -50,7 +51,7 @@ def refusal(path) -> str:
 
 
 def test_the_authors_checkpoint_reads_as_depth_4():
-    model, source = from_lightning_checkpoint(shared_file(CHECKPOINT))
+    model, source = from_lightning_checkpoint(public_data(CHECKPOINT))
     assert model.config.depth == 4 and model.config.g_ratio == 0.5 and not model.training
     assert source["epoch"] == 33 and source["global_step"] == 272 and source["depth"] == 4
 
@@ -114,7 +115,7 @@ def test_a_missing_filter_and_other_files_are_refused(tmp_path):
 
 
 def test_read_train_config_reads_the_authors_file():
-    config = read_train_config(shared_file("neural-astar/train.yaml"))
+    config = read_train_config(public_data("neural-astar/train.yaml"))
     assert config["Tmax"] == 0.25 and config["seed"] == 1234
     assert config["encoder"] == {"input": "m+", "arch": "CNN", "depth": 4}
     assert config["params"] == {"batch_size": 100, "num_epochs": 50, "lr": 0.001}

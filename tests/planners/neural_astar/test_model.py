@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 import torch
 
+from tests.needs import public_data
 from tests.planners.neural_astar.literal import (
     CHECKPOINT,
     checkpoint_state,
     mazes_test_split,
     plain_encoder,
-    shared_file,
 )
 from vinadv.errors import InputError
 from vinadv.planners.neural_astar.checkpoint import from_lightning_checkpoint
@@ -52,7 +52,7 @@ def test_encoder_equals_the_plain_reference_on_the_checkpoint_tensors(source, fe
     free, starts, goals = few_mazes
     state = checkpoint_state()
     if source == "checkpoint":
-        model, _ = from_lightning_checkpoint(shared_file(CHECKPOINT))
+        model, _ = from_lightning_checkpoint(public_data(CHECKPOINT))
     else:
         model = load_neural_astar()
     with torch.no_grad():
@@ -89,7 +89,7 @@ def test_load_refuses_a_lightning_checkpoint_and_other_files(tmp_path):
     with pytest.raises(
         InputError, match="a Lightning checkpoint, not a vinadv Neural A\\* weights file.*import-weights"
     ):
-        load_neural_astar(shared_file(CHECKPOINT))
+        load_neural_astar(public_data(CHECKPOINT))
     other = tmp_path / "other.pt"
     torch.save({"format": "vinadv.gppn/1"}, other)
     with pytest.raises(InputError, match="not a Neural A\\* weights file"):
@@ -108,9 +108,9 @@ def test_the_shipped_weights_are_the_checkpoint_and_carry_its_record_and_licence
     for key, value in encoder.items():
         assert torch.equal(shipped["state_dict"][key.removeprefix("planner.encoder.")], value), key
     record = shipped["record"]
-    assert record["imported_from"]["sha256"] == weights_checksum(shared_file(CHECKPOINT))
+    assert record["imported_from"]["sha256"] == weights_checksum(public_data(CHECKPOINT))
     assert record["train_config"]["encoder"] == {"input": "m+", "arch": "CNN", "depth": 4}
-    licence = shared_file("neural-astar/LICENSE").read_text()
+    licence = public_data("neural-astar/LICENSE").read_text()
     assert record["license"] == licence
     assert SHIPPED_WEIGHTS.with_name("neural_astar_mazes32.LICENSE.txt").read_text() == licence
     assert SHIPPED_WEIGHTS.with_suffix(".json").exists()
