@@ -18,9 +18,9 @@ import numpy as np
 import torch
 
 from vinadv.grid import generate_maps
-from vinadv.planners.reference import plan_reference
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import action_maps, plan_maps
+from vinadv.planners.vin.reference import plan_reference
 from vinadv.planners.vin.weights import load_vin
 from vinadv.testing.planners import planning_vin, random_vin
 from vinadv.vocabulary import TERMINATIONS

@@ -17,7 +17,7 @@ turns, so the sizes do not take turns here: each runs its rounds in a row):
   else, maps/s;
 - `engine`: `VINPlanner.plan_batch`, the exact CPU engine, one plan per map (each its own value map): plans/s,
   with the maps whose rollout met a near tie (`near_tie_maps`): those are re-decided by replaying PyTorch's float32
-  arithmetic (`vinadv.planners.replay`);
+  arithmetic (`vinadv.planners.vin.replay`);
 - `attack`: the exhaustive attack (`make_attack("exhaustive")` with `vinadv robustness`' harm ranking: every valid
   cell of every map added in turn, each candidate map planned, paired, labelled, ranked) on the first `--attack-n`
   maps: seconds per map, and the candidate maps per map (valid cells, `vinadv.attacks.validity.valid_cells`).
@@ -61,9 +61,9 @@ from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps
 from vinadv.identify import harm_strength
 from vinadv.planners.batching import N_THREADS
-from vinadv.planners.interface import VINPlanner
 from vinadv.planners.vin.arrays import VINWeights, default_k
 from vinadv.planners.vin.engine import action_maps, plan_maps
+from vinadv.planners.vin.planner import VINPlanner
 from vinadv.planners.vin.weights import load_vin_weights
 from vinadv.planners.weights import WEIGHTS_DIR
 

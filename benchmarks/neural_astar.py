@@ -26,7 +26,7 @@ import numpy as np
 import torch
 
 from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # benchmarks/common.py
-from vinadv.planners.astar import AStarPlanner
+from vinadv.planners.classical.astar import AStarPlanner
 from vinadv.planners.neural_astar.model import load_neural_astar
 from vinadv.planners.neural_astar.planner import NeuralAstarPlanner
 

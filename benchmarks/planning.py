@@ -27,9 +27,9 @@ import torch
 
 from vinadv.grid import generate_maps
 from vinadv.planners.batching import N_THREADS
-from vinadv.planners.reference import plan_reference
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import action_maps, plan_batch
+from vinadv.planners.vin.reference import plan_reference
 from vinadv.planners.vin.weights import load_vin
 from vinadv.testing.planners import planning_vin
 

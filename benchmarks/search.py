@@ -1,4 +1,4 @@
-"""Search throughput: `astar` (vinadv.planners.astar) on a batch of rows at once against one row per call.
+"""Search throughput: `astar` (vinadv.planners.classical.astar) on a batch of rows at once against one row per call.
 
     nice .venv/bin/python benchmarks/search.py [--data MPD.npz] [--n 1000] [--size 32] [--moves moore] [--json]
 
@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # benchmarks/common.py
-from vinadv.planners.astar import AStarPlanner
+from vinadv.planners.classical.astar import AStarPlanner
 
 
 def main(argv=None) -> int:

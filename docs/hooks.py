@@ -9,7 +9,7 @@ the README's markers: `python docs/hooks.py` rewrites it there, and a test (`tes
 Markers: `<!-- vinadv:weights-table -->` (one row per shipped weights file), `<!-- vinadv:weights-commands -->`
 (the command and checksum behind each row), `<!-- vinadv:by-length -->` (rollout success by the optimal path's move
 count, for the metrics files that have it), `<!-- vinadv:by-length-figure -->` (the same as a curve, drawn by
-`vinadv.planners.length_curve` as `vinadv eval --figure` draws it, inlined as SVG),
+`vinadv.evaluation.length_curve` as `vinadv eval --figure` draws it, inlined as SVG),
 `<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
 benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/results/mpd.md`) reads
 `docs/results/mpd.json`, written by `benchmarks/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
@@ -40,7 +40,7 @@ import re
 from pathlib import Path
 
 from vinadv.bench.leaderboard import read_entries, render_markdown, rows  # the one renderer of a leaderboard
-from vinadv.planners.evaluation import LENGTH_BUCKET  # the width of the `by_length` rows
+from vinadv.evaluation.planner_metrics import LENGTH_BUCKET  # the width of the `by_length` rows
 
 ROOT = Path(__file__).resolve().parents[1]
 WEIGHTS_DIR = ROOT / "src" / "vinadv" / "weights"
@@ -166,7 +166,7 @@ def by_length_svg(folder: Path = WEIGHTS_DIR) -> str:
     """The success-by-path-length curves of the metrics files that have `by_length`, one per weights file, as SVG
     text (no date in it, so an unchanged metrics file gives the same bytes)."""
     # the curve `vinadv eval --figure` draws; late, as matplotlib is a second to import and only this page needs it
-    from vinadv.planners.length_curve import success_by_length_figure, svg_text  # noqa: PLC0415
+    from vinadv.evaluation.length_curve import success_by_length_figure, svg_text  # noqa: PLC0415
 
     entries = [e for e in weights_metrics(folder) if e["vinadv"].get("by_length")]
     curves = [

@@ -71,7 +71,7 @@ def cpu_vendor() -> str:
         return ""
 
 
-#: The BLAS kernels whose summation orders `vinadv.planners.replay` models were read off MKL on AMD EPYC. Elsewhere
+#: The BLAS kernels whose summation orders `vinadv.planners.vin.replay` models were read off MKL on AMD EPYC. Elsewhere
 #: (seen: MKL's AVX-512 kernels on an Intel Xeon) the r layer's and fc's sums may follow no modelled order; the replay
 #: then uses PyTorch itself, exact and slower, which the bit-for-bit tests check all the same. There, the tests of the
 #: replay itself are skipped; on AMD they must find the orders.

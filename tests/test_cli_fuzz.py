@@ -38,9 +38,9 @@ WORK = (
     "vinadv.grid.generator:_generate_chunk",  # maps generate, robustness's maps, training maps
     "vinadv.planners.training:train_vin",
     "vinadv.planners.training:train_gppn",
-    "vinadv.interop.protocols:evaluate_protocol",
-    "vinadv.interop.protocols:gppn_protocol",
-    "vinadv.planners.evaluation:evaluate_planner",
+    "vinadv.evaluation.protocols:evaluate_protocol",
+    "vinadv.evaluation.protocols:gppn_protocol",
+    "vinadv.evaluation.planner_metrics:evaluate_planner",
     "vinadv.attacks.strategies:Attack.attack",
     "vinadv.classify.train_eval:train_classifier",
     "vinadv.pipeline:compute_shard",

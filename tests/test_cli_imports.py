@@ -84,7 +84,9 @@ def test_a_vin_run_needs_no_pytorch_once_the_replay_settings_are_kept(tmp_path, 
     assert replayed or not MODELLED_CPU, f"the replay was not verified on a modelled CPU ({cpu_vendor()})"
     # the kept settings hold whatever the run's size: a short second run shows it (the first needs its near ties)
     second = imported_modules("run", "--n", "100", "--seed", "1", "--db", str(tmp_path / "b.db"), "--quiet")
-    assert "sqlalchemy" in second and ("torch" in second) == (not replayed)
+    assert "sqlalchemy" in second
+    # replayed: no PyTorch at all; else PyTorch decides the near ties the short run meets, if it meets any
+    assert "torch" not in second or not replayed
 
 
 # --- the lint rule that keeps the commands light ----------------------------------------------------------------------

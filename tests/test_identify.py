@@ -12,7 +12,7 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
 from vinadv.identify import objective_strength
-from vinadv.planners.reference import plan_reference
+from vinadv.planners.vin.reference import plan_reference
 from vinadv.store import Store
 from vinadv.testing.planners import planning_vin
 

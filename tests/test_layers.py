@@ -163,3 +163,22 @@ def test_production_code_never_imports_the_test_support():
         if part_of(path) != "testing" and "testing" in imported_vinadv_names(path)
     ]
     assert not importers, importers
+
+
+#: the planner families: a package each under `vinadv.planners`
+PLANNER_FAMILIES = ("vin", "gppn", "neural_astar", "classical")
+#: the contract and the mechanics every planner shares (`vinadv.planners` outside the families and the registry)
+PLANNER_CONTRACT = ("interface", "search", "result", "rollout", "batching", "device", "spec", "records")
+
+
+def test_the_planner_contract_imports_no_family():
+    # a family builds on the contract, never the other way; only the registry (and the families) name families
+    reaching = []
+    for name in PLANNER_CONTRACT:
+        path = SOURCE / "planners" / f"{name}.py"
+        for module in imported_vinadv_modules(path):
+            parts = module.split(".")
+            if parts[1:2] == ["planners"] and len(parts) > 2 and parts[2] in PLANNER_FAMILIES:
+                reaching.append(f"planners/{name}.py imports {module}")
+    assert not reaching, reaching
+    assert {p.name for p in (SOURCE / "planners").iterdir() if (p / "__init__.py").exists()} == set(PLANNER_FAMILIES)

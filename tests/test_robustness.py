@@ -16,8 +16,8 @@ from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.identify import objective_strength
-from vinadv.planners.reference import plan_reference
 from vinadv.planners.registry import load_planner
+from vinadv.planners.vin.reference import plan_reference
 from vinadv.planners.vin.weights import save_vin
 from vinadv.robustness import (
     MapOutcomes,

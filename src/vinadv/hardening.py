@@ -26,7 +26,7 @@ from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.identify import OBJECTIVES, identify, objective_strength
-from vinadv.planners.interface import as_planner
+from vinadv.planners.vin.planner import as_planner
 
 
 @dataclass(frozen=True)

@@ -21,9 +21,10 @@ from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_
 from vinadv.classify.rule import label_batch, path_distances
 from vinadv.errors import InputError
 from vinadv.grid.columns import Columns
-from vinadv.planners.interface import Planner, as_planner
+from vinadv.planners.interface import Planner
 from vinadv.planners.registry import PlannerRef, load_planner
 from vinadv.planners.spec import PlannerSpec
+from vinadv.planners.vin.planner import as_planner
 from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
 
 if TYPE_CHECKING:  # scikit-learn comes with it; the rule labeller needs none

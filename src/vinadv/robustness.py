@@ -46,8 +46,8 @@ from vinadv.errors import InputError
 from vinadv.grid.generator import generate_maps
 from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.identify import identify, objective_strength
-from vinadv.planners.interface import as_planner
 from vinadv.planners.spec import PlannerSpec
+from vinadv.planners.vin.planner import as_planner
 from vinadv.vocabulary import ADD, SUCCESS_LABELS, label_counts
 
 if TYPE_CHECKING:  # names for the annotations only: the planners and the grid load when a benchmark runs

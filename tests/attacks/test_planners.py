@@ -13,12 +13,13 @@ from vinadv.attacks.validity import valid_cells
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.identify import identify, rule_strength
+from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.gppn import GPPN, GPPNConfig
-from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, as_planner
-from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.interface import PlannerError, TorchPlanner
 from vinadv.planners.registry import load_custom
 from vinadv.planners.spec import is_planner_spec
 from vinadv.planners.vin import make_input
+from vinadv.planners.vin.planner import VINPlanner, as_planner
 from vinadv.testing.planners import planning_vin
 
 SIZE = 10

@@ -19,8 +19,8 @@ from vinadv.grid import generate_maps
 from vinadv.grid.checks import border_walls
 from vinadv.identify import identify
 from vinadv.npzfile import save_npz
-from vinadv.planners.interface import as_planner
-from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.classical.optimal import OptimalPlanner
+from vinadv.planners.vin.planner import as_planner
 from vinadv.testing.planners import planning_vin
 
 SIZE = 8

@@ -11,7 +11,7 @@ from vinadv.attacks.strategies import STRATEGIES, AttackContext, KeyPointsAttack
 from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps
 from vinadv.identify import rule_strength
-from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.registry import load_planner
 from vinadv.planners.search import UserSearchPlanner
 from vinadv.testing.planners import planning_vin

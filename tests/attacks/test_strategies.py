@@ -9,7 +9,7 @@ from vinadv.classify import label_pairs
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.identify import rule_strength
-from vinadv.planners.reference import plan_reference
+from vinadv.planners.vin.reference import plan_reference
 from vinadv.testing.planners import planning_vin
 from vinadv.vocabulary import LABEL_STRENGTH
 

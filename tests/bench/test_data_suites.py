@@ -15,10 +15,10 @@ from vinadv.bench.entry import deterministic_part, entry_json, run_bench, suite_
 from vinadv.bench.suites import AttackGroup, DataFile, DataSuite, get_suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.evaluation.search_metrics import evaluate_search
 from vinadv.grid import generate_maps
 from vinadv.interop import export_maps, import_maps
 from vinadv.planners.registry import load_planner
-from vinadv.planners.search_metrics import evaluate_search
 
 SIZE = 10
 

@@ -17,7 +17,7 @@ from vinadv.bench.entry import deterministic_part, entry_json, make_entry, run_b
 from vinadv.bench.suites import AttackGroup, Suite, get_suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.planners.interface import as_planner
+from vinadv.planners.vin.planner import as_planner
 from vinadv.robustness import benchmark_maps, robustness
 from vinadv.testing.planners import planning_vin
 

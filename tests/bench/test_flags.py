@@ -11,8 +11,9 @@ from torch import nn
 from vinadv.bench.flags import differs_between_passes, gradient_is_masked, raise_flags
 from vinadv.bench.suites import get_suite
 from vinadv.grid import generate_maps
-from vinadv.planners.interface import TorchPlanner, as_planner
-from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.classical.optimal import OptimalPlanner
+from vinadv.planners.interface import TorchPlanner
+from vinadv.planners.vin.planner import as_planner
 from vinadv.testing.planners import planning_vin
 
 SIZE = 10

@@ -15,8 +15,8 @@ import pytest
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.evaluation.planner_metrics import evaluate_planner
 from vinadv.grid import MapSet, generate_maps
-from vinadv.planners.evaluation import evaluate_planner
 from vinadv.planners.pathset import PathSet
 from vinadv.planners.registry import load_planner
 from vinadv.planners.vin.weights import save_vin

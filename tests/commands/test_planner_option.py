@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tests.cli_files import command_line
-from tests.interop.test_protocols import brute_gppn_figures
+from tests.evaluation.test_protocols import brute_gppn_figures
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.evaluation import evaluate_planner_quality
@@ -15,7 +15,7 @@ from vinadv.grid import generate_maps
 from vinadv.grid.mapset import MapSet
 from vinadv.identify import replan
 from vinadv.pipeline import PLANNER_SPEC
-from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.vin.weights import save_vin
 from vinadv.planners.weights import weights_checksum
 from vinadv.report import write_report

@@ -9,12 +9,12 @@ from tests.grid.oracle import brute_distances
 from tests.interop.conftest import borderless
 from vinadv.attacks.strategies import make_attack
 from vinadv.attacks.validity import valid_cells
+from vinadv.evaluation.planner_metrics import evaluate_vin
 from vinadv.grid import generate_maps, shortest_distances
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths
-from vinadv.planners.evaluation import evaluate_vin
-from vinadv.planners.reference import plan_reference
 from vinadv.planners.vin.engine import plan_maps
+from vinadv.planners.vin.reference import plan_reference
 from vinadv.testing.planners import planning_vin
 
 

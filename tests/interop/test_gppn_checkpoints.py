@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import torch
 
-from tests.planners.test_gppn import plain_gppn
+from tests.planners.gppn.test_gppn import plain_gppn
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps

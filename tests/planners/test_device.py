@@ -16,8 +16,9 @@ from vinadv.attacks.strategies import AttackContext, make_attack
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.planners.device import resolve_device
-from vinadv.planners.interface import TorchPlanner, VINPlanner
+from vinadv.planners.interface import TorchPlanner
 from vinadv.planners.registry import PlannerRef, load_planner
+from vinadv.planners.vin.planner import VINPlanner
 from vinadv.testing.planners import tie_flips
 
 SIZE = 10
@@ -97,7 +98,7 @@ def test_the_vin_on_a_device_plans_the_engines_paths_with_its_torch_forward(plan
     assert forward.spec() == {**engine.spec(), "device": "cpu"}
     expected = engine.plan_maps(maps.obstacles, maps.goals, maps.starts)
     # the device path never calls the engine: the generic rollout of the torch logits
-    monkeypatch.setattr("vinadv.planners.interface.engine.plan_maps", _fail)
+    monkeypatch.setattr("vinadv.planners.vin.planner.engine.plan_maps", _fail)
     got = forward.plan_maps(maps.obstacles, maps.goals, maps.starts)
     assert got.paths == expected.paths and np.array_equal(got.termination, expected.termination)
     np.testing.assert_array_equal(

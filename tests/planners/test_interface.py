@@ -11,16 +11,17 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps, optimal_actions, shortest_distances
 from vinadv.grid.shortest_paths import valid_moves
+from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.gppn import GPPN, GPPNConfig
-from vinadv.planners.interface import PlannerError, TorchPlanner, VINPlanner, check_logits
-from vinadv.planners.optimal import OptimalPlanner
-from vinadv.planners.reference import rollout
+from vinadv.planners.interface import PlannerError, TorchPlanner, check_logits
 from vinadv.planners.registry import load_custom
 from vinadv.planners.result import step_limits
 from vinadv.planners.rollout import multi_start_limits, rollout_logits
 from vinadv.planners.symmetric import DihedralAverage
 from vinadv.planners.vin import make_input
 from vinadv.planners.vin.engine import plan_maps as engine_plan_maps
+from vinadv.planners.vin.planner import VINPlanner
+from vinadv.planners.vin.reference import rollout
 from vinadv.testing.planners import planning_vin
 from vinadv.vocabulary import COLLISION
 

@@ -16,9 +16,9 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import MapSet, generate_maps
 from vinadv.planners import registry
-from vinadv.planners.astar import WeightedAStarPlanner
+from vinadv.planners.classical.astar import WeightedAStarPlanner
+from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.interface import PlannerError
-from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.pathset import PathSet
 from vinadv.planners.registry import list_planners, load_planner
 from vinadv.planners.rollout import rollout_logits

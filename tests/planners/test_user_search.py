@@ -208,7 +208,7 @@ def test_a_user_value_map_is_used_and_checked():
 def test_a_search_planner_has_no_policy_to_average_or_to_read_per_cell(maps):
     with pytest.raises(PlannerError, match=r"is a search planner; \+d4 averages a policy planner's"):
         load_planner(f"{EXAMPLE}:make+d4", SIZE)
-    from vinadv.interop.protocols import gppn_protocol, planner_actions  # noqa: PLC0415 (PyTorch: this test only)
+    from vinadv.evaluation.protocols import gppn_protocol, planner_actions  # noqa: PLC0415 (PyTorch: this test only)
 
     planner = load_planner(f"{EXAMPLE}:make", SIZE)
     with pytest.raises(PlannerError, match="the gppn protocol follows a policy from every cell"):

@@ -77,9 +77,10 @@ from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import removable_cells, valid_cells
 from vinadv.errors import InputError
 from vinadv.planners.device import full_precision
-from vinadv.planners.interface import Planner, PlannerError, as_planner
+from vinadv.planners.interface import Planner, PlannerError
 from vinadv.planners.result import PlanResult
 from vinadv.planners.search import SearchPlanner
+from vinadv.planners.vin.planner import as_planner
 from vinadv.vocabulary import ADD, EDITS, REMOVE
 
 #: candidates planned together; bounds memory (each holds an N x N map and a path)

@@ -10,7 +10,7 @@ chunks, in map order:
 
 - `clean`: the unattacked maps. vinadv's convention: rollout success from the start (`success_rate`), the share of
   maps whose path is optimal (`percent_optimal`), the mean regret of the reached paths; GPPN's convention (`gppn`:
-  `percent_optimal`, `percent_success` over every free cell, `vinadv.interop.protocols.gppn_protocol`, averaged over
+  `percent_optimal`, `percent_success` over every free cell, `vinadv.evaluation.protocols.gppn_protocol`, averaged over
   the maps); for a search planner, which has no policy to follow from every cell, `gppn` is None and `search` holds
   the Neural A* authors' Opt / Exp / Hmean, success, cost ratio and expansions (`join_search`).
 - `attacks`: per attack (`edit:strategy`), its figures at k = 1..max (`vinadv.robustness.Figures`: paper success rate,
@@ -40,11 +40,11 @@ from vinadv import __version__
 from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags
 from vinadv.bench.suites import ENTRY_FORMAT, DataSuite, Suite, maps_sha256
 from vinadv.errors import InputError
+from vinadv.evaluation.protocols import gppn_protocol
+from vinadv.evaluation.search_metrics import evaluate_search, harmonic_mean, path_costs
 from vinadv.grid.mapset import MapSet
-from vinadv.interop.protocols import gppn_protocol
 from vinadv.planners.interface import Planner
 from vinadv.planners.search import SearchPlanner
-from vinadv.planners.search_metrics import evaluate_search, harmonic_mean, path_costs
 from vinadv.robustness import Figures, MapOutcomes, benchmark_maps, robustness, worst_case
 
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
@@ -274,7 +274,7 @@ def make_entry(suite: Suite, planner: Planner, chunks: dict[int, dict], checks: 
 
 
 def join_search(parts: list[dict]) -> dict:
-    """The search metrics (`vinadv.planners.search_metrics`) over every row of the chunks `parts` (each chunk's, one
+    """The search metrics (`vinadv.evaluation.search_metrics`) over every row of the chunks `parts` (each chunk's, one
     start per map): the means weighted by their rows (the cost ratio by the rows that reached the goal), Hmean the
     harmonic mean of the joined Opt and Exp, as the authors take it with one start per map."""
     rows = np.array([p["rows"] for p in parts], dtype=np.float64)

@@ -107,12 +107,12 @@ def emit_metrics(args: argparse.Namespace, measured: dict, source: dict, figures
 
 def write_figures(args: argparse.Namespace, figures: dict) -> None:
     """Write an `eval` command's record `figures` as indented JSON to `--out`, and its success-by-path-length
-    curve to `--figure` (`vinadv.planners.length_curve`), where they are given."""
+    curve to `--figure` (`vinadv.evaluation.length_curve`), where they are given."""
     if args.out:
         with atomic_output(args.out, "w") as fh:
             fh.write(json.dumps(figures, indent=2) + "\n")
     if getattr(args, "figure", None):
-        from vinadv.planners.length_curve import by_length_rows, save_success_by_length
+        from vinadv.evaluation.length_curve import by_length_rows, save_success_by_length
 
         ours = figures.get("vinadv", figures)  # `vinadv eval` nests each protocol's figures, `vin eval` is flat
         title = f"{ours['maps']:,} maps of {ours['size']}x{ours['size']}, {ours['rollouts']:,} rollouts"

@@ -150,7 +150,7 @@ def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
 
 
 def cmd_gppn_eval(args: argparse.Namespace) -> int:
-    from vinadv.planners.evaluation import evaluate_planner
+    from vinadv.evaluation.planner_metrics import evaluate_planner
     from vinadv.planners.registry import load_planner
 
     maps, source = start_eval(args)

@@ -13,7 +13,7 @@ from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.planners.zoo import model_of_file, read_zoo
 
-#: `vinadv.interop.protocols.PROTOCOLS`, not imported: building the parser loads no PyTorch
+#: `vinadv.evaluation.protocols.PROTOCOLS`, not imported: building the parser loads no PyTorch
 PROTOCOLS = ("vinadv", "gppn", "kentsommer", "search")
 
 
@@ -135,11 +135,12 @@ def check_protocols(text: str | None) -> tuple[str, ...] | None:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from vinadv.interop.protocols import PORT_TEST_PRIOR, gppn_protocol, kentsommer_protocol, require_policy
-    from vinadv.planners.evaluation import evaluate_planner
-    from vinadv.planners.interface import PlannerError, VINPlanner
+    from vinadv.evaluation.planner_metrics import evaluate_planner
+    from vinadv.evaluation.protocols import PORT_TEST_PRIOR, gppn_protocol, kentsommer_protocol, require_policy
+    from vinadv.evaluation.search_metrics import evaluate_search
+    from vinadv.planners.interface import PlannerError
     from vinadv.planners.search import SearchPlanner
-    from vinadv.planners.search_metrics import evaluate_search
+    from vinadv.planners.vin.planner import VINPlanner
 
     protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
     if args.prior is not None and "kentsommer" not in (protocols or ()):
@@ -219,7 +220,7 @@ def print_eval(name: str, maps, figures: dict) -> None:
 
 
 def search_text(m: dict) -> str:
-    """The search metrics (`vinadv.planners.search_metrics`) in one line; n/a where undefined."""
+    """The search metrics (`vinadv.evaluation.search_metrics`) in one line; n/a where undefined."""
     ratio = "n/a" if m["cost_ratio"] is None else f"{m['cost_ratio']:.4f}"
     expanded = "" if m["expansions"] is None else f", {m['expansions']:.1f} cells expanded per search"
     return (

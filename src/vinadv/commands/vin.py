@@ -70,8 +70,8 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from vinadv.interop.protocols import evaluate_protocol
-    from vinadv.planners.interface import as_planner
+    from vinadv.evaluation.protocols import evaluate_protocol
+    from vinadv.planners.vin.planner import as_planner
     from vinadv.planners.vin.weights import default_weights_path, load_vin
 
     maps, source = start_eval(args)

@@ -1,5 +1,13 @@
-"""The evaluation stage: what the report shows beyond the stored pairs, computed and stored (`vinadv evaluate`).
+"""The evaluation stage: measuring planners and classifiers, and what the report shows beyond the stored pairs,
+computed and stored (`vinadv evaluate`).
 
+Planners:
+- `planner_metrics`: a policy planner's rollout metrics (success, optimal, action accuracy, by path length);
+- `search_metrics`: Opt / Exp / Hmean, the Neural A* authors' metrics, for any planner;
+- `protocols`: other code's evaluation protocols (GPPN's %Opt / %Suc, the kentsommer port's), run on vinadv's planners;
+- `length_curve`: success by optimal path length, with Wilson intervals, and its figure.
+
+A run's report:
 - `classifiers`: the paper's classifier comparison on a run's FP/DP pairs (section 5.2: tables 5, 6, figs. 8, 9),
   rows of the `evaluations` table.
 - `planner_quality`: the quality of the planner the run used (a shipped metrics file, the weights' training record
@@ -7,16 +15,30 @@
 - `timing`: table 7's processing time of the rule labeller and the database read, a measurement of the run.
 
 The report (`vinadv.report`) only reads what this stage stored; `evaluate_for_report` is the stage as
-`vinadv run --report` (and so `make demo`) runs it before writing the report.
+`vinadv run --report` (and so `make demo`) runs it before writing the report. The package's names are imported at
+their first use (PEP 562), so that the planner metrics load without the classifiers' libraries.
 """
 
 from __future__ import annotations
 
-from vinadv.evaluation.classifiers import CLASSIFIERS, compare_for_report, evaluate_run
-from vinadv.evaluation.planner_quality import evaluate_planner_quality
-from vinadv.evaluation.timing import evaluate_timing
+import importlib
+
+#: the package's names and the module each comes from, imported at first use
+_LAZY = {
+    "CLASSIFIERS": "classifiers",
+    "compare_for_report": "classifiers",
+    "evaluate_run": "classifiers",
+    "evaluate_planner_quality": "planner_quality",
+    "evaluate_timing": "timing",
+}
 
 __all__ = ["CLASSIFIERS", "evaluate_for_report", "evaluate_planner_quality", "evaluate_run", "evaluate_timing"]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(importlib.import_module(f"vinadv.evaluation.{_LAZY[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def evaluate_for_report(store, run_id: int, *, compare: bool = True, progress: bool = False) -> str | None:
@@ -24,6 +46,10 @@ def evaluate_for_report(store, run_id: int, *, compare: bool = True, progress: b
     (`compare_for_report`: both settings, the quick profile) unless `compare` is False or the run has one stored,
     then the planner's quality and the processing time. Return why no comparison was run: `"skipped"` (not
     `compare`), the reason the run cannot be compared, or None (run now, or stored before)."""
+    from vinadv.evaluation.classifiers import compare_for_report  # noqa: PLC0415 (the package imports its modules at first use)
+    from vinadv.evaluation.planner_quality import evaluate_planner_quality  # noqa: PLC0415 (the package imports its modules at first use)
+    from vinadv.evaluation.timing import evaluate_timing  # noqa: PLC0415 (the package imports its modules at first use)
+
     reason = "skipped" if not compare else None
     if compare and not store.read_evaluations(run_id):
         _, reason = compare_for_report(store, run_id, progress=progress)

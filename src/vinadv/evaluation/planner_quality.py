@@ -14,9 +14,9 @@ from pathlib import Path
 
 from vinadv.errors import InputError
 from vinadv.evaluation.classifiers import jsonable
+from vinadv.evaluation.planner_metrics import evaluate_planner
 from vinadv.grid.generator import generate_maps
 from vinadv.grid.moves import DEFAULT_MOVES
-from vinadv.planners.evaluation import evaluate_planner
 from vinadv.planners.registry import default_weights, load_planner
 from vinadv.vocabulary import PLANNER_QUALITY
 
@@ -26,9 +26,9 @@ QUICK_EVAL_SEED = 20_240_601
 
 def planner_quality(config: dict, checksum: str | None, size: int, moves: str = DEFAULT_MOVES) -> tuple[dict, str]:
     """The quality of the planner a run used (`config["planner"]`, default the VIN): `(metrics, source)`; metrics as
-    `vinadv.planners.evaluation.evaluate_planner` (success_rate, optimal_rate, action_accuracy, ...), `{}` when the
-    planner or its weights are not on this machine, or are not the ones the run used (`checksum`); `source` says
-    where the metrics come from, or why there are none. `moves`: the run's movement model (the quick evaluation's
+    `vinadv.evaluation.planner_metrics.evaluate_planner` (success_rate, optimal_rate, action_accuracy, ...), `{}`
+    when the planner or its weights are not on this machine, or are not the ones the run used (`checksum`); `source`
+    says where the metrics come from, or why there are none. `moves`: the run's movement model (the quick evaluation's
     maps are of that model)."""
     name = config.get("planner") or "vin"
     corner_cutting = bool(config.get("corner_cutting", True))

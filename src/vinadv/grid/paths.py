@@ -184,3 +184,11 @@ class PackedPaths:
         check_cells_in_grid(reader, f"{prefix}_cells", cells, size)
         check_offsets(reader, f"{prefix}_offsets", offsets, n, len(cells))
         return cls(cells, offsets)
+
+
+def path_costs(paths: PackedPaths, moves: str) -> np.ndarray:
+    """`(n,)` float64 cost of each path under the movement model `moves`: its move count where every move costs 1
+    (`moore`, `news`), `PackedPaths.costs` (straight 1, diagonal sqrt 2) on `octile`."""
+    if move_model(moves).unit_costs:
+        return np.maximum(paths.lengths - 1, 0).astype(np.float64)
+    return paths.costs()

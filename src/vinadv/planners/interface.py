@@ -4,18 +4,19 @@ A whole-map policy planner answers `policy_logits(obstacles (B, N, N) bool, goal
 logits in DESIGN.md's action order (N, S, E, W, NE, NW, SE, SW); the logits do not depend on the agent's cell, so
 one map per map serves all its rollouts. `Planner.plan_maps` turns them into paths with the compiled rollout of
 `vinadv.planners.rollout` (argmax, lowest index on ties), the same for every planner. A planner may plan faster its
-own way as long as the paths are the same: the VIN keeps its exact engine (`VINPlanner`).
+own way as long as the paths are the same: the VIN keeps its exact engine
+(`vinadv.planners.vin.planner.VINPlanner`).
 
 Every planner's logits pass `check_logits`: a planner that returns another shape, a non-float type, NaN or +inf is
 refused with a `PlannerError` (an `InputError`: the planner is the user's input) naming it.
 
 PyTorch is imported by the planners that run it, when they run it: the VIN plans from NumPy weights
-(`vinadv.planners.vin.arrays`) and a process that only plans with it never loads PyTorch.
+(`vinadv.planners.vin.arrays`) and a process that only plans with it never loads PyTorch. This module is the
+contract: it imports no planner family (the VIN's planner is `vinadv.planners.vin.planner`).
 """
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import sys
 from abc import ABC, abstractmethod
@@ -32,9 +33,6 @@ from vinadv.planners.device import full_precision
 from vinadv.planners.result import PlanResult, check_plan_inputs
 from vinadv.planners.rollout import rollout_logits
 from vinadv.planners.spec import PlannerSpec
-from vinadv.planners.vin import engine
-from vinadv.planners.vin.arrays import VINWeights
-from vinadv.planners.weights import check_action_count, trained_moves, weights_checksum
 
 if TYPE_CHECKING:  # PyTorch is loaded only by the planners that run it
     import torch
@@ -329,143 +327,3 @@ class TorchPlanner(Planner):
         with torch_threads(1):  # maps split between threads, one torch thread each
             over_maps(b, forward)
         return out
-
-
-class VINPlanner(Planner):
-    """The VIN: paths from the exact engine (`vinadv.planners.vin.engine`, the same paths as re-running the network at
-    every step), not the generic rollout; logits, value maps and gradients from the PyTorch `VIN`.
-
-    `vin` is `VINWeights` (from a file: planning needs no PyTorch) or a PyTorch `VIN`, read afresh at every call
-    (it may be training).
-
-    `device` (`--device`): plan with the PyTorch forward on that device instead (`VINPolicy` through `TorchPlanner`,
-    then the rollout every planner shares), a copy of the VIN moved there at first use; value maps and gradients are
-    computed there too.
-    None (the default) keeps the exact engine, the reference. On the CPU the forward gives the engine's paths (the
-    engine replays PyTorch's float32 arithmetic at near ties; docs/guide/gpu.md gives the count measured on 1,000 maps);
-    on a GPU other float sums may break a near tie the other way.
-
-    `moves`: the movement model the VIN was trained on (`trained_moves` of its record; `octile` for records without
-    one). The engine plans `octile` moves, so a VIN of another model plans with its PyTorch forward on the CPU and
-    the rollout every planner shares, which follows the model's moves and costs.
-    """
-
-    def __init__(self, vin, size: int, checksum: str | None = None, device: str | torch.device | None = None):
-        self.name, self.size = "vin", int(size)
-        self._source = vin
-        self._torch: TorchPlanner | None = None
-        self._device = device
-        if device is not None:
-            import torch
-
-            self.device_type = torch.device(device).type
-        path = vin.path if isinstance(vin, VINWeights) else getattr(vin, "weights_path", None)
-        self.moves = trained_moves(path, getattr(vin, "record", None) or {})
-        check_action_count(path, vin.config.n_actions, self.moves, "VIN")
-        if checksum is None:
-            checksum = weights_checksum(path) if path is not None else state_checksum(self.vin)
-        self._checksum = checksum
-
-    @property
-    def weights(self) -> VINWeights:
-        """The weights as they are now (`VINWeights`)."""
-        return self._source if isinstance(self._source, VINWeights) else VINWeights.from_module(self._source)
-
-    @property
-    def vin(self):
-        """The PyTorch `VIN` (built from the weights at first use)."""
-        return self._source.module() if isinstance(self._source, VINWeights) else self._source
-
-    @property
-    def config(self) -> dict:
-        return self._source.config.to_dict()  # a VIN and VINWeights both carry it: no copy of the weights
-
-    def _torch_planner(self) -> TorchPlanner:
-        if self._torch is None:
-            from vinadv.planners.vin.model import VINPolicy  # noqa: PLC0415 (PyTorch: the VIN plans without it)
-
-            if self._device is None:
-                policy = VINPolicy(self.vin)
-            else:  # a copy moved there: the weights' own module stays on the CPU
-                policy = VINPolicy(copy.deepcopy(self.vin)).to(self._device)
-            self._torch = TorchPlanner(policy, self.name, self.size, self._checksum, self.config, device=self._device)
-        return self._torch
-
-    @property
-    def device(self) -> torch.device:
-        """Where its PyTorch forward runs (the CPU unless a device was given)."""
-        return self._torch_planner().device
-
-    @property
-    def module(self) -> nn.Module:
-        return self._torch_planner().module
-
-    @property
-    def differentiable(self) -> nn.Module:
-        return self.module
-
-    def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
-        return self._torch_planner().policy_logits(obstacles, goals)
-
-    def value_maps(self, obstacles: np.ndarray, goals: np.ndarray, batch_size: int = 64) -> np.ndarray:
-        """The VIN's value maps `max_a q`, `(B, N, N)` float32, `batch_size` maps per forward."""
-        import torch
-
-        from vinadv.planners.vin.model import make_input  # noqa: PLC0415 (PyTorch: the VIN plans without it)
-
-        obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-        self._check_size(obstacles)
-        out = np.empty(obstacles.shape, np.float32)
-        vin, device = self.vin, None
-        if self._device is not None:
-            vin, device = self._torch_planner().module.vin, self.device
-            batch_size = max(batch_size, self._torch_planner().device_batch_size if device.type != "cpu" else 0)
-        with torch.no_grad(), full_precision(self.device if device is not None else torch.device("cpu")):
-            for i in range(0, len(obstacles), batch_size):
-                x = make_input(obstacles[i : i + batch_size], goals[i : i + batch_size])
-                if device is not None:
-                    x = x.to(device)
-                out[i : i + batch_size] = vin.q_values(x).max(dim=1).values.cpu().numpy()
-        return out
-
-    def plan_maps(
-        self,
-        obstacles: np.ndarray,
-        goals: np.ndarray,
-        starts: np.ndarray,
-        corner_cutting: bool = True,
-        chunk_size: int | None = None,
-        progress: bool = False,
-    ) -> PlanResult:
-        # the PyTorch forward on the device, or for a movement model the engine does not plan (it plans octile
-        # moves), then the rollout every planner shares
-        if self._device is not None or self.moves != DEFAULT_MOVES:
-            chunk = DEFAULT_CHUNK if chunk_size is None else chunk_size
-            return super().plan_maps(obstacles, goals, starts, corner_cutting, chunk, progress)
-        obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
-        self._check_size(obstacles)
-        return engine.plan_maps(
-            obstacles, goals, starts, self.weights, corner_cutting, chunk_size or engine.DEFAULT_CHUNK, progress
-        )
-
-
-def as_planner(planner, size: int) -> Planner:
-    """`planner` if it is a `Planner`; a `VIN` or `VINWeights` wrapped as the `vin` planner for `size x size` maps
-    (the library functions that take a planner also take a VIN, as before there were other planners); any other
-    `torch.nn.Module` as a `TorchPlanner` named after its class."""
-    if isinstance(planner, Planner):
-        return planner
-    if isinstance(planner, VINWeights):
-        return VINPlanner(planner, size)
-    if "torch" in sys.modules:  # without PyTorch loaded, nothing is a module
-        from torch import nn
-
-        from vinadv.planners.vin.model import VIN  # noqa: PLC0415 (PyTorch: the VIN plans without it)
-
-        if isinstance(planner, VIN):
-            return VINPlanner(planner, size)
-        if isinstance(planner, nn.Module):  # a module with the bring-your-own contract (a GPPN, say)
-            return TorchPlanner(planner, type(planner).__name__.lower(), size)
-    raise PlannerError(
-        f"planner: expected a Planner, a VIN or a torch.nn.Module, got {type(planner).__name__}", "planner"
-    )

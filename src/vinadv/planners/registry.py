@@ -9,8 +9,8 @@
   `moore` maps (six families' train and valid splits, `maps import --format mpd` then `maps concat`), shipped as
   `vin_mpd32.pt` and `gppn_mpd32.pt`: they plan `moore` maps of 32x32 and refuse others (size, movement model).
 - `optimal`: exact shortest paths (the control: what a perfect planner does).
-- `astar`: vanilla A* on the maps' movement model, with its expansions (`vinadv.planners.astar`; on `moore` maps the
-  Neural A* authors' vanilla A*).
+- `astar`: vanilla A* on the maps' movement model, with its expansions (`vinadv.planners.classical.astar`; on
+  `moore` maps the Neural A* authors' vanilla A*).
 - `wastar`: weighted A*, `f = g + w * h` (`wastar:w=3`; w >= 1, default 2): fewer expansions, suboptimal paths.
 - `neural-astar`: Neural A* (Yonetani et al. 2021), the authors' CNN encoder and search on `moore` maps; weights from
   `weights=` or the shipped `neural_astar_mazes32.pt` (converted from the authors' mazes checkpoint; the encoder is
@@ -42,11 +42,12 @@ from pathlib import Path
 from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES
-from vinadv.planners.astar import AStarPlanner, WeightedAStarPlanner
+from vinadv.planners.classical.astar import AStarPlanner, WeightedAStarPlanner
+from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.device import resolve_device
-from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, VINPlanner, state_checksum
-from vinadv.planners.optimal import OptimalPlanner
+from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, state_checksum
 from vinadv.planners.search import SearchPlanner, UserSearchPlanner
+from vinadv.planners.vin.planner import VINPlanner
 from vinadv.planners.vin.weights import default_weights_path, load_vin_weights
 from vinadv.planners.weights import (
     WEIGHTS_DIR,

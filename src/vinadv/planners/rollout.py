@@ -2,7 +2,7 @@
 
 A whole-map policy planner gives one logits map `(8, N, N)` per map (it does not depend on the agent's cell); the
 rollouts of all starts of all maps then follow argmax actions (lowest index on ties) in one Numba kernel, with the
-rules and termination codes of `vinadv.planners.reference.rollout` (the engine's and the reference's rule):
+rules and termination codes of `vinadv.planners.vin.reference.rollout` (the engine's and the reference's rule):
 at each cell the goal ends the path ('goal'); a path that already made its step limit 2L of moves ends as
 'step_limit'; otherwise the move is taken: off the grid, into an obstacle, or (without corner cutting) diagonally
 past an obstacle ends it as 'collision', onto a visited cell as 'loop'.

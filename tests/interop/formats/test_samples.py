@@ -9,10 +9,10 @@ import pytest
 
 from tests.interop.formats.layouts import assert_same_maps, trajectories, write_kentsommer
 from vinadv.errors import InputError
+from vinadv.evaluation.planner_metrics import evaluate_vin
 from vinadv.grid import MapSet, PackedPaths
 from vinadv.interop import export_maps, import_maps, read_maps
-from vinadv.planners.evaluation import evaluate_vin
-from vinadv.planners.reference import plan_reference
+from vinadv.planners.vin.reference import plan_reference
 from vinadv.testing.planners import planning_vin
 
 

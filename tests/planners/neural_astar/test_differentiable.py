@@ -10,7 +10,7 @@ import pytest
 import torch
 
 from tests.planners.neural_astar.literal import literal_search
-from vinadv.planners.astar import best_first_search
+from vinadv.planners.classical.astar import best_first_search
 from vinadv.planners.neural_astar.differentiable import authors_heuristic, differentiable_astar
 
 

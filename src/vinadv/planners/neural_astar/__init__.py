@@ -7,5 +7,5 @@ public repository (omron-sinicx/neural-astar, branch minimal, src/neural_astar/p
   neighbour filter, backtracking), and the path-map module the saliency attack differentiates.
 - `checkpoint`: the authors' Lightning checkpoint read with the allow-list reader and checked key by key.
 - `planner`: `NeuralAstarPlanner`, a search planner with an exact mode (the encoder's guidance cost map searched
-  by the compiled best-first search of `vinadv.planners.astar`) and the differentiable mode.
+  by the compiled best-first search of `vinadv.planners.classical.astar`) and the differentiable mode.
 """

@@ -25,7 +25,7 @@ divides 0 by 0 there) stops unsolved with a path map holding the goal alone, as 
 before opening the goal does. Where the largest open exp(-f / sqrt(N)) is subnormal or 0 in float32 (f / sqrt(N)
 above about 87: long searches on large maps), float32 can no longer tell those cells apart (and where all are 0 the
 authors' selection is 0/0); this module then selects, among the open cells of that largest value, the one of the
-smallest f (the first on ties), as the exact mode (`vinadv.planners.astar`) does.
+smallest f (the first on ties), as the exact mode (`vinadv.planners.classical.astar`) does.
 """
 
 from __future__ import annotations
@@ -38,10 +38,10 @@ import torch
 from torch import nn
 
 from vinadv.grid.actions import ACTION_DELTAS
-from vinadv.planners.astar import FLOAT32_TINY, TIE_BREAK
+from vinadv.planners.classical.astar import FLOAT32_TINY, TIE_BREAK
 from vinadv.planners.neural_astar.model import NeuralAstar
 
-#: the smallest normal float32: below it exp(-f / sqrt(N)) is subnormal (`vinadv.planners.astar.FLOAT32_TINY`)
+#: the smallest normal float32: below it exp(-f / sqrt(N)) is subnormal (`vinadv.planners.classical.astar.FLOAT32_TINY`)
 TINY = float(FLOAT32_TINY)
 __all__ = ["DifferentiableSearch", "NeuralAstarPaths", "authors_heuristic", "differentiable_astar"]
 

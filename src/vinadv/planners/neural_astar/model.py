@@ -53,7 +53,8 @@ __all__ = [
 @dataclass(frozen=True)
 class NeuralAstarConfig:
     """The model's settings (the authors' defaults, which their mazes model was trained with). The heuristic's
-    tie-break weight is the authors' 0.001 (`vinadv.planners.astar.TIE_BREAK`), which their code does not vary.
+    tie-break weight is the authors' 0.001 (`vinadv.planners.classical.astar.TIE_BREAK`), which their code does not
+    vary.
 
     Attributes:
         depth: encoder blocks (1..4), the authors' `encoder.depth`.

@@ -1,8 +1,8 @@
 """`NeuralAstarPlanner`: Neural A* as a vinadv search planner, in two modes that give the same search.
 
 - Exact mode (`plan_paths`, what `plan`, `attack`, `run`, `eval` use): the encoder's guidance cost maps (PyTorch, no
-  gradients, batched), then the compiled best-first search of `vinadv.planners.astar` with the authors' float32
-  arithmetic (`best_first_search(..., exact=False)`): their heuristic, f, tie rule and neighbour rule on `moore`
+  gradients, batched), then the compiled best-first search of `vinadv.planners.classical.astar` with the authors'
+  float32 arithmetic (`best_first_search(..., exact=False)`): their heuristic, f, tie rule and neighbour rule on `moore`
   moves with corner cutting.
 - Differentiable mode (`differentiable_paths`, `plan_paths_differentiable`): the authors' differentiable A* in
   PyTorch (`vinadv.planners.neural_astar.differentiable`), for gradients (saliency) and training.
@@ -25,8 +25,8 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from vinadv.planners.astar import best_first_search
 from vinadv.planners.batching import forward_batches, over_maps, torch_threads
+from vinadv.planners.classical.astar import best_first_search
 from vinadv.planners.interface import PlannerError
 from vinadv.planners.neural_astar.differentiable import NeuralAstarPaths, authors_heuristic
 from vinadv.planners.neural_astar.model import NeuralAstar

@@ -42,12 +42,12 @@ from tqdm import tqdm
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
-from vinadv.planners.astar import AStarPlanner
+from vinadv.grid.paths import path_costs
+from vinadv.planners.classical.astar import AStarPlanner
 from vinadv.planners.device import resolve_device
 from vinadv.planners.neural_astar.differentiable import differentiable_astar
 from vinadv.planners.neural_astar.model import NeuralAstar, NeuralAstarConfig
 from vinadv.planners.neural_astar.planner import MOVES, NeuralAstarPlanner
-from vinadv.planners.search_metrics import EPS, path_costs
 from vinadv.planners.training import hardware_info, read_training_checkpoint, restore_training, save_training_checkpoint
 
 __all__ = [
@@ -162,7 +162,8 @@ def validation_figures(
         weight = len(optimal[sl])
         sums["p_opt"] += p_opt * weight
         sums["p_exp"] += p_exp * weight
-        sums["h_mean"] += 2.0 / (1.0 / (p_opt + EPS) + 1.0 / (p_exp + EPS)) * weight
+        # the authors' harmonic mean with their 1e-10 guard (`vinadv.evaluation.search_metrics.harmonic_mean`)
+        sums["h_mean"] += 2.0 / (1.0 / (p_opt + 1e-10) + 1.0 / (p_exp + 1e-10)) * weight
     return {"rows": n, **{k: v / max(n, 1) for k, v in sums.items()}}
 
 

@@ -3,7 +3,7 @@
 `VINWeights` holds the float32 state dict as NumPy arrays with its `VINConfig`, training record and file; the
 PyTorch `VIN` (`vinadv.planners.vin.model`) is built from it only when something asks for it (`VINWeights.module`:
 training, gradients, the generic rollout, a replay check). `vinadv run` with the VIN never imports PyTorch once
-the near-tie replay's settings are known on the machine (`vinadv.planners.replay`).
+the near-tie replay's settings are known on the machine (`vinadv.planners.vin.replay`).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The fast batched planning engine: one value map per map, shared by its rollouts, all in one compiled kernel.
 
-Paths and termination reasons are those of `vinadv.planners.reference.plan_reference` (the ports' way: re-run the
+Paths and termination reasons are those of `vinadv.planners.vin.reference.plan_reference` (the ports' way: re-run the
 float32 PyTorch VIN at every step). The engine gets there differently, map by map, in parallel over maps:
 
 1. Value map. It does not depend on the agent's cell, so each map's VIN runs once (`_value_iteration`).
@@ -27,7 +27,6 @@ import numpy as np
 from vinadv.grid.actions import ACTION_DELTAS, SQRT2
 from vinadv.grid.optimal_moves import optimal_moves_kernel
 from vinadv.planners.batching import DEFAULT_CHUNK, chunk_slices, over_maps
-from vinadv.planners.replay import best_and_gap, exact_actions
 from vinadv.planners.result import (
     GOAL,
     STEP_LIMIT,
@@ -38,6 +37,7 @@ from vinadv.planners.result import (
 from vinadv.planners.rollout import MOVED, rollout_step
 from vinadv.planners.vin.arrays import GOAL_VALUE, VINWeights, as_vin_weights
 from vinadv.planners.vin.flat import kernel_taps, layout, zero_row_gaps
+from vinadv.planners.vin.replay import best_and_gap, exact_actions
 
 if TYPE_CHECKING:
     from vinadv.planners.vin.model import VIN

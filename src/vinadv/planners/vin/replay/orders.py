@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from vinadv.planners.replay.cache import CACHE, torch_threads_now
-from vinadv.planners.replay.kernels import add_bias, conv_chains, sum_channels
 from vinadv.planners.vin.flat import from_flat, to_flat
+from vinadv.planners.vin.replay.cache import CACHE, torch_threads_now
+from vinadv.planners.vin.replay.kernels import add_bias, conv_chains, sum_channels
 
 __all__ = ["PROBES", "conv_modes", "sum_order"]
 

@@ -3,7 +3,7 @@
 `vinadv` and `gppn` take any planner (`vinadv.planners.interface.Planner`, or a VIN); `kentsommer` a VIN (its goal
 prior is a VIN input).
 
-- `vinadv` (DESIGN.md): `vinadv.planners.evaluation.evaluate_vin`: action accuracy against the set of optimal
+- `vinadv` (DESIGN.md): `vinadv.evaluation.planner_metrics.evaluate_vin`: action accuracy against the set of optimal
   actions at every free reachable cell; rollouts from every real start, a collision, a revisited cell or more than
   2L moves (L: moves of an optimal path) end a path unreached.
 - `kentsommer` (the port's test.py and train.py): the goal channel is its test-time reward prior, -1 everywhere and
@@ -28,15 +28,16 @@ import numpy as np
 import torch
 
 from vinadv.errors import InputError
+from vinadv.evaluation.planner_metrics import evaluate_planner, evaluate_vin
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES, require_moves
 from vinadv.interop.formats.gppn import unit_cost_distances
 from vinadv.interop.formats.samples import expert_steps
-from vinadv.planners.evaluation import evaluate_planner, evaluate_vin
-from vinadv.planners.interface import PlannerError, as_planner
+from vinadv.planners.interface import PlannerError
 from vinadv.planners.search import SearchPlanner
 from vinadv.planners.vin.model import VIN, make_input
+from vinadv.planners.vin.planner import as_planner
 
 PROTOCOLS = ("vinadv", "kentsommer", "gppn")
 PORT_TEST_PRIOR = -1.0

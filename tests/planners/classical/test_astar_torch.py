@@ -14,7 +14,7 @@ import torch
 import torch.nn.functional as F
 
 from tests.needs import public_data
-from vinadv.planners.astar import AStarPlanner, best_first_search
+from vinadv.planners.classical.astar import AStarPlanner, best_first_search
 
 pytestmark = pytest.mark.slow
 

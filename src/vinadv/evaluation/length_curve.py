@@ -1,7 +1,7 @@
 """The success-by-path-length curve: rollout success against the optimal path's move count, the plot that the VIN
 literature compares planners with (Highway VIN and DT-VIN plot success falling as paths grow long).
 
-It is drawn from the `by_length` rows of an evaluation (`vinadv.planners.evaluation.rollout_metrics`: buckets of
+It is drawn from the `by_length` rows of an evaluation (`vinadv.evaluation.planner_metrics.rollout_metrics`: buckets of
 `LENGTH_BUCKET` optimal moves), so a committed metrics file redraws it without planning anything. Each bucket is
 labelled on the x axis by its move range; success is shown with its 95% Wilson score interval (a bucket of a few
 rollouts is noisy, and the interval says how much), and a lower panel counts the rollouts per bucket on a log

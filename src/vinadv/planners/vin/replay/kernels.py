@@ -1,6 +1,6 @@
 """The compiled loops that round as PyTorch's CPU kernels do: the 3x3 convolutions as chains over their taps (fused
 multiply-adds or not, per output channel), the 1x1 convolution as one or two chains over its channels, and the
-k-step value iteration built from them. Which chain a channel takes is measured (`vinadv.planners.replay.orders`).
+k-step value iteration built from them. Which chain a channel takes is measured (`vinadv.planners.vin.replay.orders`).
 """
 
 from __future__ import annotations

@@ -9,14 +9,14 @@ import pytest
 
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.grid.generator import generate_maps
-from vinadv.planners.length_curve import (
+from vinadv.evaluation.length_curve import (
     by_length_rows,
     length_curve,
     success_by_length_figure,
     svg_text,
     wilson_interval,
 )
+from vinadv.grid.generator import generate_maps
 
 SIZE = 10
 

@@ -37,7 +37,7 @@ from vinadv.errors import InputError
 from vinadv.planners.weights import torch_load, weights_file
 
 GPPN_FORMAT = "vinadv.gppn/1"
-WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
+WEIGHTS_DIR = Path(__file__).resolve().parents[2] / "weights"
 
 
 #: the widest hidden layer (l_h, and the VIN's l_q) a planner may be built with: a GPPN's weights grow with its

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from vinadv.planners.replay.cache import CACHE, torch_threads_now
-from vinadv.planners.replay.orders import PROBES
+from vinadv.planners.vin.replay.cache import CACHE, torch_threads_now
+from vinadv.planners.vin.replay.orders import PROBES
 
 __all__ = ["MAX_FC_WIDTH", "fc_order", "fma32", "replay_fc"]
 

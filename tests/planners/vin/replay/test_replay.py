@@ -15,8 +15,10 @@ from hypothesis import strategies as st
 
 from tests.needs import MODELLED_CPU, cpu_vendor
 from vinadv.grid import generate_maps
-from vinadv.planners.reference import torch_action_at
-from vinadv.planners.replay import (
+from vinadv.planners.vin import engine, make_input
+from vinadv.planners.vin.flat import from_flat, layout, to_flat
+from vinadv.planners.vin.reference import torch_action_at
+from vinadv.planners.vin.replay import (
     CACHE,
     ReplayCache,
     actions,
@@ -27,10 +29,8 @@ from vinadv.planners.replay import (
     replay_q_values,
     sum_order,
 )
-from vinadv.planners.replay.fc import fma32, replay_fc
-from vinadv.planners.replay.kernels import conv_chains, conv_fused, conv_plain, replay_kernel, sum_channels
-from vinadv.planners.vin import engine, make_input
-from vinadv.planners.vin.flat import from_flat, layout, to_flat
+from vinadv.planners.vin.replay.fc import fma32, replay_fc
+from vinadv.planners.vin.replay.kernels import conv_chains, conv_fused, conv_plain, replay_kernel, sum_channels
 from vinadv.planners.vin.weights import load_vin, load_vin_weights
 from vinadv.testing.planners import planning_vin, random_vin
 

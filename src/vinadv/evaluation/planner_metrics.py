@@ -9,7 +9,7 @@
 
 A search planner (`vinadv.planners.search.SearchPlanner`) has no policy, so no action accuracy (`action_accuracy`
 None, `action_cells` 0); its paths get the same rollout figures. The search figures (Opt, Exp, Hmean, cost ratio) of
-any planner are `vinadv.planners.search_metrics`'.
+any planner are `vinadv.evaluation.search_metrics`'.
 """
 
 from __future__ import annotations

@@ -9,9 +9,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.grid.oracle import brute_distances, legal
+from vinadv.evaluation.planner_metrics import LENGTH_BUCKET, action_accuracy_counts, evaluate_vin, rollout_metrics
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths
-from vinadv.planners.evaluation import LENGTH_BUCKET, action_accuracy_counts, evaluate_vin, rollout_metrics
 from vinadv.planners.result import COLLISION, GOAL, LOOP, PlanResult
 from vinadv.planners.vin import VIN, VINConfig
 from vinadv.vocabulary import TERMINATIONS

@@ -11,12 +11,12 @@ import torch
 from tests.interop.conftest import borderless
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.evaluation.planner_metrics import evaluate_vin
+from vinadv.evaluation.protocols import evaluate_protocol, gppn_protocol
 from vinadv.grid import MapSet, generate_maps
 from vinadv.grid.shortest_paths import expert_paths
-from vinadv.interop.protocols import evaluate_protocol, gppn_protocol
-from vinadv.planners.evaluation import evaluate_vin
+from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.interface import PlannerError
-from vinadv.planners.optimal import OptimalPlanner
 from vinadv.planners.vin import make_input
 from vinadv.testing.planners import planning_vin
 

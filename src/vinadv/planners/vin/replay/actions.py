@@ -10,12 +10,12 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from vinadv.planners.replay.cache import CACHE, torch_threads_now
-from vinadv.planners.replay.fc import fc_order, replay_fc
-from vinadv.planners.replay.kernels import add_bias, conv_chains, replay_kernel, sum_channels
-from vinadv.planners.replay.orders import conv_modes, sum_order
 from vinadv.planners.vin.arrays import VINWeights, as_vin_weights, input_array
 from vinadv.planners.vin.flat import from_flat, to_flat
+from vinadv.planners.vin.replay.cache import CACHE, torch_threads_now
+from vinadv.planners.vin.replay.fc import fc_order, replay_fc
+from vinadv.planners.vin.replay.kernels import add_bias, conv_chains, replay_kernel, sum_channels
+from vinadv.planners.vin.replay.orders import conv_modes, sum_order
 
 if TYPE_CHECKING:
     from vinadv.planners.vin.model import VIN

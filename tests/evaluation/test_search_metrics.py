@@ -1,4 +1,4 @@
-"""Opt / Exp / Hmean (`vinadv.planners.search_metrics`) against values worked out by hand, and on planned maps."""
+"""Opt / Exp / Hmean (`vinadv.evaluation.search_metrics`) against values worked out by hand, and on planned maps."""
 
 import json
 import math
@@ -8,10 +8,10 @@ import pytest
 
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.evaluation.search_metrics import evaluate_search, path_costs, search_metrics
 from vinadv.grid import generate_maps
 from vinadv.grid.paths import PackedPaths
 from vinadv.planners.registry import load_planner
-from vinadv.planners.search_metrics import evaluate_search, path_costs, search_metrics
 
 COSTS = [5.0, 6.0, 7.0, 3.0]
 REACHED = [True, True, False, True]  # row 2 fails: never optimal, whatever its cost

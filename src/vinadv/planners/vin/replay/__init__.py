@@ -46,10 +46,10 @@ disk), `kernels` (the compiled chains), `orders` (`conv_modes`, `sum_order`), `f
 `fc`), `actions` (`replay_q_values`, `exact_actions`).
 """
 
-from vinadv.planners.replay.actions import best_and_gap, exact_actions, replay_q_values
-from vinadv.planners.replay.cache import CACHE, ReplayCache, cache_path, machine_key, torch_threads_now
-from vinadv.planners.replay.fc import fc_order
-from vinadv.planners.replay.orders import conv_modes, sum_order
+from vinadv.planners.vin.replay.actions import best_and_gap, exact_actions, replay_q_values
+from vinadv.planners.vin.replay.cache import CACHE, ReplayCache, cache_path, machine_key, torch_threads_now
+from vinadv.planners.vin.replay.fc import fc_order
+from vinadv.planners.vin.replay.orders import conv_modes, sum_order
 
 __all__ = [
     "CACHE",

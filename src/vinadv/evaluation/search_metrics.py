@@ -4,8 +4,8 @@ Over the rows (one per map and start) a planner plans (Yonetani et al., ICML 202
 omron-sinicx/neural-astar `utils/training.py`: `calc_metrics`, `calc_metrics_from_multiple_results`):
 
 - Opt: the share of rows whose path reaches the goal at the optimal cost (the cost of the path vanilla A* finds: A*
-  is exact, `vinadv.planners.astar`; vinadv takes the exact cost of the maps' expert paths, the same number). A path
-  that does not reach the goal is not optimal.
+  is exact, `vinadv.planners.classical.astar`; vinadv takes the exact cost of the maps' expert paths, the same
+  number). A path that does not reach the goal is not optimal.
 - Exp: the mean over rows of `max(0, (E_A* - E) / E_A*)`, `E` the cells the planner expanded and `E_A*` those
   vanilla A* (`astar`, on the maps' movement model) expanded from the same start: the share of A*'s search saved.
   Defined for planners that report their expansions (search planners); None for the others.
@@ -20,7 +20,7 @@ paths (`paths.sum()`), vinadv compares costs under the maps' movement model (the
 where every move costs 1 and a searched path has no repeated cell); they count a failed search's path as whatever
 their backtracking gives, vinadv as not optimal; Exp includes the rows that fail, as `calc_metrics` does (their
 older `compute_opt_exp` left them out). On `octile` and `news` maps the reference A* is vinadv's (module doc of
-`vinadv.planners.astar`), so Exp there is vinadv's extension of their definition.
+`vinadv.planners.classical.astar`), so Exp there is vinadv's extension of their definition.
 """
 
 from __future__ import annotations
@@ -31,10 +31,9 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
-from vinadv.grid.moves import move_model
-from vinadv.grid.paths import PackedPaths
+from vinadv.grid.paths import path_costs
 from vinadv.grid.shortest_paths import COST_TOL
-from vinadv.planners.astar import AStarPlanner
+from vinadv.planners.classical.astar import AStarPlanner
 from vinadv.planners.search import SearchResult
 
 #: the authors' guard against a zero in the harmonic mean
@@ -52,14 +51,6 @@ class SearchMetrics(TypedDict):
     cost_ratio: float | None
     expansions: float | None
     astar_expansions: float | None
-
-
-def path_costs(paths: PackedPaths, moves: str) -> np.ndarray:
-    """`(n,)` float64 cost of each path under the movement model `moves`: its move count where every move costs 1
-    (`moore`, `news`), `PackedPaths.costs` (straight 1, diagonal sqrt 2) on `octile`."""
-    if move_model(moves).unit_costs:
-        return np.maximum(paths.lengths - 1, 0).astype(np.float64)
-    return paths.costs()
 
 
 def search_metrics(

@@ -1,4 +1,4 @@
-"""The best-first search kernel and the `astar` / `wastar` planners (`vinadv.planners.astar`).
+"""The best-first search kernel and the `astar` / `wastar` planners (`vinadv.planners.classical.astar`).
 
 Oracles: a literal, scanning re-statement of the Neural A* authors' step (every step computes f and the float32
 exp(-f / sqrt N) of every cell with NumPy and takes the first index of the largest open value: no heap), its float64
@@ -16,7 +16,7 @@ from vinadv.classify.harm import pairset_harm
 from vinadv.classify.rule import label_pairs
 from vinadv.errors import InputError
 from vinadv.grid.moves import move_model
-from vinadv.planners.astar import AStarPlanner, WeightedAStarPlanner, best_first_search, replica_is_exact
+from vinadv.planners.classical.astar import AStarPlanner, WeightedAStarPlanner, best_first_search, replica_is_exact
 from vinadv.planners.registry import load_planner
 from vinadv.planners.result import GOAL, STEP_LIMIT
 

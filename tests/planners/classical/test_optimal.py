@@ -7,8 +7,8 @@ import pytest
 
 from tests.grid.oracle import brute_distances
 from vinadv.grid import expert_paths, generate_maps
+from vinadv.planners.classical.optimal import ILLEGAL, OptimalPlanner
 from vinadv.planners.interface import PlannerError
-from vinadv.planners.optimal import ILLEGAL, OptimalPlanner
 from vinadv.planners.registry import PlannerRef, load_planner
 
 DELTAS = [(-1, 0), (1, 0), (0, 1), (0, -1), (-1, 1), (-1, -1), (1, 1), (1, -1)]
