@@ -29,7 +29,7 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 #: the registered planners, in the order `vinadv planners` lists them
 REGISTERED = [
     "vin",
-    "vin_robust",
+    "vin-robust",
     "gppn",
     "vin-mpd32",
     "gppn-mpd32",
@@ -131,8 +131,18 @@ def test_planners_command(capsys):
     assert "optimal" in text and "FILE.py:FACTORY" in text
 
 
-def test_a_registered_planner_is_loaded_listed_and_refused_twice(monkeypatch):
-    monkeypatch.setattr(registry, "REGISTRY", dict(registry.REGISTRY))
+@pytest.fixture
+def own_names():
+    """Planners a test registers (names appended), unregistered after it."""
+    names = []
+    yield names
+    for name in names:
+        if name in registry.REGISTRY:
+            registry.unregister(name)
+
+
+def test_a_registered_planner_is_loaded_listed_and_refused_twice(own_names):
+    own_names.append("mine")
     calls = []
 
     def load(size, weights, corner_cutting, device):
@@ -223,8 +233,8 @@ def test_bad_parameters_are_refused_in_one_line_naming_them(spec, message):
     assert "\n" not in str(caught.value)
 
 
-def test_a_registered_planner_takes_its_parameters_by_keyword(monkeypatch):
-    monkeypatch.setattr(registry, "REGISTRY", dict(registry.REGISTRY))
+def test_a_registered_planner_takes_its_parameters_by_keyword(own_names):
+    own_names.extend(["deep", "deeper"])
     calls = []
 
     def load(size, weights, corner_cutting, device, depth, scale):
