@@ -8,8 +8,10 @@ from pathlib import Path
 
 import pytest
 
+from vinadv.bench.entry import entry_key, spec_key
 from vinadv.bench.index import SHIPPED_INDEX, index_json, make_index, read_index
 from vinadv.bench.leaderboard import read_entries
+from vinadv.bench.suites import get_suite
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.planners import zoo
@@ -93,3 +95,48 @@ def test_planners_json_lists_weights_licence_training_and_bench_entries(capsys):
             assert e["planner"]["name"] == p["name"] and e["weights_sha256"] == p["weights_sha256"]
     assert {e["suite"] for e in by_name["optimal"]["bench_entries"]} >= {"vin28-quick-v1"}
     assert {m["name"] for m in out["zoo"]} == set(zoo.read_zoo())
+
+
+def test_zoo_names_are_hyphenated_and_the_old_ones_still_name_their_model():
+    old = {
+        "vin28_robust": "vin28-robust",
+        "vin_mpd32": "vin-mpd32",
+        "gppn_mpd32": "gppn-mpd32",
+        "neural_astar_mazes32": "neural-astar-mazes32",
+        "neural_astar_mpd5": "neural-astar-mpd5",
+    }
+    assert all("_" not in name for name in zoo.read_zoo())
+    for alias, name in old.items():
+        assert zoo.zoo_model(alias) is zoo.zoo_model(name) is not None, alias
+        assert zoo.resolve(alias, zoo.zoo_model(name).kind) == str(WEIGHTS_DIR / zoo.zoo_model(name).file)
+    # each model's loader is its planner's, as "module:function"
+    assert zoo.zoo_model("vin28-robust").loader == "vinadv.planners.registry.loaders:load_vin"
+
+
+def test_every_committed_entry_keeps_its_key_read_in_todays_spelling():
+    """The key of each committed entry, from its spec as stored, is the key of its spec as read (upgraded to today's
+    names): `--resume` finds the chunks a database holds for it."""
+    upgraded = dict(read_entries(ENTRIES))
+    renamed = 0
+    for path in sorted(ENTRIES.glob("*.json")):
+        stored = json.loads(path.read_text())
+        read = upgraded[path]
+        assert "_" not in read["planner"]["name"], path.name
+        renamed += read["planner"]["name"] != stored["planner"]["name"]
+        raw = hashlib.sha256(json.dumps([stored["suite"]["checksum"], stored["planner"]], sort_keys=True).encode())
+        assert spec_key(read["suite"]["checksum"], read["planner"]) == raw.hexdigest(), path.name
+    assert renamed == 2  # vin28-v1 and vin28-quick-v1 of vin_robust, now vin-robust
+
+
+@pytest.mark.parametrize(
+    "choice",
+    [("vin_robust", None), ("vin-robust", None), ("vin", "vin28_robust"), ("vin", "vin28-robust")],
+    ids=str,
+)
+def test_old_and_new_spellings_give_the_committed_entrys_key(choice):
+    stored = json.loads((ENTRIES / "vin28-quick-v1.vin_robust.json").read_text())
+    suite = get_suite("vin28-quick-v1")
+    planner = load_planner(choice[0], 28, weights=choice[1])
+    assert planner.name == "vin-robust"
+    raw = hashlib.sha256(json.dumps([suite.checksum, stored["planner"]], sort_keys=True).encode()).hexdigest()
+    assert entry_key(suite, planner) == raw

@@ -101,15 +101,19 @@ def data_suite_maps(suite: DataSuite, data: str | os.PathLike | None) -> MapSet:
 
 
 def entry_key(suite: Suite, planner: Planner, name: str | None = None) -> str:
-    """The entry's identity in a database: sha256 of the suite's checksum and the planner's spec, its name as the
-    spec recorded it when the entry's chunks were first stored (`recorded_name`: `vin-robust` keys as `vin_robust`,
-    so the chunks stored and the entries committed before names were spelled with hyphens keep their keys);
-    `name`: another name to key it by (`entry_keys`)."""
+    """The entry's identity in a database: `spec_key` of the suite's checksum and the planner's spec."""
+    return spec_key(suite.checksum, planner.spec(), name)
+
+
+def spec_key(suite_checksum: str, spec: dict, name: str | None = None) -> str:
+    """sha256 of a suite's checksum and a planner's spec, its name as the spec recorded it when the entry's chunks
+    were first stored (`recorded_name`: `vin-robust` and `vin_robust` key as `vin_robust`, so the chunks stored and
+    the entries committed before names were spelled with hyphens keep their keys); `name`: another name to key it
+    by (`entry_keys`)."""
     from vinadv.planners.registry import recorded_name  # noqa: PLC0415 (light: the declarations)
 
-    spec = dict(planner.spec())
-    spec["name"] = recorded_name(spec["name"]) if name is None else name
-    text = json.dumps([suite.checksum, spec], sort_keys=True)
+    spec = {**spec, "name": recorded_name(spec["name"]) if name is None else name}
+    text = json.dumps([suite_checksum, spec], sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
 
 
