@@ -41,6 +41,7 @@ from pathlib import Path
 
 from vinadv.bench.leaderboard import read_entries, render_markdown, rows  # the one renderer of a leaderboard
 from vinadv.evaluation.planner_metrics import LENGTH_BUCKET  # the width of the `by_length` rows
+from vinadv.planners.registry import canonical_name  # a metrics file's planner in today's spelling
 
 ROOT = Path(__file__).resolve().parents[1]
 WEIGHTS_DIR = ROOT / "src" / "vinadv" / "weights"
@@ -126,7 +127,7 @@ def weights_table(folder: Path = WEIGHTS_DIR) -> str:
         # figures measured on a maps file (the MP test splits), not the generated maps, say which file
         where = f" ({Path(entry['data']).name})" if entry.get("data") else ""
         rows.append(
-            f"| `{entry['planner']}` | `{entry['weights']}` | {percent(fig['success_rate'])} of "
+            f"| `{canonical_name(entry['planner'])}` | `{entry['weights']}` | {percent(fig['success_rate'])} of "
             f"{fig['rollouts']:,}{where} | {percent(fig['optimal_rate'])} | {percent(fig['action_accuracy'])} | "
             f"{percent(gppn.get('percent_success'))} | {percent(gppn.get('percent_optimal'))} |"
         )

@@ -37,7 +37,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import PLANNER_SPEC, Identification, identify, load_classifier, objective_strength
 from vinadv.planners.interface import EMPTY_SHA256, Planner
-from vinadv.planners.registry import DEFAULT_PLANNER, load_planner
+from vinadv.planners.registry import DEFAULT_PLANNER, load_planner, same_choice
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.weights import weights_checksum
 from vinadv.seeds import check_seed
@@ -326,8 +326,12 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         # runs stored before planners / several obstacles / maps files: the VIN, one obstacle, generated maps
         stored_config = {"planner": DEFAULT_PLANNER, "obstacles": 1, **(info["config"] or {})}
         stored_config.pop(PLANNER_SPEC, None)
-        if stored_config != config.to_dict():
-            diff = sorted(k for k in config.to_dict() if stored_config.get(k) != config.to_dict()[k])
+        given = config.to_dict()
+        # one planner however named: an old spelling (vin_robust), or a family with its planner's weights
+        if same_choice((stored_config["planner"], stored_config.get("weights")), (config.planner, config.weights)):
+            stored_config = {**stored_config, "planner": given["planner"], "weights": given.get("weights")}
+        if stored_config != given:
+            diff = sorted(k for k in given if stored_config.get(k) != given[k])
             raise InputError(
                 f"resume: run '{name}' was made with other settings ({', '.join(diff)}); "
                 "use the same options or another name",

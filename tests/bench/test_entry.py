@@ -13,12 +13,15 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from vinadv.bench import entry as bench_entry
+from vinadv.bench import suites
 from vinadv.bench.entry import deterministic_part, entry_json, make_entry, run_bench, weighted_mean
 from vinadv.bench.suites import AttackGroup, Suite, get_suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.planners.registry import load_planner
 from vinadv.planners.vin.planner import as_planner
 from vinadv.robustness import benchmark_maps, robustness
+from vinadv.store import Store
 from vinadv.testing.planners import planning_vin
 
 SIZE = 10
@@ -144,3 +147,52 @@ def test_chunk_means_join_to_the_same_bits_in_any_order(chunks, rng):
     assert weighted_mean(*zip(*shuffled)) == got
     exact = sum(Fraction(w) * Fraction(v) for w, v in chunks) / sum(Fraction(w) for w in weights)
     assert abs(Fraction(got) - exact) <= abs(exact) * Fraction(2, 10**15)
+
+
+@pytest.fixture
+def tiny28(monkeypatch):
+    """A two-map 28x28 suite of one chunk per map, registered for the command as `tiny28`."""
+    maps = benchmark_maps(2, 28, seed=1000)
+    suite = Suite(
+        name="tiny28",
+        description="a test suite",
+        n=2,
+        size=28,
+        maps_seed=1000,
+        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
+        attacks=(AttackGroup(("random",), "add", 1),),
+        budget=2,
+        chunk=1,
+    )
+    monkeypatch.setitem(suites.SUITES, suite.name, suite)
+    return suite
+
+
+def test_bench_run_resumes_the_chunks_of_old_and_new_names_of_one_planner(tiny28, tmp_path, monkeypatch):
+    db = f"sqlite:///{tmp_path / 'b.db'}"
+    base = ["bench", "run", "--suite", "tiny28", "--db", db, "--quiet"]
+    assert main([*base, "--planner", "vin_robust", "--out", str(tmp_path / "old.json")]) == 0
+    first = json.loads((tmp_path / "old.json").read_text())
+    assert first["planner"]["name"] == "vin-robust"
+
+    def computed(*args):
+        raise AssertionError("a stored chunk was computed again")
+
+    monkeypatch.setattr(bench_entry, "compute_chunk", computed)
+    choices = (["--planner", "vin-robust"], ["--planner", "vin", "--weights", "vin28-robust"])
+    for i, choice in enumerate(choices):
+        out = tmp_path / f"{i}.json"
+        assert main([*base, *choice, "--resume", "--out", str(out)]) == 0
+        assert entry_json(deterministic_part(json.loads(out.read_text()))) == entry_json(deterministic_part(first))
+    # chunks stored by `--planner vin --weights vin28_robust` before the two were one planner: under vin's key
+    planner = load_planner("vin-robust", 28)
+    key, family_key = bench_entry.entry_keys(tiny28, planner)
+    assert key == bench_entry.entry_key(tiny28, load_planner("vin_robust", 28)) != family_key
+    other = f"sqlite:///{tmp_path / 'family.db'}"
+    with Store.open(db) as store, Store.open(other) as copy:
+        for chunk, result in store.read_bench_chunks(key).items():
+            copy.add_bench_chunk(family_key, chunk, result)
+    out = tmp_path / "family.json"
+    argv = ["bench", "run", "--suite", "tiny28", "--db", other, "--planner", "vin_robust", "--resume", "--quiet"]
+    assert main([*argv, "--out", str(out)]) == 0
+    assert entry_json(deterministic_part(json.loads(out.read_text()))) == entry_json(deterministic_part(first))

@@ -29,7 +29,7 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_planner.py"
 #: the registered planners, in the order `vinadv planners` lists them
 REGISTERED = [
     "vin",
-    "vin_robust",
+    "vin-robust",
     "gppn",
     "vin-mpd32",
     "gppn-mpd32",
@@ -131,8 +131,18 @@ def test_planners_command(capsys):
     assert "optimal" in text and "FILE.py:FACTORY" in text
 
 
-def test_a_registered_planner_is_loaded_listed_and_refused_twice(monkeypatch):
-    monkeypatch.setattr(registry, "REGISTRY", dict(registry.REGISTRY))
+@pytest.fixture
+def own_names():
+    """Planners a test registers (names appended), unregistered after it."""
+    names = []
+    yield names
+    for name in names:
+        if name in registry.REGISTRY:
+            registry.unregister(name)
+
+
+def test_a_registered_planner_is_loaded_listed_and_refused_twice(own_names):
+    own_names.append("mine")
     calls = []
 
     def load(size, weights, corner_cutting, device):
@@ -223,8 +233,8 @@ def test_bad_parameters_are_refused_in_one_line_naming_them(spec, message):
     assert "\n" not in str(caught.value)
 
 
-def test_a_registered_planner_takes_its_parameters_by_keyword(monkeypatch):
-    monkeypatch.setattr(registry, "REGISTRY", dict(registry.REGISTRY))
+def test_a_registered_planner_takes_its_parameters_by_keyword(own_names):
+    own_names.extend(["deep", "deeper"])
     calls = []
 
     def load(size, weights, corner_cutting, device, depth, scale):
@@ -274,3 +284,92 @@ def test_the_mp_trained_planners_plan_32x32_moore_maps_and_refuse_others(name):
         load_planner(name, 28, moves="moore")
     with pytest.raises(PlannerError, match="takes no weights file"):
         load_planner(name, 32, weights="w.pt", moves="moore")
+
+
+# --- names: one spelling (hyphens), the old ones still accepted -----------------------------------------------------
+
+#: the names of earlier versions -> today's: planners (`--planner`) and zoo models (`--weights`)
+OLD_PLANNERS = {"vin_robust": "vin-robust"}
+OLD_WEIGHTS = {
+    "vin28_robust": "vin28-robust",
+    "vin_mpd32": "vin-mpd32",
+    "gppn_mpd32": "gppn-mpd32",
+    "neural_astar_mazes32": "neural-astar-mazes32",
+    "neural_astar_mpd5": "neural-astar-mpd5",
+}
+
+
+def test_planners_json_lists_hyphenated_names_only(capsys):
+    assert main(["planners", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    names = [p["name"] for p in out["planners"]] + [m["name"] for m in out["zoo"]]
+    names += [p["zoo"] for p in out["planners"] if p["zoo"]] + [m["planner"] for m in out["zoo"]]
+    assert names and not [n for n in names if "_" in n]
+    assert not set(OLD_PLANNERS) & set(names) and not set(OLD_WEIGHTS) & set(names)
+
+
+@pytest.mark.parametrize(
+    ("spec", "weights", "name"),
+    [
+        ("vin_robust", None, "vin-robust"),
+        ("vin", "vin28_robust", "vin-robust"),
+        ("vin", "vin28-robust", "vin-robust"),
+        ("vin-robust", "vin28_robust", "vin-robust"),
+        ("vin_robust+d4", None, "vin-robust+d4"),
+        ("vin", "vin_mpd32", "vin-mpd32"),
+        ("gppn", "gppn_mpd32", "gppn-mpd32"),
+        ("neural-astar", "neural_astar_mpd5", "neural-astar-mpd5"),
+        ("neural-astar", "neural_astar_mazes32", "neural-astar"),
+    ],
+)
+def test_old_names_and_a_family_with_shipped_weights_resolve_before_load(spec, weights, name):
+    assert registry.resolve_choice(spec, weights)[0] == name
+    assert registry.same_choice((spec, weights), (name, registry.resolve_choice(spec, weights)[1]))
+
+
+def test_every_old_name_loads_the_planner_of_its_new_name():
+    for old, new in OLD_PLANNERS.items():
+        a, b = load_planner(old, 28), load_planner(new, 28)
+        assert a.name == b.name == new and a.spec() == b.spec()
+    for old, new in OLD_WEIGHTS.items():
+        model = registry.zoo_model(new)
+        family = registry.REGISTRY[model.planner].family
+        size = model.size or 32
+        a = load_planner(family, size, weights=old, moves=model.moves)
+        b = load_planner(family, size, weights=new, moves=model.moves)
+        assert a.name == b.name == model.planner and a.checksum == b.checksum == model.sha256, old
+    with pytest.raises(PlannerError, match="takes no weights file"):
+        load_planner("vin-robust", 28, weights="vin28")  # a fixed planner takes its own weights only
+    with pytest.raises(InputError, match="name 'my_planner': planner names are spelled with hyphens"):
+        registry.register("my_planner", description="x", entry_point="m:f")
+    with pytest.raises(InputError, match="'vin_robust': a planner of that name is already registered"):
+        registry.register("mine", description="x", entry_point="m:f", aliases=("vin_robust",))
+
+
+@pytest.fixture(scope="module")
+def maps28(tmp_path_factory):
+    path = tmp_path_factory.mktemp("maps") / "m.npz"
+    assert main(["maps", "generate", "--n", "2", "--size", "28", "--seed", "3", "--out", str(path), "--quiet"]) == 0
+    return path
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["--planner", "vin_robust"], ["--planner", "vin", "--weights", "vin28_robust"], ["--planner", "vin-robust"]],
+    ids=" ".join,
+)
+def test_the_cli_takes_old_names_as_planner_and_weights(args, maps28, tmp_path, capsys):
+    out = tmp_path / "p.npz"
+    assert main(["plan", "--maps", str(maps28), "--out", str(out), *args, "--json"]) == 0
+    planner = json.loads(capsys.readouterr().out)["planner"]
+    assert planner["name"] == "vin-robust" and planner["weights_sha256"] == registry.zoo_model("vin28-robust").sha256
+
+
+def test_run_resume_takes_old_and_new_names_of_one_planner(tmp_path, capsys):
+    db = f"sqlite:///{tmp_path / 'r.db'}"
+    args = ["run", "--n", "4", "--size", "28", "--shard-size", "2", "--db", db, "--name", "r", "--quiet"]
+    assert main([*args, "--planner", "vin_robust"]) == 0
+    for choice in (["--planner", "vin-robust"], ["--planner", "vin", "--weights", "vin28-robust"]):
+        assert main([*args, *choice, "--resume"]) == 0, capsys.readouterr().err
+    assert main([*args, "--planner", "vin", "--resume"]) == 2  # another planner: refused
+    assert "other settings (planner" in capsys.readouterr().err

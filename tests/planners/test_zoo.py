@@ -8,13 +8,15 @@ from pathlib import Path
 
 import pytest
 
+from vinadv.bench.entry import entry_key, spec_key
 from vinadv.bench.index import SHIPPED_INDEX, index_json, make_index, read_index
 from vinadv.bench.leaderboard import read_entries
+from vinadv.bench.suites import get_suite
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.planners import weights as weights_module
 from vinadv.planners import zoo
 from vinadv.planners.registry import PlannerRef, load_planner
+from vinadv.planners.registry import models as zoo_models
 from vinadv.planners.weights import WEIGHTS_DIR
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -37,12 +39,12 @@ def test_the_zoo_names_every_shipped_weights_file_with_its_sha256_and_files():
 
 
 def test_a_zoo_name_loads_its_weights_and_wrong_kinds_are_refused():
-    robust = load_planner("vin", 28, weights="vin28_robust")
-    assert robust.checksum == sha256(WEIGHTS_DIR / "vin28_robust.pt") == load_planner("vin_robust", 28).checksum
+    robust = load_planner("vin", 28, weights="vin28-robust")
+    assert robust.checksum == sha256(WEIGHTS_DIR / "vin28_robust.pt") == load_planner("vin-robust", 28).checksum
     with pytest.raises(InputError, match="holds vin weights .* not gppn weights"):
         load_planner("gppn", 28, weights="vin28")
-    ref = PlannerRef.of(robust, "vin", "vin28_robust", True)
-    assert ref.weights == "vin28_robust" and ref.load().checksum == robust.checksum
+    ref = PlannerRef.of(robust, "vin", "vin28-robust", True)  # one planner, one reference
+    assert (ref.spec, ref.weights) == ("vin-robust", None) and ref.load().checksum == robust.checksum
 
 
 @pytest.fixture
@@ -50,12 +52,12 @@ def tampered_zoo(tmp_path, monkeypatch):
     """A copy of the weights folder whose vin28.pt has one byte changed; the zoo reads that folder."""
     folder = tmp_path / "weights"
     folder.mkdir()
-    for name in ("zoo.json", "vin28.pt", "vin28.json"):
+    for name in ("vin28.pt", "vin28.json"):
         shutil.copy(WEIGHTS_DIR / name, folder / name)
     data = bytearray((folder / "vin28.pt").read_bytes())
     data[-100] ^= 1
     (folder / "vin28.pt").write_bytes(bytes(data))
-    monkeypatch.setattr(weights_module, "WEIGHTS_DIR", folder)
+    monkeypatch.setattr(zoo_models, "WEIGHTS_DIR", folder)
     return folder / "vin28.pt"
 
 
@@ -84,7 +86,7 @@ def test_planners_json_lists_weights_licence_training_and_bench_entries(capsys):
     out = json.loads(capsys.readouterr().out)
     by_name = {p["name"]: p for p in out["planners"]}
     assert by_name["vin"]["zoo"] == "vin28" and by_name["vin"]["weights_sha256"] == sha256(WEIGHTS_DIR / "vin28.pt")
-    assert by_name["vin_robust"]["training"]["command"].startswith("vinadv vin train")
+    assert by_name["vin-robust"]["training"]["command"].startswith("vinadv vin train")
     assert "OMRON" in by_name["neural-astar"]["licence"] and by_name["optimal"]["weights_sha256"] is None
     rows = read_index()
     for p in out["planners"]:
@@ -95,7 +97,46 @@ def test_planners_json_lists_weights_licence_training_and_bench_entries(capsys):
     assert {m["name"] for m in out["zoo"]} == set(zoo.read_zoo())
 
 
-def test_a_bad_zoo_index_is_one_line(tmp_path):
-    (tmp_path / "zoo.json").write_text(json.dumps({"format": "vinadv.zoo/1", "models": {"x": {"planner": "vin"}}}))
-    with pytest.raises(InputError, match="model 'x' must have exactly the fields"):
-        zoo.read_zoo(tmp_path)
+def test_zoo_names_are_hyphenated_and_the_old_ones_still_name_their_model():
+    old = {
+        "vin28_robust": "vin28-robust",
+        "vin_mpd32": "vin-mpd32",
+        "gppn_mpd32": "gppn-mpd32",
+        "neural_astar_mazes32": "neural-astar-mazes32",
+        "neural_astar_mpd5": "neural-astar-mpd5",
+    }
+    assert all("_" not in name for name in zoo.read_zoo())
+    for alias, name in old.items():
+        assert zoo.zoo_model(alias) is zoo.zoo_model(name) is not None, alias
+        assert zoo.resolve(alias, zoo.zoo_model(name).kind) == str(WEIGHTS_DIR / zoo.zoo_model(name).file)
+    # each model's loader is its planner's, as "module:function"
+    assert zoo.zoo_model("vin28-robust").loader == "vinadv.planners.registry.loaders:load_vin"
+
+
+def test_every_committed_entry_keeps_its_key_read_in_todays_spelling():
+    """The key of each committed entry, from its spec as stored, is the key of its spec as read (upgraded to today's
+    names): `--resume` finds the chunks a database holds for it."""
+    upgraded = dict(read_entries(ENTRIES))
+    renamed = 0
+    for path in sorted(ENTRIES.glob("*.json")):
+        stored = json.loads(path.read_text())
+        read = upgraded[path]
+        assert "_" not in read["planner"]["name"], path.name
+        renamed += read["planner"]["name"] != stored["planner"]["name"]
+        raw = hashlib.sha256(json.dumps([stored["suite"]["checksum"], stored["planner"]], sort_keys=True).encode())
+        assert spec_key(read["suite"]["checksum"], read["planner"]) == raw.hexdigest(), path.name
+    assert renamed == 2  # vin28-v1 and vin28-quick-v1 of vin_robust, now vin-robust
+
+
+@pytest.mark.parametrize(
+    "choice",
+    [("vin_robust", None), ("vin-robust", None), ("vin", "vin28_robust"), ("vin", "vin28-robust")],
+    ids=str,
+)
+def test_old_and_new_spellings_give_the_committed_entrys_key(choice):
+    stored = json.loads((ENTRIES / "vin28-quick-v1.vin_robust.json").read_text())
+    suite = get_suite("vin28-quick-v1")
+    planner = load_planner(choice[0], 28, weights=choice[1])
+    assert planner.name == "vin-robust"
+    raw = hashlib.sha256(json.dumps([suite.checksum, stored["planner"]], sort_keys=True).encode()).hexdigest()
+    assert entry_key(suite, planner) == raw

@@ -100,10 +100,36 @@ def data_suite_maps(suite: DataSuite, data: str | os.PathLike | None) -> MapSet:
     return MapSet.concat(parts)
 
 
-def entry_key(suite: Suite, planner: Planner) -> str:
-    """The entry's identity in a database: sha256 of the suite's checksum and the planner's spec."""
-    text = json.dumps([suite.checksum, planner.spec()], sort_keys=True)
+def entry_key(suite: Suite, planner: Planner, name: str | None = None) -> str:
+    """The entry's identity in a database: `spec_key` of the suite's checksum and the planner's spec."""
+    return spec_key(suite.checksum, planner.spec(), name)
+
+
+def spec_key(suite_checksum: str, spec: dict, name: str | None = None) -> str:
+    """sha256 of a suite's checksum and a planner's spec, its name as the spec recorded it when the entry's chunks
+    were first stored (`recorded_name`: `vin-robust` and `vin_robust` key as `vin_robust`, so the chunks stored and
+    the entries committed before names were spelled with hyphens keep their keys); `name`: another name to key it
+    by (`entry_keys`)."""
+    from vinadv.planners.registry import recorded_name  # noqa: PLC0415 (light: the declarations)
+
+    spec = {**spec, "name": recorded_name(spec["name"]) if name is None else name}
+    text = json.dumps([suite_checksum, spec], sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def entry_keys(suite: Suite, planner: Planner) -> list[str]:
+    """Every key the chunks of this entry may be stored under, `entry_key` first: a fixed planner (`vin-robust`) was
+    also loaded as its family with its weights (`--planner vin --weights vin28_robust`), whose spec named the family
+    (`vin`), before the two were one planner."""
+    from vinadv.planners.registry import REGISTRY, SUFFIX, canonical_name  # noqa: PLC0415 (light)
+
+    name = canonical_name(planner.spec()["name"])
+    suffix = SUFFIX if name.endswith(SUFFIX) else ""
+    info = REGISTRY.get(name[: len(name) - len(suffix)])
+    keys = [entry_key(suite, planner)]
+    if info is not None and not info.takes_weights and info.family is not None:
+        keys.append(entry_key(suite, planner, info.family + suffix))
+    return keys
 
 
 def chunk_maps(maps: MapSet, lo: int, hi: int) -> MapSet:
@@ -345,7 +371,8 @@ def run_bench(
     t0 = time.perf_counter()
     maps = suite_maps(suite, data)
     checks = planner_checks(suite, planner, maps)
-    key = entry_key(suite, planner)
+    keys = entry_keys(suite, planner)
+    key = keys[0]
     n_chunks = -(-suite.n // suite.chunk)
     done: dict[int, dict] = {}
     store = None
@@ -353,7 +380,12 @@ def run_bench(
         from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only with --db)
 
         store = Store.open(db)
-        done = {c: r for c, r in store.read_bench_chunks(key).items() if c < n_chunks}
+        for key in keys:  # continued under the key its chunks are stored under
+            done = {c: r for c, r in store.read_bench_chunks(key).items() if c < n_chunks}
+            if done:
+                break
+        else:
+            key = keys[0]
         if done and not resume:
             store.close()
             raise InputError(

@@ -62,5 +62,8 @@ def read_index(path: str | os.PathLike = SHIPPED_INDEX) -> list[dict]:
 def entries_of(rows: list[dict], planner: str, weights_sha256: str | None) -> list[dict]:
     """The rows of `planner` (the registered name, as its spec records it) with those weights (None: a planner
     without weights), in suite order."""
-    found = [r for r in rows if r["planner"]["name"] == planner and r["weights_sha256"] == weights_sha256]
+    from vinadv.planners.registry import canonical_name  # noqa: PLC0415 (light: the declarations)
+
+    name = canonical_name(planner)  # an old spelling, in the planner asked for or an index written before
+    found = [r for r in rows if canonical_name(r["planner"]["name"]) == name and r["weights_sha256"] == weights_sha256]
     return sorted(found, key=lambda r: (r["suite"], r["file"]))

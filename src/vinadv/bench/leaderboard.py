@@ -29,15 +29,27 @@ COLUMNS = (
 )
 
 
+def upgrade_entry(entry: dict) -> dict:
+    """An entry as read: its planner's name in today's spelling (`vin_robust` -> `vin-robust`); the rest as stored.
+    Its key (`entry_key`) is unchanged by this."""
+    from vinadv.planners.registry import canonical_name  # noqa: PLC0415 (light: the declarations)
+
+    planner = entry.get("planner")
+    if isinstance(planner, dict) and isinstance(planner.get("name"), str):
+        entry = {**entry, "planner": {**planner, "name": canonical_name(planner["name"])}}
+    return entry
+
+
 def read_entries(folder: str | os.PathLike) -> list[tuple[Path, dict]]:
-    """Every entry file (`*.json` of format `ENTRY_FORMAT`) in `folder`, in name order; InputError for a folder that
+    """Every entry file (`*.json` of format `ENTRY_FORMAT`) in `folder`, in name order, upgraded (`upgrade_entry`);
+    InputError for a folder that
     is not there, or a JSON file that is not an entry's or is not valid JSON."""
     folder = Path(folder)
     if not folder.is_dir():
         raise InputError(f"{folder}: no such folder", "folder")
     entries = []
     for path in sorted(folder.glob("*.json")):
-        entries.append((path, read_json_document(path, ENTRY_FORMAT, "benchmark entry")))
+        entries.append((path, upgrade_entry(read_json_document(path, ENTRY_FORMAT, "benchmark entry"))))
     return entries
 
 

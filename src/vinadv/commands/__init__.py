@@ -66,7 +66,7 @@ def add_planner_arguments(parser, weights_help: str | None = None) -> None:
         "--weights",
         default=None,
         help=weights_help
-        or "weights file of the vin, gppn or neural-astar planner, or a model zoo name (vin28_robust: `vinadv "
+        or "weights file of the vin, gppn or neural-astar planner, or a model zoo name (vin28-robust: `vinadv "
         "planners`) (default: the shipped weights for the map size)",
     )
     add_device_argument(parser)

@@ -11,7 +11,6 @@ from vinadv.commands import add_planner_arguments, command_line, load_args_plann
 from vinadv.commands.evaluation import add_eval_arguments, add_prior_argument, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
-from vinadv.planners.zoo import model_of_file, read_zoo
 
 #: `vinadv.evaluation.protocols.PROTOCOLS`, not imported: building the parser loads no PyTorch
 PROTOCOLS = ("vinadv", "gppn", "kentsommer", "search")
@@ -48,9 +47,11 @@ def register(subparsers) -> None:
 
 
 def zoo_listing(planners: list[dict]) -> list[dict]:
-    """The model zoo (`vinadv.planners.zoo`), each model with its bench entries (the shipped index,
+    """The model zoo (`vinadv.planners.registry.models`), each model with its bench entries (the shipped index,
     `vinadv.bench.index`); and, in place, each of `planners` (`list_planners`) with its zoo model (the shipped
     weights it loads by default, or None), weights sha256, training record, licence and bench entries."""
+    from vinadv.planners.registry.models import model_of_file, read_zoo  # noqa: PLC0415 (light, read when listed)
+
     index = read_index()
     models = []
     for model in read_zoo().values():

@@ -1,12 +1,12 @@
 """Weights files of any planner: the folder of the shipped weights, the file a command reads, its checksum.
 
-Each planner's own file format lives beside its model (`vinadv.planners.vin.weights` for the VIN,
-`vinadv.planners.gppn` for the GPPN); what they share is here.
+The shipped ones are the model zoo, declared in the registry (`vinadv.planners.registry.models`, which this
+module reads and which imports nothing of it). Each planner's own file format lives beside its model
+(`vinadv.planners.vin.weights` for the VIN, `vinadv.planners.gppn` for the GPPN); what they share is here.
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
 import warnings
 import zipfile
@@ -15,10 +15,9 @@ from pathlib import Path
 from typing import Any
 
 from vinadv.errors import InputError
-from vinadv.planners import zoo
+from vinadv.planners.registry.models import WEIGHTS_DIR, resolve, verify
+from vinadv.planners.registry.models import file_sha256 as weights_checksum
 
-#: the weights shipped with vinadv (`vin28.pt`, `gppn28.pt`, ...)
-WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
 __all__ = [
     "WEIGHTS_DIR",
     "check_action_count",
@@ -30,22 +29,13 @@ __all__ = [
 ]
 
 
-def weights_checksum(path: str | os.PathLike) -> str:
-    """SHA-256 of the file's bytes, as hex: identifies the model in run records."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def weights_file(path: str | os.PathLike | None, shipped: Path, planner: str, size: int) -> str:
     """The weights file to read: `path` (a file, or the name of a model of the zoo holding `planner` weights:
-    `vinadv.planners.zoo`), or the `shipped` weights of `planner` for `size x size` maps when None. A file of the zoo
-    is checked against the zoo's sha256 before it is read. Raises InputError naming a missing file (and, for shipped
-    weights, how to make some), or a zoo file whose checksum differs (both checksums)."""
+    `vinadv.planners.registry.models`), or the `shipped` weights of `planner` for `size x size` maps when None. A
+    file of the zoo is checked against the zoo's sha256 before it is read. Raises InputError naming a missing file
+    (and, for shipped weights, how to make some), or a zoo file whose checksum differs (both checksums)."""
     if path is not None:
-        path = zoo.resolve(path, planner.lower())
+        path = resolve(path, planner.lower())
     if path is None:
         if not shipped.exists():
             raise InputError(
@@ -56,7 +46,7 @@ def weights_file(path: str | os.PathLike | None, shipped: Path, planner: str, si
     name = str(path)
     if not os.path.exists(name):
         raise InputError(f"{name}: no such weights file (nor a model of the zoo: `vinadv planners` lists them)")
-    zoo.verify(name)
+    verify(name)
     return name
 
 

@@ -51,8 +51,15 @@ class NeuralAstarPlanner(SearchPlanner):
 
     moves = MOVES
 
-    def __init__(self, model: NeuralAstar, size: int, device: str | torch.device | None = None, batch_size: int = 64):
-        self.name, self.size = "neural-astar", int(size)
+    def __init__(
+        self,
+        model: NeuralAstar,
+        size: int,
+        device: str | torch.device | None = None,
+        batch_size: int = 64,
+        name: str = "neural-astar",
+    ):
+        self.name, self.size = name, int(size)
         # None: the CPU, not recorded in `spec()`; a device given is recorded by its type (as `TorchPlanner`)
         self.device = torch.device("cpu" if device is None else device)
         self.device_type = None if device is None else self.device.type

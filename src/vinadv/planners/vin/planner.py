@@ -49,8 +49,15 @@ class VINPlanner(Planner):
     the rollout every planner shares, which follows the model's moves and costs.
     """
 
-    def __init__(self, vin, size: int, checksum: str | None = None, device: str | torch.device | None = None):
-        self.name, self.size = "vin", int(size)
+    def __init__(
+        self,
+        vin,
+        size: int,
+        checksum: str | None = None,
+        device: str | torch.device | None = None,
+        name: str = "vin",
+    ):
+        self.name, self.size = name, int(size)
         self._source = vin
         self._torch: TorchPlanner | None = None
         self._device = device

@@ -1,0 +1,197 @@
+"""The planners vinadv knows by name, one declaration each: its loader as `"module:function"`, its shipped weights
+(the model zoo: file, sha256, map size, movement model, licence) and the old spellings of its names.
+
+Names are spelled with hyphens; the names of earlier versions (`vin_robust`, and the zoo's `vin28_robust`,
+`vin_mpd32`, `gppn_mpd32`, `neural_astar_mazes32`, `neural_astar_mpd5`) are aliases, accepted wherever a planner
+or weights are named, so stored runs, bench chunks and committed entries read and resume unchanged.
+"""
+
+from __future__ import annotations
+
+from vinadv.planners.registry.base import PlannerParam, register
+from vinadv.planners.registry.models import Model
+
+LOADERS = "vinadv.planners.registry.loaders"
+OURS = "MIT (vinadv's own licence: trained by the vinadv authors)"
+
+register(
+    "vin",
+    description="Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine (default)",
+    entry_point=f"{LOADERS}:load_vin",
+    default_file="vin{size}.pt",
+    takes_weights=True,
+    kind="vin",
+    models=(
+        Model(
+            name="vin28",
+            file="vin28.pt",
+            sha256="3138c5fb0583c0c813f3426c2c513dfa9e5c7258d148948d05830fc99a440582",
+            size=28,
+            moves="octile",
+            description="the VIN trained on 28x28 maps: the default planner's weights",
+            licence=OURS,
+            record="vin28.json",
+            metrics="vin28.metrics.json",
+        ),
+        Model(
+            name="vin64",
+            file="vin64.pt",
+            sha256="798e7cd0cc70670fe15695aa74f39c3ea9326521740824d3f06a0bedd728457c",
+            size=64,
+            moves="octile",
+            description="the VIN for 64x64 maps (k = 100): vin28_robust.pt fine-tuned on 64x64 maps",
+            licence=OURS,
+            record="vin64.json",
+            metrics="vin64.metrics.json",
+        ),
+    ),
+)
+register(
+    "vin-robust",  # the VIN with its own weights: `--planner vin --weights vin28-robust` is this planner
+    description="the VIN, trained from the shift start and adversarially (`vin train --vi-init shift --adversarial`)",
+    entry_point=f"{LOADERS}:load_vin",
+    kwargs={"name": "vin-robust"},
+    default_file="vin{size}_robust.pt",
+    kind="vin",
+    aliases=("vin_robust",),
+    recorded_as="vin_robust",
+    models=(
+        Model(
+            name="vin28-robust",
+            file="vin28_robust.pt",
+            sha256="86af3ea83e65f30a0477bab46e98bffaff4231c3f3a5bfcea630c2f4a7e4c97c",
+            size=28,
+            moves="octile",
+            description="the VIN trained from the shift start and adversarially on 28x28 maps",
+            licence=OURS,
+            record="vin28_robust.json",
+            metrics="vin28_robust.metrics.json",
+            aliases=("vin28_robust",),
+        ),
+    ),
+)
+register(
+    "gppn",
+    description="Gated Path Planning Network (Lee et al. 2018): LSTM-gated propagation, the actions of its moves",
+    entry_point=f"{LOADERS}:load_gppn",
+    default_file="gppn{size}.pt",
+    takes_weights=True,
+    kind="gppn",
+    models=(
+        Model(
+            name="gppn28",
+            file="gppn28.pt",
+            sha256="f8e2dc1ac19e943b9e9da68bd620bd1cf5e9bd8f0967df02fe944f2bc83a0e3d",
+            size=28,
+            moves="octile",
+            description="the GPPN trained on 28x28 maps",
+            licence=OURS,
+            record="gppn28.json",
+            metrics="gppn28.metrics.json",
+        ),
+    ),
+)
+register(
+    "vin-mpd32",  # fixed weights, as vin-robust: another file is planner 'vin' with --weights
+    description="the VIN trained on the MP dataset's 32x32 moore maps (six families; docs/guide/mpd.md)",
+    entry_point=f"{LOADERS}:load_vin",
+    kwargs={"name": "vin-mpd32"},
+    default_file="vin_mpd32.pt",
+    kind="vin",
+    models=(
+        Model(
+            name="vin-mpd32",
+            file="vin_mpd32.pt",
+            sha256="2f06f7552a0e64312f1aa358a86cf8316473bbe1c4097c5bb4565af12c196128",
+            size=32,
+            moves="moore",
+            description="the VIN trained on the MP dataset's six 32x32 families (moore moves)",
+            licence=OURS,
+            record="vin_mpd32.json",
+            metrics="vin_mpd32.metrics.json",
+            aliases=("vin_mpd32",),
+        ),
+    ),
+)
+register(
+    "gppn-mpd32",
+    description="the GPPN trained on the MP dataset's 32x32 moore maps (six families; docs/guide/mpd.md)",
+    entry_point=f"{LOADERS}:load_gppn",
+    kwargs={"name": "gppn-mpd32"},
+    default_file="gppn_mpd32.pt",
+    kind="gppn",
+    models=(
+        Model(
+            name="gppn-mpd32",
+            file="gppn_mpd32.pt",
+            sha256="73a3af2f161ca3cbcc828c68137e093defc593f3bdc55acfac6741db779a6983",
+            size=32,
+            moves="moore",
+            description="the GPPN trained on the MP dataset's six 32x32 families (moore moves)",
+            licence=OURS,
+            record="gppn_mpd32.json",
+            metrics="gppn_mpd32.metrics.json",
+            aliases=("gppn_mpd32",),
+        ),
+    ),
+)
+register(
+    "optimal",
+    description="exact shortest paths (Dijkstra, lowest action index on ties): the control",
+    entry_point=f"{LOADERS}:load_optimal",
+)
+register(
+    "astar",
+    description="A* search on the maps' moves, with its expansions (on moore maps the Neural A* authors' vanilla A*)",
+    entry_point=f"{LOADERS}:load_astar",
+)
+register(
+    "wastar",
+    description="weighted A* search, f = g + w*h: fewer expansions, suboptimal paths (wastar:w=3)",
+    entry_point=f"{LOADERS}:load_wastar",
+    params=(PlannerParam("w", 2.0, "the weight of the heuristic (1: A*)", minimum=1.0),),
+)
+register(
+    "neural-astar",
+    description="Neural A* (Yonetani et al. 2021): a CNN's guidance costs searched by A*, on moore maps",
+    entry_point=f"{LOADERS}:load_neural_astar",
+    default_file="neural_astar_mazes32.pt",  # one model for every size: the encoder is fully convolutional
+    takes_weights=True,
+    kind="neural-astar",
+    models=(
+        Model(
+            name="neural-astar-mazes32",
+            file="neural_astar_mazes32.pt",
+            sha256="04d61e5441975a924713b98ee1cd8c00cd881d1afa7740ee946a27f6aca7c006",
+            size=None,
+            moves="moore",
+            description="Neural A*'s encoder, converted from the authors' mazes_032_moore_c8 checkpoint (any map size)",
+            licence="MIT, Copyright (c) 2021 OMRON SINIC X Corporation (the Neural A* authors)",
+            record="neural_astar_mazes32.json",
+            licence_file="neural_astar_mazes32.LICENSE.txt",
+            aliases=("neural_astar_mazes32",),
+        ),
+    ),
+)
+register(
+    "neural-astar-mpd5",  # its own weights: other weights are planner 'neural-astar' with weights
+    description="Neural A* trained by `vinadv neural-astar train` on the five MP families other than mazes",
+    entry_point=f"{LOADERS}:load_neural_astar",
+    kwargs={"name": "neural-astar-mpd5"},
+    default_file="neural_astar_mpd5.pt",
+    kind="neural-astar",
+    models=(
+        Model(
+            name="neural-astar-mpd5",
+            file="neural_astar_mpd5.pt",
+            sha256="3ef7c314b8ca9ea7a303be20dfd4cd9860fc74733b28b0d9a3f8033dacef1436",
+            size=None,
+            moves="moore",
+            description="Neural A*'s encoder trained by vinadv neural-astar train on the five MP families other than "
+            "mazes (any map size)",
+            licence=OURS,
+            record="neural_astar_mpd5.json",
+            aliases=("neural_astar_mpd5",),
+        ),
+    ),
+)
