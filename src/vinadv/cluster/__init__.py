@@ -177,7 +177,7 @@ class ClusterShards:
         from dask.base import tokenize
         from distributed import as_completed
 
-        from vinadv.planners.registry import PlannerRef
+        from vinadv.planners.registry.loading import PlannerRef
 
         ref = PlannerRef.of(planner, config.planner, config.weights, config.corner_cutting)
         classifier = config.classifier if config.classifier in (None, "rule") else _absolute(config.classifier)

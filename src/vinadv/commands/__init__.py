@@ -87,7 +87,7 @@ def add_device_argument(parser) -> None:
 def load_args_planner(args, maps, device: str | None):
     """The planner of `--planner`/`--weights` for the maps `maps` (a `MapSet`: its size, move rule and movement
     model), its forward on `device` (`planner_device(args)`, checked before the command wrote anything)."""
-    from vinadv.planners.registry import load_planner
+    from vinadv.planners.registry.loading import load_planner
 
     size, corner_cutting, moves = maps.size, maps.corner_cutting, maps.moves
     return load_planner(

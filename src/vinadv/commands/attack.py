@@ -160,7 +160,7 @@ def cmd_attack(args: argparse.Namespace) -> int:
     from vinadv.classify.harm import check_tolerances
     from vinadv.grid.mapset import MapSet
     from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
-    from vinadv.planners.registry import PlannerRef
+    from vinadv.planners.registry.loading import PlannerRef
 
     check_tolerances(args.harm_tolerance, args.harm_rtol)
     device = planner_device(args)

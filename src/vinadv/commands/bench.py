@@ -69,7 +69,7 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     if args.out:
         check_output_path(args.out)
     from vinadv.bench.entry import entry_json, run_bench
-    from vinadv.planners.registry import PlannerRef, load_planner
+    from vinadv.planners.registry.loading import PlannerRef, load_planner
 
     device = planner_device(args)
     planner = load_planner(args.planner, suite.size, weights=args.weights, device=device, moves=suite.movement())

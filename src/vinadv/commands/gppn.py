@@ -151,7 +151,7 @@ def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
 
 def cmd_gppn_eval(args: argparse.Namespace) -> int:
     from vinadv.evaluation.planner_metrics import evaluate_planner
-    from vinadv.planners.registry import load_planner
+    from vinadv.planners.registry.loading import load_planner
 
     maps, source = start_eval(args)
     planner = load_planner(

@@ -174,7 +174,7 @@ def cmd_compare_modes(args: argparse.Namespace) -> int:
     import numpy as np
 
     from vinadv.grid.mapset import MapSet
-    from vinadv.planners.registry import load_planner
+    from vinadv.planners.registry.loading import load_planner
 
     maps = MapSet.load(args.data)
     planner = load_planner(

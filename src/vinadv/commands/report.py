@@ -83,8 +83,9 @@ def _latest_run(store) -> int:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from vinadv.evaluation import evaluate_planner_quality, evaluate_timing
     from vinadv.evaluation.classifiers import CLASSIFIERS, evaluate_run, parse_list, parse_sizes
+    from vinadv.evaluation.planner_quality import evaluate_planner_quality
+    from vinadv.evaluation.timing import evaluate_timing
     from vinadv.store import Store
 
     classifiers = parse_list(args.classifiers, CLASSIFIERS, "--classifiers")

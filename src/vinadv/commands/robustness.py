@@ -96,7 +96,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
     settings = maps_settings(args, n=1000)  # a maps file is read and checked here, before anything is written
-    from vinadv.planners.registry import load_planner
+    from vinadv.planners.registry.loading import load_planner
     from vinadv.robustness import benchmark_maps, robustness, save_robustness
 
     # the planner too (a planner of another movement model than the maps' is refused in one line)

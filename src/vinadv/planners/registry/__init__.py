@@ -17,8 +17,8 @@ movement model, licence; `vinadv.planners.registry.models`). The names of earlie
   `moore` maps (six families' train and valid splits, `maps import --format mpd` then `maps concat`), shipped as
   `vin_mpd32.pt` and `gppn_mpd32.pt`: they plan `moore` maps of 32x32 and refuse others (size, movement model).
 - `optimal`: exact shortest paths (the control: what a perfect planner does).
-- `astar`: vanilla A* on the maps' movement model, with its expansions (`vinadv.planners.classical.astar`; on `moore` maps the
-  Neural A* authors' vanilla A*).
+- `astar`: vanilla A* on the maps' movement model, with its expansions (`vinadv.planners.classical.astar`; on
+  `moore` maps the Neural A* authors' vanilla A*).
 - `wastar`: weighted A*, `f = g + w * h` (`wastar:w=3`; w >= 1, default 2): fewer expansions, suboptimal paths.
 - `neural-astar`: Neural A* (Yonetani et al. 2021), the authors' CNN encoder and search on `moore` maps; weights from
   `weights=` or the shipped `neural_astar_mazes32.pt` (converted from the authors' mazes checkpoint; the encoder is
