@@ -11,7 +11,6 @@ from vinadv.commands import add_planner_arguments, command_line, load_args_plann
 from vinadv.commands.evaluation import add_eval_arguments, add_prior_argument, by_length_text, start_eval, write_figures
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
-from vinadv.planners.registry import SUFFIX
 
 #: `vinadv.evaluation.protocols.PROTOCOLS`, not imported: building the parser loads no PyTorch
 PROTOCOLS = ("vinadv", "gppn", "kentsommer", "search")
@@ -74,7 +73,7 @@ def zoo_listing(planners: list[dict]) -> list[dict]:
 
 
 def cmd_planners(args: argparse.Namespace) -> int:
-    from vinadv.planners.registry.loading import list_planners
+    from vinadv.planners.registry.loading import SUFFIX, list_planners
 
     planners = list_planners(args.size)
     models = zoo_listing(planners)

@@ -26,7 +26,6 @@ from vinadv.commands.attack import (
 )
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
-from vinadv.evaluation import evaluate_for_report
 
 
 def register(subparsers) -> None:
@@ -112,6 +111,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         )
     result = summary.to_dict()
     if args.report:
+        from vinadv.evaluation import evaluate_for_report
         from vinadv.report import build_report
         from vinadv.store import Store
 
