@@ -213,6 +213,8 @@ class RobustnessResult:
     overall: list[Figures]
     seconds: float
     overall_outcomes: list[MapOutcomes] = field(default_factory=list, repr=False)
+    #: its row in the database `run` stored it in (`save_robustness`), else None; not in `to_dict`
+    id: int | None = None
 
     def figures(self, strategy: str = WORST_CASE, k: int = 1) -> Figures:
         """The figures of `strategy` (or the worst case) at `k` obstacles."""
@@ -477,10 +479,16 @@ def _robustness_task(config: RobustnessConfig, planner, maps, progress: bool, ch
 
 
 def run(
-    config: RobustnessConfig, executor: Executor = LOCAL, *, device: str | None = None, progress: bool = False
+    config: RobustnessConfig,
+    executor: Executor = LOCAL,
+    *,
+    db: str | None = None,
+    device: str | None = None,
+    progress: bool = False,
 ) -> RobustnessResult:
     """The robustness benchmark of `config` (`robustness`), on `executor` (as one task: its strategies share the
-    maps and their figures the per-map outcomes), the planner's forward on `device`."""
+    maps and their figures the per-map outcomes), the planner's forward on `device`; with `db`, stored there
+    (`save_robustness`, the row's id in `result.id`); a database that will be refused is refused before the work."""
     from vinadv.planners.registry import PlannerRef, load_planner  # noqa: PLC0415 (loaded when a benchmark runs)
 
     # the planner first (one of another movement model than the maps' is refused in one line), then the maps
@@ -492,12 +500,20 @@ def run(
         moves=config.moves,
         device=device,
     )
+    if db is not None:
+        from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only to store the result)
+
+        with Store.open(db):
+            pass
     maps = config.load_maps()
     planner_x = shipped(
         executor, planner, lambda: PlannerRef.of(planner, config.planner, config.weights, config.corner_cutting)
     )
     task = functools.partial(_robustness_task, config, planner_x, maps, progress and not executor.remote)
-    return next(iter(executor.map(task, [0])))
+    result = next(iter(executor.map(task, [0])))
+    if db is not None:
+        result.id = save_robustness(result, db)
+    return result
 
 
 def save_robustness(result: RobustnessResult, db: str | None) -> int:

@@ -94,17 +94,10 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         **option_values(args, "harm_tolerance", "harm_rtol"),
         strategies=strategies,
     )
-    if args.db is not None:  # a database that will be refused is refused now, not after the benchmark
-        from vinadv.store import Store
-
-        with Store.open(args.db):
-            pass
-    result = run(config, device=device, progress=shows_progress(args))
+    result = run(config, db=args.db, device=device, progress=shows_progress(args))
     out = result.to_dict()
-    if args.db is not None:
-        from vinadv.robustness import save_robustness
-
-        out["id"] = save_robustness(result, args.db)
+    if result.id is not None:
+        out["id"] = result.id
     if args.report:
         from vinadv.report.build import robustness_report
 
