@@ -5,7 +5,7 @@
 
 Measured in one run, on the same RunConfig (same seed, so the same pairs), each into a fresh SQLite file:
 - local: `run_pipeline` in this process (no Dask; torch and the planner use their default threads);
-- k workers: `run_pipeline` with `ClusterShards` on a LocalCluster of k single-threaded worker processes, started
+- k workers: `run_pipeline` with a `DaskExecutor` on a LocalCluster of k single-threaded worker processes, started
   and warmed up (weights loaded, compiled kernels cached) before the clock starts, so the figure is the
   steady-state rate, not start-up. The client writes every pair to the database (included in the time).
 Also printed: the client's database write rate (the ceiling of one client) and, from the 1-worker rate, a
@@ -25,8 +25,9 @@ from pathlib import Path
 
 from distributed import Client
 
-from vinadv.cluster import ClusterShards, start_local_cluster
+from vinadv.cluster import DaskExecutor, start_local_cluster
 from vinadv.cluster.worker import plugin_class
+from vinadv.executor import LOCAL
 from vinadv.pipeline import RunConfig, run_pipeline
 from vinadv.planners.vin.weights import default_weights_path, save_vin
 from vinadv.testing.planners import planning_vin
@@ -44,9 +45,9 @@ def _weights(args, tmp: Path) -> str:
     return str(path)
 
 
-def _timed_run(config, db: str, shard_results=None) -> dict:
+def _timed_run(config, db: str, executor=LOCAL) -> dict:
     t0 = time.perf_counter()
-    summary = run_pipeline(config, db=db, progress=False, shard_results=shard_results)
+    summary = run_pipeline(config, db=db, progress=False, executor=executor)
     wall = time.perf_counter() - t0
     return {
         "pairs": summary.n_pairs,
@@ -97,8 +98,8 @@ def main() -> None:
         for k in (int(v) for v in args.workers.split(",")):
             with start_local_cluster(k) as cluster, Client(cluster) as client:
                 client.register_plugin(plugin_class()())
-                _timed_run(warm, f"sqlite:///{tmp / f'warm{k}.db'}", ClusterShards(client))  # every worker warm
-                out["runs"][f"{k}w"] = _timed_run(config, f"sqlite:///{tmp / f'w{k}.db'}", ClusterShards(client))
+                _timed_run(warm, f"sqlite:///{tmp / f'warm{k}.db'}", DaskExecutor(client))  # every worker warm
+                out["runs"][f"{k}w"] = _timed_run(config, f"sqlite:///{tmp / f'w{k}.db'}", DaskExecutor(client))
     out["load_after"] = [round(v, 2) for v in os.getloadavg()]
     runs = out["runs"]
     if "1w" in runs and "2w" in runs:

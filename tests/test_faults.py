@@ -18,6 +18,7 @@ import pytest
 from tests.fault_files import tmpfs
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.executor import LocalExecutor
 from vinadv.grid import generate_maps, generator
 from vinadv.pipeline import RunConfig, run_pipeline
 from vinadv.store import Store
@@ -96,11 +97,12 @@ def test_resume_of_a_complete_run_recomputes_nothing(weights, tmp_path):
     first = run_pipeline(config, db=db, name="done", progress=False)
     computed = []
 
-    def shards(config, todo, model, classifier, label_source):
-        computed.extend(todo)
-        return iter(())
+    class Recording(LocalExecutor):
+        def map(self, task, chunks, *, ordered=True):
+            computed.extend(chunks)
+            return iter(())
 
-    again = run_pipeline(config, db=db, name="done", resume=True, progress=False, shard_results=shards)
+    again = run_pipeline(config, db=db, name="done", resume=True, progress=False, executor=Recording())
     assert computed == [] and again.skipped_shards == 3 and again.stored == 0
     with Store.open(db) as store:
         assert store.count_pairs(first.run_id) == first.stored

@@ -22,6 +22,8 @@ LAYERS = {
     "errors": 0,
     "vocabulary": 1,
     "seeds": 1,
+    # where a job's chunks run (in this process; the Dask executor is the cluster's): knows no job
+    "executor": 2,
     "outfile": 1,
     "jsonfile": 1,
     "npzfile": 2,
@@ -36,6 +38,8 @@ LAYERS = {
     "testing": 6,
     "store": 4,
     "hardening": 7,
+    # the jobs without an engine module of their own (vinadv attack), and the one attack call every job makes
+    "jobs": 7,
     "robustness": 8,
     "pipeline": 8,
     "evaluation": 8,

@@ -19,10 +19,11 @@ from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.executor import LocalExecutor
 from vinadv.grid import generate_maps
 from vinadv.grid.mapset import MapSet
 from vinadv.identify import objective_strength
-from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run_pipeline, shard_maps
+from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run, run_pipeline, shard_maps
 from vinadv.planners.interface import EMPTY_SHA256
 from vinadv.planners.vin.weights import load_vin
 from vinadv.store import Store
@@ -117,13 +118,17 @@ def test_stored_harm_agrees_with_an_independent_recomputation(weights, sqlite_ur
 
 
 def test_result_does_not_depend_on_the_order_shards_finish(weights, sqlite_url, tmp_path):
-    def reversed_shards(config, shards, model, classifier, label_source):
-        for shard in reversed(list(shards)):
-            yield compute_shard(config, shard, model, classifier, label_source)
+    class Reversed(LocalExecutor):
+        """An executor whose shards finish last first."""
+
+        remote = True
+
+        def map(self, task, chunks, *, ordered=True):
+            return iter([task(chunk) for chunk in reversed(list(chunks))])
 
     other = f"sqlite:///{tmp_path / 'other.db'}"
     a = run_pipeline(config(weights), db=sqlite_url, progress=False)
-    b = run_pipeline(config(weights), db=other, progress=False, shard_results=reversed_shards)
+    b = run(config(weights), Reversed(), db=other)
     with Store.open(sqlite_url) as s1, Store.open(other) as s2:
         assert s1.read_pairs(a.run_id).equals(s2.read_pairs(b.run_id))
 

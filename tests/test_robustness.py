@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sqlite3
 
 import numpy as np
@@ -304,3 +305,37 @@ def test_cli_json_db_and_report(weights, tmp_path, capsys):
         and "harmful rate by obstacles added" in text
         and "stored as robustness benchmark 3" in text
     )
+
+
+@pytest.mark.parametrize(
+    "field, value, message",
+    [
+        ("n", 0, "n must be >= 1, got 0"),
+        ("max_obstacles", 0, "max_obstacles must be >= 1, got 0"),
+        ("radius", -1, "radius must be >= 0, got -1"),
+        ("harm_tolerance", -1.0, "harm_tolerance: must be a finite number >= 0"),
+        ("objective", "fast", "objective: 'fast' is not one of"),
+        ("strategies", "random,nope", "strategies: unknown strategy 'nope'"),
+        ("moves", "hex", "hex"),
+    ],
+)
+def test_a_config_refuses_a_bad_value_naming_the_field(field, value, message):
+    from vinadv.robustness import RobustnessConfig  # noqa: PLC0415 (the config under test)
+
+    with pytest.raises(InputError, match=re.escape(message)) as info:
+        RobustnessConfig(**{field: value})
+    assert field in info.value.parameters
+    assert RobustnessConfig(strategies="random, near-path").strategies == ("random", "near-path")
+
+
+def test_the_job_gives_the_engines_result(tmp_path):
+    from vinadv.robustness import RobustnessConfig, run  # noqa: PLC0415 (the job under test)
+
+    config = RobustnessConfig(planner="optimal", n=6, size=10, strategies=("random",), max_obstacles=2, seed=3)
+    maps = benchmark_maps(6, 10, seed=3)
+    engine = robustness(load_planner("optimal", 10), maps, ("random",), 2, seed=3).to_dict()
+
+    job = run(config).to_dict()
+    for out in (job, engine):
+        out["seconds"] = out["strategies"]["random"]["seconds"] = 0
+    assert json.dumps(job, sort_keys=True) == json.dumps(engine, sort_keys=True)

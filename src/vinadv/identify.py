@@ -7,9 +7,9 @@ for the FP/DP rest), mark attack success (UrP or FP), and return `D_adversarial`
 
 from __future__ import annotations
 
+import functools
 import os
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -20,11 +20,13 @@ from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_table, pairset_harm
 from vinadv.classify.rule import label_batch, path_distances
 from vinadv.errors import InputError
+from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.columns import Columns
 from vinadv.planners.interface import Planner
 from vinadv.planners.registry import PlannerRef, load_planner
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
+from vinadv.planners.weights import weights_checksum
 from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
 
 if TYPE_CHECKING:  # scikit-learn comes with it; the rule labeller needs none
@@ -203,6 +205,66 @@ class StoredIdentification:
     seconds: float
 
 
+@dataclass(frozen=True)
+class ClassifierRef:
+    """A classifier model file by reference, for another process to load the same one (`vinadv.executor.shipped`):
+    its absolute path and the SHA-256 the client's file has; `load` refuses a file that differs."""
+
+    path: str
+    checksum: str
+
+    @classmethod
+    def of(cls, spec: str | os.PathLike) -> ClassifierRef:
+        path = os.path.abspath(os.fspath(spec))  # another process may run in another folder: same path, same file
+        return cls(path, weights_checksum(path))
+
+    def load(self) -> PairClassifier | None:
+        found = weights_checksum(self.path)
+        if found != self.checksum:
+            raise InputError(
+                f"classifier file {self.path} on this worker differs from the client's (sha256 {found} != "
+                f"{self.checksum})",
+                "classifier",
+            )
+        return load_classifier(self.path)[0]
+
+
+def _identify_chunk(planner, classifier, label_source: str, harm_tol: float, harm_rtol: float, pairs: PairSet):
+    """The task of `identify_and_store` on a slice of pairs: plan again (with `planner`, unless None), label,
+    and compute the harm (`planner`, `classifier`: models, or references to them, `vinadv.executor.resolve`)."""
+    planner = resolve(planner)
+    if planner is not None:
+        pairs = replan(pairs, planner)
+    return identify(pairs, resolve(classifier), label_source, harm_tol=harm_tol, harm_rtol=harm_rtol)
+
+
+def identify_pairs(
+    pairs: PairSet,
+    planner: Planner | None,
+    classifier: str | None,
+    executor: Executor = LOCAL,
+    *,
+    planner_ref: PlannerRef | None = None,
+    harm_tol: float = DEFAULT_TOL,
+    harm_rtol: float = 0.0,
+    shard_size: int = 1000,
+) -> Identification:
+    """`identify` of `pairs` (after `replan` with `planner`, unless None) on `executor`, in slices of `shard_size`
+    pairs where it cuts them (`Executor.bounds`): the same `Identification` wherever it runs. `planner_ref`: the
+    planner by reference, for a remote executor (`PlannerRef.of`)."""
+    classifier_model, classifier_name = load_classifier(classifier)
+    planner_x = shipped(executor, planner, lambda: planner_ref)
+    classifier_x = shipped(executor, classifier_model, lambda: ClassifierRef.of(classifier))
+    task = functools.partial(_identify_chunk, planner_x, classifier_x, classifier_name, harm_tol, harm_rtol)
+    bounds = executor.bounds(len(pairs), shard_size)
+    if bounds == [(0, len(pairs))]:
+        return next(iter(executor.map(task, [pairs])))
+    parts = list(executor.map(task, (pairs.take(np.arange(lo, hi)) for lo, hi in bounds)))
+    if not parts:
+        return identify(pairs, None, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
+    return Identification.concat(parts, label_source=classifier_name)
+
+
 def identify_and_store(
     pairs_path: str | os.PathLike,
     db: str | None = None,
@@ -213,7 +275,8 @@ def identify_and_store(
     name: str | None = None,
     harm_tol: float = DEFAULT_TOL,
     harm_rtol: float = 0.0,
-    remote: Callable[..., Identification] | None = None,
+    executor: Executor = LOCAL,
+    shard_size: int = 1000,
     device: str | None = None,
 ) -> StoredIdentification:
     """`vinadv identify`: label the pairs of a pairs file and store them as a new run in `db`, with their harm
@@ -221,17 +284,18 @@ def identify_and_store(
     both maps of every pair are planned again by that planner first: the attacks, found on the planner that made the
     file, tried on another (transfer). The run's config records both planners (`attack_planner`: the file's).
 
-    `remote(pairs, planner_ref, classifier, label_source, harm_tol=, harm_rtol=)` computes the identification
-    elsewhere (say `vinadv.cluster.ClusterIdentify`; `planner_ref` a `PlannerRef`, or None to keep the file's
-    paths); it is called after the inputs are checked, so a bad file is refused before any worker starts. Without
-    it, everything runs in this process. `device`: where the planner given plans (`load_planner`); refused
-    without `planner` or `weights` (the file's paths are kept then: nothing runs on it)."""
+    `executor` computes the identification (`identify_pairs`: in this process by default; `vinadv.cluster.
+    DaskExecutor` on a cluster, `shard_size` pairs per task) after the inputs are checked, so a bad file is refused
+    before any worker starts. `device`: where the planner given plans (`load_planner`); refused without `planner`
+    or `weights` (the file's paths are kept then: nothing runs on it)."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: identify needs no store)
     from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
 
     if name is not None:
         check_run_name(name)  # before the work and the database: it is refused, not found, after them
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
+    if shard_size < 1:
+        raise InputError(f"shard_size must be >= 1, got {shard_size}", "shard_size")
     if device is not None and planner is None and weights is None:
         raise InputError(
             "device: only with planner or weights (without them the file's paths are kept, nothing is planned)",
@@ -241,7 +305,7 @@ def identify_and_store(
         )
     pairs = PairSet.load(pairs_path)
     t0 = time.perf_counter()
-    replanner = None
+    replanner = ref = None
     if planner is not None or weights is not None:
         replanner = load_planner(
             planner,
@@ -251,14 +315,17 @@ def identify_and_store(
             moves=pairs.moves,
             device=device,
         )
-    classifier_model, classifier_name = load_classifier(classifier)
-    if remote is None:
-        if replanner is not None:
-            pairs = replan(pairs, replanner)
-        ident = identify(pairs, classifier_model, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
-    else:
-        ref = None if replanner is None else PlannerRef.of(replanner, planner, weights, pairs.corner_cutting)
-        ident = remote(pairs, ref, classifier, classifier_name, harm_tol=harm_tol, harm_rtol=harm_rtol)
+        ref = PlannerRef.of(replanner, planner, weights, pairs.corner_cutting) if executor.remote else None
+    ident = identify_pairs(
+        pairs,
+        replanner,
+        classifier,
+        executor,
+        planner_ref=ref,
+        harm_tol=harm_tol,
+        harm_rtol=harm_rtol,
+        shard_size=shard_size,
+    )
     elapsed = time.perf_counter() - t0
     # the spec of the planner that made the file (vinadv >= 0.2)
     attack_planner: PlannerSpec | None = pairs.params.get("planner")
@@ -280,7 +347,7 @@ def identify_and_store(
             },
             weights_checksum=None if used is None else used["weights_sha256"],
             attack=pairs.strategy,
-            classifier=classifier_name,
+            classifier=ident.label_source,
             moves=pairs.moves,
         )
         store.write_pairs(run_id, ident.records())
@@ -290,11 +357,13 @@ def identify_and_store(
 
 __all__ = [
     "BUILTIN_CLASSIFIERS",
+    "ClassifierRef",
     "LABELS",
     "Identification",
     "StoredIdentification",
     "identify",
     "identify_and_store",
+    "identify_pairs",
     "load_classifier",
     "replan",
     "rule_strength",

@@ -22,7 +22,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import time
-from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -32,12 +31,21 @@ from vinadv import __version__
 from vinadv.attacks.strategies import make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, cross_table, harm_summary
 from vinadv.errors import InputError, OutputError
+from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.generator import MIN_SIZE, check_limits, default_obstacle_params, generate_maps
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
-from vinadv.identify import PLANNER_SPEC, Identification, identify, load_classifier, objective_strength
+from vinadv.identify import (
+    PLANNER_SPEC,
+    ClassifierRef,
+    Identification,
+    identify,
+    load_classifier,
+    objective_strength,
+)
+from vinadv.jobs.attack import attack_maps
 from vinadv.planners.interface import EMPTY_SHA256, Planner
-from vinadv.planners.registry import DEFAULT_PLANNER, load_planner, same_choice
+from vinadv.planners.registry import DEFAULT_PLANNER, PlannerRef, load_planner, same_choice
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.weights import weights_checksum
 from vinadv.seeds import check_seed
@@ -196,22 +204,22 @@ def compute_shard(
     maps = shard_maps(config, shard)
     n_maps = len(maps)
     t1 = time.perf_counter()
-    attack = make_attack(
+    result = attack_maps(
         config.attack,
-        per_map=config.per_map,
-        seed=(config.seed, shard),
-        budget=config.budget,
-        radius=config.radius,
-        obstacles=config.obstacles,
-        edit=config.edit,
-    )
-    result = attack.attack(
+        {
+            "per_map": config.per_map,
+            "seed": (config.seed, shard),
+            "budget": config.budget,
+            "radius": config.radius,
+            "obstacles": config.obstacles,
+            "edit": config.edit,
+        },
         maps.obstacles,
         maps.starts[:, 0],
         maps.goals,
         planner,
         config.corner_cutting,
-        strength=objective_strength(config.objective),
+        objective=config.objective,
     )
     t2 = time.perf_counter()
     # the generator's expert paths of the original maps: harm then searches only adversarial maps (and few of them)
@@ -378,19 +386,21 @@ def _check_same_planner(name: str, info: dict, planner: Planner) -> None:
         )
 
 
-def run_pipeline(
+def run(
     config: RunConfig,
+    executor: Executor = LOCAL,
+    *,
     db: str | None = None,
     name: str | None = None,
     resume: bool = False,
-    progress: bool = True,
-    shard_results: Callable | None = None,
+    progress: bool = False,
     device: str | None = None,
 ) -> RunSummary:
-    """Run the main job and store it; returns the summary. `shard_results(config, shards, planner, classifier,
-    label_source)` may compute shards elsewhere (a cluster) and yield `ShardResult`s in any order. `device`: where
-    the planner's forward runs (`load_planner`), not part of the config: a run may be resumed on another device. The
-    run records its type in the planner's spec (`PLANNER_SPEC`)."""
+    """Run the main job and store it in `db` (as the run `name`; with `resume`, go on with the latest run of that
+    name); returns the summary. The shards are computed on `executor` (`vinadv.executor`: in this process by
+    default), stored in shard order as they come back. `device`: where the planner's forward runs (`load_planner`),
+    not part of the config: a run may be resumed on another device. The run records its type in the planner's spec
+    (`PLANNER_SPEC`)."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: computing a shard needs no store)
     from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
 
@@ -409,7 +419,15 @@ def run_pipeline(
         if resume:
             summary.skipped_shards = _complete_shards(store, run_id, config)
             shards = shards[summary.skipped_shards :]
-        compute = shard_results or _local_shards
+        task = functools.partial(
+            _shard_task,
+            config,
+            shipped(
+                executor, planner, lambda: PlannerRef.of(planner, config.planner, config.weights, config.corner_cutting)
+            ),
+            shipped(executor, classifier, lambda: ClassifierRef.of(config.classifier)),
+            classifier_name,
+        )
         bar = None
         if progress:
             from tqdm import tqdm
@@ -417,11 +435,10 @@ def run_pipeline(
             bar = tqdm(total=max(0, config.n - summary.skipped_shards * config.shard_size), desc="maps", unit="map")
         done = summary.skipped_shards
         try:
-            for result in compute(config, shards, planner, classifier, classifier_name):
+            for result in executor.map(task, shards):
                 t0 = time.perf_counter()
-                written = store.write_pairs(
-                    run_id, shard_records(result), skip_stored=resume or shard_results is not None
-                )
+                # a remote executor may deliver a shard twice: what is stored is skipped
+                written = store.write_pairs(run_id, shard_records(result), skip_stored=resume or executor.remote)
                 if result.shard == done:  # shards arrive in order: 0 .. done-1 are all stored
                     done += 1
                     store.set_shards_done(run_id, done)
@@ -472,6 +489,19 @@ def _complete_shards(store, run_id: int, config: RunConfig) -> int:
     return min(config.n_shards, max(recorded, before_last))
 
 
-def _local_shards(config, shards, planner, classifier, label_source):
-    for shard in shards:
-        yield compute_shard(config, shard, planner, classifier, label_source)
+def _shard_task(config: RunConfig, planner, classifier, label_source: str, shard: int) -> ShardResult:
+    """The task of `run`: shard `shard` (`compute_shard`), with the models (or references to them) given."""
+    return compute_shard(config, shard, resolve(planner), resolve(classifier), label_source)
+
+
+def run_pipeline(
+    config: RunConfig,
+    db: str | None = None,
+    name: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    executor: Executor = LOCAL,
+    device: str | None = None,
+) -> RunSummary:
+    """`run` with the arguments of earlier versions (a progress bar by default)."""
+    return run(config, executor, db=db, name=name, resume=resume, progress=progress, device=device)

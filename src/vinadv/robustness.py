@@ -26,6 +26,10 @@ largest `regret_a`, so the exhaustive harmful rate is exactly the share of maps 
 With `edit="remove"` every strategy frees obstacle cells instead of adding them (DESIGN.md "Obstacle removal"): k
 cells freed greedily, the same figures; the settings then say `edit: remove` (absent: `add`).
 
+As a job: `RobustnessConfig` (the maps by their settings or a maps file, the strategies and their options, the planner
+by its spec; checked when made), `run(config, executor)` and the `RobustnessResult` (`to_dict()`: what `--json`
+prints and the database stores).
+
 `benchmark_maps(n, size, seed)` makes the fixed maps: the generator's first `n` maps of `seed` (default 1000, the
 held-out seed of the evaluation tables), one start each. Results go to a database's `robustness` table
 (`save_robustness`) and into the report (`vinadv.report`).
@@ -33,6 +37,7 @@ held-out seed of the evaluation tables), one start each. Results go to a databas
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -43,11 +48,13 @@ import numpy as np
 from vinadv.attacks.strategies import STRATEGIES, make_attack
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances
 from vinadv.errors import InputError
-from vinadv.grid.generator import generate_maps
-from vinadv.grid.moves import DEFAULT_MOVES
+from vinadv.executor import LOCAL, Executor, resolve, shipped
+from vinadv.grid.generator import MIN_SIZE, generate_maps
+from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import identify, objective_strength
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
+from vinadv.seeds import check_seed
 from vinadv.vocabulary import ADD, SUCCESS_LABELS, label_counts
 
 if TYPE_CHECKING:  # names for the annotations only: the planners and the grid load when a benchmark runs
@@ -206,6 +213,8 @@ class RobustnessResult:
     overall: list[Figures]
     seconds: float
     overall_outcomes: list[MapOutcomes] = field(default_factory=list, repr=False)
+    #: its row in the database `run` stored it in (`save_robustness`), else None; not in `to_dict`
+    id: int | None = None
 
     def figures(self, strategy: str = WORST_CASE, k: int = 1) -> Figures:
         """The figures of `strategy` (or the worst case) at `k` obstacles."""
@@ -394,6 +403,119 @@ def _outcomes(n: int, map_index, labels, harm, regret_a) -> MapOutcomes:
     return MapOutcomes(pair=pair, valid=valid, broken=broken, harmful=harmful & valid, regret=regret, label=label)
 
 
+@dataclass(frozen=True)
+class RobustnessConfig:
+    """Everything that determines a robustness benchmark (`vinadv robustness`); checked when made (InputError naming
+    the field). The maps: the generator's first `n` maps of `seed` at `size` (`benchmark_maps`), or the first `n`
+    maps of the maps file `maps` (its `size`, `corner_cutting` and `moves` given with it, and its SHA-256:
+    `vinadv.pipeline.maps_file_config`). `seed` also seeds the randomised strategies. `strategies`: names, or names
+    joined by commas (`check_strategies` expands 'all')."""
+
+    planner: str | None = None
+    weights: str | None = None
+    n: int = 1000
+    size: int = 28
+    seed: int = BENCHMARK_SEED
+    corner_cutting: bool = True
+    moves: str = DEFAULT_MOVES
+    maps: str | None = None
+    maps_sha256: str | None = None
+    strategies: tuple[str, ...] = DEFAULT_STRATEGIES
+    max_obstacles: int = 3
+    objective: str = "harm"
+    budget: int = 8
+    radius: int = 2
+    edit: str = ADD
+    harm_tolerance: float = DEFAULT_TOL
+    harm_rtol: float = 0.0
+
+    def __post_init__(self):
+        strategies = self.strategies.split(",") if isinstance(self.strategies, str) else self.strategies
+        object.__setattr__(self, "strategies", _known(s.strip() for s in strategies))
+        least = {"n": 1, "max_obstacles": 1, "budget": 1, "radius": 0, "size": MIN_SIZE}
+        for name, bound in least.items():
+            if getattr(self, name) < bound:
+                raise InputError(f"{name} must be >= {bound}, got {getattr(self, name)}", name)
+        check_seed(self.seed)
+        check_tolerances(self.harm_tolerance, self.harm_rtol)
+        check_moves(self.moves, self.corner_cutting)
+        objective_strength(self.objective)
+        make_attack(self.strategies[0], 1, self.seed, self.budget, self.radius, self.max_obstacles, self.edit)
+        if (self.maps is None) != (self.maps_sha256 is None):
+            raise InputError("maps and maps_sha256 go together (maps_file_config gives both)", "maps")
+
+    def load_maps(self) -> MapSet:
+        """The benchmark's maps: generated, or the maps file's first `n` (refused if its SHA-256 changed)."""
+        if self.maps is None:
+            return benchmark_maps(
+                self.n, self.size, seed=self.seed, corner_cutting=self.corner_cutting, moves=self.moves
+            )
+        from vinadv.grid.mapset import MapSet  # noqa: PLC0415 (as the planners: loaded when a benchmark runs)
+        from vinadv.planners.weights import weights_checksum  # noqa: PLC0415 (a file's SHA-256)
+
+        if weights_checksum(self.maps) != self.maps_sha256:
+            raise InputError(f"maps file {self.maps}: its SHA-256 is not {self.maps_sha256}", "maps")
+        return MapSet.load(self.maps).take(slice(0, self.n))
+
+
+def _robustness_task(config: RobustnessConfig, planner, maps, progress: bool, chunk: int) -> RobustnessResult:
+    """The task of `run`: the whole benchmark (one chunk), the planner given or by reference."""
+    source = None if config.maps is None else {"maps": config.maps, "maps_sha256": config.maps_sha256}
+    return robustness(
+        resolve(planner),
+        maps,
+        config.strategies,
+        config.max_obstacles,
+        objective=config.objective,
+        seed=config.seed,
+        budget=config.budget,
+        radius=config.radius,
+        harm_tol=config.harm_tolerance,
+        harm_rtol=config.harm_rtol,
+        edit=config.edit,
+        progress=progress,
+        maps_source=source,
+    )
+
+
+def run(
+    config: RobustnessConfig,
+    executor: Executor = LOCAL,
+    *,
+    db: str | None = None,
+    device: str | None = None,
+    progress: bool = False,
+) -> RobustnessResult:
+    """The robustness benchmark of `config` (`robustness`), on `executor` (as one task: its strategies share the
+    maps and their figures the per-map outcomes), the planner's forward on `device`; with `db`, stored there
+    (`save_robustness`, the row's id in `result.id`); a database that will be refused is refused before the work."""
+    from vinadv.planners.registry import PlannerRef, load_planner  # noqa: PLC0415 (loaded when a benchmark runs)
+
+    # the planner first (one of another movement model than the maps' is refused in one line), then the maps
+    planner = load_planner(
+        config.planner,
+        config.size,
+        weights=config.weights,
+        corner_cutting=config.corner_cutting,
+        moves=config.moves,
+        device=device,
+    )
+    if db is not None:
+        from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only to store the result)
+
+        with Store.open(db):
+            pass
+    maps = config.load_maps()
+    planner_x = shipped(
+        executor, planner, lambda: PlannerRef.of(planner, config.planner, config.weights, config.corner_cutting)
+    )
+    task = functools.partial(_robustness_task, config, planner_x, maps, progress and not executor.remote)
+    result = next(iter(executor.map(task, [0])))
+    if db is not None:
+        result.id = save_robustness(result, db)
+    return result
+
+
 def save_robustness(result: RobustnessResult, db: str | None) -> int:
     """Store `result` as a row of the database's `robustness` table; return its id."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only to store the result)
@@ -409,11 +531,13 @@ __all__ = [
     "DEFAULT_STRATEGIES",
     "Figures",
     "MapOutcomes",
+    "RobustnessConfig",
     "RobustnessResult",
     "StrategyResult",
     "benchmark_maps",
     "check_strategies",
     "robustness",
+    "run",
     "save_robustness",
     "worst_case",
 ]

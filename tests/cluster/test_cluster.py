@@ -31,12 +31,10 @@ from vinadv.bench import suites  # noqa: E402
 from vinadv.bench.entry import deterministic_part, entry_json, run_bench  # noqa: E402
 from vinadv.bench.suites import AttackGroup, Suite, maps_sha256  # noqa: E402
 from vinadv.cli import main  # noqa: E402
-from vinadv.cluster import ClusterBenchChunks, ClusterShards, start_local_cluster  # noqa: E402
-from vinadv.cluster.worker import (
-    plugin_class,  # noqa: E402
-    worker_planner,  # noqa: E402
-)
+from vinadv.cluster import DaskExecutor, start_local_cluster  # noqa: E402
+from vinadv.cluster.worker import plugin_class  # noqa: E402
 from vinadv.errors import InputError  # noqa: E402
+from vinadv.executor import LOCAL, ByReference, LocalExecutor, resolve  # noqa: E402
 from vinadv.grid import generate_maps  # noqa: E402
 from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run_pipeline  # noqa: E402
 from vinadv.planners.registry import PlannerRef, load_planner  # noqa: E402
@@ -75,9 +73,7 @@ def test_run_on_the_cluster_stores_the_same_pairs_as_the_local_run(weights, clus
     _, client = cluster
     local_db, cluster_db = f"sqlite:///{tmp_path / 'local.db'}", f"sqlite:///{tmp_path / 'cluster.db'}"
     local = run_pipeline(config(weights), db=local_db, name="x", progress=False)
-    on_cluster = run_pipeline(
-        config(weights), db=cluster_db, name="x", progress=False, shard_results=ClusterShards(client)
-    )
+    on_cluster = run_pipeline(config(weights), db=cluster_db, name="x", progress=False, executor=DaskExecutor(client))
     assert on_cluster.stored == on_cluster.n_pairs == local.n_pairs > 150
     a, b = stored(local_db, local.run_id), stored(cluster_db, on_cluster.run_id)
     assert np.array_equal(a.pair_index, b.pair_index) and a.equals(b)
@@ -111,7 +107,7 @@ def test_workers_are_single_threaded(cluster):
 
 def test_a_worker_with_other_weights_refuses_them(weights):
     with pytest.raises(InputError, match="workers need the same planner files"):
-        worker_planner(PlannerRef("vin", weights, SIZE, True, "0" * 64))
+        resolve(ByReference(PlannerRef("vin", weights, SIZE, True, "0" * 64)))
 
 
 @pytest.mark.slow  # starts (and stops) a LocalCluster of its own: the path users take with --workers
@@ -153,7 +149,7 @@ def test_a_killed_worker_still_leaves_every_pair_exactly_once(weights, cluster, 
     db = f"sqlite:///{tmp_path / 'kill.db'}"
     cfg = config(weights, n=240, seed=11, shard_size=10)
     summary = run_pipeline(
-        cfg, db=db, name="k", progress=False, shard_results=ClusterShards(client, on_result=kill_one_worker)
+        cfg, db=db, name="k", progress=False, executor=DaskExecutor(client, on_result=kill_one_worker)
     )
     assert killed
     got = stored(db, summary.run_id)
@@ -168,16 +164,20 @@ def test_a_killed_worker_still_leaves_every_pair_exactly_once(weights, cluster, 
 
 def test_a_shard_delivered_twice_is_stored_once(weights, tmp_path):
     cfg = config(weights, n=40)
-    model = load_vin(weights, size=SIZE)
 
-    def twice(config, shards, model_, classifier, label_source):
-        for shard in shards:
-            result = compute_shard(config, shard, model, classifier, label_source)
-            yield result
-            yield result
+    class Twice(LocalExecutor):
+        """A remote executor's worst case: every result delivered twice."""
+
+        remote = True
+
+        def map(self, task, chunks, *, ordered=True):
+            for chunk in chunks:
+                result = task(chunk)
+                yield result
+                yield result
 
     db = f"sqlite:///{tmp_path / 'twice.db'}"
-    summary = run_pipeline(cfg, db=db, progress=False, shard_results=twice)
+    summary = run_pipeline(cfg, db=db, progress=False, executor=Twice())
     got = stored(db, summary.run_id)
     assert summary.stored == len(got) == summary.n_pairs // 2
     assert len(np.unique(got.pair_index)) == len(got)
@@ -318,7 +318,7 @@ def test_a_search_planner_on_a_maps_file_runs_on_the_cluster_as_locally(cluster,
     settings = RunConfig(**maps_file_config(str(maps)), attack="key-points", seed=3, shard_size=10, planner=spec)
     local_db, cluster_db = f"sqlite:///{tmp_path / 'local.db'}", f"sqlite:///{tmp_path / 'cluster.db'}"
     local = run_pipeline(settings, db=local_db, name="s", progress=False)
-    on_cluster = run_pipeline(settings, db=cluster_db, name="s", progress=False, shard_results=ClusterShards(client))
+    on_cluster = run_pipeline(settings, db=cluster_db, name="s", progress=False, executor=DaskExecutor(client))
     assert on_cluster.stored == local.stored == 30
     a, b = stored(local_db, local.run_id), stored(cluster_db, on_cluster.run_id)
     assert np.array_equal(a.pair_index, b.pair_index) and a.equals(b)
@@ -347,9 +347,10 @@ def test_bench_run_on_the_cluster_gives_the_local_entry(weights, cluster, tmp_pa
     suite = tiny_bench_suite()
     planner = load_planner("vin", SIZE, weights=weights)
     local = entry_json(deterministic_part(run_bench(suite, planner)))
-    chunks = ClusterBenchChunks(client, PlannerRef.of(planner, "vin", weights, True))
+    ref = PlannerRef.of(planner, "vin", weights, True)
     db = f"sqlite:///{tmp_path / 'b.db'}"
-    assert entry_json(deterministic_part(run_bench(suite, planner, db=db, chunk_results=chunks))) == local
+    on_cluster = run_bench(suite, planner, db=db, executor=DaskExecutor(client), planner_ref=ref)
+    assert entry_json(deterministic_part(on_cluster)) == local
     assert entry_json(deterministic_part(run_bench(suite, planner, db=db, resume=True))) == local  # all stored
     monkeypatch.setitem(suites.SUITES, suite.name, suite)  # the workers get the suite by value, not by name
     out = tmp_path / "e.json"
@@ -365,3 +366,25 @@ def test_bench_run_refuses_bad_cluster_options_in_one_line(tmp_path, capsys):
     assert main([*base, "--workers", "0"]) == 2
     assert "--workers must be >= 1, got 0" in capsys.readouterr().err
     assert not (tmp_path / "e.json").exists()
+
+
+@pytest.mark.slow
+def test_the_dask_executor_maps_a_task_as_the_local_one(cluster):
+    _, client = cluster
+    executor = DaskExecutor(client, window=2)
+    chunks = list(range(9))
+    assert list(executor.map(abs, [-c for c in chunks])) == list(LOCAL.map(abs, [-c for c in chunks])) == chunks
+    assert sorted(executor.map(abs, chunks, ordered=False)) == chunks
+    assert executor.bounds(5, 2) == [(0, 2), (2, 4), (4, 5)] and LOCAL.bounds(5, 2) == [(0, 5)]
+
+
+@pytest.mark.slow
+def test_the_attack_job_on_the_dask_executor_makes_the_local_pairs(weights, cluster, tmp_path):
+    from vinadv.jobs.attack import AttackConfig, run  # noqa: PLC0415 (the job under test)
+
+    _, client = cluster
+    generate_maps(25, SIZE, seed=4, n_starts=1).save(tmp_path / "m.npz")
+    config = AttackConfig(str(tmp_path / "m.npz"), "random", per_map=2, seed=1, weights=weights, shard_size=7)
+    local, remote = run(config), run(config, DaskExecutor(client))
+    assert local.to_dict() | {"seconds": 0} == remote.to_dict() | {"seconds": 0}
+    assert np.array_equal(local.pairs.added, remote.pairs.added) and local.pairs.path_a == remote.pairs.path_a

@@ -25,13 +25,14 @@ device type, byte for byte (`entry_json` writes sorted keys, fixed indentation).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import math
 import os
 import platform
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -42,6 +43,7 @@ from vinadv.bench.suites import ENTRY_FORMAT, DataSuite, Suite, maps_sha256
 from vinadv.errors import InputError
 from vinadv.evaluation.protocols import gppn_protocol
 from vinadv.evaluation.search_metrics import evaluate_search, harmonic_mean, path_costs
+from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.mapset import MapSet
 from vinadv.planners.interface import Planner
 from vinadv.planners.search import SearchPlanner
@@ -347,10 +349,22 @@ def planner_checks(suite: Suite, planner: Planner, maps: MapSet) -> dict:
     return {"gradient_masked": gradient_is_masked(*args), "non_deterministic": differs_between_passes(*args)}
 
 
-def local_chunks(suite: Suite, planner: Planner, maps: MapSet, chunks: Iterable[int]) -> Iterator[tuple[int, dict]]:
-    """`(chunk, compute_chunk(...))` for each of `chunks`, in this process, in order."""
-    for chunk in chunks:
-        yield chunk, compute_chunk(suite, planner, maps, chunk)
+@dataclasses.dataclass(frozen=True)
+class SuiteMaps:
+    """A suite's maps by reference, for a remote task (`vinadv.executor.shipped`): made, or read from the folder
+    `data` (an absolute path), once per process; known by the suite's checksum."""
+
+    suite: Suite = dataclasses.field(compare=False)
+    checksum: str
+    data: str | None
+
+    def load(self) -> MapSet:
+        return suite_maps(self.suite, self.data)
+
+
+def _chunk_task(suite: Suite, planner, maps, chunk: int) -> tuple[int, dict]:
+    """The task of `run_bench`: `(chunk, compute_chunk(...))`, the planner and maps given or by reference."""
+    return chunk, compute_chunk(suite, resolve(planner), resolve(maps), chunk)
 
 
 def run_bench(
@@ -360,15 +374,19 @@ def run_bench(
     resume: bool = False,
     progress: bool = False,
     data: str | os.PathLike | None = None,
-    chunk_results: Callable[..., Iterable[tuple[int, dict]]] | None = None,
+    executor: Executor = LOCAL,
+    planner_ref=None,
 ) -> dict:
     """The entry of `planner` on `suite` (module doc). With `db` each chunk is stored when done; with `resume` the
     chunks stored there are read, not recomputed (without it, a database already holding chunks of this entry is
     refused: say --resume, or use another database). `data`: the folder of a data suite's files.
 
-    `chunk_results(suite, planner, maps, chunks)` computes the chunks `chunks` and yields `(chunk, result)` pairs in
-    any order (default `local_chunks`, here, in order; `vinadv.cluster.ClusterBenchChunks` on a Dask cluster)."""
+    The chunks are computed on `executor` (`vinadv.executor`: in this process, in order, by default) and stored as
+    they come back, in any order; a remote executor needs the planner by reference, `planner_ref`
+    (`vinadv.planners.registry.PlannerRef.of`)."""
     t0 = time.perf_counter()
+    if executor.remote and planner_ref is None:
+        raise InputError("planner_ref: a remote executor needs the planner by reference", "planner_ref")
     maps = suite_maps(suite, data)
     checks = planner_checks(suite, planner, maps)
     keys = entry_keys(suite, planner)
@@ -392,13 +410,20 @@ def run_bench(
                 f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
             )
     todo = [c for c in range(n_chunks) if c not in done]
+    absolute = None if data is None else os.path.abspath(os.fspath(data))  # workers may run in another folder
+    task = functools.partial(
+        _chunk_task,
+        suite,
+        shipped(executor, planner, lambda: planner_ref),
+        shipped(executor, maps, lambda: SuiteMaps(suite, suite.checksum, absolute)),
+    )
     bar = None
     if progress:
         from tqdm import tqdm  # noqa: PLC0415 (only with a progress bar)
 
         bar = tqdm(desc=f"bench {suite.name}", unit="chunk", initial=len(done), total=n_chunks)
     try:
-        for chunk, result in (chunk_results or local_chunks)(suite, planner, maps, todo):
+        for chunk, result in executor.map(task, todo, ordered=False):
             if store is not None:
                 store.add_bench_chunk(key, chunk, result)
             done[chunk] = result

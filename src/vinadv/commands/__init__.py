@@ -18,6 +18,7 @@ import sys
 from collections.abc import Iterator
 from typing import Any
 
+from vinadv.cluster import open_executor
 from vinadv.errors import InputError
 from vinadv.planners.batching import set_torch_threads
 from vinadv.planners.device import resolve_device
@@ -102,6 +103,26 @@ def planner_device(args) -> str | None:
     if name is None:
         return None
     return str(resolve_device(name))
+
+
+def add_cluster_arguments(parser, shard_size: bool = False) -> None:
+    """`--cluster`, `--workers` (read by `open_args_executor`; and with `shard_size`, `--shard-size` for commands
+    that have none yet): where a job's chunks are computed (`vinadv.cluster.DaskExecutor`)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--cluster", metavar="tcp://HOST:PORT", help="compute on this Dask scheduler's workers")
+    group.add_argument(
+        "--workers", type=int, metavar="N", help="compute on a local Dask cluster of N single-threaded worker processes"
+    )
+    if shard_size:
+        parser.add_argument(
+            "--shard-size", type=int, default=1000, help="with --cluster/--workers: items per task (default 1000)"
+        )
+
+
+def open_args_executor(args):
+    """The executor of `--cluster`/`--workers` (`vinadv.cluster.open_executor`, a context manager): in this process
+    without either. Open it after the options are checked: a local cluster spawns processes."""
+    return open_executor(args.cluster, args.workers)
 
 
 def add_corner_cutting_argument(parser) -> None:

@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import time
 
-from vinadv.cluster import add_cluster_arguments, attack_on_cluster, open_cluster
-from vinadv.commands import LazyChoices, add_planner_arguments, load_args_planner, option_values, planner_device
+from vinadv.commands import (
+    LazyChoices,
+    add_cluster_arguments,
+    add_planner_arguments,
+    open_args_executor,
+    option_values,
+    planner_device,
+)
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.outfile import check_output_path
 
@@ -113,25 +118,10 @@ def add_objective_argument(parser) -> None:
 def attack_summary(
     labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float, harm_table: dict | None = None
 ) -> dict:
-    """The summary of labelled pairs: counts, the paper's success rate, and with `harm_table` (a
-    `vinadv.classify.harm.cross_table`) the harm counts, the harmful rate and the label x harm table."""
-    from vinadv.classify.harm import harm_summary
-    from vinadv.vocabulary import label_counts, success_count
+    """The summary of labelled pairs (`vinadv.jobs.attack.pairs_summary`)."""
+    from vinadv.jobs.attack import pairs_summary
 
-    counts = label_counts(labels)
-    valid = len(labels) - counts["invalid"]
-    success = success_count(counts)
-    return {
-        "maps": n_maps,
-        "pairs": len(labels),
-        "maps_without_valid_cell": no_valid,
-        "counts": counts,
-        "success_rate": success / valid if valid else None,
-        "planner_calls": planner_calls,
-        "planner_calls_per_success": planner_calls / success if success else None,
-        "seconds": round(seconds, 3),
-        **({} if harm_table is None else harm_summary(harm_table)),
-    }
+    return pairs_summary(labels, n_maps, no_valid, planner_calls, seconds, harm_table)
 
 
 def print_counts(summary: dict) -> None:
@@ -156,76 +146,37 @@ def print_counts(summary: dict) -> None:
 
 
 def cmd_attack(args: argparse.Namespace) -> int:
-    from vinadv.attacks.strategies import make_attack
-    from vinadv.classify.harm import check_tolerances
-    from vinadv.grid.mapset import MapSet
-    from vinadv.identify import identify, objective_strength  # scikit-learn behind it: for this command only
-    from vinadv.planners.registry.loading import PlannerRef
+    from vinadv.jobs.attack import AttackConfig, run  # scikit-learn behind it: for this command only
 
-    check_tolerances(args.harm_tolerance, args.harm_rtol)
+    config = AttackConfig(
+        maps=args.maps,
+        strategy=args.strategy,
+        **attack_options(args),
+        **option_values(args, "objective", "planner", "weights", "harm_tolerance", "harm_rtol", "shard_size"),
+    )
     device = planner_device(args)
     check_output_path(args.out)  # before the work: a folder in the way or a missing folder
-    maps = MapSet.load(args.maps)
-    planner = load_args_planner(args, maps, device)
-    # `make_attack`'s options, kept: on a cluster every worker builds its own attack from them
-    options = attack_options(args)
-    attack = make_attack(args.strategy, **options)
-    t0 = time.perf_counter()
-    if args.cluster is None and args.workers is None:
-        result = attack.attack(
-            maps.obstacles,
-            maps.starts[:, 0],
-            maps.goals,
-            planner,
-            maps.corner_cutting,
-            strength=objective_strength(args.objective),
-            progress=shows_progress(args),
-        )
-    else:
-        with open_cluster(args.cluster, args.workers) as client:
-            ref = PlannerRef.of(planner, args.planner, args.weights, maps.corner_cutting)
-            result = attack_on_cluster(
-                client,
-                args.strategy,
-                options,
-                maps,
-                ref,
-                shard_size=args.shard_size,
-                progress=shows_progress(args),
-                objective=args.objective,
-            )
-    elapsed = time.perf_counter() - t0
-    result.pairs.save(args.out)
-    ident = identify(result.pairs, **harm_tolerances(args))
-    summary = attack_summary(
-        ident.labels, len(maps), len(result.no_valid_cell), result.planner_calls, elapsed, harm_table=ident.harm_table()
-    )
-    summary.update(
-        strategy=args.strategy,
-        params=attack.params(),
-        planner=planner.spec(),
-        out=args.out,
-        objective=args.objective,
-        edit=args.edit,
-    )
-    fallback = attack.ranked_as(planner)
-    if fallback:  # saliency without gradients (optimal, most search planners): ranked as key-points
-        summary["ranked_as"] = fallback
+    with open_args_executor(args) as executor:
+        outcome = run(config, executor, device=device, progress=shows_progress(args))
+    outcome.pairs.save(args.out)
+    summary = {**outcome.to_dict(), "out": args.out}
+    elapsed, name, fallback = outcome.seconds, outcome.planner_name, outcome.ranked_as
+    no_valid = outcome.result.no_valid_cell
 
     def report() -> None:
         removing = " (obstacles removed)" if args.edit == "remove" else ""
         print(
-            f"{args.strategy}{removing} on planner {planner.name}: {summary['pairs']:,} pairs from {len(maps):,} maps "
+            f"{args.strategy}{removing} on planner {name}: {summary['pairs']:,} pairs from {outcome.n_maps:,} maps "
             f"in {elapsed:.1f} s -> {args.out}"
         )
         if fallback:
-            print(f"planner {planner.name} has no gradients: {args.strategy} ranked the cells as {fallback}")
-        if result.no_valid_cell.size:
+            print(f"planner {name} has no gradients: {args.strategy} ranked the cells as {fallback}")
+        if no_valid.size:
             what = "an obstacle to remove" if args.edit == "remove" else "an added obstacle"
-            print(f"{len(result.no_valid_cell)} maps had no valid cell for {what}; no pair was made for them")
+            print(f"{len(no_valid)} maps had no valid cell for {what}; no pair was made for them")
         print_counts(summary)
         per = summary["planner_calls_per_success"]
         per_text = "n/a" if per is None else f"{per:.1f}"
-        print(f"planner calls: {result.planner_calls:,} ({per_text} per successful attack)")
+        print(f"planner calls: {outcome.result.planner_calls:,} ({per_text} per successful attack)")
 
     return emit(args, summary, report)

@@ -8,8 +8,14 @@ import os
 from pathlib import Path
 
 from vinadv.bench.index import index_json, make_index
-from vinadv.cluster import ClusterBenchChunks, add_cluster_arguments, open_cluster
-from vinadv.commands import add_actions, add_planner_arguments, planner_device
+from vinadv.commands import (
+    add_actions,
+    add_cluster_arguments,
+    add_planner_arguments,
+    open_args_executor,
+    option_values,
+    planner_device,
+)
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
@@ -61,33 +67,19 @@ def register(subparsers) -> None:
 
 
 def cmd_bench_run(args: argparse.Namespace) -> int:
-    from vinadv.bench.suites import get_suite
+    from vinadv.bench.job import BenchConfig, run
 
-    suite = get_suite(args.suite)  # an unknown suite: one line, before anything loads
+    config = BenchConfig(**option_values(args, "suite", "planner", "weights", "data"))  # an unknown suite: one line
     if args.resume and args.db is None:
         raise InputError("--resume: only with --db")
     if args.out:
         check_output_path(args.out)
-    from vinadv.bench.entry import entry_json, run_bench
-    from vinadv.planners.registry.loading import PlannerRef, load_planner
-
     device = planner_device(args)
-    planner = load_planner(args.planner, suite.size, weights=args.weights, device=device, moves=suite.movement())
-    with open_cluster(args.cluster, args.workers) as client:
-        chunk_results = None
-        if client is not None:  # every suite's maps cut corners (the generator's default, the MP layout's)
-            ref = PlannerRef.of(planner, args.planner, args.weights, corner_cutting=True)
-            chunk_results = ClusterBenchChunks(client, ref, data=args.data)
-        entry = run_bench(
-            suite,
-            planner,
-            db=args.db,
-            resume=args.resume,
-            progress=shows_progress(args),
-            data=args.data,
-            chunk_results=chunk_results,
-        )
-    text = entry_json(entry)
+    suite = config.frozen_suite
+    with open_args_executor(args) as executor:
+        result = run(config, executor, db=args.db, resume=args.resume, progress=shows_progress(args), device=device)
+    entry = result.to_dict()
+    text = result.json()
     if args.out:
         with atomic_output(args.out, "w", encoding="utf-8") as fh:
             fh.write(text)

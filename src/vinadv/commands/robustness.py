@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from vinadv.commands import add_moves_argument, add_planner_arguments, option_values, planner_device
-from vinadv.commands.attack import add_edit_argument, add_harm_arguments, harm_tolerances
+from vinadv.commands.attack import add_edit_argument, add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
 from vinadv.errors import InputError, OutputError
@@ -77,63 +77,27 @@ def register(subparsers) -> None:
 
 
 def cmd_robustness(args: argparse.Namespace) -> int:
-    from vinadv.classify.harm import check_tolerances
-    from vinadv.grid.moves import check_moves
-    from vinadv.robustness import check_strategies
+    from vinadv.robustness import RobustnessConfig, check_strategies, run
 
     # every option checked before the maps are made and the planner loaded
     strategies = check_strategies(args.strategies, exhaustive=args.exhaustive)
-    for name in ("n", "max_obstacles", "budget"):
-        if getattr(args, name) is not None and getattr(args, name) < 1:
-            raise InputError(f"{name} must be >= 1, got {getattr(args, name)}", name)
-    if args.radius < 0:
-        raise InputError(f"radius must be >= 0, got {args.radius}", "radius")
-    check_tolerances(args.harm_tolerance, args.harm_rtol)
-    if args.moves is not None:
-        check_moves(args.moves)
+    if args.n is not None and args.n < 1:  # before a maps file is read
+        raise InputError(f"n must be >= 1, got {args.n}", "n")
     device = planner_device(args)
     if args.report:
         if Path(args.report).exists() and not Path(args.report).is_dir():
             raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
     settings = maps_settings(args, n=1000)  # a maps file is read and checked here, before anything is written
-    from vinadv.planners.registry.loading import load_planner
-    from vinadv.robustness import benchmark_maps, robustness, save_robustness
-
-    # the planner too (a planner of another movement model than the maps' is refused in one line)
-    planner = load_planner(
-        args.planner,
-        settings["size"],
-        weights=args.weights,
-        corner_cutting=settings["corner_cutting"],
-        moves=settings["moves"],
-        device=device,
+    config = RobustnessConfig(
+        **settings,
+        **option_values(args, "planner", "weights", "seed", "max_obstacles", "objective", "budget", "radius", "edit"),
+        **option_values(args, "harm_tolerance", "harm_rtol"),
+        strategies=strategies,
     )
-    if args.db is not None:  # a database that will be refused is refused now, not after the benchmark
-        from vinadv.store import Store
-
-        with Store.open(args.db):
-            pass
-    if args.maps is None:
-        maps = benchmark_maps(settings["n"], settings["size"], seed=args.seed, moves=settings["moves"])
-        source = None
-    else:
-        from vinadv.grid.mapset import MapSet
-
-        maps = MapSet.load(args.maps).take(slice(0, settings["n"]))
-        source = {"maps": settings["maps"], "maps_sha256": settings["maps_sha256"]}
-    result = robustness(
-        planner,
-        maps,
-        strategies,
-        args.max_obstacles,
-        **option_values(args, "objective", "seed", "budget", "radius", "edit"),
-        **harm_tolerances(args),
-        progress=shows_progress(args),
-        maps_source=source,
-    )
+    result = run(config, db=args.db, device=device, progress=shows_progress(args))
     out = result.to_dict()
-    if args.db is not None:
-        out["id"] = save_robustness(result, args.db)
+    if result.id is not None:
+        out["id"] = result.id
     if args.report:
         from vinadv.report.build import robustness_report
 

@@ -5,13 +5,14 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.cluster import ClusterIdentify, ClusterShards, add_cluster_arguments, open_cluster
 from vinadv.commands import (
     LazyChoices,
+    add_cluster_arguments,
     add_corner_cutting_argument,
     add_db_argument,
     add_moves_argument,
     add_planner_arguments,
+    open_args_executor,
     option_values,
     planner_device,
 )
@@ -88,7 +89,7 @@ def add_classifier_argument(parser) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from vinadv.pipeline import RunConfig, run_pipeline  # scikit-learn behind it: imported for this command only
+    from vinadv.pipeline import RunConfig, run  # scikit-learn behind it: imported for this command only
 
     if args.no_evaluate and not args.report:
         raise InputError("--no-evaluate: only with --report DIR")
@@ -101,17 +102,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         ),
         planner=args.planner or "vin",
     )
-    with open_cluster(args.cluster, args.workers) as client:
-        summary = run_pipeline(
+    with open_args_executor(args) as executor:
+        summary = run(
             config,
+            executor,
             **option_values(args, "db", "name", "resume"),
             progress=shows_progress(args),
             device=device,
-            **_cluster_options(client),
         )
     result = summary.to_dict()
     if args.report:
-        from vinadv.evaluation import evaluate_for_report
+        from vinadv.evaluation import evaluate_for_report  # noqa: PLC0415 (its stage is heavy: only with --report)
         from vinadv.report import build_report
         from vinadv.store import Store
 
@@ -166,13 +167,6 @@ def maps_settings(args: argparse.Namespace, n: int = 5000, size: int = 28) -> di
     return maps_file_config(args.maps, args.n)
 
 
-def _cluster_options(client) -> dict:
-    """`run_pipeline`'s keyword arguments for computing on `client` (none: in this process)."""
-    if client is None:
-        return {}
-    return {"shard_results": ClusterShards(client)}
-
-
 def _print_run(result: dict) -> None:
     from vinadv.pipeline import STAGES
 
@@ -205,17 +199,16 @@ def _print_run(result: dict) -> None:
 def cmd_identify(args: argparse.Namespace) -> int:
     from vinadv.identify import identify_and_store
 
-    remote = None
-    if args.cluster is not None or args.workers is not None:
-        remote = ClusterIdentify(args.cluster, args.workers, shard_size=args.shard_size, progress=shows_progress(args))
-    done = identify_and_store(
-        args.pairs,
-        args.db,
-        **option_values(args, "classifier", "planner", "weights", "name"),
-        **harm_tolerances(args),
-        remote=remote,
-        device=planner_device(args),
-    )
+    device = planner_device(args)
+    with open_args_executor(args) as executor:
+        done = identify_and_store(
+            args.pairs,
+            args.db,
+            **option_values(args, "classifier", "planner", "weights", "name", "shard_size"),
+            **harm_tolerances(args),
+            executor=executor,
+            device=device,
+        )
     ident = done.identification
     summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds, harm_table=ident.harm_table())
     summary.update(run_id=done.run_id, adversarial=int(ident.attack.sum()))

@@ -1,0 +1,71 @@
+"""`vinadv bench run` as a job: `BenchConfig` (a suite by name, the planner by its spec), `run(config, executor)`
+and `BenchResult` (the entry, `to_dict()`; `vinadv.bench.entry`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from vinadv.bench.entry import entry_json, run_bench
+from vinadv.bench.suites import Suite, get_suite
+from vinadv.executor import LOCAL, Executor
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """What determines a bench entry: the suite (`vinadv.bench.suites`, by name), the planner's spec and weights,
+    and the folder of a data suite's files (`data`); checked when made (an unknown suite: InputError naming it)."""
+
+    suite: str
+    planner: str | None = None
+    weights: str | None = None
+    data: str | None = None
+
+    def __post_init__(self):
+        get_suite(self.suite)
+
+    @property
+    def frozen_suite(self) -> Suite:
+        return get_suite(self.suite)
+
+
+@dataclass
+class BenchResult:
+    """A bench entry (`vinadv.bench.entry.make_entry`)."""
+
+    entry: dict
+
+    def to_dict(self) -> dict:
+        return self.entry
+
+    def json(self) -> str:
+        """The entry as written (`entry_json`)."""
+        return entry_json(self.entry)
+
+
+def run(
+    config: BenchConfig,
+    executor: Executor = LOCAL,
+    *,
+    db: str | None = None,
+    resume: bool = False,
+    progress: bool = False,
+    device: str | None = None,
+) -> BenchResult:
+    """The entry of the planner of `config` on its suite (`run_bench`), its chunks computed on `executor`; with `db`
+    each chunk stored when done, with `resume` the stored ones read. `device`: where the planner's forward runs."""
+    from vinadv.errors import InputError  # noqa: PLC0415 (light; beside the planners' import)
+    from vinadv.planners.registry import PlannerRef, load_planner  # noqa: PLC0415 (loaded when a job runs)
+
+    if resume and db is None:
+        raise InputError("resume: only with db", "resume", "db")
+    suite = config.frozen_suite
+    planner = load_planner(config.planner, suite.size, weights=config.weights, device=device, moves=suite.movement())
+    # every suite's maps cut corners (the generator's default, the MP layout's)
+    ref = PlannerRef.of(planner, config.planner, config.weights, corner_cutting=True) if executor.remote else None
+    entry = run_bench(
+        suite, planner, db=db, resume=resume, progress=progress, data=config.data, executor=executor, planner_ref=ref
+    )
+    return BenchResult(entry)
+
+
+__all__ = ["BenchConfig", "BenchResult", "run"]
