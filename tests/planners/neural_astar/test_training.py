@@ -135,5 +135,7 @@ def test_the_shipped_mpd5_model_is_registered_with_its_training_record():
     assert {d["path"].rsplit("/", 1)[-1] for d in record["data"]} == {
         f"{f}_train.npz" for f in ("alternating_gaps", "forest", "multiple_bugtraps", "shifting_gaps", "single_bugtrap")
     }
+    # its own file names the same planner (`resolve_choice`); any other file is refused
+    assert load_planner("neural-astar-mpd5", 32, weights=str(path), moves="moore").checksum == planner.checksum
     with pytest.raises(PlannerError, match="takes no weights file"):
-        load_planner("neural-astar-mpd5", 32, weights=str(path), moves="moore")
+        load_planner("neural-astar-mpd5", 32, weights=str(WEIGHTS_DIR / "neural_astar_mazes32.pt"), moves="moore")
