@@ -4,7 +4,7 @@
                                                      [--threads 1 2] [--json]
 
 One training step = forward over every cell of a batch of maps, the optimal-set loss, backward and an RMSprop step,
-as `vinadv gppn train` does it (`vinadv.planners.training.batch_loss`). Two ways of computing the same function:
+as `vinadv gppn train` does it (`vinadv.planners.imitation.batch_loss`). Two ways of computing the same function:
 1. plain: the straightforward code of the published model (`nn.LSTMCell` on `(B*N*N, l_h)` rows, the hidden state
    transposed back to `(B, l_h, N, N)` for the `l_h -> 1` convolution at every step);
 2. vinadv's `GPPN`: the state stays in rows; the convolution is one matrix product and f*f shifted sums.
@@ -25,7 +25,7 @@ from torch import nn
 from vinadv.grid import generate_maps
 from vinadv.planners.batching import set_torch_threads
 from vinadv.planners.gppn import GPPN, GPPNConfig, input_maps
-from vinadv.planners.training import batch_loss, optimal_action_bits
+from vinadv.planners.imitation import batch_loss, optimal_action_bits
 
 
 class PlainGPPN(nn.Module):

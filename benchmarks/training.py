@@ -20,7 +20,7 @@ import time
 import torch
 
 from vinadv.grid import generate_maps
-from vinadv.planners.training import bits_to_mask, optimal_action_bits, optimal_set_loss
+from vinadv.planners.imitation import bits_to_mask, optimal_action_bits, optimal_set_loss
 from vinadv.planners.vin import VIN, VINConfig, default_k, make_input, value_iteration
 from vinadv.planners.vin.weights import default_weights_path, load_vin
 

@@ -36,8 +36,8 @@ class WorkReached(BaseException):  # noqa: N818 - not an error: the command reac
 #: the work each command starts once its options passed, `module:attribute` (a function, or a class's method)
 WORK = (
     "vinadv.grid.generator:_generate_chunk",  # maps generate, robustness's maps, training maps
-    "vinadv.planners.training:train_vin",
-    "vinadv.planners.training:train_gppn",
+    "vinadv.planners.vin.training:train_vin",
+    "vinadv.planners.gppn.training:train_gppn",
     "vinadv.evaluation.protocols:evaluate_protocol",
     "vinadv.evaluation.protocols:gppn_protocol",
     "vinadv.evaluation.planner_metrics:evaluate_planner",

@@ -14,8 +14,10 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.hardening import AdversarialConfig, AdversarialMaps
-from vinadv.planners.training import TrainConfig, split_indices, train_vin
+from vinadv.planners.harness import split_indices
+from vinadv.planners.imitation import TrainConfig
 from vinadv.planners.vin.engine import plan_batch
+from vinadv.planners.vin.training import train_vin
 from vinadv.testing.planners import planning_vin
 
 SIZE = 8

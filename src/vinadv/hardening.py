@@ -6,7 +6,7 @@ Before every epoch (from `start_epoch` on), `AdversarialMaps`:
    default, exhaustive search ranked by harm, finds each map's worst single obstacle),
 3. keeps the adversarial maps of the *harmful* pairs (`vinadv.classify.harm`: unreached, or a path that got worse
    than optimal by more than on the original map) — a fork onto another optimal route is not something to unlearn,
-4. and hands them to `vinadv.planners.training.train_model`, which adds them to the training maps with their own
+4. and hands them to `vinadv.planners.imitation.train_model`, which adds them to the training maps with their own
    Dijkstra supervision (every free cell, the set of optimal actions) for that epoch and the rest.
 
 What each round found is kept in the training record (`augment_rounds`), the added maps in the checkpoint.

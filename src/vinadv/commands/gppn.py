@@ -93,7 +93,7 @@ def register(subparsers) -> None:
 
 def cmd_gppn_train(args: argparse.Namespace) -> int:
     from vinadv.planners.gppn import save_gppn
-    from vinadv.planners.training import train_gppn
+    from vinadv.planners.gppn.training import train_gppn
 
     config = train_config(args, planner="gppn", l_h=args.l_h, kernel=args.kernel, compile=args.compile)
     return run_training(args, config, train_gppn, save_gppn)

@@ -244,9 +244,9 @@ def _joined_maps(paths: list[str]):
 
 def cmd_train(args: argparse.Namespace) -> int:
 
+    from vinadv.planners.harness import split_indices
     from vinadv.planners.neural_astar.model import save_neural_astar
     from vinadv.planners.neural_astar.training import NeuralAstarTrainConfig, train_neural_astar
-    from vinadv.planners.training import split_indices
 
     set_threads(args.threads)
     device = planner_device(args) or "cpu"

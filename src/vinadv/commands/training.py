@@ -20,7 +20,7 @@ from vinadv.planners.records import TrainingRecord
 from vinadv.planners.weights import weights_checksum
 
 if TYPE_CHECKING:  # PyTorch behind it: imported by the command that trains
-    from vinadv.planners.training import TrainConfig
+    from vinadv.planners.imitation import TrainConfig
 
 
 def add_train_arguments(train: argparse.ArgumentParser, lr: float, k_help: str) -> None:
@@ -121,7 +121,7 @@ def add_compile_argument(train: argparse.ArgumentParser) -> None:
 
 def train_config(args: argparse.Namespace, **extra: Any) -> TrainConfig:
     """The `TrainConfig` of a `train` command's shared options (`add_train_arguments`), plus `extra` fields."""
-    from vinadv.planners.training import TrainConfig
+    from vinadv.planners.imitation import TrainConfig
 
     config = TrainConfig(
         **option_values(args, "epochs", "lr", "batch_size", "val_fraction", "seed", "device", "k", "init"),

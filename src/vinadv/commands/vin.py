@@ -63,7 +63,7 @@ def register(subparsers) -> None:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from vinadv.planners.training import train_vin
+    from vinadv.planners.vin.training import train_vin
     from vinadv.planners.vin.weights import save_vin
 
     return run_training(args, train_config(args, vi_init=args.vi_init), train_vin, save_vin)

@@ -1,6 +1,6 @@
 """The dicts the planners hand to other modules and write as JSON, named: a planner's evaluation figures
 (`PlannerMetrics`, from `vinadv.evaluation.planner_metrics`) and the record of a training (`TrainingRecord`, from
-`vinadv.planners.training`, kept inside the weights file and beside it).
+`vinadv.planners.imitation`, kept inside the weights file and beside it).
 
 TypedDicts, so they stay plain dicts (`json.dumps` takes them as they are); the classes name the keys that other
 modules read. Nothing here imports PyTorch.

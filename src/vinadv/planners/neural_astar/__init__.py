@@ -8,4 +8,6 @@ public repository (omron-sinicx/neural-astar, branch minimal, src/neural_astar/p
 - `checkpoint`: the authors' Lightning checkpoint read with the allow-list reader and checked key by key.
 - `planner`: `NeuralAstarPlanner`, a search planner with an exact mode (the encoder's guidance cost map searched
   by the compiled best-first search of `vinadv.planners.classical.astar`) and the differentiable mode.
+- `training`: `train_neural_astar`, the authors' training (their loss, settings and model selection) in the
+  training harness (`vinadv.planners.harness`).
 """

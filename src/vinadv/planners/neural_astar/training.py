@@ -21,9 +21,10 @@
   ties (`vinadv neural-astar compare-modes`).
 - Model selection: the epoch of the highest validation h_mean (the authors' `ModelCheckpoint(monitor=
   "metrics/h_mean", mode="max")`; the first on ties), whose weights are returned.
-- A checkpoint after every epoch (model, optimiser, best weights, figures): a killed run resumed with the same
-  settings ends with the same weights as one not interrupted (the shuffles and starts are seeded by epoch, and
-  nothing else in training draws random numbers).
+- The run is the training harness's (`vinadv.planners.harness`): a checkpoint after every epoch (model, optimiser,
+  best weights, figures); a killed or time-limited run resumed with the same settings ends with the same weights as
+  one not interrupted (the shuffles and starts are seeded by epoch, and nothing else in training draws random
+  numbers).
 """
 
 from __future__ import annotations
@@ -34,25 +35,25 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
-from tqdm import tqdm
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.paths import path_costs
 from vinadv.planners.classical.astar import AStarPlanner
 from vinadv.planners.device import resolve_device
+from vinadv.planners.harness import CheckpointKind, TrainingRun, TrainingState, hardware_info
 from vinadv.planners.neural_astar.differentiable import differentiable_astar
 from vinadv.planners.neural_astar.model import NeuralAstar, NeuralAstarConfig
 from vinadv.planners.neural_astar.planner import MOVES, NeuralAstarPlanner
-from vinadv.planners.training import hardware_info, read_training_checkpoint, restore_training, save_training_checkpoint
 
 __all__ = [
     "CHECKPOINT_FORMAT",
+    "CHECKPOINT_KIND",
     "RECORD_FORMAT",
+    "NeuralAstarState",
     "NeuralAstarTrainConfig",
     "history_loss",
     "optimal_path_maps",
@@ -177,35 +178,18 @@ def _epoch_rows(maps: MapSet, seed: int, epoch: int) -> np.ndarray:
 
 
 @dataclass
-class _State:
-    epoch: int
-    wall_s: float
-    epochs: list
-    best: dict | None  # {"epoch", "h_mean", ...} of the best epoch so far
-    best_state: dict | None
+class NeuralAstarState(TrainingState):
+    """The harness's state plus the best epoch so far: its record entry (`epoch`, `val_h_mean` ...) and weights."""
+
+    best: dict | None = None
+    best_state: dict | None = None
 
 
-def _save_checkpoint(path, model, optimizer, config, state: _State, data_sha256) -> None:
-    # every field of the state, as `_load_checkpoint` reads them back
-    save_training_checkpoint(path, CHECKPOINT_FORMAT, model.encoder, optimizer, config, data_sha256, **vars(state))
-
-
-#: settings a resumed run must share with its checkpoint (the epoch count and time limit may change)
-_SAME_ON_RESUME = ("lr", "batch_size", "tmax", "seed", "depth", "g_ratio")
-
-
-def _load_checkpoint(path, model, optimizer, config: NeuralAstarTrainConfig, data_sha256) -> _State:
-    ck = read_training_checkpoint(path, CHECKPOINT_FORMAT, "Neural A*", config.to_dict(), _SAME_ON_RESUME)
-    if ck.get("data_sha256") != data_sha256:
-        raise InputError(f"{path}: checkpoint was made on other maps (checksums differ); remove it to start over")
-    restore_training(path, ck, model.encoder, optimizer)
-    return _State(
-        epoch=int(ck["epoch"]),
-        wall_s=float(ck["wall_s"]),
-        epochs=list(ck["epochs"]),
-        best=ck.get("best"),
-        best_state=ck.get("best_state"),
-    )
+#: Neural A*'s checkpoints: the settings a resumed run must share with them (the epoch count and time limit may
+#: change)
+CHECKPOINT_KIND = CheckpointKind(
+    CHECKPOINT_FORMAT, "Neural A*", ("lr", "batch_size", "tmax", "seed", "depth", "g_ratio")
+)
 
 
 def train_neural_astar(
@@ -244,26 +228,29 @@ def train_neural_astar(
     torch.manual_seed(config.seed)
     model = NeuralAstar(NeuralAstarConfig(depth=config.depth, g_ratio=config.g_ratio)).to(device)
     optimizer = torch.optim.RMSprop(model.parameters(), lr=config.lr)
-    state = _State(epoch=0, wall_s=0.0, epochs=[], best=None, best_state=None)
-    if resume and checkpoint is not None and Path(checkpoint).exists():
-        state = _load_checkpoint(checkpoint, model, optimizer, config, data_sha256)
-        if log:
-            log(f"resumed from {checkpoint} after epoch {state.epoch}")
+    # the checkpoint keeps the encoder's weights (the search has none)
+    run = TrainingRun(
+        CHECKPOINT_KIND,
+        config,
+        model.encoder,
+        optimizer,
+        NeuralAstarState(),
+        checkpoint=checkpoint,
+        resume=resume,
+        data_sha256=data_sha256,
+        progress=progress,
+        log=log,
+    )
+    state: NeuralAstarState = run.state
     val_starts = val_maps.starts[:, 0]
     val_astar = AStarPlanner(val_maps.size, MOVES).plan_paths(val_maps.obstacles, val_starts, val_maps.goals, True)
     obstacles = torch.from_numpy(train_maps.obstacles.astype(np.float32))
-    started = time.time() - state.wall_s
-    stopped = None
-    n_batches = math.ceil(len(train_maps) / config.batch_size)
-    for epoch in range(state.epoch, config.epochs):
+    for epoch in run.epochs():
         t0 = time.time()
         rows = _epoch_rows(train_maps, config.seed, epoch)
         model.train()
         loss_sum = 0.0
-        bar = None
-        if progress:
-            bar = tqdm(total=n_batches, unit="batch", desc=f"epoch {epoch + 1}/{config.epochs}", leave=False)
-        for i in range(0, len(rows), config.batch_size):
+        for i in run.progress(range(0, len(rows), config.batch_size), epoch):
             batch = rows[i : i + config.batch_size]
             index = batch // train_maps.n_starts
             obs = obstacles[index].to(device)
@@ -279,14 +266,9 @@ def train_neural_astar(
             loss.backward()
             optimizer.step()
             loss_sum += loss.item() * len(batch)
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix(loss=f"{loss.item():.4f}")
-        if bar is not None:
-            bar.close()
+            run.postfix(loss=f"{loss.item():.4f}")
         figures = validation_figures(model, val_maps, config.batch_size, device, val_astar.expansions)
-        state.epoch = epoch + 1
-        state.wall_s = time.time() - started
+        wall_s = run.clock(epoch)
         entry = {
             "epoch": epoch + 1,
             "train_loss": loss_sum / len(rows),
@@ -294,24 +276,17 @@ def train_neural_astar(
             "val_p_exp": figures["p_exp"],
             "val_h_mean": figures["h_mean"],
             "epoch_s": round(time.time() - t0, 2),
-            "wall_s": round(state.wall_s, 2),
+            "wall_s": round(wall_s, 2),
         }
-        state.epochs.append(entry)
         if state.best is None or figures["h_mean"] > state.best["val_h_mean"]:
             state.best = dict(entry)
             state.best_state = {k: v.detach().cpu().clone() for k, v in model.encoder.state_dict().items()}
-        if log:
-            log(
-                f"epoch {epoch + 1}/{config.epochs}: loss {entry['train_loss']:.5f}, val Opt {figures['p_opt']:.3f} "
-                f"Exp {figures['p_exp']:.3f} Hmean {figures['h_mean']:.3f} ({entry['epoch_s']:.0f} s)"
-                + (" best" if state.best["epoch"] == epoch + 1 else "")
-            )
-        if checkpoint is not None:
-            _save_checkpoint(checkpoint, model, optimizer, config, state, data_sha256)
-        past_limit = config.time_limit_min is not None and state.wall_s > 60 * config.time_limit_min
-        if past_limit and state.epoch < config.epochs:
-            stopped = f"time limit of {config.time_limit_min} min reached after epoch {state.epoch}"
-            break
+        run.close_epoch(
+            entry,
+            f"epoch {epoch + 1}/{config.epochs}: loss {entry['train_loss']:.5f}, val Opt {figures['p_opt']:.3f} "
+            f"Exp {figures['p_exp']:.3f} Hmean {figures['h_mean']:.3f} ({entry['epoch_s']:.0f} s)"
+            + (" best" if state.best["epoch"] == epoch + 1 else ""),
+        )
     best = copy.deepcopy(model).cpu()
     if state.best_state is not None:
         best.encoder.load_state_dict(state.best_state)
@@ -336,6 +311,6 @@ def train_neural_astar(
         "best_epoch": None if state.best is None else state.best["epoch"],
         "best": state.best,
         "wall_time_s": round(state.wall_s, 1),
-        "stopped_early": stopped,
+        "stopped_early": run.stopped,
     }
     return best, rec

@@ -7,6 +7,7 @@ iteration.
 - `engine`: the batched planning engine (`plan_maps`, `plan_batch`, `action_maps`), the reference's paths exactly;
 - `value_iteration`: the k-step loop as one compiled autograd function, for training on CPU;
 - `flat`: the flat zero-padded map layout of the engine's and the near-tie replay's kernels.
+- `training`: `train_vin`, the VIN's training entry (the imitation loop, `vinadv.planners.imitation`).
 
 Importing this package loads no PyTorch (the engine plans without it): the names of `model` are imported from it
 at their first use.

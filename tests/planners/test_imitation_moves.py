@@ -16,9 +16,11 @@ from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.planners.gppn import save_gppn
+from vinadv.planners.gppn.training import train_gppn
+from vinadv.planners.imitation import TrainConfig, bits_to_mask, optimal_action_bits
 from vinadv.planners.padding import pad_actions
 from vinadv.planners.registry import load_planner
-from vinadv.planners.training import TrainConfig, bits_to_mask, optimal_action_bits, train_gppn, train_vin
+from vinadv.planners.vin.training import train_vin
 from vinadv.planners.vin.weights import save_vin
 from vinadv.planners.weights import trained_moves
 

@@ -1,67 +1,23 @@
-"""Training: the optimal-set loss against brute force, targets against the oracle, a tiny run, resume, the CLI."""
+"""The VIN's training entry (`vinadv.planners.vin.training.train_vin`): a tiny run, resume, `--init`, the
+shift-initialised kernels, the CLI."""
 
 import json
-import math
 
 import numpy as np
 import pytest
 import torch
 
-from tests.grid.oracle import DELTAS, optimal_action_mask
+from tests.grid.oracle import DELTAS
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
-from vinadv.planners.training import (
-    TrainConfig,
-    bits_to_mask,
-    evaluate_loss,
-    optimal_action_bits,
-    optimal_set_loss,
-    split_indices,
-    train_vin,
-)
+from vinadv.planners.imitation import TrainConfig, evaluate_loss, optimal_action_bits
 from vinadv.planners.vin import VIN, VINConfig, init_shift_kernels
+from vinadv.planners.vin.training import train_vin
 from vinadv.planners.vin.weights import load_vin, save_vin
 from vinadv.planners.weights import weights_checksum
 
 pytestmark = pytest.mark.slow
-
-
-def test_optimal_set_loss_matches_brute_force():
-    rng = np.random.default_rng(0)
-    logits = rng.normal(scale=3.0, size=(50, 8))
-    mask = rng.random((50, 8)) < 0.3
-    mask[np.arange(50), rng.integers(0, 8, 50)] = True  # at least one optimal action per row
-    expected = []
-    for row, opt in zip(logits, mask):
-        total = sum(math.exp(v) for v in row)
-        expected.append(-math.log(sum(math.exp(v) for v, o in zip(row, opt) if o) / total))
-    got = optimal_set_loss(torch.tensor(logits), torch.tensor(mask))
-    assert float(got) == pytest.approx(np.mean(expected), rel=1e-9)
-    # one optimal action: plain cross-entropy
-    single = np.zeros((50, 8), dtype=bool)
-    single[np.arange(50), np.argmax(logits, axis=1)] = True
-    ce = torch.nn.functional.cross_entropy(torch.tensor(logits), torch.tensor(np.argmax(logits, axis=1)))
-    assert float(optimal_set_loss(torch.tensor(logits), torch.tensor(single))) == pytest.approx(float(ce))
-
-
-def test_optimal_action_bits_match_the_brute_force_oracle():
-    maps = generate_maps(4, 8, seed=2, n_starts=1)
-    bits = optimal_action_bits(maps)
-    mask = bits_to_mask(torch.from_numpy(bits)).numpy()
-    for i in range(len(maps)):
-        want = optimal_action_mask(maps.obstacles[i].tolist(), tuple(maps.goals[i]))
-        np.testing.assert_array_equal(mask[i], np.array(want), err_msg=f"map {i}")
-
-
-def test_split_is_disjoint_and_seeded():
-    train, val = split_indices(100, 0.1, seed=3)
-    assert len(val) == 10 and len(train) == 90 and not set(train) & set(val)
-    assert set(train) | set(val) == set(range(100))
-    np.testing.assert_array_equal(split_indices(100, 0.1, seed=3)[1], val)
-    with pytest.raises(InputError):
-        split_indices(1, 0.5, seed=0)
-
 
 TINY = dict(epochs=2, lr=0.01, batch_size=8, val_fraction=0.25, seed=1, l_h=8, l_q=8)
 
@@ -192,17 +148,3 @@ def test_shift_initialised_training_learns_the_recursion():
         assert record["train_config"]["vi_init"] == vi_init
         accuracy[vi_init] = record["epochs"][-1]["val_action_accuracy"]
     assert accuracy["shift"] > 0.92 and accuracy["shift"] > accuracy["default"] + 0.05, accuracy
-
-
-@pytest.mark.parametrize(
-    ("fields", "names"),
-    [
-        ({"vi_init": "identity"}, ("vi_init",)),
-        ({"vi_init": "shift", "planner": "gppn"}, ("vi_init",)),
-        ({"vi_init": "shift", "init": "w.pt"}, ("vi_init", "init")),
-    ],
-)
-def test_vi_init_is_checked(fields, names):
-    with pytest.raises(InputError) as err:
-        TrainConfig(**fields).validate()
-    assert err.value.parameters == names

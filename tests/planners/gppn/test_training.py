@@ -1,4 +1,5 @@
-"""GPPN training through the generic trainer: it learns, resumes, refuses another planner's checkpoint; the CLI."""
+"""The GPPN's training entry (`vinadv.planners.gppn.training`) through the imitation loop: it learns, resumes,
+refuses another planner's checkpoint; the CLI."""
 
 import json
 
@@ -6,19 +7,15 @@ import numpy as np
 import pytest
 import torch
 
-import vinadv.planners.training as training
+import vinadv.planners.imitation as imitation
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.planners.gppn import GPPN, GPPNConfig, load_gppn, save_gppn
-from vinadv.planners.training import (
-    TrainConfig,
-    evaluate_loss,
-    optimal_action_bits,
-    split_indices,
-    train_gppn,
-    train_vin,
-)
+from vinadv.planners.gppn.training import train_gppn
+from vinadv.planners.harness import split_indices
+from vinadv.planners.imitation import TrainConfig, evaluate_loss, optimal_action_bits
+from vinadv.planners.vin.training import train_vin
 from vinadv.planners.weights import weights_checksum
 
 pytestmark = pytest.mark.slow
@@ -140,7 +137,7 @@ def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatc
         planner="gppn", epochs=2, lr=0.01, batch_size=8, k=4, l_h=4, kernel=3, seed=2, checkpoint_min=1e-9
     )  # a checkpoint after every batch
     whole, whole_rec = train_gppn(maps, config, checkpoint=tmp_path / "a.ckpt", progress=False)
-    real, calls = training.batch_loss, []
+    real, calls = imitation.batch_loss, []
 
     def dies_in_epoch_two(*args):
         calls.append(1)
@@ -148,10 +145,10 @@ def test_a_run_killed_mid_epoch_resumes_to_the_same_weights(tmp_path, monkeypatc
             raise KeyboardInterrupt
         return real(*args)
 
-    monkeypatch.setattr(training, "batch_loss", dies_in_epoch_two)
+    monkeypatch.setattr(imitation, "batch_loss", dies_in_epoch_two)
     with pytest.raises(KeyboardInterrupt):
         train_gppn(maps, config, checkpoint=tmp_path / "b.ckpt", progress=False)
-    monkeypatch.setattr(training, "batch_loss", real)
+    monkeypatch.setattr(imitation, "batch_loss", real)
     ck = torch.load(tmp_path / "b.ckpt", weights_only=True)
     assert ck["epoch"] == 1 and ck["step"] == 7
     resumed, rec = train_gppn(maps, config, checkpoint=tmp_path / "b.ckpt", resume=True, progress=False)

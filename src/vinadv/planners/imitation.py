@@ -1,5 +1,6 @@
-"""Training a whole-map planner (the VIN, the GPPN, any torch planner) on a maps file: every free cell of every map
-is a supervised state.
+"""The imitation loop of the whole-map planners (the VIN, the GPPN, any torch planner with the planner contract),
+shared by their training entries (`vinadv.planners.vin.training.train_vin`,
+`vinadv.planners.gppn.training.train_gppn`): on a maps file, every free cell of every map is a supervised state.
 
 The policy depends only on the map, so one forward pass per map gives the logits of all its cells at once.
 Dijkstra gives the set of optimal actions at every cell that can reach the goal; where several actions are
@@ -8,37 +9,33 @@ optimal any is right, so the loss is the negative log of the probability mass on
 
 Optimiser: RMSprop (as the original VIN and the common PyTorch ports, eps 1e-6) with a cosine learning-rate
 schedule, gradient-norm clipping (value iteration through max can spike the gradient). The last `val_fraction`
-of the maps (after a seeded shuffle) is held out. After each epoch, and every `checkpoint_min` minutes within one,
-a checkpoint (model, optimiser, record, position) is written, so a killed run resumes where it stopped.
+of the maps (after a seeded shuffle) is held out. The run is the training harness's (`vinadv.planners.harness`):
+after each epoch, and every `checkpoint_min` minutes within one, a checkpoint (model, optimiser, position) is
+written, so a killed or time-limited run resumes where it stopped.
 """
 
 from __future__ import annotations
 
 import math
 import os
-import platform
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 import torch
-from tqdm import tqdm
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES, MoveModel, move_model
 from vinadv.grid.shortest_paths import optimal_actions, shortest_distances
-from vinadv.outfile import atomic_output
 from vinadv.planners.device import resolve_device
-from vinadv.planners.gppn import GPPN, MAX_KERNEL, MAX_WIDTH, GPPNConfig, load_gppn
+from vinadv.planners.gppn.model import MAX_KERNEL, MAX_WIDTH
+from vinadv.planners.harness import CheckpointKind, TrainingRun, TrainingState, hardware_info, split_indices
 from vinadv.planners.records import EpochRecord, TrainingRecord
 from vinadv.planners.vin import value_iteration
-from vinadv.planners.vin.arrays import VINConfig, default_k
-from vinadv.planners.vin.model import VI_INITS, VIN, init_shift_kernels, make_input
-from vinadv.planners.vin.weights import load_vin
-from vinadv.planners.weights import torch_load, trained_moves, weights_checksum
+from vinadv.planners.vin.model import VI_INITS, VIN, make_input
+from vinadv.planners.weights import trained_moves, weights_checksum
 
 CHECKPOINT_FORMAT = "vinadv.vin-checkpoint/1"
 _BITS = 1 << np.arange(8, dtype=np.uint16)
@@ -116,6 +113,44 @@ class TrainConfig:
         return asdict(self)
 
 
+@dataclass
+class ImitationState(TrainingState):
+    """The harness's state plus the imitation loop's: optimizer steps taken, the unfinished epoch's sums (a checkpoint
+    inside an epoch), the maps `augment` added and what each call said."""
+
+    step: int = 0
+    partial: list = field(default_factory=lambda: [0.0, 0, 0])  # loss, cells, correct of the unfinished epoch
+    added_obstacles: np.ndarray | None = None
+    added_goals: np.ndarray | None = None
+    augment_rounds: list = field(default_factory=list)
+
+    def position(self) -> str:
+        return f"epoch {self.epoch}, step {self.step}"
+
+
+#: the VIN's and GPPN's checkpoints: the settings a resumed run must share with its checkpoint (a checkpoint older
+#: than a setting holds its default)
+CHECKPOINT_KIND = CheckpointKind(
+    CHECKPOINT_FORMAT,
+    "vinadv",
+    (
+        "planner",
+        "lr",
+        "lr_final_fraction",
+        "batch_size",
+        "val_fraction",
+        "seed",
+        "k",
+        "l_h",
+        "l_q",
+        "kernel",
+        "epochs",
+        "adversarial",
+    ),
+    TrainConfig().to_dict(),
+)
+
+
 def optimal_action_bits(maps: MapSet) -> np.ndarray:
     """Optimal actions of every cell of `maps` under their movement model, as a bit mask: see `action_bits`."""
     return action_bits(maps.obstacles, maps.goals, maps.corner_cutting, maps.moves)
@@ -186,50 +221,6 @@ def batch_loss(
     return loss, int(supervised.sum()), int(correct)
 
 
-def split_indices(n: int, val_fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """Seeded shuffle of `range(n)`, then `(train, val)`: the last `round(n * val_fraction)` (>= 1 if > 0) held out."""
-    order = np.random.default_rng([seed, 0x5EED]).permutation(n)
-    n_val = 0 if val_fraction <= 0 else max(1, int(round(n * val_fraction)))
-    if n - n_val < 1:
-        raise InputError(f"{n} maps are too few for a validation fraction of {val_fraction}")
-    return np.sort(order[: n - n_val]), np.sort(order[n - n_val :])
-
-
-def hardware_info(device: torch.device) -> dict:
-    info = {
-        "device": str(device),
-        "platform": platform.platform(),
-        "processor": platform.processor() or platform.machine(),
-        "cpu_count": os.cpu_count(),
-        "torch_threads": torch.get_num_threads(),
-        "torch": str(torch.__version__),
-    }
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    info["cpu_model"] = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    if device.type == "cuda":
-        info["gpu"] = torch.cuda.get_device_name(device)
-    return info
-
-
-@dataclass
-class _State:
-    epoch: int = 0
-    step: int = 0
-    wall_s: float = 0.0
-    epochs: list[EpochRecord] = field(default_factory=list)
-    partial: list = field(default_factory=lambda: [0.0, 0, 0])  # loss, cells, correct of the unfinished epoch
-    # maps added by `augment` (obstacles, goals) and what each call said
-    added_obstacles: np.ndarray | None = None
-    added_goals: np.ndarray | None = None
-    augment_rounds: list = field(default_factory=list)
-
-
 def evaluate_loss(
     model: torch.nn.Module, maps: MapSet, bits: np.ndarray, idx: np.ndarray, batch_size: int, device: torch.device
 ) -> dict:
@@ -246,45 +237,7 @@ def evaluate_loss(
     return {"loss": total_loss / max(cells, 1), "action_accuracy": correct / max(cells, 1), "cells": cells}
 
 
-def train_vin(maps: MapSet, config: TrainConfig, **options) -> tuple[VIN, TrainingRecord]:
-    """Train a VIN on `maps`; `options` and the result as `train_model`'s (the model on the CPU, in eval mode, and
-    the training record). `config.init` names a VIN weights file to start from."""
-    config.validate()
-    torch.manual_seed(config.seed)
-    n_actions = move_model(maps.moves).n_actions  # the maps' moves: 8, or 4 on `news`
-    vin_config = VINConfig(k=config.k or default_k(maps.size), l_h=config.l_h, l_q=config.l_q, n_actions=n_actions)
-    model = VIN(vin_config)
-    if config.vi_init == "shift":
-        init_shift_kernels(model)
-    record = options.get("record")
-    if config.init:
-        # at the file's own k, so that the record keeps it (`init_k`) where this training's differs
-        start = load_vin(config.init, size=maps.size)
-        record = _start_from(model, start, config.init, record, maps.moves)
-    cpu = resolve_device(config.device).type == "cpu"
-    options["record"] = {
-        **(record or {}),
-        "value_iteration": "compiled (vinadv.planners.vin.value_iteration)" if cpu else "torch",
-    }
-    return train_model(model, maps, config, vin_config.to_dict(), **options)
-
-
-def train_gppn(maps: MapSet, config: TrainConfig, **options) -> tuple[GPPN, TrainingRecord]:
-    """Train a GPPN (`config.k` iterations, width `config.l_h`, kernel `config.kernel`) on `maps`; `options` and the
-    result as `train_model`'s. `config.init` names a GPPN weights file to start from."""
-    config.validate()
-    torch.manual_seed(config.seed)
-    n_actions = move_model(maps.moves).n_actions  # the maps' moves: 8, or 4 on `news`
-    gppn_config = GPPNConfig(k=config.k or default_k(maps.size), l_h=config.l_h, f=config.kernel, n_actions=n_actions)
-    model = GPPN(gppn_config)
-    if config.init:
-        options["record"] = _start_from(
-            model, load_gppn(config.init, size=maps.size), config.init, options.get("record"), maps.moves
-        )
-    return train_model(model, maps, config, gppn_config.to_dict(), **options)
-
-
-def _start_from(
+def start_from(
     model: torch.nn.Module, start: torch.nn.Module, path, record: TrainingRecord | None, moves: str = DEFAULT_MOVES
 ) -> TrainingRecord:
     """Load `start`'s weights (read from `path`, `--init`) into `model`; the record gains their checksum (and
@@ -347,7 +300,6 @@ def train_model(
     train_idx, val_idx = split_indices(len(maps), config.val_fraction, config.seed)
     steps_per_epoch = math.ceil(len(train_idx) / config.batch_size)
     total_steps = steps_per_epoch * config.epochs
-    state = _State()
     rec: TrainingRecord = dict(record or {})
     rec.update(
         format=f"vinadv.{config.planner}-training-record/1",
@@ -366,10 +318,20 @@ def train_model(
         loss="-log sum_{a optimal} softmax(logits)_a, mean over free reachable non-goal cells",
         optimizer="RMSprop(eps=1e-6), cosine lr schedule per step, grad-norm clipping",
     )
-    if resume and checkpoint is not None and Path(checkpoint).exists():
-        state = _load_checkpoint(checkpoint, model, optimizer, config, rec)
-        if log:
-            log(f"resumed from {checkpoint} after epoch {state.epoch}, step {state.step}")
+    run = TrainingRun(
+        CHECKPOINT_KIND,
+        config,
+        model,
+        optimizer,
+        ImitationState(),
+        checkpoint=checkpoint,
+        resume=resume,
+        data_sha256=rec.get("data", {}).get("sha256"),
+        progress=progress,
+        log=log,
+        every_min=config.checkpoint_min,
+    )
+    state: ImitationState = run.state
     # `forward` computes the logits; `model` keeps the parameters (the compiled wrapper shares them) and is saved
     forward = torch.compile(model) if config.compile else model
     bits = optimal_action_bits(maps)
@@ -379,10 +341,7 @@ def train_model(
         goals = np.concatenate([maps.goals, state.added_goals])
         added = action_bits(state.added_obstacles, state.added_goals, maps.corner_cutting, maps.moves)
         bits = np.concatenate([bits, added])
-    started = time.time() - state.wall_s
-    stopped = None
-    last_save = time.time()
-    for epoch in range(state.epoch, config.epochs):
+    for epoch in run.epochs():
         done = state.step - epoch * steps_per_epoch  # batches of this epoch done before a mid-epoch checkpoint
         if augment is not None and not done and len(state.augment_rounds) <= epoch:
             found = augment(model, epoch, train_idx)
@@ -405,17 +364,13 @@ def train_model(
                     **info,
                 }
             )
-            if log:
-                log(f"epoch {epoch + 1}: {state.augment_rounds[-1]}")
+            run.say(f"epoch {epoch + 1}: {state.augment_rounds[-1]}")
         model.train()
         pool = np.concatenate([train_idx, np.arange(len(maps), len(obstacles))])
         order = pool[np.random.default_rng([config.seed, epoch]).permutation(len(pool))][: len(train_idx)]
-        batches = range(done * config.batch_size, len(order), config.batch_size)
-        if progress:
-            batches = tqdm(batches, desc=f"epoch {epoch + 1}/{config.epochs}", unit="batch", leave=False)
         loss_sum, cell_sum, correct_sum = state.partial if done else (0.0, 0, 0)
         epoch_start = time.time()
-        for i in batches:
+        for i in run.progress(range(done * config.batch_size, len(order), config.batch_size), epoch):
             b = order[i : i + config.batch_size]
             lr = _lr_at(state.step, total_steps, config)
             for group in optimizer.param_groups:
@@ -430,17 +385,13 @@ def train_model(
             loss_sum += loss.item() * n
             cell_sum += n
             correct_sum += c
-            if progress:
-                batches.set_postfix(loss=f"{loss_sum / max(cell_sum, 1):.4f}", lr=f"{lr:.2g}")
-            due = config.checkpoint_min and time.time() - last_save > 60 * config.checkpoint_min
-            if checkpoint is not None and due:
-                state.partial, state.wall_s = [loss_sum, cell_sum, correct_sum], time.time() - started
-                _save_checkpoint(checkpoint, model, optimizer, config, state, rec)
-                last_save = time.time()
+            run.postfix(loss=f"{loss_sum / max(cell_sum, 1):.4f}", lr=f"{lr:.2g}")
+            if run.due():
+                state.partial, state.wall_s = [loss_sum, cell_sum, correct_sum], run.elapsed()
+                run.save()
         state.partial = [0.0, 0, 0]
         val = evaluate_loss(forward, maps, bits, val_idx, config.batch_size, device) if len(val_idx) else {}
-        state.epoch = epoch + 1
-        state.wall_s = time.time() - started
+        wall_s = run.clock(epoch)
         entry: EpochRecord = {
             "epoch": epoch + 1,
             "train_loss": loss_sum / max(cell_sum, 1),
@@ -449,30 +400,21 @@ def train_model(
             "val_action_accuracy": val.get("action_accuracy"),
             "lr_end": _lr_at(state.step - 1, total_steps, config),
             "epoch_s": round(time.time() - epoch_start, 2),
-            "wall_s": round(state.wall_s, 2),
+            "wall_s": round(wall_s, 2),
         }
-        state.epochs.append(entry)
-        if log:
-            log(
-                f"epoch {entry['epoch']}/{config.epochs}: train loss {entry['train_loss']:.4f} "
-                f"acc {entry['train_action_accuracy']:.4f}"
-                + (f", val loss {entry['val_loss']:.4f} acc {entry['val_action_accuracy']:.4f}" if val else "")
-                + f" ({entry['epoch_s']:.0f} s)"
-            )
-        if checkpoint is not None:
-            _save_checkpoint(checkpoint, model, optimizer, config, state, rec)
-        past_limit = config.time_limit_min is not None and state.wall_s > 60 * config.time_limit_min
-        if past_limit and state.epoch < config.epochs:
-            stopped = f"time limit of {config.time_limit_min} min reached after epoch {state.epoch}"
-            if log:
-                log(stopped)
-            break
+        run.close_epoch(
+            entry,
+            f"epoch {entry['epoch']}/{config.epochs}: train loss {entry['train_loss']:.4f} "
+            f"acc {entry['train_action_accuracy']:.4f}"
+            + (f", val loss {entry['val_loss']:.4f} acc {entry['val_action_accuracy']:.4f}" if val else "")
+            + f" ({entry['epoch_s']:.0f} s)",
+        )
     rec.update(
         epochs=state.epochs,
         epochs_done=state.epoch,
         wall_time_s=round(state.wall_s, 1),
         steps=state.step,
-        stopped_early=stopped,
+        stopped_early=run.stopped,
     )
     if augment is not None:
         rec.update(augment_rounds=state.augment_rounds, added_maps=len(obstacles) - len(maps))
@@ -485,123 +427,3 @@ def _lr_at(step: int, total: int, config: TrainConfig) -> float:
     warmup_steps = min(200, math.ceil(0.05 * total)) if config.warmup_steps is None else config.warmup_steps
     warmup = min(1.0, (step + 1) / warmup_steps) if warmup_steps else 1.0
     return warmup * config.lr * (f + (1 - f) * 0.5 * (1 + math.cos(math.pi * min(step, total) / max(total, 1))))
-
-
-def save_training_checkpoint(
-    path: str | os.PathLike,
-    checkpoint_format: str,
-    model: torch.nn.Module,
-    optimizer: torch.optim.Optimizer,
-    config,
-    data_sha256: str | None,
-    **position,
-) -> None:
-    """Write a trainer's checkpoint (atomically: a run killed while writing keeps the last one): its format, the
-    weights (on CPU), the optimiser, the settings (`config.to_dict()`), what identifies the training data, and the
-    trainer's own `position` fields (epoch, records ...)."""
-    with atomic_output(path, "wb", mkdir=True) as fh:
-        torch.save(
-            {
-                "format": checkpoint_format,
-                "model": {k: v.detach().cpu() for k, v in model.state_dict().items()},
-                "optimizer": optimizer.state_dict(),
-                "train_config": config.to_dict(),
-                "data_sha256": data_sha256,
-                **position,
-            },
-            fh,
-        )
-
-
-def read_training_checkpoint(
-    path: str | os.PathLike,
-    checkpoint_format: str,
-    trainer: str,
-    config: dict,
-    same_on_resume: Iterable[str],
-    defaults: dict | None = None,
-) -> dict:
-    """The checkpoint a run resumes from, refused (`InputError`) unless it is a `trainer` checkpoint of
-    `checkpoint_format` made with the same `same_on_resume` settings as `config` (a `to_dict()`): resuming under
-    other settings would silently mix two trainings. `defaults`: what a setting is in a checkpoint older than it."""
-    ck = torch_load(path, "readable training checkpoint")
-    if not isinstance(ck, dict) or ck.get("format") != checkpoint_format:
-        raise InputError(f"{path}: not a {trainer} training checkpoint (expected format {checkpoint_format!r})")
-    saved, defaults = dict(ck.get("train_config") or {}), defaults or {}
-    for key in same_on_resume:
-        if saved.get(key, defaults.get(key)) != config.get(key):
-            raise InputError(
-                f"{path}: checkpoint was made with {key}={saved.get(key)!r}, now {config.get(key)!r}; "
-                "use the same options to resume, or remove the checkpoint"
-            )
-    return ck
-
-
-def restore_training(
-    path: str | os.PathLike, ck: dict, model: torch.nn.Module, optimizer: torch.optim.Optimizer
-) -> None:
-    """Load the weights and the optimiser of checkpoint `ck` (read from `path`) into `model` and `optimizer`;
-    `InputError` when they do not fit."""
-    try:
-        model.load_state_dict(ck["model"])
-        optimizer.load_state_dict(ck["optimizer"])
-    except (RuntimeError, KeyError, ValueError) as exc:
-        raise InputError(f"{path}: checkpoint does not match the model ({str(exc).splitlines()[0]})") from None
-
-
-def _save_checkpoint(path, model, optimizer, config, state: _State, rec: TrainingRecord) -> None:
-    save_training_checkpoint(
-        path,
-        CHECKPOINT_FORMAT,
-        model,
-        optimizer,
-        config,
-        rec.get("data", {}).get("sha256"),
-        epoch=state.epoch,
-        step=state.step,
-        wall_s=state.wall_s,
-        epochs=state.epochs,
-        partial=state.partial,
-        augment_rounds=state.augment_rounds,
-        added_obstacles=None if state.added_obstacles is None else torch.from_numpy(state.added_obstacles),
-        added_goals=None if state.added_goals is None else torch.from_numpy(state.added_goals),
-    )
-
-
-#: settings a resumed run must share with its checkpoint
-_SAME_ON_RESUME = (
-    "planner",
-    "lr",
-    "lr_final_fraction",
-    "batch_size",
-    "val_fraction",
-    "seed",
-    "k",
-    "l_h",
-    "l_q",
-    "kernel",
-    "epochs",
-    "adversarial",
-)
-
-
-def _load_checkpoint(path, model, optimizer, config: TrainConfig, rec: TrainingRecord) -> _State:
-    # checkpoints older than a setting hold its default
-    ck = read_training_checkpoint(
-        path, CHECKPOINT_FORMAT, "vinadv", config.to_dict(), _SAME_ON_RESUME, TrainConfig().to_dict()
-    )
-    data_sha = rec.get("data", {}).get("sha256")
-    if data_sha is not None and ck.get("data_sha256") not in (None, data_sha):
-        raise InputError(f"{path}: checkpoint was made on other data (checksum differs); remove it to start over")
-    restore_training(path, ck, model, optimizer)
-    added_obs, added_goals = ck.get("added_obstacles"), ck.get("added_goals")
-    return _State(
-        epoch=int(ck["epoch"]),
-        step=int(ck["step"]),
-        wall_s=float(ck["wall_s"]),
-        epochs=list(ck["epochs"]),
-        partial=list(ck.get("partial", [0.0, 0, 0])),
-        added_obstacles=None if added_obs is None else added_obs.numpy(),
-        added_goals=None if added_goals is None else added_goals.numpy(),
-        augment_rounds=list(ck.get("augment_rounds", [])),
-    )
