@@ -160,7 +160,9 @@ def training_checkpoint(args: argparse.Namespace, out: Path) -> Path:
     `--resume` was not given."""
     checkpoint = out.with_name(out.name + ".ckpt")
     if checkpoint.exists() and not args.resume:
-        raise InputError(f"{checkpoint} exists (a killed training?): pass --resume to continue it, or remove it")
+        raise InputError(
+            f"{checkpoint} exists (a killed or time-limited training?): pass --resume to continue it, or remove it"
+        )
     return checkpoint
 
 
@@ -194,7 +196,9 @@ def train_and_save(
 ) -> tuple[dict, Path]:
     """Train with `train(*data, ...)` (the checkpoint `checkpoint`, `--resume`, progress bars and lines as `--quiet`
     and `--json` say, `record` to fill, and `options`), then write the weights with `save(model, out, record)` and the
-    record, stamped finished, beside them, and drop the checkpoint. Returns the record and the record file's path."""
+    record, stamped finished, beside them. The checkpoint goes when the training ran to its last epoch, and stays when
+    it stopped early (`--time-limit`): `--resume` continues from it. Returns the record and the record file's
+    path."""
     model, record = train(
         *data,
         checkpoint=checkpoint,
@@ -207,7 +211,8 @@ def train_and_save(
     record["finished"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     save(model, out, record)
     record_path = write_record(out, record)
-    checkpoint.unlink(missing_ok=True)
+    if not record.get("stopped_early"):
+        checkpoint.unlink(missing_ok=True)
     return record, record_path
 
 
