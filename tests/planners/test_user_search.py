@@ -206,7 +206,7 @@ def test_a_user_value_map_is_used_and_checked():
 
 
 def test_a_search_planner_has_no_policy_to_average_or_to_read_per_cell(maps):
-    with pytest.raises(PlannerError, match=r"is a search planner; \+d4 averages a policy planner's"):
+    with pytest.raises(PlannerError, match=r"declares no policy \(a search planner\); \+d4 averages a policy"):
         load_planner(f"{EXAMPLE}:make+d4", SIZE)
     from vinadv.evaluation.protocols import gppn_protocol, planner_actions  # noqa: PLC0415 (PyTorch: this test only)
 
