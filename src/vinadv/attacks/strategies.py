@@ -29,8 +29,7 @@ The strategies:
 - `exhaustive`: every valid cell of every map; keeps the strongest per map, or all pairs with `per_map=0`.
   This is the upper bound of what one obstacle can do.
 
-On a planner without a policy at every cell (`Capabilities.policy` False: a search planner, which answers paths):
-`random`,
+On a planner without a policy at every cell (`Capabilities.policy` False: a search planner): `random`,
 `near-path` and `exhaustive` are unchanged (they need only paths); `key-points` ranks tier 3 by the planner's
 `value_maps`, its own cost or heuristic map where it has one, else minus the exact cost-to-go; `saliency` takes the
 gradient, with respect to the obstacles, of the planner's differentiable path map
@@ -508,12 +507,10 @@ class SaliencyAttack(Attack):
 
     @staticmethod
     def gradient_module(planner: Planner):
-        """The planner's differentiable module where it declares gradients (`Capabilities.gradients`): its logits'
-        for a policy planner, its path map's for a search planner; None otherwise."""
-        capabilities = planner.capabilities
-        if not capabilities.gradients:
+        """Its declared gradients' module (`Capabilities.gradients`): of the logits, or of a search's path map; None."""
+        if not planner.capabilities.gradients:
             return None
-        return planner.differentiable if capabilities.policy else planner.differentiable_paths
+        return planner.differentiable if planner.capabilities.policy else planner.differentiable_paths
 
     def ranked_as(self, planner: Planner) -> str | None:
         return KeyPointsAttack.name if self.gradient_module(planner) is None else None
