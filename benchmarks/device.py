@@ -65,10 +65,10 @@ def plans_per_second(planner, maps, batch: int, seconds: float) -> float:
     """Plans per second of `plan_maps` on `batch` maps (one start each) a call, calls repeated for `seconds`."""
     obstacles, goals, starts = maps.obstacles[:batch], maps.goals[:batch], maps.starts[:batch, :1]
     warm = slice(0, min(batch, 64))  # compiles, loads, allocates (a whole batch of 1,024 takes long on a CPU)
-    planner.plan_maps(obstacles[warm], goals[warm], starts[warm])
+    planner.plan(obstacles[warm], starts[warm], goals[warm])
     done, t0 = 0, time.perf_counter()
     while True:
-        planner.plan_maps(obstacles, goals, starts)
+        planner.plan(obstacles, starts, goals)
         done += batch
         elapsed = time.perf_counter() - t0
         if elapsed >= seconds:
@@ -78,8 +78,8 @@ def plans_per_second(planner, maps, batch: int, seconds: float) -> float:
 def ties(reference, default, device, maps) -> dict:
     """How the device's paths differ from the default's, and which action flips explain it (see the module doc)."""
     flips = tie_flips(reference.logits(maps.obstacles, maps.goals), device.logits(maps.obstacles, maps.goals))
-    a = default.plan_maps(maps.obstacles, maps.goals, maps.starts)
-    b = device.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    a = default.plan(maps.obstacles, maps.starts, maps.goals)
+    b = device.plan(maps.obstacles, maps.starts, maps.goals)
     differ = ~a.paths.same_as(b.paths)
     owner = np.repeat(np.arange(len(maps)), maps.n_starts)
     return {

@@ -6,7 +6,7 @@ On `--n` generated maps (one start each), side by side in this run, taking turns
 - `attack`: `make_attack("exhaustive").attack(...)` with the harm ranking `vinadv robustness` uses (every valid
   cell of every map: the original maps planned, every candidate map built, planned, paired, labelled, ranked);
 - `plan_batch`: the same candidate maps (every valid cell of every map added in turn) planned with
-  `planner.plan_batch` in chunks of the attack's `EVAL_CHUNK`, nothing else.
+  `planner.plan` in chunks of the attack's `EVAL_CHUNK`, nothing else.
 Goal (issue 19): the attack at most 1.3x `plan_batch`.
 """
 
@@ -32,7 +32,7 @@ def plan_candidates(planner, obstacles, starts, goals) -> int:
         m = maps[lo : lo + EVAL_CHUNK]
         adversarial = obstacles[m].copy()
         adversarial[np.arange(len(m)), rows[lo : lo + EVAL_CHUNK], cols[lo : lo + EVAL_CHUNK]] = True
-        planner.plan_batch(adversarial, starts[m], goals[m], True)
+        planner.plan(adversarial, starts[m], goals[m], True)
     return len(maps)
 
 

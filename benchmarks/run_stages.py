@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/run_stages.py [--n 5000] [--size 28] [--json]
 
 Runs `vinadv run --n N --attack near-path --classifier rule` into a fresh SQLite file as its own process (what a
-user waits for: interpreter start, imports, the job, exit), with `plan_batch` timed inside it (every plan of the
+user waits for: interpreter start, imports, the job, exit), with `Planner.plan` timed inside it (every plan of the
 run: each map's original and adversarial path); then, in this process, the engine alone on the same plans (the
 maps the run planned, in one `plan_batch` call, compiled and warm, best of 3). Goals (issue 19): the run's
 planning at most 1.5x the engine's time, the whole command under 4x.
@@ -25,7 +25,7 @@ import time
 
 
 def child(record: str, argv: list[str]) -> int:
-    """Run `vinadv ARGV` in this process with `plan_batch` timed and its inputs kept; write them to `record`."""
+    """Run `vinadv ARGV` in this process with `Planner.plan` timed and its inputs kept; write them to `record`."""
     t_enter = time.time()
     import numpy as np
 
@@ -35,16 +35,16 @@ def child(record: str, argv: list[str]) -> int:
 
     t_imported = time.time()
     calls, seconds = [], [0.0]
-    plan_batch = Planner.plan_batch  # every plan of the run goes through it (the VIN planner: to its engine)
+    plan = Planner.plan  # every plan of the run goes through it (the VIN planner: to its engine)
 
-    def timed_plan_batch(self, obstacles, starts, goals, corner_cutting=True):
+    def timed_plan(self, obstacles, starts, goals, corner_cutting=True, moves=None, **options):
         t0 = time.perf_counter()
-        out = plan_batch(self, obstacles, starts, goals, corner_cutting)
+        out = plan(self, obstacles, starts, goals, corner_cutting, moves, **options)
         seconds[0] += time.perf_counter() - t0
         calls.append((obstacles, starts, goals, corner_cutting))
         return out
 
-    Planner.plan_batch = timed_plan_batch
+    Planner.plan = timed_plan
     sys.argv = ["vinadv", *argv]
     code = cli.main()  # as the `vinadv` program calls it
     t_done = time.time()

@@ -4,7 +4,8 @@
 `make(size)` returns an object with `plan_paths(obstacles, starts, goals, corner_cutting)`: obstacles (B, N, N) bool,
 starts and goals (B, 2) int64 (row, col), one search per row. It returns a `SearchResult` (or just a list of B (L, 2)
 paths): each path starts at its start and moves one legal move at a time; a path that does not end at the goal (the
-start alone, say) means "no path found". vinadv checks every answer and refuses a bad one in one line.
+start alone, say) means "no path found". vinadv checks every answer and refuses a bad one in one line;
+`vinadv.planners.check_planner(make(28), 28)` runs every check on a few generated maps (in your own tests, say).
 
 This one is breadth-first search, in NumPy, all B searches at once, level by level: it finds a path with the fewest
 moves and reports the cells it expanded. It plans vinadv's `octile` maps, where a diagonal move costs sqrt 2, so its
@@ -32,6 +33,7 @@ def shifted(x: np.ndarray, dr: int, dc: int) -> np.ndarray:
 
 class BreadthFirst:
     moves = "octile"  # the movement model it plans (the default; "moore" and "news" are the others)
+    capabilities = {"expansions": True}  # what it offers beyond paths: its answers carry the expanded cells
 
     def plan_paths(self, obstacles, starts, goals, corner_cutting=True):
         b, n, _ = obstacles.shape

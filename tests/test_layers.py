@@ -172,7 +172,18 @@ def test_production_code_never_imports_the_test_support():
 #: the planner families: a package each under `vinadv.planners`
 PLANNER_FAMILIES = ("vin", "gppn", "neural_astar", "classical")
 #: the contract and the mechanics every planner shares (`vinadv.planners` outside the families and the registry)
-PLANNER_CONTRACT = ("interface", "search", "result", "rollout", "batching", "device", "spec", "records", "harness")
+PLANNER_CONTRACT = (
+    "interface",
+    "search",
+    "checks",
+    "result",
+    "rollout",
+    "batching",
+    "device",
+    "spec",
+    "records",
+    "harness",
+)
 
 
 def test_the_planner_contract_imports_no_family():

@@ -115,8 +115,8 @@ def replan(pairs: PairSet, planner: Planner) -> PairSet:
     """`pairs` with both paths planned again by `planner` (a `Planner` or a `VIN`): the attacks found on one
     planner, tried on another (transfer)."""
     planner = as_planner(planner, pairs.size)
-    o = planner.plan_batch(pairs.obstacles_o, pairs.starts, pairs.goals, pairs.corner_cutting)
-    a = planner.plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals, pairs.corner_cutting)
+    o = planner.plan(pairs.obstacles_o, pairs.starts, pairs.goals, pairs.corner_cutting, pairs.moves)
+    a = planner.plan(pairs.obstacles_a, pairs.starts, pairs.goals, pairs.corner_cutting, pairs.moves)
     return replace(
         pairs,
         path_o=o.paths,

@@ -376,7 +376,7 @@ def robustness(
 
 def _clean(planner, maps) -> dict:
     """The planner on the unattacked maps: rollout success and the mean regret of the reached paths."""
-    plans = planner.plan_batch(maps.obstacles, maps.starts[:, 0], maps.goals, maps.corner_cutting)
+    plans = planner.plan(maps.obstacles, maps.starts[:, 0], maps.goals, maps.corner_cutting, maps.moves)
     reached = plans.reached
     regret = plans.paths.costs(maps.moves)[reached] - maps.expert_costs[reached, 0]
     return {

@@ -58,7 +58,7 @@ def test_every_strategy_runs_on_every_planner(strategy, planner_name, maps):
     assert_valid(pairs, maps)
     assert pairs.params["planner"] == planner.spec() and is_planner_spec(planner.spec())
     # the adversarial paths are the planner's own paths on the adversarial maps
-    again = planner.plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals)
+    again = planner.plan(pairs.obstacles_a, pairs.starts, pairs.goals)
     assert again.paths == pairs.path_a
 
 
@@ -80,7 +80,7 @@ def test_saliency_on_the_vin_planner_is_the_gradient_of_the_vin_itself(maps):
     vin = planning_vin(SIZE, seed=1, noise=0.1)
     planner = VINPlanner(vin, SIZE)
     obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
-    originals = planner.plan_batch(obstacles, starts, goals)
+    originals = planner.plan(obstacles, starts, goals)
     ctx = AttackContext(
         obstacles,
         starts,

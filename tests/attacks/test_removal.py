@@ -118,7 +118,7 @@ def test_removal_candidates_are_the_documented_sets(name, maps):
         assert len(pairs) == allowed.sum()
     if name == "near-path":  # within the radius of the original path
         path = np.zeros_like(maps.obstacles)
-        for i, p in enumerate(as_planner(model, SIZE).plan_batch(maps.obstacles, starts, goals).paths.unpack()):
+        for i, p in enumerate(as_planner(model, SIZE).plan(maps.obstacles, starts, goals).paths.unpack()):
             path[i, p[:, 0], p[:, 1]] = True
         assert within_distance(path, 1)[m, cells[:, 0], cells[:, 1]].all()
     if name in ("random", "near-path"):

@@ -37,7 +37,7 @@ def context(planner, maps):
         starts,
         goals,
         valid_cells(obstacles, starts, goals, True),
-        planner.plan_batch(obstacles, starts, goals),
+        planner.plan(obstacles, starts, goals),
         planner,
         np.random.default_rng(0),
     )
@@ -53,7 +53,7 @@ def test_every_strategy_runs_on_a_search_planner(strategy, maps):
     assert len(pairs) > 0
     assert_valid(pairs, maps)
     assert pairs.params["planner"] == planner.spec()
-    again = planner.plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals)
+    again = planner.plan(pairs.obstacles_a, pairs.starts, pairs.goals)
     assert again.paths == pairs.path_a  # the planner's own paths on the adversarial maps
     # saliency without gradients is ranked as key-points, and the pairs say so; no other strategy falls back
     assert pairs.params.get("ranked_as") == ("key-points" if strategy == "saliency" else None)

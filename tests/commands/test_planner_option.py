@@ -49,7 +49,7 @@ def test_attack_on_the_optimal_planner_is_never_harmful(maps_file, tmp_path, cap
     assert summary["harm_counts"]["harmful"] == 0
     pairs = PairSet.load(out)
     assert pairs.params["planner"]["name"] == "optimal"
-    again = OptimalPlanner(SIZE).plan_batch(pairs.obstacles_a, pairs.starts, pairs.goals)
+    again = OptimalPlanner(SIZE).plan(pairs.obstacles_a, pairs.starts, pairs.goals)
     assert again.paths == pairs.path_a
 
 

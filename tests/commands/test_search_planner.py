@@ -58,7 +58,7 @@ def test_eval_gives_a_search_planner_its_path_figures(maps_file, capsys):
     ours = figures["vinadv"]
     maps = MapSet.load(maps_file)
     # oracle: plain-Python costs of the planner's own paths against the expert costs
-    result = load_planner(SPEC, SIZE).plan_maps(maps.obstacles, maps.goals, maps.starts)
+    result = load_planner(SPEC, SIZE).plan(maps.obstacles, maps.starts, maps.goals)
     costs = np.array([cost(result.paths[i].tolist()) for i in range(16)])
     expert = maps.expert_costs.reshape(-1)
     assert ours["success_rate"] == 1.0 and ours["action_accuracy"] is None and ours["action_cells"] == 0

@@ -78,7 +78,7 @@ def test_planners_on_generated_maps():
 
 
 def weighted_costs(maps):
-    result = load_planner("wastar:w=4", 10).plan_maps(maps.obstacles, maps.goals, maps.starts)
+    result = load_planner("wastar:w=4", 10).plan(maps.obstacles, maps.starts, maps.goals)
     return result.paths.costs()
 
 

@@ -85,8 +85,8 @@ def test_torch_planners_on_the_cpu_plan_what_the_default_plans(spec, gppn_file, 
     assert isinstance(on_cpu, TorchPlanner) and on_cpu.device == torch.device("cpu")
     assert default.device_type is None and "device" not in default.spec()
     assert on_cpu.spec() == {**default.spec(), "device": "cpu"}
-    a = default.plan_maps(maps.obstacles, maps.goals, maps.starts)
-    b = on_cpu.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    a = default.plan(maps.obstacles, maps.starts, maps.goals)
+    b = on_cpu.plan(maps.obstacles, maps.starts, maps.goals)
     assert a.paths == b.paths and np.array_equal(a.termination, b.termination)
     np.testing.assert_array_equal(default.logits(maps.obstacles, maps.goals), on_cpu.logits(maps.obstacles, maps.goals))
 
@@ -99,7 +99,7 @@ def test_the_vin_on_a_device_plans_the_engines_paths_with_its_torch_forward(plan
     expected = engine.plan_maps(maps.obstacles, maps.goals, maps.starts)
     # the device path never calls the engine: the generic rollout of the torch logits
     monkeypatch.setattr("vinadv.planners.vin.planner.engine.plan_maps", _fail)
-    got = forward.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    got = forward.plan(maps.obstacles, maps.starts, maps.goals)
     assert got.paths == expected.paths and np.array_equal(got.termination, expected.termination)
     np.testing.assert_array_equal(
         engine.value_maps(maps.obstacles, maps.goals), forward.value_maps(maps.obstacles, maps.goals)
@@ -170,8 +170,8 @@ def _compare_devices(cpu, gpu, maps) -> dict:
     """Logits and paths of one planner on the CPU and on the GPU: every action that differs is a near tie of the
     CPU's logits, and a path differs only on a map where an action does. Returns the counts."""
     flips = tie_flips(cpu.logits(maps.obstacles, maps.goals), gpu.logits(maps.obstacles, maps.goals))
-    a = cpu.plan_maps(maps.obstacles, maps.goals, maps.starts)
-    b = gpu.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    a = cpu.plan(maps.obstacles, maps.starts, maps.goals)
+    b = gpu.plan(maps.obstacles, maps.starts, maps.goals)
     differ = ~a.paths.same_as(b.paths)
     owner = np.repeat(np.arange(len(maps)), maps.n_starts)
     assert flips["not_ties"] == 0, flips
@@ -196,10 +196,10 @@ def test_the_vins_forward_on_cuda_plans_the_engines_paths_but_at_near_ties(maps2
     engine, cpu, gpu = (load_planner("vin", 28, device=d) for d in (None, "cpu", "cuda"))
     counts = _compare_devices(cpu, gpu, maps28)
     a = engine.plan_maps(maps28.obstacles, maps28.goals, maps28.starts)
-    b = gpu.plan_maps(maps28.obstacles, maps28.goals, maps28.starts)
+    b = gpu.plan(maps28.obstacles, maps28.starts, maps28.goals)
     counts["paths_differing_from_the_engine"] = int((~a.paths.same_as(b.paths)).sum())
     assert counts["paths_differing_from_the_engine"] <= counts["paths_differing"] + int(
-        (~a.paths.same_as(cpu.plan_maps(maps28.obstacles, maps28.goals, maps28.starts).paths)).sum()
+        (~a.paths.same_as(cpu.plan(maps28.obstacles, maps28.starts, maps28.goals).paths)).sum()
     )
     record_property("counts", counts)
     print("vin", counts)
@@ -222,7 +222,7 @@ def test_the_exhaustive_search_and_saliency_on_cuda_match_the_cpu_but_at_near_ti
     print("exhaustive", {"candidates": len(differ), "differing": int(differ.sum()), "flipped_cells": flips["cells"]})
 
     saliency = make_attack("saliency")
-    base = cpu.plan_batch(obstacles, starts, goals)
+    base = cpu.plan(obstacles, starts, goals)
     ctx = [
         AttackContext(obstacles, starts, goals, np.ones_like(obstacles), base, planner, np.random.default_rng(0))
         for planner in (cpu, gpu)

@@ -64,7 +64,7 @@ def test_a_planner_trained_on_a_movement_model_plans_it_and_refuses_others(plann
     logits = loaded.logits(maps.obstacles, maps.goals)
     assert logits.shape == (4, 8, 8, 8)  # the contract's 8 actions; news' diagonals masked
     assert np.isneginf(logits[:, 4:]).all() == (moves == "news") and np.isfinite(logits[:, :n_actions]).all()
-    result = loaded.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    result = loaded.plan(maps.obstacles, maps.starts, maps.goals)
     steps = np.abs(np.diff(result.paths.cells.astype(np.int64), axis=0))
     inside = np.ones(len(steps), dtype=bool)
     inside[result.paths.offsets[1:-1] - 1] = False  # the step from one path's end to the next path's start

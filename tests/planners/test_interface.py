@@ -142,10 +142,10 @@ def _planners(size):
 def test_every_planner_batched_equals_one_by_one(index):
     maps = generate_maps(12, 16, seed=9, n_starts=3)
     planner = _planners(16)[index]
-    batched = planner.plan_maps(maps.obstacles, maps.goals, maps.starts, chunk_size=5)
+    batched = planner.plan(maps.obstacles, maps.starts, maps.goals, chunk_size=5)
     for b in range(len(maps)):
         for s in range(3):
-            one = planner.plan_batch(maps.obstacles[b : b + 1], maps.starts[b : b + 1, s], maps.goals[b : b + 1])
+            one = planner.plan(maps.obstacles[b : b + 1], maps.starts[b : b + 1, s], maps.goals[b : b + 1])
             np.testing.assert_array_equal(one.paths[0], batched.paths[b * 3 + s])
             assert one.termination[0] == batched.termination[b * 3 + s]
     spec = planner.spec()
@@ -201,7 +201,7 @@ def test_a_planner_that_breaks_the_contract_is_refused_by_name(mode, message):
     maps = generate_maps(3, 8, seed=1, n_starts=1)
     planner = TorchPlanner(Broken(mode), "my-broken", 8)
     with pytest.raises(PlannerError, match="planner 'my-broken'.*" + message):
-        planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
+        planner.plan(maps.obstacles, maps.starts, maps.goals)
     assert issubclass(PlannerError, InputError)
 
 
@@ -231,7 +231,7 @@ def test_cpu_forwards_take_16_to_31_maps_and_each_map_its_own_logits(b):
 @pytest.mark.parametrize("mode", ["-inf", "-inf on illegal moves"])
 def test_minus_infinity_masks_a_move(mode):
     maps = generate_maps(3, 8, seed=1, n_starts=1)
-    result = TorchPlanner(Broken(mode), "masking", 8).plan_maps(maps.obstacles, maps.goals, maps.starts)
+    result = TorchPlanner(Broken(mode), "masking", 8).plan(maps.obstacles, maps.starts, maps.goals)
     assert len(result) == 3
     if mode == "-inf on illegal moves":
         assert not (result.termination == COLLISION).any()  # only legal moves were left to take
@@ -243,7 +243,7 @@ def test_check_logits_numpy_and_sizes():
     assert check_logits("p", np.zeros((1, 8, 4, 4), np.float16), 1, 4).dtype == np.float32
     maps = generate_maps(2, 8, seed=1, n_starts=1)
     with pytest.raises(PlannerError, match="planner 'optimal' is for 16x16 maps, the maps are 8x8"):
-        OptimalPlanner(16).plan_maps(maps.obstacles, maps.goals, maps.starts)
+        OptimalPlanner(16).plan(maps.obstacles, maps.starts, maps.goals)
 
 
 def test_cli_refuses_a_broken_planner_with_exit_2(tmp_path, capsys):
@@ -287,3 +287,22 @@ def test_bad_starts_are_refused():
         planner.plan_maps(maps.obstacles, maps.goals, maps.starts + 8)
     with pytest.raises(InputError, match="goals has shape"):
         planner.plan_maps(maps.obstacles, maps.goals[:1], maps.starts)
+    with pytest.raises(InputError, match=r"starts has shape \(2, 2, 2, 1\), expected \(2, S, 2\)"):
+        planner.plan(maps.obstacles, maps.starts[..., None], maps.goals)
+
+
+@pytest.mark.parametrize("index", range(2), ids=["vin", "optimal"])
+def test_the_deprecated_calls_are_plan_in_the_old_argument_orders(index):
+    maps = generate_maps(4, 16, seed=2, n_starts=2)
+    planner = _planners(16)[index]
+    many = planner.plan(maps.obstacles, maps.starts, maps.goals, maps.corner_cutting, maps.moves)
+    assert_same(planner.plan_maps(maps.obstacles, maps.goals, maps.starts, maps.corner_cutting), many)
+    one = planner.plan(maps.obstacles, maps.starts[:, 1], maps.goals)
+    assert_same(planner.plan_batch(maps.obstacles, maps.starts[:, 1], maps.goals), one)
+    assert_same(one, many.take(np.arange(1, 8, 2)))
+
+
+def test_plan_refuses_maps_of_another_movement_model_in_one_line():
+    maps = generate_maps(2, 8, seed=1, n_starts=1)
+    with pytest.raises(PlannerError, match=r"planner 'optimal' plans octile moves .*; the maps use 'news' moves"):
+        OptimalPlanner(8).plan(maps.obstacles, maps.starts, maps.goals, True, "news")

@@ -68,7 +68,7 @@ def test_module_factory_spec(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(tmp_path))
     planner = load_planner("userpkg_planner:make", 16)
     maps = generate_maps(3, 16, seed=1, n_starts=2)
-    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    result = planner.plan(maps.obstacles, maps.starts, maps.goals)
     assert len(result) == 6
     spec = planner.spec()
     assert spec["name"] == "userpkg_planner:make" and spec["config"]["factory"] == "make"
@@ -276,7 +276,7 @@ def test_the_mp_trained_planners_plan_32x32_moore_maps_and_refuse_others(name):
     assert planner.name == name and planner.moves == "moore" and planner.spec()["name"] == name
     record = json.loads(registry.default_weights(name, 32).with_suffix(".json").read_text())
     assert record["moves"] == "moore" and record["size"] == 32  # what the refusals below read
-    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    result = planner.plan(maps.obstacles, maps.starts, maps.goals)
     assert len(result.termination) == 2
     with pytest.raises(InputError, match=f"planner '{name}' plans moore moves .*the maps use 'octile' moves"):
         load_planner(name, 32)

@@ -25,7 +25,7 @@ class Recorder(SearchPlanner):
         return SearchResult(paths=PlanResult.from_paths(paths, term).paths, termination=term, expanded=expanded)
 
 
-def test_plan_maps_plans_start_s_of_map_b_as_row_b_times_s_plus_s_in_chunks():
+def test_plan_plans_start_s_of_map_b_as_row_b_times_s_plus_s_in_chunks_of_maps():
     rng = np.random.default_rng(0)
     b, s = 3, 4
     obstacles = np.zeros((b, 5, 5), bool)
@@ -35,8 +35,10 @@ def test_plan_maps_plans_start_s_of_map_b_as_row_b_times_s_plus_s_in_chunks():
     starts[:, :, 0] = 4  # never the goal (no path is found) nor the obstacle
     goals[:, 0] = 0
     planner = Recorder()
-    result = planner.plan_maps(obstacles, goals, starts, chunk_size=5)
-    assert planner.calls == [5, 5, 2]
+    result = planner.plan(obstacles, starts, goals, chunk_size=2)
+    assert planner.calls == [8, 4]  # 2 maps of 4 starts, then the last map's 4
+    assert planner.plan(obstacles, starts, goals).termination.tolist() == result.termination.tolist()
+    assert planner.calls[2:] == [12]  # a search planner gets every row at once unless told a chunk size
     for row in range(b * s):
         m, k = divmod(row, s)
         assert result.paths[row].tolist() == [starts[m, k].tolist()]

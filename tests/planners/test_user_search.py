@@ -43,7 +43,7 @@ def maps():
 def test_the_example_finds_fewest_move_paths_and_reports_its_expansions(maps, corner_cutting):
     planner = load_planner(f"{EXAMPLE}:make", SIZE)
     assert isinstance(planner, UserSearchPlanner)
-    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts, corner_cutting)
+    result = planner.plan(maps.obstacles, maps.starts, maps.goals, corner_cutting)
     obstacles = maps.obstacles.tolist()
     for row in range(len(result)):
         m, s = divmod(row, 3)
@@ -58,7 +58,7 @@ def test_the_example_finds_fewest_move_paths_and_reports_its_expansions(maps, co
 def test_the_example_says_no_path_where_the_goal_is_walled_off():
     obstacles = np.zeros((1, 5, 5), bool)
     obstacles[0, :, 2] = True
-    result = load_planner(f"{EXAMPLE}:make", 5).plan_batch(obstacles, np.array([[0, 0]]), np.array([[0, 4]]))
+    result = load_planner(f"{EXAMPLE}:make", 5).plan(obstacles, np.array([[0, 0]]), np.array([[0, 4]]))
     assert result.paths[0].tolist() == [[0, 0]] and result.termination_names.tolist() == ["step_limit"]
     assert result.expansions.tolist() == [10]  # the two columns left of the wall
 
@@ -82,7 +82,7 @@ def straight(obstacles, starts, goals):
 def run(answer, obstacles=None, **attrs):
     planner = UserSearchPlanner(Answers(answer, **attrs), "mine.py:make", 6)
     obstacles = np.zeros((2, 6, 6), bool) if obstacles is None else obstacles
-    return planner.plan_batch(obstacles, np.array([[1, 1], [1, 1]]), np.array([[1, 4], [1, 4]]))
+    return planner.plan(obstacles, np.array([[1, 1], [1, 1]]), np.array([[1, 4], [1, 4]]))
 
 
 def test_a_legal_answer_passes_and_gets_its_terminations():
@@ -206,7 +206,7 @@ def test_a_user_value_map_is_used_and_checked():
 
 
 def test_a_search_planner_has_no_policy_to_average_or_to_read_per_cell(maps):
-    with pytest.raises(PlannerError, match=r"is a search planner; \+d4 averages a policy planner's"):
+    with pytest.raises(PlannerError, match=r"declares no policy \(a search planner\); \+d4 averages a policy"):
         load_planner(f"{EXAMPLE}:make+d4", SIZE)
     from vinadv.evaluation.protocols import gppn_protocol, planner_actions  # noqa: PLC0415 (PyTorch: this test only)
 

@@ -29,7 +29,7 @@ The strategies:
 - `exhaustive`: every valid cell of every map; keeps the strongest per map, or all pairs with `per_map=0`.
   This is the upper bound of what one obstacle can do.
 
-On a search planner (`vinadv.planners.search.SearchPlanner`, which answers paths and has no policy): `random`,
+On a planner without a policy at every cell (`Capabilities.policy` False: a search planner): `random`,
 `near-path` and `exhaustive` are unchanged (they need only paths); `key-points` ranks tier 3 by the planner's
 `value_maps`, its own cost or heuristic map where it has one, else minus the exact cost-to-go; `saliency` takes the
 gradient, with respect to the obstacles, of the planner's differentiable path map
@@ -79,7 +79,6 @@ from vinadv.errors import InputError
 from vinadv.planners.device import full_precision
 from vinadv.planners.interface import Planner, PlannerError
 from vinadv.planners.result import PlanResult
-from vinadv.planners.search import SearchPlanner
 from vinadv.planners.vin.planner import as_planner
 from vinadv.vocabulary import ADD, EDITS, REMOVE
 
@@ -227,7 +226,7 @@ class Attack:
         planner = as_planner(planner, obstacles.shape[1])
         strength = strength or planner_strength
         b = len(obstacles)
-        base = planner.plan_batch(obstacles, starts, goals, corner_cutting)
+        base = planner.plan(obstacles, starts, goals, corner_cutting)
         calls = b
         current, plans = obstacles, base
         chosen = np.zeros((b, 0, 2), np.int64)
@@ -236,7 +235,7 @@ class Attack:
         for step in range(self.obstacles):
             last = step == self.obstacles - 1
             if step:
-                plans = planner.plan_batch(current, starts, goals, corner_cutting)
+                plans = planner.plan(current, starts, goals, corner_cutting)
                 calls += b
             candidates = removable_cells if self.edit == REMOVE else valid_cells
             valid = candidates(current, starts, goals, corner_cutting, planner.moves) & alive[:, None, None]
@@ -329,7 +328,7 @@ class Attack:
     def _evaluate_chunk(self, ctx, map_idx, cells, rank, corner_cutting, strength, keep, ranked) -> PairSet:
         obstacles_a = ctx.obstacles[map_idx].copy()
         obstacles_a[np.arange(len(map_idx)), cells[:, 0], cells[:, 1]] = ctx.edit == ADD
-        planned = ctx.planner.plan_batch(obstacles_a, ctx.starts[map_idx], ctx.goals[map_idx], corner_cutting)
+        planned = ctx.planner.plan(obstacles_a, ctx.starts[map_idx], ctx.goals[map_idx], corner_cutting)
         pairs = _make_pairs(ctx, map_idx, cells, obstacles_a, planned, corner_cutting)
         if not ranked or keep == 0:
             return pairs
@@ -508,10 +507,10 @@ class SaliencyAttack(Attack):
 
     @staticmethod
     def gradient_module(planner: Planner):
-        """The planner's differentiable module: its path map for a search planner, its logits otherwise; None."""
-        if isinstance(planner, SearchPlanner):
-            return planner.differentiable_paths
-        return planner.differentiable
+        """Its declared gradients' module (`Capabilities.gradients`): of the logits, or of a search's path map; None."""
+        if not planner.capabilities.gradients:
+            return None
+        return planner.differentiable if planner.capabilities.policy else planner.differentiable_paths
 
     def ranked_as(self, planner: Planner) -> str | None:
         return KeyPointsAttack.name if self.gradient_module(planner) is None else None
@@ -520,7 +519,7 @@ class SaliencyAttack(Attack):
         module = self.gradient_module(ctx.planner)
         if module is None:  # no gradients (the `optimal` control, most search planners): rank as key-points does
             return KeyPointsAttack.candidate_scores(self, ctx)
-        if isinstance(ctx.planner, SearchPlanner):
+        if not ctx.planner.capabilities.policy:  # a search planner's module is its path map's
             return _path_saliency(ctx, module)
         import torch  # here only: the other strategies run without PyTorch
 

@@ -46,7 +46,6 @@ from vinadv.evaluation.search_metrics import evaluate_search, harmonic_mean, pat
 from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.mapset import MapSet
 from vinadv.planners.interface import Planner
-from vinadv.planners.search import SearchPlanner
 from vinadv.robustness import Figures, MapOutcomes, benchmark_maps, robustness, worst_case
 
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
@@ -157,10 +156,10 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     t0 = time.perf_counter()
     lo = chunk * suite.chunk
     sub = chunk_maps(maps, lo, min(len(maps), lo + suite.chunk))
-    plans = planner.plan_batch(sub.obstacles, sub.starts[:, 0], sub.goals, sub.corner_cutting)
+    plans = planner.plan(sub.obstacles, sub.starts[:, 0], sub.goals, sub.corner_cutting, sub.moves)
     # costs under the maps' movement model (every move 1 on `moore`), as their expert costs
     regret = np.where(plans.reached, path_costs(plans.paths, sub.moves) - sub.expert_costs[:, 0], np.nan)
-    if isinstance(planner, SearchPlanner):  # no policy at every cell: the Neural A* authors' Opt / Exp instead
+    if not planner.capabilities.policy:  # no policy at every cell: the Neural A* authors' Opt / Exp instead
         clean = {"search": dict(evaluate_search(planner, sub))}
     else:
         gppn = gppn_protocol(planner, sub)

@@ -19,7 +19,6 @@ import numpy as np
 from vinadv.attacks.strategies import AttackContext, SaliencyAttack
 from vinadv.bench.suites import Suite
 from vinadv.planners.interface import Planner
-from vinadv.planners.search import SearchPlanner
 
 #: maps the gradient and determinism checks look at (the suite's first)
 CHECK_MAPS = 16
@@ -29,7 +28,7 @@ def gradient_is_masked(planner: Planner, obstacles, starts, goals, corner_cuttin
     """Whether the saliency gradient is zero or not finite on every map (None: the planner has no gradient)."""
     if SaliencyAttack.gradient_module(planner) is None:  # a search planner's gradient is its path map's
         return None
-    plans = planner.plan_batch(obstacles, starts, goals, corner_cutting)
+    plans = planner.plan(obstacles, starts, goals, corner_cutting)
     ctx = AttackContext(obstacles, starts, goals, np.ones_like(obstacles), plans, planner, np.random.default_rng(0))
     scores = SaliencyAttack().candidate_scores(ctx)
     finite = np.isfinite(scores)
@@ -39,12 +38,12 @@ def gradient_is_masked(planner: Planner, obstacles, starts, goals, corner_cuttin
 def differs_between_passes(planner: Planner, obstacles, starts, goals, corner_cutting: bool = True) -> bool:
     """Whether two forward passes on the same maps give different logits (a policy planner's; a search planner has
     none) or different paths."""
-    if not isinstance(planner, SearchPlanner):
+    if planner.capabilities.policy:
         first, second = planner.logits(obstacles, goals), planner.logits(obstacles, goals)
         if np.asarray(first).tobytes() != np.asarray(second).tobytes():
             return True
-    a = planner.plan_batch(obstacles, starts, goals, corner_cutting)
-    b = planner.plan_batch(obstacles, starts, goals, corner_cutting)
+    a = planner.plan(obstacles, starts, goals, corner_cutting)
+    b = planner.plan(obstacles, starts, goals, corner_cutting)
     return a.paths != b.paths or not np.array_equal(a.termination_names, b.termination_names)
 
 

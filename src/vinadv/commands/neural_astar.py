@@ -197,7 +197,7 @@ def cmd_compare_modes(args: argparse.Namespace) -> int:
         for i in range(0, len(starts), chunk):
             sl = slice(i, i + chunk)
             t0 = time.perf_counter()
-            exact = planner.plan_paths(obstacles[sl], starts[sl], goals[sl], maps.corner_cutting)
+            exact = planner.plan(obstacles[sl], starts[sl], goals[sl], maps.corner_cutting, maps.moves)
             t1 = time.perf_counter()
             diff = planner.plan_paths_differentiable(obstacles[sl], starts[sl], goals[sl], maps.corner_cutting)
             seconds["exact"] += t1 - t0

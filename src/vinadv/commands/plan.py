@@ -38,12 +38,13 @@ def cmd_plan(args: argparse.Namespace) -> int:
     maps = MapSet.load(args.maps)
     planner = load_args_planner(args, maps, device)
     t0 = time.perf_counter()
-    result = planner.plan_maps(
+    result = planner.plan(
         maps.obstacles,
-        maps.goals,
         maps.starts,
+        maps.goals,
         maps.corner_cutting,
-        args.chunk_size,
+        maps.moves,
+        chunk_size=args.chunk_size,
         progress=shows_progress(args),
     )
     elapsed = time.perf_counter() - t0

@@ -137,11 +137,14 @@ def check_protocols(text: str | None) -> tuple[str, ...] | None:
 
 def cmd_eval(args: argparse.Namespace) -> int:
     from vinadv.evaluation.planner_metrics import evaluate_planner
-    from vinadv.evaluation.protocols import PORT_TEST_PRIOR, gppn_protocol, kentsommer_protocol, require_policy
+    from vinadv.evaluation.protocols import (
+        PORT_TEST_PRIOR,
+        gppn_protocol,
+        kentsommer_protocol,
+        planner_vin,
+        require_policy,
+    )
     from vinadv.evaluation.search_metrics import evaluate_search
-    from vinadv.planners.interface import PlannerError
-    from vinadv.planners.search import SearchPlanner
-    from vinadv.planners.vin.planner import VINPlanner
 
     protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
     if args.prior is not None and "kentsommer" not in (protocols or ()):
@@ -149,17 +152,12 @@ def cmd_eval(args: argparse.Namespace) -> int:
     device = planner_device(args)
     maps, source = start_eval(args)
     planner = load_args_planner(args, maps, device)
-    search = isinstance(planner, SearchPlanner)
     if protocols is None:
-        protocols = ("vinadv", "search") if search else ("vinadv", "gppn", "search")
+        protocols = ("vinadv", "gppn", "search") if planner.capabilities.policy else ("vinadv", "search")
     for protocol in protocols:
         if protocol in ("gppn", "kentsommer"):
             require_policy(planner, f"the {protocol} protocol")
-    if "kentsommer" in protocols and not isinstance(planner, VINPlanner):
-        raise PlannerError(
-            f"the kentsommer protocol measures a VIN (its goal prior is a VIN input); planner {planner.name!r} is not "
-            "one"
-        )
+    vin = planner_vin(planner) if "kentsommer" in protocols else None
     figures, seconds = {}, {}
     for protocol in protocols:
         t0 = time.perf_counter()
@@ -171,7 +169,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
             figures[protocol] = evaluate_search(planner, maps, progress=shows_progress(args))
         else:
             prior = PORT_TEST_PRIOR if args.prior is None else args.prior
-            figures[protocol] = kentsommer_protocol(planner.vin, maps, prior)
+            figures[protocol] = kentsommer_protocol(vin, maps, prior)
         seconds[protocol] = round(time.perf_counter() - t0, 2)
     metrics = {
         "planner": planner.spec(),

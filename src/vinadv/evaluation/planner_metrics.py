@@ -7,9 +7,9 @@
   success rate (goal reached), % optimal (path cost equals the expert cost within 1e-9; an unreached path is
   not optimal), mean extra path cost of the reached paths (cost - expert cost), and the termination reasons.
 
-A search planner (`vinadv.planners.search.SearchPlanner`) has no policy, so no action accuracy (`action_accuracy`
-None, `action_cells` 0); its paths get the same rollout figures. The search figures (Opt, Exp, Hmean, cost ratio) of
-any planner are `vinadv.evaluation.search_metrics`'.
+A planner without a policy at every cell (`Capabilities.policy` False: a search planner) has no action accuracy
+(`action_accuracy` None, `action_cells` 0); its paths get the same rollout figures. The search figures (Opt, Exp,
+Hmean, cost ratio) of any planner are `vinadv.evaluation.search_metrics`'.
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ from vinadv.grid.moves import DEFAULT_MOVES, move_model, require_moves
 from vinadv.grid.shortest_paths import COST_TOL, optimal_actions, shortest_distances
 from vinadv.planners.records import LengthBucketMetrics, PlannerMetrics, RolloutMetrics
 from vinadv.planners.result import PlanResult
-from vinadv.planners.search import SearchPlanner
 from vinadv.planners.vin import engine
 from vinadv.planners.vin.model import VIN, make_input
 from vinadv.vocabulary import TERMINATIONS
@@ -162,9 +161,9 @@ def evaluate_vin(
 
 def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> PlannerMetrics:
     """All figures for any `vinadv.planners.interface.Planner` on `maps`: action accuracy from its logits, rollouts
-    (from every start) by its `plan_maps`, under the maps' movement model, which the planner must plan
+    (from every start) by its `plan`, under the maps' movement model, which the planner must plan
     (`Planner.for_moves`: one of another model is refused in one line). A search planner's paths get the rollout
-    figures, and no action accuracy (it has no policy)."""
+    figures, and no action accuracy (it declares no policy)."""
     planner = planner.for_moves(maps.moves)
 
     def counts(obs, goals):
@@ -173,8 +172,8 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
 
     return _evaluate(
         maps,
-        None if isinstance(planner, SearchPlanner) else counts,
-        lambda obs, goals, starts: planner.plan_maps(obs, goals, starts, maps.corner_cutting),
+        counts if planner.capabilities.policy else None,
+        lambda obs, goals, starts: planner.plan(obs, starts, goals, maps.corner_cutting, maps.moves),
         batch_size,
         progress,
     )

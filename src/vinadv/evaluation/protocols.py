@@ -18,8 +18,8 @@ prior is a VIN input).
   path (free cells that cannot reach the goal at all count as optimal, as GPPN's code counts them), averaged over
   maps.
 Ties between logits go to the lowest vinadv action index in all three. `gppn` and `kentsommer` read a policy at every
-cell: a search planner (`vinadv.planners.search.SearchPlanner`, paths only) is refused with one line; `vinadv` measures
-its paths (`evaluate_planner`).
+cell: a planner that declares none (`Capabilities.policy` False: a search planner, paths only) is refused with one
+line; `vinadv` measures its paths (`evaluate_planner`). `kentsommer` reads a VIN's own network (`planner_vin`).
 """
 
 from __future__ import annotations
@@ -35,7 +35,6 @@ from vinadv.grid.moves import DEFAULT_MOVES, require_moves
 from vinadv.interop.formats.gppn import unit_cost_distances
 from vinadv.interop.formats.samples import expert_steps
 from vinadv.planners.interface import PlannerError
-from vinadv.planners.search import SearchPlanner
 from vinadv.planners.vin.model import VIN, make_input
 from vinadv.planners.vin.planner import as_planner
 
@@ -104,7 +103,7 @@ def kentsommer_protocol(model: VIN, maps: MapSet, prior: float = PORT_TEST_PRIOR
 
 def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_size: int = 256) -> np.ndarray:
     """The argmax action (lowest index on ties) of every cell by `planner` (a `Planner` or a VIN), `(n, N, N)`; a
-    search planner is refused (`require_policy`)."""
+    planner without a policy at every cell (a search planner) is refused (`require_policy`)."""
     planner = as_planner(planner, obstacles.shape[1])
     require_policy(planner, "the argmax action of every cell")
     out = [
@@ -114,13 +113,26 @@ def planner_actions(planner, obstacles: np.ndarray, goals: np.ndarray, batch_siz
     return np.concatenate(out) if out else np.zeros(obstacles.shape, np.int64)
 
 
+def planner_vin(planner) -> VIN:
+    """The PyTorch VIN of `planner` (its `vin`), which the kentsommer protocol runs (its goal prior is a VIN input);
+    a planner without one is refused in one line."""
+    vin = getattr(planner, "vin", None)
+    if vin is None:
+        raise PlannerError(
+            f"the kentsommer protocol measures a VIN (its goal prior is a VIN input); planner {planner.name!r} has no "
+            "VIN network"
+        )
+    return vin
+
+
 def require_policy(planner, what: str) -> None:
-    """Refuse (`PlannerError`, one line) a search planner for `what` ("the gppn protocol"), which reads a policy at
-    every cell."""
-    if isinstance(planner, SearchPlanner):
+    """Refuse (`PlannerError`, one line) a planner that declares no policy at every cell (`Capabilities.policy`: a
+    search planner) for `what` ("the gppn protocol"), which reads one."""
+    if not planner.capabilities.policy:
         raise PlannerError(
             f"{what} follows a policy from every cell: it needs a policy planner (vin, gppn, optimal, "
-            f"your own torch module); {planner.name!r} is a search planner (measure it with the vinadv protocol)"
+            f"your own torch module); {planner.name!r} declares no policy (a search planner: measure it with the "
+            "vinadv protocol)"
         )
 
 

@@ -118,17 +118,25 @@ def harmonic_mean(opt, exp):
 
 
 def evaluate_search(planner, maps: MapSet, chunk_size: int = 256, progress: bool = False) -> SearchMetrics:
-    """`search_metrics` of `planner` (any `Planner`, its `plan_maps`) on every start of `maps`, against vanilla A*
+    """`search_metrics` of `planner` (any `Planner`, its `plan`) on every start of `maps`, against vanilla A*
     (`astar` on the maps' movement model) from the same starts and the maps' exact expert costs."""
     mask = maps.start_mask.reshape(-1)
-    result = planner.plan_maps(
-        maps.obstacles, maps.goals, maps.starts, maps.corner_cutting, chunk_size=chunk_size, progress=progress
+    result = planner.plan(
+        maps.obstacles,
+        maps.starts,
+        maps.goals,
+        maps.corner_cutting,
+        maps.moves,
+        chunk_size=chunk_size,
+        progress=progress,
     )
     expansions = result.expansions if isinstance(result, SearchResult) else None
     reference = None
     if expansions is not None:
         astar = AStarPlanner(maps.size, maps.moves)
-        reference = astar.plan_maps(maps.obstacles, maps.goals, maps.starts, maps.corner_cutting, chunk_size).expansions
+        reference = astar.plan(
+            maps.obstacles, maps.starts, maps.goals, maps.corner_cutting, maps.moves, chunk_size=chunk_size
+        ).expansions
         expansions, reference = expansions[mask], reference[mask]
     owner = np.repeat(np.arange(len(maps)), maps.n_starts)[mask]
     return search_metrics(

@@ -1,11 +1,22 @@
-"""One interface for every planner: whole-map action logits, and paths by DESIGN.md's rollout.
+"""The planner contract: one planning call, `Planner.plan`, and what a planner declares it can do beyond it.
 
-A whole-map policy planner answers `policy_logits(obstacles (B, N, N) bool, goals (B, 2)) -> (B, 8, N, N)` float
-logits in DESIGN.md's action order (N, S, E, W, NE, NW, SE, SW); the logits do not depend on the agent's cell, so
-one map per map serves all its rollouts. `Planner.plan_maps` turns them into paths with the compiled rollout of
-`vinadv.planners.rollout` (argmax, lowest index on ties), the same for every planner. A planner may plan faster its
-own way as long as the paths are the same: the VIN keeps its exact engine
-(`vinadv.planners.vin.planner.VINPlanner`).
+`Planner.plan(obstacles, starts, goals, corner_cutting, moves)` is the one planning call, with one argument order,
+always checked, told the maps' corner-cutting rule and movement model: paths, terminations and, where the planner
+reports them, the cells each search expanded (`SearchResult.expanded`). One chunk loop serves every planner; a
+planner gives the step that plans one chunk (`Planner._chunk_planner`):
+
+- a policy planner answers `policy_logits(obstacles (B, N, N) bool, goals (B, 2)) -> (B, 8, N, N)` float logits in
+  DESIGN.md's action order (N, S, E, W, NE, NW, SE, SW); the logits do not depend on the agent's cell, so one map
+  per map serves all its rollouts, and the step turns them into paths with the compiled rollout of
+  `vinadv.planners.rollout` (argmax, lowest index on ties), the same for every policy planner. A planner may plan
+  faster its own way as long as the paths are the same: the VIN's step is its exact engine
+  (`vinadv.planners.vin.planner.VINPlanner`);
+- a search planner (`vinadv.planners.search.SearchPlanner`) answers paths, one per row, from its `plan_paths`, and
+  every answer passes `check_paths`.
+
+What a planner can do beyond planning is declared (`Capabilities`, as scikit-learn's estimator tags), never inferred
+from its class: the library asks `planner.capabilities` (`require` refuses in one line), and no module outside this
+one asks a planner its class. `vinadv.planners.checks.check_planner` tests a planner against its declaration.
 
 Every planner's logits pass `check_logits`: a planner that returns another shape, a non-float type, NaN or +inf is
 refused with a `PlannerError` (an `InputError`: the planner is the user's input) naming it.
@@ -20,6 +31,8 @@ from __future__ import annotations
 import hashlib
 import sys
 from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -47,6 +60,64 @@ DEVICE_BATCH = DEFAULT_CHUNK
 
 class PlannerError(InputError):
     """A planner that does not keep the interface (wrong shape, type, NaN), or that cannot be loaded."""
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What a planner can do beyond `Planner.plan` (declared by each planner class, as scikit-learn's estimator tags).
+
+    Attributes:
+        policy: a policy at every cell: `policy_logits` / `logits` answer `(B, 8, N, N)` action logits (the
+            per-cell metrics, the gppn and kentsommer protocols, the `+d4` average read it).
+        value_maps: value maps of its own from `value_maps` (the VIN's `max_a q`, `optimal`'s minus the cost-to-go, a
+            search's heuristic map), not the stand-in every planner has (its policy's confidence, or minus the exact
+            cost-to-go for a search planner).
+        gradients: a differentiable module (the saliency attack): of the logits for a policy planner
+            (`differentiable`), of a path map for a search planner (`differentiable_paths`).
+        expansions: `plan` reports the cells each search expanded (`SearchResult.expanded`: the Exp metric).
+    """
+
+    policy: bool = False
+    value_maps: bool = False
+    gradients: bool = False
+    expansions: bool = False
+
+    @classmethod
+    def from_mapping(cls, name: str, declared) -> Capabilities:
+        """`declared` (a `Capabilities`, or a mapping of some of its fields to bools) as `Capabilities`; anything else
+        is a `PlannerError` naming the planner `name`."""
+        if isinstance(declared, cls):
+            return declared
+        known = [f.name for f in fields(cls)]
+        if not hasattr(declared, "items"):
+            raise PlannerError(
+                f"planner {name!r}: capabilities {declared!r} is not a Capabilities or a mapping of {known} to bools"
+            )
+        unknown = sorted(set(declared) - set(known))
+        if unknown or not all(isinstance(v, bool) for v in declared.values()):
+            raise PlannerError(f"planner {name!r}: capabilities {dict(declared)!r}; expected some of {known} as bools")
+        return cls(**declared)
+
+
+#: what each capability gives, for the refusals of `require`
+CAPABILITY_TEXT = {
+    "policy": "a policy at every cell (policy_logits)",
+    "value_maps": "value maps of its own",
+    "gradients": "a differentiable module (gradients)",
+    "expansions": "the cells each search expanded",
+}
+
+
+def require(planner: Planner, capability: str, what: str) -> None:
+    """Refuse (`PlannerError`, one line naming the planner and what it lacks) a planner that does not declare
+    `capability` (a `Capabilities` field), which `what` ("the gppn protocol") needs."""
+    if not getattr(planner.capabilities, capability):
+        raise PlannerError(f"{what} needs {CAPABILITY_TEXT[capability]}: planner {planner.name!r} declares none")
+
+
+def is_planner(obj) -> bool:
+    """Whether `obj` is a `Planner` (the one question on a planner's class the library asks, here in the contract)."""
+    return isinstance(obj, Planner)
 
 
 def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
@@ -124,7 +195,7 @@ def state_checksum(module: nn.Module) -> str | None:
 
 
 class Planner(ABC):
-    """A whole-map policy planner for N x N maps.
+    """A planner for N x N maps: `plan` (the one planning call) and what `capabilities` declares.
 
     Attributes:
         name: the registry name or the user's spec (`vin`, `gppn`, `optimal`, `file.py:factory`), used in errors.
@@ -132,11 +203,15 @@ class Planner(ABC):
         moves: the movement model it plans for (`vinadv.grid.moves`): the actions its rollouts take and the L of
             their step limit. `octile` unless the planner says otherwise (the learned planners were trained on
             octile maps); `for_moves` gives the planner for the maps' model or refuses.
+        capabilities: what it can do beyond `plan` (`Capabilities`); this base class is a whole-map policy planner.
+        chunk_size: maps per chunk of `plan` when the caller gives none (None: all in one).
     """
 
     name: str
     size: int
     moves: str = DEFAULT_MOVES
+    capabilities: Capabilities = Capabilities(policy=True)
+    chunk_size: int | None = DEFAULT_CHUNK
     #: the device type (`cpu`, `cuda`) its forward was asked to run on (`--device`), recorded in `spec()`; None: the
     #: planner's default (the VIN's exact CPU engine, a torch planner on the CPU), recorded as before devices were
     device_type: str | None = None
@@ -146,13 +221,16 @@ class Planner(ABC):
         follow several, `optimal`, returns its own for `moves`), else PlannerError, one line naming both models. A
         planner is never masked down to another model's actions or judged with its costs: an 8-action policy on
         `news` maps, or an octile-trained one on `moore` maps, would be scored on moves it was not made for."""
+        self._check_moves(moves)
+        return self
+
+    def _check_moves(self, moves: str) -> None:
         model = move_model(moves)
         if model.name != self.moves:
             raise PlannerError(
                 f"planner {self.name!r} plans {self.moves} moves ({move_model(self.moves).description}); the maps use "
                 f"{model.name!r} moves ({model.description})"
             )
-        return self
 
     @abstractmethod
     def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray | torch.Tensor:
@@ -180,15 +258,15 @@ class Planner(ABC):
     @property
     def differentiable(self) -> nn.Module | None:
         """A module computing the logits differentiably: `module(obstacles (B,N,N) float, goals (B,2) int64)`
-        -> `(B, 8, N, N)` (the gradient attacks use it); None for a planner without gradients."""
+        -> `(B, 8, N, N)` (the gradient attacks use it), where `capabilities.gradients`; None otherwise."""
         return None
 
     def value_maps(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
         """`(B, N, N)` float: how good each cell is for reaching the goal, for the value-based attack ranking.
 
-        A planner without a value map gets a stand-in: the log-probability of the action it chooses at each cell
-        (`max_a log_softmax(logits)`, its confidence). The VIN answers its value map `max_a q`, `optimal` minus
-        the exact cost-to-go.
+        A planner without a value map of its own (`capabilities.value_maps` False) gets a stand-in: the
+        log-probability of the action it chooses at each cell (`max_a log_softmax(logits)`, its confidence). The
+        VIN answers its value map `max_a q`, `optimal` minus the exact cost-to-go.
         """
         import torch
 
@@ -203,45 +281,100 @@ class Planner(ABC):
         raw = self.policy_logits(obstacles, goals)
         return check_logits(self.name, raw, obstacles.shape[0], obstacles.shape[1])
 
+    def plan(
+        self,
+        obstacles: np.ndarray,
+        starts: np.ndarray,
+        goals: np.ndarray,
+        corner_cutting: bool = True,
+        moves: str | None = None,
+        *,
+        chunk_size: int | None = None,
+        progress: bool = False,
+    ) -> PlanResult:
+        """Plan one path per start: the one planning call.
+
+        Args:
+            obstacles: `(B, N, N)` bool, True = obstacle, N the planner's `size`.
+            starts: `(B, 2)` int, one start per map, or `(B, S, 2)`, S starts per map: path `b * S + s` is from
+                start `s` of map `b`.
+            goals: `(B, 2)` int `(row, col)`.
+            corner_cutting: the maps' rule: whether a diagonal move may pass between two obstacles.
+            moves: the maps' movement model (`vinadv.grid.moves`); a planner of another model is refused in one line
+                (`for_moves` gives the planner of the maps' model where there is one). None: the planner's own.
+            chunk_size: maps per chunk (bounds memory; default `self.chunk_size`, None there: all maps in one chunk).
+            progress: a tqdm bar over chunks.
+
+        Returns:
+            `PlanResult`, checked (a policy planner's logits by `check_logits` and `check_masking`, a search planner's
+            paths by `check_paths`); a search planner's is a `SearchResult`, with the cells it expanded where it
+            reports them (`capabilities.expansions`).
+        """
+        obstacles, starts, goals = check_starts_inputs(obstacles, starts, goals)
+        self._check_size(obstacles)
+        if moves is not None:
+            self._check_moves(moves)
+        step = self._chunk_planner(bool(corner_cutting))
+        chunk = self.chunk_size if chunk_size is None else chunk_size
+        chunk = max(1, len(obstacles)) if chunk is None else chunk
+        parts = [
+            step(obstacles[sl], starts[sl], goals[sl])
+            for sl in chunk_slices(len(obstacles), chunk, progress, f"planning ({self.name})")
+        ]
+        return self._result_type().concat(parts)
+
+    def _result_type(self) -> type[PlanResult]:
+        """The type of `plan`'s result (a search planner's is `SearchResult`)."""
+        return PlanResult
+
+    def _chunk_planner(self, corner_cutting: bool) -> Callable[[np.ndarray, np.ndarray, np.ndarray], PlanResult]:
+        """The step of `plan`'s loop: `step(obstacles (b, N, N), starts (b, S, 2), goals (b, 2)) -> PlanResult` for
+        one chunk of checked inputs, made once per call. A policy planner's: its checked logits, then the rollout
+        every policy planner shares (one adapter); a planner with its own way to the same paths overrides it."""
+
+        def step(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> PlanResult:
+            logits = self.logits(obstacles, goals)
+            check_masking(self.name, logits, obstacles, goals, corner_cutting, self.moves)
+            return rollout_logits(logits, obstacles, goals, starts, corner_cutting, moves=self.moves)
+
+        return step
+
     def plan_maps(
         self,
         obstacles: np.ndarray,
         goals: np.ndarray,
         starts: np.ndarray,
         corner_cutting: bool = True,
-        chunk_size: int = DEFAULT_CHUNK,
+        chunk_size: int | None = None,
         progress: bool = False,
     ) -> PlanResult:
-        """Paths from `starts (B, S, 2)`: path `b * S + s` from start `s` of map `b`, `chunk_size` maps at a time."""
+        """Deprecated: `plan(obstacles, starts, goals, ...)`, the one planning call, in its argument order. Paths from
+        `starts (B, S, 2)`: path `b * S + s` from start `s` of map `b`."""
         obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
-        self._check_size(obstacles)
-        parts = []
-        for sl in chunk_slices(len(obstacles), chunk_size, progress, f"planning ({self.name})"):
-            logits = self.logits(obstacles[sl], goals[sl])
-            check_masking(self.name, logits, obstacles[sl], goals[sl], corner_cutting, self.moves)
-            parts.append(
-                rollout_logits(
-                    logits,
-                    obstacles[sl],
-                    goals[sl],
-                    starts[sl],
-                    corner_cutting,
-                    moves=self.moves,
-                )
-            )
-        return PlanResult.concat(parts)
+        return self.plan(obstacles, starts, goals, corner_cutting, chunk_size=chunk_size, progress=progress)
 
     def plan_batch(
         self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
     ) -> PlanResult:
-        """One path per map: `starts (B, 2)`; same paths as `plan_maps` with one start per map."""
+        """Deprecated: `plan(obstacles, starts, goals, corner_cutting)`, the one planning call. One path per map:
+        `starts (B, 2)`."""
         obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
-        return self.plan_maps(obstacles, goals, starts[:, None, :], corner_cutting)
+        return self.plan(obstacles, starts, goals, corner_cutting)
 
     def _check_size(self, obstacles: np.ndarray) -> None:
         if obstacles.ndim == 3 and obstacles.shape[1] != self.size:
             n = obstacles.shape[1]
             raise PlannerError(f"planner {self.name!r} is for {self.size}x{self.size} maps, the maps are {n}x{n}")
+
+
+def check_starts_inputs(obstacles, starts, goals) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`plan`'s inputs normalised: `(obstacles (B, N, N) bool, starts (B, S, 2) int64, goals (B, 2) int64)`, from
+    starts `(B, 2)` (S = 1) or `(B, S, 2)`; one-line `InputError` naming the parameter otherwise."""
+    if np.ndim(starts) == 2:
+        obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
+        return obstacles, starts[:, None, :], goals
+    obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
+    return obstacles, starts, goals
 
 
 def check_multi_inputs(obstacles, goals, starts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -251,7 +384,7 @@ def check_multi_inputs(obstacles, goals, starts) -> tuple[np.ndarray, np.ndarray
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     b, n = obstacles.shape[0], obstacles.shape[1]
     if starts.ndim != 3 or starts.shape[0] != b or starts.shape[2] != 2:
-        raise InputError(f"starts has shape {starts.shape}, expected ({b}, S, 2)")
+        raise InputError(f"starts has shape {starts.shape}, expected ({b}, S, 2)", "starts")
     if starts.size and (starts.min() < 0 or starts.max() >= n):
         raise InputError(f"starts has a cell outside the {n}x{n} grid")
     return obstacles, goals, starts
@@ -270,7 +403,11 @@ class TorchPlanner(Planner):
     float32's bytes) and its logits come back in one copy. `module` stays available for gradient-based attacks.
 
     `device` None is the CPU, not recorded in `spec()`; a device given is recorded by its type (`device_type`).
+
+    Capabilities: a policy at every cell and gradients (the module); value maps are the stand-in.
     """
+
+    capabilities = Capabilities(policy=True, gradients=True)
 
     def __init__(
         self,

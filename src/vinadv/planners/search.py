@@ -4,10 +4,12 @@ A search planner (A*, weighted A*, Neural A*, a user's own) implements
 
     plan_paths(obstacles (B, N, N) bool, starts (B, 2) int64, goals (B, 2) int64, corner_cutting) -> SearchResult
 
-one path per row, with the cells it expanded where it reports them. `SearchPlanner.plan_maps` plans a maps file with
-S starts per map as S rows per map, so a search planner works wherever a `Planner` does (plan, attack, run,
-identify, robustness, eval). It has no policy logits: `policy_logits` refuses with a `PlannerError`, and the code
-that needs logits (the rollout metrics' per-cell policy, `interop.protocols`) says it needs a policy planner.
+one path per row, with the cells it expanded where it reports them (and declares so: `Capabilities.expansions`).
+`plan_paths` is the hook of the one planning call, `Planner.plan`: its chunk step plans S starts per map as S rows
+per map and checks the answer, so a search planner works wherever a `Planner` does (plan, attack, run, identify,
+robustness, eval). It declares no policy (`Capabilities.policy` False): `policy_logits` refuses with a
+`PlannerError`, and the code that needs logits (the rollout metrics' per-cell policy, `evaluation.protocols`) asks
+the capability and says what the planner lacks.
 
 Every search planner's answer passes `check_paths` (as every policy planner's logits pass `check_logits`): one path
 per row, every cell in the grid, the first cell the row's start, each next cell one legal move of the maps' movement
@@ -15,11 +17,12 @@ model away (so never an obstacle), a termination that says `goal` exactly where 
 expansions of the maps' shape. Anything else is a `PlannerError` naming the planner, in one line.
 
 A user's own search planner (`--planner FILE.py:FACTORY` whose factory returns an object with `plan_paths`) is
-wrapped by `UserSearchPlanner`: its exceptions (or `sys.exit`) become one-line `PlannerError`s naming it.
+wrapped by `UserSearchPlanner`: its exceptions (or `sys.exit`) become one-line `PlannerError`s naming it, and its
+capabilities are what the object offers.
 
-Attack signals (`attacks.strategies`): `value_maps` is the planner's own cost or heuristic map where it has one,
-else minus the exact cost-to-go (as `optimal`'s); `differentiable` is None, and a planner whose search is
-differentiable offers `differentiable_paths` instead (None otherwise).
+Attack signals (`attacks.strategies`): `value_maps` is the planner's own cost or heuristic map where it has one
+(`Capabilities.value_maps`), else minus the exact cost-to-go (as `optimal`'s); `differentiable` is None, and a
+planner whose search is differentiable (`Capabilities.gradients`) offers `differentiable_paths` instead.
 """
 
 from __future__ import annotations
@@ -35,11 +38,12 @@ from vinadv.grid.actions import ACTION_DELTAS, N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves, move_model
 from vinadv.grid.paths import PackedPaths
 from vinadv.grid.shortest_paths import negative_cost_to_go
-from vinadv.planners.batching import chunk_slices
-from vinadv.planners.interface import DEFAULT_CHUNK, Planner, PlannerError, check_multi_inputs
-from vinadv.planners.result import GOAL, STEP_LIMIT, TERMINATIONS, PlanResult, check_plan_inputs
+from vinadv.planners.interface import Capabilities, Planner, PlannerError
+from vinadv.planners.result import GOAL, STEP_LIMIT, TERMINATIONS, PlanResult
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from torch import nn
 
 
@@ -217,22 +221,40 @@ def check_paths(
 class SearchPlanner(Planner):
     """A planner that searches: `plan_paths` gives the paths (and expansions); no policy logits.
 
-    Subclasses set `name`, `size`, `moves` (the movement model they search, `vinadv.grid.moves`) and implement
-    `plan_paths`. They may override `value_maps` (their own cost or heuristic map) and `differentiable_paths`.
+    Subclasses set `name`, `size`, `moves` (the movement model they search, `vinadv.grid.moves`), `capabilities`
+    (what they offer beyond paths: expansions, their own value maps, gradients) and implement `plan_paths`. They may
+    override `value_maps` (their own cost or heuristic map) and `differentiable_paths`. `plan` chunks the rows and
+    checks every answer (`check_paths`, on the planner's movement model).
     """
+
+    capabilities = Capabilities()
+    #: None: `plan` gives `plan_paths` all the rows at once unless the caller gives a chunk size (the planner batches
+    #: its own work)
+    chunk_size = None
 
     @abstractmethod
     def plan_paths(
         self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
     ) -> SearchResult:
-        """One searched path per row: obstacles `(B, N, N)` bool, starts and goals `(B, 2)` int64 `(row, col)`."""
+        """One searched path per row: obstacles `(B, N, N)` bool, starts and goals `(B, 2)` int64 `(row, col)`; the
+        hook of `plan`, which checks its answer."""
 
-    def paths(
-        self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
-    ) -> SearchResult:
-        """`plan_paths`, checked (`check_paths`, on the planner's movement model): what every caller plans with."""
-        raw = self.plan_paths(obstacles, starts, goals, corner_cutting)
-        return check_paths(self.name, raw, obstacles, starts, goals, corner_cutting, self.moves)
+    def _result_type(self) -> type[PlanResult]:
+        return SearchResult
+
+    def _chunk_planner(self, corner_cutting: bool) -> Callable[[np.ndarray, np.ndarray, np.ndarray], SearchResult]:
+        """`plan`'s step: the chunk's S starts per map as S rows per map (row `b * S + s`), searched by `plan_paths`
+        and checked by `check_paths`."""
+
+        def step(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> SearchResult:
+            per_map = starts.shape[1]
+            if per_map != 1:
+                obstacles, goals = np.repeat(obstacles, per_map, axis=0), np.repeat(goals, per_map, axis=0)
+            rows = starts.reshape(-1, 2)
+            raw = self.plan_paths(obstacles, rows, goals, corner_cutting)
+            return check_paths(self.name, raw, obstacles, rows, goals, corner_cutting, self.moves)
+
+        return step
 
     def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
         raise PlannerError(f"planner {self.name!r} is a search planner: it answers paths, not policy logits")
@@ -240,8 +262,8 @@ class SearchPlanner(Planner):
     @property
     def differentiable_paths(self) -> nn.Module | None:
         """A module `module(obstacles (B,N,N) float, starts (B,2) int64, goals (B,2) int64) -> (B, N, N)` float path
-        map, differentiable with respect to the obstacles (the saliency attack uses it); None for a planner whose
-        search has no gradients."""
+        map, differentiable with respect to the obstacles (the saliency attack uses it), where
+        `capabilities.gradients`; None for a planner whose search has no gradients."""
         return None
 
     def value_maps(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
@@ -253,35 +275,6 @@ class SearchPlanner(Planner):
         # it plans
         return negative_cost_to_go(obstacles, goals, True, self.moves)
 
-    def plan_maps(
-        self,
-        obstacles: np.ndarray,
-        goals: np.ndarray,
-        starts: np.ndarray,
-        corner_cutting: bool = True,
-        chunk_size: int = DEFAULT_CHUNK,
-        progress: bool = False,
-    ) -> SearchResult:
-        """Paths from `starts (B, S, 2)`: row `b * S + s` searches from start `s` of map `b`, `chunk_size` rows at a
-        time."""
-        obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
-        self._check_size(obstacles)
-        per_map = starts.shape[1]
-        map_of_row = np.repeat(np.arange(len(obstacles)), per_map)
-        rows = starts.reshape(-1, 2)
-        parts = [
-            self.paths(obstacles[map_of_row[sl]], rows[sl], goals[map_of_row[sl]], corner_cutting)
-            for sl in chunk_slices(len(rows), chunk_size, progress, f"planning ({self.name})")
-        ]
-        return SearchResult.concat(parts)
-
-    def plan_batch(
-        self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
-    ) -> SearchResult:
-        obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
-        self._check_size(obstacles)
-        return self.paths(obstacles, starts, goals, corner_cutting)
-
 
 class UserSearchPlanner(SearchPlanner):
     """A user's own search planner: any object with `plan_paths(obstacles, starts, goals, corner_cutting)` (the
@@ -289,8 +282,11 @@ class UserSearchPlanner(SearchPlanner):
 
     Optional attributes of the object: `moves` (the movement model it plans, default `octile`: maps of another
     model are refused, as for every planner), `value_maps(obstacles, goals) -> (B, N, N)` (its own cost or heuristic
-    map, for the key-points ranking; default minus the exact cost-to-go) and `differentiable_paths` (a torch module,
-    for the saliency attack). Whatever it raises, `sys.exit` included, is one `PlannerError` naming the planner.
+    map, for the key-points ranking; default minus the exact cost-to-go), `differentiable_paths` (a torch module,
+    for the saliency attack) and `capabilities` (a `Capabilities`, or a dict of some of its fields: say
+    `{"expansions": True}` where its answers carry the expanded cells). Its capabilities are what it offers: value
+    maps where it has `value_maps`, gradients where `differentiable_paths` is not None, expansions where it declares
+    them; never a policy. Whatever it raises, `sys.exit` included, is one `PlannerError` naming the planner.
     """
 
     def __init__(self, impl, name: str, size: int, checksum: str | None = None, config: dict | None = None):
@@ -302,6 +298,14 @@ class UserSearchPlanner(SearchPlanner):
             raise PlannerError(f"planner {name!r}: its moves {moves!r} is not a movement model") from None
         self._checksum = checksum
         self._config = dict(config or {})
+        declared = Capabilities.from_mapping(name, getattr(impl, "capabilities", {}))
+        if declared.policy:
+            raise PlannerError(f"planner {name!r}: an object with plan_paths is a search planner; it has no policy")
+        self.capabilities = Capabilities(
+            value_maps=declared.value_maps or callable(getattr(impl, "value_maps", None)),
+            gradients=declared.gradients or getattr(impl, "differentiable_paths", None) is not None,
+            expansions=declared.expansions,
+        )
 
     def _call(self, what: str, method, *args):
         try:

@@ -233,7 +233,7 @@ def test_the_planner_follows_the_maps_moves_and_plans_many_rows_at_once():
     for moves in ("octile", "moore", "news"):
         planner = AStarPlanner(10).for_moves(moves)
         assert planner.moves == moves and planner.spec()["name"] == "astar"
-        batched = planner.plan_batch(obstacles, starts, goals)
+        batched = planner.plan(obstacles, starts, goals)
         for i in range(len(problems)):  # each row as if searched alone
             alone = planner.plan_paths(obstacles[i : i + 1], starts[i : i + 1], goals[i : i + 1])
             assert alone.paths[0].tolist() == batched.paths[i].tolist()

@@ -61,7 +61,7 @@ def brute_path(obs, start, goal, corner_cutting):
 @pytest.mark.parametrize("corner_cutting", [True, False])
 def test_paths_equal_brute_force_shortest_paths(corner_cutting):
     maps = generate_maps(25, 9, seed=4, n_starts=3, corner_cutting=corner_cutting)
-    result = OptimalPlanner(9, corner_cutting).plan_maps(maps.obstacles, maps.goals, maps.starts, corner_cutting)
+    result = OptimalPlanner(9, corner_cutting).plan(maps.obstacles, maps.starts, maps.goals, corner_cutting)
     assert result.reached.all()
     for b in range(len(maps)):
         obs = maps.obstacles[b].tolist()
@@ -76,7 +76,7 @@ def test_paths_equal_brute_force_shortest_paths(corner_cutting):
 @pytest.mark.parametrize("corner_cutting", [True, False])
 def test_paths_equal_expert_paths_at_28(corner_cutting):
     maps = generate_maps(200, 28, seed=8, n_starts=4, corner_cutting=corner_cutting)
-    result = OptimalPlanner(28, corner_cutting).plan_maps(maps.obstacles, maps.goals, maps.starts, corner_cutting)
+    result = OptimalPlanner(28, corner_cutting).plan(maps.obstacles, maps.starts, maps.goals, corner_cutting)
     _, expert = expert_paths(maps.obstacles, maps.goals, maps.starts, corner_cutting)
     assert result.paths == expert
     assert result.reached.all()
@@ -85,14 +85,14 @@ def test_paths_equal_expert_paths_at_28(corner_cutting):
 def test_a_start_cut_off_from_the_goal_does_not_reach_it():
     obstacles = np.zeros((1, 6, 6), bool)
     obstacles[0, :, 3] = True  # a wall between the two halves
-    result = OptimalPlanner(6).plan_maps(obstacles, np.array([[2, 5]]), np.array([[[2, 1]]]))
+    result = OptimalPlanner(6).plan(obstacles, np.array([[[2, 1]]]), np.array([[2, 5]]))
     assert not result.reached[0] and result.termination_names[0] in ("loop", "step_limit", "collision")
 
 
 def test_refuses_another_move_rule():
     maps = generate_maps(2, 8, seed=1, n_starts=1)
     with pytest.raises(ValueError, match="corner_cutting=True"):
-        OptimalPlanner(8, True).plan_maps(maps.obstacles, maps.goals, maps.starts, corner_cutting=False)
+        OptimalPlanner(8, True).plan(maps.obstacles, maps.starts, maps.goals, corner_cutting=False)
 
 
 @pytest.mark.parametrize("moves", ["moore", "news"])
@@ -109,7 +109,7 @@ def test_follows_the_movement_model(moves):
         best = brute_distances(maps.obstacles[b].tolist(), tuple(maps.goals[b]), True, moves)
         for (r, c), (cost, _) in best.items():
             assert (math.isnan(values[b, r, c]) and math.isinf(cost)) or math.isclose(-values[b, r, c], cost)
-    result = planner.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    result = planner.plan(maps.obstacles, maps.starts, maps.goals)
     assert result.paths == maps.expert and result.reached.all()
     logits = planner.logits(maps.obstacles, maps.goals)
     assert (logits[:, 4:] == ILLEGAL).all() if moves == "news" else (logits[:, 4:] > ILLEGAL).any()

@@ -71,7 +71,7 @@ def test_on_the_whole_mazes_test_split_both_modes_equal_the_literal_loop(planner
 def test_both_modes_agree_on_generated_moore_maps_of_another_size(planner):
     maps = generate_maps(6, 20, seed=3, n_starts=2, moves="moore")
     p = load_planner("neural-astar", 20, moves="moore")
-    exact = p.plan_maps(maps.obstacles, maps.goals, maps.starts)
+    exact = p.plan(maps.obstacles, maps.starts, maps.goals)
     rows = np.repeat(np.arange(6), 2)
     diff = p.plan_paths_differentiable(maps.obstacles[rows], maps.starts.reshape(-1, 2), maps.goals[rows])
     assert exact.reached.all()

@@ -53,7 +53,7 @@ import numpy as np
 from vinadv.errors import InputError
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves, move_model
 from vinadv.grid.shortest_paths import COST_TOL, legal_move
-from vinadv.planners.interface import PlannerError
+from vinadv.planners.interface import Capabilities, PlannerError
 from vinadv.planners.result import GOAL, STEP_LIMIT, PlanResult, check_plan_inputs
 from vinadv.planners.search import SearchPlanner, SearchResult
 
@@ -367,8 +367,10 @@ def best_first_search(
 
 class AStarPlanner(SearchPlanner):
     """Vanilla A* on the maps' movement model (`g_ratio` 0.5, cost 1 on free cells; module doc): exact shortest
-    paths, with the cells it expanded; on `moore` maps the Neural A* authors' vanilla A*, expansion for expansion."""
+    paths, with the cells it expanded; on `moore` maps the Neural A* authors' vanilla A*, expansion for expansion.
+    Capabilities: expansions (its value maps are the stand-in, minus the exact cost-to-go; no gradients)."""
 
+    capabilities = Capabilities(expansions=True)
     g_ratio = 0.5
 
     def __init__(self, size: int, moves: str = DEFAULT_MOVES):

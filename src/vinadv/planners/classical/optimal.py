@@ -19,7 +19,7 @@ from vinadv.errors import InputError
 from vinadv.grid.actions import N_ACTIONS
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves, move_model
 from vinadv.grid.shortest_paths import negative_cost_to_go, optimal_actions, shortest_distances, valid_moves
-from vinadv.planners.interface import DEFAULT_CHUNK, Planner
+from vinadv.planners.interface import Capabilities, Planner
 
 #: logit of an illegal move: below the excess cost of any legal move (at most about 2 * sqrt(2) * N * N).
 ILLEGAL = -1.0e9
@@ -27,7 +27,10 @@ ILLEGAL = -1.0e9
 
 class OptimalPlanner(Planner):
     """Exact shortest paths with DESIGN.md's tie-break, as a whole-map policy planner (no weights), on the movement
-    model `moves`."""
+    model `moves`. Capabilities: a policy at every cell and value maps of its own (minus the exact cost-to-go); no
+    weights, so no gradients."""
+
+    capabilities = Capabilities(policy=True, value_maps=True)
 
     def __init__(self, size: int, corner_cutting: bool = True, moves: str = DEFAULT_MOVES):
         self.name, self.size, self.corner_cutting = "optimal", int(size), bool(corner_cutting)
@@ -69,18 +72,10 @@ class OptimalPlanner(Planner):
         self._check_size(obstacles)
         return negative_cost_to_go(obstacles, goals, self.corner_cutting, self.moves)
 
-    def plan_maps(
-        self,
-        obstacles,
-        goals,
-        starts,
-        corner_cutting: bool = True,
-        chunk_size: int | None = None,
-        progress: bool = False,
-    ):
-        if bool(corner_cutting) != self.corner_cutting:  # the logits follow the planner's own move rule
+    def _chunk_planner(self, corner_cutting: bool):
+        if corner_cutting != self.corner_cutting:  # the logits follow the planner's own move rule
             raise InputError(
                 f"planner 'optimal' was made with corner_cutting={self.corner_cutting}, "
-                f"the maps use corner_cutting={bool(corner_cutting)}"
+                f"the maps use corner_cutting={corner_cutting}"
             )
-        return super().plan_maps(obstacles, goals, starts, corner_cutting, chunk_size or DEFAULT_CHUNK, progress)
+        return super()._chunk_planner(corner_cutting)

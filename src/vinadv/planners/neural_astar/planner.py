@@ -27,7 +27,7 @@ import torch
 
 from vinadv.planners.batching import forward_batches, over_maps, torch_threads
 from vinadv.planners.classical.astar import best_first_search
-from vinadv.planners.interface import PlannerError
+from vinadv.planners.interface import Capabilities, PlannerError
 from vinadv.planners.neural_astar.differentiable import NeuralAstarPaths, authors_heuristic
 from vinadv.planners.neural_astar.model import NeuralAstar
 from vinadv.planners.result import GOAL, STEP_LIMIT, PlanResult, check_plan_inputs
@@ -47,9 +47,13 @@ class NeuralAstarPlanner(SearchPlanner):
         model: the `NeuralAstar` module (eval mode), on `device`.
         batch_size: maps per encoder forward on a GPU, and per differentiable search (on the CPU the encoder runs
             in batches of `vinadv.planners.batching.forward_batches`, as `TorchPlanner`).
+
+    Capabilities: expansions (the authors' histories), value maps of its own (minus its heuristic map) and gradients
+    (the differentiable search, `differentiable_paths`).
     """
 
     moves = MOVES
+    capabilities = Capabilities(value_maps=True, gradients=True, expansions=True)
 
     def __init__(
         self,

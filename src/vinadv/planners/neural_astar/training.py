@@ -17,7 +17,7 @@
   p_opt (the share of paths as long as vanilla A*'s), p_exp (the mean of max(0, (E_A* - E) / E_A*)) and
   h_mean = 2 / (1 / (p_opt + 1e-10) + 1 / (p_exp + 1e-10)); the epoch's figures are the batches' means weighted by
   their rows (what Lightning logs on epoch end). vinadv plans these with the exact mode
-  (`NeuralAstarPlanner.plan_paths`), which gives the differentiable search's paths and expansions except on float32
+  (`NeuralAstarPlanner.plan`), which gives the differentiable search's paths and expansions except on float32
   ties (`vinadv neural-astar compare-modes`).
 - Model selection: the epoch of the highest validation h_mean (the authors' `ModelCheckpoint(monitor=
   "metrics/h_mean", mode="max")`; the first on ties), whose weights are returned.
@@ -149,9 +149,9 @@ def validation_figures(
     starts, goals = maps.starts[:, 0], maps.goals
     planner = NeuralAstarPlanner(model, maps.size, device=device, batch_size=batch_size)
     model.eval()
-    result = planner.plan_paths(maps.obstacles, starts, goals, True)
+    result = planner.plan(maps.obstacles, starts, goals, True, MOVES)
     if astar_expansions is None:
-        astar_expansions = AStarPlanner(maps.size, MOVES).plan_paths(maps.obstacles, starts, goals, True).expansions
+        astar_expansions = AStarPlanner(maps.size, MOVES).plan(maps.obstacles, starts, goals, True, MOVES).expansions
     costs = path_costs(result.paths, MOVES)
     optimal = result.reached & (np.abs(costs - maps.expert_costs.reshape(-1)[rows]) <= 1e-6)
     reference = np.asarray(astar_expansions, dtype=np.float64)
@@ -243,7 +243,7 @@ def train_neural_astar(
     )
     state: NeuralAstarState = run.state
     val_starts = val_maps.starts[:, 0]
-    val_astar = AStarPlanner(val_maps.size, MOVES).plan_paths(val_maps.obstacles, val_starts, val_maps.goals, True)
+    val_astar = AStarPlanner(val_maps.size, MOVES).plan(val_maps.obstacles, val_starts, val_maps.goals, True, MOVES)
     obstacles = torch.from_numpy(train_maps.obstacles.astype(np.float32))
     for epoch in run.epochs():
         t0 = time.time()

@@ -20,7 +20,7 @@ from vinadv.planners.device import resolve_device
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, state_checksum
 from vinadv.planners.registry.base import DEFAULT_PLANNER, REGISTRY, SUFFIX, canonical_name
 from vinadv.planners.registry.models import model_of_file, zoo_model
-from vinadv.planners.search import SearchPlanner, UserSearchPlanner
+from vinadv.planners.search import UserSearchPlanner
 from vinadv.planners.weights import weights_checksum
 
 
@@ -168,12 +168,12 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
     # `_load`, not `load_planner`: the base's movement model is checked once, on the average (`load_planner`)
     base = _load(base_spec, size, weights, corner_cutting, device)
     module = base.differentiable
-    if isinstance(base, SearchPlanner):  # the average is over policies: a search planner has none
+    if not base.capabilities.policy:  # the average is over policies: a search planner has none
         raise PlannerError(
-            f"planner {spec!r}: {base.name!r} is a search planner; {SUFFIX} averages a policy planner's action "
-            "probabilities (vin, gppn or your own torch module)"
+            f"planner {spec!r}: {base.name!r} declares no policy (a search planner); {SUFFIX} averages a policy "
+            "planner's action probabilities (vin, gppn or your own torch module)"
         )
-    if module is None:
+    if not base.capabilities.gradients or module is None:
         raise PlannerError(
             f"planner {spec!r}: {base.name!r} has no torch module to average ({SUFFIX} takes vin, gppn or your own)"
         )

@@ -469,13 +469,23 @@ def plan_maps(
         check_plan_inputs(obstacles, starts[:, s], goals)
     weights = as_vin_weights(model)  # a PyTorch VIN is read now, once for the whole batch
     parts = [
-        _plan_chunk(obstacles[sl], goals[sl], starts[sl], weights, corner_cutting, stats if stats is not None else {})
+        plan_chunk(obstacles[sl], goals[sl], starts[sl], weights, corner_cutting, stats if stats is not None else {})
         for sl in chunk_slices(len(obstacles), chunk_size, progress)
     ]
     return PlanResult.concat(parts)
 
 
-def _plan_chunk(obstacles, goals, starts, weights: VINWeights, corner_cutting, stats) -> PlanResult:
+def plan_chunk(
+    obstacles: np.ndarray,
+    goals: np.ndarray,
+    starts: np.ndarray,
+    weights: VINWeights,
+    corner_cutting: bool = True,
+    stats: dict | None = None,
+) -> PlanResult:
+    """One chunk of `plan_maps`, on inputs already checked (contiguous `(b, N, N)` bool, `(b, 2)` and `(b, S, 2)`
+    int64 in the grid) and `VINWeights`: the step of `VINPlanner.plan`'s loop. `stats`: near-tie counts, added to."""
+    stats = {} if stats is None else stats
     b, s = starts.shape[0], starts.shape[1]
     n = obstacles.shape[1]
     p = FoldedVIN.from_weights(weights)

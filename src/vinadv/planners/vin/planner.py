@@ -11,13 +11,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from vinadv.grid.moves import DEFAULT_MOVES
+from vinadv.planners.batching import DEFAULT_CHUNK as ENGINE_CHUNK
 from vinadv.planners.device import full_precision
 from vinadv.planners.interface import (
     DEFAULT_CHUNK,
+    Capabilities,
     Planner,
     PlannerError,
     TorchPlanner,
-    check_multi_inputs,
+    is_planner,
     state_checksum,
 )
 from vinadv.planners.result import PlanResult
@@ -47,7 +49,11 @@ class VINPlanner(Planner):
     `moves`: the movement model the VIN was trained on (`trained_moves` of its record; `octile` for records without
     one). The engine plans `octile` moves, so a VIN of another model plans with its PyTorch forward on the CPU and
     the rollout every planner shares, which follows the model's moves and costs.
+
+    Capabilities: a policy at every cell, value maps of its own (`max_a q`) and gradients (the PyTorch `VIN`).
     """
+
+    capabilities = Capabilities(policy=True, value_maps=True, gradients=True)
 
     def __init__(
         self,
@@ -134,32 +140,33 @@ class VINPlanner(Planner):
                 out[i : i + batch_size] = vin.q_values(x).max(dim=1).values.cpu().numpy()
         return out
 
-    def plan_maps(
-        self,
-        obstacles: np.ndarray,
-        goals: np.ndarray,
-        starts: np.ndarray,
-        corner_cutting: bool = True,
-        chunk_size: int | None = None,
-        progress: bool = False,
-    ) -> PlanResult:
-        # the PyTorch forward on the device, or for a movement model the engine does not plan (it plans octile
-        # moves), then the rollout every planner shares
-        if self._device is not None or self.moves != DEFAULT_MOVES:
-            chunk = DEFAULT_CHUNK if chunk_size is None else chunk_size
-            return super().plan_maps(obstacles, goals, starts, corner_cutting, chunk, progress)
-        obstacles, goals, starts = check_multi_inputs(obstacles, goals, starts)
-        self._check_size(obstacles)
-        return engine.plan_maps(
-            obstacles, goals, starts, self.weights, corner_cutting, chunk_size or engine.DEFAULT_CHUNK, progress
-        )
+    def _engine_plans(self) -> bool:
+        """Whether `plan` runs the exact engine: no device asked for, and the engine's `octile` moves (else the
+        PyTorch forward on the device, or for another movement model, then the rollout every planner shares)."""
+        return self._device is None and self.moves == DEFAULT_MOVES
+
+    @property
+    def chunk_size(self) -> int:
+        return ENGINE_CHUNK if self._engine_plans() else DEFAULT_CHUNK
+
+    def _chunk_planner(self, corner_cutting: bool):
+        """`plan`'s step: the exact engine on the weights as they are at the call (read once for all its chunks),
+        or the policy rollout every planner shares (`_engine_plans`)."""
+        if not self._engine_plans():
+            return super()._chunk_planner(corner_cutting)
+        weights = self.weights
+
+        def step(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> PlanResult:
+            return engine.plan_chunk(obstacles, goals, starts, weights, corner_cutting)
+
+        return step
 
 
 def as_planner(planner, size: int) -> Planner:
     """`planner` if it is a `Planner`; a `VIN` or `VINWeights` wrapped as the `vin` planner for `size x size` maps
     (the library functions that take a planner also take a VIN, as before there were other planners); any other
     `torch.nn.Module` as a `TorchPlanner` named after its class."""
-    if isinstance(planner, Planner):
+    if is_planner(planner):
         return planner
     if isinstance(planner, VINWeights):
         return VINPlanner(planner, size)

@@ -95,7 +95,7 @@ def plan_reference(
     Args:
         obstacles: `(B, N, N)` bool. starts, goals: `(B, 2)` int `(row, col)`.
         model: the VIN; corner_cutting: whether a diagonal move may pass between obstacles.
-        chunk_size: ignored (same signature as `plan_batch`).
+        chunk_size: ignored (same signature as `engine.plan_batch`).
     """
     obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
     limits = step_limits(obstacles, starts, goals, corner_cutting)
