@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 
 from vinadv.bench.leaderboard import compute_time, planner_label, read_entries, render_markdown, rows
-from vinadv.bench.suites import ENTRY_FORMAT
+from vinadv.bench.suites import ENTRY_FORMAT, FROZEN
 from vinadv.cli import main
 
 
@@ -14,11 +14,11 @@ def _entry(planner: str, harmful: float, flags=(), removal: float = 0.0) -> dict
     figures = {"k": 1, "harmful_rate": harmful, "paper_success_rate": harmful / 2}
     return {
         "format": ENTRY_FORMAT,
-        "suite": {"name": "vin28-quick-v1", "checksum": "ab" * 32},
+        "suite": {"name": "vin28-quick-v1", "checksum": FROZEN["vin28-quick-v1"]},
         "planner": {"name": planner},
         "weights_sha256": None,
         "clean": {"success_rate": 0.9},
-        "attacks": {"remove:random": {"edit": "remove", "by_obstacles": [{"harmful_rate": removal}]}},
+        "attacks": {"remove:random": {"edit": "remove", "by_obstacles": [{**figures, "harmful_rate": removal}]}},
         "worst_case": [figures, {**figures, "k": 3}],
         "flags": {name: {"raised": name in flags, "why": ""} for name in ("gradient_masking", "too_weak")},
     }

@@ -52,6 +52,9 @@ from vinadv.robustness import Figures, MapOutcomes, benchmark_maps, robustness, 
 VOLATILE_FIELDS = ("time", "machine")
 #: a path is optimal when its cost is within this of the optimum
 OPTIMAL_TOL = 1e-9
+#: the results-format version of a stored chunk: bumped whenever what `compute_chunk` computes changes, so that
+#: `--resume` never joins chunks of two computations (chunks stored before fingerprints are this version, 1)
+CHUNK_FORMAT = 1
 
 
 def suite_maps(suite: Suite, data: str | os.PathLike | None = None) -> MapSet:
@@ -131,6 +134,56 @@ def entry_keys(suite: Suite, planner: Planner) -> list[str]:
     if info is not None and not info.takes_weights and info.family is not None:
         keys.append(entry_key(suite, planner, info.family + suffix))
     return keys
+
+
+def chunk_fingerprint(suite: Suite, planner: Planner) -> dict:
+    """What a stored chunk must have been computed with to be reused (`run_bench`): the results format
+    (`CHUNK_FORMAT`), the suite's checksum and the planner's provenance (a bring-your-own planner's: the files it
+    imports from beside it, or the version it declares, `vinadv.planners.provenance`; None for vinadv's own, which
+    the results format covers). Stored beside the chunk's result (field `fingerprint`), out of the entry key."""
+    return {"format": CHUNK_FORMAT, "suite": suite.checksum, "provenance": getattr(planner, "provenance", None)}
+
+
+def _describe(fingerprint: dict, other: dict) -> str:
+    """The parts of `fingerprint` that differ from `other`, in words."""
+    parts = []
+    if fingerprint.get("format") != other.get("format"):
+        parts.append(f"results format {fingerprint.get('format')}")
+    if fingerprint.get("suite") != other.get("suite"):
+        parts.append(f"suite checksum {str(fingerprint.get('suite'))[:12]}")
+    mine, theirs = fingerprint.get("provenance") or {}, other.get("provenance") or {}
+    if mine != theirs:
+        if "version" in mine or "version" in theirs:
+            parts.append(f"planner version {mine.get('version')!r}")
+        files, others = mine.get("files") or {}, theirs.get("files") or {}
+        changed = sorted(n for n in set(files) | set(others) if files.get(n) != others.get(n))
+        parts += [f"{n} {files[n][:12] if n in files else '(not imported)'}" for n in changed[:4]]
+    return ", ".join(parts) or "the same"
+
+
+def reusable(stored: dict | None, fingerprint: dict) -> bool:
+    """Whether a chunk stored with the fingerprint `stored` may join an entry computed with `fingerprint`: the same
+    results format, suite checksum and planner provenance. A chunk stored before fingerprints (`stored` None) is
+    results format 1 of its entry's suite (the suite is in the entry key), its provenance unknown."""
+    if stored is None:
+        stored = {**fingerprint, "format": 1}
+    return stored == fingerprint
+
+
+def _check_stored(suite: Suite, n_chunks: int):
+    """The check of a stored chunk's result (`Store.read_bench_chunks`): the chunk schema
+    (`vinadv.bench.validate.check_chunk`) and a fingerprint that is an object; chunks past the suite are not read."""
+    from vinadv.bench.validate import chunk_problem  # noqa: PLC0415 (only with --db)
+
+    def check(chunk: int, result) -> str | None:
+        if not 0 <= chunk < n_chunks:
+            return None
+        problem = chunk_problem(result, suite, chunk)
+        if problem is None and not isinstance(result.get("fingerprint", {}), dict):
+            problem = "field 'fingerprint' is not an object"
+        return problem
+
+    return check
 
 
 def chunk_maps(maps: MapSet, lo: int, hi: int) -> MapSet:
@@ -361,6 +414,39 @@ class SuiteMaps:
         return suite_maps(self.suite, self.data)
 
 
+def _stored_chunks(
+    store, db: str, keys: list[str], suite: Suite, n_chunks: int, fingerprint: dict, resume: bool
+) -> tuple[dict[int, dict], str]:
+    """The chunks of this entry stored in `db` ({chunk: result}, each checked: `_check_stored`) and the key they are
+    stored under (the first of `keys` when none); InputError for chunks stored without `resume`, or one whose
+    fingerprint is not this run's (`reusable`), naming both."""
+    done: dict[int, dict] = {}
+    for key in keys:  # continued under the key its chunks are stored under
+        try:
+            stored = store.read_bench_chunks(key, _check_stored(suite, n_chunks))
+        except InputError as exc:
+            raise InputError(f"database {db}: {exc}", "db") from None
+        done = {c: r for c, r in stored.items() if 0 <= c < n_chunks}
+        if done:
+            break
+    else:
+        key = keys[0]
+    if done and not resume:
+        raise InputError(
+            f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
+        )
+    for c, r in sorted(done.items()):  # one computation per entry: every chunk's fingerprint is this run's
+        if not reusable(r.get("fingerprint"), fingerprint):
+            stored_fp = r.get("fingerprint") or {**fingerprint, "format": 1}
+            raise InputError(
+                f"database {db}: chunk {c} of this entry was computed with {_describe(stored_fp, fingerprint)}, this "
+                f"run with {_describe(fingerprint, stored_fp)}; the entry would mix two computations: use another "
+                "database",
+                "resume",
+            )
+    return done, key
+
+
 def _chunk_task(suite: Suite, planner, maps, chunk: int) -> tuple[int, dict]:
     """The task of `run_bench`: `(chunk, compute_chunk(...))`, the planner and maps given or by reference."""
     return chunk, compute_chunk(suite, resolve(planner), resolve(maps), chunk)
@@ -390,6 +476,7 @@ def run_bench(
     checks = planner_checks(suite, planner, maps)
     keys = entry_keys(suite, planner)
     key = keys[0]
+    fingerprint = chunk_fingerprint(suite, planner)
     n_chunks = -(-suite.n // suite.chunk)
     done: dict[int, dict] = {}
     store = None
@@ -397,17 +484,11 @@ def run_bench(
         from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only with --db)
 
         store = Store.open(db)
-        for key in keys:  # continued under the key its chunks are stored under
-            done = {c: r for c, r in store.read_bench_chunks(key).items() if c < n_chunks}
-            if done:
-                break
-        else:
-            key = keys[0]
-        if done and not resume:
+        try:
+            done, key = _stored_chunks(store, db, keys, suite, n_chunks, fingerprint, resume)
+        except InputError:
             store.close()
-            raise InputError(
-                f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
-            )
+            raise
     todo = [c for c in range(n_chunks) if c not in done]
     absolute = None if data is None else os.path.abspath(os.fspath(data))  # workers may run in another folder
     task = functools.partial(
@@ -424,7 +505,7 @@ def run_bench(
     try:
         for chunk, result in executor.map(task, todo, ordered=False):
             if store is not None:
-                store.add_bench_chunk(key, chunk, result)
+                store.add_bench_chunk(key, chunk, {**result, "fingerprint": fingerprint})
             done[chunk] = result
             if bar is not None:
                 bar.update(1)

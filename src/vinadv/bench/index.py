@@ -40,7 +40,7 @@ def make_index(entries: list[tuple[Path, dict]], folder: str) -> dict:
                 "clean_success": e["clean"]["success_rate"],
                 "worst_case_harmful_rate": e["worst_case"][0]["harmful_rate"],
                 "flags": [name for name, f in e["flags"].items() if f["raised"]],
-                "wall_s": e["time"]["wall_s"],
+                "wall_s": (e.get("time") or {}).get("wall_s"),
             }
         )
     return {"format": INDEX_FORMAT, "entries": rows}

@@ -1,15 +1,25 @@
 """The leaderboard: benchmark entries (`vinadv.bench.entry`) of one folder as a Markdown and an HTML table, per suite,
 sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at the
 largest k, then by name), each row linking to its entry file, its flags shown beside it, and how long it took (the
-sum of its chunks' seconds: on the machine and load of the time, not a speed figure)."""
+sum of its chunks' seconds: on the machine and load of the time, not a speed figure).
+
+Every entry is checked against the entry schema (`vinadv.bench.validate`) before it is used: a bad one is one line
+naming its file and field (`read_entries_checked`), the others still rendered. An entry whose suite checksum is not
+one of the released suites' (`vinadv.bench.suites.FROZEN`) is listed under its own heading, labelled unknown, never
+beside the released suite's entries. Markdown and HTML escape every string taken from an entry (`markdown_text`,
+`html.escape`)."""
 
 from __future__ import annotations
 
 import html
+import math
 import os
+import re
+import urllib.parse
 from pathlib import Path
 
-from vinadv.bench.suites import ENTRY_FORMAT
+from vinadv.bench.suites import ENTRY_FORMAT, FROZEN
+from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
 from vinadv.jsonfile import read_json_document
 
@@ -41,16 +51,35 @@ def upgrade_entry(entry: dict) -> dict:
 
 
 def read_entries(folder: str | os.PathLike) -> list[tuple[Path, dict]]:
-    """Every entry file (`*.json` of format `ENTRY_FORMAT`) in `folder`, in name order, upgraded (`upgrade_entry`);
-    InputError for a folder that
-    is not there, or a JSON file that is not an entry's or is not valid JSON."""
+    """Every entry file (`*.json` of format `ENTRY_FORMAT`) in `folder`, in name order, checked against the entry
+    schema (`vinadv.bench.validate`) and upgraded (`upgrade_entry`); InputError for a folder that is not there, or
+    for the first file that is not a valid entry (naming the file and the field)."""
+    entries, problems = read_entries_checked(folder)
+    if problems:
+        raise InputError(problems[0])
+    return entries
+
+
+def read_entries_checked(folder: str | os.PathLike) -> tuple[list[tuple[Path, dict]], list[str]]:
+    """The valid entries of `folder` as `read_entries` reads them, and one line per file that is not one (not
+    readable, not JSON, not an entry, or a field the schema refuses), naming the file and the field; InputError for a
+    folder that is not there."""
     folder = Path(folder)
     if not folder.is_dir():
-        raise InputError(f"{folder}: no such folder", "folder")
-    entries = []
+        raise InputError(f"{folder}: no such folder", "dir")
+    entries, problems = [], []
     for path in sorted(folder.glob("*.json")):
-        entries.append((path, upgrade_entry(read_json_document(path, ENTRY_FORMAT, "benchmark entry"))))
-    return entries
+        try:
+            entry = read_json_document(path, ENTRY_FORMAT, "benchmark entry")
+        except InputError as exc:
+            problems.append(str(exc))
+            continue
+        problem = entry_problem(entry)
+        if problem is not None:
+            problems.append(f"{path}: {problem}: not a valid benchmark entry")
+            continue
+        entries.append((path, upgrade_entry(entry)))
+    return entries, problems
 
 
 def _pct(value) -> str:
@@ -70,6 +99,13 @@ def _removal_harmful(entry: dict) -> float | None:
     return max(rates) if rates else None
 
 
+def _value(value) -> str:
+    """A config value as a label shows it: a number by `g`, anything else as text."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+        return f"{value:g}"
+    return str(value)
+
+
 def planner_label(spec: dict) -> str:
     """The planner as `--planner` names it: its name, with the values of its registered parameters
     (`wastar:w=2`), so that two settings of one planner read apart."""
@@ -80,7 +116,7 @@ def planner_label(spec: dict) -> str:
     given = [] if info is None else [p.name for p in info.params if p.name in config]
     if not given:
         return spec["name"]
-    return spec["name"] + ":" + ",".join(f"{k}={config[k]:g}" for k in given)
+    return spec["name"] + ":" + ",".join(f"{k}={_value(config[k])}" for k in given)
 
 
 def compute_time(entry: dict) -> str:
@@ -93,15 +129,27 @@ def compute_time(entry: dict) -> str:
     return f"{sum(chunks) / 60:.1f} min" + (f" ({device})" if device else "")
 
 
+def suite_heading(suite: dict) -> tuple[str, str]:
+    """(the key of a suite's table, its heading): the suite's name and checksum, and for a checksum that is not the
+    released suite's of that name (`FROZEN`) the label "unknown", keyed apart from the released suite."""
+    name, checksum = suite["name"], suite["checksum"]
+    if FROZEN.get(name) == checksum:
+        return name, f"{name} ({checksum[:12]})"
+    return f"{name} (unknown {checksum[:12]})", f"{name} ({checksum[:12]}, unknown: not a released suite)"
+
+
 def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
-    """{suite name: rows, sorted}: each row the entry's file, its cells' values and its raised flags."""
+    """{suite: rows, sorted}: each row the entry's file, its cells' values and its raised flags. A suite is keyed by
+    its name (for an unreleased checksum, by its name and checksum, labelled unknown: `suite_heading`); the released
+    suites first."""
     by_suite: dict[str, list[dict]] = {}
     for path, e in entries:
         worst = e["worst_case"]
         weights = e.get("weights_sha256")
+        key, heading = suite_heading(e["suite"])
         row = {
             "file": path.name,
-            "suite": f"{e['suite']['name']} ({e['suite']['checksum'][:12]})",
+            "suite": heading,
             "planner": planner_label(e["planner"]),
             "weights": weights[:12] if weights else "—",
             "clean": e["clean"]["success_rate"],
@@ -115,7 +163,7 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
             "flags": [name for name, f in e["flags"].items() if f["raised"]],
             "time": compute_time(e),
         }
-        by_suite.setdefault(e["suite"]["name"], []).append(row)
+        by_suite.setdefault(key, []).append(row)
 
     def order(r):
         return (
@@ -125,7 +173,10 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
             r["weights"],
         )
 
-    return {suite: sorted(rs, key=order) for suite, rs in sorted(by_suite.items())}
+    def released_first(item):
+        return (item[0] not in FROZEN, item[0])
+
+    return {suite: sorted(rs, key=order) for suite, rs in sorted(by_suite.items(), key=released_first)}
 
 
 def _cells(r: dict) -> list[str]:
@@ -144,16 +195,33 @@ def _cells(r: dict) -> list[str]:
     ]
 
 
+#: what a Markdown table cell must not hold raw: inline markup, links, HTML, the cell separator
+_MARKDOWN_SPECIAL = re.compile(r"([\\`*\[\]<>|&~]|(?<![A-Za-z0-9])_|_(?![A-Za-z0-9]))")
+_CONTROL = re.compile(r"[\x00-\x1f\x7f\u2028\u2029]")
+
+
+def markdown_text(value: str) -> str:
+    """`value` as literal text in a Markdown table cell: line breaks and other control characters as spaces, every
+    character that could start markup (a link, HTML, emphasis, code, a cell separator) backslash-escaped."""
+    return _MARKDOWN_SPECIAL.sub(r"\\\1", _CONTROL.sub(" ", str(value)))
+
+
+def _link(prefix: str, file: str) -> str:
+    """A link target to the entry file: percent-encoded (a file name cannot end the link or start markup)."""
+    return urllib.parse.quote(prefix + file, safe="/.-_~")
+
+
 def render_markdown(table: dict[str, list[dict]], link_prefix: str = "") -> str:
-    """The leaderboard as Markdown: one table per suite, the planner cell linking to `link_prefix` + entry file."""
+    """The leaderboard as Markdown: one table per suite, the planner cell linking to `link_prefix` + entry file; the
+    strings taken from the entries escaped (`markdown_text`)."""
     out = []
     for rs in table.values():
-        out.append(f"### {rs[0]['suite']}\n")
+        out.append(f"### {markdown_text(rs[0]['suite'])}\n")
         out.append("| # | " + " | ".join(COLUMNS) + " |")
         out.append("|" + " --- |" * (len(COLUMNS) + 1))
         for i, r in enumerate(rs, start=1):
-            cells = _cells(r)
-            cells[0] = f"[{cells[0]}]({link_prefix}{r['file']})"
+            cells = [markdown_text(c) for c in _cells(r)]
+            cells[0] = f"[{cells[0]}]({_link(link_prefix, r['file'])})"
             out.append(f"| {i} | " + " | ".join(cells) + " |")
         out.append("")
     return "\n".join(out)
@@ -173,7 +241,7 @@ def render_html(table: dict[str, list[dict]], link_prefix: str = "") -> str:
         parts.append("<tr><th>#</th>" + "".join(f"<th>{html.escape(c)}</th>" for c in COLUMNS) + "</tr>")
         for i, r in enumerate(rs, start=1):
             cells = [html.escape(c) for c in _cells(r)]
-            link = html.escape(link_prefix + r["file"], quote=True)
+            link = html.escape(_link(link_prefix, r["file"]), quote=True)
             cells[0] = f'<a href="{link}">{cells[0]}</a>'
             parts.append(f"<tr><td>{i}</td>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
         parts.append("</table>")

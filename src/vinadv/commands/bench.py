@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 from vinadv.bench.index import index_json, make_index
@@ -17,7 +18,7 @@ from vinadv.commands import (
     planner_device,
 )
 from vinadv.commands.output import add_output_options, emit, shows_progress
-from vinadv.errors import InputError
+from vinadv.errors import InputError, one_line
 from vinadv.outfile import atomic_output, check_output_path
 
 
@@ -52,7 +53,9 @@ def register(subparsers) -> None:
         "leaderboard",
         help="render the entries of a folder as a leaderboard (HTML and Markdown)",
         description="Read every result entry (*.json) of DIR and write OUT/leaderboard.html and OUT/leaderboard.md, "
-        "one table per suite sorted by the worst-case harmful rate, each row linking to its entry.",
+        "one table per suite sorted by the worst-case harmful rate, each row linking to its entry. Each entry is "
+        "checked against the entry schema: a file that is not a valid entry is one line naming it and the field, the "
+        "rest still rendered, and the status is 2.",
     )
     board.add_argument("dir", metavar="DIR", help="folder of result entries (*.json)")
     board.add_argument("--out", required=True, metavar="OUT", help="folder to write leaderboard.html and .md to")
@@ -100,14 +103,14 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
 
 
 def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
-    from vinadv.bench.leaderboard import read_entries, render_html, render_markdown, rows
+    from vinadv.bench.leaderboard import read_entries_checked, render_html, render_markdown, rows
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out: {out} exists and is not a folder")
     if args.index:
         check_output_path(args.index)
-    entries = read_entries(args.dir)
+    entries, problems = read_entries_checked(args.dir)
     table = rows(entries)
     if args.index:  # the folder as given: the index names the files the way the user does
         with atomic_output(args.index, "w", encoding="utf-8") as fh:
@@ -125,4 +128,7 @@ def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
         n = sum(len(r) for r in table.values())
         print(f"{n} entries of {len(table)} suites -> {out / 'leaderboard.html'}, {out / 'leaderboard.md'}")
 
-    return emit(args, {"suites": table}, report)
+    for problem in problems:  # one line per file that is not a valid entry; the others are rendered
+        print(f"vinadv: error: {one_line(problem)}", file=sys.stderr)
+    code = emit(args, {"suites": table, "problems": problems}, report)
+    return 2 if problems else code

@@ -49,9 +49,18 @@ PIECES_PER_THREAD = 4
 MIN_PIECE = 16
 
 
-def over_maps(b: int, work: Callable[[int, int], None], threads: int | None = None) -> None:
+#: the most work (in units of the caller's `cost`: multiply-adds for the VIN's value iteration) one round of
+#: `over_maps` hands to its threads: about a second of compiled kernel, after which Ctrl-C and SIGTERM are seen
+ROUND_COST = 2 * 10**9
+
+
+def over_maps(b: int, work: Callable[[int, int], None], threads: int | None = None, cost: float = 0.0) -> None:
     """`work(lo, hi)` over `range(b)` split between `threads` threads (default and at most `N_THREADS`), for
     kernels that release the GIL (Numba `nogil=True`).
+
+    `cost`: the work of one map (say k * l_q * N * N multiply-adds); the maps are then run in rounds of at most
+    `ROUND_COST` work between them, one after the other, so that a signal (Ctrl-C, SIGTERM), which Python handles only
+    between two calls of a compiled kernel, stops the command within a round, however large k or the batch.
 
     Plain threads rather than Numba's OpenMP layer: OpenMP workers left spinning slow down PyTorch's own OpenMP
     pool, which callers use right after. Several pieces per thread, taken as threads come free: on a machine where
@@ -59,6 +68,12 @@ def over_maps(b: int, work: Callable[[int, int], None], threads: int | None = No
     rest (one piece per thread made the job as slow as its slowest thread, about 2x).
     """
     threads = N_THREADS if threads is None else max(1, min(threads, N_THREADS))
+    per_round = b if cost <= 0 else max(1, int(ROUND_COST * threads // cost))
+    if per_round < b:
+        for lo in range(0, b, per_round):
+            hi = min(b, lo + per_round)
+            over_maps(hi - lo, lambda a, z, lo=lo: work(lo + a, lo + z), threads)
+        return
     pieces = min(threads * PIECES_PER_THREAD, b // MIN_PIECE)
     if threads == 1 or pieces < 2:
         work(0, b)

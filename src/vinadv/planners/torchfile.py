@@ -8,6 +8,11 @@ Only those names and `collections.OrderedDict` are accepted, so, as with `torch.
 cannot run code. Anything else (the legacy format, other classes, big-endian storages, dtypes NumPy lacks such as
 bfloat16, a view outside its storage) gives None: the caller reads that file with PyTorch, which also words its
 errors.
+
+A file this reader finds damaged is never handed to PyTorch, which checks less: a zip archive whose members fail
+their CRC-32 (`check_archive`: PyTorch's reader does not check it, and would load a flipped byte of tensor data as
+other weights), a storage of the wrong length or a truncated pickle raise InputError naming the file. So do
+floating tensors holding NaN or infinities (`check_finite`): no planner plans with them.
 """
 
 from __future__ import annotations
@@ -19,6 +24,8 @@ import pickle
 import zipfile
 
 import numpy as np
+
+from vinadv.errors import InputError
 
 _STORAGE_DTYPES = {
     "FloatStorage": np.float32,
@@ -35,6 +42,53 @@ _STORAGE_DTYPES = {
 
 class _Unsupported(Exception):
     """Something this reader does not handle: PyTorch reads the file instead."""
+
+
+class _Damaged(Exception):
+    """A zip archive torch.save wrote whose content is not what it says: refused, never read by PyTorch."""
+
+
+def check_archive(path: str | os.PathLike, archive: zipfile.ZipFile | None = None) -> None:
+    """InputError naming `path` when it is a zip archive with a member whose CRC-32 does not match its bytes (a member
+    stored without one, CRC 0, as `torch.serialization.config.save.compute_crc32 = False` writes, is not checked);
+    nothing for a file that is not a zip archive (PyTorch's legacy format)."""
+    try:
+        if archive is None:
+            if not zipfile.is_zipfile(path):
+                return
+            with zipfile.ZipFile(path) as opened:
+                check_archive(path, opened)
+            return
+        for info in archive.infolist():
+            if info.CRC == 0 and info.file_size:
+                continue
+            with archive.open(info) as fh:  # ZipExtFile checks the CRC-32 when the member is read to its end
+                while fh.read(1 << 20):
+                    pass
+    except (zipfile.BadZipFile, EOFError, OSError, ValueError, NotImplementedError) as exc:
+        why = str(exc).splitlines()[0] if str(exc) else "truncated"
+        raise InputError(f"{path}: a damaged weights file ({why})") from None
+
+
+def check_finite(path: str | os.PathLike, data, where: str = "") -> None:
+    """InputError naming `path` and the entry when a floating array (NumPy, or a torch tensor) in `data` (dicts,
+    lists and tuples of them, nested) holds NaN or an infinity."""
+    if isinstance(data, dict):
+        for key, value in data.items():
+            check_finite(path, value, f"{where}.{key}" if where else str(key))
+        return
+    if isinstance(data, (list, tuple)):
+        for i, value in enumerate(data):
+            check_finite(path, value, f"{where}[{i}]")
+        return
+    if isinstance(data, np.ndarray):
+        bad = data.dtype.kind in "fc" and not np.isfinite(data).all()
+    elif hasattr(data, "is_floating_point") and hasattr(data, "isfinite"):  # a torch tensor
+        bad = bool(data.is_floating_point() and not data.isfinite().all())
+    else:
+        return
+    if bad:
+        raise InputError(f"{path}: tensor '{where}' holds NaN or infinite values: not usable weights")
 
 
 def _rebuild_tensor(storage, offset, size, stride, requires_grad=False, hooks=None, metadata=None) -> np.ndarray:
@@ -74,18 +128,28 @@ class _Unpickler(pickle.Unpickler):
             raise _Unsupported("a persistent id other than a storage")
         dtype, key, numel = pid[1], str(pid[2]), int(pid[4])
         if key not in self.storages:
-            raw = self.archive.read(f"{self.prefix}data/{key}")
+            try:
+                raw = self.archive.read(f"{self.prefix}data/{key}")
+            except KeyError:
+                raise _Damaged(f"no storage {key}") from None
             if len(raw) != numel * dtype.itemsize:
-                raise _Unsupported("a storage of the wrong length")
+                raise _Damaged(f"storage {key} holds {len(raw)} bytes, not {numel * dtype.itemsize}")
             self.storages[key] = np.frombuffer(raw, dtype=dtype)
         return self.storages[key]
 
 
 def read_torch_file(path: str | os.PathLike) -> object | None:
     """The object `torch.load(path, weights_only=True)` gives, with NumPy arrays for tensors; None when this reader
-    cannot read the file (see the module docstring), including a damaged or missing one."""
+    cannot read the file (see the module docstring: the caller reads it with PyTorch). InputError naming the file for
+    a damaged zip archive (a member failing its CRC-32, a missing or short storage, a truncated pickle) and for
+    floating tensors holding NaN or infinities: such a file is never handed to a reader that checks less."""
     try:
-        with zipfile.ZipFile(path) as archive:
+        archive = zipfile.ZipFile(path)
+    except (OSError, zipfile.BadZipFile, EOFError, ValueError):
+        return None  # not a zip archive (PyTorch's legacy format), or unreadable: PyTorch words it
+    with archive:
+        check_archive(path, archive)
+        try:
             names = archive.namelist()
             pickles = [n for n in names if n.endswith("/data.pkl") and n.count("/") == 1]
             if len(pickles) != 1:
@@ -93,8 +157,14 @@ def read_torch_file(path: str | os.PathLike) -> object | None:
             prefix = pickles[0][: -len("data.pkl")]
             if prefix + "byteorder" in names and archive.read(prefix + "byteorder").strip() != b"little":
                 return None
-            return _Unpickler(archive.read(pickles[0]), archive, prefix).load()
-    except (_Unsupported, OSError, zipfile.BadZipFile, KeyError, EOFError, ValueError, pickle.UnpicklingError):
-        return None
-    except (AttributeError, TypeError, IndexError, RecursionError):  # a malformed pickle: PyTorch words its error
-        return None
+            data = _Unpickler(archive.read(pickles[0]), archive, prefix).load()
+        except _Unsupported:
+            return None
+        except _Damaged as exc:
+            raise InputError(f"{path}: a damaged weights file ({exc})") from None
+        except (EOFError, pickle.UnpicklingError) as exc:
+            raise InputError(f"{path}: a damaged weights file (its pickle: {type(exc).__name__})") from None
+        except (KeyError, ValueError, AttributeError, TypeError, IndexError, RecursionError):
+            return None  # a pickle this reader does not follow: PyTorch reads it, or words its error
+    check_finite(path, data)
+    return data

@@ -8,6 +8,7 @@ module reads and which imports nothing of it). Each planner's own file format li
 from __future__ import annotations
 
 import os
+import stat
 import warnings
 import zipfile
 from collections.abc import Iterable
@@ -18,9 +19,20 @@ from vinadv.errors import InputError
 from vinadv.planners.registry.models import WEIGHTS_DIR, resolve, verify
 from vinadv.planners.registry.models import file_sha256 as weights_checksum
 
+#: the most iterations (value-iteration steps, recurrent steps) k a weights file's config, or `--k`, may ask for:
+#: far past any map a grid planner plans (the VIN's default is about 1.3 N; 1,000 crosses a 750 x 750 map), and
+#: bounded so a file saying 10^18 is refused before the loop, not run for ever
+MAX_ITERATIONS = 1000
+#: the most channels of a layer (a VIN's l_h, l_q) a weights file's config may ask for
+MAX_CHANNELS = 4096
+
 __all__ = [
+    "MAX_CHANNELS",
+    "MAX_ITERATIONS",
     "WEIGHTS_DIR",
     "check_action_count",
+    "check_iterations",
+    "check_regular_file",
     "check_trained_size",
     "torch_load",
     "trained_moves",
@@ -46,8 +58,17 @@ def weights_file(path: str | os.PathLike | None, shipped: Path, planner: str, si
     name = str(path)
     if not os.path.exists(name):
         raise InputError(f"{name}: no such weights file (nor a model of the zoo: `vinadv planners` lists them)")
+    check_regular_file(name)
     verify(name)
     return name
+
+
+def check_iterations(name: str | os.PathLike | None, k, what: str = "k") -> int:
+    """`k` as an int when it is an iteration count in [1, `MAX_ITERATIONS`]; InputError naming the file `name`
+    otherwise, before any loop runs."""
+    if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= MAX_ITERATIONS:
+        raise InputError(f"{name or 'the weights'}: {what} is {k!r}, expected an integer in [1, {MAX_ITERATIONS}]")
+    return k
 
 
 def check_trained_size(name: str | os.PathLike | None, record: dict, size: int, planner: str) -> None:
@@ -96,16 +117,37 @@ def check_action_count(name: str | os.PathLike | None, n_actions: int, moves: st
 def torch_load(name: str | os.PathLike, what: str, allowed_globals: Iterable = ()) -> Any:
     """`torch.load(name, weights_only=True)` on the CPU: tensors and plain values (and `allowed_globals`), never
     code. A file torch cannot load so raises InputError in one line, "NAME: not a WHAT (why)", without torch's
-    advice to load it with `weights_only=False` (which would run the file's code) and without its warnings."""
+    advice to load it with `weights_only=False` (which would run the file's code) and without its warnings. Before
+    torch reads it: a file that is not a regular file (a FIFO, a device) is refused by type, a zip archive whose
+    members fail their CRC-32 as damaged (`vinadv.planners.torchfile.check_archive`: torch does not check it); after,
+    floating tensors holding NaN or infinities (`check_finite`)."""
     import torch
 
+    from vinadv.planners.torchfile import check_archive, check_finite  # noqa: PLC0415 (beside torch)
+
+    check_regular_file(name)
+    check_archive(name)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # say, torch's note on a pickle protocol it did not write: the error says
             with torch.serialization.safe_globals(list(allowed_globals)):
-                return torch.load(name, map_location="cpu", weights_only=True)
+                data = torch.load(name, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises many types for a bad file (pickle, zip, EOF, an unsafe global)
         raise InputError(f"{name}: not a {what} ({_why_unreadable(str(name), exc)})") from None
+    check_finite(name, data)
+    return data
+
+
+def check_regular_file(name: str | os.PathLike) -> None:
+    """InputError naming `name` when it is (or links to) something other than a regular file: a FIFO would block the
+    read forever, a device such as /dev/zero never end it."""
+    try:
+        mode = os.stat(name).st_mode
+    except OSError:
+        return  # missing or unreadable: the reader words it
+    if not stat.S_ISREG(mode):
+        kind = "a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else "a device or special file"
+        raise InputError(f"{name}: {kind}, not a weights file")
 
 
 def _why_unreadable(name: str, exc: Exception) -> str:

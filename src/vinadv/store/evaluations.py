@@ -5,12 +5,13 @@ empty where missing (`measurements` in an older database opened read-only)."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 
 import sqlalchemy as sa
 
 from vinadv import __version__
-from vinadv.errors import InputError
+from vinadv.errors import InputError, one_line
 from vinadv.store.connection import utcnow
 from vinadv.store.runs import RunQueries
 from vinadv.store.schema import bench_chunks, evaluations, measurements, robustness
@@ -119,13 +120,29 @@ class EvaluationQueries(RunQueries):
                 )
             )
 
-    def read_bench_chunks(self, entry: str) -> dict[int, dict]:
-        """The stored chunks of benchmark entry `entry`: {chunk: result} (`{}` when none, or no table yet)."""
+    def read_bench_chunks(self, entry: str, check=None) -> dict[int, dict]:
+        """The stored chunks of benchmark entry `entry`: {chunk: result} (`{}` when none, or no table yet). Each
+        result is parsed here from its stored text, then `check(chunk, result)` (the bench schema,
+        `vinadv.bench.validate`) names its first problem or None: InputError (one line naming the chunk and the
+        problem) for a result that is not JSON or that `check` refuses."""
         with self.engine.connect() as conn:
             if not sa.inspect(conn).has_table(bench_chunks.name):
                 return {}
-            query = sa.select(bench_chunks.c.chunk, bench_chunks.c.result).where(bench_chunks.c.entry == str(entry))
-            return {int(r.chunk): r.result for r in conn.execute(query)}
+            text = sa.cast(bench_chunks.c.result, sa.Text).label("result")  # parsed here: a bad one is one line
+            query = sa.select(bench_chunks.c.chunk, text).where(bench_chunks.c.entry == str(entry))
+            stored = [(int(r.chunk), r.result) for r in conn.execute(query)]
+        out = {}
+        for chunk, raw in stored:
+            where = f"stored chunk {chunk} of benchmark entry {str(entry)[:12]}"
+            try:
+                result = json.loads(raw) if isinstance(raw, (str, bytes)) else raw
+            except (ValueError, RecursionError):
+                raise InputError(f"{where}: its result is not JSON ({one_line(str(raw)[:40])!r})") from None
+            problem = None if check is None else check(chunk, result)
+            if problem is not None:
+                raise InputError(f"{where}: {problem}")
+            out[chunk] = result
+        return out
 
     def read_robustness(self, ids: Sequence[int] | None = None) -> list[dict]:
         """The stored robustness benchmarks (of `ids` only, if given), oldest first: dicts of the table's columns

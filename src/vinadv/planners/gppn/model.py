@@ -34,7 +34,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from vinadv.errors import InputError
-from vinadv.planners.weights import torch_load, weights_file
+from vinadv.planners.weights import MAX_ITERATIONS, torch_load, weights_file
 
 GPPN_FORMAT = "vinadv.gppn/1"
 WEIGHTS_DIR = Path(__file__).resolve().parents[2] / "weights"
@@ -65,6 +65,8 @@ class GPPNConfig:
             raise InputError(f"GPPN k, l_h and n_actions must be >= 1, got {self.to_dict()}")
         if self.f < 1 or self.f % 2 == 0:
             raise InputError(f"GPPN kernel f must be odd and >= 1, got {self.f}")
+        if self.k > MAX_ITERATIONS:
+            raise InputError(f"GPPN k must be at most {MAX_ITERATIONS}, got {self.k}", "k")
         if self.l_h > MAX_WIDTH:
             raise InputError(f"GPPN l_h must be at most {MAX_WIDTH}, got {self.l_h}", "l_h")
         if self.f > MAX_KERNEL:

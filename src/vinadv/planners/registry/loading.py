@@ -18,6 +18,7 @@ from pathlib import Path
 from vinadv.grid.moves import DEFAULT_MOVES
 from vinadv.planners.device import resolve_device
 from vinadv.planners.interface import Planner, PlannerError, TorchPlanner, state_checksum
+from vinadv.planners.provenance import source_provenance
 from vinadv.planners.registry.base import DEFAULT_PLANNER, REGISTRY, SUFFIX, canonical_name
 from vinadv.planners.registry.models import model_of_file, zoo_model
 from vinadv.planners.search import UserSearchPlanner
@@ -232,6 +233,14 @@ def load_custom(spec: str, size: int, device: str | None = None) -> Planner:
     except (Exception, SystemExit) as exc:
         raise PlannerError(f"planner {spec!r}: {factory_name}({size}) failed: {type(exc).__name__}: {exc}") from None
     config = {"source": source, "factory": factory_name, "source_sha256": source_sha}
+    planner = _custom_planner(net, spec, size, factory_name, config, device)
+    # what resumed bench chunks are compared by (`vinadv.planners.provenance`), out of the spec the entry key hashes
+    folder = Path(source).parent if _is_file(source) else Path(getattr(module, "__file__", None) or ".").parent
+    planner.provenance = source_provenance(module, folder)
+    return planner
+
+
+def _custom_planner(net, spec: str, size: int, factory_name: str, config: dict, device: str | None) -> Planner:
     if callable(getattr(net, "plan_paths", None)):  # a search planner: paths, not logits
         torch = sys.modules.get("torch")  # a search planner may be a torch module (its weights checksummed), or not
         stateful = torch is not None and isinstance(net, torch.nn.Module)

@@ -73,6 +73,7 @@ def action_maps(model: VINWeights | VIN, obstacles: np.ndarray, goals: np.ndarra
             REL_MARGIN,
             actions[lo:hi],
         ),
+        cost=_map_cost(p, obstacles.shape[1]),
     )
     return actions
 
@@ -102,6 +103,12 @@ class FoldedVIN:
             k=int(weights.config.k),
             goal_value=float(GOAL_VALUE),
         )
+
+
+def _map_cost(p: FoldedVIN, n: int) -> float:
+    """The value iteration's multiply-adds on one N x N map (`over_maps` runs the maps in rounds of bounded work, so
+    Ctrl-C and SIGTERM are seen between them, whatever k)."""
+    return 9.0 * (p.k + 1) * p.q_w.shape[0] * n * n
 
 
 # The kernels work on the flat layout of `vinadv.planners.vin.flat`. The value iteration also keeps the value map
@@ -515,6 +522,7 @@ def plan_chunk(
             lengths,
             terms,
         ),
+        cost=_map_cost(p, n),
     )
     undecided = np.flatnonzero(terms == UNDECIDED)
     if len(undecided):  # rare: a rollout that stepped on a near tie is re-done with the reference's own decisions

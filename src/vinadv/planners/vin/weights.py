@@ -27,7 +27,7 @@ from vinadv.grid.moves import MOVES, move_model
 from vinadv.outfile import atomic_output
 from vinadv.planners.torchfile import read_torch_file
 from vinadv.planners.vin.arrays import STATE_KEYS, VINConfig, VINWeights, default_k
-from vinadv.planners.weights import WEIGHTS_DIR, torch_load, weights_file
+from vinadv.planners.weights import MAX_CHANNELS, WEIGHTS_DIR, check_iterations, torch_load, weights_file
 
 WEIGHTS_FORMAT = "vinadv.vin/1"
 __all__ = [
@@ -78,6 +78,8 @@ def load_vin_weights(path: str | os.PathLike | None = None, size: int = 28, k: i
     vinadv file. Raises InputError naming the file for a missing, unreadable, corrupted or mismatched file.
     """
     name = weights_file(path, default_weights_path(size), "VIN", size)
+    if k is not None:
+        check_iterations(name, k)
     data = read_torch_file(name)
     if data is None:
         data = _torch_load(name)
@@ -172,6 +174,10 @@ def _config_from_dict(name: str, raw: dict[str, Any]) -> VINConfig:
     for key, value in raw.items():
         if not isinstance(value, int) or isinstance(value, bool) or value < 1:
             raise InputError(f"{name}: config entry '{key}' must be a positive integer, got {value!r}")
+        if key == "k":
+            check_iterations(name, value, "config entry 'k'")
+        elif value > MAX_CHANNELS:
+            raise InputError(f"{name}: config entry '{key}' is {value}, expected at most {MAX_CHANNELS}")
     return VINConfig(**raw)
 
 

@@ -1,0 +1,321 @@
+"""The schema of benchmark entries (`vinadv.bench.entry`) and of their stored chunk results, checked in plain Python.
+
+An entry is read from a file anyone can edit, a chunk result from a database anyone can write to: every field the
+leaderboard, the index or `make_entry` reads is checked before it is used, so a malformed one is one line naming the
+field (`entry_problem`, `chunk_problem`: the first problem, or None), never a traceback or a figure that lies.
+
+What an entry must hold (fields not listed are not read, and not checked):
+- `format`: `ENTRY_FORMAT`; `suite`: `name` (a non-empty string of at most `MAX_TEXT` characters) and `checksum`
+  (64 hex digits; one of a released suite's, `suites.FROZEN`, or the leaderboard labels it unknown);
+- `planner`: `name` (as `suite.name`), `config` (absent, null, or an object of plain JSON values, `MAX_DEPTH` deep at
+  most, every float finite); `weights_sha256` (here and in `planner`): absent, null or 64 hex digits;
+- `clean`: `success_rate` a rate (a finite number in [0, 1]); `percent_optimal` a rate or null; `maps`, `reached`
+  counts (integers in [0, `MAX_COUNT`]); `mean_regret` finite or null; `gppn` null or its two rates; `search` null or
+  its rates (`opt`, `exp`, `success`, `hmean`), `rows` a count, `cost_ratio`, `expansions`, `astar_expansions`
+  finite and non-negative or null;
+- `attacks`: an object of attacks, each with `edit` (`add` or `remove`), `strategy` (text) and `by_obstacles`, a
+  non-empty list of figures; `worst_case`: a non-empty list of figures, `k` increasing; a figure: `k` an integer in
+  [1, `MAX_K`], `harmful_rate` and `paper_success_rate` rates or null, `mean_regret` finite or null, its counts
+  (`maps`, `valid`, `attacked`, `broken`, `harmful`, `reached`, `attacks`, each label's) counts;
+- `flags`: an object of flags, each `raised` (true or false) and `why` (text);
+- `time` (absent or null, or `wall_s` and every `chunks_s` finite and non-negative), `machine` (absent or null, or
+  `device` text or null), `vinadv_version` (absent, null or text).
+
+Strings are checked for type and length only: the renderers escape them (`vinadv.bench.leaderboard`).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from vinadv.bench.suites import ENTRY_FORMAT, Suite
+from vinadv.vocabulary import EDITS, LABELS
+
+#: the longest name or text field read (characters)
+MAX_TEXT = 200
+#: the largest count (maps, pairs) an entry or chunk may hold
+MAX_COUNT = 10**9
+#: the largest number of edited cells k
+MAX_K = 1000
+#: how deep a planner's config may nest
+MAX_DEPTH = 4
+_HEX64 = re.compile(r"[0-9a-f]{64}")
+_FIGURE_COUNTS = ("maps", "valid", "attacked", "broken", "harmful", "reached", "attacks")
+
+
+class Bad(Exception):
+    """A field that is not what the schema says: `field` (dotted path) and `why`."""
+
+    def __init__(self, field: str, why: str):
+        super().__init__(f"field '{field}' {why}")
+        self.field, self.why = field, why
+
+
+def _show(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _kind(value) -> str:
+    return {dict: "an object", list: "a list", str: "a string", bool: "a boolean", type(None): "null"}.get(
+        type(value), _show(value)
+    )
+
+
+def _obj(value, field: str) -> dict:
+    if not isinstance(value, dict):
+        raise Bad(field, f"is {_kind(value)}, expected an object")
+    return value
+
+
+def _list(value, field: str, nonempty: bool = False) -> list:
+    if not isinstance(value, list):
+        raise Bad(field, f"is {_kind(value)}, expected a list")
+    if nonempty and not value:
+        raise Bad(field, "is an empty list")
+    return value
+
+
+def _get(d: dict, key: str, field: str):
+    if key not in d:
+        raise Bad(f"{field}.{key}" if field else key, "is missing")
+    return d[key]
+
+
+def _number(value, field: str, lo: float | None = None, hi: float | None = None, null: bool = False):
+    if value is None and null:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise Bad(field, f"is {_kind(value)}, expected a number" + (" or null" if null else ""))
+    if not math.isfinite(value):
+        raise Bad(field, f"is {_show(value)}, expected a finite number")
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        bounds = f"in [{lo:g}, {hi:g}]" if hi is not None else f">= {lo:g}"
+        raise Bad(field, f"is {_show(value)}, expected a number {bounds}")
+    return value
+
+
+def rate(value, field: str, null: bool = False):
+    """A share: a finite number in [0, 1] (or None where `null`)."""
+    return _number(value, field, 0.0, 1.0, null)
+
+
+def count(value, field: str, hi: int = MAX_COUNT) -> int:
+    """A count: an integer in [0, hi]."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise Bad(field, f"is {_kind(value)}, expected an integer")
+    if not 0 <= value <= hi:
+        raise Bad(field, f"is {_show(value)}, expected an integer in [0, {hi}]")
+    return value
+
+
+def text(value, field: str, null: bool = False, nonempty: bool = False):
+    """A string of at most `MAX_TEXT` characters (or None where `null`)."""
+    if value is None and null:
+        return None
+    if not isinstance(value, str):
+        raise Bad(field, f"is {_kind(value)}, expected a string" + (" or null" if null else ""))
+    if len(value) > MAX_TEXT or (nonempty and not value):
+        raise Bad(field, f"is a string of {len(value)} characters, expected 1 to {MAX_TEXT}")
+    return value
+
+
+def sha256(value, field: str, null: bool = False):
+    """64 lowercase hex digits (or None where `null`)."""
+    if value is None and null:
+        return None
+    if not isinstance(value, str) or not _HEX64.fullmatch(value):
+        raise Bad(field, f"is {_show(value)}, expected a sha256 (64 hex digits)" + (" or null" if null else ""))
+    return value
+
+
+def _plain(value, field: str, depth: int = 0) -> None:
+    """Plain JSON: strings, finite numbers, booleans, null, and lists and objects of them `MAX_DEPTH` deep."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise Bad(field, f"is {_show(value)}, expected a finite number")
+    if isinstance(value, (dict, list)):
+        if depth >= MAX_DEPTH:
+            raise Bad(field, f"nests deeper than {MAX_DEPTH}")
+        items = value.items() if isinstance(value, dict) else enumerate(value)
+        for key, v in items:
+            _plain(v, f"{field}.{key}" if isinstance(value, dict) else f"{field}[{key}]", depth + 1)
+    elif isinstance(value, str):
+        text(value, field)
+
+
+def figures(value, field: str) -> dict:
+    """One figure of an attack or of the worst case at one k (`vinadv.robustness.Figures`)."""
+    f = _obj(value, field)
+    count(_get(f, "k", field), f"{field}.k", MAX_K)
+    if f["k"] < 1:
+        raise Bad(f"{field}.k", f"is {f['k']}, expected an integer in [1, {MAX_K}]")
+    rate(_get(f, "harmful_rate", field), f"{field}.harmful_rate", null=True)
+    rate(_get(f, "paper_success_rate", field), f"{field}.paper_success_rate", null=True)
+    if "mean_regret" in f:
+        _number(f["mean_regret"], f"{field}.mean_regret", null=True)
+    for name in _FIGURE_COUNTS:
+        if name in f:
+            count(f[name], f"{field}.{name}")
+    if "counts" in f:
+        for label, n in _obj(f["counts"], f"{field}.counts").items():
+            if label not in LABELS:
+                raise Bad(f"{field}.counts", f"has label {_show(label)}, expected one of {', '.join(LABELS)}")
+            count(n, f"{field}.counts.{label}")
+    return f
+
+
+def check_entry(entry) -> None:
+    """Raise `Bad` for the first field of `entry` that is not what the schema (module doc) says."""
+    e = _obj(entry, "(entry)")
+    if e.get("format") != ENTRY_FORMAT:
+        raise Bad("format", f"is {_show(e.get('format'))}, expected {ENTRY_FORMAT!r}")
+    suite = _obj(_get(e, "suite", ""), "suite")
+    text(_get(suite, "name", "suite"), "suite.name", nonempty=True)
+    sha256(_get(suite, "checksum", "suite"), "suite.checksum")
+    planner = _obj(_get(e, "planner", ""), "planner")
+    text(_get(planner, "name", "planner"), "planner.name", nonempty=True)
+    if planner.get("config") is not None:
+        _plain(_obj(planner["config"], "planner.config"), "planner.config")
+    for key in planner:
+        if key not in ("name", "config"):
+            _plain(planner[key], f"planner.{key}", MAX_DEPTH - 1)
+    sha256(planner.get("weights_sha256"), "planner.weights_sha256", null=True)
+    sha256(e.get("weights_sha256"), "weights_sha256", null=True)
+    text(e.get("vinadv_version"), "vinadv_version", null=True)
+    clean = _obj(_get(e, "clean", ""), "clean")
+    rate(_get(clean, "success_rate", "clean"), "clean.success_rate")
+    rate(clean.get("percent_optimal"), "clean.percent_optimal", null=True)
+    for name in ("maps", "reached"):
+        if name in clean:
+            count(clean[name], f"clean.{name}")
+    _number(clean.get("mean_regret"), "clean.mean_regret", null=True)
+    if clean.get("gppn") is not None:
+        gppn = _obj(clean["gppn"], "clean.gppn")
+        for name in ("percent_optimal", "percent_success"):
+            rate(gppn.get(name), f"clean.gppn.{name}", null=True)
+    if clean.get("search") is not None:
+        search = _obj(clean["search"], "clean.search")
+        for name in ("opt", "exp", "success", "hmean"):
+            rate(search.get(name), f"clean.search.{name}", null=True)
+        for name in ("cost_ratio", "expansions", "astar_expansions"):
+            _number(search.get(name), f"clean.search.{name}", lo=0.0, null=True)
+        if "rows" in search:
+            count(search["rows"], "clean.search.rows")
+    attacks = _obj(_get(e, "attacks", ""), "attacks")
+    for key, attack in attacks.items():
+        field = f"attacks.{key}"
+        text(key, field)
+        a = _obj(attack, field)
+        if _get(a, "edit", field) not in EDITS:
+            raise Bad(f"{field}.edit", f"is {_show(a['edit'])}, expected one of {', '.join(EDITS)}")
+        text(a.get("strategy"), f"{field}.strategy", null=True)
+        for i, f in enumerate(_list(_get(a, "by_obstacles", field), f"{field}.by_obstacles", nonempty=True)):
+            figures(f, f"{field}.by_obstacles[{i}]")
+    worst = _list(_get(e, "worst_case", ""), "worst_case", nonempty=True)
+    for i, f in enumerate(worst):
+        figures(f, f"worst_case[{i}]")
+        if i and f["k"] <= worst[i - 1]["k"]:
+            raise Bad(f"worst_case[{i}].k", f"is {f['k']}, not above worst_case[{i - 1}].k ({worst[i - 1]['k']})")
+    for name, flag in _obj(_get(e, "flags", ""), "flags").items():
+        text(name, f"flags.{name}", nonempty=True)
+        flag = _obj(flag, f"flags.{name}")
+        if not isinstance(_get(flag, "raised", f"flags.{name}"), bool):
+            raise Bad(f"flags.{name}.raised", f"is {_kind(flag['raised'])}, expected true or false")
+        text(flag.get("why", ""), f"flags.{name}.why")
+    if e.get("time") is not None:
+        t = _obj(e["time"], "time")
+        _number(t.get("wall_s"), "time.wall_s", lo=0.0, null=True)
+        if t.get("chunks_s") is not None:
+            for i, s in enumerate(_list(t["chunks_s"], "time.chunks_s")):
+                _number(s, f"time.chunks_s[{i}]", lo=0.0)
+    if e.get("machine") is not None:
+        text(_obj(e["machine"], "machine").get("device"), "machine.device", null=True)
+
+
+def entry_problem(entry) -> str | None:
+    """The first problem of `entry` as "field 'F' ...", or None for an entry the schema accepts."""
+    try:
+        check_entry(entry)
+    except Bad as exc:
+        return str(exc)
+    return None
+
+
+def _bools(value, field: str, n: int) -> list:
+    values = _list(value, field)
+    if len(values) != n:
+        raise Bad(field, f"holds {len(values)} values, expected {n} (one per map)")
+    for i, v in enumerate(values):
+        if not isinstance(v, bool):
+            raise Bad(f"{field}[{i}]", f"is {_kind(v)}, expected true or false")
+    return values
+
+
+def _reals(value, field: str, n: int) -> list:
+    values = _list(value, field)
+    if len(values) != n:
+        raise Bad(field, f"holds {len(values)} values, expected {n} (one per map)")
+    for i, v in enumerate(values):
+        _number(v, f"{field}[{i}]", null=True)
+    return values
+
+
+def check_chunk(result, suite: Suite, chunk: int) -> None:
+    """Raise `Bad` for the first field of the stored result of chunk `chunk` of `suite` (`compute_chunk`) that is
+    not what `make_entry` reads: its maps, the clean planner's per-map outcomes and means, every attack of the suite
+    at every k with one value per map, the labels, the counts."""
+    r = _obj(result, "(result)")
+    lo = chunk * suite.chunk
+    expected = min(suite.n, lo + suite.chunk) - lo
+    if _get(r, "first_map", "") != lo or isinstance(r["first_map"], bool):
+        raise Bad("first_map", f"is {_show(r['first_map'])}, expected {lo}")
+    if _get(r, "maps", "") != expected or isinstance(r["maps"], bool):
+        raise Bad("maps", f"is {_show(r['maps'])}, expected {expected}")
+    n = expected
+    clean = _obj(_get(r, "clean", ""), "clean")
+    _bools(_get(clean, "reached", "clean"), "clean.reached", n)
+    _reals(_get(clean, "regret", "clean"), "clean.regret", n)
+    if "search" in clean:
+        search = _obj(clean["search"], "clean.search")
+        count(_get(search, "rows", "clean.search"), "clean.search.rows")
+        for name in ("opt", "exp", "success"):
+            rate(_get(search, name, "clean.search"), f"clean.search.{name}", null=True)
+        for name in ("cost_ratio", "expansions", "astar_expansions"):
+            _number(_get(search, name, "clean.search"), f"clean.search.{name}", lo=0.0, null=True)
+    else:
+        for name in ("gppn_percent_optimal", "gppn_percent_success"):
+            rate(_get(clean, name, "clean"), f"clean.{name}")
+    attacks = _obj(_get(r, "attacks", ""), "attacks")
+    for group in suite.attacks:
+        for key in group.keys():
+            field = f"attacks.{key}"
+            per_k = _list(_get(attacks, key, "attacks"), field)
+            if len(per_k) != group.max_obstacles:
+                raise Bad(field, f"holds {len(per_k)} values of k, expected {group.max_obstacles}")
+            for k, part in enumerate(per_k):
+                at = f"{field}[{k}]"
+                part = _obj(part, at)
+                for name in ("pair", "valid", "broken", "harmful"):
+                    _bools(_get(part, name, at), f"{at}.{name}", n)
+                _reals(_get(part, "regret", at), f"{at}.regret", n)
+                labels = _list(_get(part, "label", at), f"{at}.label")
+                if len(labels) != n:
+                    raise Bad(f"{at}.label", f"holds {len(labels)} values, expected {n} (one per map)")
+                for i, label in enumerate(labels):
+                    if label != "" and label not in LABELS:
+                        raise Bad(f"{at}.label[{i}]", f"is {_show(label)}, expected one of {', '.join(LABELS)}")
+                for label, c in _obj(_get(part, "counts", at), f"{at}.counts").items():
+                    if label not in LABELS:
+                        raise Bad(f"{at}.counts", f"has label {_show(label)}, expected one of {', '.join(LABELS)}")
+                    count(c, f"{at}.counts.{label}")
+    _number(_get(r, "seconds", ""), "seconds", lo=0.0)
+
+
+def chunk_problem(result, suite: Suite, chunk: int) -> str | None:
+    """The first problem of a stored chunk result as "field 'F' ...", or None for one the schema accepts."""
+    try:
+        check_chunk(result, suite, chunk)
+    except Bad as exc:
+        return str(exc)
+    return None

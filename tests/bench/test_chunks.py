@@ -1,0 +1,136 @@
+"""Resume that mixes computations (issue 45): a stored chunk is checked on read (its result's schema) and reused only
+when its fingerprint (results format, suite checksum, planner provenance) is this run's; a mismatch is one line
+naming both. Chunks stored before fingerprints still resume; the provenance stays out of the entry key."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import sqlalchemy as sa
+
+from vinadv.bench import entry as bench_entry
+from vinadv.bench import suites
+from vinadv.bench.entry import deterministic_part, entry_json, entry_key, run_bench
+from vinadv.bench.suites import AttackGroup, Suite, maps_sha256
+from vinadv.cli import main
+from vinadv.errors import InputError
+from vinadv.planners.registry import load_planner
+from vinadv.robustness import benchmark_maps
+
+
+@pytest.fixture(scope="module")
+def tiny() -> Suite:
+    maps = benchmark_maps(2, 28, seed=1000)
+    return Suite(
+        name="tiny-chunks",
+        description="a test suite",
+        n=2,
+        size=28,
+        maps_seed=1000,
+        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
+        attacks=(AttackGroup(("random",), "add", 1),),
+        budget=2,
+        chunk=1,
+    )
+
+
+def _sql(db_file, statement: str) -> None:
+    engine = sa.create_engine(f"sqlite:///{db_file}")
+    with engine.begin() as conn:
+        conn.execute(sa.text(statement))
+    engine.dispose()
+
+
+def _no_compute(monkeypatch):
+    def computed(*args):
+        raise AssertionError("a stored chunk was computed again")
+
+    monkeypatch.setattr(bench_entry, "compute_chunk", computed)
+
+
+@pytest.mark.parametrize(
+    ("result", "expected"),
+    [
+        ("{}", "field 'first_map' is missing"),
+        ("not json", "not JSON"),
+        ('{"first_map": 1}', "field 'maps'"),
+        ('{"first_map": 0}', "field 'first_map' is 0, expected 1"),
+    ],
+)
+def test_a_stored_chunk_that_is_not_a_result_is_one_line(tiny, tmp_path, monkeypatch, capsys, result, expected):
+    planner = load_planner("optimal", 28)
+    db = tmp_path / "b.db"
+    run_bench(tiny, planner, db=str(db))
+    _sql(db, f"UPDATE bench_chunks SET result = '{result}' WHERE chunk = 1")
+    with pytest.raises(InputError, match=f"database .*b.db: stored chunk 1 .*{expected}"):
+        run_bench(tiny, planner, db=str(db), resume=True)
+    monkeypatch.setitem(suites.SUITES, tiny.name, tiny)
+    argv = ["bench", "run", "--suite", tiny.name, "--planner", "optimal", "--db", str(db), "--resume", "--quiet"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "stored chunk 1" in err and expected.split("'")[0] in err
+
+
+def test_chunks_of_another_results_format_are_refused_naming_both(tiny, tmp_path, monkeypatch):
+    planner = load_planner("optimal", 28)
+    db = str(tmp_path / "b.db")
+    run_bench(tiny, planner, db=db)
+    monkeypatch.setattr(bench_entry, "CHUNK_FORMAT", 2)
+    _no_compute(monkeypatch)
+    with pytest.raises(InputError, match="computed with results format 1, this run with results format 2"):
+        run_bench(tiny, planner, db=db, resume=True)
+
+
+def test_chunks_stored_before_fingerprints_still_resume(tiny, tmp_path, monkeypatch):
+    planner = load_planner("optimal", 28)
+    db = tmp_path / "b.db"
+    whole = run_bench(tiny, planner, db=str(db))
+    _sql(db, "UPDATE bench_chunks SET result = json_remove(result, '$.fingerprint'), version = '0.1.0'")
+    _no_compute(monkeypatch)
+    resumed = run_bench(tiny, planner, db=str(db), resume=True)
+    assert entry_json(deterministic_part(resumed)) == entry_json(deterministic_part(whole))
+
+
+PLANNER = """
+import os, sys
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import {helper}
+
+def make(size):
+    return {helper}.inner(size)
+"""
+HELPER = """
+from vinadv.planners.registry import load_planner
+
+STEP = {step}
+
+def inner(size):
+    return load_planner("astar", size)
+"""
+
+
+def test_a_file_planner_whose_imported_module_changed_is_refused_naming_it(tiny, tmp_path, monkeypatch):
+    helper = f"helper_{tmp_path.name.replace('-', '_')}"
+    (tmp_path / "mine.py").write_text(PLANNER.format(helper=helper))
+    (tmp_path / f"{helper}.py").write_text(HELPER.format(step=1))
+    spec = f"{tmp_path / 'mine.py'}:make"
+    first = load_planner(spec, 28)
+    assert set(first.provenance["files"]) == {"mine.py", f"{helper}.py"}
+    assert "provenance" not in json.dumps(first.spec())
+    db = str(tmp_path / "b.db")
+    run_bench(tiny, first, db=db)
+    (tmp_path / f"{helper}.py").write_text(HELPER.format(step=2))  # the imported module changed
+    second = load_planner(spec, 28)
+    assert entry_key(tiny, second) == entry_key(tiny, first)  # the provenance is not in the key
+    _no_compute(monkeypatch)
+    with pytest.raises(InputError, match=f"computed with {helper}.py [0-9a-f]{{12}}, this run with {helper}.py"):
+        run_bench(tiny, second, db=db, resume=True)
+
+
+def test_a_declared_planner_version_is_its_provenance(tmp_path):
+    (tmp_path / "versioned.py").write_text(
+        'PLANNER_VERSION = "2.1"\n\ndef make(size):\n    from vinadv.planners.registry import load_planner\n\n'
+        '    return load_planner("astar", size)\n'
+    )
+    assert load_planner(f"{tmp_path / 'versioned.py'}:make", 28).provenance == {"version": "2.1"}
