@@ -44,7 +44,7 @@ WORK = (
     "vinadv.attacks.strategies:Attack.attack",
     "vinadv.classify.train_eval:train_classifier",
     "vinadv.pipeline:compute_shard",
-    "vinadv.identify:identify_and_store",
+    "vinadv.identify:identify_pairs",
     "vinadv.robustness:robustness",
     "vinadv.evaluation:evaluate_run",
     "vinadv.evaluation:evaluate_planner_quality",
