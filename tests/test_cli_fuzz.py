@@ -44,11 +44,11 @@ WORK = (
     "vinadv.attacks.strategies:Attack.attack",
     "vinadv.classify.train_eval:train_classifier",
     "vinadv.pipeline:compute_shard",
-    "vinadv.identify:identify_and_store",
+    "vinadv.identify:identify_pairs",
     "vinadv.robustness:robustness",
-    "vinadv.evaluation:evaluate_run",
-    "vinadv.evaluation:evaluate_planner_quality",
-    "vinadv.evaluation:evaluate_timing",
+    "vinadv.evaluation.job:evaluate_run",
+    "vinadv.evaluation.job:evaluate_planner_quality",
+    "vinadv.evaluation.job:evaluate_timing",
     "vinadv.report.build:gather_report",  # the figures and tables of the report
     "vinadv.cluster:start_local_cluster",  # --workers: no Dask cluster is started
     "vinadv.cluster:_check_reachable",  # --cluster: no scheduler is dialled

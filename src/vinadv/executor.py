@@ -1,8 +1,9 @@
 """Where a job's work runs: an executor maps a task function over chunks and knows no job.
 
-Every job (`vinadv.pipeline.run`, `vinadv.jobs.attack.run`, `vinadv.robustness.run`, `vinadv.identify`,
-`vinadv.bench.entry.run_bench`) cuts its work in chunks (shards of maps, slices of pairs, chunks of a suite), writes
-the task that computes one chunk as a plain function of picklable arguments, and hands both to an executor:
+Every job (`vinadv.jobs.JOBS`: `vinadv.pipeline.run`, `vinadv.jobs.attack.run`, `vinadv.identify.run`,
+`vinadv.robustness.run`, `vinadv.bench.job.run`, `vinadv.evaluation.job.run`) cuts its work in chunks (shards of
+maps, slices of pairs, chunks of a suite, or one chunk: the whole job), writes the task that computes one chunk as
+a plain function of picklable arguments, and hands both to an executor:
 
 - `LocalExecutor` (`LOCAL`): in this process, one chunk after the other, in order; the planners' own thread pool
   splits each chunk's maps over the cores. It runs what would be cut in pieces for other processes as one chunk

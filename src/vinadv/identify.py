@@ -3,6 +3,10 @@
 Plan both maps (or take the paths already planned by the attack), label each path pair (default: the exact
 rule labeller; or a trained classifier, run as the paper's hybrid: path features first, the image classifier
 for the FP/DP rest), mark attack success (UrP or FP), and return `D_adversarial`, the successful pairs.
+
+`vinadv identify` is this module's job: `IdentifyConfig` (a pairs file, the classifier, the planner that plans the
+pairs again by its spec, the harm tolerances), `run(config, executor)` (labelled and stored as a run) and
+`StoredIdentification` (`to_dict()` the summary).
 """
 
 from __future__ import annotations
@@ -10,14 +14,21 @@ from __future__ import annotations
 import functools
 import os
 import time
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from vinadv.attacks.pairs import PairSet
 from vinadv.classify.batch import PathPairBatch
-from vinadv.classify.harm import DEFAULT_TOL, PairHarm, check_tolerances, cross_table, pairset_harm
+from vinadv.classify.harm import (
+    DEFAULT_TOL,
+    PairHarm,
+    check_tolerances,
+    cross_table,
+    harm_summary,
+    pairset_harm,
+)
 from vinadv.classify.rule import label_batch, path_distances
 from vinadv.errors import InputError
 from vinadv.executor import LOCAL, Executor, resolve, shipped
@@ -27,7 +38,15 @@ from vinadv.planners.registry import PlannerRef, load_planner
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
 from vinadv.planners.weights import weights_checksum
-from vinadv.vocabulary import FORK_OR_DETOUR, LABEL_STRENGTH, LABELS, is_success, label_counts, label_strength
+from vinadv.vocabulary import (
+    FORK_OR_DETOUR,
+    LABEL_STRENGTH,
+    LABELS,
+    is_success,
+    label_counts,
+    label_strength,
+    success_count,
+)
 
 if TYPE_CHECKING:  # scikit-learn comes with it; the rule labeller needs none
     from vinadv.classify.base import PairClassifier
@@ -44,12 +63,7 @@ def load_classifier(spec: str | os.PathLike | None) -> tuple[PairClassifier | No
     from vinadv.classify.base import load_model  # noqa: PLC0415 (scikit-learn: the rule labeller does without it)
     from vinadv.classify.hybrid import HybridClassifier, RuleClassifier  # noqa: PLC0415 (as above)
 
-    if not os.path.exists(spec):
-        raise InputError(
-            f"classifier {spec}: neither a built-in classifier ({', '.join(BUILTIN_CLASSIFIERS)}) "
-            "nor an existing model file",
-            "classifier",
-        )
+    check_classifier(spec)
     model = load_model(spec)
     if not isinstance(model, (HybridClassifier, RuleClassifier)):
         model = HybridClassifier(model)
@@ -196,15 +210,6 @@ def objective_strength(objective: str):
 PLANNER_SPEC = "planner_spec"
 
 
-@dataclass
-class StoredIdentification:
-    """What `identify_and_store` did: the identification, the run it was stored as, and how long it took."""
-
-    identification: Identification
-    run_id: int
-    seconds: float
-
-
 @dataclass(frozen=True)
 class ClassifierRef:
     """A classifier model file by reference, for another process to load the same one (`vinadv.executor.shipped`):
@@ -265,6 +270,167 @@ def identify_pairs(
     return Identification.concat(parts, label_source=classifier_name)
 
 
+def pairs_summary(
+    labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float, harm_table: dict | None = None
+) -> dict:
+    """The summary of labelled pairs: counts, the paper's success rate, and with `harm_table` (a
+    `vinadv.classify.harm.cross_table`) the harm counts, the harmful rate and the label x harm table."""
+    counts = label_counts(labels)
+    valid = len(labels) - counts["invalid"]
+    success = success_count(counts)
+    return {
+        "maps": n_maps,
+        "pairs": len(labels),
+        "maps_without_valid_cell": no_valid,
+        "counts": counts,
+        "success_rate": success / valid if valid else None,
+        "planner_calls": planner_calls,
+        "planner_calls_per_success": planner_calls / success if success else None,
+        "seconds": round(seconds, 3),
+        **({} if harm_table is None else harm_summary(harm_table)),
+    }
+
+
+def check_classifier(spec: str | os.PathLike | None) -> None:
+    """InputError naming `classifier` unless `spec` is a built-in classifier, None (the rule) or an existing file."""
+    if spec is not None and str(spec) not in BUILTIN_CLASSIFIERS and not os.path.exists(spec):
+        raise InputError(
+            f"classifier {spec}: neither a built-in classifier ({', '.join(BUILTIN_CLASSIFIERS)}) "
+            "nor an existing model file",
+            "classifier",
+        )
+
+
+@dataclass(frozen=True)
+class IdentifyConfig:
+    """Everything that determines the labels of `vinadv identify`; checked when made (InputError naming the field).
+
+    `pairs`: a pairs file; `classifier`: 'rule' (None) or a model file of `vinadv classify train`; `planner`,
+    `weights`: a planner by its spec (`vinadv.planners.registry.load_planner`) that plans both maps of every pair
+    again (the file's attacks tried on another planner: transfer), or neither (the file's paths are kept);
+    `harm_tolerance`, `harm_rtol`: the harm test's; `shard_size`: pairs per task where the executor cuts them."""
+
+    pairs: str
+    classifier: str | None = None
+    planner: str | None = None
+    weights: str | None = None
+    harm_tolerance: float = DEFAULT_TOL
+    harm_rtol: float = 0.0
+    shard_size: int = 1000
+
+    def __post_init__(self):
+        object.__setattr__(self, "pairs", os.fspath(self.pairs))
+        check_classifier(self.classifier)
+        check_tolerances(self.harm_tolerance, self.harm_rtol)
+        if self.shard_size < 1:
+            raise InputError(f"shard_size must be >= 1, got {self.shard_size}", "shard_size")
+
+    @property
+    def replans(self) -> bool:
+        """Whether the pairs are planned again (a planner or weights given)."""
+        return self.planner is not None or self.weights is not None
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class StoredIdentification:
+    """What `run` did: the identification, the run it was stored as, and how long it took; `to_dict()` the summary
+    (`pairs_summary` of the labels, the run id and the number of successful attacks)."""
+
+    identification: Identification
+    run_id: int
+    seconds: float
+
+    def to_dict(self) -> dict:
+        ident = self.identification
+        out = pairs_summary(ident.labels, len(ident), 0, 0, self.seconds, harm_table=ident.harm_table())
+        out.update(run_id=self.run_id, adversarial=int(ident.attack.sum()))
+        return out
+
+
+def run(
+    config: IdentifyConfig,
+    executor: Executor = LOCAL,
+    *,
+    db: str | None = None,
+    name: str | None = None,
+    device: str | None = None,
+) -> StoredIdentification:
+    """`vinadv identify`: label the pairs of `config.pairs` and store them as a new run `name` in `db`, with their
+    harm. With a planner in `config`, both maps of every pair are planned again by it first; the run's config
+    records both planners (`attack_planner`: the file's).
+
+    `executor` computes the identification (`identify_pairs`: in this process by default; `vinadv.cluster.
+    DaskExecutor` on a cluster, `config.shard_size` pairs per task) after the inputs are checked, so a bad file is
+    refused before any worker starts. `device`: where the planner plans (`load_planner`); refused without one in
+    `config` (the file's paths are kept then: nothing runs on it)."""
+    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: identify needs no store)
+    from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
+
+    if name is not None:
+        check_run_name(name)  # before the work and the database: it is refused, not found, after them
+    if device is not None and not config.replans:
+        raise InputError(
+            "device: only with planner or weights (without them the file's paths are kept, nothing is planned)",
+            "device",
+            "planner",
+            "weights",
+        )
+    pairs = PairSet.load(config.pairs)
+    t0 = time.perf_counter()
+    replanner = ref = None
+    if config.replans:
+        replanner = load_planner(
+            config.planner,
+            pairs.size,
+            weights=config.weights,
+            corner_cutting=pairs.corner_cutting,
+            moves=pairs.moves,
+            device=device,
+        )
+        if executor.remote:
+            ref = PlannerRef.of(replanner, config.planner, config.weights, pairs.corner_cutting)
+    ident = identify_pairs(
+        pairs,
+        replanner,
+        config.classifier,
+        executor,
+        planner_ref=ref,
+        harm_tol=config.harm_tolerance,
+        harm_rtol=config.harm_rtol,
+        shard_size=config.shard_size,
+    )
+    elapsed = time.perf_counter() - t0
+    # the spec of the planner that made the file (vinadv >= 0.2)
+    attack_planner: PlannerSpec | None = pairs.params.get("planner")
+    used: PlannerSpec | None = replanner.spec() if replanner is not None else attack_planner
+    with Store.open(db) as store:
+        run_id = store.create_run(
+            name,
+            config={
+                "pairs": config.pairs,
+                "strategy": pairs.strategy,
+                "params": pairs.params,
+                "classifier": config.classifier,
+                "planner": None if used is None else used["name"],
+                "weights": config.weights,
+                PLANNER_SPEC: used,
+                "attack_planner": attack_planner,
+                "harm_tolerance": config.harm_tolerance,
+                "harm_rtol": config.harm_rtol,
+            },
+            weights_checksum=None if used is None else used["weights_sha256"],
+            attack=pairs.strategy,
+            classifier=ident.label_source,
+            moves=pairs.moves,
+        )
+        store.write_pairs(run_id, ident.records())
+        store.finish_run(run_id, timings={"identify": elapsed})
+    return StoredIdentification(ident, run_id, elapsed)
+
+
 def identify_and_store(
     pairs_path: str | os.PathLike,
     db: str | None = None,
@@ -279,92 +445,25 @@ def identify_and_store(
     shard_size: int = 1000,
     device: str | None = None,
 ) -> StoredIdentification:
-    """`vinadv identify`: label the pairs of a pairs file and store them as a new run in `db`, with their harm
-    (tolerances `harm_tol`, `harm_rtol`). With `planner` or `weights` (`vinadv.planners.registry.load_planner`),
-    both maps of every pair are planned again by that planner first: the attacks, found on the planner that made the
-    file, tried on another (transfer). The run's config records both planners (`attack_planner`: the file's).
-
-    `executor` computes the identification (`identify_pairs`: in this process by default; `vinadv.cluster.
-    DaskExecutor` on a cluster, `shard_size` pairs per task) after the inputs are checked, so a bad file is refused
-    before any worker starts. `device`: where the planner given plans (`load_planner`); refused without `planner`
-    or `weights` (the file's paths are kept then: nothing runs on it)."""
-    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: identify needs no store)
-    from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy, as above)
-
-    if name is not None:
-        check_run_name(name)  # before the work and the database: it is refused, not found, after them
-    check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
-    if shard_size < 1:
-        raise InputError(f"shard_size must be >= 1, got {shard_size}", "shard_size")
-    if device is not None and planner is None and weights is None:
-        raise InputError(
-            "device: only with planner or weights (without them the file's paths are kept, nothing is planned)",
-            "device",
-            "planner",
-            "weights",
-        )
-    pairs = PairSet.load(pairs_path)
-    t0 = time.perf_counter()
-    replanner = ref = None
-    if planner is not None or weights is not None:
-        replanner = load_planner(
-            planner,
-            pairs.size,
-            weights=weights,
-            corner_cutting=pairs.corner_cutting,
-            moves=pairs.moves,
-            device=device,
-        )
-        ref = PlannerRef.of(replanner, planner, weights, pairs.corner_cutting) if executor.remote else None
-    ident = identify_pairs(
-        pairs,
-        replanner,
-        classifier,
-        executor,
-        planner_ref=ref,
-        harm_tol=harm_tol,
-        harm_rtol=harm_rtol,
-        shard_size=shard_size,
-    )
-    elapsed = time.perf_counter() - t0
-    # the spec of the planner that made the file (vinadv >= 0.2)
-    attack_planner: PlannerSpec | None = pairs.params.get("planner")
-    used: PlannerSpec | None = replanner.spec() if replanner is not None else attack_planner
-    with Store.open(db) as store:
-        run_id = store.create_run(
-            name,
-            config={
-                "pairs": str(pairs_path),
-                "strategy": pairs.strategy,
-                "params": pairs.params,
-                "classifier": classifier,
-                "planner": None if used is None else used["name"],
-                "weights": weights,
-                PLANNER_SPEC: used,
-                "attack_planner": attack_planner,
-                "harm_tolerance": harm_tol,
-                "harm_rtol": harm_rtol,
-            },
-            weights_checksum=None if used is None else used["weights_sha256"],
-            attack=pairs.strategy,
-            classifier=ident.label_source,
-            moves=pairs.moves,
-        )
-        store.write_pairs(run_id, ident.records())
-        store.finish_run(run_id, timings={"identify": elapsed})
-    return StoredIdentification(ident, run_id, elapsed)
+    """`run` with the arguments of earlier versions."""
+    config = IdentifyConfig(pairs_path, classifier, planner, weights, harm_tol, harm_rtol, shard_size)
+    return run(config, executor, db=db, name=name, device=device)
 
 
 __all__ = [
     "BUILTIN_CLASSIFIERS",
     "ClassifierRef",
+    "IdentifyConfig",
     "LABELS",
     "Identification",
     "StoredIdentification",
+    "check_classifier",
     "identify",
     "identify_and_store",
     "identify_pairs",
     "load_classifier",
+    "pairs_summary",
     "replan",
     "rule_strength",
+    "run",
 ]

@@ -40,7 +40,7 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -443,6 +443,10 @@ class RobustnessConfig:
         make_attack(self.strategies[0], 1, self.seed, self.budget, self.radius, self.max_obstacles, self.edit)
         if (self.maps is None) != (self.maps_sha256 is None):
             raise InputError("maps and maps_sha256 go together (maps_file_config gives both)", "maps")
+
+    def to_dict(self) -> dict:
+        """Every field (the strategies as a tuple); the stored settings are the result's (`RobustnessResult`)."""
+        return asdict(self)
 
     def load_maps(self) -> MapSet:
         """The benchmark's maps: generated, or the maps file's first `n` (refused if its SHA-256 changed)."""

@@ -3,7 +3,7 @@ and `BenchResult` (the entry, `to_dict()`; `vinadv.bench.entry`)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 from vinadv.bench.entry import entry_json, run_bench
 from vinadv.bench.suites import Suite, get_suite
@@ -22,6 +22,9 @@ class BenchConfig:
 
     def __post_init__(self):
         get_suite(self.suite)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
 
     @property
     def frozen_suite(self) -> Suite:

@@ -98,11 +98,6 @@ def add_harm_arguments(parser) -> None:
     )
 
 
-def harm_tolerances(args: argparse.Namespace) -> dict:
-    """The options of `add_harm_arguments` as the library's keyword arguments `harm_tol` and `harm_rtol`."""
-    return {"harm_tol": args.harm_tolerance, "harm_rtol": args.harm_rtol}
-
-
 def add_objective_argument(parser) -> None:
     """`--objective paper|harm`: what the ranking attacks keep as the strongest candidates of a map."""
     parser.add_argument(
@@ -113,15 +108,6 @@ def add_objective_argument(parser) -> None:
         "strongest by the paper's label (UrP > FP > DP > UcP, default) or by harm (UrP, then "
         "the largest regret_a)",
     )
-
-
-def attack_summary(
-    labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float, harm_table: dict | None = None
-) -> dict:
-    """The summary of labelled pairs (`vinadv.jobs.attack.pairs_summary`)."""
-    from vinadv.jobs.attack import pairs_summary
-
-    return pairs_summary(labels, n_maps, no_valid, planner_calls, seconds, harm_table)
 
 
 def print_counts(summary: dict) -> None:

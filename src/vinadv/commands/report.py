@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from vinadv.commands import add_db_argument
+from vinadv.commands import add_db_argument, option_values
 from vinadv.commands.classify import add_setting_argument
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
@@ -75,36 +75,15 @@ def _run_refs(text: str | None) -> list[str] | None:
     return refs
 
 
-def _latest_run(store) -> int:
-    runs = store.list_runs()
-    if not runs:
-        raise InputError(f"database {store.url}: no runs stored yet (run `vinadv run` first)")
-    return int(runs[-1]["id"])
-
-
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from vinadv.evaluation.classifiers import CLASSIFIERS, evaluate_run, parse_list, parse_sizes
-    from vinadv.evaluation.planner_quality import evaluate_planner_quality
-    from vinadv.evaluation.timing import evaluate_timing
-    from vinadv.store import Store
+    from vinadv.evaluation.job import EvaluateConfig, run  # scikit-learn behind it: for this command only
 
-    classifiers = parse_list(args.classifiers, CLASSIFIERS, "--classifiers")
-    sizes = parse_sizes(args.sizes)
-    with Store.open(args.db, create=False) as store:
-        run_id = store.resolve_run(args.run) if args.run is not None else _latest_run(store)
-        # the measurements first: a run with too few FP/DP pairs to compare classifiers still gets them
-        quality = evaluate_planner_quality(store, run_id)
-        timing = evaluate_timing(store, run_id)
-        rows = evaluate_run(store, run_id, classifiers, args.setting, sizes, args.seed, progress=shows_progress(args))
-    summary = {
-        "run_id": run_id,
-        "rows": [{k: v for k, v in r.items() if k != "curves"} for r in rows],
-        "planner_quality": quality,
-        "timing": timing,
-    }
+    config = EvaluateConfig(**option_values(args, "db", "run", "classifiers", "setting", "sizes", "seed"))
+    result = run(config, progress=shows_progress(args))
+    rows, quality, timing = result.rows, result.planner_quality, result.timing
 
     def text() -> None:
-        print(f"run {run_id}: {len(rows)} evaluations stored (setting {args.setting}, seed {args.seed})")
+        print(f"run {result.run_id}: {len(rows)} evaluations stored (setting {args.setting}, seed {args.seed})")
         print(
             f"{'classifier':<10} {'training':<10} {'pairs':>6} {'accuracy':>8} {'FP F1':>6} {'AUC':>6} "
             f"{'AP':>6} {'train s':>8} {'s/100':>8}"
@@ -123,9 +102,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             f"processing time of {timing['pairs']} pairs: rule {timing['rule_s']:.4f} s, "
             f"read from the database {timing['read_s']:.4f} s"
         )
-        print(f"write the report: vinadv report --db {store.url} --run {run_id} --out DIR")
+        print(f"write the report: vinadv report --db {result.url} --run {result.run_id} --out DIR")
 
-    return emit(args, summary, text)
+    return emit(args, result.to_dict(), text)
 
 
 def _f(value, width: int = 8, digits: int = 3) -> str:

@@ -21,8 +21,6 @@ from vinadv.commands.attack import (
     add_harm_arguments,
     add_objective_argument,
     attack_options,
-    attack_summary,
-    harm_tolerances,
     print_counts,
 )
 from vinadv.commands.output import add_output_options, emit, shows_progress
@@ -197,25 +195,19 @@ def _print_run(result: dict) -> None:
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
-    from vinadv.identify import identify_and_store
+    from vinadv.identify import IdentifyConfig, run  # scikit-learn behind it: imported for this command only
 
+    config = IdentifyConfig(
+        **option_values(args, "pairs", "classifier", "planner", "weights", "harm_tolerance", "harm_rtol", "shard_size")
+    )
     device = planner_device(args)
     with open_args_executor(args) as executor:
-        done = identify_and_store(
-            args.pairs,
-            args.db,
-            **option_values(args, "classifier", "planner", "weights", "name", "shard_size"),
-            **harm_tolerances(args),
-            executor=executor,
-            device=device,
-        )
-    ident = done.identification
-    summary = attack_summary(ident.labels, len(ident), 0, 0, done.seconds, harm_table=ident.harm_table())
-    summary.update(run_id=done.run_id, adversarial=int(ident.attack.sum()))
+        done = run(config, executor, db=args.db, name=args.name, device=device)
+    summary = done.to_dict()
 
     def report() -> None:
         print(
-            f"run {done.run_id}: {len(ident):,} pairs identified in {done.seconds:.2f} s; "
+            f"run {done.run_id}: {summary['pairs']:,} pairs identified in {done.seconds:.2f} s; "
             f"{summary['adversarial']:,} successful attacks (D_adversarial)"
         )
         print_counts(summary)

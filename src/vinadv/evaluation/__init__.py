@@ -13,6 +13,8 @@ A run's report:
 - `planner_quality`: the quality of the planner the run used (a shipped metrics file, the weights' training record
   or a quick evaluation on fresh maps), a measurement of the run.
 - `timing`: table 7's processing time of the rule labeller and the database read, a measurement of the run.
+- `job`: `vinadv evaluate` as a job (`EvaluateConfig`, `run(config, executor)`, `EvaluateResult`): the three above
+  on a stored run, stored.
 
 The report (`vinadv.report`) only reads what this stage stored; `evaluate_for_report` is the stage as
 `vinadv run --report` (and so `make demo`) runs it before writing the report. The package's names are imported at
@@ -30,9 +32,19 @@ _LAZY = {
     "evaluate_run": "classifiers",
     "evaluate_planner_quality": "planner_quality",
     "evaluate_timing": "timing",
+    "EvaluateConfig": "job",
+    "EvaluateResult": "job",
 }
 
-__all__ = ["CLASSIFIERS", "evaluate_for_report", "evaluate_planner_quality", "evaluate_run", "evaluate_timing"]
+__all__ = [
+    "CLASSIFIERS",
+    "EvaluateConfig",
+    "EvaluateResult",
+    "evaluate_for_report",
+    "evaluate_planner_quality",
+    "evaluate_run",
+    "evaluate_timing",
+]
 
 
 def __getattr__(name: str):

@@ -19,13 +19,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from vinadv.attacks.strategies import AttackResult, make_attack
-from vinadv.classify.harm import DEFAULT_TOL, check_tolerances, harm_summary
+from vinadv.classify.harm import DEFAULT_TOL, check_tolerances
 from vinadv.errors import InputError
 from vinadv.executor import LOCAL, Executor, resolve, shipped
-from vinadv.identify import Identification, identify, objective_strength
+from vinadv.identify import Identification, identify, objective_strength, pairs_summary
 from vinadv.planners.spec import PlannerSpec
 from vinadv.seeds import check_seed
-from vinadv.vocabulary import ADD, label_counts, success_count
+from vinadv.vocabulary import ADD
 
 if TYPE_CHECKING:
     from vinadv.planners.interface import Planner
@@ -96,27 +96,6 @@ class AttackConfig:
 
     def to_dict(self) -> dict:
         return asdict(self)
-
-
-def pairs_summary(
-    labels, n_maps: int, no_valid: int, planner_calls: int, seconds: float, harm_table: dict | None = None
-) -> dict:
-    """The summary of labelled pairs: counts, the paper's success rate, and with `harm_table` (a
-    `vinadv.classify.harm.cross_table`) the harm counts, the harmful rate and the label x harm table."""
-    counts = label_counts(labels)
-    valid = len(labels) - counts["invalid"]
-    success = success_count(counts)
-    return {
-        "maps": n_maps,
-        "pairs": len(labels),
-        "maps_without_valid_cell": no_valid,
-        "counts": counts,
-        "success_rate": success / valid if valid else None,
-        "planner_calls": planner_calls,
-        "planner_calls_per_success": planner_calls / success if success else None,
-        "seconds": round(seconds, 3),
-        **({} if harm_table is None else harm_summary(harm_table)),
-    }
 
 
 @dataclass
