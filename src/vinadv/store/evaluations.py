@@ -11,6 +11,7 @@ import sqlalchemy as sa
 
 from vinadv import __version__
 from vinadv.errors import InputError
+from vinadv.records import BENCH_CHUNK, ROBUSTNESS, ROBUSTNESS_SETTINGS, upgrade
 from vinadv.store.connection import utcnow
 from vinadv.store.runs import RunQueries
 from vinadv.store.schema import bench_chunks, evaluations, measurements, robustness
@@ -78,7 +79,7 @@ class EvaluationQueries(RunQueries):
 
     def read_measurement(self, run_id: int, kind: str) -> dict | None:
         """The newest stored `kind` measurement of the run (the `result` dict), None when there is none (or the
-        database predates the table)."""
+        database has no such table)."""
         with self.engine.connect() as conn:
             if not sa.inspect(conn).has_table(measurements.name):
                 return None
@@ -120,20 +121,26 @@ class EvaluationQueries(RunQueries):
             )
 
     def read_bench_chunks(self, entry: str) -> dict[int, dict]:
-        """The stored chunks of benchmark entry `entry`: {chunk: result} (`{}` when none, or no table yet)."""
+        """The stored chunks of benchmark entry `entry`: {chunk: result}, each in today's form (`vinadv.records`;
+        `{}` when none, or no table yet)."""
         with self.engine.connect() as conn:
             if not sa.inspect(conn).has_table(bench_chunks.name):
                 return {}
             query = sa.select(bench_chunks.c.chunk, bench_chunks.c.result).where(bench_chunks.c.entry == str(entry))
-            return {int(r.chunk): r.result for r in conn.execute(query)}
+            return {int(r.chunk): upgrade(BENCH_CHUNK, r.result) for r in conn.execute(query)}
 
     def read_robustness(self, ids: Sequence[int] | None = None) -> list[dict]:
-        """The stored robustness benchmarks (of `ids` only, if given), oldest first: dicts of the table's columns
-        (`[]` when none, or when the table does not exist yet)."""
+        """The stored robustness benchmarks (of `ids` only, if given), oldest first: dicts of the table's columns, the
+        settings and the result in today's form (`vinadv.records`; `[]` when none, or when the table does not exist
+        yet)."""
         with self.engine.connect() as conn:
             if not sa.inspect(conn).has_table(robustness.name):
                 return []
             query = sa.select(robustness).order_by(robustness.c.id)
             if ids is not None:
                 query = query.where(robustness.c.id.in_([int(i) for i in ids]))
-            return [dict(r) for r in conn.execute(query).mappings().all()]
+            rows = [dict(r) for r in conn.execute(query).mappings().all()]
+        for row in rows:
+            row["settings"] = upgrade(ROBUSTNESS_SETTINGS, row["settings"])
+            row["result"] = upgrade(ROBUSTNESS, row["result"])
+        return rows
