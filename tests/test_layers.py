@@ -26,6 +26,8 @@ LAYERS = {
     "executor": 2,
     "outfile": 1,
     "jsonfile": 1,
+    # the records stored as JSON, their versions and their one upgrade at read: every reader and writer imports it
+    "records": 1,
     "npzfile": 2,
     "grid": 3,
     "planners": 4,

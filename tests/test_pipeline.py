@@ -26,6 +26,7 @@ from vinadv.identify import objective_strength
 from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run, run_pipeline, shard_maps
 from vinadv.planners.interface import EMPTY_SHA256
 from vinadv.planners.vin.weights import load_vin
+from vinadv.records import VERSION_KEY
 from vinadv.store import Store
 
 SIZE = 12
@@ -268,8 +269,9 @@ def test_a_run_stored_before_several_obstacles_resumes_as_one_obstacle(weights, 
     with Store.open(sqlite_url) as store:
         stored = store.run_info(summary.run_id)["config"]
     stored.pop("obstacles")
+    stored.pop(VERSION_KEY)
     engine = sa.create_engine(sqlite_url, poolclass=sa.pool.NullPool)
-    with engine.begin() as conn:  # the config an older vinadv stored: no "obstacles"
+    with engine.begin() as conn:  # a config of version 0 (`vinadv.records`) of a one-obstacle run: no "obstacles"
         conn.execute(
             sa.text("UPDATE runs SET config = :c WHERE id = :i"), {"c": json.dumps(stored), "i": summary.run_id}
         )
@@ -432,12 +434,12 @@ def test_a_run_follows_its_movement_model_from_maps_to_the_stored_harm(moves, sq
         ):
             expert = optimal_path(obstacles.tolist(), start, goal, True, moves)
             assert stored == pytest.approx(path_cost(expert, moves), abs=1e-9)
-    # the same settings resume it; an octile run's config holds no moves (as before movement models)
+    # the same settings resume it; every run's config holds its moves, as `runs.moves` does
     again = run_pipeline(RunConfig(**kw), db=sqlite_url, name=f"r-{moves}", resume=True, progress=False)
     assert again.skipped_shards == 2
     octile = run_pipeline(RunConfig(**{**kw, "moves": "octile", "n": 2}), db=sqlite_url, progress=False)
     with Store.open(sqlite_url) as store:
-        assert "moves" not in store.run_info(octile.run_id)["config"]
+        assert store.run_info(octile.run_id)["config"]["moves"] == "octile"
         assert store.run_moves(octile.run_id) == "octile"
 
 
@@ -456,7 +458,7 @@ def test_a_maps_file_run_takes_the_file_s_maps_in_shards_and_refuses_a_changed_f
     generate_maps(7, 8, seed=2, n_starts=3).save(path)
     config = RunConfig(**maps_file_config(str(path)), planner="optimal", shard_size=3)
     assert (config.n, config.size, config.n_shards) == (7, 8, 3)
-    assert config.to_dict()["maps_sha256"] == config.maps_sha256 and "maps" not in RunConfig().to_dict()
+    assert config.to_dict()["maps_sha256"] == config.maps_sha256 and RunConfig().to_dict()["maps"] is None
     maps = MapSet.load(path)
     last = shard_maps(config, 2)
     assert len(last) == 1 and np.array_equal(last.obstacles, maps.obstacles[6:])

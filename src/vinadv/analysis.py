@@ -347,8 +347,8 @@ class Results:
 
     def runs(self) -> pd.DataFrame:
         """One row per run, oldest first: run_id, name, created, config (a dict), seed, weights_checksum, attack,
-        classifier, version, timings (a dict), status, moves (its movement model: `octile` for runs stored before
-        schema version 5), and n_pairs (its stored pairs)."""
+        classifier, version, timings (a dict), status, moves (its movement model: `octile` where the column is NULL,
+        `vinadv.store`), and n_pairs (its stored pairs)."""
         import pandas as pd
 
         rows = self.store.list_runs(with_counts=True)

@@ -38,7 +38,9 @@ from vinadv.planners.registry import PlannerRef, load_planner
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
 from vinadv.planners.weights import weights_checksum
+from vinadv.records import IDENTIFY, RECORD_VERSIONS, VERSION_KEY
 from vinadv.vocabulary import (
+    EDITS,
     FORK_OR_DETOUR,
     LABEL_STRENGTH,
     LABELS,
@@ -403,7 +405,7 @@ def run(
         shard_size=config.shard_size,
     )
     elapsed = time.perf_counter() - t0
-    # the spec of the planner that made the file (vinadv >= 0.2)
+    # the spec of the planner that made the file, where its params record one
     attack_planner: PlannerSpec | None = pairs.params.get("planner")
     used: PlannerSpec | None = replanner.spec() if replanner is not None else attack_planner
     with Store.open(db) as store:
@@ -420,6 +422,8 @@ def run(
                 "attack_planner": attack_planner,
                 "harm_tolerance": config.harm_tolerance,
                 "harm_rtol": config.harm_rtol,
+                "edit": str(pairs.edit[0]) if len(pairs) else EDITS[0],
+                VERSION_KEY: RECORD_VERSIONS[IDENTIFY],
             },
             weights_checksum=None if used is None else used["weights_sha256"],
             attack=pairs.strategy,

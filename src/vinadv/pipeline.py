@@ -12,7 +12,7 @@ shard refuses a file whose checksum differs (a worker elsewhere reading another 
 
 A shard is written in batches inside transactions and `(run_id, pair_index)` is unique; a run killed part way
 resumes with `resume=True`: shards are stored in order and each completely stored shard is recorded
-(`Store.set_shards_done`), so the recorded ones are skipped (and, for a run stored by an older vinadv, the shards
+(`Store.set_shards_done`), so the recorded ones are skipped (and, for a run that recorded no count, the shards
 before the last one holding a pair); the rest are recomputed and only their missing pairs are written. A
 database fault while storing (a full disk) stops the run with one line naming the database and how to resume.
 """
@@ -48,6 +48,7 @@ from vinadv.planners.interface import EMPTY_SHA256, Planner
 from vinadv.planners.registry import DEFAULT_PLANNER, PlannerRef, load_planner, same_choice
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.weights import weights_checksum
+from vinadv.records import RUN, VERSION_KEY, run_config_kind, stamp
 from vinadv.seeds import check_seed
 from vinadv.vocabulary import ADD, LABEL_STRENGTH, success_count
 
@@ -107,18 +108,9 @@ class RunConfig:
         return self.per_map if self.per_map > 0 else self.size * self.size
 
     def to_dict(self) -> dict:
-        """The config as stored with the run; without a maps file, its two fields are left out (the runs of
-        generated maps are stored as before), `edit` when `add` (a stored config without it reads as `add`), and
-        `moves` when `octile` (an octile run's config is what it was
-        before movement models; the run's model is also in `runs.moves`, which the store reads)."""
-        out = asdict(self)
-        if self.edit == ADD:  # a run that adds obstacles is stored as it was before removal existed
-            del out["edit"]
-        if self.maps is None:
-            del out["maps"], out["maps_sha256"]
-        if out["moves"] == DEFAULT_MOVES:
-            del out["moves"]
-        return out
+        """Every setting of the config, by name (stored with the run, with its planner's spec and the record version:
+        `vinadv.records.RUN`); `RunConfig(**config.to_dict())` is the same config."""
+        return asdict(self)
 
 
 def maps_file_config(path: str, n: int | None = None) -> dict:
@@ -330,14 +322,14 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         run_id = store.find_run(name)
         if run_id is None:
             raise InputError(f"resume: no run named '{name}' in {store.url}", "resume")
-        info = store.run_info(run_id)
-        # runs stored before planners / several obstacles / maps files: the VIN, one obstacle, generated maps
-        stored_config = {"planner": DEFAULT_PLANNER, "obstacles": 1, **(info["config"] or {})}
-        stored_config.pop(PLANNER_SPEC, None)
+        info = store.run_info(run_id)  # the config upgraded to today's form (`vinadv.records`)
+        if run_config_kind(info["config"]) != RUN:
+            raise InputError(f"resume: run '{name}' was not made by `vinadv run`; use another name", "resume", "name")
+        stored_config = {k: v for k, v in info["config"].items() if k not in (PLANNER_SPEC, VERSION_KEY)}
         given = config.to_dict()
         # one planner however named: an old spelling (vin_robust), or a family with its planner's weights
-        if same_choice((stored_config["planner"], stored_config.get("weights")), (config.planner, config.weights)):
-            stored_config = {**stored_config, "planner": given["planner"], "weights": given.get("weights")}
+        if same_choice((stored_config["planner"], stored_config["weights"]), (config.planner, config.weights)):
+            stored_config = {**stored_config, "planner": given["planner"], "weights": given["weights"]}
         if stored_config != given:
             diff = sorted(k for k in given if stored_config.get(k) != given[k])
             raise InputError(
@@ -351,7 +343,7 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         return run_id
     return store.create_run(
         name,
-        config={**config.to_dict(), PLANNER_SPEC: planner.spec()},
+        config=stamp(RUN, {**config.to_dict(), PLANNER_SPEC: planner.spec()}),
         seed=config.seed,
         weights_checksum=planner.checksum,
         attack=config.attack,
@@ -365,7 +357,7 @@ def _check_same_planner(name: str, info: dict, planner: Planner) -> None:
     """Refuse (InputError) to resume the run `name` (its row `info`) with another planner than it was made with:
     other weights (checksum), or a bring-your-own planner whose source file changed since (its recorded SHA-256)."""
     stored_checksum = info["weights_checksum"]
-    if stored_checksum == EMPTY_SHA256:  # a planner without weights, as an older vinadv recorded it
+    if stored_checksum == EMPTY_SHA256:  # a planner without weights: recorded as None or as the empty SHA-256
         stored_checksum = None
     if stored_checksum != planner.checksum:
         raise InputError(
@@ -374,7 +366,7 @@ def _check_same_planner(name: str, info: dict, planner: Planner) -> None:
             "resume",
             "planner",
         )
-    stored_spec = (info["config"] or {}).get(PLANNER_SPEC) or {}
+    stored_spec = info["config"][PLANNER_SPEC] or {}
     stored_source = (stored_spec.get("config") or {}).get("source_sha256")
     source = planner.config.get("source_sha256")
     if stored_source is not None and stored_source != source:
@@ -503,5 +495,5 @@ def run_pipeline(
     executor: Executor = LOCAL,
     device: str | None = None,
 ) -> RunSummary:
-    """`run` with the arguments of earlier versions (a progress bar by default)."""
+    """`run` with the settings as positional arguments after `config` (a progress bar by default)."""
     return run(config, executor, db=db, name=name, resume=resume, progress=progress, device=device)

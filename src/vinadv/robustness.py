@@ -54,6 +54,7 @@ from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import identify, objective_strength
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
+from vinadv.records import ROBUSTNESS, ROBUSTNESS_SETTINGS, stamp
 from vinadv.seeds import check_seed
 from vinadv.vocabulary import ADD, SUCCESS_LABELS, label_counts
 
@@ -187,7 +188,7 @@ class StrategyResult:
             "name": self.name,
             "seconds": round(self.seconds, 3),
             "planner_calls": self.planner_calls,
-            **({} if self.ranked_as is None else {"ranked_as": self.ranked_as}),
+            "ranked_as": self.ranked_as,
             "by_obstacles": [f.to_dict() for f in self.by_k],
         }
 
@@ -198,8 +199,9 @@ class RobustnessResult:
 
     Attributes:
         planner: the planner's `spec()` (name, size, config, weights checksum).
-        settings: maps (n, size, seed, corner cutting), strategies, max_obstacles, objective, budget, radius, seed of
-            the randomised strategies, harm tolerances.
+        settings: maps (n, size, seed, corner cutting, movement model, the maps file and its SHA-256 or None),
+            strategies, max_obstacles, objective, budget, radius, seed of the randomised strategies, harm tolerances,
+            edit: every field, and the record version (`vinadv.records.ROBUSTNESS_SETTINGS`).
         clean: the unattacked maps: maps, reached, success_rate, mean_regret (of the reached paths).
         strategies: {name: StrategyResult}, in the order run.
         overall: the worst case over the strategies at k = 1..max (`overall[k - 1]`).
@@ -222,8 +224,9 @@ class RobustnessResult:
         return by_k[k - 1]
 
     def to_dict(self) -> dict:
-        """Every figure, JSON-able (what `--json` prints and the database stores)."""
-        return {
+        """Every figure, JSON-able (what `--json` prints and the database stores: the record
+        `vinadv.records.ROBUSTNESS`, its version included)."""
+        result = {
             "planner": self.planner,
             "settings": self.settings,
             "clean": self.clean,
@@ -231,6 +234,7 @@ class RobustnessResult:
             "overall": [f.to_dict() for f in self.overall],
             "seconds": round(self.seconds, 3),
         }
+        return stamp(ROBUSTNESS, result)
 
 
 def check_strategies(strategies, exhaustive: bool = False) -> tuple[str, ...]:
@@ -358,14 +362,15 @@ def robustness(
         "radius": radius,
         "harm_tolerance": harm_tol,
         "harm_rtol": harm_rtol,
-        # an octile benchmark's settings are what they were before movement models
-        **({} if maps.moves == DEFAULT_MOVES else {"moves": maps.moves}),
+        "moves": maps.moves,
+        "maps": None,
+        "maps_sha256": None,
         **(maps_source or {}),
-        **({} if edit == ADD else {"edit": edit}),  # absent: add, as every result stored before removal existed
+        "edit": edit,
     }
     return RobustnessResult(
         planner=planner.spec(),
-        settings=settings,
+        settings=stamp(ROBUSTNESS_SETTINGS, settings),
         clean=clean,
         strategies=results,
         overall=overall,

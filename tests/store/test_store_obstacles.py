@@ -107,6 +107,9 @@ def test_robustness_rows_round_trip(db_url):
         rows = store.read_robustness()
         assert [r["id"] for r in rows] == [first, second]
         assert rows[0]["planner"] == "vin" and rows[0]["weights_checksum"] == "ab" * 32
-        assert rows[0]["settings"] == settings and rows[0]["result"] == result
+        # version 0 records (`vinadv.records`): read with the fields their writers left out
+        filled = {"moves": "octile", "maps": None, "maps_sha256": None, "edit": "add"}
+        assert rows[0]["settings"] == {**filled, **settings, "record_version": 1}
+        assert rows[0]["result"] == {**result, "record_version": 1}
         assert rows[1]["weights_checksum"] is None
         assert [r["id"] for r in store.read_robustness([second])] == [second]

@@ -46,6 +46,7 @@ from vinadv.evaluation.search_metrics import evaluate_search, harmonic_mean, pat
 from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.mapset import MapSet
 from vinadv.planners.interface import Planner
+from vinadv.records import BENCH_CHUNK, RECORD_VERSIONS, VERSION_KEY
 from vinadv.robustness import Figures, MapOutcomes, benchmark_maps, robustness, worst_case
 
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
@@ -205,7 +206,8 @@ def _floats(values) -> list:
 
 
 def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> dict:
-    """Chunk `chunk` of the suite (maps `chunk * suite.chunk ..`): the clean planner and every attack, per map."""
+    """Chunk `chunk` of the suite (maps `chunk * suite.chunk ..`): the clean planner and every attack, per map (the
+    record `vinadv.records.BENCH_CHUNK`, its version included)."""
     t0 = time.perf_counter()
     lo = chunk * suite.chunk
     sub = chunk_maps(maps, lo, min(len(maps), lo + suite.chunk))
@@ -256,6 +258,7 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
         },
         "attacks": attacks,
         "seconds": round(time.perf_counter() - t0, 3),
+        VERSION_KEY: RECORD_VERSIONS[BENCH_CHUNK],
     }
 
 

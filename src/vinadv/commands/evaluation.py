@@ -69,7 +69,7 @@ def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:
     moves = args.moves or "octile"
     maps = generate_maps(args.n, args.size, args.seed, args.starts, moves=moves)
     generated = {"n": args.n, "seed": args.seed, "size": args.size}
-    if moves != "octile":  # an octile record is what it was before movement models
+    if moves != "octile":  # the record names the movement model only off octile maps
         generated["moves"] = moves
     return maps, {"generated": generated}
 

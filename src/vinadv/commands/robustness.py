@@ -131,7 +131,7 @@ def print_robustness(out: dict) -> None:
     print(
         f"robustness of planner {planner['name']}{f' (weights {weights})' if weights else ''} on {s['n']:,} maps "
         f"{s['size']}x{s['size']} ({origin}), kept by {s['objective']}, in {out['seconds']:.1f} s"
-        + (", obstacles removed" if s.get("edit") == "remove" else "")
+        + (", obstacles removed" if s["edit"] == "remove" else "")
     )
     regret = "—" if clean["mean_regret"] is None else f"{clean['mean_regret']:.3f}"
     print(

@@ -18,6 +18,7 @@ from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
 from vinadv.planners.records import TrainingRecord
 from vinadv.planners.weights import weights_checksum
+from vinadv.records import RECORD_VERSIONS, TRAINING, VERSION_KEY
 
 if TYPE_CHECKING:  # PyTorch behind it: imported by the command that trains
     from vinadv.planners.imitation import TrainConfig
@@ -167,8 +168,10 @@ def training_checkpoint(args: argparse.Namespace, out: Path) -> Path:
 
 
 def training_record(**fields: Any) -> dict:
-    """The head of a training record: the command line, vinadv's version and the time it started; then `fields`."""
+    """The head of a training record: its record version (`vinadv.records.TRAINING`), the command line, vinadv's
+    version and the time it started; then `fields`."""
     return {
+        VERSION_KEY: RECORD_VERSIONS[TRAINING],
         "command": command_line(),
         "vinadv": __version__,
         "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),

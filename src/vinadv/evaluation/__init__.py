@@ -57,7 +57,7 @@ def evaluate_for_report(store, run_id: int, *, compare: bool = True, progress: b
     """Evaluate the stored run `run_id` for its report and store the results: the quick classifier comparison
     (`compare_for_report`: both settings, the quick profile) unless `compare` is False or the run has one stored,
     then the planner's quality and the processing time. Return why no comparison was run: `"skipped"` (not
-    `compare`), the reason the run cannot be compared, or None (run now, or stored before)."""
+    `compare`), the reason the run cannot be compared, or None (run now, or one stored already)."""
     from vinadv.evaluation.classifiers import compare_for_report  # noqa: PLC0415 (the package imports its modules at first use)
     from vinadv.evaluation.planner_quality import evaluate_planner_quality  # noqa: PLC0415 (the package imports its modules at first use)
     from vinadv.evaluation.timing import evaluate_timing  # noqa: PLC0415 (the package imports its modules at first use)

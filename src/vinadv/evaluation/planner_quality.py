@@ -96,7 +96,7 @@ def evaluate_planner_quality(store, run_id: int) -> dict:
     info = store.run_info(run_id)
     config = info.get("config") or {}
     size = config.get("size")
-    if size is None:  # a run stored before the config held the size: its first pair's
+    if size is None:  # a config without the size (`vinadv identify`'s, or none): its first pair's
         index, _ = store.pair_labels(run_id)
         size = store.read_pairs(run_id, pair_indices=index[:1]).size
     metrics, source = planner_quality(config, info.get("weights_checksum"), int(size), info["moves"])

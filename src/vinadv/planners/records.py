@@ -74,8 +74,7 @@ class EpochRecord(TypedDict):
 
 
 class DataRecord(TypedDict):
-    """The maps file a training read (the `train` commands), its movement model included (`moves`; records
-    written before movement models have none: their maps were `octile`)."""
+    """The maps file a training read (the `train` commands), its movement model included (`moves`)."""
 
     path: str
     sha256: str
@@ -92,10 +91,11 @@ class TrainingRecord(TypedDict, total=False):
 
     `training.train_model` writes `format` ... `optimizer` when it starts and `epochs` ... `stopped_early` (with
     `augment_rounds` and `added_maps` under adversarial training) when it ends; `train_vin` adds `value_iteration`,
-    `--init` adds `init_sha256` (and `init_k`); the `train` commands add `command`, `vinadv`, `started`, `data`
-    and `finished`.
+    `--init` adds `init_sha256` (and `init_k`); the `train` commands add `record_version` (`vinadv.records.TRAINING`:
+    readers take the record through `vinadv.records.upgrade`), `command`, `vinadv`, `started`, `data` and `finished`.
     """
 
+    record_version: int
     format: str
     planner: str
     seed: int

@@ -18,6 +18,7 @@ from typing import Any
 from vinadv.errors import InputError
 from vinadv.planners.registry.models import WEIGHTS_DIR, resolve, verify
 from vinadv.planners.registry.models import file_sha256 as weights_checksum
+from vinadv.records import TRAINING, upgrade
 
 #: the most iterations (value-iteration steps, recurrent steps) k a weights file's config, or `--k`, may ask for:
 #: far past any map a grid planner plans (the VIN's default is about 1.3 N; 1,000 crosses a 750 x 750 map), and
@@ -84,14 +85,13 @@ def check_trained_size(name: str | os.PathLike | None, record: dict, size: int, 
 
 
 def trained_moves(name: str | os.PathLike | None, record: dict) -> str:
-    """The movement model (`vinadv.grid.moves`) the weights were trained on, from their training `record`: its
-    `moves`, else its data's `moves`, else `octile` (records written before movement models, and weights from
-    elsewhere, were trained on octile maps or say nothing). A name that is not a model raises InputError naming the
-    file `name`."""
+    """The movement model (`vinadv.grid.moves`) the weights were trained on, from their training `record` (in
+    today's form, `vinadv.records.TRAINING`): its `moves`, else its data's `moves`, else `octile` (a record that names
+    no maps: weights from elsewhere). A name that is not a model raises InputError naming the file `name`."""
     # late: the commands import this module to start, and `vinadv.grid` brings Numba (tests/test_cli_imports.py)
     from vinadv.grid.moves import DEFAULT_MOVES, MOVES  # noqa: PLC0415
 
-    record = record if isinstance(record, dict) else {}
+    record = upgrade(TRAINING, record) if isinstance(record, dict) else {}
     data = record.get("data") if isinstance(record.get("data"), dict) else {}
     moves = record.get("moves", data.get("moves", DEFAULT_MOVES))
     if moves not in MOVES:

@@ -87,7 +87,7 @@ class CountQueries(Database):
 
     def harm_counts(self, run_id: int) -> dict[str, dict[str | None, int]]:
         """Stored pairs per (paper label, harm), in one GROUP BY: `{label: {harm: n}}`, only the combinations
-        present. Harm None: not computed (NULL: a pair stored before vinadv kept harm, or every pair of a
+        present. Harm None: not computed (NULL: a pair stored without harm, or every pair of a
         version-1 database opened read-only)."""
         c = map_pairs.c
         keys = (c.label,) if "harm" in self.absent_columns else (c.label, c.harm)

@@ -12,6 +12,7 @@ import sqlalchemy as sa
 
 from vinadv import __version__
 from vinadv.errors import InputError, one_line
+from vinadv.records import BENCH_CHUNK, ROBUSTNESS, ROBUSTNESS_SETTINGS, upgrade
 from vinadv.store.connection import utcnow
 from vinadv.store.runs import RunQueries
 from vinadv.store.schema import bench_chunks, evaluations, measurements, robustness
@@ -79,7 +80,7 @@ class EvaluationQueries(RunQueries):
 
     def read_measurement(self, run_id: int, kind: str) -> dict | None:
         """The newest stored `kind` measurement of the run (the `result` dict), None when there is none (or the
-        database predates the table)."""
+        database has no such table)."""
         with self.engine.connect() as conn:
             if not sa.inspect(conn).has_table(measurements.name):
                 return None
@@ -122,7 +123,8 @@ class EvaluationQueries(RunQueries):
 
     def read_bench_chunks(self, entry: str, check=None) -> dict[int, dict]:
         """The stored chunks of benchmark entry `entry`: {chunk: result} (`{}` when none, or no table yet). Each
-        result is parsed here from its stored text, then `check(chunk, result)` (the bench schema,
+        result is parsed here from its stored text and read in today's form (`vinadv.records`), then
+        `check(chunk, result)` (the bench schema,
         `vinadv.bench.validate`) names its first problem or None: InputError (one line naming the chunk and the
         problem) for a result that is not JSON or that `check` refuses."""
         with self.engine.connect() as conn:
@@ -138,6 +140,8 @@ class EvaluationQueries(RunQueries):
                 result = json.loads(raw) if isinstance(raw, (str, bytes)) else raw
             except (ValueError, RecursionError):
                 raise InputError(f"{where}: its result is not JSON ({one_line(str(raw)[:40])!r})") from None
+            if isinstance(result, dict):
+                result = upgrade(BENCH_CHUNK, result)
             problem = None if check is None else check(chunk, result)
             if problem is not None:
                 raise InputError(f"{where}: {problem}")
@@ -145,12 +149,17 @@ class EvaluationQueries(RunQueries):
         return out
 
     def read_robustness(self, ids: Sequence[int] | None = None) -> list[dict]:
-        """The stored robustness benchmarks (of `ids` only, if given), oldest first: dicts of the table's columns
-        (`[]` when none, or when the table does not exist yet)."""
+        """The stored robustness benchmarks (of `ids` only, if given), oldest first: dicts of the table's columns, the
+        settings and the result in today's form (`vinadv.records`; `[]` when none, or when the table does not exist
+        yet)."""
         with self.engine.connect() as conn:
             if not sa.inspect(conn).has_table(robustness.name):
                 return []
             query = sa.select(robustness).order_by(robustness.c.id)
             if ids is not None:
                 query = query.where(robustness.c.id.in_([int(i) for i in ids]))
-            return [dict(r) for r in conn.execute(query).mappings().all()]
+            rows = [dict(r) for r in conn.execute(query).mappings().all()]
+        for row in rows:
+            row["settings"] = upgrade(ROBUSTNESS_SETTINGS, row["settings"])
+            row["result"] = upgrade(ROBUSTNESS, row["result"])
+        return rows

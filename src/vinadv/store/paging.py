@@ -12,7 +12,7 @@ class PagingQueries(Database):
     """Pages of a run's pairs without maps and paths (a part of `Store`)."""
 
     def ensure_indexes(self) -> list[str]:
-        """Create the indexes of the current schema that the database lacks (one made by an older vinadv);
+        """Create the indexes of the current schema that the database lacks (one made with fewer indexes);
         return their names. Paging stays correct without them, only slower. An index on a column the database
         does not have yet (the harm columns of a version-1 database opened without `create`) is left for later."""
         created = []

@@ -9,6 +9,7 @@ import sqlalchemy as sa
 from vinadv import __version__
 from vinadv.errors import InputError
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
+from vinadv.records import upgrade_run_config
 from vinadv.store.connection import Database, utcnow
 from vinadv.store.schema import exact_collation, map_pairs, meta_table, runs
 
@@ -115,9 +116,9 @@ class RunQueries(Database):
     def resolve_run(self, ref: str | int, param: str = "run_id") -> int:
         """The id of the run `ref` names: the one rule for every run reference. A number is a run id (a run name is
         never a number, see `create_run`), anything else a run name (its latest run), looked up exactly as given,
-        then, when no run has that exact name, without the whitespace around it (a run an older vinadv stored as
-        'x ' is found by 'x ', and 'x' by ' x '). InputError (naming the parameter `param`) when there is no such
-        run."""
+        then, when no run has that exact name, without the whitespace around it (a name stored with whitespace,
+        which `check_run_name` now refuses: 'x ' is found by 'x ', and 'x' by ' x '). InputError (naming the
+        parameter `param`) when there is no such run."""
         text = str(ref)
         if text.strip().isascii() and text.strip().isdigit():  # not '²': a digit to isdigit, no number to int
             text = text.strip()
@@ -210,9 +211,11 @@ class RunQueries(Database):
 
 
 def _run_row(row) -> dict:
-    """A `runs` row as a dict, its `moves` `octile` where NULL (a run stored before schema version 6)."""
+    """A `runs` row as a dict: its `config` in today's form (`vinadv.records.upgrade_run_config`), its `moves`
+    `octile` where NULL (the column's value in the rows of schema versions 1 to 5)."""
     info = dict(row)
-    info["moves"] = info.get("moves") or DEFAULT_MOVES
+    info["config"] = upgrade_run_config(info["config"])
+    info["moves"] = info["moves"] or DEFAULT_MOVES
     return info
 
 

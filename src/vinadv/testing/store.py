@@ -40,7 +40,7 @@ def random_records(
     score[rng.random(n) < 0.3] = np.nan
     dh = rng.integers(-1, size, n)
     dv = rng.integers(-1, size, n)
-    # harm: costs with NULLs (NaN), labels with NULLs (None), like rows written before the harm columns existed
+    # harm: costs with NULLs (NaN), labels with NULLs (None), like rows stored without harm
     costs = {name: np.where(rng.random(n) < 0.2, np.nan, rng.random(n) * 4 * size) for name in HARM_FLOAT_COLUMNS}
     expert_label = np.array([None, *LABELS], dtype=object)[rng.integers(0, len(LABELS) + 1, n)]
     harm = np.array([None, *HARMS], dtype=object)[rng.integers(0, len(HARMS) + 1, n)]

@@ -549,7 +549,7 @@ def _pair_row_json(row: dict, humans: list[dict]) -> dict:
 
 
 def run_planner(run: dict) -> str:
-    """The planner a run's pairs were planned by (its config's `planner`; runs before planners: `vin`)."""
+    """The planner a run's pairs were planned by (its config's `planner`; `vin` where the config names none)."""
     return (run.get("config") or {}).get("planner") or "vin"
 
 

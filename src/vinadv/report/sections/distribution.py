@@ -58,7 +58,7 @@ def gather(ctx: Context) -> DistributionData:
             RunCounts(
                 run_id=rid,
                 name=info.get("name"),
-                # a run that frees obstacles says so; one that adds them is shown as before removal existed
+                # a run that frees obstacles says so; one that adds them shows its strategy alone
                 attack=info.get("attack")
                 and info["attack"] + (" (remove)" if run_edit(info.get("config")) == "remove" else ""),
                 labelled_by=", ".join(sources) or (info.get("classifier") or RULE_SOURCE),

@@ -8,6 +8,7 @@ import numpy as np
 
 from vinadv.classify.harm import DEFAULT_TOL, harm_summary
 from vinadv.grid.shortest_paths import expert_paths
+from vinadv.records import run_config_kind
 from vinadv.report.data import ALL_LABELS, Context, Figure, Table
 from vinadv.vocabulary import HARMS, SUCCESS_LABELS
 
@@ -68,8 +69,8 @@ class RegretChanges:
 
 @dataclass
 class HarmData:
-    """The harm section of the main run. `available`: some pair of the run has harm stored (a run stored before
-    vinadv computed harm has none: then every other field is empty). `counts`: {label: {harm: pairs}}, every label
+    """The harm section of the main run. `available`: some pair of the run has harm stored (a run whose pairs hold
+    no harm: then every other field is empty). `counts`: {label: {harm: pairs}}, every label
     and harm value (and `NOT_COMPUTED` where some pairs lack harm); `rates`: the paper's success rate and the
     harmful rate, both over the valid pairs with harm; `tol`, `rtol`: the run's harm tolerances."""
 
@@ -115,7 +116,8 @@ def change_bins(values: np.ndarray, tol: float) -> np.ndarray:
 
 def gather(ctx: Context) -> HarmData:
     info = ctx.store.run_info(ctx.run_id)
-    config = info.get("config") or {}
+    # the run's tolerances as its config records them (`vinadv.records`), the defaults for a run without such a config
+    config = info["config"] if run_config_kind(info["config"]) is not None else {}
     tol, rtol = float(config.get("harm_tolerance", DEFAULT_TOL)), float(config.get("harm_rtol", 0.0))
     stored = ctx.store.harm_counts(ctx.run_id)
     not_computed = sum(row.get(None, 0) for row in stored.values())

@@ -91,7 +91,7 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
                     **{name: s["seconds"] for name, s in result["strategies"].items()},
                     "total": result["seconds"],
                 },
-                edit=str(settings.get("edit", "add")),  # absent: stored before removal existed
+                edit=str(settings["edit"]),
             )
         )
     data = RobustnessData(benchmarks=benchmarks)

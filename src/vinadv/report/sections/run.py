@@ -6,7 +6,9 @@ import json
 from dataclasses import dataclass
 
 from vinadv.grid.moves import DEFAULT_MOVES
+from vinadv.records import run_config_kind
 from vinadv.report.data import Context, Figure, Table
+from vinadv.vocabulary import ADD
 
 
 @dataclass
@@ -24,10 +26,10 @@ class RunData:
 
 
 def run_edit(config: dict | None) -> str:
-    """What a run's attack did to the maps, from its stored config: `remove` (obstacle cells freed: `vinadv run
-    --edit remove`, or `vinadv identify` of a pairs file so made) or `add` (every run stored before removal existed)."""
-    config = config or {}
-    return str(config.get("edit") or (config.get("params") or {}).get("edit") or "add")
+    """What a run's attack did to the maps, from its stored config (a `vinadv run` or `vinadv identify` config
+    records its `edit`, `vinadv.records`): `remove` (obstacle cells freed) or `add`; `add` for a run without such a
+    config."""
+    return str(config["edit"]) if run_config_kind(config) is not None else ADD
 
 
 def gather(ctx: Context) -> RunData:
@@ -40,7 +42,7 @@ def gather(ctx: Context) -> RunData:
         ("created (UTC)", info["created"]),
         ("status", info["status"]),
         ("attack strategy", info.get("attack")),
-        *removal,  # a run that adds obstacles shows no row: its report is as before removal existed
+        *removal,  # the edit row only for a run that frees obstacles
         ("labelled by", info.get("classifier") or ", ".join(sources)),
         ("label sources", ", ".join(sources)),
         ("seed", info.get("seed")),
@@ -50,7 +52,7 @@ def gather(ctx: Context) -> RunData:
         ("planner weights (SHA-256)", info.get("weights_checksum")),
         ("vinadv version", info["version"]),
     ]
-    if info["moves"] != DEFAULT_MOVES:  # an octile run's table is what it was before movement models
+    if info["moves"] != DEFAULT_MOVES:  # the movement model row only for a run off octile maps
         rows.insert(rows.index(("seed", info.get("seed"))), ("movement model", info["moves"]))
     config = [
         (k, json.dumps(v) if isinstance(v, (dict, list)) else v) for k, v in sorted((info.get("config") or {}).items())
