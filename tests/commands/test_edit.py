@@ -47,7 +47,7 @@ def test_run_stores_the_edit_and_the_report_and_viewer_show_it(tmp_path):
         assert set(store.read_pairs(removed).edit) == {"remove"} and set(store.read_pairs(added).edit) == {"add"}
         assert run_edit(store.run_info(removed)["config"]) == "remove"
         config = store.run_info(added)["config"]
-        assert run_edit(config) == "add" and "edit" not in config  # stored as before removal existed
+        assert run_edit(config) == "add" and config["edit"] == "add"  # writers write every field
         app = create_app(store, secret_key="k")
         app.config["TESTING"] = True
         client = app.test_client()
@@ -64,7 +64,7 @@ def test_robustness_removes(tmp_path, capsys):
     assert out["settings"]["edit"] == "remove"
     assert all(f["harmful"] == 0 and f["valid"] > 0 for f in out["overall"])
     assert main([*argv, "--strategies", "random", "--json"]) == 0
-    assert "edit" not in json.loads(capsys.readouterr().out)["settings"]
+    assert json.loads(capsys.readouterr().out)["settings"]["edit"] == "add"
 
 
 def test_edit_is_validated(maps_file, tmp_path, capsys):
