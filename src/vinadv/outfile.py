@@ -138,6 +138,21 @@ def atomic_output(path: str | os.PathLike, mode: str = "wb", *, mkdir: bool = Fa
         raise
 
 
+def save_torch(obj: object, path: str | os.PathLike, *, mkdir: bool = False) -> None:
+    """`torch.save(obj)` to `path` through `atomic_output`. torch wraps a failed write (a full disk) in a RuntimeError
+    ("unexpected pos ..."): that is the OutputError naming `path`, and the temporary file is removed."""
+    import torch  # noqa: PLC0415 (outfile stays light: only the commands that write weights load PyTorch)
+
+    with atomic_output(path, "wb", mkdir=mkdir) as fh:
+        try:
+            torch.save(obj, fh)
+        except RuntimeError as exc:
+            cause = exc.__cause__ or exc.__context__
+            if isinstance(cause, OSError):  # the file's own write failed: atomic_output reports it
+                raise cause from None
+            raise
+
+
 def _remove(tmp: str) -> None:
     with contextlib.suppress(OSError):
         os.remove(tmp)
