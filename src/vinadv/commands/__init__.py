@@ -200,10 +200,11 @@ def option_values(args: argparse.Namespace, *names: str) -> dict[str, Any]:
 
 
 def cli_message(exc: InputError) -> str:
-    """`exc`'s message for the command line: the first mention of each parameter it names becomes its flag."""
+    """`exc`'s message for the command line: the first mention of each parameter it names becomes its flag. A word
+    that is part of a path (`/tmp/data/x.npz`: next to a `/`, `\\` or `.`) is the path's, and stays."""
     message = str(exc)
     for parameter in getattr(exc, "parameters", ()):
-        pattern = rf"(?<![\w-]){re.escape(parameter)}(?![\w-])"
+        pattern = rf"(?<![\w/\\.-]){re.escape(parameter)}(?![\w/\\-]|\.\w)"
         message = re.sub(pattern, flag(parameter).replace("\\", "\\\\"), message, count=1)
     return message
 

@@ -109,6 +109,9 @@ def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out: {out} exists and is not a folder")
+    if not Path(args.dir).is_dir():  # named as the command line names it: the argument DIR
+        what = "is not a folder" if Path(args.dir).exists() else "no such folder"
+        raise InputError(f"DIR {args.dir}: {what} (the folder of result entries)")
     entries_read = sorted(Path(args.dir).glob("*.json")) if Path(args.dir).is_dir() else []
     if args.index:  # not one of the entries it indexes
         check_output_path(args.index, inputs={"DIR": entries_read})
