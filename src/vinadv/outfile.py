@@ -60,9 +60,13 @@ def check_output_folder(path: str | os.PathLike, *, inputs: Inputs | None = None
     path = Path(path)
     check_not_input(path, inputs)
     if path.exists() and not path.is_dir():
-        raise OutputError(f"cannot write the folder {path}: a file of that name exists (give a folder name)")
-    if path.is_dir():
-        _probe(path / "index.html", path)
+        raise OutputError(f"cannot write the folder {path}: it exists and is not a folder (give a folder name)")
+    made = path  # the folder files go into, or the nearest existing one above it, where the command makes it
+    while not made.exists() and made != made.parent:
+        made = made.parent
+    if not made.is_dir():
+        raise OutputError(f"cannot write the folder {path}: {made} is not a folder")
+    _probe(made / "index.html", made)
     return path
 
 

@@ -148,7 +148,17 @@ def test_same_file_and_folder_checks(tmp_path):
     assert not same_file(tmp_path / "a", tmp_path / "missing")
     with pytest.raises(OutputError, match="it is the input --db"):
         check_output_folder(tmp_path / "b", inputs={"--db": tmp_path / "a"})
-    with pytest.raises(OutputError, match="a file of that name exists"):
+    with pytest.raises(OutputError, match="it exists and is not a folder"):
         check_output_folder(tmp_path / "a")
     assert check_output_folder(tmp_path / "new") == tmp_path / "new" and not (tmp_path / "new").exists()
     check_output_path(tmp_path / "x", inputs={"--data": [None, tmp_path / "y"], "--init": None})
+
+
+def test_a_report_folder_under_a_read_only_one_is_refused_before_the_work(tmp_path, capsys):
+    with tmpfs(tmp_path / "ro", "1M", ",ro") as folder:
+        assert main(["report", "--db", str(tmp_path / "r.db"), "--out", str(folder / "new" / "rep")]) == 2
+        line = capsys.readouterr().err
+        assert "read-only" in line and line.count("\n") == 1
+    (tmp_path / "file").write_bytes(b"x")
+    with pytest.raises(OutputError, match="is not a folder"):
+        check_output_folder(tmp_path / "file" / "rep")
