@@ -15,6 +15,7 @@ from collections.abc import Iterator
 
 import pytest
 import sqlalchemy as sa
+from hypothesis import settings
 
 from tests.needs import skip_or_fail
 from tests.scheduling import make_scheduler
@@ -27,6 +28,16 @@ from vinadv.testing.planners import planning_vin
 # get one too, or their first launch would put torch back on two (`set_torch_threads`). Commands the tests start in
 # subprocesses keep the defaults.
 set_torch_threads(1)
+
+# Hypothesis: every property test reproducible. The "ci" profile (loaded where CI=true, or by HYPOTHESIS_PROFILE=ci)
+# draws the same examples on every run (derandomize: seeded by the test itself) and keeps no database, so a CI run
+# fails only on a case anyone can rerun; "dev" (the default elsewhere) draws new examples each run and keeps the ones
+# that failed in .hypothesis/ to replay them first. Both print a failure's reproduction blob (`@reproduce_failure`);
+# a failure found either way is kept in its test as an `@example(...)`, a regression example every profile runs.
+# `pytest --hypothesis-seed=N` draws other examples once, to look for hidden assumptions (docs/development.md).
+settings.register_profile("ci", derandomize=True, database=None, print_blob=True)
+settings.register_profile("dev", print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or ("ci" if os.environ.get("CI") == "true" else "dev"))
 
 # Temporary files (tmp_path, the folders below) on a RAM disk where there is a roomy one: SQLite syncs every new
 # database to disk (45 ms a database on the 2-core machine's disk, 15 ms in memory) and the suite creates hundreds;

@@ -307,3 +307,17 @@ def test_the_guides_python_tour_runs_as_written():
     pairs = namespace["pairs"]
     assert len(pairs) > 0 and namespace["runs"]["n_pairs"].tolist() == [len(pairs)]
     assert "near-path" in out.getvalue() and "(28, 28)" in out.getvalue()
+
+
+@pytest.mark.parametrize("url", [123, 1.5, b"x.db", ["x.db"]])
+def test_open_refuses_what_is_not_a_url_or_a_path_in_one_line(url):
+    with pytest.raises(InputError, match=r"^url: vinadv.open takes a database URL or a SQLite file") as caught:
+        vinadv.open(url)
+    assert "\n" not in str(caught.value) and caught.value.parameters == ("url",)
+
+
+def test_open_takes_a_path_object(tmp_path):
+    with Store.open(str(tmp_path / "r.db")) as store:
+        store.create_run("p")
+    with vinadv.open(tmp_path / "r.db") as db:
+        assert len(db.runs()) == 1

@@ -36,6 +36,7 @@ import contextlib
 import datetime
 import itertools
 import json
+import os
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -43,7 +44,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from vinadv import __version__
-from vinadv.errors import InputError
+from vinadv.errors import InputError, one_line
 from vinadv.outfile import atomic_output
 from vinadv.robustness import WORST_CASE
 from vinadv.store import PairRecords, Store
@@ -432,9 +433,18 @@ def robustness_rows(stored: dict) -> list[dict]:
 
 
 # named as the builtin it shadows in this module only (which never opens a file itself): `vinadv.open(url)`
-def open(url: str | None = None) -> Results:
-    """Open the vinadv database at `url` (a SQLAlchemy URL or a SQLite file; default `$VINADV_DB`, else `vinadv.db`)
-    for reading: `with vinadv.open("results.db") as db: db.pairs(run="demo")`."""
+def open(url: str | os.PathLike | None = None) -> Results:
+    """Open the vinadv database at `url` (a SQLAlchemy URL or a SQLite file, a `str` or a path object; default
+    `$VINADV_DB`, else `vinadv.db`) for reading: `with vinadv.open("results.db") as db: db.pairs(run="demo")`.
+    Anything else is an InputError naming the argument."""
+    if isinstance(url, os.PathLike):
+        url = os.fspath(url)
+    if url is not None and not isinstance(url, str):
+        raise InputError(
+            f"url: vinadv.open takes a database URL or a SQLite file (str or path), got {type(url).__name__} "
+            f"{one_line(repr(url))[:80]}",
+            "url",
+        )
     return Results(Store.open(url, readonly=True))
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from vinadv import __version__
 from vinadv.commands import cli_message
+from vinadv.commands.output import reserve_stdout
 from vinadv.errors import InputError, one_line, os_error_message
 from vinadv.seeds import check_seed
 
@@ -121,7 +122,8 @@ def _run(args: argparse.Namespace, argv: list[str] | None) -> int:
     try:
         if getattr(args, "seed", None) is not None:
             check_seed(args.seed)  # every command's --seed, by one rule, before the command does anything
-        code = args.func(args)
+        with reserve_stdout(args):  # --json: standard output holds the result alone
+            code = args.func(args)
     except InputError as exc:
         print(f"vinadv: error: {one_line(cli_message(exc))}", file=sys.stderr)
         return 2

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import event, example, given, settings, target
 from hypothesis import strategies as st
 
 from tests.fault_files import read_npz
@@ -129,33 +129,46 @@ def _optimal_cost(obstacles, start, goal) -> float:
     return float(brute_distances(obstacles, tuple(goal))[tuple(start)][0])
 
 
-def _check_never_harmed(maps, name: str, k: int, seed: int, checked: int) -> None:
+def _check_never_harmed(maps, name: str, k: int, seed: int, checked: int) -> int:
     """Every pair `name` makes on `maps` by freeing k cells for `optimal` is harmless, and its optimum (the first
-    `checked` pairs by the plain-Python oracle) is never longer than the original map's."""
+    `checked` pairs by the plain-Python oracle) is never longer than the original map's. Returns the number of pairs,
+    which may be 0: a strategy may find no cell to free on small maps (near-path, with none near the path)."""
     result = make_attack(name, per_map=2, seed=seed, budget=4, obstacles=k, edit="remove").attack(
         maps.obstacles, maps.starts[:, 0], maps.goals, OptimalPlanner(SIZE)
     )
     pairs = result.pairs
     ident = identify(pairs)
-    valid = ident.labels != "invalid"
-    assert valid.any() and set(ident.harm.harm[valid]) == {"harmless"} and "UrP" not in set(ident.labels)
+    assert "invalid" not in set(ident.labels)  # `optimal` reaches every goal on the clean map
+    assert set(ident.harm.harm) <= {"harmless"} and "UrP" not in set(ident.labels)
     assert (ident.harm.opt_cost_a <= ident.harm.opt_cost_o + 1e-9).all()
     for i in range(min(checked, len(pairs))):  # a freed cell never lengthens the optimum (the oracle)
         before = _optimal_cost(pairs.obstacles_o[i], pairs.starts[i], pairs.goals[i])
         after = _optimal_cost(pairs.obstacles_a[i], pairs.starts[i], pairs.goals[i])
         assert after <= before + 1e-9
         assert abs(ident.harm.opt_cost_a[i] - after) < 1e-9 and abs(ident.harm.opt_cost_o[i] - before) < 1e-9
+    return len(pairs)
 
 
 def test_removal_never_harms_optimal_on_fixed_maps(maps):
-    _check_never_harmed(maps, "exhaustive", 1, 0, checked=3)
+    assert _check_never_harmed(maps, "exhaustive", 1, 0, checked=3) > 0
+
+
+@pytest.mark.parametrize("k", [1, 2])
+@pytest.mark.parametrize("name", sorted(STRATEGIES))
+def test_every_strategy_frees_cells_on_fixed_maps(name, k):
+    """The property below may meet maps where a strategy makes no pair; on these every strategy makes some, so the
+    property is not checked on nothing."""
+    assert _check_never_harmed(generate_maps(4, SIZE, seed=7, n_starts=1), name, k, 7, checked=1) > 0
 
 
 @pytest.mark.slow
 @settings(max_examples=12, deadline=None)
 @given(seed=st.integers(0, 10**6), k=st.integers(1, 2), name=st.sampled_from(sorted(STRATEGIES)))
+@example(seed=450, k=2, name="near-path")  # no pair on these four maps: it failed when the test assumed one
 def test_removal_never_harms_optimal(seed, k, name):
-    _check_never_harmed(generate_maps(4, SIZE, seed=seed, n_starts=1), name, k, seed, checked=4)
+    made = _check_never_harmed(generate_maps(4, SIZE, seed=seed, n_starts=1), name, k, seed, checked=4)
+    event("pairs made" if made else "no pair made")
+    target(made, label="pairs made")
 
 
 def test_pairs_files_keep_the_edit_and_older_files_read_as_add(maps, tmp_path):

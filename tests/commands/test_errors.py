@@ -41,3 +41,25 @@ def test_commands_show_flags(tmp_path, capsys):
     )
     err = capsys.readouterr().err
     assert "vinadv: error:" in err and "Traceback" not in err
+
+
+def test_cli_message_leaves_a_parameter_inside_a_path_alone():
+    exc = InputError("/tmp/data/a_032.npz: no such file (suite s reads it from data)", "data")
+    assert cli_message(exc) == "/tmp/data/a_032.npz: no such file (suite s reads it from --data)"
+    exc = InputError("data/a.npz and data.npz and C:\\\\data\\\\x: no such file in data.", "data")
+    assert cli_message(exc) == "data/a.npz and data.npz and C:\\\\data\\\\x: no such file in --data."
+
+
+def test_bench_run_names_the_missing_file_of_data_as_it_is(tmp_path, monkeypatch, capsys):
+    (tmp_path / "data").mkdir()
+    monkeypatch.chdir(tmp_path)
+    assert main(["bench", "run", "--suite", "mpd32-quick-v1", "--planner", "optimal", "--data", "data", "--quiet"]) == 2
+    line = capsys.readouterr().err
+    assert line.startswith("vinadv: error: data/") and "no such file" in line and line.rstrip().endswith("--data)")
+
+
+def test_bench_leaderboard_names_its_folder_argument(tmp_path, capsys):
+    assert main(["bench", "leaderboard", str(tmp_path / "nonexist"), "--out", str(tmp_path / "lb")]) == 2
+    line = capsys.readouterr().err
+    assert "--folder" not in line and f"DIR {tmp_path / 'nonexist'}: no such folder" in line
+    assert not (tmp_path / "lb").exists()

@@ -137,3 +137,33 @@ def test_eval_quiet_prints_its_figures_without_a_progress_bar(maps_file, tmp_pat
     assert quiet.out.startswith(f"planner optimal: 6 maps of {SIZE}x{SIZE}")
     assert "rollout success 100.00%" in quiet.out and "%Suc" in quiet.out
     assert json.loads((tmp_path / "f.json").read_text())["vinadv"]["success_rate"] == 1.0
+
+
+#: a bring-your-own planner that prints to standard output while it is made and while it plans
+PRINTING = """
+import torch
+
+
+class Chatty(torch.nn.Module):
+    def forward(self, obstacles, goals):
+        print("planning", obstacles.shape[0], "maps")
+        return torch.zeros(obstacles.shape[0], 8, obstacles.shape[1], obstacles.shape[2])
+
+
+def make(size):
+    print("made for", size)
+    return Chatty()
+"""
+
+
+def test_a_planner_that_prints_does_not_break_json(tmp_path, capsys):
+    generate_maps(2, 8, seed=1, n_starts=1).save(tmp_path / "m.npz")
+    (tmp_path / "chatty.py").write_text(PRINTING)
+    argv = ["plan", "--maps", str(tmp_path / "m.npz"), "--out", str(tmp_path / "p.npz")]
+    assert main([*argv, "--planner", f"{tmp_path / 'chatty.py'}:make", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert len(out.splitlines()) == 1 and json.loads(out)["paths"] == 2
+    assert "made for 8" in err and "planning" in err
+    # without --json the planner's prints stay where it printed them
+    assert main([*argv, "--planner", f"{tmp_path / 'chatty.py'}:make", "--quiet"]) == 0
+    assert "made for 8" in capsys.readouterr().out

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import re
 import shlex
 import sys
@@ -96,6 +97,38 @@ def load_args_planner(args, maps, device: str | None):
     )
 
 
+def planner_inputs(args) -> dict[str, str | None]:
+    """The files `--planner` and `--weights` read (for `vinadv.outfile.check_output_path`'s `inputs`): the planner's
+    own FILE.py of a FILE.py:FACTORY spec, and the weights file (a zoo name matches no output)."""
+    spec = getattr(args, "planner", None)
+    found = re.match(r"(.+?\.py):", spec) if spec else None
+    return {"--planner": found.group(1) if found else None, "--weights": getattr(args, "weights", None)}
+
+
+def db_file(db: str | None) -> str | None:
+    """The SQLite file a `--db` value names (its default included: $VINADV_DB, else vinadv.db), or None for a server
+    URL or an in-memory database: for `check_output_path`'s `inputs`, without loading SQLAlchemy."""
+    db = db or os.environ.get("VINADV_DB") or "vinadv.db"
+    if "://" not in db:
+        return os.path.expanduser(db)
+    if not db.startswith("sqlite:///"):
+        return None
+    path = db.removeprefix("sqlite:///").split("?", 1)[0]
+    return None if path in ("", ":memory:") or path.startswith("file:") else path
+
+
+def check_db_and_report(db: str | None, inputs: dict, report: str | None = None) -> None:
+    """Before a job's work: the SQLite file it stores in, `db` (`db_file(args.db)`; None: none), is none of its
+    `inputs` (`{"--maps": args.maps, ...}`), and its report folder `report` (`--report DIR`) is neither an input nor
+    the database (`vinadv.outfile`)."""
+    from vinadv.outfile import check_not_input, check_output_folder  # noqa: PLC0415 (light, but only for jobs)
+
+    if db is not None:
+        check_not_input(db, inputs)
+    if report is not None:
+        check_output_folder(report, inputs={**inputs, "--db": db})
+
+
 def planner_device(args) -> str | None:
     """`--device` checked and made concrete (`auto` -> `cuda` or `cpu`), for `load_planner(..., device=)`; None when
     not given. Call it before the command writes anything: a device this machine lacks is one line, exit status 2."""
@@ -167,10 +200,11 @@ def option_values(args: argparse.Namespace, *names: str) -> dict[str, Any]:
 
 
 def cli_message(exc: InputError) -> str:
-    """`exc`'s message for the command line: the first mention of each parameter it names becomes its flag."""
+    """`exc`'s message for the command line: the first mention of each parameter it names becomes its flag. A word
+    that is part of a path (`/tmp/data/x.npz`: next to a `/`, `\\` or `.`) is the path's, and stays."""
     message = str(exc)
     for parameter in getattr(exc, "parameters", ()):
-        pattern = rf"(?<![\w-]){re.escape(parameter)}(?![\w-])"
+        pattern = rf"(?<![\w/\\.-]){re.escape(parameter)}(?![\w/\\-]|\.\w)"
         message = re.sub(pattern, flag(parameter).replace("\\", "\\\\"), message, count=1)
     return message
 

@@ -11,6 +11,7 @@ from vinadv.commands import (
     open_args_executor,
     option_values,
     planner_device,
+    planner_inputs,
 )
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.outfile import check_output_path
@@ -141,7 +142,8 @@ def cmd_attack(args: argparse.Namespace) -> int:
         **option_values(args, "objective", "planner", "weights", "harm_tolerance", "harm_rtol", "shard_size"),
     )
     device = planner_device(args)
-    check_output_path(args.out)  # before the work: a folder in the way or a missing folder
+    # before the work: a folder in the way, a missing folder, an input (the maps, the planner's files)
+    check_output_path(args.out, inputs={"--maps": args.maps, **planner_inputs(args)})
     with open_args_executor(args) as executor:
         outcome = run(config, executor, device=device, progress=shows_progress(args))
     outcome.pairs.save(args.out)

@@ -13,9 +13,11 @@ from vinadv.commands import (
     add_actions,
     add_cluster_arguments,
     add_planner_arguments,
+    db_file,
     open_args_executor,
     option_values,
     planner_device,
+    planner_inputs,
 )
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError, one_line
@@ -75,8 +77,10 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     config = BenchConfig(**option_values(args, "suite", "planner", "weights", "data"))  # an unknown suite: one line
     if args.resume and args.db is None:
         raise InputError("--resume: only with --db")
-    if args.out:
-        check_output_path(args.out)
+    if args.out:  # before the suite is computed: writable, and not the database or a file the planner reads
+        data = sorted(Path(args.data).glob("*.npz")) if args.data and Path(args.data).is_dir() else args.data
+        inputs = {"--db": db_file(args.db) if args.db else None, "--data": data, **planner_inputs(args)}
+        check_output_path(args.out, inputs=inputs)
     device = planner_device(args)
     suite = config.frozen_suite
     with open_args_executor(args) as executor:
@@ -108,8 +112,12 @@ def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out: {out} exists and is not a folder")
-    if args.index:
-        check_output_path(args.index)
+    if not Path(args.dir).is_dir():  # named as the command line names it: the argument DIR
+        what = "is not a folder" if Path(args.dir).exists() else "no such folder"
+        raise InputError(f"DIR {args.dir}: {what} (the folder of result entries)")
+    entries_read = sorted(Path(args.dir).glob("*.json")) if Path(args.dir).is_dir() else []
+    if args.index:  # not one of the entries it indexes
+        check_output_path(args.index, inputs={"DIR": entries_read})
     entries, problems = read_entries_checked(args.dir)
     table = rows(entries)
     if args.index:  # the folder as given: the index names the files the way the user does

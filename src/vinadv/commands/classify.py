@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from vinadv.commands import add_actions, option_values
+from vinadv.commands import add_actions, db_file, option_values
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
+from vinadv.outfile import check_output_path
 
 KINDS = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw")
 
@@ -105,6 +106,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     from vinadv.classify.rule import default_threshold, label_batch
     from vinadv.classify.train_eval import train_classifier
 
+    human = args.labels == "human"  # before the training: writable, and not the pairs or the database it reads
+    check_output_path(args.out, inputs={"--pairs": args.pairs, "--db": db_file(args.db) if human else None})
     if args.labels == "human":
         batch, labels, args.pairs = _human_labels(args)
     else:

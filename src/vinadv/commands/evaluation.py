@@ -10,10 +10,10 @@ import textwrap
 import time
 from typing import TYPE_CHECKING
 
-from vinadv.commands import add_moves_argument, add_threads_argument, command_line, set_threads
+from vinadv.commands import add_moves_argument, add_threads_argument, command_line, planner_inputs, set_threads
 from vinadv.commands.output import add_output_options, emit
-from vinadv.errors import InputError
-from vinadv.outfile import atomic_output
+from vinadv.errors import InputError, OutputError
+from vinadv.outfile import atomic_output, check_output_path, same_file
 from vinadv.planners.records import RolloutMetrics
 
 if TYPE_CHECKING:  # NumPy and Numba behind it: imported by the command that evaluates
@@ -59,6 +59,7 @@ def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:
     from vinadv.grid.mapset import MapSet
 
     check_figure_option(args)
+    check_eval_outputs(args)
     set_threads(args.threads)
     if args.data is not None:
         if args.moves is not None:
@@ -72,6 +73,18 @@ def start_eval(args: argparse.Namespace) -> tuple[MapSet, dict]:
     if moves != "octile":  # the record names the movement model only off octile maps
         generated["moves"] = moves
     return maps, {"generated": generated}
+
+
+def check_eval_outputs(args: argparse.Namespace) -> None:
+    """`--out` and `--figure` checked before the work (`check_output_path`): writable, not one another, and neither
+    the maps file nor a file the planner reads."""
+    inputs = {"--data": args.data, **planner_inputs(args)}
+    if args.out:
+        check_output_path(args.out, inputs=inputs)
+    if getattr(args, "figure", None):
+        check_output_path(args.figure, inputs=inputs)
+        if args.out and same_file(args.out, args.figure):
+            raise OutputError(f"--figure and --out name one file ({args.figure}): give each its own")
 
 
 def check_figure_option(args: argparse.Namespace) -> None:

@@ -102,7 +102,7 @@ def cmd_gppn_train(args: argparse.Namespace) -> int:
 def cmd_gppn_widen(args: argparse.Namespace) -> int:
     from vinadv.planners.gppn import load_gppn, save_gppn, widen_gppn
 
-    check_output_path(args.out, mkdir=True)
+    check_output_path(args.out, mkdir=True, inputs={"WEIGHTS": args.weights})
     model = load_gppn(args.weights)
     wide = widen_gppn(model, args.l_h, noise=args.noise, seed=args.seed)
     record = {
@@ -130,7 +130,7 @@ def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
     from vinadv.interop.checkpoints import gppn_from_checkpoint
     from vinadv.planners.gppn import save_gppn
 
-    check_output_path(args.out, mkdir=True)
+    check_output_path(args.out, mkdir=True, inputs={"CKPT": args.checkpoint})
     model = gppn_from_checkpoint(args.checkpoint, args.k, args.entry)
     record = {
         "imported_from": {**model.source, "sha256": weights_checksum(args.checkpoint)},

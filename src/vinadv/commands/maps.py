@@ -46,7 +46,7 @@ def register(subparsers) -> None:
 def cmd_concat(args: argparse.Namespace) -> int:
     from vinadv.grid.mapset import MapSet
 
-    check_output_path(args.out)
+    check_output_path(args.out, inputs={"MAPS": args.maps})
     maps = MapSet.concat([MapSet.load(path) for path in args.maps], [str(path) for path in args.maps])
     maps.save(args.out)
     summary = {
@@ -113,7 +113,7 @@ def cmd_show(args: argparse.Namespace) -> int:
     from vinadv.grid.draw import draw_map, figure_format, map_legend, save_figure
 
     figure_format(args.out)  # before the work: an extension matplotlib cannot write
-    check_output_path(args.out)
+    check_output_path(args.out, inputs={"MAPS": args.maps})
     maps = MapSet.load(args.maps)
     if not 0 <= args.index < len(maps):
         raise InputError(f"--index {args.index} is out of range: {args.maps} has {len(maps)} maps")
@@ -189,7 +189,7 @@ def cmd_import(args: argparse.Namespace) -> int:
 
     if args.starts is not None and args.starts < 1:
         raise InputError(f"--starts must be >= 1, got {args.starts}")
-    check_output_path(args.out)  # before the work: a folder in the way or a missing folder
+    check_output_path(args.out, inputs={"IN": args.input})  # before the work: a folder in the way, the input
     maps, info = read_maps(
         args.input, args.format, split=args.split, starts=args.starts, seed=args.seed, moves=args.moves
     )
@@ -216,6 +216,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     from vinadv.grid import MapSet
     from vinadv.interop.formats import export_maps
 
+    check_output_path(args.out, mkdir=True, inputs={"MAPS": args.maps})  # before the maps are read
     maps = MapSet.load(args.maps)
     summary = export_maps(maps, args.out, args.format, split=args.split)
     return emit(args, summary, f"wrote {summary['maps']} maps to {args.out} ({args.format}, {summary['split']})")

@@ -14,13 +14,13 @@ from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.commands.training import (
     add_run_arguments,
     add_weights_out_argument,
+    check_weights_out,
     train_and_save,
     training_checkpoint,
     training_record,
     write_record,
 )
 from vinadv.errors import InputError
-from vinadv.outfile import check_output_path
 from vinadv.planners.weights import weights_checksum
 
 #: the format of the record of an import, in the weights file and beside it
@@ -124,7 +124,9 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
     from vinadv.planners.neural_astar.model import save_neural_astar
     from vinadv.planners.neural_astar.planner import MOVES
 
-    out = check_output_path(args.out, mkdir=True)
+    out = check_weights_out(
+        args.out, {"CKPT": args.checkpoint, "--train-config": args.train_config, "--license": args.license}
+    )
     if not Path(args.checkpoint).is_file():
         raise InputError(f"{args.checkpoint}: no such checkpoint file")
     config_path = _beside(args.checkpoint, args.train_config, "train.yaml")
@@ -258,7 +260,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     config.validate()
     if not args.val_data and not 0 < args.val_fraction < 1:
         raise InputError(f"--val-fraction must be in (0, 1), got {args.val_fraction}")
-    out = check_output_path(args.out, mkdir=True)
+    out = check_weights_out(args.out, {"--data": args.data, "--val-data": args.val_data})
     checkpoint = training_checkpoint(args, out)
     maps, data = _joined_maps(args.data)
     if args.val_data:

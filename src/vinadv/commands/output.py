@@ -1,7 +1,8 @@
 """`--json` and `--quiet`: one meaning in every command, and how a command prints its result.
 
 - `--json`: the result as one JSON line on standard output, and nothing else there (no progress bar or progress
-  lines; notes go to standard error).
+  lines; notes go to standard error; while the command runs, `reserve_stdout` sends what anything else prints there,
+  a planner of the user's say, to standard error).
 - `--quiet`: no progress bars, progress lines, logs or notes; the result itself and errors still print.
 
 A command adds the options with `add_output_options`, shows progress where `shows_progress(args)` (or through
@@ -11,13 +12,17 @@ A command adds the options with `add_output_options`, shows progress where `show
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from tqdm import tqdm
+
+#: standard output as it was before `reserve_stdout` sent the command's prints to standard error: where `emit` writes
+_result_stream = None
 
 #: the help of `--quiet`, the same in every command
 QUIET_HELP = "no progress bars, progress lines, logs or notes; the result and errors still print"
@@ -45,6 +50,23 @@ def wants_json(args: argparse.Namespace) -> bool:
 def shows_progress(args: argparse.Namespace) -> bool:
     """Whether a command shows progress bars and progress lines: neither with `--quiet` nor with `--json`."""
     return not (is_quiet(args) or wants_json(args))
+
+
+@contextlib.contextmanager
+def reserve_stdout(args: argparse.Namespace) -> Iterator[None]:
+    """Run a command with `--json` inside this: what it prints to `sys.stdout` on the way (a bring-your-own planner's
+    prints, a library's) goes to standard error, and standard output holds the result `emit` writes alone. Without
+    `--json`, nothing changes."""
+    global _result_stream
+    if not wants_json(args):
+        yield
+        return
+    previous, _result_stream = _result_stream, sys.stdout
+    try:
+        with contextlib.redirect_stdout(sys.stderr):
+            yield
+    finally:
+        _result_stream = previous
 
 
 def progress_bar(args: argparse.Namespace, *, hidden: bool = False, **options: Any) -> tqdm:
@@ -81,7 +103,7 @@ def emit(
     ones it can, as `json.dumps`' `default`), else `text`, a line or a function that prints; `--quiet` does not
     hide it. Returns the exit status, 0."""
     if wants_json(args):
-        print(json.dumps(result, default=json_default))
+        print(json.dumps(result, default=json_default), file=_result_stream or sys.stdout, flush=True)
     elif callable(text):
         text()
     else:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from vinadv.commands import add_planner_arguments, load_args_planner, planner_device
+from vinadv.commands import add_planner_arguments, load_args_planner, planner_device, planner_inputs
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -34,7 +34,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.chunk_size < 1:
         raise InputError(f"--chunk-size must be >= 1, got {args.chunk_size}")
     device = planner_device(args)
-    check_output_path(args.out)  # before the work: a folder in the way or a missing folder
+    # before the work: a folder in the way, a missing folder, an input (the maps, the planner's files)
+    check_output_path(args.out, inputs={"--maps": args.maps, **planner_inputs(args)})
     maps = MapSet.load(args.maps)
     planner = load_args_planner(args, maps, device)
     t0 = time.perf_counter()

@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import argparse
 
-from vinadv.commands import add_db_argument, option_values
+from vinadv.commands import add_db_argument, db_file, option_values
 from vinadv.commands.classify import add_setting_argument
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
+from vinadv.outfile import check_output_folder
 
 CLASSIFIER_NAMES = ("svm", "cnn", "mlp", "hausdorff", "frechet", "dtw", "hybrid", "rule")
 
@@ -114,6 +115,7 @@ def _f(value, width: int = 8, digits: int = 3) -> str:
 def cmd_report(args: argparse.Namespace) -> int:
     from vinadv.report import build_report
 
+    check_output_folder(args.out, inputs={"--db": db_file(args.db)})  # before the work: not the database, writable
     result = build_report(args.db, args.out, run_id=args.run, runs=_run_refs(args.runs))
 
     def text() -> None:

@@ -5,7 +5,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vinadv.commands import add_moves_argument, add_planner_arguments, option_values, planner_device
+from vinadv.commands import (
+    add_moves_argument,
+    add_planner_arguments,
+    check_db_and_report,
+    db_file,
+    option_values,
+    planner_device,
+    planner_inputs,
+)
 from vinadv.commands.attack import add_edit_argument, add_harm_arguments
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
@@ -84,9 +92,10 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     if args.n is not None and args.n < 1:  # before a maps file is read
         raise InputError(f"n must be >= 1, got {args.n}", "n")
     device = planner_device(args)
-    if args.report:
-        if Path(args.report).exists() and not Path(args.report).is_dir():
-            raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
+    inputs = {"--maps": args.maps, **planner_inputs(args)}
+    check_db_and_report(db_file(args.db) if args.db else None, inputs, args.report)  # no input overwritten
+    if args.report and Path(args.report).exists() and not Path(args.report).is_dir():
+        raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
     settings = maps_settings(args, n=1000)  # a maps file is read and checked here, before anything is written
     config = RobustnessConfig(
         **settings,

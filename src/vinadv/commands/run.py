@@ -12,9 +12,12 @@ from vinadv.commands import (
     add_db_argument,
     add_moves_argument,
     add_planner_arguments,
+    check_db_and_report,
+    db_file,
     open_args_executor,
     option_values,
     planner_device,
+    planner_inputs,
 )
 from vinadv.commands.attack import (
     add_attack_arguments,
@@ -91,6 +94,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     if args.no_evaluate and not args.report:
         raise InputError("--no-evaluate: only with --report DIR")
+    inputs = {"--maps": args.maps, "--classifier": args.classifier, **planner_inputs(args)}
+    check_db_and_report(db_file(args.db), inputs, args.report)  # before the work: no input overwritten
     device = planner_device(args)
     config = RunConfig(
         **maps_settings(args),
@@ -197,6 +202,8 @@ def _print_run(result: dict) -> None:
 def cmd_identify(args: argparse.Namespace) -> int:
     from vinadv.identify import IdentifyConfig, run  # scikit-learn behind it: imported for this command only
 
+    inputs = {"--pairs": args.pairs, "--classifier": args.classifier, **planner_inputs(args)}
+    check_db_and_report(db_file(args.db), inputs)  # before the work: the database is no input
     config = IdentifyConfig(
         **option_values(args, "pairs", "classifier", "planner", "weights", "harm_tolerance", "harm_rtol", "shard_size")
     )

@@ -8,7 +8,7 @@ import csv
 import json
 import sys
 
-from vinadv.commands import add_db_argument
+from vinadv.commands import add_db_argument, db_file
 from vinadv.commands.output import add_output_options, note, progress_bar
 from vinadv.errors import InputError
 from vinadv.outfile import atomic_output, check_output_path
@@ -54,7 +54,8 @@ def run_export(args: argparse.Namespace) -> int:
     if args.format in BINARY_FORMATS and not args.out:
         raise InputError(f"--out: required with --format {args.format}")
     if args.out:
-        check_output_path(args.out)  # a directory or a missing folder is refused before the database is read
+        # a directory, a missing folder, a read-only file or the database itself: refused before the database is read
+        check_output_path(args.out, inputs={"--db": db_file(args.db)})
     with Store.open(args.db, readonly=True) as store:
         run_id = store.resolve_run(args.run)
         if args.format == "npz":

@@ -15,7 +15,7 @@ from vinadv import __version__
 from vinadv.commands import LazyChoices, add_threads_argument, command_line, option_values, set_threads
 from vinadv.commands.output import add_output_options, emit, progress_lines, shows_progress
 from vinadv.errors import InputError
-from vinadv.outfile import atomic_output, check_output_path
+from vinadv.outfile import Inputs, atomic_output, check_output_path
 from vinadv.planners.records import TrainingRecord
 from vinadv.planners.weights import weights_checksum
 from vinadv.records import RECORD_VERSIONS, TRAINING, VERSION_KEY
@@ -179,6 +179,14 @@ def training_record(**fields: Any) -> dict:
     }
 
 
+def check_weights_out(out: str, inputs: Inputs) -> Path:
+    """`--out` of a command that writes weights and their record beside them (`write_record`), checked before the
+    work (`check_output_path`: created folder, writable, none of the command's `inputs`), the record's file too."""
+    path = check_output_path(out, mkdir=True, inputs=inputs)
+    check_output_path(path.with_suffix(".json"), inputs=inputs)
+    return path
+
+
 def write_record(out: Path, record: dict) -> Path:
     """Write `record` as indented JSON beside the weights `out` (`out` with `.json`, returned)."""
     record_path = out.with_suffix(".json")
@@ -228,7 +236,7 @@ def run_training(
     from vinadv.grid.mapset import MapSet
 
     set_threads(args.threads)
-    check_output_path(args.out, mkdir=True)  # before hours of training: a folder in the way
+    check_weights_out(args.out, {"--data": args.data, "--init": args.init})  # before hours of training
     maps = MapSet.load(args.data)
     if len(maps) < 2:
         raise InputError(f"{args.data}: {len(maps)} maps; training needs at least 2")

@@ -10,6 +10,7 @@ from vinadv.commands.evaluation import add_eval_arguments, add_prior_argument, e
 from vinadv.commands.output import add_output_options, emit, note, shows_progress
 from vinadv.commands.training import add_train_arguments, run_training, train_config
 from vinadv.errors import InputError
+from vinadv.outfile import check_output_path
 from vinadv.planners.weights import check_trained_size, weights_checksum
 
 
@@ -96,6 +97,7 @@ def cmd_export_weights(args: argparse.Namespace) -> int:
     from vinadv.interop.checkpoints import export_state_dict, gppn_vin_gaps, read_checkpoint
     from vinadv.planners.vin.weights import load_vin
 
+    check_output_path(args.out, inputs={"W": args.weights})  # before the weights are read
     try:
         model = load_vin(args.weights)
     except InputError:

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import os
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,6 +21,7 @@ import torch
 
 from vinadv.errors import InputError
 from vinadv.interop.formats.gppn import GPPN_TO_VINADV
+from vinadv.outfile import save_torch
 from vinadv.planners.gppn import GPPN, GPPNConfig
 from vinadv.planners.vin.arrays import STATE_KEYS
 from vinadv.planners.vin.model import VIN
@@ -34,11 +34,7 @@ def export_state_dict(model: VIN, path: str | os.PathLike) -> dict[str, tuple[in
     """Write `model`'s weights as a plain state dict (exactly STATE_KEYS, float32, CPU); returns key -> shape."""
     state = model.state_dict()
     plain = {key: state[key].detach().to("cpu", torch.float32).contiguous().clone() for key in STATE_KEYS}
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save(plain, tmp)
-    os.replace(tmp, path)
+    save_torch(plain, path, mkdir=True)
     return {key: tuple(value.shape) for key, value in plain.items()}
 
 

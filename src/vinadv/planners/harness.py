@@ -33,7 +33,7 @@ import torch
 from tqdm import tqdm
 
 from vinadv.errors import InputError
-from vinadv.outfile import atomic_output
+from vinadv.outfile import save_torch
 from vinadv.planners.weights import torch_load
 
 __all__ = [
@@ -92,18 +92,18 @@ def save_training_checkpoint(
     """Write a trainer's checkpoint (atomically: a run killed while writing keeps the last one): its format, the
     weights (on CPU), the optimiser, the settings (`config.to_dict()`), what identifies the training data, and the
     trainer's own `position` fields (epoch, records ...)."""
-    with atomic_output(path, "wb", mkdir=True) as fh:
-        torch.save(
-            {
-                "format": checkpoint_format,
-                "model": {k: v.detach().cpu() for k, v in model.state_dict().items()},
-                "optimizer": optimizer.state_dict(),
-                "train_config": config.to_dict(),
-                "data_sha256": data_sha256,
-                **position,
-            },
-            fh,
-        )
+    save_torch(
+        {
+            "format": checkpoint_format,
+            "model": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+            "optimizer": optimizer.state_dict(),
+            "train_config": config.to_dict(),
+            "data_sha256": data_sha256,
+            **position,
+        },
+        path,
+        mkdir=True,
+    )
 
 
 def read_training_checkpoint(

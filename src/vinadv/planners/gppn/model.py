@@ -34,6 +34,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from vinadv.errors import InputError
+from vinadv.outfile import save_torch
 from vinadv.planners.weights import MAX_ITERATIONS, torch_load, weights_file
 
 GPPN_FORMAT = "vinadv.gppn/1"
@@ -182,13 +183,10 @@ def default_gppn_path(size: int = 28) -> Path:
 
 def save_gppn(model: GPPN, path: str | os.PathLike, record: dict | None = None) -> None:
     """Write `{"format": "vinadv.gppn/1", "config", "state_dict" (float32, CPU), "record"}` to `path` atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     record = json.loads(json.dumps(dict(record or {})))  # plain JSON types: loadable with weights_only=True
     state = {k: v.detach().to("cpu", torch.float32).contiguous().clone() for k, v in model.state_dict().items()}
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save({"format": GPPN_FORMAT, "config": model.config.to_dict(), "state_dict": state, "record": record}, tmp)
-    os.replace(tmp, path)
+    payload = {"format": GPPN_FORMAT, "config": model.config.to_dict(), "state_dict": state, "record": record}
+    save_torch(payload, path, mkdir=True)  # a full disk: one line naming the file, no temporary file left
 
 
 _AUTHORS_HINT = (

@@ -21,12 +21,12 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import torch
 from torch import nn
 
 from vinadv.errors import InputError
+from vinadv.outfile import save_torch
 from vinadv.planners.weights import WEIGHTS_DIR, torch_load, weights_file
 
 NEURAL_ASTAR_FORMAT = "vinadv.neural-astar/1"
@@ -140,14 +140,10 @@ class NeuralAstar(nn.Module):
 def save_neural_astar(model: NeuralAstar, path: str | os.PathLike, record: dict | None = None) -> None:
     """Write `{"format": "vinadv.neural-astar/1", "config", "state_dict" (the encoder's, CPU), "record"}` to `path`
     atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     record = json.loads(json.dumps(dict(record or {})))  # plain JSON types: loadable with weights_only=True
     state = {k: v.detach().to("cpu").contiguous().clone() for k, v in model.encoder.state_dict().items()}
-    tmp = path.with_name(path.name + ".tmp")
     data = {"format": NEURAL_ASTAR_FORMAT, "config": model.config.to_dict(), "state_dict": state, "record": record}
-    torch.save(data, tmp)
-    os.replace(tmp, path)
+    save_torch(data, path, mkdir=True)  # a full disk: one line naming the file, no temporary file left
 
 
 _IMPORT_HINT = "the authors' Lightning checkpoint is converted by `vinadv neural-astar import-weights CKPT --out FILE`"

@@ -24,7 +24,7 @@ import numpy as np
 from vinadv.errors import InputError
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.grid.moves import MOVES, move_model
-from vinadv.outfile import atomic_output
+from vinadv.outfile import save_torch
 from vinadv.planners.torchfile import read_torch_file
 from vinadv.planners.vin.arrays import STATE_KEYS, VINConfig, VINWeights, default_k
 from vinadv.planners.weights import MAX_CHANNELS, WEIGHTS_DIR, check_iterations, torch_load, weights_file
@@ -66,8 +66,7 @@ def save_vin(model, path: str | os.PathLike, record: dict | None = None) -> None
         "state_dict": state,
         "record": record,
     }
-    with atomic_output(path, "wb", mkdir=True) as fh:
-        torch.save(payload, fh)
+    save_torch(payload, path, mkdir=True)
 
 
 def load_vin_weights(path: str | os.PathLike | None = None, size: int = 28, k: int | None = None) -> VINWeights:
