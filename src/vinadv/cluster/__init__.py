@@ -50,7 +50,7 @@ def require_dask():
         import distributed
     except ImportError as exc:
         raise InputError(
-            f"workers/cluster need Dask's distributed scheduler ({exc}); install it with {INSTALL_HINT}",
+            f"workers and cluster need Dask's distributed scheduler ({exc}); install it with {INSTALL_HINT}",
             "workers",
             "cluster",
         ) from None
