@@ -11,7 +11,7 @@ DEMO_FLAGS ?=
 TEST_WORKERS ?= 2
 WORKERS_FLAG := $(if $(TEST_WORKERS),-n $(TEST_WORKERS))
 
-.PHONY: venv browser test test-fast demo docs bench clean
+.PHONY: venv browser test test-fast demo docs perf clean
 
 venv: $(STAMP)
 
@@ -43,8 +43,9 @@ demo: venv
 docs: venv
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
-bench: venv
-	for b in grid planning attacks classify store; do $(PY) benchmarks/$$b.py || exit 1; done
+# the main speed measurements (perf/: ratios measured side by side in one run)
+perf: venv
+	for b in grid planning attacks classify store; do $(PY) perf/$$b.py || exit 1; done
 
 clean:
 	rm -rf $(VENV) $(DEMO_DIR) site .pytest_cache .hypothesis

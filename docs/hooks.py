@@ -12,21 +12,21 @@ count, for the metrics files that have it), `<!-- vinadv:by-length-figure -->` (
 `vinadv.evaluation.length_curve` as `vinadv eval --figure` draws it, inlined as SVG),
 `<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
 benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/results/mpd.md`) reads
-`docs/results/mpd.json`, written by `benchmarks/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
+`docs/results/mpd.json`, written by `perf/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
 (Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (the worst case per map: harmful and
 paper success rates at k = 1..K added obstacles), `<!-- vinadv:mpd-robustness-strategies -->` (the harmful rates per
 strategy) and `<!-- vinadv:mpd-commands -->` (the commands, and the checksums of the weights files they name).
 `<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine and the exhaustive attack at 28x28 to 64x64
-beside the FMA count, from `docs/results/map_size.json` (`benchmarks/map_size.py --out`), with its command and the
+beside the FMA count, from `docs/results/map_size.json` (`perf/map_size.py --out`), with its command and the
 machine's load.
 Neural A*'s page (`docs/guide/neural-astar.md`) reads `docs/results/neural_astar.json`, written by
-`benchmarks/neural_astar_table.py` with the commands it ran and the machine: `<!-- vinadv:neural-astar-modes -->` (the
+`perf/neural_astar_table.py` with the commands it ran and the machine: `<!-- vinadv:neural-astar-modes -->` (the
 exact against the differentiable search per seed, beside Opt / Exp / Hmean), `<!-- vinadv:neural-astar-speed -->`
 (plans/s side by side, and the ratios the prose would otherwise copy) and `<!-- vinadv:neural-astar-commands -->`.
 `<!-- vinadv:suite-times -->` (docs/development.md): the suite's wall times from `docs/results/suite_times.json`,
 written by `OUT=docs/results/suite_times.json bash .ci/suite-times`.
 The 64x64 VIN's section (docs/guide/planners.md) reads `docs/results/vin64_reach.json`, written by
-`benchmarks/vin64_reach.py` with its commands: `<!-- vinadv:vin64-transfer -->` (the 28x28 weights on 64x64 maps, and
+`perf/vin64_reach.py` with its commands: `<!-- vinadv:vin64-transfer -->` (the 28x28 weights on 64x64 maps, and
 the commands) and `<!-- vinadv:vin64-reach -->` (the optimal move counts that set k); and the committed weights
 files: `<!-- vinadv:vin64-training -->` (`vin64.json`: the epochs' time and validation accuracy) and
 `<!-- vinadv:vin64-held-out -->` (`vin64.metrics.json`: success on the held-out maps, and on the starts beyond reach).
@@ -211,7 +211,7 @@ def shell_block(lines: list[str]) -> str:
 
 
 def mpd_table(path: Path = MPD_JSON) -> str:
-    """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `benchmarks/mpd_table.py`'s
+    """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `perf/mpd_table.py`'s
     JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
     data = json.loads(path.read_text())
     rows = []
@@ -246,7 +246,7 @@ def _by_k(curve: list[dict], key: str) -> str:
 
 
 def mpd_robustness(path: Path = MPD_JSON) -> str:
-    """The robustness runs of `benchmarks/mpd_table.py`'s JSON, worst case per map over the strategies: per family
+    """The robustness runs of `perf/mpd_table.py`'s JSON, worst case per map over the strategies: per family
     and planner, the harmful rate and the paper's success rate at k = 1..K added obstacles."""
     data = json.loads(path.read_text())
     rows = []
@@ -305,7 +305,7 @@ GROWTH_KEYS = ("fma_per_map", "value_map_time_per_map", "engine_time_per_map")
 def map_size_table(path: Path = MAP_SIZE_JSON) -> str:
     """The VIN's value maps/s, the engine's plans/s (near-tie replays included) and the exhaustive attack's seconds
     per map by map size, beside the multiply-adds per map and the rate they allow at the CPU's FMA peak, and each
-    figure's growth from the first size; then the machine, its load and the command (`benchmarks/map_size.py`)."""
+    figure's growth from the first size; then the machine, its load and the command (`perf/map_size.py`)."""
     data = json.loads(path.read_text())
     rows = []
     for row in data["sizes"]:
@@ -393,7 +393,7 @@ def neural_astar_modes(path: Path = NEURAL_ASTAR_JSON) -> str:
     return markdown_table([*header, "mean expansions (A*'s)"], rows) + "\n\n" + note
 
 
-#: the rows of `neural_astar_speed`: the key of `benchmarks/neural_astar.py`'s `plans_per_s`, and what it times
+#: the rows of `neural_astar_speed`: the key of `perf/neural_astar.py`'s `plans_per_s`, and what it times
 SPEED_ROWS = (
     ("astar", "`astar` (compiled, unit costs)"),
     ("neural-astar exact", "`neural-astar`, exact mode (encoder, then the compiled search)"),
@@ -407,7 +407,7 @@ SPEED_ROWS = (
 
 
 def neural_astar_speed(path: Path = NEURAL_ASTAR_JSON) -> str:
-    """Plans per second of `benchmarks/neural_astar.py` (best of its rounds, side by side in one run), then the
+    """Plans per second of `perf/neural_astar.py` (best of its rounds, side by side in one run), then the
     ratios between them: the exact mode against the differentiable search, the encoder's share of the exact mode's
     time, `astar` against the exact mode; and the machine, its load and the command."""
     data = json.loads(path.read_text())
@@ -498,7 +498,7 @@ def _vi_start(weights: str, folder: Path) -> str:
 
 
 def vin64_transfer(path: Path = VIN64_JSON, folder: Path = WEIGHTS_DIR) -> str:
-    """The shipped 28x28 weights on generated 64x64 maps (`benchmarks/vin64_reach.py`): per weights file and k, the
+    """The shipped 28x28 weights on generated 64x64 maps (`perf/vin64_reach.py`): per weights file and k, the
     share of the starts from which the rollout reaches the goal; then the maps, the date and every command."""
     data = json.loads(path.read_text())
     rows, commands, settings = [], [], set()
@@ -522,7 +522,7 @@ def vin64_transfer(path: Path = VIN64_JSON, folder: Path = WEIGHTS_DIR) -> str:
 
 
 def vin64_reach(path: Path = VIN64_JSON) -> str:
-    """The optimal move counts on the training set's generator (`benchmarks/vin64_reach.py`), as a sentence: the
+    """The optimal move counts on the training set's generator (`perf/vin64_reach.py`), as a sentence: the
     longest from a start, the share of the cells that reach the goal within each k, each map's farthest cell."""
     data = json.loads(path.read_text())
     reach = data["reach"]

@@ -86,7 +86,7 @@ def pytest_runtest_setup(item) -> None:
         import torch  # noqa: PLC0415 (only for the GPU tests)
 
         if not torch.cuda.is_available():
-            pytest.skip("needs a CUDA GPU (PyTorch sees none here); benchmarks/device_check.sh runs it on one")
+            pytest.skip("needs a CUDA GPU (PyTorch sees none here); perf/device_check.sh runs it on one")
 
 
 @pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook, called only under `pytest -n N`

@@ -261,7 +261,7 @@ def _map_size_record() -> dict:
     }
     machine = {"cpu": "C", "cores": 2, "engine_threads": 2, "fma_peak_per_s": 1e11}
     return {
-        "command": "python benchmarks/map_size.py --sizes 28",
+        "command": "python perf/map_size.py --sizes 28",
         "machine": {**machine, "load_average_before": 1.5, "load_average_after": 2.5},
         "sizes": [row],
     }
@@ -315,12 +315,12 @@ def _neural_astar_record() -> dict:
     }
     machine = {"cpu": "C", "cores": 2, "torch": "9.9", "niceness": 10}
     return {
-        "command": "python benchmarks/neural_astar_table.py --data-dir <data-dir>",
+        "command": "python perf/neural_astar_table.py --data-dir <data-dir>",
         "date": "2026-01-02 03:04 UTC",
         "source": "S",
         "machine": {**machine, "load_average_before": 1.5, "load_average_after": 2.5},
         "modes": [seed, seed8],
-        "speed": {"command": "python benchmarks/neural_astar.py --rounds 4", "rounds": 4, "figures": speed},
+        "speed": {"command": "python perf/neural_astar.py --rounds 4", "rounds": 4, "figures": speed},
     }
 
 
@@ -378,7 +378,7 @@ def _vin64_files(folder: Path) -> Path:
         {"k": 9, "command": "vinadv vin eval --k 9", "figures": {**figures, "success_rate": 0.5, "optimal_rate": 0.25}}
     ]
     record = {
-        "command": "python benchmarks/vin64_reach.py --n 10",
+        "command": "python perf/vin64_reach.py --n 10",
         "date": "2026-01-02 03:04 UTC",
         "transfer": [{"weights": "a28.pt", "export": "vinadv vin export-weights a28.pt", "runs": runs}],
         "reach": {
@@ -446,7 +446,7 @@ def test_the_vin64_section_is_read_from_its_json_and_the_weights_files(tmp_path)
         "On the generator's first 20 64x64 maps of seed 4 (one start each, the training set's settings) the longest "
         "optimal path from a start has 77 moves, and 87.5% of the 1,234 free cells that reach the goal do so within 70 "
         "moves; within 50 moves: 75.0%; the per-map farthest cell has median 40.5, 99th percentile 66 and at most 90 "
-        "moves (`python benchmarks/vin64_reach.py --n 10`, 2026-01-02 03:04 UTC)"
+        "moves (`python perf/vin64_reach.py --n 10`, 2026-01-02 03:04 UTC)"
     )
     assert hooks.vin64_training(tmp_path) == (
         "The 2 epochs took 1.5 minutes on C (4 cores, 2 torch threads; `vin64.json`); validation action accuracy "
@@ -460,8 +460,8 @@ def test_the_vin64_section_is_read_from_its_json_and_the_weights_files(tmp_path)
 
 @pytest.mark.slow  # loads the benchmark script and what it imports: seconds
 def test_the_published_fma_count_is_the_forwards_as_pytorch_counts_it():
-    # benchmarks/map_size.py's formula against PyTorch's own count of the VIN's convolutions (2 flops a multiply-add)
-    spec = importlib.util.spec_from_file_location("map_size", ROOT / "benchmarks" / "map_size.py")
+    # perf/map_size.py's formula against PyTorch's own count of the VIN's convolutions (2 flops a multiply-add)
+    spec = importlib.util.spec_from_file_location("map_size", ROOT / "perf" / "map_size.py")
     map_size = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(map_size)
     for size, k, l_h in ((8, 3, 150), (11, 5, 7)):

@@ -22,8 +22,8 @@ from vinadv.planners.vin.reference import plan_reference
 from vinadv.planners.vin.weights import save_vin
 from vinadv.robustness import (
     MapOutcomes,
-    benchmark_maps,
     check_strategies,
+    heldout_maps,
     robustness,
     worst_case,
 )
@@ -44,7 +44,7 @@ def model():
 
 @pytest.fixture(scope="module")
 def maps():
-    return benchmark_maps(14, SIZE, seed=5)
+    return heldout_maps(14, SIZE, seed=5)
 
 
 @pytest.fixture(scope="module")
@@ -198,7 +198,7 @@ def test_same_seed_same_figures_other_seed_other_maps(model):
     def run(seed):
         return robustness(
             model,
-            benchmark_maps(10, SIZE, seed=seed),
+            heldout_maps(10, SIZE, seed=seed),
             ["random", "near-path", "key-points"],
             max_obstacles=2,
             seed=seed,
@@ -332,7 +332,7 @@ def test_the_job_gives_the_engines_result(tmp_path):
     from vinadv.robustness import RobustnessConfig, run  # noqa: PLC0415 (the job under test)
 
     config = RobustnessConfig(planner="optimal", n=6, size=10, strategies=("random",), max_obstacles=2, seed=3)
-    maps = benchmark_maps(6, 10, seed=3)
+    maps = heldout_maps(6, 10, seed=3)
     engine = robustness(load_planner("optimal", 10), maps, ("random",), 2, seed=3).to_dict()
 
     job = run(config).to_dict()

@@ -24,9 +24,9 @@ def test_make_test_fast_leaves_out_the_slow_marker_and_markers_are_checked():
     assert '-m "not slow"' in fast_recipe
     options = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["pytest"]["ini_options"]
     assert any(m.startswith("slow:") for m in options["markers"])
-    # the GPU tests' marker: benchmarks/device_check.sh selects them with `-m cuda` on a lent GPU machine
+    # the GPU tests' marker: perf/device_check.sh selects them with `-m cuda` on a lent GPU machine
     assert any(m.startswith("cuda:") for m in options["markers"])
-    assert "-m cuda" in (ROOT / "benchmarks" / "device_check.sh").read_text(encoding="utf-8")
+    assert "-m cuda" in (ROOT / "perf" / "device_check.sh").read_text(encoding="utf-8")
     # a misspelt marker (`@pytest.mark.slwo`) would leave its test in the fast tier without a word: refuse it
     assert "--strict-markers" in options["addopts"].split()
     assert options["timeout"] == 300

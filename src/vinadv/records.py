@@ -14,7 +14,7 @@ The kinds (the readers that call `upgrade` in brackets):
 - `ROBUSTNESS_SETTINGS`: a robustness benchmark's settings (`vinadv.robustness.robustness`), `robustness.settings`
   and inside `ROBUSTNESS` (`vinadv.store` when it reads the table).
 - `ROBUSTNESS`: a robustness benchmark's result (`RobustnessResult.to_dict`), `robustness.result` (as above).
-- `BENCH_CHUNK`: a finished chunk of a benchmark entry (`vinadv.bench.entry.compute_chunk`), `bench_chunks.result`
+- `BENCH_CHUNK`: a finished chunk of a benchmark entry (`vinadv.bench.scoring.compute_chunk`), `bench_chunks.result`
   (`vinadv.store`).
 - `TRAINING`: the record of a training, in a weights file and beside it (`vinadv.planners.records.TrainingRecord`;
   `vinadv.planners.weights.trained_moves`).

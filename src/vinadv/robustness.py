@@ -30,7 +30,7 @@ As a job: `RobustnessConfig` (the maps by their settings or a maps file, the str
 by its spec; checked when made), `run(config, executor)` and the `RobustnessResult` (`to_dict()`: what `--json`
 prints and the database stores).
 
-`benchmark_maps(n, size, seed)` makes the fixed maps: the generator's first `n` maps of `seed` (default 1000, the
+`heldout_maps(n, size, seed)` makes the fixed maps: the generator's first `n` maps of `seed` (default 1000, the
 held-out seed of the evaluation tables), one start each. Results go to a database's `robustness` table
 (`save_robustness`) and into the report (`vinadv.report`).
 """
@@ -66,16 +66,16 @@ if TYPE_CHECKING:  # names for the annotations only: the planners and the grid l
 DEFAULT_STRATEGIES = ("key-points", "saliency", "near-path", "random")
 EXHAUSTIVE = "exhaustive"
 #: the held-out seed of the evaluation tables (`vinadv vin eval --seed 1000`): never used in training
-BENCHMARK_SEED = 1000
+HELDOUT_SEED = 1000
 #: the name of the worst case over the strategies in tables and dicts
 WORST_CASE = "worst case"
 
 
-def benchmark_maps(
-    n: int = 1000, size: int = 28, seed: int = BENCHMARK_SEED, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
+def heldout_maps(
+    n: int = 1000, size: int = 28, seed: int = HELDOUT_SEED, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
 ):
-    """The benchmark's fixed maps: the generator's first `n` maps of `seed`, one start each, of the movement model
-    `moves` (a `MapSet`)."""
+    """The held-out maps of a robustness run: the generator's first `n` maps of `seed` (not a seed the planners were
+    trained on), one start each, of the movement model `moves` (a `MapSet`)."""
     return generate_maps(n, size, seed=seed, n_starts=1, corner_cutting=corner_cutting, moves=moves)
 
 
@@ -296,7 +296,7 @@ def robustness(
 
     Args:
         planner: a `vinadv.planners.interface.Planner` (or a VIN), for the maps' size.
-        maps: a `MapSet` (`benchmark_maps`); the first start of each map is attacked.
+        maps: a `MapSet` (`heldout_maps`); the first start of each map is attacked.
         strategies: names of `vinadv.attacks.strategies.STRATEGIES`, run in this order (exhaustive included only when
             named; see `check_strategies`).
         max_obstacles: the curve's largest k, >= 1.
@@ -310,7 +310,7 @@ def robustness(
         first_map: `maps` are maps `first_map..` of a larger benchmark (`Attack.attack`): the randomised strategies
             draw as they would for those maps there, so a benchmark run in chunks makes the whole one's pairs.
         progress: show a progress bar.
-        maps_source: where `maps` came from when not from `benchmark_maps` (a maps file: `{"maps": path,
+        maps_source: where `maps` came from when not from `heldout_maps` (a maps file: `{"maps": path,
             "maps_sha256": ...}`), recorded in the settings.
     """
     harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
@@ -411,7 +411,7 @@ def _outcomes(n: int, map_index, labels, harm, regret_a) -> MapOutcomes:
 @dataclass(frozen=True)
 class RobustnessConfig:
     """Everything that determines a robustness benchmark (`vinadv robustness`); checked when made (InputError naming
-    the field). The maps: the generator's first `n` maps of `seed` at `size` (`benchmark_maps`), or the first `n`
+    the field). The maps: the generator's first `n` maps of `seed` at `size` (`heldout_maps`), or the first `n`
     maps of the maps file `maps` (its `size`, `corner_cutting` and `moves` given with it, and its SHA-256:
     `vinadv.pipeline.maps_file_config`). `seed` also seeds the randomised strategies. `strategies`: names, or names
     joined by commas (`check_strategies` expands 'all')."""
@@ -420,7 +420,7 @@ class RobustnessConfig:
     weights: str | None = None
     n: int = 1000
     size: int = 28
-    seed: int = BENCHMARK_SEED
+    seed: int = HELDOUT_SEED
     corner_cutting: bool = True
     moves: str = DEFAULT_MOVES
     maps: str | None = None
@@ -456,9 +456,7 @@ class RobustnessConfig:
     def load_maps(self) -> MapSet:
         """The benchmark's maps: generated, or the maps file's first `n` (refused if its SHA-256 changed)."""
         if self.maps is None:
-            return benchmark_maps(
-                self.n, self.size, seed=self.seed, corner_cutting=self.corner_cutting, moves=self.moves
-            )
+            return heldout_maps(self.n, self.size, seed=self.seed, corner_cutting=self.corner_cutting, moves=self.moves)
         from vinadv.grid.mapset import MapSet  # noqa: PLC0415 (as the planners: loaded when a benchmark runs)
         from vinadv.planners.weights import weights_checksum  # noqa: PLC0415 (a file's SHA-256)
 
@@ -536,14 +534,14 @@ def save_robustness(result: RobustnessResult, db: str | None) -> int:
 
 
 __all__ = [
-    "BENCHMARK_SEED",
+    "HELDOUT_SEED",
     "DEFAULT_STRATEGIES",
     "Figures",
     "MapOutcomes",
     "RobustnessConfig",
     "RobustnessResult",
     "StrategyResult",
-    "benchmark_maps",
+    "heldout_maps",
     "check_strategies",
     "robustness",
     "run",

@@ -76,7 +76,7 @@ def test_no_attack_on_the_optimal_planner_is_harmful(strategy, maps):
 
 
 def test_saliency_on_the_vin_planner_is_the_gradient_of_the_vin_itself(maps):
-    """The generic autograd path (through `Planner.differentiable`) equals the VIN's own obstacle-channel gradient."""
+    """The generic autograd path (through `Planner.logits_module`) equals the VIN's own obstacle-channel gradient."""
     vin = planning_vin(SIZE, seed=1, noise=0.1)
     planner = VINPlanner(vin, SIZE)
     obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals

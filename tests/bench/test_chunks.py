@@ -9,19 +9,18 @@ import json
 import pytest
 import sqlalchemy as sa
 
-from vinadv.bench import entry as bench_entry
-from vinadv.bench import suites
-from vinadv.bench.entry import deterministic_part, entry_json, entry_key, run_bench
+from vinadv.bench import scoring, suites
+from vinadv.bench.scoring import deterministic_part, entry_json, entry_key, run_bench
 from vinadv.bench.suites import AttackGroup, Suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.planners.registry import load_planner
-from vinadv.robustness import benchmark_maps
+from vinadv.robustness import heldout_maps
 
 
 @pytest.fixture(scope="module")
 def tiny() -> Suite:
-    maps = benchmark_maps(2, 28, seed=1000)
+    maps = heldout_maps(2, 28, seed=1000)
     return Suite(
         name="tiny-chunks",
         description="a test suite",
@@ -46,7 +45,7 @@ def _no_compute(monkeypatch):
     def computed(*args):
         raise AssertionError("a stored chunk was computed again")
 
-    monkeypatch.setattr(bench_entry, "compute_chunk", computed)
+    monkeypatch.setattr(scoring, "compute_chunk", computed)
 
 
 @pytest.mark.parametrize(
@@ -76,7 +75,7 @@ def test_chunks_of_another_results_format_are_refused_naming_both(tiny, tmp_path
     planner = load_planner("optimal", 28)
     db = str(tmp_path / "b.db")
     run_bench(tiny, planner, db=db)
-    monkeypatch.setattr(bench_entry, "CHUNK_FORMAT", 2)
+    monkeypatch.setattr(scoring, "CHUNK_FORMAT", 2)
     _no_compute(monkeypatch)
     with pytest.raises(InputError, match="computed with results format 1, this run with results format 2"):
         run_bench(tiny, planner, db=db, resume=True)

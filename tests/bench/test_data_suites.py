@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from tests.needs import public_data
-from vinadv.bench.entry import deterministic_part, entry_json, run_bench, suite_maps
+from vinadv.bench.scoring import deterministic_part, entry_json, run_bench, suite_maps
 from vinadv.bench.suites import AttackGroup, DataFile, DataSuite, get_suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError

@@ -7,11 +7,11 @@ import dataclasses
 
 import pytest
 
-from vinadv.bench.entry import suite_maps
+from vinadv.bench.scoring import suite_maps
 from vinadv.bench.suites import FROZEN, SUITES, AttackGroup, Suite, get_suite, maps_sha256, register
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.robustness import benchmark_maps
+from vinadv.robustness import heldout_maps
 
 
 def test_released_suites_never_change():
@@ -31,7 +31,7 @@ def test_the_quick_suites_maps_are_the_frozen_ones():
     maps = suite_maps(suite)  # refused if the generator made other maps
     assert len(maps) == 100 and maps.size == 28
     # the digest, by hand: obstacle bytes, then int64 starts and goals
-    first = benchmark_maps(100, 28, seed=1000)
+    first = heldout_maps(100, 28, seed=1000)
     assert maps_sha256(first.obstacles, first.starts[:, 0], first.goals) == suite.maps_sha256
     other = dataclasses.replace(suite, maps_sha256="0" * 64)
     with pytest.raises(InputError, match="generator makes other maps"):

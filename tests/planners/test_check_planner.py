@@ -98,7 +98,7 @@ class Policy(Planner):
         return self._value(obstacles) if self._value else super().value_maps(obstacles, goals)
 
     @property
-    def differentiable(self):
+    def logits_module(self):
         return self._module
 
 

@@ -156,7 +156,7 @@ def test_tie_flips_finds_the_flipped_cells_and_tells_ties_from_differences():
     assert tie_flips(reference, reference)["cells"] == 0
 
 
-# On a CUDA GPU (marked `cuda`: skipped without one; benchmarks/device_check.sh runs them).
+# On a CUDA GPU (marked `cuda`: skipped without one; perf/device_check.sh runs them).
 #: the shipped 28x28 weights, on maps held out from every training (the robustness benchmark's seed)
 GPU_MAPS = 50
 

@@ -78,7 +78,7 @@ def test_registry_spec(tmp_path, capsys):
     plain, sym = load_planner("gppn", 28), load_planner("gppn+d4", 28)
     assert sym.name == "gppn+d4" and sym.checksum == plain.checksum
     assert sym.config == {**plain.config, "average": "d4"}
-    assert isinstance(sym.module, DihedralAverage) and sym.differentiable is sym.module
+    assert isinstance(sym.module, DihedralAverage) and sym.logits_module is sym.module
     vin = load_planner("vin+d4", 28)
     assert vin.name == "vin+d4" and vin.checksum == load_planner("vin", 28).checksum
     custom = load_planner("examples/my_planner.py:make+d4", 12)

@@ -116,9 +116,9 @@ def test_over_maps_runs_costly_maps_in_rounds(monkeypatch):
 
 def test_engine_results_are_the_same_in_rounds(monkeypatch):
     from vinadv.planners.vin.engine import action_maps  # noqa: PLC0415
-    from vinadv.robustness import benchmark_maps  # noqa: PLC0415
+    from vinadv.robustness import heldout_maps  # noqa: PLC0415
 
-    maps = benchmark_maps(20, SIZE, seed=0)
+    maps = heldout_maps(20, SIZE, seed=0)
     model = planning_vin(SIZE, seed=3)
     whole = action_maps(model, maps.obstacles, maps.goals)
     monkeypatch.setattr(batching, "ROUND_COST", 1)  # one map a round

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from vinadv.bench.entry import entry_key, spec_key
 from vinadv.bench.index import SHIPPED_INDEX, index_json, make_index, read_index
 from vinadv.bench.leaderboard import read_entries
+from vinadv.bench.scoring import entry_key, spec_key
 from vinadv.bench.suites import get_suite
 from vinadv.cli import main
 from vinadv.errors import InputError

@@ -12,7 +12,7 @@ from tests.report.conftest import SIZE
 
 from vinadv.planners.vin.weights import load_vin
 from vinadv.report import write_report
-from vinadv.robustness import benchmark_maps, robustness, save_robustness
+from vinadv.robustness import heldout_maps, robustness, save_robustness
 
 pytestmark = pytest.mark.slow
 
@@ -22,7 +22,7 @@ def _benchmarks(url: str, weights: str) -> list[dict]:
     model = load_vin(weights, size=SIZE)
     made = []
     for strategies, k in ((["random", "key-points"], 2), (["near-path"], 3)):
-        result = robustness(model, benchmark_maps(15, SIZE, seed=3), strategies, max_obstacles=k)
+        result = robustness(model, heldout_maps(15, SIZE, seed=3), strategies, max_obstacles=k)
         made.append({**result.to_dict(), "id": save_robustness(result, url)})
     return made
 

@@ -22,7 +22,7 @@ The strategies:
   planners the log-probability of the chosen action), (4) the remaining path cells. Evaluates the top `budget`
   (default 8).
 - `saliency`: white-box. The gradient, with respect to the obstacles, of the log-probability of the planner's
-  chosen actions along the original path (autograd through `Planner.differentiable`); the most negative
+  chosen actions along the original path (autograd through `Planner.logits_module`); the most negative
   gradient first (adding an obstacle there lowers the planner's confidence in its own path the most, to first
   order). Evaluates the top `budget`. A planner without gradients (`optimal`) is ranked as by `key-points`, and the
   pairs' params record it: `ranked_as: "key-points"`.
@@ -510,7 +510,7 @@ class SaliencyAttack(Attack):
         """Its declared gradients' module (`Capabilities.gradients`): of the logits, or of a search's path map; None."""
         if not planner.capabilities.gradients:
             return None
-        return planner.differentiable if planner.capabilities.policy else planner.differentiable_paths
+        return planner.logits_module if planner.capabilities.policy else planner.differentiable_paths
 
     def ranked_as(self, planner: Planner) -> str | None:
         return KeyPointsAttack.name if self.gradient_module(planner) is None else None

@@ -1,11 +1,11 @@
 """`vinadv bench run` as a job: `BenchConfig` (a suite by name, the planner by its spec), `run(config, executor)`
-and `BenchResult` (the entry, `to_dict()`; `vinadv.bench.entry`)."""
+and `BenchResult` (the entry, `to_dict()`; `vinadv.bench.scoring`)."""
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from vinadv.bench.entry import entry_json, run_bench
+from vinadv.bench.scoring import entry_json, run_bench
 from vinadv.bench.suites import Suite, get_suite
 from vinadv.executor import LOCAL, Executor
 
@@ -33,7 +33,7 @@ class BenchConfig:
 
 @dataclass
 class BenchResult:
-    """A bench entry (`vinadv.bench.entry.make_entry`)."""
+    """A bench entry (`vinadv.bench.scoring.make_entry`)."""
 
     entry: dict
 

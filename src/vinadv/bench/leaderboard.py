@@ -1,4 +1,4 @@
-"""The leaderboard: benchmark entries (`vinadv.bench.entry`) of one folder as a Markdown and an HTML table, per suite,
+"""The leaderboard: benchmark entries (`vinadv.bench.scoring`) of one folder as a Markdown and an HTML table, per suite,
 sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at the
 largest k, then by name), each row linking to its entry file, its flags shown beside it, and how long it took (the
 sum of its chunks' seconds: on the machine and load of the time, not a speed figure).

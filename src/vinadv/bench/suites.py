@@ -36,7 +36,7 @@ from vinadv.errors import InputError
 
 #: the format of a suite's spec (part of what its checksum covers)
 SUITE_FORMAT = "vinadv.bench_suite/1"
-#: the format of a result entry file (`vinadv.bench.entry`)
+#: the format of a result entry file (`vinadv.bench.scoring`)
 ENTRY_FORMAT = "vinadv.bench_entry/1"
 
 

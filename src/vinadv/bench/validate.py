@@ -1,4 +1,4 @@
-"""The schema of benchmark entries (`vinadv.bench.entry`) and of their stored chunk results, checked in plain Python.
+"""The schema of benchmark entries (`vinadv.bench.scoring`) and of their stored chunk results, checked in plain Python.
 
 An entry is read from a file anyone can edit, a chunk result from a database anyone can write to: every field the
 leaderboard, the index or `make_entry` reads is checked before it is used, so a malformed one is one line naming the

@@ -11,7 +11,7 @@ Beside the paper's label, for a pair on the original map `o` and the adversarial
 - `harm`: `invalid` for an invalid pair, `harmful` for UrP or when `regret_a > regret_o + tol + rtol * opt_cost_a`,
   `harmless` otherwise. A fork onto another optimal route is harmless: a perfect planner does the same.
 
-Speed (`benchmarks/harm.py`). One compiled kernel, parallel over blocks of pairs, does per pair:
+Speed (`perf/harm.py`). One compiled kernel, parallel over blocks of pairs, does per pair:
 1. the original map: an A* search from the goal with the model's distance to the start as heuristic (octile,
    Chebyshev on moore, Manhattan on news: consistent, with or without corner cutting), run until every cell on an
    optimal path is settled, so the expert path can be walked from the start with the exact tie-break. Consecutive

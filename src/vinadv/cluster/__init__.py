@@ -2,7 +2,7 @@
 workers of a Dask scheduler and knows no job. The commands open it (`open_executor`) for `--cluster tcp://HOST:PORT`
 (an existing scheduler) or `--workers N` (a LocalCluster of N single-threaded worker processes); the jobs cut their
 work in chunks and write their tasks (`vinadv.pipeline`, `vinadv.jobs.attack`, `vinadv.identify`,
-`vinadv.bench.entry`).
+`vinadv.bench.scoring`).
 
 What the executor guarantees, whatever the job:
 - Results come back to the client (`distributed.as_completed`); with `ordered` they are released in the order of

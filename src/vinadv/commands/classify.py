@@ -90,11 +90,11 @@ def _load_pairs(path):
 
 
 def _human_labels(args):
-    """(batch, labels, description) of the human-labelled pairs of --db/--run (`vinadv.viewer.training`)."""
+    """(batch, labels, description) of the human-labelled pairs of --db/--run (`vinadv.viewer.label_set`)."""
     if args.run is None:
         raise InputError("--labels human needs --run (and --db, or env VINADV_DB)")
     from vinadv.store import Store
-    from vinadv.viewer.training import human_training_set
+    from vinadv.viewer.label_set import human_training_set
 
     with Store.open(args.db, readonly=True) as store:
         run_id = store.resolve_run(args.run)

@@ -6,13 +6,13 @@ import argparse
 import time
 
 from vinadv.commands import add_actions, command_line
-from vinadv.commands.evaluation import add_eval_arguments, emit_metrics, start_eval
+from vinadv.commands.eval_options import add_eval_arguments, emit_metrics, start_eval
 from vinadv.commands.output import add_output_options, emit, shows_progress
-from vinadv.commands.training import add_compile_argument, add_train_arguments, run_training, train_config
+from vinadv.commands.train_options import add_compile_argument, add_train_arguments, run_training, train_config
 from vinadv.outfile import check_output_path
 from vinadv.planners.weights import weights_checksum
 
-#: GPPN defaults at 28x28, chosen by benchmarks/gppn_training.py on the 2-core CPU (docs/results/history.md): a 5x5
+#: GPPN defaults at 28x28, chosen by perf/gppn_training.py on the 2-core CPU (docs/results/history.md): a 5x5
 #: recurrent kernel reaches two cells per iteration, so 20 iterations cross a 28x28 map.
 GPPN_DEFAULTS = {"l_h": 32, "k": 20, "kernel": 5, "lr": 0.001}
 

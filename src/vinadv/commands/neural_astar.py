@@ -11,7 +11,7 @@ from pathlib import Path
 from vinadv import __version__
 from vinadv.commands import add_actions, add_device_argument, command_line, option_values, planner_device, set_threads
 from vinadv.commands.output import add_output_options, emit, progress_bar
-from vinadv.commands.training import (
+from vinadv.commands.train_options import (
     add_run_arguments,
     add_weights_out_argument,
     check_weights_out,

@@ -8,7 +8,13 @@ from pathlib import Path
 
 from vinadv.bench.index import entries_of, read_index
 from vinadv.commands import add_planner_arguments, command_line, load_args_planner, planner_device
-from vinadv.commands.evaluation import add_eval_arguments, add_prior_argument, by_length_text, start_eval, write_figures
+from vinadv.commands.eval_options import (
+    add_eval_arguments,
+    add_prior_argument,
+    by_length_text,
+    start_eval,
+    write_figures,
+)
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 

@@ -6,9 +6,9 @@ import argparse
 import time
 
 from vinadv.commands import LazyChoices, add_actions
-from vinadv.commands.evaluation import add_eval_arguments, add_prior_argument, emit_metrics, start_eval
+from vinadv.commands.eval_options import add_eval_arguments, add_prior_argument, emit_metrics, start_eval
 from vinadv.commands.output import add_output_options, emit, note, shows_progress
-from vinadv.commands.training import add_train_arguments, run_training, train_config
+from vinadv.commands.train_options import add_train_arguments, run_training, train_config
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
 from vinadv.planners.weights import check_trained_size, weights_checksum

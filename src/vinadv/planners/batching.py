@@ -95,7 +95,7 @@ def forward_batches(lo: int, hi: int, on_cpu: bool, batch_size: int) -> list[sli
 
     Small CPU batches keep a forward's activations in the caches: the shipped GPPN's forward on 28x28 maps and the
     Neural A* encoder's on 32x32 maps each take about 0.6 of the time in batches of 16 as of 64
-    (`benchmarks/torch_batch.py`). Never
+    (`perf/torch_batch.py`). Never
     below `CPU_MIN_BATCH`, so a map's logits are the same bits in whatever batch it lands.
     """
     if not on_cpu:

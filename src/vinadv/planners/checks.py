@@ -14,7 +14,7 @@ and model, and what it does is held against what it declares (`Capabilities`, sc
 - a declared policy: `logits` pass `check_logits`;
 - expansions: declared exactly where `plan` reports the expanded cells, of the maps' shape;
 - value maps (its own or the stand-in): `(B, N, N)` float;
-- gradients: declared exactly where it offers a differentiable module (`differentiable` for a policy planner,
+- gradients: declared exactly where it offers a differentiable module (`logits_module` for a policy planner,
   `differentiable_paths` for a search planner), whose output has the right shape and a gradient with respect to
   the obstacles.
 
@@ -115,7 +115,7 @@ def _check_gradients(planner: Planner, capabilities: Capabilities, obstacles, st
     """A declared gradient module (of the logits, or of the path map for a planner without a policy) exists, gives
     the right shape and a gradient with respect to the obstacles; an undeclared one is refused too."""
     name = planner.name
-    module = planner.differentiable if capabilities.policy else getattr(planner, "differentiable_paths", None)
+    module = planner.logits_module if capabilities.policy else getattr(planner, "differentiable_paths", None)
     kind = "differentiable" if capabilities.policy else "differentiable_paths"
     if not capabilities.gradients:
         if module is not None:

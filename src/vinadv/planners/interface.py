@@ -73,7 +73,7 @@ class Capabilities:
             search's heuristic map), not the stand-in every planner has (its policy's confidence, or minus the exact
             cost-to-go for a search planner).
         gradients: a differentiable module (the saliency attack): of the logits for a policy planner
-            (`differentiable`), of a path map for a search planner (`differentiable_paths`).
+            (`logits_module`), of a path map for a search planner (`differentiable_paths`).
         expansions: `plan` reports the cells each search expanded (`SearchResult.expanded`: the Exp metric).
     """
 
@@ -256,7 +256,7 @@ class Planner(ABC):
         return spec
 
     @property
-    def differentiable(self) -> nn.Module | None:
+    def logits_module(self) -> nn.Module | None:
         """A module computing the logits differentiably: `module(obstacles (B,N,N) float, goals (B,2) int64)`
         -> `(B, 8, N, N)` (the gradient attacks use it), where `capabilities.gradients`; None otherwise."""
         return None
@@ -432,7 +432,7 @@ class TorchPlanner(Planner):
         self.device_type = None if device is None else self.device.type
 
     @property
-    def differentiable(self) -> nn.Module:
+    def logits_module(self) -> nn.Module:
         return self.module
 
     def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:

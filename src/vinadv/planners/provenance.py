@@ -1,5 +1,5 @@
 """Where a bring-your-own planner's code comes from (`provenance`): what a resumed benchmark compares before it reuses
-the chunks a run stored (`vinadv.bench.entry.chunk_fingerprint`), kept out of the planner's spec (the entry key).
+the chunks a run stored (`vinadv.bench.scoring.chunk_fingerprint`), kept out of the planner's spec (the entry key).
 
 A planner module that declares `PLANNER_VERSION = "..."` (a string of at most 200 characters) is known by it: its
 author says when its computation changed. Otherwise it is known by the files it imports from beside it: the sha256 of

@@ -21,7 +21,7 @@ wrapped by `UserSearchPlanner`: its exceptions (or `sys.exit`) become one-line `
 capabilities are what the object offers.
 
 Attack signals (`attacks.strategies`): `value_maps` is the planner's own cost or heuristic map where it has one
-(`Capabilities.value_maps`), else minus the exact cost-to-go (as `optimal`'s); `differentiable` is None, and a
+(`Capabilities.value_maps`), else minus the exact cost-to-go (as `optimal`'s); `logits_module` is None, and a
 planner whose search is differentiable (`Capabilities.gradients`) offers `differentiable_paths` instead.
 """
 

@@ -111,7 +111,7 @@ class EvaluationQueries(RunQueries):
             return int(row.inserted_primary_key[0])
 
     def add_bench_chunk(self, entry: str, chunk: int, result: dict, version: str = __version__) -> None:
-        """Store the finished chunk `chunk` of benchmark entry `entry` (`vinadv.bench.entry`), in one transaction: a
+        """Store the finished chunk `chunk` of benchmark entry `entry` (`vinadv.bench.scoring`), in one transaction: a
         run killed before it commits leaves nothing of the chunk, one killed after leaves all of it."""
         self.ensure_table(bench_chunks)
         with self.engine.begin() as conn:

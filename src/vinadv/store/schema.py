@@ -210,7 +210,7 @@ bench_chunks = sa.Table(
     sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive
     sa.Column("entry", sa.String(64), nullable=False),  # sha256 of (suite checksum, planner spec): one bench entry
     sa.Column("chunk", sa.Integer(), nullable=False),  # maps chunk * suite.chunk .. of the suite
-    sa.Column("result", sa.JSON(), nullable=False),  # the chunk's per-map outcomes (`vinadv.bench.entry`)
+    sa.Column("result", sa.JSON(), nullable=False),  # the chunk's per-map outcomes (`vinadv.bench.scoring`)
     sa.Column("version", sa.String(64), nullable=False),
     sa.UniqueConstraint("entry", "chunk", name="uq_bench_chunks_entry_chunk"),
 )

@@ -168,7 +168,7 @@ def load_symmetric(spec: str, size: int, weights: str | None, corner_cutting: bo
         raise PlannerError(f"planner {spec!r}: {SUFFIX} follows one planner name or spec, once (e.g. gppn{SUFFIX})")
     # `_load`, not `load_planner`: the base's movement model is checked once, on the average (`load_planner`)
     base = _load(base_spec, size, weights, corner_cutting, device)
-    module = base.differentiable
+    module = base.logits_module
     if not base.capabilities.policy:  # the average is over policies: a search planner has none
         raise PlannerError(
             f"planner {spec!r}: {base.name!r} declares no policy (a search planner); {SUFFIX} averages a policy "

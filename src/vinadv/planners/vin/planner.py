@@ -113,7 +113,7 @@ class VINPlanner(Planner):
         return self._torch_planner().module
 
     @property
-    def differentiable(self) -> nn.Module:
+    def logits_module(self) -> nn.Module:
         return self.module
 
     def policy_logits(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:

@@ -12,15 +12,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from vinadv.bench import entry as bench_entry
-from vinadv.bench import suites
-from vinadv.bench.entry import deterministic_part, entry_json, make_entry, run_bench, weighted_mean
+from vinadv.bench import scoring, suites
+from vinadv.bench.scoring import deterministic_part, entry_json, make_entry, run_bench, weighted_mean
 from vinadv.bench.suites import AttackGroup, Suite, get_suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.planners.registry import load_planner
 from vinadv.planners.vin.planner import as_planner
-from vinadv.robustness import benchmark_maps, robustness
+from vinadv.robustness import heldout_maps, robustness
 from vinadv.store import Store
 from vinadv.testing.planners import planning_vin
 
@@ -28,7 +27,7 @@ SIZE = 10
 
 
 def tiny_suite(n: int = 9, chunk: int = 4) -> Suite:
-    maps = benchmark_maps(n, SIZE, seed=1000)
+    maps = heldout_maps(n, SIZE, seed=1000)
     return Suite(
         name="tiny",
         description="a test suite",
@@ -51,7 +50,7 @@ def planner():
 def test_entry_figures_are_a_whole_robustness_run(planner):
     suite = tiny_suite()
     entry = run_bench(suite, planner)
-    maps = benchmark_maps(suite.n, SIZE, seed=1000)
+    maps = heldout_maps(suite.n, SIZE, seed=1000)
     kw = dict(objective="harm", seed=suite.seed, budget=suite.budget, radius=suite.radius)
     added = robustness(planner, maps, ["random", "key-points"], 2, **kw)
     removed = robustness(planner, maps, ["random"], 1, edit="remove", **kw)
@@ -76,7 +75,7 @@ def test_resume_after_a_crash_gives_the_same_entry(planner, tmp_path, monkeypatc
     suite = tiny_suite()
     db = f"sqlite:///{tmp_path / 'b.db'}"
     whole = run_bench(suite, planner)
-    real = bench_entry.compute_chunk
+    real = scoring.compute_chunk
     calls = []
 
     def crash_on_third(*args):
@@ -85,13 +84,13 @@ def test_resume_after_a_crash_gives_the_same_entry(planner, tmp_path, monkeypatc
             raise KeyboardInterrupt  # killed during the third chunk
         return real(*args)
 
-    monkeypatch.setattr(bench_entry, "compute_chunk", crash_on_third)
+    monkeypatch.setattr(scoring, "compute_chunk", crash_on_third)
     with pytest.raises(KeyboardInterrupt):
         run_bench(suite, planner, db=db)
     with pytest.raises(InputError, match="pass --resume"):
         run_bench(suite, planner, db=db)
     calls.clear()
-    monkeypatch.setattr(bench_entry, "compute_chunk", lambda *a: calls.append(a[-1]) or real(*a))
+    monkeypatch.setattr(scoring, "compute_chunk", lambda *a: calls.append(a[-1]) or real(*a))
     resumed = run_bench(suite, planner, db=db, resume=True)
     assert calls == [2]  # only the chunk not stored
     assert entry_json(deterministic_part(resumed)) == entry_json(deterministic_part(whole))
@@ -122,8 +121,8 @@ def test_quick_suite_entries_are_deterministic(tmp_path):
 @pytest.mark.slow
 def test_make_entry_needs_every_chunk(planner):
     suite = tiny_suite()
-    maps = bench_entry.suite_maps(suite)
-    chunks = {c: bench_entry.compute_chunk(suite, planner, maps, c) for c in range(3)}
+    maps = scoring.suite_maps(suite)
+    chunks = {c: scoring.compute_chunk(suite, planner, maps, c) for c in range(3)}
     entry = make_entry(suite, planner, chunks, {"gradient_masked": False, "non_deterministic": False}, 1.0)
     assert entry["clean"]["maps"] == suite.n and entry["format"] == "vinadv.bench_entry/1"
     assert dataclasses.replace(suite, n=8).checksum != suite.checksum
@@ -152,7 +151,7 @@ def test_chunk_means_join_to_the_same_bits_in_any_order(chunks, rng):
 @pytest.fixture
 def tiny28(monkeypatch):
     """A two-map 28x28 suite of one chunk per map, registered for the command as `tiny28`."""
-    maps = benchmark_maps(2, 28, seed=1000)
+    maps = heldout_maps(2, 28, seed=1000)
     suite = Suite(
         name="tiny28",
         description="a test suite",
@@ -178,7 +177,7 @@ def test_bench_run_resumes_the_chunks_of_old_and_new_names_of_one_planner(tiny28
     def computed(*args):
         raise AssertionError("a stored chunk was computed again")
 
-    monkeypatch.setattr(bench_entry, "compute_chunk", computed)
+    monkeypatch.setattr(scoring, "compute_chunk", computed)
     choices = (["--planner", "vin-robust"], ["--planner", "vin", "--weights", "vin28-robust"])
     for i, choice in enumerate(choices):
         out = tmp_path / f"{i}.json"
@@ -186,8 +185,8 @@ def test_bench_run_resumes_the_chunks_of_old_and_new_names_of_one_planner(tiny28
         assert entry_json(deterministic_part(json.loads(out.read_text()))) == entry_json(deterministic_part(first))
     # chunks stored by `--planner vin --weights vin28_robust` before the two were one planner: under vin's key
     planner = load_planner("vin-robust", 28)
-    key, family_key = bench_entry.entry_keys(tiny28, planner)
-    assert key == bench_entry.entry_key(tiny28, load_planner("vin_robust", 28)) != family_key
+    key, family_key = scoring.entry_keys(tiny28, planner)
+    assert key == scoring.entry_key(tiny28, load_planner("vin_robust", 28)) != family_key
     other = f"sqlite:///{tmp_path / 'family.db'}"
     with Store.open(db) as store, Store.open(other) as copy:
         for chunk, result in store.read_bench_chunks(key).items():

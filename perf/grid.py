@@ -1,6 +1,6 @@
 """Dataset generation speed: maps + expert data (7 starts per map) per second, and where the time goes.
 
-    .venv/bin/python benchmarks/grid.py [--n 5000] [--size 28]
+    .venv/bin/python perf/grid.py [--n 5000] [--size 28]
 
 Target (issue 2): >= 1,000 maps/s at 28x28 on the 2-core machine.
 """

@@ -1,7 +1,7 @@
 """The VIN engine and its exhaustive attack as maps grow (28x28, 32x32, 64x64), side by side in one run, beside the
 multiply-adds a map needs: how the cost grows from 28 to 64, against the physical limit.
 
-    nice -n 15 .venv/bin/python benchmarks/map_size.py [--sizes 28,32,64] [--n 500] [--attack-n 4] [--rounds 2]
+    nice -n 15 .venv/bin/python perf/map_size.py [--sizes 28,32,64] [--n 500] [--attack-n 4] [--rounds 2]
         [--weights W] [--out FILE.json]
 
 The same tensors at every size, `--weights` (default the shipped `vin64.pt`: the shift start fine-tuned at 64x64,
@@ -35,7 +35,7 @@ The engine folds h and r into one 2 -> 1 convolution (no nonlinearity between th
 N^2 * (9 l_h l_i + l_h)), so its count is `engine = N^2 * (9 l_i + 9 l_q + 9 k l_q)`; the action head (l_q x 8 at
 the cells a path visits) is left out (under 0.1%). An exhaustive attack of a map plans each candidate map, so it
 needs `(candidates + 1) * engine` multiply-adds. The limit: plans/s at the CPU's FMA peak (cores x 2 FMA units x
-8 float32 lanes x clock, as `benchmarks/planning.py`), and the engine's share of it.
+8 float32 lanes x clock, as `perf/planning.py`), and the engine's share of it.
 
 Growth from the first size: each figure's ratio to its value at the first size (time per map; the FMA count;
 candidates per map). The machine's load average is recorded before and after: on a shared machine the absolute
@@ -113,7 +113,7 @@ def main() -> None:
     args = parser.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     record = {
-        "command": "python benchmarks/map_size.py " + shlex.join(sys.argv[1:]),
+        "command": "python perf/map_size.py " + shlex.join(sys.argv[1:]),
         "machine": {
             "cpu": platform.processor() or platform.machine(),
             "cores": len(os.sched_getaffinity(0)),

@@ -1,6 +1,6 @@
 """The same `vinadv run` quiet and with one busy process beside it: how much a busy core slows the whole job.
 
-    .venv/bin/python benchmarks/under_load.py [--n 5000] [--size 28] [--json]
+    .venv/bin/python perf/under_load.py [--n 5000] [--size 28] [--json]
 
 Runs `vinadv run --n N --attack near-path --classifier rule` into a fresh SQLite file twice, as its own process:
 first alone, then with one busy process (a pure-Python spin loop, started here and killed when the run ends, and

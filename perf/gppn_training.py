@@ -1,6 +1,6 @@
 """GPPN training step speed, side by side in one process on the same maps and weights.
 
-    nice .venv/bin/python benchmarks/gppn_training.py [--n 64] [--batch-size 32] [--l-h 32 64] [--k 20 36]
+    nice .venv/bin/python perf/gppn_training.py [--n 64] [--batch-size 32] [--l-h 32 64] [--k 20 36]
                                                      [--threads 1 2] [--json]
 
 One training step = forward over every cell of a batch of maps, the optimal-set loss, backward and an RMSprop step,

@@ -1,4 +1,4 @@
-"""The train commands' shared run (`vinadv.commands.training.train_and_save`): a run stopped by `--time-limit`
+"""The train commands' shared run (`vinadv.commands.train_options.train_and_save`): a run stopped by `--time-limit`
 keeps its checkpoint, and `--resume` continues from it to the weights of an uninterrupted run (it used to be
 removed, so `--resume` silently trained again from epoch 1). Tiny maps, two epochs: cheap."""
 

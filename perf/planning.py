@@ -1,6 +1,6 @@
 """Planning throughput, side by side in one process on the same maps and weights.
 
-    nice .venv/bin/python benchmarks/planning.py [--n 5000] [--size 28] [--ref-n 20] [--torch-n 400] [--json]
+    nice .venv/bin/python perf/planning.py [--n 5000] [--size 28] [--ref-n 20] [--torch-n 400] [--json]
 
 1. per-step reference (`plan_reference`): re-runs the full PyTorch VIN, batch size 1, at every step, as the public
    ports do (on the first --ref-n maps);

@@ -1,6 +1,6 @@
 """Store throughput: rows/s into SQLite, MariaDB and PostgreSQL, maps and paths included, side by side.
 
-    .venv/bin/python benchmarks/store.py [--n 50000] [--size 28] [--max-path 60] [--repeat 3] [--json]
+    .venv/bin/python perf/store.py [--n 50000] [--size 28] [--max-path 60] [--repeat 3] [--json]
 
 Prints, measured in one run on the same random records (`vinadv.testing.store.random_records`):
 - encode only: PairRecords -> row tuples (the vectorised text encoding of maps, paths and cells), in the form

@@ -1,6 +1,6 @@
 """What checking a search planner's answer costs (`vinadv.planners.search.check_paths`) beside the search itself.
 
-    .venv/bin/python benchmarks/search_checks.py [--n 2000] [--size 28] [--planner astar] [--repeat 15] [--json]
+    .venv/bin/python perf/search_checks.py [--n 2000] [--size 28] [--planner astar] [--repeat 15] [--json]
 
 Plans the first start of `--n` generated maps with `--planner`'s unchecked `plan_paths`, then checks the answer, best
 of `--repeat` each, side by side in one run; prints both times and their ratio.

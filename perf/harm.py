@@ -1,6 +1,6 @@
 """Labelling throughput: today's rule labeller against the rule labeller plus harm (vinadv.classify.harm).
 
-    nice .venv/bin/python benchmarks/harm.py [--pairs PAIRS.npz] [--n 100000] [--maps 10000] [--attack near-path]
+    nice .venv/bin/python perf/harm.py [--pairs PAIRS.npz] [--n 100000] [--maps 10000] [--attack near-path]
         [--json]
 
 Without --pairs it makes real pairs: `--maps` generated 28x28 maps attacked by `--attack` with the shipped VIN
@@ -21,7 +21,7 @@ import json
 import numba
 import numpy as np
 
-from common import add_output_arguments, timed_side_by_side  # benchmarks/common.py
+from common import add_output_arguments, timed_side_by_side  # perf/common.py
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import make_attack
 from vinadv.classify import PathPairBatch, label_batch

@@ -1,6 +1,6 @@
 """Attack strategies side by side on the same maps: category mix, success rate, planner calls per success, time.
 
-    .venv/bin/python benchmarks/attacks.py [--n 5000] [--size 28] [--weights W] [--strategies a,b,...] [--json]
+    .venv/bin/python perf/attacks.py [--n 5000] [--size 28] [--weights W] [--strategies a,b,...] [--json]
 
 The paper's mix for 5,000 near-path pairs: UrP 1,632, FP 204, DP 1,076, UcP 2,088 (36.7% success).
 Targets (issue 5): key-points or saliency beats near-path's success rate; exhaustive on 5,000 maps < 10 minutes.

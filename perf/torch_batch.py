@@ -1,6 +1,6 @@
 """A torch planner's CPU forward in batches of 64 maps (before) against `forward_batches` (16 to 31), side by side.
 
-    python benchmarks/torch_batch.py [--maps 64] [--rounds 3] [--json]
+    python perf/torch_batch.py [--maps 64] [--rounds 3] [--json]
 
 For the shipped GPPN (28x28 held-out maps) and the Neural A* encoder (32x32 generated maps, `moore`), on one torch
 thread as `over_maps` runs each piece:

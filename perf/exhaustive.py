@@ -1,6 +1,6 @@
 """The exhaustive attack against planning its candidate maps alone: what the attack adds to the planner's own time.
 
-    .venv/bin/python benchmarks/exhaustive.py [--n 1000] [--size 28] [--planner vin] [--rounds 2] [--json]
+    .venv/bin/python perf/exhaustive.py [--n 1000] [--size 28] [--planner vin] [--rounds 2] [--json]
 
 On `--n` generated maps (one start each), side by side in this run, taking turns, best of `--rounds`:
 - `attack`: `make_attack("exhaustive").attack(...)` with the harm ranking `vinadv robustness` uses (every valid
@@ -17,7 +17,7 @@ import json
 
 import numpy as np
 
-from common import add_output_arguments, timed_side_by_side  # benchmarks/common.py
+from common import add_output_arguments, timed_side_by_side  # perf/common.py
 from vinadv.attacks.strategies import EVAL_CHUNK, make_attack
 from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps

@@ -47,7 +47,7 @@ from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.mapset import MapSet
 from vinadv.planners.interface import Planner
 from vinadv.records import BENCH_CHUNK, RECORD_VERSIONS, VERSION_KEY
-from vinadv.robustness import Figures, MapOutcomes, benchmark_maps, robustness, worst_case
+from vinadv.robustness import Figures, MapOutcomes, heldout_maps, robustness, worst_case
 
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
 VOLATILE_FIELDS = ("time", "machine")
@@ -67,7 +67,7 @@ def suite_maps(suite: Suite, data: str | os.PathLike | None = None) -> MapSet:
     else:
         if data is not None:
             raise InputError(f"suite {suite.name} makes its maps: data (a folder of files) is for data suites", "data")
-        maps, what = benchmark_maps(suite.n, suite.size, seed=suite.maps_seed), "generator"
+        maps, what = heldout_maps(suite.n, suite.size, seed=suite.maps_seed), "generator"
     digest = maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals)
     if digest != suite.maps_sha256:
         raise InputError(

@@ -2,7 +2,7 @@
 the scripts that record results for the docs, running `vinadv` on this checkout's code with the commands recorded
 (`run_vinadv`), the machine (`cpu_model`, `load_average`) and the files' checksums (`sha256`).
 
-The scripts run as `python benchmarks/NAME.py`, so this folder is on their path and `from common import ...` finds
+The scripts run as `python perf/NAME.py`, so this folder is on their path and `from common import ...` finds
 this module.
 """
 

@@ -14,7 +14,7 @@ folder as `<work>`), which `docs/hooks.py` renders on the docs page: no number i
 entries run now replace those of the same family and planner in the existing file and the others are kept, so a
 planner can be added without running the rest again.
 
-    python benchmarks/mpd_table.py --data-dir DIR [--out docs/results/mpd.json] [--work DIR] [--update]
+    python perf/mpd_table.py --data-dir DIR [--out docs/results/mpd.json] [--work DIR] [--update]
         [--skip-table] [--skip-robustness] [--robustness-n 10] [--max-obstacles 3] [--weighted NAME=PLANNER:FILE]
 """
 
@@ -27,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from common import run_vinadv, sha256  # benchmarks/common.py
+from common import run_vinadv, sha256  # perf/common.py
 
 FAMILIES = ["mazes", "alternating_gaps", "forest", "multiple_bugtraps", "shifting_gaps", "single_bugtrap"]
 PLANNERS = ["astar", "wastar:w=2", "optimal", "neural-astar"]

@@ -3,17 +3,17 @@
 # aside), the figures issue 36 asks for first, each step under its own time limit, each writing under $OUT (a
 # temporary folder without the tool), the JSON saved as it goes (a step cut at its limit keeps what it measured):
 #
-#     bash benchmarks/device_check.sh              # from the repository root, on the GPU machine: steps 1-4
-#     STEPS="5 6" bash benchmarks/device_check.sh  # the rest, a second call on the still warm machine, time allowing
+#     bash perf/device_check.sh              # from the repository root, on the GPU machine: steps 1-4
+#     STEPS="5 6" bash perf/device_check.sh  # the rest, a second call on the still warm machine, time allowing
 #
-# With the device tool, from the session: run(command="bash benchmarks/device_check.sh", timeout_s=600), no carry:
+# With the device tool, from the session: run(command="bash perf/device_check.sh", timeout_s=600), no carry:
 # the machine's own python3 holds PyTorch (CUDA), NumPy, Numba, scikit-learn, tqdm, pytest and pytest-timeout, and
 # nothing is installed from the network. vinadv runs from src/ (PYTHONPATH); SQLAlchemy, which the tests' conftest
 # imports for the database fixtures, is not there, so the GPU tests run with --noconftest (they use none of it).
 #
 # Steps (limits in seconds; 1-4 add up to 565, under the tool's 600 a command):
 # 1. (170) plans per second at batch 1, 64 and 1,024 on the CPU and on cuda, GPPN (octile 28x28 maps) and Neural A*
-#    (moore 28x28 maps), by benchmarks/device.py (speed_gppn.json, speed_neural_astar.json);
+#    (moore 28x28 maps), by perf/device.py (speed_gppn.json, speed_neural_astar.json);
 # 2. (240) the GPPN's exhaustive robustness of FULL maps (default 1,000: issue 36's target, under 5 minutes on one
 #    H100-class GPU) on cuda, 100 maps a call, full.json rewritten after each: cut at the limit, it still gives the
 #    maps done and their seconds;
@@ -23,7 +23,7 @@
 #    64x64 maps, with its success-by-path-length curve (vin64_cuda.json, vin64_cuda_by_length.svg), to set beside
 #    the engine's committed vin64.metrics.json (the same maps, the CPU);
 # 5. (90) the command line: `vinadv plan` with --device cuda against the default, on 200 maps (cli.log);
-# 6. (240) benchmarks/device.py for the GPPN and the VIN: ties on 1,000 maps and the robustness suite of 4 maps on
+# 6. (240) perf/device.py for the GPPN and the VIN: ties on 1,000 maps and the robustness suite of 4 maps on
 #    the CPU and on cuda (device.json).
 # 7. (ENTRY_SECONDS, default 570) issue 34's bench entry of the GPPN on vin28-v1 on cuda (vin28-v1.gppn.json): a
 #    call of its own, `STEPS=7`; commit the entry under docs/results/bench/ and refresh the leaderboard's index;
@@ -33,7 +33,7 @@
 #
 # A dry run on any machine (the GPU tests left out, small sizes):
 #     DEVICE=cpu PYTHON=.venv/bin/python FULL=2 N64=5 CLI_MAPS=8 STEPS="1 2 4 5 6" BATCHES=1,8 BENCH_SECONDS=0.2 \
-#         BENCH_ARGS="--tie-maps 8 --robustness-maps 1" bash benchmarks/device_check.sh
+#         BENCH_ARGS="--tie-maps 8 --robustness-maps 1" bash perf/device_check.sh
 set -u
 cd "$(dirname "$0")/.."
 OUT=${OUT:-$(mktemp -d)}
@@ -60,10 +60,10 @@ status=0
 
 if step 1; then
     echo "== 1. plans per second, GPPN and Neural A*, on the CPU and on $DEVICE"
-    timeout 85 "$PY" benchmarks/device.py --device "$DEVICE" --planners gppn \
+    timeout 85 "$PY" perf/device.py --device "$DEVICE" --planners gppn \
         --batches "$BATCHES" --seconds "$BENCH_SECONDS" --tie-maps 0 --robustness-maps 0 \
         --json "$OUT/speed_gppn.json" > "$OUT/speed_gppn.log" 2>&1 || status=1
-    timeout 85 "$PY" benchmarks/device.py --device "$DEVICE" --planners neural-astar --moves moore \
+    timeout 85 "$PY" perf/device.py --device "$DEVICE" --planners neural-astar --moves moore \
         --batches "$BATCHES" --seconds "$BENCH_SECONDS" --tie-maps 0 --robustness-maps 0 \
         --json "$OUT/speed_neural_astar.json" > "$OUT/speed_neural_astar.log" 2>&1 || status=1
     grep -h " batch " "$OUT/speed_gppn.log" "$OUT/speed_neural_astar.log"
@@ -71,7 +71,7 @@ fi
 
 if step 2; then
     echo "== 2. exhaustive robustness of $FULL maps on $DEVICE (GPPN)"
-    timeout 240 "$PY" benchmarks/device.py --device "$DEVICE" --planners gppn --batches 1 --seconds 0.1 --tie-maps 0 \
+    timeout 240 "$PY" perf/device.py --device "$DEVICE" --planners gppn --batches 1 --seconds 0.1 --tie-maps 0 \
         --robustness-maps 0 --full-robustness "$FULL" --json "$OUT/full.json" > "$OUT/full.log" 2>&1 || status=1
     grep "full robustness" "$OUT/full.log" | tail -1
 fi
@@ -119,9 +119,9 @@ EOF
 fi
 
 if step 6; then
-    echo "== 6. benchmarks/device.py: ties on 1,000 maps and the robustness suite of 4 maps, GPPN and VIN"
+    echo "== 6. perf/device.py: ties on 1,000 maps and the robustness suite of 4 maps, GPPN and VIN"
     # shellcheck disable=SC2086 (BENCH_ARGS: several words)
-    timeout 240 "$PY" benchmarks/device.py --device "$DEVICE" --batches 1 --seconds 0.1 ${BENCH_ARGS:-} \
+    timeout 240 "$PY" perf/device.py --device "$DEVICE" --batches 1 --seconds 0.1 ${BENCH_ARGS:-} \
         --json "$OUT/device.json" > "$OUT/device.log" 2>&1
     [ $? = 0 ] || status=1
     grep -v '^ \|^[{}]' "$OUT/device.log"

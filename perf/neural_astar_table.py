@@ -5,7 +5,7 @@ each seed it imports the test split with one start per map drawn by the Neural A
 mpd ... --split test --seed S`), compares the exact and the differentiable search on it (`vinadv neural-astar
 compare-modes --data ... --json`) and evaluates the planner (`vinadv eval --data ... --planner neural-astar --json`:
 Opt / Exp / Hmean beside A*'s expansions). Then it times the searches side by side on the file's test maps with
-`benchmarks/neural_astar.py --data ... --json` (plans/s of `astar`, the exact mode, the encoder alone, the
+`perf/neural_astar.py --data ... --json` (plans/s of `astar`, the exact mode, the encoder alone, the
 differentiable search, with the gradient).
 
 Everything goes to one JSON file with the exact commands (the data folder written as `<data-dir>`, the scratch folder
@@ -13,7 +13,7 @@ as `<work>`), the date and the machine (CPU model, cores, PyTorch version, nicen
 after: the speeds are side by side in one run, so their ratios are the figures to read on a loaded machine), which
 `docs/hooks.py` renders on the page: no number is copied.
 
-    nice python benchmarks/neural_astar_table.py --data-dir DIR [--out docs/results/neural_astar.json] [--work DIR]
+    nice python perf/neural_astar_table.py --data-dir DIR [--out docs/results/neural_astar.json] [--work DIR]
         [--seeds 0,1,2,3,4] [--rounds 10]
 """
 
@@ -30,16 +30,16 @@ import sys
 import tempfile
 from pathlib import Path
 
-from common import ROOT, cpu_model, load_average, run_vinadv, shown  # benchmarks/common.py
-from mpd_table import SOURCE  # benchmarks/mpd_table.py: the same dataset
+from common import ROOT, cpu_model, load_average, run_vinadv, shown  # perf/common.py
+from mpd_table import SOURCE  # perf/mpd_table.py: the same dataset
 
 DEFAULT_OUT = ROOT / "docs" / "results" / "neural_astar.json"
 DATA_FILE = "mazes_032_moore_c8.npz"
-SPEED_SCRIPT = "benchmarks/neural_astar.py"
+SPEED_SCRIPT = "perf/neural_astar.py"
 
 
 def speed(data: Path, rounds: int, folders: dict[str, str]) -> dict:
-    """`benchmarks/neural_astar.py --data DATA --rounds ROUNDS --json`, run as its own process (its figures, as it
+    """`perf/neural_astar.py --data DATA --rounds ROUNDS --json`, run as its own process (its figures, as it
     prints them), with the command as recorded."""
     args = [SPEED_SCRIPT, "--data", str(data), "--rounds", str(rounds), "--json"]
     result = subprocess.run([sys.executable, *args], capture_output=True, text=True, check=False, cwd=ROOT)
@@ -75,7 +75,7 @@ def main() -> None:
         str(args.rounds),
     ]
     record: dict = {
-        "command": "python benchmarks/neural_astar_table.py " + shown(shlex.join(command_args), folders),
+        "command": "python perf/neural_astar_table.py " + shown(shlex.join(command_args), folders),
         "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "source": SOURCE,
         "placeholders": {"<data-dir>": "the --data-dir folder", "<work>": "a scratch folder"},

@@ -1,6 +1,6 @@
 """Planners on a GPU (`--device`) against the CPU, side by side in one run: speed, and how often the two differ.
 
-    python benchmarks/device.py [--device cuda] [--planners gppn,vin] [--batches 1,64,1024] [--tie-maps 1000]
+    python perf/device.py [--device cuda] [--planners gppn,vin] [--batches 1,64,1024] [--tie-maps 1000]
         [--robustness-maps 4] [--full-robustness 0] [--full-chunk 100] [--moves octile] [--json FILE]
 
 For each planner of `--planners`, its default (a torch planner on the CPU, the VIN's exact engine) against the same
@@ -19,7 +19,7 @@ planner loaded with `--device` (for the VIN: its PyTorch forward there):
 `--moves`: the movement model of the maps and planners (Neural A* plans `moore` moves: `--planners neural-astar
 --moves moore`).
 With `--device cpu` it compares the defaults with the forwards on the CPU (the VIN: forward against engine).
-`benchmarks/device_check.sh` runs it on a lent GPU machine.
+`perf/device_check.sh` runs it on a lent GPU machine.
 """
 
 from __future__ import annotations

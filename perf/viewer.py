@@ -1,6 +1,6 @@
 """Viewer speed on a large run: pair grid pages, the runs list, pair pages and images, through the Flask app.
 
-    .venv/bin/python benchmarks/viewer.py [--n 1000000] [--size 28] [--db /tmp/vinadv-viewer-bench.db] [--json]
+    .venv/bin/python perf/viewer.py [--n 1000000] [--size 28] [--db /tmp/vinadv-viewer-bench.db] [--json]
 
 Builds (once; reused while --n and --size match) a SQLite database with one run of `--n` random pairs
 (`vinadv.testing.store.random_records`, maps and paths included), then times whole requests of the Flask test

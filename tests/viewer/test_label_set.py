@@ -13,7 +13,7 @@ from tests.cli_files import command_line
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.store import Store
-from vinadv.viewer.training import human_training_set, resolve_human_labels
+from vinadv.viewer.label_set import human_training_set, resolve_human_labels
 
 
 def train_on_human_labels(db: str, run: int, model: str, out: str | Path, *options: str) -> int:

@@ -1,10 +1,10 @@
 """Plans per second of `neural-astar` (exact mode) and `astar`, beside Neural A*'s differentiable search, on the same
 32x32 maps, side by side.
 
-    nice .venv/bin/python benchmarks/neural_astar.py [--data MPD.npz] [--n 200] [--size 32] [--device cpu] [--json]
+    nice .venv/bin/python perf/neural_astar.py [--data MPD.npz] [--n 200] [--size 32] [--device cpu] [--json]
 
 Rows are (map, start) searches: with `--data` the test maps of an MP dataset file (one start per map drawn from the
-cells that reach the goal, `benchmarks/search.py`'s rule), else `--n` generated `moore` maps of `--size` with their
+cells that reach the goal, `perf/search.py`'s rule), else `--n` generated `moore` maps of `--size` with their
 first start. Timed in this run, taking turns, best of `--rounds`:
 - `astar`: vanilla A* (`AStarPlanner.plan_paths`), the compiled search with unit costs;
 - `neural-astar exact`: `NeuralAstarPlanner.plan_paths`, the encoder's guidance costs then the compiled search;
@@ -25,7 +25,7 @@ import numba
 import numpy as np
 import torch
 
-from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # benchmarks/common.py
+from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # perf/common.py
 from vinadv.planners.classical.astar import AStarPlanner
 from vinadv.planners.neural_astar.model import load_neural_astar
 from vinadv.planners.neural_astar.planner import NeuralAstarPlanner

@@ -1,6 +1,6 @@
 """Throughput of vinadv.classify: the rule labeller, path images, each classifier's prediction, the hybrid.
 
-    nice .venv/bin/python benchmarks/classify.py [--pairs PAIRS.npz] [--n 20000] [--json]
+    nice .venv/bin/python perf/classify.py [--pairs PAIRS.npz] [--n 20000] [--json]
 
 Without --pairs it uses synthetic pairs (expert paths on generated 28x28 maps, one obstacle added on the path,
 then mixed into all five categories; see vinadv.testing.classify) and says so. Classifiers are trained on a

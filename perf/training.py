@@ -1,6 +1,6 @@
 """VIN training step speed, side by side in one process on the same maps and weights.
 
-    nice .venv/bin/python benchmarks/training.py [--n 256] [--size 28] [--batch-size 16] [--threads 1] [--json]
+    nice .venv/bin/python perf/training.py [--n 256] [--size 28] [--batch-size 16] [--threads 1] [--json]
 
 One training step = forward over every cell of a batch of maps, the optimal-set loss, backward and an RMSprop
 step, as `vinadv vin train` does it. Two ways of computing the same function and gradients:

@@ -1,6 +1,6 @@
 """Check that `plan_batch` gives the reference planner's paths and terminations, map for map.
 
-    nice .venv/bin/python benchmarks/identical_paths.py --n 1000 --size 28 [--weights W] [--json]
+    nice .venv/bin/python perf/identical_paths.py --n 1000 --size 28 [--weights W] [--json]
 
 Weight sets: `planning_vin` (hand-set planning VIN plus 30% random noise), PyTorch's default random
 initialisation, and the shipped weights for the size when they exist (or --weights). The reference re-runs the

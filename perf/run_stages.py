@@ -1,6 +1,6 @@
 """`vinadv run` against the engine's own time: planning, each stage and the whole command, side by side.
 
-    .venv/bin/python benchmarks/run_stages.py [--n 5000] [--size 28] [--json]
+    .venv/bin/python perf/run_stages.py [--n 5000] [--size 28] [--json]
 
 Runs `vinadv run --n N --attack near-path --classifier rule` into a fresh SQLite file as its own process (what a
 user waits for: interpreter start, imports, the job, exit), with `Planner.plan` timed inside it (every plan of the

@@ -1,6 +1,6 @@
 """`vinadv run` on a Dask LocalCluster: pairs/s with 1 and 2 worker processes on the same work, and the ratio.
 
-    nice .venv/bin/python benchmarks/scale.py [--n 2000] [--size 28] [--shard-size 100] [--attack near-path]
+    nice .venv/bin/python perf/scale.py [--n 2000] [--size 28] [--shard-size 100] [--attack near-path]
                                               [--workers 1,2] [--weights FILE] [--json]
 
 Measured in one run, on the same RunConfig (same seed, so the same pairs), each into a fresh SQLite file:

@@ -1,6 +1,6 @@
 """Search throughput: `astar` (vinadv.planners.classical.astar) on a batch of rows at once against one row per call.
 
-    nice .venv/bin/python benchmarks/search.py [--data MPD.npz] [--n 1000] [--size 32] [--moves moore] [--json]
+    nice .venv/bin/python perf/search.py [--data MPD.npz] [--n 1000] [--size 32] [--moves moore] [--json]
 
 Rows are (map, start) searches: with `--data` the test maps of an MP dataset file (planning-datasets layout, one
 start per map drawn from the cells that reach the goal, `moore` moves), else `--n` generated maps of `--size` with
@@ -20,7 +20,7 @@ import json
 import numba
 import numpy as np
 
-from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # benchmarks/common.py
+from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # perf/common.py
 from vinadv.planners.classical.astar import AStarPlanner
 
 

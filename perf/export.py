@@ -1,6 +1,6 @@
 """Export of a stored run: Parquet beside CSV, time and size, measured side by side in one run.
 
-    .venv/bin/python benchmarks/export.py [--n 100000] [--size 28] [--max-path 60] [--repeat 3] [--json]
+    .venv/bin/python perf/export.py [--n 100000] [--size 28] [--max-path 60] [--repeat 3] [--json]
 
 Stores --n random pairs (`vinadv.testing.store.random_records`: --size maps, paths of up to --max-path cells,
 NULLs in the nullable columns) as one run in a fresh SQLite file (untimed), then times `vinadv export` of that run

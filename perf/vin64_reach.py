@@ -17,7 +17,7 @@ Two measurements, written to one JSON file that `docs/hooks.py` renders on the p
 code beside this script. The JSON has the exact commands (the scratch folder written as `<work>`), the date and the
 machine.
 
-    nice python benchmarks/vin64_reach.py [--out docs/results/vin64_reach.json] [--work DIR] [--n 200]
+    nice python perf/vin64_reach.py [--out docs/results/vin64_reach.json] [--work DIR] [--n 200]
         [--seed 5000] [--reach-maps 500] [--reach-seed 64]
 """
 
@@ -39,7 +39,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
 sys.path.insert(0, str(SRC))  # the library measured is this checkout's, as the commands' is
 
-from common import cpu_model, load_average, run_vinadv, sha256  # noqa: E402 (benchmarks/common.py)
+from common import cpu_model, load_average, run_vinadv, sha256  # noqa: E402 (perf/common.py)
 from vinadv.grid.generator import generate_maps  # noqa: E402
 from vinadv.grid.shortest_paths import shortest_distances  # noqa: E402
 
@@ -121,7 +121,7 @@ def main() -> None:
     command_args = ["--out", shown_out, "--n", str(args.n), "--seed", str(args.seed)]
     command_args += ["--reach-maps", str(args.reach_maps), "--reach-seed", str(args.reach_seed)]
     record: dict = {
-        "command": "python benchmarks/vin64_reach.py " + shlex.join(command_args),
+        "command": "python perf/vin64_reach.py " + shlex.join(command_args),
         "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "placeholders": {"<work>": "a scratch folder"},
         "machine": {
