@@ -379,6 +379,19 @@ def robustness(
     )
 
 
+def attack_settings(settings) -> dict:
+    """The keyword arguments of `robustness` that a benchmark's settings hold (a `RobustnessConfig`, a bench suite):
+    the ranking objective, the randomised strategies' seed, the budget, the radius and the harm tolerances."""
+    return {
+        "objective": settings.objective,
+        "seed": settings.seed,
+        "budget": settings.budget,
+        "radius": settings.radius,
+        "harm_tol": settings.harm_tolerance,
+        "harm_rtol": settings.harm_rtol,
+    }
+
+
 def _clean(planner, maps) -> dict:
     """The planner on the unattacked maps: rollout success and the mean regret of the reached paths."""
     plans = planner.plan(maps.obstacles, maps.starts[:, 0], maps.goals, maps.corner_cutting, maps.moves)
@@ -473,15 +486,10 @@ def _robustness_task(config: RobustnessConfig, planner, maps, progress: bool, ch
         maps,
         config.strategies,
         config.max_obstacles,
-        objective=config.objective,
-        seed=config.seed,
-        budget=config.budget,
-        radius=config.radius,
-        harm_tol=config.harm_tolerance,
-        harm_rtol=config.harm_rtol,
         edit=config.edit,
         progress=progress,
         maps_source=source,
+        **attack_settings(config),
     )
 
 
@@ -541,6 +549,7 @@ __all__ = [
     "RobustnessConfig",
     "RobustnessResult",
     "StrategyResult",
+    "attack_settings",
     "heldout_maps",
     "check_strategies",
     "robustness",

@@ -47,7 +47,7 @@ from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.mapset import MapSet
 from vinadv.planners.interface import Planner
 from vinadv.records import BENCH_CHUNK, RECORD_VERSIONS, VERSION_KEY
-from vinadv.robustness import Figures, MapOutcomes, heldout_maps, robustness, worst_case
+from vinadv.robustness import Figures, MapOutcomes, attack_settings, heldout_maps, robustness, worst_case
 
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
 VOLATILE_FIELDS = ("time", "machine")
@@ -226,14 +226,9 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
             sub,
             group.strategies,
             group.max_obstacles,
-            objective=suite.objective,
-            seed=suite.seed,
-            budget=suite.budget,
-            radius=suite.radius,
-            harm_tol=suite.harm_tolerance,
-            harm_rtol=suite.harm_rtol,
             edit=group.edit,
             first_map=lo,
+            **attack_settings(suite),
         )
         for name, strategy in result.strategies.items():
             attacks[f"{group.edit}:{name}"] = [
