@@ -103,22 +103,13 @@ class PairRecords(PathPairs):
         """
         return cls(
             pair_index=np.arange(len(pairs)) if pair_index is None else pair_index,
-            obstacles_o=pairs.obstacles_o,
-            obstacles_a=pairs.obstacles_a,
-            starts=pairs.starts,
-            goals=pairs.goals,
-            added=pairs.added,
-            path_o=pairs.path_o,
-            path_a=pairs.path_a,
             label=label,
             attack=attack,
-            term_o=pairs.term_o,
-            term_a=pairs.term_a,
-            edit=pairs.edit,
             label_source=label_source,
             score=score,
             dh=dh,
             dv=dv,
+            **{f.name: getattr(pairs, f.name) for f in fields(PathPairs)},  # the pairs as they are
             **({} if harm is None else {name: getattr(harm, name) for name in HARM_COLUMNS}),
         )
 
