@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.bench.two_maps import two_map_suite
 from vinadv.bench import scoring, suites
 from vinadv.bench.scoring import deterministic_part, entry_json, make_entry, run_bench, weighted_mean
 from vinadv.bench.suites import AttackGroup, Suite, get_suite, maps_sha256
@@ -151,18 +152,7 @@ def test_chunk_means_join_to_the_same_bits_in_any_order(chunks, rng):
 @pytest.fixture
 def tiny28(monkeypatch):
     """A two-map 28x28 suite of one chunk per map, registered for the command as `tiny28`."""
-    maps = heldout_maps(2, 28, seed=1000)
-    suite = Suite(
-        name="tiny28",
-        description="a test suite",
-        n=2,
-        size=28,
-        maps_seed=1000,
-        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
-        attacks=(AttackGroup(("random",), "add", 1),),
-        budget=2,
-        chunk=1,
-    )
+    suite = two_map_suite("tiny28")
     monkeypatch.setitem(suites.SUITES, suite.name, suite)
     return suite
 
