@@ -8,6 +8,15 @@ import io
 from pathlib import Path
 
 from vinadv.cli import main
+from vinadv.grid import generate_maps
+
+
+def generated_maps_file(folder: Path, n: int, size: int, *, seed: int, n_starts: int = 1) -> str:
+    """Write the generator's `n` maps of `size` (`seed`, `n_starts` starts each) to `folder/maps.npz`; returns its
+    path as a string, a command-line argument."""
+    path = folder / "maps.npz"
+    generate_maps(n, size, seed=seed, n_starts=n_starts).save(path)
+    return str(path)
 
 
 def generate_and_attack(

@@ -12,11 +12,10 @@ import numpy as np
 import pytest
 import torch
 
-from tests.cli_files import command_line
+from tests.cli_files import command_line, generated_maps_file
 from tests.planner_files import write_gppn
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
-from vinadv.grid import generate_maps
 from vinadv.identify import PLANNER_SPEC
 from vinadv.planners.pathset import PathSet
 from vinadv.store import Store
@@ -32,9 +31,7 @@ def gppn_file(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def maps_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("m") / "maps.npz"
-    generate_maps(8, SIZE, seed=9, n_starts=2).save(path)
-    return str(path)
+    return generated_maps_file(tmp_path_factory.mktemp("m"), 8, SIZE, seed=9, n_starts=2)
 
 
 @pytest.fixture

@@ -5,6 +5,7 @@ import json
 
 import pytest
 
+from tests.cli_files import generated_maps_file
 from vinadv.cli import build_parser, main
 from vinadv.commands.output import (
     QUIET_HELP,
@@ -113,9 +114,7 @@ SIZE = 10
 
 @pytest.fixture(scope="module")
 def maps_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("m") / "maps.npz"
-    generate_maps(6, SIZE, seed=2, n_starts=1).save(path)
-    return str(path)
+    return generated_maps_file(tmp_path_factory.mktemp("m"), 6, SIZE, seed=2)
 
 
 def test_attack_quiet_prints_its_summary_without_a_progress_bar(maps_file, tmp_path, capsys):

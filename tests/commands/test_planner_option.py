@@ -6,12 +6,11 @@ import shutil
 import numpy as np
 import pytest
 
-from tests.cli_files import command_line
+from tests.cli_files import command_line, generated_maps_file
 from tests.evaluation.test_protocols import brute_gppn_figures
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
 from vinadv.evaluation import evaluate_planner_quality
-from vinadv.grid import generate_maps
 from vinadv.grid.mapset import MapSet
 from vinadv.identify import replan
 from vinadv.pipeline import PLANNER_SPEC
@@ -33,9 +32,7 @@ def weights(planning_weights):
 
 @pytest.fixture(scope="module")
 def maps_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("m") / "maps.npz"
-    generate_maps(25, SIZE, seed=6, n_starts=1).save(path)
-    return str(path)
+    return generated_maps_file(tmp_path_factory.mktemp("m"), 25, SIZE, seed=6)
 
 
 def test_attack_on_the_optimal_planner_is_never_harmful(maps_file, tmp_path, capsys):

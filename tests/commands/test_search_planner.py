@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.cli_files import command_line
+from tests.cli_files import command_line, generated_maps_file
 from tests.planners.test_user_search import bfs_moves
 from vinadv.attacks.pairs import PairSet
 from vinadv.cli import main
@@ -25,9 +25,7 @@ SIZE = 8
 
 @pytest.fixture(scope="module")
 def maps_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("m") / "maps.npz"
-    generate_maps(8, SIZE, seed=11, n_starts=2).save(path)
-    return str(path)
+    return generated_maps_file(tmp_path_factory.mktemp("m"), 8, SIZE, seed=11, n_starts=2)
 
 
 def cost(path) -> float:

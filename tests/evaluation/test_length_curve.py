@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from tests.cli_files import generated_maps_file
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.evaluation.length_curve import (
@@ -16,7 +17,6 @@ from vinadv.evaluation.length_curve import (
     svg_text,
     wilson_interval,
 )
-from vinadv.grid.generator import generate_maps
 
 SIZE = 10
 
@@ -83,9 +83,7 @@ def test_by_length_rows_reads_both_record_layouts():
 
 @pytest.fixture(scope="module")
 def maps_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("curve") / "maps.npz"
-    generate_maps(6, SIZE, seed=4, n_starts=3).save(path)
-    return str(path)
+    return generated_maps_file(tmp_path_factory.mktemp("curve"), 6, SIZE, seed=4, n_starts=3)
 
 
 @pytest.mark.slow  # an evaluation and a figure
