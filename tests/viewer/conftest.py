@@ -3,6 +3,7 @@ hand-made pairs with gaps in their indices), and a Flask test client over it."""
 
 from __future__ import annotations
 
+import contextlib
 import re
 import shutil
 
@@ -88,6 +89,16 @@ def viewer_for_tests(store: Store):
     app = create_app(store, secret_key="test-secret")
     app.config["TESTING"] = True
     return app
+
+
+@contextlib.contextmanager
+def one_run_client(folder, records: PairRecords):
+    """A test client of the viewer over a new database in `folder` holding `records` as its one run; yields
+    (client, run id)."""
+    with Store.open(f"sqlite:///{folder / 'one-run.db'}") as store:
+        run_id = store.create_run("one")
+        store.write_pairs(run_id, records)
+        yield viewer_for_tests(store).test_client(), run_id
 
 
 @pytest.fixture

@@ -4,19 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from tests.viewer.conftest import viewer_for_tests
-from vinadv.store import Store
+from tests.viewer.conftest import one_run_client
 from vinadv.testing.store import random_records
 
 
 def test_pair_page_json_and_image_show_every_added_obstacle(tmp_path):
-    url = f"sqlite:///{tmp_path / 'k.db'}"
     records = random_records(4, size=9, seed=2, n_added=3)
-    with Store.open(url) as store:
-        run_id = store.create_run("three")
-        store.write_pairs(run_id, records)
-    with Store.open(url, create=False) as store:
-        client = viewer_for_tests(store).test_client()
+    with one_run_client(tmp_path, records) as (client, run_id):
         body = client.get(f"/api/pairs/{run_id}/2").get_json()
         assert body["added_cells"] == records.added[2].tolist() and body["added"] == records.added[2, 0].tolist()
         html = client.get(f"/pairs/{run_id}/2").get_data(as_text=True)
