@@ -6,10 +6,10 @@ import re
 import numpy as np
 import pytest
 
+from tests.jobs.optimal_attack import random_attack_on_optimal
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
-from vinadv.jobs.attack import AttackConfig, attack_maps, run
-from vinadv.planners.registry import load_planner
+from vinadv.jobs.attack import AttackConfig, run
 
 
 @pytest.mark.parametrize(
@@ -31,15 +31,7 @@ def test_the_job_makes_the_pairs_of_the_attack_call(tmp_path):
     maps = generate_maps(6, 10, seed=2, n_starts=2)
     maps.save(tmp_path / "m.npz")
     outcome = run(AttackConfig(str(tmp_path / "m.npz"), "random", per_map=2, seed=5, planner="optimal"))
-    direct = attack_maps(
-        "random",
-        dict(per_map=2, seed=5, budget=8, radius=2, obstacles=1, edit="add"),
-        maps.obstacles,
-        maps.starts[:, 0],
-        maps.goals,
-        load_planner("optimal", 10),
-        maps.corner_cutting,
-    )
+    direct = random_attack_on_optimal(maps, seed=5)
     assert np.array_equal(outcome.pairs.added, direct.pairs.added) and outcome.pairs.path_a == direct.pairs.path_a
     summary = outcome.to_dict()
     assert summary["pairs"] == len(direct.pairs) and summary["strategy"] == "random" and summary["maps"] == 6

@@ -6,11 +6,11 @@ import re
 import numpy as np
 import pytest
 
+from tests.jobs.optimal_attack import random_attack_on_optimal
 from vinadv.attacks.pairs import PairSet
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.identify import IdentifyConfig, identify, replan, run
-from vinadv.jobs.attack import attack_maps
 from vinadv.planners.registry import load_planner
 from vinadv.store import Store
 
@@ -36,15 +36,7 @@ def test_a_device_without_a_planner_is_refused_before_the_file_is_read(tmp_path)
 
 def test_the_job_labels_the_replanned_pairs_and_stores_them(tmp_path):
     maps = generate_maps(8, 10, seed=4, n_starts=1)
-    made = attack_maps(
-        "random",
-        dict(per_map=2, seed=1, budget=8, radius=2, obstacles=1, edit="add"),
-        maps.obstacles,
-        maps.starts[:, 0],
-        maps.goals,
-        load_planner("optimal", 10),
-        maps.corner_cutting,
-    )
+    made = random_attack_on_optimal(maps, seed=1)
     made.pairs.save(tmp_path / "p.npz")
     db = str(tmp_path / "i.db")
     done = run(IdentifyConfig(str(tmp_path / "p.npz"), planner="optimal", shard_size=3), db=db, name="transfer")
