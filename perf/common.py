@@ -42,6 +42,13 @@ def add_output_arguments(parser: argparse.ArgumentParser, rounds: int) -> None:
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
 
 
+def add_maps_arguments(parser: argparse.ArgumentParser, n: int, seed: int, size: int = 28) -> None:
+    """`--n` generated maps of `--size` from the generator's `--seed`."""
+    parser.add_argument("--n", type=int, default=n, help=f"generated maps (default {n})")
+    parser.add_argument("--size", type=int, default=size, help=f"side of the maps (default {size})")
+    parser.add_argument("--seed", type=int, default=seed, help=f"the generator's seed (default {seed})")
+
+
 def add_rows_arguments(parser: argparse.ArgumentParser, n: int, size: int) -> None:
     """`--data MPD.npz` or `--n` generated maps of `--size`: the rows of `search_rows`."""
     parser.add_argument("--data", help="an MP dataset file (<family>_032_moore_c8.npz): its test maps")

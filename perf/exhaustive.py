@@ -17,7 +17,7 @@ import json
 
 import numpy as np
 
-from common import add_output_arguments, timed_side_by_side  # perf/common.py
+from common import add_maps_arguments, add_output_arguments, timed_side_by_side  # perf/common.py
 from vinadv.attacks.strategies import EVAL_CHUNK, make_attack
 from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps
@@ -38,9 +38,7 @@ def plan_candidates(planner, obstacles, starts, goals) -> int:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--n", type=int, default=1000)
-    parser.add_argument("--size", type=int, default=28)
-    parser.add_argument("--seed", type=int, default=2026)
+    add_maps_arguments(parser, n=1000, seed=2026)
     parser.add_argument("--planner", default="vin")
     add_output_arguments(parser, rounds=2)
     args = parser.parse_args()

@@ -1,9 +1,9 @@
 """What checking a search planner's answer costs (`vinadv.planners.search.check_paths`) beside the search itself.
 
-    .venv/bin/python perf/search_checks.py [--n 2000] [--size 28] [--planner astar] [--repeat 15] [--json]
+    .venv/bin/python perf/search_checks.py [--n 2000] [--size 28] [--planner astar] [--rounds 15] [--json]
 
 Plans the first start of `--n` generated maps with `--planner`'s unchecked `plan_paths`, then checks the answer, best
-of `--repeat` each, side by side in one run; prints both times and their ratio.
+of `--rounds` each, side by side in one run; prints both times and their ratio.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import argparse
 import json
 import time
 
+from common import add_maps_arguments, add_output_arguments  # perf/common.py
 from vinadv.grid import generate_maps
 from vinadv.planners.registry import load_planner
 from vinadv.planners.search import SearchPlanner, check_paths
@@ -19,12 +20,9 @@ from vinadv.planners.search import SearchPlanner, check_paths
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--n", type=int, default=2000)
-    parser.add_argument("--size", type=int, default=28)
-    parser.add_argument("--seed", type=int, default=5)
+    add_maps_arguments(parser, n=2000, seed=5)
     parser.add_argument("--planner", default="astar")
-    parser.add_argument("--repeat", type=int, default=15)
-    parser.add_argument("--json", action="store_true")
+    add_output_arguments(parser, rounds=15)
     args = parser.parse_args()
     maps = generate_maps(args.n, args.size, seed=args.seed, n_starts=1)
     planner = load_planner(args.planner, args.size)
@@ -33,7 +31,7 @@ def main() -> None:
     obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
     planner.plan_paths(obstacles[:10], starts[:10], goals[:10])  # compile outside the timing
     search = check = float("inf")
-    for _ in range(args.repeat):
+    for _ in range(args.rounds):
         t0 = time.perf_counter()
         raw = planner.plan_paths(obstacles, starts, goals)
         t1 = time.perf_counter()

@@ -1,10 +1,10 @@
 """Viewer speed on a large run: pair grid pages, the runs list, pair pages and images, through the Flask app.
 
-    .venv/bin/python perf/viewer.py [--n 1000000] [--size 28] [--db /tmp/vinadv-viewer-bench.db] [--json]
+    .venv/bin/python perf/viewer.py [--n 1000000] [--size 28] [--db /tmp/vinadv-viewer-bench.db] [--rounds 5] [--json]
 
 Builds (once; reused while --n and --size match) a SQLite database with one run of `--n` random pairs
 (`vinadv.testing.store.random_records`, maps and paths included), then times whole requests of the Flask test
-client (query + template + response), best of --repeat, side by side in one run:
+client (query + template + response), best of --rounds, side by side in one run:
 - grid pages: first page, and a page deep in the run (after 90% of the pairs), unfiltered and filtered by label,
   attack, label source and label + source, with the viewer's keyset paging (`after=`) and, for the ratio, the same
   page fetched by LIMIT/OFFSET (what a naive pager does);
@@ -21,6 +21,7 @@ from pathlib import Path
 
 import sqlalchemy as sa
 
+from common import add_output_arguments  # perf/common.py
 from vinadv.store import Store
 from vinadv.store.schema import map_pairs
 from vinadv.testing.store import random_records
@@ -67,8 +68,7 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=1_000_000)
     parser.add_argument("--size", type=int, default=28)
     parser.add_argument("--db", default="/tmp/vinadv-viewer-bench.db")
-    parser.add_argument("--repeat", type=int, default=5)
-    parser.add_argument("--json", action="store_true")
+    add_output_arguments(parser, rounds=5)
     args = parser.parse_args()
 
     run_id = build(Path(args.db), args.n, args.size)
@@ -114,11 +114,11 @@ def main() -> None:
             deep_after = conn.execute(matching.order_by(c.pair_index).limit(1).offset(deep_offset - 1)).scalar_one()
         assert pages
         sep = "&" if query else ""
-        first = best_ms(lambda: get(f"/runs/{run_id}/pairs?{query}"), args.repeat)
-        deep = best_ms(lambda: get(f"/runs/{run_id}/pairs?{query}{sep}after={deep_after}"), args.repeat)
-        api = best_ms(lambda: get(f"/api/runs/{run_id}/pairs?{query}{sep}after={deep_after}"), args.repeat)
-        naive = best_ms(lambda: offset_page(filters, deep_offset), max(1, args.repeat // 2))
-        keyset = best_ms(lambda: store.page_pairs(run_id, after=deep_after, limit=51, **filters), args.repeat)
+        first = best_ms(lambda: get(f"/runs/{run_id}/pairs?{query}"), args.rounds)
+        deep = best_ms(lambda: get(f"/runs/{run_id}/pairs?{query}{sep}after={deep_after}"), args.rounds)
+        api = best_ms(lambda: get(f"/api/runs/{run_id}/pairs?{query}{sep}after={deep_after}"), args.rounds)
+        naive = best_ms(lambda: offset_page(filters, deep_offset), max(1, args.rounds // 2))
+        keyset = best_ms(lambda: store.page_pairs(run_id, after=deep_after, limit=51, **filters), args.rounds)
         results["grid"][name] = {
             "matching": int(total),
             "first_page_ms": first,
@@ -131,13 +131,13 @@ def main() -> None:
 
     state._counts = None
     results["runs_list_uncached_ms"] = best_ms(lambda: (setattr(state, "_counts", None), get("/")), 2)
-    results["runs_list_cached_ms"] = best_ms(lambda: get("/"), args.repeat)
+    results["runs_list_cached_ms"] = best_ms(lambda: get("/"), args.rounds)
     pair = args.n // 2
     state._rows.clear()
     start = time.perf_counter()
     get(f"/pairs/{run_id}/{pair}")
     results["pair_page_cold_ms"] = 1000 * (time.perf_counter() - start)
-    results["pair_page_ms"] = best_ms(lambda: get(f"/pairs/{run_id}/{pair}"), args.repeat)
+    results["pair_page_ms"] = best_ms(lambda: get(f"/pairs/{run_id}/{pair}"), args.rounds)
     images = {}
     for kind in ("original", "adversarial", "pathimage"):
         # the first pair image ever also pays for imports (matplotlib; torch behind vinadv.classify): warm up
@@ -145,7 +145,7 @@ def main() -> None:
         start = time.perf_counter()
         get(f"/img/{run_id}/{pair}/{kind}.png")
         cold = 1000 * (time.perf_counter() - start)
-        cached = best_ms(lambda: get(f"/img/{run_id}/{pair}/{kind}.png"), args.repeat)
+        cached = best_ms(lambda: get(f"/img/{run_id}/{pair}/{kind}.png"), args.rounds)
         images[kind] = {"cold_ms": cold, "cached_ms": cached, "cold_over_cached": cold / cached}
     results["images"] = images
     store.close()
@@ -155,7 +155,7 @@ def main() -> None:
         return
     print(
         f"viewer on one run of {args.n:,} pairs ({args.size}x{args.size}), SQLite, Flask test client, best of "
-        f"{args.repeat}"
+        f"{args.rounds}"
     )
     print(
         f"{'grid filter':<24}{'matching':>10}{'first page':>12}{'page @90%':>11}{'API @90%':>10}"
