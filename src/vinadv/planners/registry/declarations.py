@@ -14,6 +14,16 @@ from vinadv.planners.registry.models import Model
 LOADERS = "vinadv.planners.registry.loaders"
 OURS = "MIT (vinadv's own licence: trained by the vinadv authors)"
 
+
+def ours(*, stem: str, **fields) -> Model:
+    """Weights trained by vinadv: the file `stem.pt` under vinadv's licence, with its training record `stem.json`
+    and its measured figures `stem.metrics.json` beside it (`metrics=None` where there are none); `fields`: the
+    `Model`'s others."""
+    return Model(
+        **{"file": f"{stem}.pt", "licence": OURS, "record": f"{stem}.json", "metrics": f"{stem}.metrics.json", **fields}
+    )
+
+
 register(
     "vin",
     description="Value Iteration Network (Tamar et al. 2016) with vinadv's exact planning engine (default)",
@@ -22,27 +32,21 @@ register(
     takes_weights=True,
     kind="vin",
     models=(
-        Model(
+        ours(
             name="vin28",
-            file="vin28.pt",
+            stem="vin28",
             sha256="3138c5fb0583c0c813f3426c2c513dfa9e5c7258d148948d05830fc99a440582",
             size=28,
             moves="octile",
             description="the VIN trained on 28x28 maps: the default planner's weights",
-            licence=OURS,
-            record="vin28.json",
-            metrics="vin28.metrics.json",
         ),
-        Model(
+        ours(
             name="vin64",
-            file="vin64.pt",
+            stem="vin64",
             sha256="798e7cd0cc70670fe15695aa74f39c3ea9326521740824d3f06a0bedd728457c",
             size=64,
             moves="octile",
             description="the VIN for 64x64 maps (k = 100): vin28_robust.pt fine-tuned on 64x64 maps",
-            licence=OURS,
-            record="vin64.json",
-            metrics="vin64.metrics.json",
         ),
     ),
 )
@@ -56,16 +60,13 @@ register(
     aliases=("vin_robust",),
     recorded_as="vin_robust",
     models=(
-        Model(
+        ours(
             name="vin28-robust",
-            file="vin28_robust.pt",
+            stem="vin28_robust",
             sha256="86af3ea83e65f30a0477bab46e98bffaff4231c3f3a5bfcea630c2f4a7e4c97c",
             size=28,
             moves="octile",
             description="the VIN trained from the shift start and adversarially on 28x28 maps",
-            licence=OURS,
-            record="vin28_robust.json",
-            metrics="vin28_robust.metrics.json",
             aliases=("vin28_robust",),
         ),
     ),
@@ -78,16 +79,13 @@ register(
     takes_weights=True,
     kind="gppn",
     models=(
-        Model(
+        ours(
             name="gppn28",
-            file="gppn28.pt",
+            stem="gppn28",
             sha256="f8e2dc1ac19e943b9e9da68bd620bd1cf5e9bd8f0967df02fe944f2bc83a0e3d",
             size=28,
             moves="octile",
             description="the GPPN trained on 28x28 maps",
-            licence=OURS,
-            record="gppn28.json",
-            metrics="gppn28.metrics.json",
         ),
     ),
 )
@@ -99,16 +97,13 @@ register(
     default_file="vin_mpd32.pt",
     kind="vin",
     models=(
-        Model(
+        ours(
             name="vin-mpd32",
-            file="vin_mpd32.pt",
+            stem="vin_mpd32",
             sha256="2f06f7552a0e64312f1aa358a86cf8316473bbe1c4097c5bb4565af12c196128",
             size=32,
             moves="moore",
             description="the VIN trained on the MP dataset's six 32x32 families (moore moves)",
-            licence=OURS,
-            record="vin_mpd32.json",
-            metrics="vin_mpd32.metrics.json",
             aliases=("vin_mpd32",),
         ),
     ),
@@ -121,16 +116,13 @@ register(
     default_file="gppn_mpd32.pt",
     kind="gppn",
     models=(
-        Model(
+        ours(
             name="gppn-mpd32",
-            file="gppn_mpd32.pt",
+            stem="gppn_mpd32",
             sha256="73a3af2f161ca3cbcc828c68137e093defc593f3bdc55acfac6741db779a6983",
             size=32,
             moves="moore",
             description="the GPPN trained on the MP dataset's six 32x32 families (moore moves)",
-            licence=OURS,
-            record="gppn_mpd32.json",
-            metrics="gppn_mpd32.metrics.json",
             aliases=("gppn_mpd32",),
         ),
     ),
@@ -181,16 +173,15 @@ register(
     default_file="neural_astar_mpd5.pt",
     kind="neural-astar",
     models=(
-        Model(
+        ours(
             name="neural-astar-mpd5",
-            file="neural_astar_mpd5.pt",
+            stem="neural_astar_mpd5",
             sha256="3ef7c314b8ca9ea7a303be20dfd4cd9860fc74733b28b0d9a3f8033dacef1436",
             size=None,
             moves="moore",
             description="Neural A*'s encoder trained by vinadv neural-astar train on the five MP families other than "
             "mazes (any map size)",
-            licence=OURS,
-            record="neural_astar_mpd5.json",
+            metrics=None,
             aliases=("neural_astar_mpd5",),
         ),
     ),
