@@ -62,8 +62,9 @@ and `near-path` the strongest of their `per_map` drawn cells); the last step kee
 attack does. So the pairs of K obstacles with per_map 1 extend those of K - 1 (`AttackResult.steps` holds every
 step's pairs). A map with no valid cell at some step gets no pair.
 
-One file of about 600 lines on purpose, as CleanRL keeps an algorithm in one file: the strategies differ only in
-how they score candidates, and the shared steps (evaluate, keep, greedy K, removal) read best beside them.
+The strategies and the shared steps (evaluate, keep, greedy K, removal) are in this one module, as CleanRL keeps an
+algorithm in one file: the strategies differ only in how they score candidates. The white-box strategy's gradients
+(PyTorch) are in `vinadv.attacks.gradients`.
 """
 
 from __future__ import annotations
@@ -73,19 +74,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vinadv.attacks.gradients import TORCH_CHUNK as TORCH_CHUNK  # the white-box chunk, importable here too
+from vinadv.attacks.gradients import path_saliency, policy_saliency
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import removable_cells, valid_cells
 from vinadv.errors import InputError
-from vinadv.planners.device import full_precision
-from vinadv.planners.interface import Planner, PlannerError
+from vinadv.planners.interface import Planner
 from vinadv.planners.result import PlanResult
 from vinadv.planners.vin.planner import as_planner
 from vinadv.vocabulary import ADD, EDITS, REMOVE
 
 #: candidates planned together; bounds memory (each holds an N x N map and a path)
 EVAL_CHUNK = 8192
-#: maps per torch forward and backward of the white-box strategy
-TORCH_CHUNK = 128
 
 
 def planner_strength(pairs: PairSet) -> np.ndarray:
@@ -520,61 +520,8 @@ class SaliencyAttack(Attack):
         if module is None:  # no gradients (the `optimal` control, most search planners): rank as key-points does
             return KeyPointsAttack.candidate_scores(self, ctx)
         if not ctx.planner.capabilities.policy:  # a search planner's module is its path map's
-            return _path_saliency(ctx, module)
-        import torch  # here only: the other strategies run without PyTorch
-
-        device = getattr(ctx.planner, "device", torch.device("cpu"))
-        module.eval()
-        b = len(ctx.obstacles)
-        owner_all = ctx.plans.paths.owners()
-        cells_all = ctx.plans.paths.cells.astype(np.int64)
-        # the decisions along the path: every path cell but the goal
-        at_goal = np.all(cells_all == ctx.goals[owner_all], axis=1)
-        out = np.empty(ctx.obstacles.shape)
-        with full_precision(device):  # a GPU's gradients in float32, as the CPU's (no TF32)
-            for lo in range(0, b, TORCH_CHUNK):
-                hi = min(b, lo + TORCH_CHUNK)
-                sel = (owner_all >= lo) & (owner_all < hi) & ~at_goal
-                x = torch.from_numpy(ctx.obstacles[lo:hi].astype(np.float32)).to(device).requires_grad_(True)
-                logits = module(x, torch.from_numpy(ctx.goals[lo:hi]).to(device))  # (b, 8, N, N)
-                owner = torch.from_numpy(owner_all[sel] - lo).to(device)
-                rows = torch.from_numpy(cells_all[sel, 0]).to(device)
-                cols = torch.from_numpy(cells_all[sel, 1]).to(device)
-                picked = torch.log_softmax(logits[owner, :, rows, cols], dim=-1)
-                chosen = picked.detach().argmax(dim=-1)
-                objective = picked.gather(1, chosen[:, None]).sum()
-                (grad,) = torch.autograd.grad(objective, x)
-                # adding raises a cell's input (0 -> 1): the most negative gradient first; removing lowers it (1 -> 0)
-                out[lo:hi] = grad.cpu().numpy() if ctx.edit == REMOVE else -grad.cpu().numpy()
-        return out
-
-
-def _path_saliency(ctx: AttackContext, module) -> np.ndarray:
-    """Minus the gradient, with respect to the obstacles, of a search planner's differentiable path map
-    `module(obstacles (B,N,N) float, starts (B,2), goals (B,2)) -> (B,N,N)` summed over the cells of its path on each
-    searched map, `TORCH_CHUNK` maps per forward and backward."""
-    import torch  # noqa: PLC0415 (here only: the other strategies run without PyTorch)
-
-    device = getattr(ctx.planner, "device", torch.device("cpu"))
-    if hasattr(module, "eval"):
-        module.eval()
-    on_path = ctx.path_mask()
-    out = np.empty(ctx.obstacles.shape)
-    for lo in range(0, len(ctx.obstacles), TORCH_CHUNK):
-        hi = min(len(ctx.obstacles), lo + TORCH_CHUNK)
-        x = torch.from_numpy(ctx.obstacles[lo:hi].astype(np.float32)).to(device).requires_grad_(True)
-        starts = torch.from_numpy(ctx.starts[lo:hi]).to(device)
-        goals = torch.from_numpy(ctx.goals[lo:hi]).to(device)
-        path_map = module(x, starts, goals)
-        if tuple(path_map.shape) != tuple(x.shape):
-            raise PlannerError(
-                f"planner {ctx.planner.name!r}: its differentiable path map has shape {tuple(path_map.shape)}, "
-                f"expected {tuple(x.shape)}"
-            )
-        objective = (path_map * torch.from_numpy(on_path[lo:hi]).to(device, path_map.dtype)).sum()
-        (grad,) = torch.autograd.grad(objective, x)
-        out[lo:hi] = -grad.detach().cpu().double().numpy()
-    return out
+            return path_saliency(ctx, module)
+        return policy_saliency(ctx, module)
 
 
 class ExhaustiveAttack(Attack):
