@@ -24,8 +24,8 @@ LABEL_STRENGTH = {label: strength for strength, label in enumerate(reversed(STRE
 RESULT_NAMES = {"UrP": "Success-UrP", "FP": "Success-FP", "DP": "Unsuccess-DP", "UcP": "Unsuccess-UcP"}
 
 #: The edits an adversarial map makes to the original (DESIGN.md "Obstacle removal"): `add` obstacle cells (the
-#: paper's setting) or `remove` them (free obstacle cells; never a border wall). Files and databases written before
-#: removal existed read as `add`.
+#: paper's setting) or `remove` them (free obstacle cells; never a border wall). A pairs file or a database row
+#: without an edit reads as `add`.
 EDITS = ("add", "remove")
 ADD, REMOVE = EDITS
 

@@ -1,10 +1,10 @@
 """Map pairs (original map + K added obstacles, K >= 1, or minus K freed ones) with both planned paths; file format
 "vinadv.pairs/3".
 
-The field `added` is `(n, 2)` in a file of one-obstacle pairs (as before there were several: such a file is the same
-as ever, and every vinadv reads it) and `(n, K, 2)` in a file of K > 1 obstacles per pair. Version 2 added the
-movement model (field `moves`); a "vinadv.pairs/1" file is read as `octile`. Version 3 added each pair's edit
-(field `edit`, `(n,)` str: `add` or `remove`, `vocabulary.EDITS`); a file of an older version is read as `add`.
+The field `added` is `(n, 2)` in a file of one-obstacle pairs (the one-obstacle layout of every format version) and
+`(n, K, 2)` in a file of K > 1 obstacles per pair. Version 2 holds the movement model (field `moves`); a
+"vinadv.pairs/1" file reads as `octile`. Version 3 holds each pair's edit (field `edit`, `(n,)` str: `add` or
+`remove`, `vocabulary.EDITS`); a /1 or /2 file reads as `add`.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from vinadv.planners.spec import is_planner_spec
 from vinadv.vocabulary import ADD, EDITS, REMOVE, TERMINATIONS
 
 PAIRS_FORMAT = "vinadv.pairs/3"
-#: older versions still read (`/1` as `octile` pairs; both as edit `add`)
+#: the earlier format versions also read (`/1` as `octile` pairs; both as edit `add`)
 OLDER_PAIRS_FORMATS = ("vinadv.pairs/1", "vinadv.pairs/2")
 
 
@@ -133,7 +133,7 @@ class PairSet(PathPairs):
 
 
 def _read_edit(r: NpzReader, n: int) -> np.ndarray:
-    """The file's `edit` `(n,)` (absent before version 3: every pair `add`)."""
+    """The file's `edit` `(n,)` (a /1 or /2 file has none: every pair `add`)."""
     if not r.has("edit"):
         return np.full(n, ADD, dtype="<U6")
     edit = r.array("edit", "U", 1, (n,))

@@ -186,8 +186,8 @@ class Attack:
         )
 
     def _edited(self, params: dict) -> dict:
-        """`params` plus `edit` when the attack removes: an adding attack's parameters stay those written before
-        removal existed (and an absent `edit` reads as `add`)."""
+        """`params` plus `edit` when the attack removes: an adding attack's parameters have no `edit` (an absent
+        `edit` reads as `add`)."""
         return params if self.edit == ADD else {**params, "edit": self.edit}
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:

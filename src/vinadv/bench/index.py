@@ -64,6 +64,6 @@ def entries_of(rows: list[dict], planner: str, weights_sha256: str | None) -> li
     without weights), in suite order."""
     from vinadv.planners.registry import canonical_name  # noqa: PLC0415 (light: the declarations)
 
-    name = canonical_name(planner)  # an old spelling, in the planner asked for or an index written before
+    name = canonical_name(planner)  # an old spelling, in the planner asked for or in the index
     found = [r for r in rows if canonical_name(r["planner"]["name"]) == name and r["weights_sha256"] == weights_sha256]
     return sorted(found, key=lambda r: (r["suite"], r["file"]))

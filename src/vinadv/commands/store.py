@@ -133,7 +133,7 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
                 for row in chunk:
                     row["run_id"] = run_id
                     row["attack"] = bool(row["attack"])
-                    row["edit"] = row["edit"] or "add"  # NULL: a row stored before the step to schema 7
+                    row["edit"] = row["edit"] or "add"  # NULL (a row of schema 6 or below) reads as add
                 if writer is not None:
                     writer.writerows(
                         [["" if r[c] is None else int(r[c]) if c == "attack" else r[c] for c in columns] for r in chunk]

@@ -91,7 +91,7 @@ def length_curve(rows: Sequence[LengthBucketMetrics]) -> LengthCurve:
 
 def by_length_rows(record: Mapping) -> list[LengthBucketMetrics]:
     """The `by_length` rows of an evaluation record: `vinadv vin eval`'s flat record, or `vinadv eval`'s with the
-    figures under `"vinadv"`. InputError when it has none (another protocol, or a record older than the rows)."""
+    figures under `"vinadv"`. InputError when it has none (another protocol, or a record without them)."""
     figures = record.get("vinadv", record)
     rows = figures.get("by_length") if isinstance(figures, Mapping) else None
     if not rows:

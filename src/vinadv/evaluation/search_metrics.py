@@ -19,7 +19,7 @@ Differences from the authors' code, all where their code cannot tell: they compa
 paths (`paths.sum()`), vinadv compares costs under the maps' movement model (the same thing on their `moore` maps,
 where every move costs 1 and a searched path has no repeated cell); they count a failed search's path as whatever
 their backtracking gives, vinadv as not optimal; Exp includes the rows that fail, as `calc_metrics` does (their
-older `compute_opt_exp` left them out). On `octile` and `news` maps the reference A* is vinadv's (module doc of
+`compute_opt_exp` leaves them out). On `octile` and `news` maps the reference A* is vinadv's (module doc of
 `vinadv.planners.classical.astar`), so Exp there is vinadv's extension of their definition.
 """
 

@@ -1,7 +1,6 @@
 """A dataset of grid-world maps with starts, goals and expert (optimal) paths; file format "vinadv.maps/2".
 
-Version 2 added the movement model (field `moves`); a "vinadv.maps/1" file is read as `octile`, the only model
-there was.
+Version 2 holds the movement model (field `moves`); a "vinadv.maps/1" file, which has none, reads as `octile`.
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 
 MAPS_FORMAT = "vinadv.maps/2"
-#: older versions still read (as `octile` maps)
+#: the earlier format versions also read (a /1 file as `octile` maps)
 OLDER_MAPS_FORMATS = ("vinadv.maps/1",)
 
 
@@ -156,7 +155,7 @@ class MapSet:
         n, size = obstacles.shape[0], obstacles.shape[1]
         if obstacles.shape[2] != size or size < 3:
             raise r.fail("obstacles", f"has shape {obstacles.shape}, expected (n, N, N) with N >= 3")
-        if n == 0:  # written by a vinadv before `save` refused empty sets
+        if n == 0:  # `save` refuses an empty set: such a file was not written by it
             raise r.fail("obstacles", "holds no maps")
         goals = r.array("goals", "i", 2, (n, 2)).astype(np.int64)
         starts = r.array("starts", "i", 3, (n, None, 2)).astype(np.int64)

@@ -83,7 +83,7 @@ _MODELS = {
     "moore": _model("moore", 8, np.ones(8), 1.0, "8 moves, every move costs 1"),
     "news": _model("news", 4, np.ones(4), 2.0, "4 moves (N, S, E, W), cost 1"),
 }
-#: the file formats of before movement models: read as `octile` (they have no `moves` field)
+#: the file format versions without a `moves` field: read as `octile`
 OCTILE_FORMATS = ("vinadv.maps/1", "vinadv.paths/1", "vinadv.pairs/1")
 #: the model names, the default first
 MOVES = tuple(_MODELS)
@@ -123,8 +123,8 @@ def require_moves(moves: str, supported: tuple[str, ...], what: str) -> None:
 
 
 def read_moves(reader: NpzReader, corner_cutting: bool = True) -> str:
-    """The movement model of a file being read: its field `moves`, or `octile` for a file of an older format
-    version (written before movement models existed: every such file is octile). A name that is not a model, or
+    """The movement model of a file being read: its field `moves`, or `octile` for a file of a format version
+    without it (`OCTILE_FORMATS`). A name that is not a model, or
     `news` without corner cutting, raises InputError naming the file and the field."""
     if not reader.has("moves"):
         if reader.format in OCTILE_FORMATS:

@@ -14,7 +14,7 @@ A trainer drives one `TrainingRun`:
         run.close_epoch(entry, line)        # recorded, logged, checkpointed, the time limit checked
 
 The checkpoint holds what `save_training_checkpoint` writes, then the state's fields, each under its own name: the
-trainer's format string names them, and a field a checkpoint lacks (older than it) reads as its default.
+trainer's format string names them, and a field a checkpoint lacks reads as its default.
 """
 
 from __future__ import annotations
@@ -116,7 +116,7 @@ def read_training_checkpoint(
 ) -> dict:
     """The checkpoint a run resumes from, refused (`InputError`) unless it is a `trainer` checkpoint of
     `checkpoint_format` made with the same `same_on_resume` settings as `config` (a `to_dict()`): resuming under
-    other settings would silently mix two trainings. `defaults`: what a setting is in a checkpoint older than it."""
+    other settings would silently mix two trainings. `defaults`: what a setting is in a checkpoint that lacks it."""
     ck = torch_load(path, "readable training checkpoint")
     if not isinstance(ck, dict) or ck.get("format") != checkpoint_format:
         raise InputError(f"{path}: not a {trainer} training checkpoint (expected format {checkpoint_format!r})")
@@ -150,7 +150,7 @@ class CheckpointKind:
         format: the `format` entry (`vinadv.vin-checkpoint/1`: the VIN's and GPPN's; Neural A*'s own).
         trainer: the trainer's name in the refusal of another file.
         same_on_resume: the settings a resumed run must share with its checkpoint.
-        defaults: what a setting is in a checkpoint older than it (None: absent).
+        defaults: what a setting is in a checkpoint that lacks it (None: absent).
     """
 
     format: str

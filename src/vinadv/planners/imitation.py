@@ -128,8 +128,8 @@ class ImitationState(TrainingState):
         return f"epoch {self.epoch}, step {self.step}"
 
 
-#: the VIN's and GPPN's checkpoints: the settings a resumed run must share with its checkpoint (a checkpoint older
-#: than a setting holds its default)
+#: the VIN's and GPPN's checkpoints: the settings a resumed run must share with its checkpoint (a setting a
+#: checkpoint lacks holds its default)
 CHECKPOINT_KIND = CheckpointKind(
     CHECKPOINT_FORMAT,
     "vinadv",

@@ -152,8 +152,8 @@ def check_logits(name: str, logits, b: int, n: int) -> np.ndarray:
     return logits
 
 
-#: SHA-256 of no bytes: what `state_checksum` recorded for a module without state before it returned None there
-#: (runs stored by an older vinadv may hold it; they compare equal to None)
+#: SHA-256 of no bytes: a stored checksum of a module without state; it compares equal to None, the checksum
+#: `state_checksum` gives such a module
 EMPTY_SHA256 = hashlib.sha256().hexdigest()
 
 
@@ -213,7 +213,7 @@ class Planner(ABC):
     capabilities: Capabilities = Capabilities(policy=True)
     chunk_size: int | None = DEFAULT_CHUNK
     #: the device type (`cpu`, `cuda`) its forward was asked to run on (`--device`), recorded in `spec()`; None: the
-    #: planner's default (the VIN's exact CPU engine, a torch planner on the CPU), recorded as before devices were
+    #: planner's default (the VIN's exact CPU engine, a torch planner on the CPU), left out of `spec()`
     device_type: str | None = None
 
     def for_moves(self, moves: str) -> Planner:

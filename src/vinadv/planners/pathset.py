@@ -19,7 +19,7 @@ from vinadv.planners.result import PlanResult
 from vinadv.vocabulary import GOAL, TERMINATIONS
 
 PATHS_FORMAT = "vinadv.paths/2"
-#: older versions still read (as `octile` paths)
+#: the earlier format versions also read (a /1 file as `octile` paths)
 OLDER_PATHS_FORMATS = ("vinadv.paths/1",)
 
 

@@ -1,5 +1,5 @@
-"""The model zoo, now declared in the registry (`vinadv.planners.registry.models`): this module re-exports it for
-code that imports `vinadv.planners.zoo`."""
+"""The model zoo, declared in the registry (`vinadv.planners.registry.models`): this module re-exports it for code
+that imports `vinadv.planners.zoo`."""
 
 from __future__ import annotations
 

@@ -466,5 +466,5 @@ def decode_rows(rows: Sequence) -> PairRecords:
         **{name: nullable(col[name], np.nan, np.float64) for name in HARM_FLOAT_COLUMNS},
         expert_label=np.array(col["expert_label"], dtype=object),
         harm=np.array(col["harm"], dtype=object),
-        edit=np.array([ADD if e is None else e for e in col[EDIT_COLUMN]], dtype=str).reshape(-1),  # NULL: before 7
+        edit=np.array([ADD if e is None else e for e in col[EDIT_COLUMN]], dtype=str).reshape(-1),  # NULL reads as add
     )

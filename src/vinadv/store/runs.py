@@ -103,8 +103,8 @@ class RunQueries(Database):
 
     def find_run(self, name: str) -> int | None:
         """The id of the latest run called exactly `name` (for `--resume`), or None: on MySQL/MariaDB compared under
-        the `exact_collation` (the column's since schema version 5; named here too, so an older database opened
-        read-only compares exactly as well)."""
+        the `exact_collation` (the column's from schema version 5 on; named here too, so a version 4 database
+        opened read-only compares exactly as well)."""
         collation = exact_collation(self.engine.dialect)
         column = runs.c.name if collation is None else runs.c.name.collate(collation)
         with self.engine.connect() as conn:
@@ -116,8 +116,8 @@ class RunQueries(Database):
     def resolve_run(self, ref: str | int, param: str = "run_id") -> int:
         """The id of the run `ref` names: the one rule for every run reference. A number is a run id (a run name is
         never a number, see `create_run`), anything else a run name (its latest run), looked up exactly as given,
-        then, when no run has that exact name, without the whitespace around it (a name stored with whitespace,
-        which `check_run_name` now refuses: 'x ' is found by 'x ', and 'x' by ' x '). InputError (naming the
+        then, when no run has that exact name, without the whitespace around it (a stored name with whitespace,
+        which `check_run_name` refuses for a new run: 'x ' is found by 'x ', and 'x' by ' x '). InputError (naming the
         parameter `param`) when there is no such run."""
         text = str(ref)
         if text.strip().isascii() and text.strip().isdigit():  # not '²': a digit to isdigit, no number to int
@@ -138,8 +138,8 @@ class RunQueries(Database):
 
     def run_info(self, run_id: int) -> dict:
         """The run's row as a dict; `InputError` when there is no such run. Its `moves` is the run's movement
-        model: `octile` for a run stored before schema version 6 (NULL, or no column in an older database read
-        read-only)."""
+        model: `octile` where it is NULL (a run of schema version 5 or below, or no column in such a database
+        opened read-only)."""
         with self.engine.connect() as conn:
             row = conn.execute(sa.select(*self._run_columns()).where(runs.c.id == int(run_id))).mappings().one_or_none()
         if row is None:

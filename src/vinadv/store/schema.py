@@ -19,13 +19,13 @@ Tables:
 
 Version 2 adds the harm columns of `map_pairs` (`HARM_COLUMNS`, all nullable: DESIGN.md "Harm"). Version 3 adds
 `added_more` (nullable): the obstacles a pair adds after the first (`added_obstacle`), for pairs of several added
-obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair, so those rows are stored as before.
+obstacles (DESIGN.md "Several obstacles"); NULL for a one-obstacle pair (its one cell is `added_obstacle`).
 Version 4 adds the table `measurements` (`UPGRADE_TABLES`). Version 5 compares run names exactly on every backend:
 on MySQL/MariaDB `runs.name` gets a binary collation without padding (`exact_collation`), so names differing in
 case, accents, emoji or trailing spaces are different runs there too (SQLite and PostgreSQL compare bytes
 already); an older MariaDB database has the column changed in place, its rows kept. Version 6 adds `runs.moves`
-(nullable, `RUN_UPGRADE_COLUMNS`): the run's movement model (`vinadv.grid.moves`); NULL, as every run stored before
-version 6 reads, is `octile`, the only model there was. Version 7 adds `map_pairs.edit` (nullable): each pair's
+(nullable, `RUN_UPGRADE_COLUMNS`): the run's movement model (`vinadv.grid.moves`); NULL (every run of a version 5
+database) reads as `octile`. Version 7 adds `map_pairs.edit` (nullable): each pair's
 edit, `add` or `remove` (DESIGN.md "Obstacle removal"; NULL, in the rows of an older database, reads as `add`)
 and the table `bench_chunks`. A database of an older version (`UPGRADABLE_VERSIONS`)
 gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`), tables and collation it lacks on open (see

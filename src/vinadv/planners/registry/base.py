@@ -84,8 +84,8 @@ class PlannerInfo:
             those weights.
         kind: the weights format its files are in (`vin`, `gppn`, `neural-astar`; None: no weights).
         aliases: old spellings of `name`, still accepted wherever a planner is named.
-        recorded_as: the name its specs recorded before names were spelled with hyphens (`vin_robust`): bench entry
-            keys are computed with it, so stored chunks and committed entries keep their keys.
+        recorded_as: the old spelling its bench entry keys are computed with (`vin_robust`; None: its name), so
+            stored chunks and committed entries keep their keys.
         models: its shipped weights (the zoo's models it declares).
     """
 
@@ -235,8 +235,8 @@ def canonical_name(name: str) -> str:
 
 
 def recorded_name(name: str) -> str:
-    """The name a planner's bench entry key is computed with: `recorded_as` of a registered planner renamed since
-    its entries were made (`vin-robust` -> `vin_robust`, with `+d4` too), else `name` (old spellings first made
+    """The name a planner's bench entry key is computed with: `recorded_as` of a registered planner that declares
+    one (`vin-robust` -> `vin_robust`, with `+d4` too), else `name` (old spellings first made
     canonical)."""
     text = canonical_name(name)
     if text.endswith(SUFFIX):

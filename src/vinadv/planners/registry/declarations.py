@@ -1,7 +1,7 @@
 """The planners vinadv knows by name, one declaration each: its loader as `"module:function"`, its shipped weights
 (the model zoo: file, sha256, map size, movement model, licence) and the old spellings of its names.
 
-Names are spelled with hyphens; the names of earlier versions (`vin_robust`, and the zoo's `vin28_robust`,
+Names are spelled with hyphens; the old spellings (`vin_robust`, and the zoo's `vin28_robust`,
 `vin_mpd32`, `gppn_mpd32`, `neural_astar_mazes32`, `neural_astar_mpd5`) are aliases, accepted wherever a planner
 or weights are named, so stored runs, bench chunks and committed entries read and resume unchanged.
 """

@@ -164,7 +164,7 @@ class VINPlanner(Planner):
 
 def as_planner(planner, size: int) -> Planner:
     """`planner` if it is a `Planner`; a `VIN` or `VINWeights` wrapped as the `vin` planner for `size x size` maps
-    (the library functions that take a planner also take a VIN, as before there were other planners); any other
+    (so the library functions that take a planner also take a VIN); any other
     `torch.nn.Module` as a `TorchPlanner` named after its class."""
     if is_planner(planner):
         return planner
