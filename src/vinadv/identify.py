@@ -34,7 +34,7 @@ from vinadv.errors import InputError
 from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.columns import Columns
 from vinadv.planners.interface import Planner
-from vinadv.planners.registry import PlannerRef, load_planner
+from vinadv.planners.registry import PlannerRef, load_planner_for
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
 from vinadv.planners.weights import weights_checksum
@@ -384,14 +384,7 @@ def run(
     t0 = time.perf_counter()
     replanner = ref = None
     if config.replans:
-        replanner = load_planner(
-            config.planner,
-            pairs.size,
-            weights=config.weights,
-            corner_cutting=pairs.corner_cutting,
-            moves=pairs.moves,
-            device=device,
-        )
+        replanner = load_planner_for(config.planner, config.weights, pairs, device)
         if executor.remote:
             ref = PlannerRef.of(replanner, config.planner, config.weights, pairs.corner_cutting)
     ident = identify_pairs(
@@ -449,7 +442,7 @@ def identify_and_store(
     shard_size: int = 1000,
     device: str | None = None,
 ) -> StoredIdentification:
-    """`run` with the arguments of earlier versions."""
+    """`run` of the `IdentifyConfig` these arguments make: the one call, without building a config first."""
     config = IdentifyConfig(pairs_path, classifier, planner, weights, harm_tol, harm_rtol, shard_size)
     return run(config, executor, db=db, name=name, device=device)
 

@@ -45,7 +45,7 @@ from vinadv.identify import (
 )
 from vinadv.jobs.attack import attack_maps
 from vinadv.planners.interface import EMPTY_SHA256, Planner
-from vinadv.planners.registry import DEFAULT_PLANNER, PlannerRef, load_planner, same_choice
+from vinadv.planners.registry import DEFAULT_PLANNER, PlannerRef, load_planner_for, same_choice
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.weights import weights_checksum
 from vinadv.records import RUN, VERSION_KEY, run_config_kind, stamp
@@ -302,14 +302,7 @@ def resolve_planner(config: RunConfig, device: str | None = None) -> Planner:
     """The planner of a run (`config.planner` with `config.weights`, for the run's map size, move rule and movement
     model: a planner of another model is refused, see `Planner.for_moves`), its forward on `device`
     (`load_planner`; None: the planner's default)."""
-    return load_planner(
-        config.planner,
-        config.size,
-        weights=config.weights,
-        corner_cutting=config.corner_cutting,
-        device=device,
-        moves=config.moves,
-    )
+    return load_planner_for(config.planner, config.weights, config, device)
 
 
 def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: Planner, classifier_name: str):

@@ -504,17 +504,10 @@ def run(
     """The robustness benchmark of `config` (`robustness`), on `executor` (as one task: its strategies share the
     maps and their figures the per-map outcomes), the planner's forward on `device`; with `db`, stored there
     (`save_robustness`, the row's id in `result.id`); a database that will be refused is refused before the work."""
-    from vinadv.planners.registry import PlannerRef, load_planner  # noqa: PLC0415 (loaded when a benchmark runs)
+    from vinadv.planners.registry import PlannerRef, load_planner_for  # noqa: PLC0415 (loaded when a benchmark runs)
 
     # the planner first (one of another movement model than the maps' is refused in one line), then the maps
-    planner = load_planner(
-        config.planner,
-        config.size,
-        weights=config.weights,
-        corner_cutting=config.corner_cutting,
-        moves=config.moves,
-        device=device,
-    )
+    planner = load_planner_for(config.planner, config.weights, config, device)
     if db is not None:
         from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only to store the result)
 

@@ -162,17 +162,10 @@ def run(
     """Attack the maps of `config.maps` (the first start of each) with the planner of `config` (its forward on
     `device`), on `executor`, and identify the pairs (labels and harm)."""
     from vinadv.grid.mapset import MapSet  # noqa: PLC0415 (as the planners: loaded when a job runs)
-    from vinadv.planners.registry import PlannerRef, load_planner  # noqa: PLC0415 (as above)
+    from vinadv.planners.registry import PlannerRef, load_planner_for  # noqa: PLC0415 (as above)
 
     maps = MapSet.load(config.maps)
-    planner = load_planner(
-        config.planner,
-        maps.size,
-        weights=config.weights,
-        corner_cutting=maps.corner_cutting,
-        moves=maps.moves,
-        device=device,
-    )
+    planner = load_planner_for(config.planner, config.weights, maps, device)
     attack = make_attack(config.strategy, **config.options())
     planner_x = shipped(
         executor, planner, lambda: PlannerRef.of(planner, config.planner, config.weights, maps.corner_cutting)

@@ -2,7 +2,7 @@
 
 Each registered planner is declared once (`vinadv.planners.registry.declarations`): its name, spelled with hyphens,
 its loader as `"module:function"`, its parameters and its shipped weights, the model zoo (file, sha256, map size,
-movement model, licence; `vinadv.planners.registry.models`). The names of earlier versions are aliases
+movement model, licence; `vinadv.planners.registry.models`). Their old spellings are aliases
 (`canonical_name`): `vin_robust` is `vin-robust`, the zoo's `vin28_robust` is `vin28-robust`, `vin_mpd32` is
 `vin-mpd32`, `gppn_mpd32` is `gppn-mpd32`, `neural_astar_mazes32` is `neural-astar-mazes32`, `neural_astar_mpd5` is
 `neural-astar-mpd5`. A family planner given the shipped weights of one of its fixed planners is that planner
@@ -66,6 +66,7 @@ _LOADING = (
     "list_planners",
     "load_custom",
     "load_planner",
+    "load_planner_for",
     "load_symmetric",
     "resolve_choice",
     "same_choice",

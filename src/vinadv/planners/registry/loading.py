@@ -103,6 +103,14 @@ def load_planner(
     return _load(spec, size, weights, corner_cutting, device).for_moves(moves)
 
 
+def load_planner_for(spec: str | None, weights: str | None, maps, device: str | None = None) -> Planner:
+    """`load_planner` for the maps `maps` describes: anything with their `size`, `corner_cutting` and `moves` (a
+    `MapSet`, a `PairSet`, a job's config that names them)."""
+    return load_planner(
+        spec, maps.size, weights=weights, corner_cutting=maps.corner_cutting, device=device, moves=maps.moves
+    )
+
+
 def split_spec(spec: str) -> tuple[str, dict[str, str] | None]:
     """`(name, parameters)` of a spec: `wastar:w=3,x=1` -> `("wastar", {"w": "3", "x": "1"})`; a spec without
     parameters (a name, `file.py:factory`, `module:factory`: no `=`) -> `(spec, None)`. A parameter list that is not
