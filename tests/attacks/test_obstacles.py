@@ -27,11 +27,6 @@ SIZE = 8
 
 
 @pytest.fixture(scope="module")
-def model():
-    return planning_vin(SIZE, seed=1, noise=0.1)
-
-
-@pytest.fixture(scope="module")
 def maps():
     return generate_maps(24, SIZE, seed=5, n_starts=1)
 

@@ -17,11 +17,6 @@ SIZE = 10
 
 
 @pytest.fixture(scope="module")
-def model():
-    return planning_vin(SIZE, seed=1, noise=0.1)
-
-
-@pytest.fixture(scope="module")
 def maps():
     return generate_maps(40, SIZE, seed=3, n_starts=1)
 
