@@ -112,7 +112,7 @@ def map_legend(fig, axes, **kwargs) -> None:
         fig.legend(list(handles.values()), list(handles), **options)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Pair:
     """One pair as drawn: both maps, start, goal, the edited cells and both paths, `(row, col)` cells.
 
