@@ -35,6 +35,8 @@ LAYERS = {
     "attacks": 5,
     "classify": 5,
     "identify": 6,
+    # drawing maps, pairs, value maps and k curves in one palette: the report, the viewer and the commands draw with it
+    "plot": 6,
     # support code for tests and benchmarks: synthetic weights, records and pairs for what lies below it; no
     # production module imports it (test_production_code_never_imports_the_test_support)
     "testing": 6,

@@ -93,7 +93,7 @@ def check_figure_option(args: argparse.Namespace) -> None:
     comma-joined list of `vinadv eval` (None: the planner's default, which holds vinadv)."""
     if getattr(args, "figure", None) is None:
         return
-    from vinadv.grid.draw import figure_format
+    from vinadv.plot.files import figure_format
 
     try:
         figure_format(args.figure)

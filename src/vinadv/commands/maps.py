@@ -25,11 +25,18 @@ def register(subparsers) -> None:
     add_output_options(gen, json="the summary", quiet=True)
     gen.set_defaults(func=cmd_generate)
 
-    show = sub.add_parser("show", help="draw one map with its starts, goal and expert paths to an image")
-    show.add_argument("maps", help="maps file (.npz)")
-    show.add_argument("--index", type=int, default=0, help="map index (default 0)")
+    show = sub.add_parser(
+        "show",
+        help="draw a map (with its expert paths), a pair of a pairs file or a planned path to an image",
+        description="Draw one map of a maps file with its starts, goal and expert paths; one pair of a pairs file "
+        "(vinadv attack: both maps, both paths, the edited cells); or one map of a paths file (vinadv plan: the "
+        "planned paths, on the maps of --maps). The file's kind is read from it. Colours: vinadv.plot's palette.",
+    )
+    show.add_argument("maps", metavar="FILE", help="maps, pairs or paths file (.npz)")
+    show.add_argument("--index", type=int, default=0, help="map index, or pair index of a pairs file (default 0)")
     show.add_argument("--out", required=True, help="output image (.png, .svg or .pdf)")
-    show.add_argument("--all-starts", action="store_true", help="draw the expert paths of every start")
+    show.add_argument("--all-starts", action="store_true", help="draw the paths of every start (maps, paths files)")
+    show.add_argument("--maps", dest="maps_file", metavar="MAPS", help="the maps file a paths file was planned on")
     show.set_defaults(func=cmd_show)
 
     cat = sub.add_parser(
@@ -106,25 +113,78 @@ def cmd_generate(args: argparse.Namespace) -> int:
     )
 
 
+def _file_format(path: str) -> str:
+    """The `format` entry of a vinadv .npz file ('' where it has none or is no .npz file: the loader then says
+    what is wrong)."""
+    import numpy as np
+
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return str(data["format"]) if "format" in data.files else ""
+    except (OSError, ValueError):
+        return ""
+
+
 def cmd_show(args: argparse.Namespace) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")  # no display: the image goes to a file
     import matplotlib.pyplot as plt
 
-    from vinadv.grid import MapSet
-    from vinadv.grid.draw import draw_map, figure_format, map_legend, save_figure
+    from vinadv.plot.files import figure_format, save_figure
+    from vinadv.plot.maps import draw_map, map_legend, pair
 
     figure_format(args.out)  # before the work: an extension matplotlib cannot write
-    check_output_path(args.out, inputs={"MAPS": args.maps})
-    maps = MapSet.load(args.maps)
+    inputs = {"FILE": args.maps, **({"--maps": args.maps_file} if args.maps_file else {})}
+    check_output_path(args.out, inputs=inputs)
+    kind = _file_format(args.maps).partition("/")[0]
+    if kind == "vinadv.pairs":
+        from vinadv.attacks.pairs import PairSet
+
+        if args.maps_file or args.all_starts:
+            raise InputError(f"{args.maps} is a pairs file: --maps and --all-starts are for maps and paths files")
+        pairs = PairSet.load(args.maps)
+        if not 0 <= args.index < len(pairs):
+            raise InputError(f"--index {args.index} is out of range: {args.maps} has {len(pairs)} pairs")
+        fig = pair(pairs, args.index, title=f"pair {args.index} ({pairs.strategy}, {pairs.moves})")
+        save_figure(fig, args.out)
+        print(f"wrote {args.out}")
+        return 0
+    from vinadv.grid import MapSet
+
+    planned = None
+    if kind == "vinadv.paths":
+        from vinadv.planners.pathset import PathSet
+
+        if not args.maps_file:
+            raise InputError(
+                f"{args.maps} is a paths file, which holds no maps: give the maps it was planned on (--maps)"
+            )
+        planned, maps = PathSet.load(args.maps), MapSet.load(args.maps_file)
+        if (len(planned), planned.size) != (len(maps) * maps.n_starts, maps.size):
+            raise InputError(
+                f"{args.maps} holds {len(planned)} paths on {planned.size}x{planned.size} maps, not one per start of "
+                f"the {len(maps)} maps of {args.maps_file} ({maps.n_starts} starts, {maps.size}x{maps.size})"
+            )
+        source = args.maps_file
+    else:
+        if args.maps_file:
+            raise InputError(f"--maps is for a paths file; {args.maps} is read as a maps file")
+        maps, source = MapSet.load(args.maps), args.maps
     if not 0 <= args.index < len(maps):
-        raise InputError(f"--index {args.index} is out of range: {args.maps} has {len(maps)} maps")
+        raise InputError(f"--index {args.index} is out of range: {source} has {len(maps)} maps")
     starts = list(range(maps.n_starts)) if args.all_starts else [0]
     paths = [("expert", maps.expert_path(args.index, s)) for s in starts]
     costs = maps.expert_costs[args.index, starts]
-    title = (
-        f"map {args.index}: expert cost {costs[0]:.2f} ({maps.moves})"
-        if len(starts) == 1
-        else f"map {args.index}: {len(starts)} starts, expert costs {costs.min():.2f}-{costs.max():.2f} ({maps.moves})"
-    )
+    if planned is not None:
+        paths += [("planned", planned.path(args.index, s)) for s in starts]
+        reached = int(planned.reached[[args.index * planned.n_starts + s for s in starts]].sum())
+        title = f"map {args.index}: planned paths reaching the goal {reached}/{len(starts)} ({maps.moves})"
+    elif len(starts) == 1:
+        title = f"map {args.index}: expert cost {costs[0]:.2f} ({maps.moves})"
+    else:
+        spread = f"{costs.min():.2f}-{costs.max():.2f}"
+        title = f"map {args.index}: {len(starts)} starts, expert costs {spread} ({maps.moves})"
     fig, ax = plt.subplots(figsize=(4, 4.4))
     draw_map(
         ax, maps.obstacles[args.index], maps.goals[args.index], maps.starts[args.index, starts], paths, title=title

@@ -72,7 +72,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     app = create_app(store, allow_remote=args.allow_remote)
     # import the image renderers now (matplotlib; torch behind vinadv.classify), not on the first pair page
     import vinadv.classify.images  # noqa: F401
-    import vinadv.grid.draw  # noqa: F401
+    import vinadv.plot.maps  # noqa: F401
 
     # bind here rather than in werkzeug, which prints and calls sys.exit(1) when the port is taken
     family = socket.AF_INET6 if ":" in args.host else socket.AF_INET

@@ -22,8 +22,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from vinadv.errors import InputError  # noqa: E402
-from vinadv.grid.draw import save_figure  # noqa: E402
 from vinadv.planners.records import LengthBucketMetrics  # noqa: E402
+from vinadv.plot.files import save_figure  # noqa: E402
 
 __all__ = [
     "LengthCurve",

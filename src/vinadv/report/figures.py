@@ -1,9 +1,10 @@
 """The report's figures (matplotlib, Agg backend), each saved as PNG and SVG.
 
 Every function takes plain data (arrays, dicts read from the database) and a path stem; it writes `stem.png`
-and `stem.svg` and returns their file names. Curves use scikit-learn's display helpers from stored points. Map
-figures carry one legend for the start/goal markers, the added obstacle and the paths; SVG text stays text
-(searchable, selectable).
+and `stem.svg` and returns their file names. Maps, pairs and k curves are drawn by `vinadv.plot`, in its palette
+(`vinadv.plot.palette.PALETTE`); curves use scikit-learn's display helpers from stored points. Map figures carry
+one legend for the start/goal markers, the added obstacle and the paths; SVG text stays text (searchable,
+selectable).
 """
 
 from __future__ import annotations
@@ -18,8 +19,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from vinadv.classify.images import render_path_images  # noqa: E402
-from vinadv.grid.draw import draw_map, map_legend  # noqa: E402
 from vinadv.outfile import atomic_output  # noqa: E402
+from vinadv.plot.curves import draw_k_curve  # noqa: E402
+from vinadv.plot.maps import as_pair, draw_map, draw_pair, map_legend  # noqa: E402
+from vinadv.plot.palette import PALETTE  # noqa: E402
 from vinadv.vocabulary import STRENGTH_ORDER  # noqa: E402
 
 CATEGORY_ORDER = STRENGTH_ORDER[:-1]  # UrP, FP, DP, UcP: the paper's fig. 3 and table 4 order (invalid last)
@@ -51,20 +54,10 @@ def _paths(records, i: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _draw_pair(axes, records, i: int, paths_o, paths_a, title_o: str, title_a: str | None) -> None:
-    """Pair `i` of `records` on two axes: the original map with the `(label, cells)` paths `paths_o` on `axes[0]`,
-    the adversarial map (its added obstacles marked) with `paths_a` on `axes[1]`."""
-    goal, start = records.goals[i], records.starts[i]
-    draw_map(axes[0], records.obstacles_o[i], goal, start, paths=paths_o, title=title_o)
-    draw_map(
-        axes[1],
-        records.obstacles_a[i],
-        goal,
-        start,
-        paths=paths_a,
-        added=records.added[i],
-        title=title_a,
-        removed=bool(records.removes[i]),
-    )
+    """Pair `i` of `records` on two axes (`vinadv.plot.draw_pair`): the original map with the paths named in
+    `paths_o` (`original`, `adversarial`) on `axes[0]`, the adversarial map (its edited cells marked) with those of
+    `paths_a` on `axes[1]`."""
+    draw_pair(axes, as_pair(records, i), paths_o, paths_a, (title_o, title_a))
 
 
 def _distances(pair) -> str:
@@ -79,16 +72,15 @@ def map_pair(records, i: int, stem: Path, with_paths: bool, distances=None) -> l
     """Figs. 1 and 2: pair `i` of `records`, original map next to adversarial map (with the planned paths);
     `distances`: the pair's `ExamplePair` (its dh/dv in the title)."""
     fig, axes = plt.subplots(1, 2, figsize=(7, 3.6))
-    o, a = _paths(records, i)
     label = records.label[i]
     _draw_pair(
         axes,
         records,
         i,
-        [("original", o)] if with_paths else (),
-        [("adversarial", a)] if with_paths else (),
+        ("original",) if with_paths else (),
+        ("adversarial",) if with_paths else (),
         "(a) original path" if with_paths else "(a) the normal map",
-        "(b) adversarial path" if with_paths else "(b) the adversarial map (+1 obstacle, orange)",
+        "(b) adversarial path" if with_paths else f"(b) the adversarial map (+1 obstacle, {PALETTE.added.name})",
     )
     extra = _distances(distances) if with_paths else ""
     fig.suptitle(f"pair {records.pair_index[i]} ({label}{'; ' + extra if extra else ''})", fontsize=9)
@@ -110,15 +102,14 @@ def example_pairs(records, stem: Path, columns: int = 4, distances=None) -> list
         ax.axis("off")
     for i in range(n):
         r, c = 2 * (i // columns), i % columns
-        o, a = _paths(records, i)
         axes[r, c].axis("on")
         axes[r + 1, c].axis("on")
         _draw_pair(
             axes[r : r + 2, c],
             records,
             i,
-            [("original", o)],
-            [("original", o), ("adversarial", a)],
+            ("original",),
+            ("original", "adversarial"),
             f"pair {records.pair_index[i]}: original",
             f"adversarial ({records.label[i]})",
         )
@@ -142,13 +133,12 @@ def categories(examples: dict, stem: Path, distances: dict | None = None) -> lis
             column[0].set_title(f"({'abcd'[c]}) the {label}", fontsize=9)
             continue
         records, i = examples[label]
-        o, a = _paths(records, i)
         _draw_pair(
             column[:2],
             records,
             i,
-            [("original", o)],
-            [("adversarial", a)],
+            ("original",),
+            ("adversarial",),
             f"({'abcd'[c]}) the {label}",
             _distances((distances or {}).get(label)) or None,
         )
@@ -228,7 +218,7 @@ def regret_histogram(edges: np.ndarray, counts: dict[str, dict[str, np.ndarray]]
         1, len(labels), figsize=(4.4 * len(labels), 3.2), sharex=True, sharey=True, squeeze=False, layout="constrained"
     )
     widths = np.diff(edges)
-    colours = {"harmful": "#d62728", "harmless": "#7f7f7f"}
+    colours = {"harmful": PALETTE.harmful.colour, "harmless": PALETTE.harmless.colour}
     for ax, label in zip(axes[0], labels):
         bottom = np.zeros(len(widths))
         for harm, colour in colours.items():
@@ -242,13 +232,13 @@ def regret_histogram(edges: np.ndarray, counts: dict[str, dict[str, np.ndarray]]
                 bottom=bottom,
                 align="edge",
                 color=colour,
-                edgecolor="white",
+                edgecolor=PALETTE.free.colour,
                 linewidth=0.5,
                 label=harm,
                 log=True,
             )
             bottom = bottom + part
-        ax.axvline(tol, color="k", ls="--", lw=1, label=f"tolerance ({tol:g})")
+        ax.axvline(tol, color=PALETTE.edge.colour, ls="--", lw=1, label=f"tolerance ({tol:g})")
         ax.set_title(f"{label} pairs ({int(bottom.sum()):,})", fontsize=9)
         ax.set_xlabel("regret_a - regret_o (cost units)", fontsize=8)
     axes[0, 0].set_ylabel("pairs (log scale)", fontsize=8)
@@ -347,17 +337,13 @@ def robustness_curves(series: Sequence[tuple[str, list[dict]]], stem: Path) -> l
     one line per benchmark (`series`: `(name, figures by k)`, each figure a dict with `k`, `harmful_rate`,
     `paper_success_rate`, as `vinadv.robustness.Figures.to_dict`), in % of the valid maps."""
     fig, axes = plt.subplots(1, 2, figsize=(9.2, 3.6), sharey=True, layout="constrained")
-    for k, (name, points) in enumerate(series):
-        ks = [p["k"] for p in points]
-        for ax, key in zip(axes, ("harmful_rate", "paper_success_rate")):
-            values = [np.nan if p[key] is None else 100.0 * p[key] for p in points]
-            ax.plot(ks, values, "o-", color=f"C{k % 10}", label=name)
-    top = max([1] + [p["k"] for _, points in series for p in points])
-    for ax, title in zip(axes, ("harmful rate (worst case per map)", "paper success rate, UrP + FP (worst case)")):
-        ax.set_xticks(range(1, top + 1))
-        ax.set_xlabel("obstacles added (k)")
+    for ax, key, title in zip(
+        axes,
+        ("harmful_rate", "paper_success_rate"),
+        ("harmful rate (worst case per map)", "paper success rate, UrP + FP (worst case)"),
+    ):
+        draw_k_curve(ax, list(series), key)
         ax.set_title(title, fontsize=9)
-        ax.grid(alpha=0.3)
     axes[0].set_ylabel("% of valid maps")
     axes[0].set_ylim(0, 100)
     handles, labels = axes[0].get_legend_handles_labels()

@@ -45,6 +45,7 @@ from flask import (
 from werkzeug.exceptions import BadRequest, Forbidden, HTTPException
 
 from vinadv.errors import InputError
+from vinadv.plot.palette import PALETTE
 from vinadv.store import LABELS, Store
 from vinadv.store.records import PairRecords
 from vinadv.viewer.render import KINDS, PngCache, render_pair_png
@@ -91,6 +92,7 @@ def create_app(
     app.json.sort_keys = False
     app.extensions["vinadv"] = state = _ViewerState(store, image_cache_bytes)
     app.jinja_env.globals.update(
+        PALETTE=PALETTE,
         LABELS=LABELS,
         HUMAN_LABELS=HUMAN_LABELS,
         LABEL_KEYS=LABEL_KEYS,

@@ -1,10 +1,10 @@
 """PNG images of one stored pair, rendered on the server: the original map, the adversarial map and the path
 image, with an LRU cache so that paging back and forth never renders a pair twice.
 
-Maps are drawn with `vinadv.grid.draw.draw_map` on a bare `matplotlib.figure.Figure` (no pyplot state, so
-rendering is safe from the server's threads; a lock still serialises it, Agg is not fast enough in parallel on
-two cores to matter). The path image is the classifier's input (`render_path_images`, DESIGN.md colours),
-scaled up by whole pixels so every cell stays a crisp square.
+Maps are drawn with `vinadv.plot.draw_map` (in `vinadv.plot.palette`'s colours) on a bare
+`matplotlib.figure.Figure` (no pyplot state, so rendering is safe from the server's threads; a lock still serialises
+it, Agg is not fast enough in parallel on two cores to matter). The path image is the classifier's input
+(`render_path_images`, DESIGN.md colours), scaled up by whole pixels so every cell stays a crisp square.
 """
 
 from __future__ import annotations
@@ -71,20 +71,20 @@ def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from vinadv.grid.draw import draw_map  # noqa: PLC0415 (Matplotlib: only the map images need it)
+    from vinadv.plot.maps import as_pair, draw_map  # noqa: PLC0415 (Matplotlib: only the map images need it)
 
-    o, a = records.path_o[i], records.path_a[i]
+    pair = as_pair(records, i)
     paths = []
     if kind == "original":
-        obstacles, added, title = records.obstacles_o[i], None, "original map, original path"
-        if len(o):
-            paths.append(("original", o))
+        obstacles, added, title = pair.obstacles_o, None, "original map, original path"
+        if len(pair.path_o):
+            paths.append(("original", pair.path_o))
     elif kind == "adversarial":
-        obstacles, added, title = records.obstacles_a[i], records.added[i], "adversarial map, both paths"
-        if len(o):
-            paths.append(("original", o))
-        if len(a):
-            paths.append(("adversarial", a))
+        obstacles, added, title = pair.obstacles_a, pair.added, "adversarial map, both paths"
+        if len(pair.path_o):
+            paths.append(("original", pair.path_o))
+        if len(pair.path_a):
+            paths.append(("adversarial", pair.path_a))
     else:
         raise ValueError(f"unknown image kind {kind!r}")
     with _render_lock:
@@ -94,12 +94,12 @@ def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
         draw_map(
             ax,
             obstacles,
-            goal=records.goals[i],
-            start=records.starts[i],
+            goal=pair.goal,
+            start=pair.start,
             paths=paths,
             added=added,
             title=title,
-            removed=bool(records.removes[i]),
+            removed=pair.removed,
         )
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=_MAP_DPI)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from vinadv.plot.palette import PALETTE
 from vinadv.report.data import CATEGORY_ORDER, Context, Figure, Table
 from vinadv.report.sections.examples import ExamplePair, chosen_examples
 
@@ -35,8 +36,8 @@ def gather(ctx: Context) -> CategoriesData:
                 distances={label: pairs[i] for label, i in shown.items()},
             )
         ),
-        "Fig. 3: the four categories. Rows: original map (red path), adversarial map (blue path), path "
-        "image (blue = adversarial path, red = original path drawn on top).",
+        f"Fig. 3: the four categories. Rows: original map ({PALETTE.original.name} path), adversarial map "
+        f"({PALETTE.adversarial.name} path), path image (blue = adversarial path, red = original path drawn on top).",
         "the four categories",
         900,
     )

@@ -8,6 +8,7 @@ import numpy as np
 
 from vinadv.classify.batch import PathPairBatch
 from vinadv.classify.rule import label_batch
+from vinadv.plot.palette import PALETTE
 from vinadv.report.data import CATEGORY_ORDER, Context, Figure, Table
 
 
@@ -80,13 +81,14 @@ def gather(ctx: Context) -> ExamplesData:
         tuple(figures.map_pair(records, i, ctx.out / "fig1_map_pair", with_paths=False)),
         "Fig. 1: a pair of maps, the normal map and the adversarial map ("
         + ("one added obstacle" if records.n_added == 1 else f"{records.n_added} added obstacles")
-        + ", orange).",
+        + f", {PALETTE.added.name}).",
         "original and adversarial map",
         760,
     )
     fig2 = Figure(
         tuple(figures.map_pair(records, i, ctx.out / "fig2_path_pair", with_paths=True, distances=pairs[i])),
-        "Fig. 2: the pair of paths the VIN plans on them (original red, adversarial blue dashed).",
+        f"Fig. 2: the pair of paths the VIN plans on them (original {PALETTE.original.name}, adversarial "
+        f"{PALETTE.adversarial.name} dashed).",
         "original and adversarial path",
         760,
     )

@@ -8,6 +8,7 @@ import numpy as np
 
 from vinadv.classify.harm import DEFAULT_TOL, harm_summary
 from vinadv.grid.shortest_paths import expert_paths
+from vinadv.plot.palette import PALETTE
 from vinadv.records import run_config_kind
 from vinadv.report.data import ALL_LABELS, Context, Figure, Table
 from vinadv.vocabulary import HARMS, SUCCESS_LABELS
@@ -279,9 +280,10 @@ def _harm_examples(ctx: Context, data: HarmData, corner_cutting: bool, moves: st
         figure = Figure(
             tuple(figures.harm_pairs(records, shown, ctx.out / f"fig_harm_{harm}_{label}")),
             f"{harm.capitalize()} {label} pairs ({len(shown)}, the first by pair index): {what}. "
-            "Each pair: the original map with the planner's path (red) and the expert, optimal path "
-            "(green, seen where the two differ), next to the adversarial map with the planner's path "
-            "(blue, dashed), the expert path on that map and the added obstacle (orange).",
+            f"Each pair: the original map with the planner's path ({PALETTE.original.name}) and the expert, optimal "
+            f"path ({PALETTE.expert.name}, seen where the two differ), next to the adversarial map with the planner's "
+            f"path ({PALETTE.adversarial.name}, dashed), the expert path on that map and the added obstacle "
+            f"({PALETTE.added.name}).",
             kind,
             900,
         )

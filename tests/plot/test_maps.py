@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from vinadv.cli import main
-from vinadv.grid import MapSet, draw
+from vinadv.grid import MapSet
+from vinadv.plot import files
+from vinadv.plot import maps as draw
 
 
 def _markers(fig, label: str) -> np.ndarray:
@@ -45,7 +47,7 @@ def test_maps_show_marks_every_start_with_a_legend(tmp_path, monkeypatch, all_st
     )
     maps = MapSet.load(maps_file)
     shown = []
-    monkeypatch.setattr(draw, "save_figure", lambda fig, path: shown.append(fig))
+    monkeypatch.setattr(files, "save_figure", lambda fig, path: shown.append(fig))
     assert (
         main(
             ["maps", "show", str(maps_file), "--index", "1", "--out", str(tmp_path / "m.png")]

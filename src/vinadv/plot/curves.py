@@ -1,0 +1,89 @@
+"""The k curve: a rate (by default the harmful rate) against the number of edited cells k, one line per planner,
+with its interval as a band where one is given."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from vinadv.errors import InputError
+
+#: the strategy name of a benchmark's worst case over its strategies (`vinadv.robustness.WORST_CASE`)
+WORST_CASE = "worst case"
+
+
+def k_series(data, rate: str = "harmful_rate", strategy: str = WORST_CASE) -> list[tuple[str, list[dict]]]:
+    """`[(name, points)]`, one per line, each point a dict with `k`, `rate` and, where present, `rate_low` and
+    `rate_high` (its interval, fractions).
+
+    `data`: `vinadv.open(...).robustness()` (a DataFrame: the rows of `strategy`, one line per benchmark, named by
+    planner, or by planner and benchmark where a planner has several), a mapping `{name: points}`, or a sequence of
+    `(name, points)`; points are dicts (or rows) with `k` and `rate` (`vinadv.robustness.Figures.to_dict`)."""
+    if hasattr(data, "columns"):  # the robustness DataFrame
+        if "strategy" in data.columns:
+            data = data[data["strategy"] == strategy]
+        if not len(data):
+            raise InputError(f"k_curve: no rows of strategy {strategy!r} to draw", "data")
+        key = "benchmark" if "benchmark" in data.columns else "planner"
+        groups = list(data.groupby(key, sort=False))
+        counts: dict = {}
+        for _, rows in groups:
+            counts[rows["planner"].iloc[0]] = counts.get(rows["planner"].iloc[0], 0) + 1
+        series = []
+        for bench, rows in groups:
+            planner = rows["planner"].iloc[0]
+            name = planner if counts[planner] == 1 else f"{planner} (#{bench})"
+            series.append((str(name), rows.sort_values("k").to_dict("records")))
+        return series
+    items = list(data.items()) if isinstance(data, Mapping) else list(data)
+    return [(str(name), [dict(p) for p in points]) for name, points in items]
+
+
+def draw_k_curve(ax, data, rate: str = "harmful_rate", strategy: str = WORST_CASE, intervals: bool = True) -> None:
+    """The k curve on `ax` (see `k_series` for `data`): `rate` in % against k, one line per series in
+    matplotlib's colour cycle (`C0`, `C1`, ...), each point's interval (`{rate}_low`, `{rate}_high`) a band where
+    given and `intervals`. A missing value (None) leaves a gap."""
+    series = k_series(data, rate, strategy)
+    for i, (name, points) in enumerate(series):
+        ks = np.array([p["k"] for p in points], dtype=np.float64)
+        values = np.array([np.nan if p.get(rate) is None else 100.0 * p[rate] for p in points])
+        colour = f"C{i % 10}"
+        ax.plot(ks, values, "o-", color=colour, label=name)
+        low, high = (f"{rate}_low", f"{rate}_high")
+        if intervals and all(p.get(low) is not None and p.get(high) is not None for p in points) and points:
+            lows = np.array([100.0 * p[low] for p in points])
+            highs = np.array([100.0 * p[high] for p in points])
+            ax.fill_between(ks, lows, highs, color=colour, alpha=0.18, linewidth=0)
+    top = max([1] + [int(p["k"]) for _, points in series for p in points])
+    ax.set_xticks(range(1, top + 1))
+    ax.set_xlabel("obstacles added (k)")
+    ax.grid(alpha=0.3)
+
+
+def k_curve(
+    data,
+    rate: str = "harmful_rate",
+    *,
+    strategy: str = WORST_CASE,
+    intervals: bool = True,
+    ax=None,
+    title: str | None = None,
+):
+    """Draw the k curve (`draw_k_curve`): `rate` (`harmful_rate`, `paper_success_rate`, any rate column) against k,
+    one line per planner, on `ax` or a new figure; returns the figure.
+
+        with vinadv.open("results.db") as results:
+            vinadv.plot.k_curve(results.robustness())
+    """
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(5, 3.6), layout="constrained")
+    else:
+        fig = ax.figure
+    draw_k_curve(ax, data, rate, strategy, intervals)
+    ax.set_ylabel(f"{rate.replace('_', ' ')} (% of valid maps)")
+    ax.set_ylim(0, 100)
+    ax.set_title(title or rate.replace("_", " "), fontsize=9)
+    ax.legend(fontsize=8)
+    return fig
