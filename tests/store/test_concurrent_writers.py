@@ -207,3 +207,62 @@ def test_deadlocks_are_told_apart_from_other_faults():
     assert is_deadlock(wrapped(PgError("deadlock detected")))
     assert not is_deadlock(wrapped(MySQLError(1205, "Lock wait timeout exceeded")))
     assert not is_deadlock(wrapped(MySQLError("disk full")))
+
+
+@contextlib.contextmanager
+def pause_creator_at(statement: str, nth: int = 1) -> Iterator[tuple[threading.Event, threading.Event]]:
+    """For the block, make the thread that runs the `nth` statement starting with `statement` (it creates the tables)
+    wait there until another thread is about to take the schema lock, or the test says the other thread's open is
+    over. Yields (paused, released): paused is set once the creator waits, released lets it go. What the creator did
+    before `statement` is visible where DDL commits itself (MariaDB), so the other open meets a database half made,
+    every time."""
+    paused, released = threading.Event(), threading.Event()
+    seen: dict = {"n": 0, "creator": None}
+
+    def before(conn, cursor, text, parameters, context, executemany):
+        text, me = text.lstrip().upper(), threading.get_ident()
+        if seen["creator"] not in (None, me) and any(s in text for s in LOCK_STATEMENTS):
+            released.set()  # the other open waits for the creator's lock: let the creator finish
+        elif text.startswith(statement) and seen["creator"] in (None, me):
+            seen["n"] += 1
+            if seen["n"] == nth:
+                seen["creator"] = me
+                paused.set()
+                assert released.wait(timeout=30), "the other open neither ended nor took the lock"
+
+    sa.event.listen(sa.engine.Engine, "before_cursor_execute", before)
+    try:
+        yield paused, released
+    finally:
+        released.set()
+        sa.event.remove(sa.engine.Engine, "before_cursor_execute", before)
+
+
+def outcome(work):
+    """`work()`, or the exception it raised (reported to the test, which fails on it)."""
+    try:
+        return work()
+    except Exception as exc:
+        return exc
+
+
+@pytest.mark.parametrize(("statement", "nth"), [("INSERT INTO", 1), ("CREATE TABLE", 2)], ids=["no-version", "half"])
+def test_an_open_of_a_database_another_process_is_creating_waits_for_it(db_url, statement, nth):
+    # MariaDB commits each CREATE TABLE: an open that met the creator's tables before its schema version refused the
+    # database ("schema version None, this vinadv needs '7'"); it waits for the creator's lock and checks again now
+    def use(name: str):
+        with Store.open(db_url) as store:
+            return store.create_run(name)
+
+    first: list = [None]
+    with pause_creator_at(statement, nth) as (paused, released):
+        creator = threading.Thread(target=lambda: first.__setitem__(0, outcome(lambda: use("first"))))
+        creator.start()
+        assert paused.wait(timeout=30), "the creator never reached the statement"
+        second = outcome(lambda: use("second"))
+        released.set()
+        creator.join(timeout=60)
+    assert isinstance(first[0], int) and isinstance(second, int), (first, second)
+    assert columns_and_version(db_url)[1] == SCHEMA_VERSION
+    with Store.open(db_url, readonly=True) as store:
+        assert sorted(r["name"] for r in store.list_runs(with_counts=False)) == ["first", "second"]

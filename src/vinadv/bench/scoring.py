@@ -5,8 +5,9 @@ attack group of the suite through the robustness benchmark (`vinadv.robustness.r
 cells edited greedily, labelled and judged for harm), keeping every map's outcome. With a database each finished
 chunk is stored in one transaction (`Store.add_bench_chunk`), so `--resume` after a crash, even kill -9, recomputes
 only the chunks not stored; the randomised strategies draw as they would over the whole suite (`first_map`), so the
-chunks make the whole suite's pairs. The entry (`make_entry`) is then computed from the per-map outcomes of all
-chunks, in map order:
+chunks make the whole suite's pairs. Two runs resuming one entry at once may both compute a chunk: the first stores
+it, the other checks its own is the same and uses the stored one (`_same_chunk`). The entry (`make_entry`) is then
+computed from the per-map outcomes of all chunks, in map order:
 
 - `clean`: the unattacked maps. vinadv's convention: rollout success from the start (`success_rate`), the share of
   maps whose path is optimal (`percent_optimal`), the mean regret of the reached paths; GPPN's convention (`gppn`:
@@ -445,6 +446,42 @@ def _stored_chunks(
     return done, key
 
 
+#: the fields of a chunk's result that are not a function of the suite and the planner (`_same_chunk`)
+_CHUNK_VOLATILE = ("seconds", "fingerprint")
+
+
+def _same_chunk(db: str, chunk: int, stored: dict, result: dict, fingerprint: dict) -> dict:
+    """The chunk `chunk` another run stored while this one computed it (`stored`, read back), where it is the same
+    as this run's `result` but for the time taken; InputError naming both where it was computed otherwise (another
+    fingerprint) or came out otherwise (a planner that is not deterministic): the entry would mix two computations."""
+    if not reusable(stored.get("fingerprint"), fingerprint):
+        theirs = stored.get("fingerprint") or {**fingerprint, "format": 1}
+        raise InputError(
+            f"database {db}: chunk {chunk} of this entry was stored meanwhile by another run computed with "
+            f"{_describe(theirs, fingerprint)}, this run with {_describe(fingerprint, theirs)}; the entry would mix "
+            "two computations: use another database",
+            "resume",
+        )
+
+    def kept(part: dict) -> dict:
+        return {k: v for k, v in part.items() if k not in _CHUNK_VOLATILE}
+
+    mine, theirs = kept(result), kept(stored)
+    if json.dumps(mine, sort_keys=True) != json.dumps(theirs, sort_keys=True):
+        fields = sorted(
+            k
+            for k in set(mine) | set(theirs)
+            if json.dumps(mine.get(k), sort_keys=True) != json.dumps(theirs.get(k), sort_keys=True)
+        )
+        raise InputError(
+            f"database {db}: chunk {chunk} of this entry was stored meanwhile by another run, with another result "
+            f"than this run's (field {', '.join(map(repr, fields[:3])) or '?'}): the planner does not compute the "
+            "same result twice; the stored chunk is kept (--resume uses it)",
+            "resume",
+        )
+    return stored
+
+
 def _chunk_task(suite: Suite, planner, maps, chunk: int) -> tuple[int, dict]:
     """The task of `run_bench`: `(chunk, compute_chunk(...))`, the planner and maps given or by reference."""
     return chunk, compute_chunk(suite, resolve(planner), resolve(maps), chunk)
@@ -503,7 +540,11 @@ def run_bench(
     try:
         for chunk, result in executor.map(task, todo, ordered=False):
             if store is not None:
-                store.add_bench_chunk(key, chunk, {**result, "fingerprint": fingerprint})
+                stored = store.add_bench_chunk(
+                    key, chunk, {**result, "fingerprint": fingerprint}, check=_check_stored(suite, n_chunks)
+                )
+                if stored is not None:  # stored meanwhile (another run resuming this entry): the same, or refused
+                    result = _same_chunk(db, chunk, stored, result, fingerprint)
             done[chunk] = result
             if bar is not None:
                 bar.update(1)

@@ -167,7 +167,25 @@ def check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool)
     when opened without `create`: with it, an older version is upgraded, see `upgrade`).
 
     An empty database gets the tables when `create` (else InputError); one with foreign tables of our names, of
-    another schema version or with missing tables or columns is refused with InputError naming it (`shown`)."""
+    another schema version or with missing tables or columns is refused with InputError naming it (`shown`).
+
+    The check reads the schema without the `schema_lock`, and on MariaDB, which commits each CREATE and ALTER on its
+    own, it may find another process's tables half made (no schema version yet, a table missing). So on a server, a
+    check that fails is made once more after waiting for the schema lock (`wait_for_schema`): whoever held it has
+    finished, and only a database that still fails is refused. SQLite and PostgreSQL create and upgrade in one
+    transaction, which no other process sees half done; waiting there is harmless (SQLite, whose lock is a write
+    transaction, does not wait: a refused file is not even locked for writing)."""
+    try:
+        return _check_schema(engine, shown, create=create, readonly=readonly)
+    except InputError:
+        if engine.dialect.name == "sqlite":
+            raise
+        wait_for_schema(engine)
+    return _check_schema(engine, shown, create=create, readonly=readonly)
+
+
+def _check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool) -> frozenset[str]:
+    """`check_schema` once."""
     sqlite = engine.dialect.name == "sqlite"
     with engine.connect() as conn:
         present = set(sa.inspect(conn).get_table_names())
@@ -265,6 +283,13 @@ def schema_lock(conn: sa.Connection) -> Iterator[None]:
             conn.commit()
         elif conn.in_transaction():
             conn.rollback()  # after a failure, or nothing to do: the lock goes with the transaction
+
+
+def wait_for_schema(engine: sa.Engine) -> None:
+    """Wait until no process is creating or upgrading the tables of the database behind `engine`: take the
+    `schema_lock` and let it go at once, changing nothing."""
+    with engine.connect() as conn, schema_lock(conn):
+        pass
 
 
 def create_tables(engine: sa.Engine) -> bool:

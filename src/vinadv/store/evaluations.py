@@ -9,6 +9,7 @@ import json
 from collections.abc import Sequence
 
 import sqlalchemy as sa
+from sqlalchemy import exc as sa_exc
 
 from vinadv import __version__
 from vinadv.errors import InputError, one_line
@@ -110,21 +111,33 @@ class EvaluationQueries(RunQueries):
             )
             return int(row.inserted_primary_key[0])
 
-    def add_bench_chunk(self, entry: str, chunk: int, result: dict, version: str = __version__) -> None:
+    def add_bench_chunk(
+        self, entry: str, chunk: int, result: dict, version: str = __version__, check=None
+    ) -> dict | None:
         """Store the finished chunk `chunk` of benchmark entry `entry` (`vinadv.bench.scoring`), in one transaction: a
-        run killed before it commits leaves nothing of the chunk, one killed after leaves all of it."""
+        run killed before it commits leaves nothing of the chunk, one killed after leaves all of it. Returns None, or,
+        where the chunk is stored already (another process resuming the same entry stored it first, or a remote
+        executor delivered it twice), that stored result as `read_bench_chunks` gives it (`check` as there), leaving
+        it as it is: the caller compares the two."""
         self.ensure_table(bench_chunks)
-        with self.engine.begin() as conn:
-            conn.execute(
-                bench_chunks.insert().values(
-                    created=utcnow(), entry=str(entry), chunk=int(chunk), result=result, version=version
+        try:
+            with self.engine.begin() as conn:
+                conn.execute(
+                    bench_chunks.insert().values(
+                        created=utcnow(), entry=str(entry), chunk=int(chunk), result=result, version=version
+                    )
                 )
-            )
+            return None
+        except sa_exc.IntegrityError:  # the unique (entry, chunk): stored first by another writer
+            stored = self.read_bench_chunks(entry, check, chunks=[int(chunk)])
+            if int(chunk) not in stored:  # another constraint: a bug, raised as it is
+                raise
+            return stored[int(chunk)]
 
-    def read_bench_chunks(self, entry: str, check=None) -> dict[int, dict]:
-        """The stored chunks of benchmark entry `entry`: {chunk: result} (`{}` when none, or no table yet). Each
-        result is parsed here from its stored text and read in today's form (`vinadv.records`), then
-        `check(chunk, result)` (the bench schema,
+    def read_bench_chunks(self, entry: str, check=None, chunks: Sequence[int] | None = None) -> dict[int, dict]:
+        """The stored chunks of benchmark entry `entry` (those numbered in `chunks`, if given): {chunk: result} (`{}`
+        when none, or no table yet). Each result is parsed here from its stored text and read in today's form
+        (`vinadv.records`), then `check(chunk, result)` (the bench schema,
         `vinadv.bench.validate`) names its first problem or None: InputError (one line naming the chunk and the
         problem) for a result that is not JSON or that `check` refuses."""
         with self.engine.connect() as conn:
@@ -132,6 +145,8 @@ class EvaluationQueries(RunQueries):
                 return {}
             text = sa.cast(bench_chunks.c.result, sa.Text).label("result")  # parsed here: a bad one is one line
             query = sa.select(bench_chunks.c.chunk, text).where(bench_chunks.c.entry == str(entry))
+            if chunks is not None:
+                query = query.where(bench_chunks.c.chunk.in_([int(c) for c in chunks]))
             stored = [(int(r.chunk), r.result) for r in conn.execute(query)]
         out = {}
         for chunk, raw in stored:
