@@ -135,22 +135,24 @@ def cmd_show(args: argparse.Namespace) -> int:
     return 0
 
 
-FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn", "mpd", "movingai")
+FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn", "mpd", "movingai", "ascii", "png")
 
 
 def _register_interop(sub) -> None:
     imp = sub.add_parser(
         "import",
-        help="read maps of the kentsommer PyTorch port, avivt's .mat files, GPPN, the MP dataset (mpd) or the Moving "
-        "AI benchmarks (movingai)",
+        help="read maps of the kentsommer PyTorch port, avivt's .mat files, GPPN, the MP dataset (mpd), the Moving "
+        "AI benchmarks (movingai), or a map drawn in text (ascii) or an image (png)",
         description="Regroup another codebase's samples into maps and trajectories; expert costs "
         "are vinadv's under the maps' movement model (kentsommer, avivt: octile; gppn: the file's moore or news; "
-        "mpd: moore; movingai: octile without corner cutting). See docs/guide/interop.md and docs/formats.md.",
+        "mpd: moore; movingai: octile without corner cutting; ascii, png: --moves, corner cutting unless "
+        "--no-corner-cutting). See docs/guide/interop.md and docs/formats.md.",
     )
     imp.add_argument(
         "input",
         metavar="IN",
-        help="the file to read (.npz for kentsommer, gppn and mpd, .mat for avivt, .map for movingai)",
+        help="the file to read (.npz for kentsommer, gppn and mpd, .mat for avivt, .map for movingai, a text file for "
+        "ascii, an image for png)",
     )
     imp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the file's layout")
     imp.add_argument("--out", required=True, help="output maps file (.npz)")
@@ -190,6 +192,15 @@ def _register_interop(sub) -> None:
         default=None,
         metavar="F",
         help="movingai: the least share of free cells of a window (default 0.5)",
+    )
+    imp.add_argument("--start", default=None, metavar="ROW,COL", help="png: the start cell (an image draws none)")
+    imp.add_argument("--goal", default=None, metavar="ROW,COL", help="png: the goal cell")
+    imp.add_argument(
+        "--pad-to",
+        type=int,
+        default=None,
+        metavar="N",
+        help="ascii, png: pad the drawing with obstacles into an N x N map (default: a square of its larger side)",
     )
     add_corner_cutting_argument(imp)
     add_moves_argument(
@@ -235,6 +246,9 @@ def cmd_import(args: argparse.Namespace) -> int:
         "crops": args.crops,
         "min_free": args.min_free,
         "corner_cutting": False if args.no_corner_cutting else None,
+        "start": args.start,
+        "goal": args.goal,
+        "pad_to": args.pad_to,
     }
     maps, info = read_maps(
         args.input, args.format, split=args.split, starts=args.starts, seed=args.seed, moves=args.moves, **options

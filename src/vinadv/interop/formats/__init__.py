@@ -18,7 +18,7 @@ from pathlib import Path
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import check_moves, require_moves
-from vinadv.interop.formats import avivt, gppn, kentsommer, movingai, mpd
+from vinadv.interop.formats import avivt, drawn, gppn, kentsommer, movingai, mpd
 
 
 @dataclass(frozen=True)
@@ -64,6 +64,12 @@ FORMATS: dict[str, Format] = {
         ("octile",),
         ("scen", "bucket", "crop", "crops", "min_free", "corner_cutting"),
     ),
+    "ascii": Format(
+        drawn.read_ascii, drawn.write_refused("ascii"), ("all",), drawn.MOVES, ("pad_to", "corner_cutting")
+    ),
+    "png": Format(
+        drawn.read_png, drawn.write_refused("png"), ("all",), drawn.MOVES, ("start", "goal", "pad_to", "corner_cutting")
+    ),
 }
 
 
@@ -85,7 +91,7 @@ def read_maps(
     """Read maps in another codebase's layout: `(MapSet, info)`; `info` says what was found and done.
 
     Args:
-        format: 'kentsommer', 'avivt', 'gppn', 'mpd' or 'movingai' (`FORMATS`).
+        format: 'kentsommer', 'avivt', 'gppn', 'mpd', 'movingai', 'ascii' or 'png' (`FORMATS`).
         split: kentsommer train|test|all (default test); gppn train|valid|test|all (default test); avivt
             train|test, the layout (default: the one the file has).
         starts: starts per map where the file has none (gppn, avivt's batched-only layout; default 7); files
@@ -95,7 +101,8 @@ def read_maps(
             8 actions, `news` for 4; mpd: `moore`; kentsommer and avivt: `octile`). A model the layout cannot hold
             is refused.
         options: what a layout takes beyond these (`Format.options`; None is not given): movingai's `scen`,
-            `bucket`, `crop`, `crops`, `min_free` and `corner_cutting` (`vinadv.interop.formats.movingai`).
+            `bucket`, `crop`, `crops`, `min_free` and `corner_cutting` (`vinadv.interop.formats.movingai`); ascii's
+            and png's `pad_to` and `corner_cutting`, png's `start` and `goal` (`vinadv.interop.formats.drawn`).
 
     Raises InputError naming the file and array for a missing array, a wrong shape, other polarity, a goal value
     or label out of range, or a path that is not a legal move sequence to the goal.
