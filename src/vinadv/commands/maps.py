@@ -195,18 +195,25 @@ def cmd_show(args: argparse.Namespace) -> int:
     return 0
 
 
-FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn", "mpd")
+FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn", "mpd", "movingai", "ascii", "png")
 
 
 def _register_interop(sub) -> None:
     imp = sub.add_parser(
         "import",
-        help="read maps of the kentsommer PyTorch port, avivt's .mat files, GPPN or the MP dataset (mpd)",
+        help="read maps of the kentsommer PyTorch port, avivt's .mat files, GPPN, the MP dataset (mpd), the Moving "
+        "AI benchmarks (movingai), or a map drawn in text (ascii) or an image (png)",
         description="Regroup another codebase's samples into maps and trajectories; expert costs "
         "are vinadv's under the maps' movement model (kentsommer, avivt: octile; gppn: the file's moore or news; "
-        "mpd: moore). See docs/guide/interop.md.",
+        "mpd: moore; movingai: octile without corner cutting; ascii, png: --moves, corner cutting unless "
+        "--no-corner-cutting). See docs/guide/interop.md and docs/formats.md.",
     )
-    imp.add_argument("input", metavar="IN", help="the file to read (.npz for kentsommer, gppn and mpd, .mat for avivt)")
+    imp.add_argument(
+        "input",
+        metavar="IN",
+        help="the file to read (.npz for kentsommer, gppn and mpd, .mat for avivt, .map for movingai, a text file for "
+        "ascii, an image for png)",
+    )
     imp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the file's layout")
     imp.add_argument("--out", required=True, help="output maps file (.npz)")
     imp.add_argument(
@@ -221,7 +228,41 @@ def _register_interop(sub) -> None:
         default=None,
         help="starts drawn per map where the file has none (gppn: default 7; mpd: default 1, by Neural A*'s rule)",
     )
-    imp.add_argument("--seed", type=int, default=0, help="seed of the drawn starts (default 0)")
+    imp.add_argument("--seed", type=int, default=0, help="seed of the drawn starts and crops (default 0)")
+    imp.add_argument(
+        "--scen",
+        default=None,
+        metavar="FILE",
+        help="movingai: the .scen problems (each a map of its own; optimal lengths checked against vinadv's)",
+    )
+    imp.add_argument(
+        "--bucket", default=None, metavar="LIST", help="movingai: keep the .scen problems of these buckets (0-4,7)"
+    )
+    imp.add_argument(
+        "--crop",
+        type=int,
+        default=None,
+        metavar="N",
+        help="movingai: cut windows of N x N out of the map, goal and starts drawn in each (docs/formats.md)",
+    )
+    imp.add_argument("--crops", type=int, default=None, metavar="K", help="movingai: windows drawn (default 1)")
+    imp.add_argument(
+        "--min-free",
+        type=float,
+        default=None,
+        metavar="F",
+        help="movingai: the least share of free cells of a window (default 0.5)",
+    )
+    imp.add_argument("--start", default=None, metavar="ROW,COL", help="png: the start cell (an image draws none)")
+    imp.add_argument("--goal", default=None, metavar="ROW,COL", help="png: the goal cell")
+    imp.add_argument(
+        "--pad-to",
+        type=int,
+        default=None,
+        metavar="N",
+        help="ascii, png: pad the drawing with obstacles into an N x N map (default: a square of its larger side)",
+    )
+    add_corner_cutting_argument(imp)
     add_moves_argument(
         imp,
         default=None,
@@ -231,14 +272,22 @@ def _register_interop(sub) -> None:
     add_output_options(imp, json="the summary", quiet=True)
     imp.set_defaults(func=cmd_import)
 
-    exp = sub.add_parser("export", help="write a maps file in the kentsommer, avivt, GPPN or MP dataset (mpd) layout")
+    exp = sub.add_parser(
+        "export",
+        help="write a maps file in the kentsommer, avivt, GPPN, MP dataset (mpd) or Moving AI (movingai) layout",
+    )
     exp.add_argument("maps", help="maps file (.npz)")
     exp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the layout to write")
-    exp.add_argument("--out", required=True, help="output file (.npz for kentsommer, gppn and mpd, .mat for avivt)")
+    exp.add_argument(
+        "--out",
+        required=True,
+        help="output file (.npz for kentsommer, gppn and mpd, .mat for avivt; movingai: the .scen, its .map beside)",
+    )
     exp.add_argument(
         "--split",
         default=None,
-        help="kentsommer: train|test; gppn, mpd: train|valid|test; avivt: test|train layout (default test)",
+        help="kentsommer: train|test; gppn, mpd: train|valid|test; avivt: test|train layout (default test); movingai: "
+        "none",
     )
     add_output_options(exp, json="the summary")
     exp.set_defaults(func=cmd_export)
@@ -249,9 +298,20 @@ def cmd_import(args: argparse.Namespace) -> int:
 
     if args.starts is not None and args.starts < 1:
         raise InputError(f"--starts must be >= 1, got {args.starts}")
-    check_output_path(args.out, inputs={"IN": args.input})  # before the work: a folder in the way, the input
+    check_output_path(args.out, inputs={"IN": args.input, "--scen": args.scen})  # before the work
+    options = {
+        "scen": args.scen,
+        "bucket": args.bucket,
+        "crop": args.crop,
+        "crops": args.crops,
+        "min_free": args.min_free,
+        "corner_cutting": False if args.no_corner_cutting else None,
+        "start": args.start,
+        "goal": args.goal,
+        "pad_to": args.pad_to,
+    }
     maps, info = read_maps(
-        args.input, args.format, split=args.split, starts=args.starts, seed=args.seed, moves=args.moves
+        args.input, args.format, split=args.split, starts=args.starts, seed=args.seed, moves=args.moves, **options
     )
     if len(maps) == 0:  # a maps file holds at least one map (`MapSet.save`): say so of the file read
         split = args.split or info.get("split")
@@ -265,9 +325,19 @@ def cmd_import(args: argparse.Namespace) -> int:
             f"wrote {info['maps']} maps of {info['size']}x{info['size']} (up to {info['starts_per_map']} starts"
             f"{padded}) to {args.out}; expert paths: {info['expert_paths']}"
         )
-        for key in ("moves", "file_paths_optimal", "movement", "starts_rule", "maps_left_out_no_start"):
+        for key in (
+            "moves",
+            "file_paths_optimal",
+            "movement",
+            "starts_rule",
+            "maps_left_out_no_start",
+            "lengths_checked",
+        ):
             if info.get(key):
                 print(f"  {key.replace('_', ' ')}: {info[key]}")
+        if any(info.get("padding", {}).values()):
+            pad = info["padding"]
+            print(f"  padded with obstacles: {pad['rows']} rows below, {pad['cols']} columns to the right")
 
     return emit(args, info, text)
 

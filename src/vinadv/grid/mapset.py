@@ -121,6 +121,16 @@ class MapSet:
             moves=first.moves,
         )
 
+    @classmethod
+    def from_ascii(
+        cls, text: str, *, pad_to: int | None = None, corner_cutting: bool = True, moves: str = DEFAULT_MOVES
+    ) -> MapSet:
+        """One map drawn in ASCII: `#` or `@` an obstacle, `.` free, `S` a start, `G` the goal, one line a row;
+        padded with obstacles into a square of side `pad_to` at least (`vinadv.grid.drawn`)."""
+        from vinadv.grid.drawn import from_ascii  # noqa: PLC0415 (drawn builds on this module)
+
+        return from_ascii(text, pad_to=pad_to, corner_cutting=corner_cutting, moves=moves)
+
     def expert_path(self, i: int, s: int = 0) -> np.ndarray:
         """The optimal path from start `s` of map `i`, `(L, 2)` int16."""
         return self.expert[i * self.n_starts + s]

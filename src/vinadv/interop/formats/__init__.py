@@ -18,7 +18,7 @@ from pathlib import Path
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import check_moves, require_moves
-from vinadv.interop.formats import avivt, gppn, kentsommer, mpd
+from vinadv.interop.formats import avivt, drawn, gppn, kentsommer, movingai, mpd
 
 
 @dataclass(frozen=True)
@@ -38,6 +38,8 @@ class Format:
     write: Callable[[MapSet, Path, str], dict]
     splits: tuple[str, ...]
     moves: tuple[str, ...] = ("octile",)
+    #: the keyword options `read` takes beyond the five above (movingai: `scen`, `bucket`, `crop`, ...)
+    options: tuple[str, ...] = ()
 
     @property
     def export_splits(self) -> tuple[str, ...]:
@@ -55,6 +57,19 @@ FORMATS: dict[str, Format] = {
     "avivt": Format(_octile(avivt.read), avivt.write, avivt.SPLITS),
     "gppn": Format(gppn.read, gppn.write, tuple(gppn.SPLITS), ("moore", "news", "octile")),
     "mpd": Format(mpd.read, mpd.write, mpd.SPLITS, ("moore",)),
+    "movingai": Format(
+        movingai.read,
+        movingai.write,
+        ("all",),
+        ("octile",),
+        ("scen", "bucket", "crop", "crops", "min_free", "corner_cutting"),
+    ),
+    "ascii": Format(
+        drawn.read_ascii, drawn.write_refused("ascii"), ("all",), drawn.MOVES, ("pad_to", "corner_cutting")
+    ),
+    "png": Format(
+        drawn.read_png, drawn.write_refused("png"), ("all",), drawn.MOVES, ("start", "goal", "pad_to", "corner_cutting")
+    ),
 }
 
 
@@ -71,11 +86,12 @@ def read_maps(
     starts: int | None = None,
     seed: int = 0,
     moves: str | None = None,
+    **options,
 ) -> tuple[MapSet, dict]:
     """Read maps in another codebase's layout: `(MapSet, info)`; `info` says what was found and done.
 
     Args:
-        format: 'kentsommer', 'avivt' or 'gppn'.
+        format: 'kentsommer', 'avivt', 'gppn', 'mpd', 'movingai', 'ascii' or 'png' (`FORMATS`).
         split: kentsommer train|test|all (default test); gppn train|valid|test|all (default test); avivt
             train|test, the layout (default: the one the file has).
         starts: starts per map where the file has none (gppn, avivt's batched-only layout; default 7); files
@@ -84,6 +100,9 @@ def read_maps(
         moves: the movement model of the maps read (`vinadv.grid.moves`); None: the file's own (gppn: `moore` for
             8 actions, `news` for 4; mpd: `moore`; kentsommer and avivt: `octile`). A model the layout cannot hold
             is refused.
+        options: what a layout takes beyond these (`Format.options`; None is not given): movingai's `scen`,
+            `bucket`, `crop`, `crops`, `min_free` and `corner_cutting` (`vinadv.interop.formats.movingai`); ascii's
+            and png's `pad_to` and `corner_cutting`, png's `start` and `goal` (`vinadv.interop.formats.drawn`).
 
     Raises InputError naming the file and array for a missing array, a wrong shape, other polarity, a goal value
     or label out of range, or a path that is not a legal move sequence to the goal.
@@ -95,8 +114,12 @@ def read_maps(
         raise InputError(f"starts must be >= 1, got {starts}")
     if moves is not None and check_moves(moves) not in layout.moves:
         raise InputError(f"moves {moves!r}: format {format} holds {' or '.join(layout.moves)} maps", "moves")
+    given = {k: v for k, v in options.items() if v is not None}
+    for name in given:
+        if name not in layout.options:
+            raise InputError(f"{name} is not an option of format {format}", name)
     path = str(path)
-    maps, info = layout.read(path, split, starts, seed, moves)
+    maps, info = layout.read(path, split, starts, seed, moves, **given)
     return maps, {"format": format, "file": path, "moves": maps.moves, **info}
 
 
@@ -113,13 +136,17 @@ def export_maps(maps: MapSet, path: str | os.PathLike, format: str, split: str |
     writes the test layout (one row per real start), train the per-sample training arrays (no batched arrays).
     gppn: the mazes go to `split` (train|valid|test, default test), the others are empty; the policies are
     GPPN's (every move cost 1: `news` maps get 4 actions, `moore` and `octile` maps 8). mpd: the maps go to `split`,
-    the others are empty, with their goals, policies and distances (`moore` maps only). A layout is written from the
-    movement models it holds (`Format.moves`; InputError otherwise).
+    the others are empty, with their goals, policies and distances (`moore` maps only). movingai (no splits): one
+    `.map` per distinct grid and a `.scen` of every real start (octile maps without corner cutting only). A layout is
+    written from the movement models it holds (`Format.moves`; InputError otherwise).
     """
     layout = _format(format)
     require_moves(maps.moves, layout.moves, f"export to {format}")
-    split = split or "test"
-    if split not in layout.export_splits:
+    if not layout.export_splits:  # one grid a file, no splits (movingai)
+        if split is not None:
+            raise InputError(f"format {format} has no splits, got split {split!r}")
+        split = "all"
+    elif (split := split or "test") not in layout.export_splits:
         allowed = ", ".join(layout.export_splits)
         raise InputError(f"split must be one of {allowed} to export format {format}, got {split!r}")
     path = Path(path)
