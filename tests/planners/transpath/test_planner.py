@@ -127,3 +127,18 @@ def test_other_sizes_are_refused_in_one_line():
     maps = generate_maps(1, 32, seed=0, n_starts=1)
     with pytest.raises(PlannerError, match="64x64"):
         planner.plan(maps.obstacles, maps.starts, maps.goals)
+
+
+@pytest.mark.parametrize("mode", ["cf", "f"])
+def test_the_compiled_replica_equals_the_literal_search_on_generated_maps(mode):
+    """Three generated 64x64 maps (vinadv's generator, corner cutting: the authors' rule), one start each: the same
+    paths and expanded cells, no float32 tie met."""
+    torch.set_num_threads(1)
+    maps = generate_maps(3, 64, seed=11, n_starts=1)
+    obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
+    with torch.no_grad():
+        values = plain_forward(state(mode), obstacles, starts if mode == "f" else None, goals)[:, 0]
+    answers = literal_answers(values, obstacles, starts, goals, mode)
+    result = transpath_search(values.numpy(), obstacles, starts, goals, mode, focal_exp=torch.exp(values).numpy())
+    assert mismatches(result, answers) == []
+    assert [ties for _, _, ties in answers] == [0] * 3
