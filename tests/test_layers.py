@@ -174,7 +174,7 @@ def test_production_code_never_imports_the_test_support():
 
 
 #: the planner families: a package each under `vinadv.planners`
-PLANNER_FAMILIES = ("vin", "gppn", "neural_astar", "classical")
+PLANNER_FAMILIES = ("vin", "gppn", "neural_astar", "transpath", "classical")
 #: the contract and the mechanics every planner shares (`vinadv.planners` outside the families and the registry)
 PLANNER_CONTRACT = (
     "interface",

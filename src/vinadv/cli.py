@@ -30,6 +30,7 @@ COMMAND_MODULES = [
     "vinadv.commands.planners",
     "vinadv.commands.gppn",
     "vinadv.commands.neural_astar",
+    "vinadv.commands.transpath",
     "vinadv.commands.attack",
     "vinadv.commands.classify",
     "vinadv.commands.run",

@@ -38,6 +38,8 @@ REGISTERED = [
     "wastar",
     "neural-astar",
     "neural-astar-mpd5",
+    "transpath-cf",
+    "transpath-focal",
 ]
 
 

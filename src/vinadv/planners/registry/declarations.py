@@ -186,3 +186,50 @@ register(
         ),
     ),
 )
+TRANSPATH = "vinadv.planners.transpath.planner:load"
+TRANSPATH_LICENCE = "MIT, Copyright (c) 2024 AI Research (the TransPath authors, AIRI-Institute/TransPath)"
+register(
+    "transpath-cf",
+    description="TransPath (Kirilenko et al. 2023): A*, octile heuristic divided by a transformer's correction "
+    "factors, 64x64 only",
+    entry_point=TRANSPATH,
+    kwargs={"mode": "cf"},
+    default_file="transpath_cf.pt",
+    takes_weights=True,
+    kind="transpath-cf",
+    models=(
+        Model(
+            name="transpath-cf",
+            file="transpath_cf.pt",
+            sha256="3300e009d540942930f1465f79e476a0b4642095acfafae4a57017eb9ff8b2f3",
+            size=64,
+            moves="octile",
+            description="TransPath's correction-factor model, converted from the authors' weights/cf.pth",
+            licence=TRANSPATH_LICENCE,
+            record="transpath_cf.json",
+            licence_file="transpath.LICENSE.txt",
+        ),
+    ),
+)
+register(
+    "transpath-focal",
+    description="TransPath (Kirilenko et al. 2023): focal search (f_w 100) on a transformer's focal values, 64x64 only",
+    entry_point=TRANSPATH,
+    kwargs={"mode": "f"},
+    default_file="transpath_focal.pt",
+    takes_weights=True,
+    kind="transpath-focal",
+    models=(
+        Model(
+            name="transpath-focal",
+            file="transpath_focal.pt",
+            sha256="d1afeb72367b3b80f76c296cdcab7df8e7eba02ff1c18cb58e2aeeffa457d8c8",
+            size=64,
+            moves="octile",
+            description="TransPath's focal-value model, converted from the authors' weights/focal.pth",
+            licence=TRANSPATH_LICENCE,
+            record="transpath_focal.json",
+            licence_file="transpath.LICENSE.txt",
+        ),
+    ),
+)

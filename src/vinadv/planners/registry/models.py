@@ -21,7 +21,7 @@ from vinadv.errors import InputError
 #: the weights shipped with vinadv (`vin28.pt`, `gppn28.pt`, ...): package data
 WEIGHTS_DIR = Path(__file__).resolve().parents[2] / "weights"
 #: the weights formats a zoo model may be read by, by the name the loaders pass to `weights_file`
-KINDS = ("vin", "gppn", "neural-astar")
+KINDS = ("vin", "gppn", "neural-astar", "transpath-cf", "transpath-focal")
 #: the zoo's models by name, in declaration order; filled by `add_model` (the registry's `register`)
 MODELS: dict[str, ZooModel] = {}
 #: every old spelling of a model's name (`vin28_robust`) -> its name (`vin28-robust`)
