@@ -21,6 +21,7 @@ import datetime as dt
 import os
 import re
 import sqlite3
+import time
 import urllib.parse
 from collections.abc import Iterator
 from pathlib import Path
@@ -244,10 +245,31 @@ def _check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool
             )
     if readonly:
         return absent
-    with engine.connect() as conn:
-        if sqlite and conn.exec_driver_sql("PRAGMA journal_mode").scalar() != "wal":
-            conn.exec_driver_sql("PRAGMA journal_mode=WAL")  # a vinadv file written by another tool
+    if sqlite:
+        with engine.connect() as conn:
+            if conn.exec_driver_sql("PRAGMA journal_mode").scalar() != "wal":
+                switch_to_wal(conn)  # a vinadv file written by another tool, or one being created meanwhile
     return absent
+
+
+#: how long a switch to WAL waits for other connections to the file, as SQLite's busy timeout waits for locks
+_WAL_WAIT_S = 30.0
+
+
+def switch_to_wal(conn: sa.Connection) -> None:
+    """`PRAGMA journal_mode=WAL` on the SQLite file behind `conn`. The switch needs the file to itself, and SQLite
+    answers "database is locked" at once, without its busy timeout, while another connection reads it (a second
+    process opening a database the first is creating): tried again until `_WAL_WAIT_S` has passed."""
+    deadline = time.monotonic() + _WAL_WAIT_S
+    while True:
+        try:
+            conn.exec_driver_sql("PRAGMA journal_mode=WAL")
+            return
+        except sa_exc.OperationalError as exc:
+            if "locked" not in str(exc) or time.monotonic() > deadline:
+                raise
+            conn.rollback()
+            time.sleep(0.02)
 
 
 #: PostgreSQL's advisory lock key for changing the schema (advisory locks are per database): "vinadv" and 1
@@ -310,7 +332,7 @@ def create_tables(engine: sa.Engine) -> bool:
             conn.execute(meta_table.insert(), [{"key": "schema_version", "value": SCHEMA_VERSION}])
             conn.commit()
         if sqlite:
-            conn.exec_driver_sql("PRAGMA journal_mode=WAL")  # outside the transaction, as SQLite requires
+            switch_to_wal(conn)  # outside the transaction, as SQLite requires
     return True
 
 
