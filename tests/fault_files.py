@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import io
 import sqlite3
 import subprocess
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -95,6 +97,26 @@ def rewrite_npz(src: Path, dst: Path, **changes) -> Path:
             arrays[name] = np.asarray(value)
     with open(dst, "wb") as fh:
         np.savez(fh, **arrays)
+    return dst
+
+
+def forge_npy_header(src: Path, dst: Path, name: str, shape: tuple[int, ...], dtype: str | None = None) -> Path:
+    """`src` (an `.npz`) written to `dst` with array `name`'s `.npy` header claiming `shape` (and `dtype`), its data
+    bytes unchanged: a forged header, as a hostile file would carry."""
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w") as zout:
+        for info in zin.infolist():
+            data = zin.read(info)
+            if info.filename == f"{name}.npy":
+                fh = io.BytesIO(data)
+                np.lib.format.read_magic(fh)
+                _, fortran, found = np.lib.format.read_array_header_1_0(fh)
+                header = io.BytesIO()
+                descr = np.lib.format.dtype_to_descr(np.dtype(dtype or found))
+                np.lib.format.write_array_header_1_0(
+                    header, {"shape": tuple(shape), "fortran_order": fortran, "descr": descr}
+                )
+                data = header.getvalue() + data[fh.tell() :]
+            zout.writestr(info.filename, data)
     return dst
 
 

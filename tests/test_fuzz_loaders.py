@@ -20,6 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.fault_files import (
+    forge_npy_header,
     read_npz,
     write_classifier,
     write_database,
@@ -31,7 +32,9 @@ from tests.fault_files import (
 from vinadv.attacks.pairs import PairSet
 from vinadv.classify import load_model
 from vinadv.errors import InputError
+from vinadv.grid import generate_maps
 from vinadv.grid.mapset import MapSet
+from vinadv.interop import export_maps, read_maps
 from vinadv.planners.pathset import PathSet
 from vinadv.planners.vin.weights import read_weights
 from vinadv.store import Store
@@ -359,6 +362,45 @@ def test_weights_mutations_give_input_errors(valid, tmp_path):
 
     check()
     assert seen and all(refused for _, _, refused in seen), seen
+
+
+def test_mp_import_header_forgeries_give_input_errors(tmp_path):
+    """An MP file (`maps import --format mpd`) with one array's `.npy` header forged (an axis grown, shrunk or
+    emptied, another dtype; the data left as it was): the importer loads the split or refuses in one line, and a
+    header that claims more bytes than the archive holds for it is refused, every one, before NumPy allocates it."""
+    valid = tmp_path / "mp.npz"
+    for split in ("train", "valid", "test"):  # one split per file, so a file of every split is made
+        export_maps(generate_maps(3, 10, seed=4, n_starts=1, moves="moore"), tmp_path / f"{split}.npz", "mpd", split)
+    arrays = {}
+    for i, split in enumerate(("train", "valid", "test")):
+        part = read_npz(tmp_path / f"{split}.npz")
+        arrays.update({f"arr_{4 * i + j}": part[f"arr_{4 * i + j}"] for j in range(4)})
+    np.savez(valid, **arrays)
+    target = tmp_path / "forged.npz"
+    past: list[
+        tuple[str, tuple, str, bool]
+    ] = []  # the forgeries claiming more than the data: (name, shape, dtype, refused)
+
+    @FUZZ
+    @given(
+        index=st.integers(0, 11),
+        axis=st.integers(0, 4),
+        size=st.sampled_from([0, 1, 2, 7, 10**6, 10**12]),
+        dtype=st.sampled_from([None, "<f8", "<c16", "|u1", "<i2"]),
+    )
+    def check(index, axis, size, dtype):
+        name = f"arr_{index}"
+        shape = list(arrays[name].shape)
+        shape[axis % len(shape)] = size
+        forge_npy_header(valid, target, name, tuple(shape), dtype)
+        split = ("train", "valid", "test")[index // 4]
+        refused = _refused(lambda path: read_maps(path, "mpd", split=split), target)
+        claimed = int(np.prod(shape, dtype=object)) * np.dtype(dtype or arrays[name].dtype).itemsize
+        if claimed > arrays[name].nbytes:
+            past.append((name, tuple(shape), dtype, refused))
+
+    check()
+    assert past and all(refused for *_, refused in past), past
 
 
 def test_random_bytes_as_weights_say_what_the_file_is_not(tmp_path):

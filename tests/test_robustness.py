@@ -339,3 +339,21 @@ def test_the_job_gives_the_engines_result(tmp_path):
     for out in (job, engine):
         out["seconds"] = out["strategies"]["random"]["seconds"] = 0
     assert json.dumps(job, sort_keys=True) == json.dumps(engine, sort_keys=True)
+
+
+def test_a_curve_past_the_cells_left_ends_the_search_and_past_a_maps_cells_is_refused(model, maps):
+    """`--max-obstacles` huge kept the greedy search planning after no cell was left (issue 45): past a map's cells
+    it is refused before any work, naming the field; up to them, the search stops where the cells run out and the
+    curve's later points are maps without a pair."""
+    cells = SIZE * SIZE
+    for k in (cells + 1, 10**9):
+        with pytest.raises(InputError, match=f"max_obstacles {k}: more than the {cells} cells of a {SIZE}x{SIZE} map"):
+            robustness(model, maps.take(np.arange(2)), ["random"], max_obstacles=k)
+    result = robustness(model, maps.take(np.arange(2)), ["random"], max_obstacles=cells, edit="remove")
+    by_k = result.strategies["random"].by_k
+    assert [f.k for f in by_k] == list(range(1, cells + 1)) and len(result.overall) == cells
+    made = [f.attacked for f in by_k]
+    last = made.index(0)  # the step where no map had a cell left; every later one the same
+    assert last < cells // 2 and not any(made[last:]) and all(made[:last])
+    # 2 maps: the clean plans, then per step a plan of each map (but the first step's) and at most one candidate each
+    assert result.strategies["random"].planner_calls <= 2 + 4 * last

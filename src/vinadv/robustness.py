@@ -321,6 +321,11 @@ def robustness(
     strength = objective_strength(objective)
     if len(maps) < 1:
         raise InputError("maps: no maps to attack", "n")
+    if int(max_obstacles) > maps.size**2:  # the curve has a point per k: bounded before any is computed
+        raise InputError(
+            f"max_obstacles {max_obstacles}: more than the {maps.size**2} cells of a {maps.size}x{maps.size} map",
+            "max_obstacles",
+        )
     t_start = time.perf_counter()
     # the maps' movement model: costs, regret and harm are its; a planner of another model is refused in one line
     planner = as_planner(planner, maps.size).for_moves(maps.moves)
@@ -338,12 +343,16 @@ def robustness(
             maps.obstacles, starts, goals, planner, cc, strength=strength, progress=progress, first_map=first_map
         )
         by_k, outcomes = [], []
-        for k, pairs in enumerate(result.steps, start=1):
-            expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
-            ident = identify(pairs, harm_tol=harm_tol, harm_rtol=harm_rtol, expert_o=expert_o)
-            outcome = _outcomes(n, pairs.map_index, ident.labels, ident.harm.harm, ident.harm.regret_a)
+        for k in range(1, int(max_obstacles) + 1):
+            if k <= len(result.steps):
+                pairs = result.steps[k - 1]
+                expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
+                ident = identify(pairs, harm_tol=harm_tol, harm_rtol=harm_rtol, expert_o=expert_o)
+                outcome = _outcomes(n, pairs.map_index, ident.labels, ident.harm.harm, ident.harm.regret_a)
+                counts = label_counts(ident.labels)
+            # else: every map ran out of cells at the last step made (`AttackResult.steps`): no pair, as there
             outcomes.append(outcome)
-            by_k.append(Figures.of(k, outcome, counts=label_counts(ident.labels)))
+            by_k.append(Figures.of(k, outcome, counts=counts))
         results[name] = StrategyResult(
             name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes, attack.ranked_as(planner)
         )

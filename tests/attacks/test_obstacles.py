@@ -19,6 +19,7 @@ from vinadv.classify import label_pairs
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
 from vinadv.identify import harm_strength, rule_strength
+from vinadv.planners.registry import load_planner
 from vinadv.planners.vin.reference import plan_reference
 from vinadv.testing.planners import planning_vin
 from vinadv.vocabulary import LABEL_STRENGTH
@@ -251,3 +252,30 @@ def test_bad_obstacle_count_is_refused():
     with pytest.raises(InputError, match="^obstacles must be >= 1") as err:
         make_attack("random", obstacles=0)
     assert err.value.parameters == ("obstacles",)
+
+
+@pytest.mark.parametrize("edit", ["add", "remove"])
+def test_a_greedy_search_past_the_cells_left_stops_when_none_is_left(maps, edit):
+    """`--obstacles 1000000000` kept planning every map at every step after no cell was left (issue 45): the search
+    stops at the step where no map has a valid cell; that step's pairs (none) are the result, and `steps` ends there."""
+    planner = load_planner("optimal", SIZE)
+    calls = []
+    plan = planner.plan
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        assert len(calls) < 5000, "the greedy search kept planning after no cell was left"
+        return plan(*args, **kwargs)
+
+    planner.plan = counted
+    few = slice(0, 3)
+    attack = make_attack("random", seed=1, obstacles=10**9, edit=edit)
+    result = attack.attack(maps.obstacles[few], maps.starts[few, 0], maps.goals[few], planner)
+    k = len(result.steps)
+    assert k < SIZE * SIZE and len(result.pairs) == 0 and len(result.steps[-1]) == 0
+    assert sorted(result.no_valid_cell.tolist()) == [0, 1, 2] and all(len(s) for s in result.steps[:-1])
+    # the steps made are those of an attack of that many cells: the same cells, step for step
+    again = make_attack("random", seed=1, obstacles=k - 1, edit=edit)
+    shorter = again.attack(maps.obstacles[few], maps.starts[few, 0], maps.goals[few], load_planner("optimal", SIZE))
+    for mine, theirs in zip(result.steps[:-1], shorter.steps, strict=True):
+        assert np.array_equal(mine.added, theirs.added) and np.array_equal(mine.map_index, theirs.map_index)

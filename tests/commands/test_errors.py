@@ -1,10 +1,13 @@
 """Library errors name parameters; the command line shows the flags instead."""
 
+import importlib
+import os
 import pickle
 
 from vinadv.cli import main
 from vinadv.commands import cli_message, flag
 from vinadv.errors import InputError
+from vinadv.grid import generate_maps
 
 
 def test_flags_of_parameters():
@@ -63,3 +66,28 @@ def test_bench_leaderboard_names_its_folder_argument(tmp_path, capsys):
     line = capsys.readouterr().err
     assert "--folder" not in line and f"DIR {tmp_path / 'nonexist'}: no such folder" in line
     assert not (tmp_path / "lb").exists()
+
+
+def test_workers_past_four_per_core_are_refused_before_any_process_starts(tmp_path, capsys, monkeypatch):
+    """`--workers 100000` started a LocalCluster that then ignored Ctrl-C: more than 4 per core is refused, one
+    line naming the flag and pointing to --cluster (checked before Dask is imported or a process spawned)."""
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a local cluster was started")
+
+    try:
+        distributed = importlib.import_module("distributed")
+    except ImportError:
+        pass
+    else:
+        monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    generate_maps(2, 10, seed=1, n_starts=1).save(tmp_path / "m.npz")
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    line = ["attack", "--maps", str(tmp_path / "m.npz"), "--strategy", "random", "--planner", "optimal"]
+    line += ["--out", str(tmp_path / "p.npz")]
+    assert main([*line, "--workers", "100000", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "--workers 100000: at most 4 local worker processes per core, 8 on this machine's 2 cores" in err
+    assert "(--cluster tcp://HOST:PORT)" in err and err.count("\n") == 1 and not (tmp_path / "p.npz").exists()
+    assert main([*line, "--workers", "9", "--quiet"]) == 2
+    assert "--workers 9: at most 4" in capsys.readouterr().err

@@ -3,7 +3,7 @@ import pytest
 
 from tests.classify.test_harm import dijkstra, optimal_path
 from vinadv.errors import InputError
-from vinadv.grid import generate_maps, obstacle_fraction, shortest_distances
+from vinadv.grid import generate_maps, generator, obstacle_fraction, shortest_distances
 from vinadv.grid.generator import _paint_shapes
 
 
@@ -64,6 +64,23 @@ def test_bad_arguments_are_input_errors():
         generate_maps(-1)
     with pytest.raises(InputError, match="^n_starts must be >= 1"):
         generate_maps(3, 8, n_starts=0)
+
+
+@pytest.mark.parametrize("moves", ["octile", "news"])
+def test_starts_past_the_cells_a_start_can_be_on_are_refused_before_any_map(moves, monkeypatch):
+    """34 starts on 8x8 maps (36 interior cells, the goal and at least two cells one move from it) drew 32,768 maps
+    before giving up; 10**9 starts are refused as well, never allocated. Checked before any chunk is made."""
+
+    def no_chunk(*args, **kwargs):
+        raise AssertionError("a chunk was generated")
+
+    monkeypatch.setattr(generator, "_generate_chunk", no_chunk)
+    for n_starts in (34, 10**9):
+        with pytest.raises(InputError, match=f"^n_starts {n_starts}: a 8x8 map has at most 33 cells a start") as exc:
+            generate_maps(2, 8, n_starts=n_starts, moves=moves)
+        assert exc.value.parameters == ("n_starts",)
+    monkeypatch.undo()
+    assert generator.start_cells(8) == 33 and generator.start_cells(28) == 673
 
 
 def _shapes_by_testing_every_cell(attempts, is_disc, top, left, height, width, radius, goals, size):

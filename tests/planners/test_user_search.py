@@ -139,6 +139,34 @@ BAD = {
         lambda o, s, g: SearchResult.from_paths(straight(o, s, g), g, expanded=np.zeros((2, 5, 5), bool)),
         r"expansions of shape \(2, 5, 5\) and dtype bool; expected \(2, 6, 6\) bool",
     ),
+    # cells checked in their own dtype before int16: a column 65536 past a legal one never wraps into the grid, a
+    # float is never truncated, and expansions are a 0/1 mask (a NaN is not an expanded cell)
+    "a cell that int16 wraps": (
+        lambda o, s, g: [np.array([[1, 1], [1, 2 + 65536], [1, 3], [1, 4]]), *straight(o, s, g)[1:]],
+        r"paths that are not \(L, 2\) integer cells: cells hold 65538, outside -32768\.\.32767",
+    ),
+    "a wrapped cell in a result": (
+        lambda o, s, g: SearchResult.from_paths(
+            [np.array([[1, 1], [1, 2 - 65536], [1, 3], [1, 4]]), *straight(o, s, g)[1:]], g
+        ),
+        r"plan_paths failed: InputError: cells hold -65534, outside -32768\.\.32767",
+    ),
+    "a float cell": (
+        lambda o, s, g: [np.array([[1, 1], [1, 2.7], [1, 3], [1, 4]]), *straight(o, s, g)[1:]],
+        r"cells hold 2\.7, not a whole number",
+    ),
+    "a NaN cell": (
+        lambda o, s, g: [np.array([[1, 1], [np.nan, 2], [1, 3], [1, 4]]), *straight(o, s, g)[1:]],
+        r"cells hold nan, not a whole number",
+    ),
+    "NaN expansions": (
+        lambda o, s, g: SearchResult.from_paths(straight(o, s, g), g, expanded=np.full((2, 6, 6), np.nan)),
+        r"expanded holds nan \(72 cells\); expected a mask",
+    ),
+    "expansions that are counts": (
+        lambda o, s, g: SearchResult.from_paths(straight(o, s, g), g, expanded=np.full((2, 6, 6), -1)),
+        r"expanded holds -1 \(72 cells\)",
+    ),
     "raises": (lambda o, s, g: 1 / 0, r"planner 'mine.py:make': plan_paths failed: ZeroDivisionError"),
     "exits": (lambda o, s, g: exit(3), r"planner 'mine.py:make': plan_paths failed: SystemExit: 3"),
 }
@@ -242,3 +270,10 @@ def test_the_move_check_agrees_with_the_oracle_s_move_rule_for_every_step(moves,
                 except PlannerError:
                     accepted = False
                 assert accepted == expected, (r, c, dr, dc)
+
+
+def test_expansions_as_a_0_1_number_mask_are_counted_as_the_bool_mask():
+    expanded = np.zeros((2, 6, 6))
+    expanded[:, 1, 1:5] = 1.0
+    result = run(lambda o, s, g: SearchResult.from_paths(straight(o, s, g), g, expanded=expanded))
+    assert result.expanded.dtype == bool and result.expansions.tolist() == [4, 4]

@@ -60,11 +60,13 @@ judged as the pair it would make with the ORIGINAL map (its path and the `streng
 last keeps the strongest candidate of each map (per_map 1 of a ranking strategy, whatever the strategy: for `random`
 and `near-path` the strongest of their `per_map` drawn cells); the last step keeps `per_map` pairs as a one-obstacle
 attack does. So the pairs of K obstacles with per_map 1 extend those of K - 1 (`AttackResult.steps` holds every
-step's pairs). A map with no valid cell at some step gets no pair.
+step's pairs). A map with no valid cell at some step gets no pair; once no map has one, the search stops there (a K
+past the cells a map can take, `obstacles=10**9`, ends when the cells run out): its pairs are that step's (none),
+and `steps` ends with it, as every later step would make none.
 
 The strategies and the shared steps (evaluate, keep, greedy K, removal) are in this one module, as CleanRL keeps an
 algorithm in one file: the strategies differ only in how they score candidates. The white-box strategy's gradients
-(PyTorch) are in `vinadv.attacks.gradients`.
+(PyTorch) are in `vinadv.attacks.gradients`, the neighbourhoods the ranking reads in `vinadv.attacks.neighbourhood`.
 """
 
 from __future__ import annotations
@@ -76,6 +78,7 @@ import numpy as np
 
 from vinadv.attacks.gradients import TORCH_CHUNK as TORCH_CHUNK  # the white-box chunk, importable here too
 from vinadv.attacks.gradients import path_saliency, policy_saliency
+from vinadv.attacks.neighbourhood import steepness, steepness_across, within_distance
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import removable_cells, valid_cells
 from vinadv.errors import InputError
@@ -105,7 +108,8 @@ class AttackResult:
         planner_calls: rollouts run, the original maps' included.
         steps: the pairs kept after each greedy step, `steps[k - 1]` of k added obstacles (the original map against
             the map with the first k cells); the last is `pairs`. With per_map 1, `steps[k - 1]` is exactly what an
-            attack with `obstacles=k` makes.
+            attack with `obstacles=k` makes. Fewer than K where every map ran out of valid cells before step K (the
+            last is then empty, and so would every later step be).
     """
 
     pairs: PairSet
@@ -273,6 +277,8 @@ class Attack:
             fallback = self.ranked_as(planner)
             kept.params = {**kept.params, "planner": planner.spec(), **({"ranked_as": fallback} if fallback else {})}
             steps.append(kept)
+            if not alive.any():  # no map has a cell left: every later step would make no pair
+                break
             if not last:
                 current = obstacles.copy()
                 current[kept.map_index] = kept.obstacles_a
@@ -405,23 +411,6 @@ class NearPathAttack(Attack):
         return np.where(near, ctx.rng.random(ctx.obstacles.shape), -np.inf)
 
 
-def within_distance(mask: np.ndarray, radius: int) -> np.ndarray:
-    """Cells within `radius` king moves (Chebyshev distance) of a True cell of the same map: `(B, N, N)` bool for
-    `mask (B, N, N)` bool. A square's dilation is one along the rows, then one along the columns (SciPy's
-    `maximum_filter` gives the same but takes longer to import than a whole `vinadv run` spends here)."""
-    out = mask.copy()
-    for axis in (1, 2):
-        grown = out.copy()
-        for shift in range(1, radius + 1):
-            lead = [slice(None)] * 3
-            lag = [slice(None)] * 3
-            lead[axis], lag[axis] = slice(shift, None), slice(None, -shift)
-            grown[tuple(lead)] |= out[tuple(lag)]
-            grown[tuple(lag)] |= out[tuple(lead)]
-        out = grown
-    return out
-
-
 class KeyPointsAttack(Attack):
     name = "key-points"
 
@@ -438,14 +427,14 @@ class KeyPointsAttack(Attack):
         if ctx.edit == REMOVE:
             # tier 4 (lowest): every obstacle, in [0, 1); tier 3: those next to the path, in [1, 2); both by the
             # value change across the cell
-            steep = _steepness_across(value, ctx.obstacles)
+            steep = steepness_across(value, ctx.obstacles)
             scale = np.maximum(steep.reshape(b, -1).max(axis=1), 1e-12)[:, None, None]
             scores = np.where(ctx.obstacles, 0.999 * steep / scale, scores)
         else:
             # tier 4 (lowest): any path cell; tier 3: other cells next to the path, by the steepest value change to
             # a neighbour, in [1, 2)
             scores[on_path] = 0.0
-            steep = _steepness(value, ctx.obstacles)
+            steep = steepness(value, ctx.obstacles)
             scale = np.maximum(steep.reshape(b, -1).max(axis=1), 1e-12)[:, None, None]
         scores = np.where(near, 1.0 + 0.999 * steep / scale, scores)
         # moves of the path: move k goes from cell k to cell k + 1 of the same path
@@ -468,38 +457,6 @@ class KeyPointsAttack(Attack):
         turn = same & prev_same & np.any(move != prev_move, axis=1)
         np.maximum.at(scores, (owner[turn], cells[turn, 0], cells[turn, 1]), 3.0 + 0.999 * frac[turn])
         return scores
-
-
-def _steepness(value: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
-    """Largest |value change| from each cell to a free 8-neighbour, `(B, N, N)`."""
-    b, n, m = value.shape
-    v = np.where(obstacles, np.nan, value.astype(np.float64))
-    padded = np.full((b, n + 2, m + 2), np.nan)
-    padded[:, 1:-1, 1:-1] = v
-    steep = np.zeros((b, n, m))
-    for dr in (-1, 0, 1):
-        for dc in (-1, 0, 1):
-            if dr or dc:
-                diff = np.abs(padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m] - v)
-                steep = np.fmax(steep, diff)
-    return np.nan_to_num(steep)
-
-
-def _steepness_across(value: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
-    """Largest |value difference| between two free 8-neighbours of each cell, `(B, N, N)` (0 with fewer than two):
-    what a path through the cell, were it free, would skip."""
-    b, n, m = value.shape
-    padded = np.full((b, n + 2, m + 2), np.nan)
-    padded[:, 1:-1, 1:-1] = np.where(obstacles, np.nan, value.astype(np.float64))
-    hi = np.full((b, n, m), -np.inf)
-    lo = np.full((b, n, m), np.inf)
-    for dr in (-1, 0, 1):
-        for dc in (-1, 0, 1):
-            if dr or dc:
-                v = padded[:, 1 + dr : 1 + dr + n, 1 + dc : 1 + dc + m]
-                hi = np.fmax(hi, v)
-                lo = np.fmin(lo, v)
-    return np.where(hi > lo, hi - lo, 0.0)
 
 
 class SaliencyAttack(Attack):

@@ -1,6 +1,7 @@
 """Scale out on a Dask cluster: `DaskExecutor`, an executor (`vinadv.executor`) that maps a task over chunks on the
 workers of a Dask scheduler and knows no job. The commands open it (`open_executor`) for `--cluster tcp://HOST:PORT`
-(an existing scheduler) or `--workers N` (a LocalCluster of N single-threaded worker processes); the jobs cut their
+(an existing scheduler) or `--workers N` (a LocalCluster of N single-threaded worker processes, at most
+`MAX_WORKERS_PER_CORE` = 4 per core of the machine: a cluster is for more); the jobs cut their
 work in chunks and write their tasks (`vinadv.pipeline`, `vinadv.jobs.attack`, `vinadv.identify`,
 `vinadv.bench.scoring`).
 
@@ -25,6 +26,7 @@ options that ask for one are the commands' (`vinadv.commands.add_cluster_argumen
 from __future__ import annotations
 
 import contextlib
+import os
 import socket
 import uuid
 from collections.abc import Callable, Iterable, Iterator
@@ -40,6 +42,9 @@ INSTALL_HINT = "pip install 'vinadv[cluster]'"
 RETRIES = 3
 #: tasks submitted or waiting per worker thread
 WINDOW_PER_THREAD = 4
+#: a local cluster's worker processes per core of this machine, at most (more only oversubscribe it: a cluster of
+#: several machines, `--cluster`, is for more)
+MAX_WORKERS_PER_CORE = 4
 
 __all__ = ["INSTALL_HINT", "DaskExecutor", "open_cluster", "open_executor", "require_dask", "start_local_cluster"]
 
@@ -59,8 +64,7 @@ def require_dask():
 
 def start_local_cluster(workers: int, **kwargs):
     """A LocalCluster of `workers` processes, one thread each, numeric libraries single-threaded."""
-    if workers < 1:
-        raise InputError(f"workers must be >= 1, got {workers}", "workers")
+    check_local_workers(workers)
     require_dask()
     from distributed import LocalCluster
 
@@ -68,6 +72,22 @@ def start_local_cluster(workers: int, **kwargs):
         n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None, env=dict(SINGLE_THREAD_ENV)
     )
     return LocalCluster(**{**options, **kwargs})
+
+
+def check_local_workers(workers: int) -> None:
+    """Refuse (InputError naming `workers`) fewer than 1 worker process or more than `MAX_WORKERS_PER_CORE` per core of
+    this machine, before any process is started."""
+    if workers < 1:
+        raise InputError(f"workers must be >= 1, got {workers}", "workers")
+    cores = os.cpu_count() or 1
+    if workers > MAX_WORKERS_PER_CORE * cores:
+        raise InputError(
+            f"workers {workers}: at most {MAX_WORKERS_PER_CORE} local worker processes per core, "
+            f"{MAX_WORKERS_PER_CORE * cores} on this machine's {cores} cores; for more, give the scheduler of "
+            "Dask workers on several machines (cluster tcp://HOST:PORT)",
+            "workers",
+            "cluster",
+        )
 
 
 @contextlib.contextmanager

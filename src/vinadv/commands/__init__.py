@@ -144,7 +144,11 @@ def add_cluster_arguments(parser, shard_size: bool = False) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--cluster", metavar="tcp://HOST:PORT", help="compute on this Dask scheduler's workers")
     group.add_argument(
-        "--workers", type=int, metavar="N", help="compute on a local Dask cluster of N single-threaded worker processes"
+        "--workers",
+        type=int,
+        metavar="N",
+        help="compute on a local Dask cluster of N single-threaded worker processes (at most 4 per core of this "
+        "machine; for more, --cluster)",
     )
     if shard_size:
         parser.add_argument(

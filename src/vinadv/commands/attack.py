@@ -59,7 +59,7 @@ def add_attack_arguments(parser) -> None:
         metavar="K",
         help="obstacles added per pair (default 1, the paper's setting); K > 1: greedily, the "
         "strategy run again on the map with the cells chosen so far, keeping the strongest cell "
-        "against the original map's path each time",
+        "against the original map's path each time; the search stops when no map has a valid cell left",
     )
     add_edit_argument(parser)
 

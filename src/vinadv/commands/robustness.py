@@ -61,7 +61,7 @@ def register(subparsers) -> None:
         type=int,
         default=3,
         metavar="K",
-        help="the curve's largest number of added obstacles (default 3)",
+        help="the curve's largest number of added obstacles (default 3; at most a map's N*N cells)",
     )
     p.add_argument(
         "--objective",

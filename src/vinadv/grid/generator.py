@@ -14,10 +14,10 @@ not depend on n being larger, and chunks can be made anywhere (a cluster worker)
 The shapes are painted one by one over their bounding boxes (compiled with Numba), from the same draws as the
 original vectorised formulation (every attempt tested against every cell), so the maps are those it made.
 
-Limits (InputError naming them, before any work): a size where one map's working memory (~`WORK_BYTES_PER_CELL`
-bytes per cell, measured with tracemalloc) exceeds half the available memory (about 9,000x9,000 with
-24 GiB available), and an `n` whose maps would take more than half the available memory (the output is held in
-memory).
+Limits (InputError naming them, before any work): `n_starts` past the cells a start can be on (`start_cells`), a size
+where one map's working memory (~`WORK_BYTES_PER_CELL` bytes per cell, measured with tracemalloc) exceeds half the
+available memory (about 9,000x9,000 with 24 GiB available), and an `n` whose maps would take more than half the
+available memory (the output is held in memory).
 """
 
 from __future__ import annotations
@@ -106,6 +106,14 @@ def check_limits(n: int, size: int, n_starts: int, max_obs: int) -> None:
 
 def _gib(n_bytes: int) -> str:
     return f"{n_bytes / 2**30:,.1f} GiB" if n_bytes >= 2**30 / 10 else f"{n_bytes / 2**20:,.0f} MiB"
+
+
+def start_cells(size: int) -> int:
+    """The most starts a `size x size` map can hold: its interior cells (the border is an obstacle) less the goal and
+    the cells one move from it (a start is `MIN_START_MOVES` = 2 moves away; a goal in a corner of the interior has
+    at least two such cells under every movement model). More is refused before any map is made, where it would
+    otherwise draw maps until the generator gives up."""
+    return max(0, (size - 2) ** 2 - 3)
 
 
 def default_obstacle_params(size: int) -> tuple[int, int]:
@@ -219,8 +227,13 @@ def generate_maps(
     max_size = default_size if max_size is None else max_size
     if max_obs < 1 or max_size < 1:
         raise InputError(f"max_obs and max_size must be >= 1, got {max_obs} and {max_size}")
-    if n_starts >= size * size:
-        raise InputError(f"n_starts {n_starts}: a {size}x{size} map has fewer free cells than that", "n_starts")
+    most = start_cells(size)
+    if n_starts > most:
+        raise InputError(
+            f"n_starts {n_starts}: a {size}x{size} map has at most {most} cells a start can be on (its interior, "
+            f"less the goal and the cells one move from it)",
+            "n_starts",
+        )
     check_limits(n, size, n_starts, max_obs)
     count = chunk_maps(size, max_obs)
 

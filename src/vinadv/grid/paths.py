@@ -15,6 +15,27 @@ from vinadv.errors import InputError
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.npzfile import check_cells_in_grid, check_offsets
 
+#: the values a cell's row or column may hold (the int16 of vinadv's files)
+CELL_RANGE = (int(np.iinfo(np.int16).min), int(np.iinfo(np.int16).max))
+
+
+def _check_cell_values(cells: np.ndarray) -> None:
+    """Refuse (InputError naming the value) cells that int16 would change: not numbers, floats that are not whole
+    numbers (NaN and infinities included), or values outside int16's range. Checked in the cells' own dtype, before
+    any cast, so `r + 65536` never wraps into the grid and `1.7` is never truncated to 1."""
+    if cells.dtype == np.int16 or cells.size == 0:
+        return
+    if cells.dtype.kind not in "iuf":
+        raise InputError(f"cells has dtype {cells.dtype}, expected integers")
+    if cells.dtype.kind == "f":
+        whole = np.isfinite(cells) & (cells == np.round(cells))
+        if not whole.all():
+            raise InputError(f"cells hold {cells[~whole][0].item()!r}, not a whole number")
+    low, high = cells.min(), cells.max()
+    if low < CELL_RANGE[0] or high > CELL_RANGE[1]:
+        value = (low if low < CELL_RANGE[0] else high).item()
+        raise InputError(f"cells hold {value!r}, outside {CELL_RANGE[0]}..{CELL_RANGE[1]} (int16)")
+
 
 class PackedPaths:
     """n paths of `(row, col)` cells, packed flat.
@@ -43,6 +64,7 @@ class PackedPaths:
             raise InputError(f"offsets has shape {offsets.shape} and dtype {offsets.dtype}, expected (n + 1,) integers")
         if offsets[0] != 0 or offsets[-1] != len(cells) or np.any(offsets[1:] < offsets[:-1]):
             raise InputError(f"offsets must start at 0, never decrease and end at the number of cells ({len(cells)})")
+        _check_cell_values(cells)
         self.cells = np.ascontiguousarray(cells, dtype=np.int16)
         self.offsets = np.ascontiguousarray(offsets, dtype=np.int64)
 
@@ -50,11 +72,17 @@ class PackedPaths:
 
     @classmethod
     def pack(cls, paths: Sequence[np.ndarray]) -> PackedPaths:
-        """Pack a sequence of `(L_i, 2)` cell arrays (or lists of `(row, col)`)."""
-        arrays = [np.asarray(p, dtype=np.int16).reshape(-1, 2) for p in paths]
+        """Pack a sequence of `(L_i, 2)` cell arrays (or lists of `(row, col)`). The cells are checked in their own
+        dtype before they become int16 (`_check_cell_values`): a float that is not a whole number, or a number
+        outside int16, is refused, never truncated or wrapped."""
+        arrays = [np.asarray(p).reshape(-1, 2) for p in paths]
         offsets = np.zeros(len(arrays) + 1, dtype=np.int64)
         np.cumsum([len(a) for a in arrays], out=offsets[1:])
-        cells = np.concatenate(arrays) if arrays else np.zeros((0, 2), np.int16)
+        nonempty = [a for a in arrays if a.size]
+        cells = np.concatenate(nonempty) if nonempty else np.zeros((0, 2), np.int16)
+        if cells.dtype.kind == "f":
+            _check_cell_values(cells)
+            cells = cells.astype(np.int64)
         return cls(cells, offsets)
 
     @classmethod

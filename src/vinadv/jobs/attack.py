@@ -219,9 +219,13 @@ def _joined(parts: list[AttackResult], bounds, attack, maps, strategy: str) -> A
 
     params = parts[0].pairs.params if parts else attack.params()  # the planner's spec included
     steps = []
-    for k in range(attack.obstacles):  # each greedy step's pairs, the chunks' joined (the last: the result)
+    # each greedy step's pairs, the chunks' joined (the last: the result); a chunk whose maps ran out of cells stopped
+    # early (`AttackResult.steps`) and adds none to the later steps
+    for k in range(max((len(p.steps) for p in parts), default=1)):
         shifted = []
         for (lo, _), part in zip(bounds, parts):
+            if k >= len(part.steps):
+                continue
             step = part.steps[k]
             step.map_index = step.map_index + lo
             shifted.append(step)

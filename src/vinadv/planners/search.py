@@ -11,10 +11,12 @@ robustness, eval). It declares no policy (`Capabilities.policy` False): `policy_
 `PlannerError`, and the code that needs logits (the rollout metrics' per-cell policy, `evaluation.protocols`) asks
 the capability and says what the planner lacks.
 
-Every search planner's answer passes `check_paths` (as every policy planner's logits pass `check_logits`): one path
-per row, every cell in the grid, the first cell the row's start, each next cell one legal move of the maps' movement
-model away (so never an obstacle), a termination that says `goal` exactly where the path ends at the goal, and
-expansions of the maps' shape. Anything else is a `PlannerError` naming the planner, in one line.
+Every search planner's answer passes `check_paths` (as every policy planner's logits pass `check_logits`): one path per
+row, every cell in the grid (checked in the planner's own dtype, before vinadv's int16: a float that is not a whole
+number or a value outside int16 is refused, never truncated or wrapped into the grid), the first cell the row's start,
+each next cell one legal move of the maps' movement model away (so never an obstacle), a termination that says `goal`
+exactly where the path ends at the goal, and expansions of the maps' shape, a mask (bool, or numbers that are all 0 or
+1: a NaN is refused, never counted). Anything else is a `PlannerError` naming the planner, in one line.
 
 A user's own search planner (`--planner FILE.py:FACTORY` whose factory returns an object with `plan_paths`) is
 wrapped by `UserSearchPlanner`: its exceptions (or `sys.exit`) become one-line `PlannerError`s naming it, and its
@@ -61,7 +63,7 @@ class SearchResult(PlanResult):
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.expanded is not None:
-            self.expanded = np.asarray(self.expanded, dtype=bool)
+            self.expanded = _expansion_mask(self.expanded)
             if self.expanded.ndim != 3 or len(self.expanded) != len(self.paths):
                 raise InputError(
                     f"SearchResult: expanded has shape {self.expanded.shape}, expected ({len(self.paths)}, N, N)"
@@ -82,6 +84,23 @@ class SearchResult(PlanResult):
     def expansions(self) -> np.ndarray | None:
         """`(B,)` int64, how many cells each search expanded; None where the planner does not report them."""
         return None if self.expanded is None else self.expanded.sum(axis=(1, 2), dtype=np.int64)
+
+
+def _expansion_mask(expanded) -> np.ndarray:
+    """`expanded` as a bool mask, checked in its own dtype first: numbers must be 0 or 1 (a NaN, a negative, a count
+    above 1 or a fraction is refused, InputError naming it, never counted as an expanded cell)."""
+    arr = np.asarray(expanded)
+    if arr.dtype == bool:
+        return arr
+    if arr.dtype.kind not in "iuf":
+        raise InputError(f"SearchResult: expanded has dtype {arr.dtype}, expected a bool mask of the expanded cells")
+    bad = (arr != 0) & (arr != 1)  # NaN compares unequal to both
+    if bad.any():
+        raise InputError(
+            f"SearchResult: expanded holds {arr[bad].reshape(-1)[0].item()!r} ({int(bad.sum())} cells); "
+            "expected a mask of the expanded cells (True/False or 0/1)"
+        )
+    return arr.astype(bool)
 
 
 def _last_cells(paths: PackedPaths) -> np.ndarray:

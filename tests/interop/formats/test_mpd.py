@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from tests.fault_files import forge_npy_header
 from tests.grid.oracle import brute_distances
 from tests.interop.conftest import mpd_file
 from vinadv.cli import main
@@ -17,6 +18,7 @@ from vinadv.grid import generate_maps
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import shortest_distances
 from vinadv.interop import export_maps, import_maps, read_maps
+from vinadv.interop.formats import files
 from vinadv.interop.formats.mpd import draw_starts, start_bands
 
 FAMILIES = ("mazes", "forest", "alternating_gaps", "multiple_bugtraps", "shifting_gaps", "single_bugtrap")
@@ -197,3 +199,61 @@ def test_the_command_imports_a_split_and_refuses_another_model(tmp_path, capsys)
     assert main([*line, "--moves", "octile"]) == 2
     assert "--moves 'octile': format mpd holds moore maps" in capsys.readouterr().err
     assert main([*line[:-2], "--split", "all", "--out", str(tmp_path / "x.npz")]) == 2
+
+
+# ------------------------------------------------------------------------------------------- bounds (issue 45)
+
+
+@pytest.fixture
+def small_mp(tmp_path):
+    """An MP file of 4 moore 12x12 maps in its test split."""
+    path = tmp_path / "mp.npz"
+    export_maps(generate_maps(4, 12, seed=3, n_starts=1, moves="moore"), path, "mpd", split="test")
+    return path
+
+
+def test_an_empty_split_reads_as_no_maps_and_the_command_says_so(small_mp, tmp_path, capsys):
+    """A split of 0 maps was a traceback (a reshape of 0 maps); it reads as none, as the other layouts' empty splits,
+    and `maps import` says there is nothing to import."""
+    maps, info = read_maps(small_mp, "mpd", split="valid", starts=3)
+    assert len(maps) == 0 and maps.size == 12 and info["maps"] == 0 and info["maps_left_out_no_start"] == 0
+    out = tmp_path / "m.npz"
+    assert main(["maps", "import", "--format", "mpd", str(small_mp), "--split", "valid", "--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().endswith("mp.npz: no maps to import (split valid)") and not out.exists()
+
+
+@pytest.mark.parametrize("starts", [145, 10**9])
+def test_starts_past_a_maps_cells_are_one_line_before_any_draw(small_mp, tmp_path, capsys, starts):
+    """`--starts` 10^9 tried to allocate terabytes, 145 on 12x12 maps broke a broadcast: more starts than a map has
+    cells is refused, naming the flag; as many as its cells is the padded import."""
+    with pytest.raises(InputError, match=f"n_starts {starts}: more than the 144 cells of the file's 12x12 maps"):
+        read_maps(small_mp, "mpd", starts=starts)
+    line = ["maps", "import", "--format", "mpd", str(small_mp), "--out", str(tmp_path / "m.npz"), "--quiet"]
+    assert main([*line, "--starts", str(starts)]) == 2
+    assert f"vinadv: error: --starts {starts}: more than the 144 cells" in capsys.readouterr().err
+    maps, info = read_maps(small_mp, "mpd", starts=144, seed=2)
+    assert maps.n_starts == 144 and info["maps_padded"] == 4
+    for i in range(len(maps)):  # every band cell once, the rest padded
+        real = maps.starts[i][maps.start_mask[i]]
+        assert len({tuple(c) for c in real.tolist()}) == len(real) < 144
+
+
+@pytest.mark.parametrize(
+    ("name", "shape", "dtype"),
+    [("arr_11", (100000, 1, 1000, 512), None), ("arr_8", (4, 12, 13), None), ("arr_10", (4, 8, 1, 12, 12), "<c16")],
+)
+def test_a_forged_npy_header_is_refused_before_numpy_allocates(small_mp, tmp_path, name, shape, dtype):
+    """A header claiming 381 GiB over a few KiB of data made NumPy allocate what it claims (a MemoryError): the
+    headers are read first, and an array that claims more than its archive holds is one line naming it."""
+    forged = forge_npy_header(small_mp, tmp_path / "forged.npz", name, shape, dtype)
+    with pytest.raises(InputError, match=rf"forged\.npz: array '{name}' has a header that claims shape") as err:
+        read_maps(forged, "mpd")
+    assert "but the archive holds" in str(err.value) and "\n" not in str(err.value)
+    if shape[0] == 100000:
+        assert "(381.5 GiB)" in str(err.value)
+
+
+def test_arrays_that_need_more_than_half_the_memory_are_refused(small_mp, monkeypatch):
+    monkeypatch.setattr(files, "available_memory", lambda: 20_000)
+    with pytest.raises(InputError, match=r"mp\.npz: the arrays read need .* more than half the 19\.5 KiB available"):
+        read_maps(small_mp, "mpd")

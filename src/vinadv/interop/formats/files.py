@@ -3,6 +3,7 @@ the array."""
 
 from __future__ import annotations
 
+import math
 import os
 import zipfile
 from typing import Any
@@ -10,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.grid.generator import available_memory
 
 
 class ForeignArrays:
@@ -45,16 +47,59 @@ class ForeignArrays:
 
 
 def load_npz(path: str, names: tuple[str, ...] | None = None) -> ForeignArrays:
-    """The arrays of the `.npz` file at `path` (only `names` where given, those it has: a split of a large file)."""
+    """The arrays of the `.npz` file at `path` (only `names` where given, those it has: a split of a large file), their
+    sizes checked from their headers before any is read (`check_npz_sizes`)."""
     if not os.path.exists(path):
         raise InputError(f"{path}: no such file")
     if not zipfile.is_zipfile(path):
         raise InputError(f"{path}: not an .npz file (not a zip archive)")
     try:
+        with zipfile.ZipFile(path) as archive:
+            check_npz_sizes(path, archive, names)
         with np.load(path, allow_pickle=False) as npz:
             return ForeignArrays(path, {k: npz[k] for k in npz.files if names is None or k in names})
+    except InputError:
+        raise
     except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
         raise InputError(f"{path}: not a readable .npz file ({exc})") from None
+
+
+def check_npz_sizes(path: str, archive: zipfile.ZipFile, names: tuple[str, ...] | None = None) -> None:
+    """Refuse (InputError naming the file and the array) an array of `archive` (those of `names` where given) whose
+    `.npy` header (read with `numpy.lib.format`, no data) claims more bytes than the archive holds for it (a forged
+    header: NumPy would allocate what it claims before reading), or arrays that together claim more than half the
+    memory available; a header that is not one is a damaged file."""
+    total = 0
+    for info in archive.infolist():
+        if not info.filename.endswith(".npy"):
+            continue
+        name = info.filename[: -len(".npy")]
+        if names is not None and name not in names:
+            continue
+        with archive.open(info) as fh:
+            version = np.lib.format.read_magic(fh)
+            read_header = (
+                np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+            )
+            shape, _, dtype = read_header(fh)
+            held = info.file_size - fh.tell()
+        claimed = math.prod(shape) * dtype.itemsize
+        if claimed > held:
+            raise InputError(
+                f"{path}: array '{name}' has a header that claims shape {shape} of {dtype} ({_size(claimed)}), "
+                f"but the archive holds {_size(held)} for it"
+            )
+        total += claimed
+    avail = available_memory()
+    if total > avail // 2:
+        raise InputError(f"{path}: the arrays read need {_size(total)}, more than half the {_size(avail)} available")
+
+
+def _size(n_bytes: int) -> str:
+    for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n_bytes >= scale:
+            return f"{n_bytes / scale:,.1f} {unit}"
+    return f"{n_bytes} bytes"
 
 
 def load_mat(path: str) -> ForeignArrays:

@@ -10,7 +10,9 @@ the maps cut corners.
 What the import checks, each mismatch one line naming the array: 0/1 maps, one goal per map on a free cell,
 one-hot actions that are an optimal `moore` move at every cell that reaches the goal (the goal excepted: the
 generator writes an arbitrary action there, as at walls and walled-off cells), and the distances: exactly vinadv's
-`moore` expert costs (Dijkstra, corner cutting allowed) where the goal is reachable, `-M*M` elsewhere.
+`moore` expert costs (Dijkstra, corner cutting allowed) where the goal is reachable, `-M*M` elsewhere. Before that,
+the arrays' headers (`files.check_npz_sizes`) and `--starts` (at most a map's `M*M` cells) are bounded before anything
+is allocated for them; a split of 0 maps reads as none.
 
 Starts (the file has none) are drawn as the Neural A* loader draws them (github.com/omron-sinicx/neural-astar,
 `utils/data.py`), a rule that wins over vinadv's own start rule for these maps: over the cells whose stored
@@ -62,6 +64,8 @@ def _read(f: ForeignArrays, split: str, k: int, seed: int) -> tuple[MapSet, dict
     n, m = maps.shape[0], maps.shape[1]
     if maps.shape[2] != m or m < 3:
         raise f.fail(names[0], f"has shape {maps.shape}, expected (n, M, M) maps")
+    if k > m * m:  # before the starts are drawn: distinct starts of a map are at most its cells
+        raise InputError(f"n_starts {k}: more than the {m * m} cells of the file's {m}x{m} maps", "n_starts")
     goal_maps = f.get(names[1], 4, (n, 1, m, m))
     policies = f.get(names[2], 5, (n, 8, 1, m, m))
     stored = f.get(names[3], 4, (n, 1, m, m))[:, 0].astype(np.float64)
@@ -111,7 +115,7 @@ def start_bands(stored: np.ndarray) -> np.ndarray:
     """`(n, 3, M*M)` bool: the cells of each map in the loader's three bands (55-70, 70-85, 85-100 percent of the
     distance), from the stored negative distances `(n, M, M)`: over the values above the map's minimum, NumPy's
     default percentiles 45, 30, 15, 0 of the negative distance bound the bands, inclusive."""
-    flat = stored.reshape(len(stored), -1)
+    flat = stored.reshape(len(stored), stored.shape[1] * stored.shape[2])  # (0, M*M) for an empty split
     low = flat.min(axis=1, keepdims=True) if len(flat) else np.zeros((0, 1))
     above = flat > low
     values = np.where(above, flat, np.nan)
@@ -137,15 +141,15 @@ def draw_starts(bands: np.ndarray, k: int, rng: np.random.Generator) -> tuple[np
     counts = bands.sum(axis=2)  # (n, 3)
     in_bands = bands.any(axis=1)  # (n, M*M)
     n_cells = in_bands.sum(axis=1)
-    drawn = _pick(bands, counts, rng.random((n, k, 2)))
+    cells = np.argsort(~bands, axis=2, kind="stable")  # (n, 3, M*M): each band's cells first, row-major
+    drawn = _pick(cells, counts, rng.random((n, k, 2)))
     full = n_cells >= k  # maps whose k starts can differ: redraw their repeats
     while True:
-        same = drawn[:, :, None] == drawn[:, None, :]  # (n, k, k): slot j equals slot i
-        repeat = np.tril(same, -1).any(axis=2) & full[:, None]  # equals an earlier slot i < j
+        repeat = _repeats(drawn) & full[:, None]
         if not repeat.any():
             break
         rows, slots = np.nonzero(repeat)
-        drawn[rows, slots] = _pick(bands[rows], counts[rows], rng.random((len(rows), 1, 2)))[:, 0]
+        drawn[rows, slots] = _pick(cells[rows], counts[rows], rng.random((len(rows), 1, 2)))[:, 0]
     few = np.flatnonzero(~full & (n_cells > 0))
     if len(few):  # all their band cells, row-major, first in the row
         order = np.argsort(~in_bands[few], axis=1, kind="stable")[:, :k]
@@ -154,19 +158,31 @@ def draw_starts(bands: np.ndarray, k: int, rng: np.random.Generator) -> tuple[np
     return np.where(out_counts[:, None] > 0, drawn, 0), out_counts
 
 
-def _pick(bands: np.ndarray, counts: np.ndarray, u: np.ndarray) -> np.ndarray:
+def _repeats(drawn: np.ndarray) -> np.ndarray:
+    """`(n, k)` bool: the slots of `drawn (n, k)` that equal an earlier slot of their row (a stable sort puts equal
+    values in slot order, so every one but the first of a run repeats an earlier one; memory O(n k), not O(n k^2))."""
+    order = np.argsort(drawn, axis=1, kind="stable")
+    ranked = np.take_along_axis(drawn, order, axis=1)
+    later = np.zeros(drawn.shape, dtype=bool)
+    later[:, 1:] = ranked[:, 1:] == ranked[:, :-1]
+    out = np.zeros(drawn.shape, dtype=bool)
+    np.put_along_axis(out, order, later, axis=1)
+    return out
+
+
+def _pick(cells: np.ndarray, counts: np.ndarray, u: np.ndarray) -> np.ndarray:
     """`(m, j)` flat cell indices, one per uniform pair `u (m, j, 2)`: `u[..., 0]` one of the map's non-empty bands
-    of `bands (m, 3, C)` (cell counts `counts (m, 3)`), `u[..., 1]` a cell of it; a map without a non-empty band 0."""
+    (cell counts `counts (m, 3)`), `u[..., 1]` a cell of it, the band's cells being the first `counts` of `cells
+    (m, 3, C)` (row-major); a map without a non-empty band 0."""
     nonempty = counts > 0
     n_bands = nonempty.sum(axis=1)  # (m,)
     which = np.minimum((u[..., 0] * n_bands[:, None]).astype(np.int64), np.maximum(n_bands - 1, 0)[:, None])
     # the which-th non-empty band: the first band whose running count of non-empty bands exceeds `which`
     band = np.argmax(np.cumsum(nonempty, axis=1)[:, None, :] > which[..., None], axis=2)  # (m, j)
-    rows = np.arange(len(bands))[:, None]
+    rows = np.arange(len(cells))[:, None]
     size = counts[rows, band]
     rank = np.minimum((u[..., 1] * size).astype(np.int64), np.maximum(size - 1, 0))
-    running = np.cumsum(bands, axis=2)[rows, band]  # (m, j, C)
-    drawn = np.argmax(running > rank[..., None], axis=2)
+    drawn = cells[rows, band, rank]  # the rank-th cell of the band, row-major
     return np.where((n_bands > 0)[:, None], drawn, 0)
 
 
