@@ -6,7 +6,10 @@ first use, so `import vinadv` stays light.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import importlib
+import sys
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from vinadv.analysis import Results
@@ -22,3 +25,24 @@ def open(url: str | None = None) -> Results:
     from vinadv.analysis import open as open_results  # noqa: PLC0415
 
     return open_results(url)
+
+
+def lazy_names(package: str, modules: dict[str, tuple[str, ...]]) -> tuple[list[str], Callable, Callable]:
+    """A package's names imported from their modules when first used (PEP 562): `modules` lists the names by the
+    submodule of `package` that defines them. Returns the package's `(__all__, __getattr__, __dir__)`; a name, once
+    imported, is kept in the package."""
+    exports = {name: module for module, names in modules.items() for name in names}
+    names = sorted(exports)
+
+    def __getattr__(name: str) -> Any:
+        module = exports.get(name)
+        if module is None:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(f"{package}.{module}"), name)
+        setattr(sys.modules[package], name, value)
+        return value
+
+    def __dir__() -> list[str]:
+        return names
+
+    return names, __getattr__, __dir__

@@ -11,31 +11,20 @@ import json
 import pytest
 import sqlalchemy as sa
 
+from tests.bench.two_maps import two_map_suite
 from tests.store.test_concurrent_writers import in_two_threads, meet_after_first_call
 from vinadv.bench import scoring, suites
 from vinadv.bench.scoring import deterministic_part, entry_json, entry_key, run_bench
-from vinadv.bench.suites import AttackGroup, Suite, maps_sha256
+from vinadv.bench.suites import Suite
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.planners.registry import load_planner
-from vinadv.robustness import heldout_maps
 from vinadv.store import Store
 
 
 @pytest.fixture(scope="module")
 def tiny() -> Suite:
-    maps = heldout_maps(2, 28, seed=1000)
-    return Suite(
-        name="tiny-concurrent",
-        description="a test suite",
-        n=2,
-        size=28,
-        maps_seed=1000,
-        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
-        attacks=(AttackGroup(("random",), "add", 1),),
-        budget=2,
-        chunk=1,
-    )
+    return two_map_suite("tiny-concurrent")
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ rule labeller, harm) does not load scikit-learn and PyTorch with the classifiers
 needs neither of them for labelling).
 """
 
-import importlib
+from vinadv import lazy_names
 
 #: the package's public names, by the module that defines them
 _MODULES = {
@@ -30,18 +30,4 @@ _MODULES = {
     "rule": ("PairLabels", "default_threshold", "is_fork", "label_batch", "label_pairs", "path_distances"),
     "similarity": ("DistanceThresholdClassifier", "dtw_distances", "frechet_distances", "hausdorff_distances"),
 }
-_EXPORTS = {name: module for module, names in _MODULES.items() for name in names}
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'vinadv.classify' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"vinadv.classify.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return __all__
+__all__, __getattr__, __dir__ = lazy_names(__name__, _MODULES)

@@ -3,22 +3,23 @@
 from __future__ import annotations
 
 import argparse
-import datetime
 import hashlib
 import time
 from pathlib import Path
 
-from vinadv import __version__
 from vinadv.commands import add_actions, add_device_argument, command_line, option_values, planner_device, set_threads
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.commands.train_options import (
     add_run_arguments,
     add_weights_out_argument,
     check_weights_out,
+    file_beside,
+    import_stamp,
+    read_licence,
+    save_import,
     train_and_save,
     training_checkpoint,
     training_record,
-    write_record,
 )
 from vinadv.errors import InputError
 from vinadv.planners.weights import weights_checksum
@@ -104,17 +105,6 @@ def register(subparsers) -> None:
     tr.set_defaults(func=cmd_train)
 
 
-def _beside(checkpoint: str, given: str | None, name: str) -> Path | None:
-    """`given`, or the file `name` in the checkpoint's folder when there (None if not)."""
-    if given is not None:
-        path = Path(given)
-        if not path.is_file():
-            raise InputError(f"{given}: no such file")
-        return path
-    path = Path(checkpoint).parent / name
-    return path if path.is_file() else None
-
-
 def cmd_import_weights(args: argparse.Namespace) -> int:
     from vinadv.planners.neural_astar.checkpoint import (
         check_train_config,
@@ -129,19 +119,13 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
     )
     if not Path(args.checkpoint).is_file():
         raise InputError(f"{args.checkpoint}: no such checkpoint file")
-    config_path = _beside(args.checkpoint, args.train_config, "train.yaml")
-    license_path = _beside(args.checkpoint, args.license, "LICENSE")
+    config_path = file_beside(args.checkpoint, args.train_config, "train.yaml")
+    license_path = file_beside(args.checkpoint, args.license, "LICENSE")
     model, source = from_lightning_checkpoint(args.checkpoint)
     train_config = None
     if config_path is not None:
         train_config = read_train_config(config_path)
         check_train_config(train_config, model.config.depth, str(config_path))
-    license_text = None
-    if license_path is not None:
-        try:
-            license_text = license_path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InputError(f"{license_path}: cannot read the licence ({exc})") from None
     record = {
         "format": IMPORT_RECORD_FORMAT,
         "planner": "neural-astar",
@@ -154,21 +138,20 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
         "train_config_file": None
         if config_path is None
         else {"path": str(config_path), "sha256": weights_checksum(config_path)},
-        "license": license_text,
+        "license": read_licence(license_path),
         "model": model.config.to_dict(),
         "moves": MOVES,
         "corner_cutting": True,
-        "command": command_line(),
-        "vinadv": __version__,
-        "imported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        **import_stamp(),
     }
-    save_neural_astar(model, out, record)
-    record_path = write_record(out, record)
-    return emit(
+    return save_import(
         args,
+        model,
+        out,
         record,
-        f"wrote {out} and {record_path}: Neural A* (CNN encoder, depth {model.config.depth}) from {args.checkpoint} "
-        f"(epoch {source['epoch']}); use --planner neural-astar --weights {out}",
+        save_neural_astar,
+        f"Neural A* (CNN encoder, depth {model.config.depth}) from {args.checkpoint} (epoch {source['epoch']}); "
+        f"use --planner neural-astar --weights {out}",
     )
 
 

@@ -195,6 +195,47 @@ def write_record(out: Path, record: dict) -> Path:
     return record_path
 
 
+def file_beside(weights: str, given: str | None, name: str) -> Path | None:
+    """`given` (an input of an import: it must be a file), or the file `name` in the folder of the imported
+    `weights` when there (None if not)."""
+    if given is not None:
+        path = Path(given)
+        if not path.is_file():
+            raise InputError(f"{given}: no such file")
+        return path
+    path = Path(weights).parent / name
+    return path if path.is_file() else None
+
+
+def read_licence(path: Path | None) -> str | None:
+    """The text of the licence file `path` an import copies into its record (None without one)."""
+    if path is None:
+        return None
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read the licence ({exc})") from None
+
+
+def import_stamp() -> dict:
+    """The tail of an import's record: the command line, vinadv's version and the time of the import."""
+    return {
+        "command": command_line(),
+        "vinadv": __version__,
+        "imported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    }
+
+
+def save_import(
+    args: argparse.Namespace, model: Any, out: Path, record: dict, save: Callable[..., None], summary: str
+) -> int:
+    """Write imported weights with `save(model, out, record)` and the record beside them, then report: `wrote OUT
+    and RECORD: summary`, or the record with `--json`."""
+    save(model, out, record)
+    record_path = write_record(out, record)
+    return emit(args, record, f"wrote {out} and {record_path}: {summary}")
+
+
 def train_and_save(
     args: argparse.Namespace,
     train: Callable[..., tuple],

@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import datetime
 from pathlib import Path
 
-from vinadv import __version__
-from vinadv.commands import add_actions, command_line
-from vinadv.commands.output import add_output_options, emit
-from vinadv.commands.train_options import add_weights_out_argument, check_weights_out, write_record
+from vinadv.commands import add_actions
+from vinadv.commands.output import add_output_options
+from vinadv.commands.train_options import (
+    add_weights_out_argument,
+    check_weights_out,
+    file_beside,
+    import_stamp,
+    read_licence,
+    save_import,
+)
 from vinadv.errors import InputError
 from vinadv.planners.weights import weights_checksum
 
@@ -53,34 +58,24 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
     out = check_weights_out(args.out, {"FILE": args.weights, "--license": args.license})
     if not Path(args.weights).is_file():
         raise InputError(f"{args.weights}: no such weights file")
-    if args.license is not None and not Path(args.license).is_file():
-        raise InputError(f"{args.license}: no such file")
-    license_path = Path(args.license) if args.license else Path(args.weights).parent / "LICENSE"
-    license_text = None
-    if license_path.is_file():
-        try:
-            license_text = license_path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InputError(f"{license_path}: cannot read the licence ({exc})") from None
+    license_path = file_beside(args.weights, args.license, "LICENSE")
     model = from_authors_state_dict(args.weights, args.mode)
     record = {
         "format": IMPORT_RECORD_FORMAT,
         "planner": NAMES[args.mode],
         "mode": args.mode,
         "imported_from": {"path": args.weights, "sha256": weights_checksum(args.weights), "source": args.source},
-        "license": license_text,
+        "license": read_licence(license_path),
         "size": 64,
         "moves": MOVES,
         "corner_cutting": True,
-        "command": command_line(),
-        "vinadv": __version__,
-        "imported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        **import_stamp(),
     }
-    save_transpath(model, out, record)
-    record_path = write_record(out, record)
-    return emit(
+    return save_import(
         args,
+        model,
+        out,
         record,
-        f"wrote {out} and {record_path}: TransPath ({args.mode}) from {args.weights}; use --planner "
-        f"{NAMES[args.mode]} --weights {out}",
+        save_transpath,
+        f"TransPath ({args.mode}) from {args.weights}; use --planner {NAMES[args.mode]} --weights {out}",
     )

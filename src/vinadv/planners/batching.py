@@ -105,6 +105,26 @@ def forward_batches(lo: int, hi: int, on_cpu: bool, batch_size: int) -> list[sli
     return [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
+def forward_maps(b: int, device, batch_size: int, forward: Callable[[slice], None]) -> None:
+    """Call `forward(sl)` over the slices of `b` maps, without gradients: on the CPU split between threads of one
+    torch thread each (`over_maps`), on another device `batch_size` maps at a time, one after another; the slices are
+    `forward_batches`'."""
+    import torch
+
+    on_cpu = device.type == "cpu"
+
+    def work(lo: int, hi: int) -> None:
+        with torch.no_grad():  # per thread: grad mode is thread-local
+            for sl in forward_batches(lo, hi, on_cpu, batch_size):
+                forward(sl)
+
+    if not on_cpu:
+        work(0, b)
+    else:
+        with torch_threads(1):
+            over_maps(b, work)
+
+
 def set_torch_threads(threads: int) -> None:
     """PyTorch's intra-op threads set to `threads` for good, and Numba's parallel kernels to as many (at most its
     pool).

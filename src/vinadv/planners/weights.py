@@ -38,6 +38,8 @@ __all__ = [
     "torch_load",
     "trained_moves",
     "weights_checksum",
+    "as_loaded",
+    "weights_path_checksum",
     "weights_file",
 ]
 
@@ -161,3 +163,18 @@ def _why_unreadable(name: str, exc: Exception) -> str:
         if fh.read(1) == b"\x80":  # a pickle's protocol opcode: pickled by Python, not saved by torch
             return "a Python pickle, not a file torch.save wrote; loading it would run code"
     return "damaged or another kind of file"
+
+
+def weights_path_checksum(model: object) -> str | None:
+    """The sha256 of the weights file a model was read from (its `weights_path`); None for a model made in memory."""
+    path = getattr(model, "weights_path", None)
+    return weights_checksum(path) if path is not None else None
+
+
+def as_loaded(model, name: str, data: dict):
+    """`model`, read from the weights file `name` (its contents `data`), in eval mode with the file's `record` and
+    its `weights_path`; returned."""
+    model.eval()
+    model.record = data.get("record") or {}
+    model.weights_path = name
+    return model

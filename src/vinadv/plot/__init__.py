@@ -12,7 +12,7 @@ The names below are imported from their modules when first used: `vinadv.plot.pa
 viewer's pages and the report's captions read it), the drawing modules import it at their top.
 """
 
-import importlib
+from vinadv import lazy_names
 
 #: the package's public names, by the module that defines them
 _MODULES = {
@@ -21,18 +21,4 @@ _MODULES = {
     "curves": ("WORST_CASE", "draw_k_curve", "k_curve", "k_series"),
     "files": ("figure_format", "save_figure"),
 }
-_EXPORTS = {name: module for module, names in _MODULES.items() for name in names}
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'vinadv.plot' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"vinadv.plot.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return __all__
+__all__, __getattr__, __dir__ = lazy_names(__name__, _MODULES)

@@ -102,21 +102,31 @@ def literal_search(cost: torch.Tensor, free: np.ndarray, start, goal, budget: in
         closed.add(v)
         expanded[v // n, v % n] = True
         if v == t:
-            path = [v]
-            while path[-1] != s:
-                path.append(parent[path[-1]])
-            return [(u // n, u % n) for u in reversed(path)], expanded, True
+            return parents_chain(parent, s, t, n), expanded, True
         open_[v] = 0.0
-        r, col = divmod(v, n)
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, col + dc
-                if (dr, dc) == (0, 0) or not (0 <= rr < n and 0 <= cc < n) or not free[rr, cc]:
-                    continue
-                u = rr * n + cc
-                g2 = g[v] + c[v]
-                if (open_[u] == 0 and u not in closed) or (open_[u] == 1 and g[u] > g2):
-                    g[u] = g2
-                    open_[u] = 1.0
-                    parent[u] = v
+        for u, _, _ in free_neighbours(free, v, n):
+            g2 = g[v] + c[v]
+            if (open_[u] == 0 and u not in closed) or (open_[u] == 1 and g[u] > g2):
+                g[u] = g2
+                open_[u] = 1.0
+                parent[u] = v
     return [(int(start[0]), int(start[1]))], expanded, False
+
+
+def parents_chain(parent: dict, s: int, t: int, n: int) -> list[tuple[int, int]]:
+    """The cells of the parents' chain from the start index `s` to the goal index `t` on `n x n` maps, start first."""
+    path = [t]
+    while path[-1] != s:
+        path.append(parent[path[-1]])
+    return [(u // n, u % n) for u in reversed(path)]
+
+
+def free_neighbours(free: np.ndarray, v: int, n: int):
+    """The free cells among the eight around the cell index `v` (corners cut), row-major: `(index, dr, dc)`."""
+    r, col = divmod(v, n)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            rr, cc = r + dr, col + dc
+            if (dr, dc) == (0, 0) or not (0 <= rr < n and 0 <= cc < n) or not free[rr, cc]:
+                continue
+            yield rr * n + cc, dr, dc

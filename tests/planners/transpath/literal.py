@@ -26,6 +26,7 @@ import torch
 import torch.nn.functional as F
 
 from tests.needs import public_data
+from tests.planners.neural_astar.literal import free_neighbours, parents_chain
 
 WEIGHTS = {"cf": "transpath/cf.pth", "f": "transpath/focal.pth"}
 TARGET = {"cf": "k", "f": "f"}
@@ -166,21 +167,12 @@ def literal_search(values: torch.Tensor, free: np.ndarray, start, goal, mode: st
         closed.add(v)
         expanded[v // n, v % n] = True
         if v == t:
-            path = [v]
-            while path[-1] != s:
-                path.append(parent[path[-1]])
-            return [(u // n, u % n) for u in reversed(path)], expanded, True, ties
+            return parents_chain(parent, s, t, n), expanded, True, ties
         open_np[v] = 0.0
-        r, col = divmod(v, n)
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, col + dc
-                if (dr, dc) == (0, 0) or not (0 <= rr < n and 0 <= cc < n) or not free[rr, cc]:
-                    continue
-                u = rr * n + cc
-                g2 = g_[v] + (diagonal if dr and dc else np.float32(1.0))  # float32 + float32
-                if (open_np[u] == 0 and u not in closed) or (open_np[u] == 1 and g_[u] > g2):
-                    g_[u] = g2
-                    open_np[u] = 1.0
-                    parent[u] = v
+        for u, dr, dc in free_neighbours(free, v, n):
+            g2 = g_[v] + (diagonal if dr and dc else np.float32(1.0))  # float32 + float32
+            if (open_np[u] == 0 and u not in closed) or (open_np[u] == 1 and g_[u] > g2):
+                g_[u] = g2
+                open_np[u] = 1.0
+                parent[u] = v
     return [(int(start[0]), int(start[1]))], expanded, False, ties

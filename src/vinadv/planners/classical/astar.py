@@ -145,6 +145,56 @@ def _replica_key(g, h, g_ratio32, h_ratio32, sqrt_n32):
 
 
 @numba.njit(cache=True, nogil=True)
+def _pop_current(hk1, hk2, hcell, size, state, key1):
+    """Pop the heap until an entry that is current (its cell open, its key the cell's key in `key1`); returns
+    `(cell, new size)`, the cell -1 where the heap runs out."""
+    while size > 0:
+        size = _heap_pop(hk1, hk2, hcell, size)
+        i = hcell[size]
+        if state[i] == 1 and hk1[size] == key1[i]:
+            return i, size
+    return -1, size
+
+
+@numba.njit(cache=True, nogil=True)
+def _close(sel, goal, state, parent, expanded, cells_out):
+    """Close the selected cell `sel` and mark it expanded. Returns `(path length, termination)` where the search
+    ends: no cell to select (`sel` -1: `(1, STEP_LIMIT)`) or the goal (its parents' chain written into `cells_out`,
+    start first: `(length, GOAL)`); elsewhere `(0, STEP_LIMIT)`, the search goes on."""
+    if sel < 0:
+        return 1, STEP_LIMIT  # open list empty: the goal cannot be reached
+    m = expanded.shape[1]
+    state[sel] = 2
+    expanded[sel // m, sel - (sel // m) * m] = True
+    if sel != goal:
+        return 0, STEP_LIMIT
+    length = 0
+    i = goal
+    while i >= 0:
+        length += 1
+        i = parent[i]
+    i = goal
+    for k in range(length - 1, -1, -1):
+        cells_out[k, 0] = i // m
+        cells_out[k, 1] = i - (i // m) * m
+        i = parent[i]
+    return length, GOAL
+
+
+@numba.njit(cache=True, nogil=True)
+def _successor(obstacles, state, sel, dr, dc, corner_cutting):
+    """The index of the cell one move `(dr, dc)` from the cell `sel` where the move is legal (the maps' rule) and
+    that cell is not closed; else -1."""
+    m = obstacles.shape[1]
+    r = sel // m
+    c = sel - r * m
+    if not legal_move(obstacles, r, c, dr, dc, corner_cutting):
+        return -1
+    j = (r + dr) * m + (c + dc)
+    return -1 if state[j] == 2 else j
+
+
+@numba.njit(cache=True, nogil=True)
 def _search_one(cost, obstacles, sr, sc, gr, gc, params, cells_out, expanded):
     """One search (see the module doc) from `(sr, sc)` to `(gr, gc)` with the parameters `params` that
     `best_first_search` packs; fills `cells_out` (the path, start first) and `expanded`; returns
@@ -195,39 +245,15 @@ def _search_one(cost, obstacles, sr, sc, gr, gc, params, cells_out, expanded):
         size = _heap_push(hk1, hk2, hcell, 0, a, b, start)
         key1[start] = a
     for _ in range(budget):
-        # the best open cell: pop until an entry that is current (its cell open, its key the cell's key)
-        sel = -1
-        while size > 0:
-            size = _heap_pop(hk1, hk2, hcell, size)
-            i = hcell[size]
-            if state[i] == 1 and hk1[size] == key1[i]:
-                sel = i
-                break
-        if sel < 0:
-            return 1, STEP_LIMIT  # open list empty: the goal cannot be reached
-        state[sel] = 2
+        sel, size = _pop_current(hk1, hk2, hcell, size, state, key1)  # the best open cell
+        length, term = _close(sel, goal, state, parent, expanded, cells_out)
+        if length > 0:
+            return length, term
         r = sel // m
         c = sel - r * m
-        expanded[r, c] = True
-        if sel == goal:
-            length = 0
-            i = goal
-            while i >= 0:
-                length += 1
-                i = parent[i]
-            i = goal
-            for k in range(length - 1, -1, -1):
-                cells_out[k, 0] = i // m
-                cells_out[k, 1] = i - (i // m) * m
-                i = parent[i]
-            return length, GOAL
         for a_ in range(deltas.shape[0]):
-            dr = deltas[a_, 0]
-            dc = deltas[a_, 1]
-            if not legal_move(obstacles, r, c, dr, dc, corner_cutting):
-                continue
-            j = (r + dr) * m + (c + dc)
-            if state[j] == 2:
+            j = _successor(obstacles, state, sel, deltas[a_, 0], deltas[a_, 1], corner_cutting)
+            if j < 0:
                 continue
             if exact:
                 g2_64 = g64[sel] + np.float64(cost[r, c]) * move_costs[a_]

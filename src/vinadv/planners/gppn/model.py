@@ -35,7 +35,7 @@ from torch import nn
 
 from vinadv.errors import InputError
 from vinadv.outfile import save_torch
-from vinadv.planners.weights import MAX_ITERATIONS, torch_load, weights_file
+from vinadv.planners.weights import MAX_ITERATIONS, as_loaded, torch_load, weights_file
 
 GPPN_FORMAT = "vinadv.gppn/1"
 WEIGHTS_DIR = Path(__file__).resolve().parents[2] / "weights"
@@ -215,7 +215,4 @@ def load_gppn(path: str | os.PathLike | None = None, size: int = 28) -> GPPN:
         model.load_state_dict(data["state_dict"])
     except (KeyError, TypeError, RuntimeError) as exc:
         raise InputError(f"{name}: config or state dict do not match a GPPN ({str(exc).splitlines()[0]})") from None
-    model.eval()
-    model.record = data.get("record") or {}
-    model.weights_path = name
-    return model
+    return as_loaded(model, name, data)

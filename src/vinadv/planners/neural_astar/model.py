@@ -27,7 +27,7 @@ from torch import nn
 
 from vinadv.errors import InputError
 from vinadv.outfile import save_torch
-from vinadv.planners.weights import WEIGHTS_DIR, torch_load, weights_file
+from vinadv.planners.weights import WEIGHTS_DIR, as_loaded, torch_load, weights_file
 
 NEURAL_ASTAR_FORMAT = "vinadv.neural-astar/1"
 #: the output channels of the authors' CNN encoder blocks; a depth-d encoder uses the first d
@@ -113,13 +113,18 @@ class GuidanceEncoder(nn.Module):
 def encoder_inputs(obstacles: torch.Tensor, starts: torch.Tensor | None, goals: torch.Tensor) -> torch.Tensor:
     """`(B, 2, N, N)`: the map (1 - obstacles: 1 free, as the MP dataset's) and the start map plus the goal map (2 at
     a start that is the goal), the authors' "m+" input; `starts` None marks the goal alone."""
-    b = obstacles.shape[0]
-    rows = torch.arange(b, device=obstacles.device)
+    return torch.stack([1.0 - obstacles, start_goal_marks(obstacles, starts, goals)], dim=1)
+
+
+def start_goal_marks(obstacles: torch.Tensor, starts: torch.Tensor | None, goals: torch.Tensor) -> torch.Tensor:
+    """`(B, N, N)` like `obstacles`: 1 at each map's start and 1 at its goal (2 at a start that is the goal); `starts`
+    None marks the goal alone. The marks channel of the Neural A* and TransPath inputs."""
+    rows = torch.arange(obstacles.shape[0], device=obstacles.device)
     marks = torch.zeros_like(obstacles)
     if starts is not None:
         marks[rows, starts[:, 0], starts[:, 1]] += 1.0
     marks[rows, goals[:, 0], goals[:, 1]] += 1.0
-    return torch.stack([1.0 - obstacles, marks], dim=1)
+    return marks
 
 
 class NeuralAstar(nn.Module):
@@ -165,7 +170,4 @@ def load_neural_astar(path: str | os.PathLike | None = None) -> NeuralAstar:
         raise InputError(
             f"{name}: config or state dict do not match a Neural A* model ({str(exc).splitlines()[0]})"
         ) from None
-    model.eval()
-    model.record = data.get("record") or {}
-    model.weights_path = name
-    return model
+    return as_loaded(model, name, data)

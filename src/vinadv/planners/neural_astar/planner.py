@@ -25,14 +25,14 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from vinadv.planners.batching import forward_batches, over_maps, torch_threads
+from vinadv.planners.batching import forward_maps, over_maps, torch_threads
 from vinadv.planners.classical.astar import best_first_search
 from vinadv.planners.interface import Capabilities, PlannerError
 from vinadv.planners.neural_astar.differentiable import NeuralAstarPaths, authors_heuristic
 from vinadv.planners.neural_astar.model import NeuralAstar
 from vinadv.planners.result import GOAL, STEP_LIMIT, PlanResult, check_plan_inputs
 from vinadv.planners.search import SearchPlanner, SearchResult
-from vinadv.planners.weights import weights_checksum
+from vinadv.planners.weights import weights_path_checksum
 
 __all__ = ["MOVES", "NeuralAstarPlanner"]
 
@@ -69,8 +69,7 @@ class NeuralAstarPlanner(SearchPlanner):
         self.device_type = None if device is None else self.device.type
         self.model = model.to(self.device).eval()
         self.batch_size = max(1, int(batch_size))
-        path = getattr(model, "weights_path", None)
-        self._checksum = weights_checksum(path) if path is not None else None
+        self._checksum = weights_path_checksum(model)
 
     @property
     def checksum(self) -> str | None:
@@ -97,19 +96,13 @@ class NeuralAstarPlanner(SearchPlanner):
         b = len(obstacles)
         out = np.empty(obstacles.shape, dtype=np.float32)
 
-        def forward(lo: int, hi: int) -> None:
-            with torch.no_grad():
-                for sl in forward_batches(lo, hi, self.device.type == "cpu", self.batch_size):
-                    obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
-                    s = None if starts is None else torch.from_numpy(starts[sl]).to(self.device)
-                    g = torch.from_numpy(goals[sl]).to(self.device)
-                    out[sl] = self.model(obs, s, g).to("cpu", torch.float32).numpy()
+        def forward(sl: slice) -> None:
+            obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
+            s = None if starts is None else torch.from_numpy(starts[sl]).to(self.device)
+            g = torch.from_numpy(goals[sl]).to(self.device)
+            out[sl] = self.model(obs, s, g).to("cpu", torch.float32).numpy()
 
-        if self.device.type != "cpu":
-            forward(0, b)
-        else:
-            with torch_threads(1):
-                over_maps(b, forward)
+        forward_maps(b, self.device, self.batch_size, forward)
         return out
 
     def plan_paths(

@@ -34,7 +34,8 @@ from torch import nn
 
 from vinadv.errors import InputError
 from vinadv.outfile import save_torch
-from vinadv.planners.weights import WEIGHTS_DIR, torch_load, weights_file
+from vinadv.planners.neural_astar.model import start_goal_marks
+from vinadv.planners.weights import WEIGHTS_DIR, as_loaded, torch_load, weights_file
 
 __all__ = [
     "MODES",
@@ -218,13 +219,7 @@ class SpatialTransformer(nn.Module):
 def network_inputs(obstacles: torch.Tensor, starts: torch.Tensor | None, goals: torch.Tensor) -> torch.Tensor:
     """`(B, 2, N, N)`: the map (1 = obstacle, the authors' arrays) and the goal map (`starts` None, the `cf` model's
     input) or the start map plus the goal map (the `f` model's; 2 at a start that is the goal)."""
-    b = obstacles.shape[0]
-    rows = torch.arange(b, device=obstacles.device)
-    marks = torch.zeros_like(obstacles)
-    if starts is not None:
-        marks[rows, starts[:, 0], starts[:, 1]] += 1.0
-    marks[rows, goals[:, 0], goals[:, 1]] += 1.0
-    return torch.stack([obstacles, marks], dim=1)
+    return torch.stack([obstacles, start_goal_marks(obstacles, starts, goals)], dim=1)
 
 
 class TransPath(nn.Module):
@@ -289,7 +284,4 @@ def load_transpath(path: str | os.PathLike | None = None, mode: str = "cf") -> T
         model.load_state_dict(data["state_dict"])
     except (KeyError, TypeError, RuntimeError) as exc:
         raise InputError(f"{name}: the state dict does not match TransPath's ({str(exc).splitlines()[0]})") from None
-    model.eval()
-    model.record = data.get("record") or {}
-    model.weights_path = name
-    return model
+    return as_loaded(model, name, data)

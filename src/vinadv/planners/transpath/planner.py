@@ -16,13 +16,13 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from vinadv.planners.batching import forward_batches, over_maps, torch_threads
+from vinadv.planners.batching import forward_maps
 from vinadv.planners.interface import Capabilities, PlannerError
 from vinadv.planners.result import check_plan_inputs
 from vinadv.planners.search import SearchPlanner, SearchResult
 from vinadv.planners.transpath.model import SIZE, TransPath
 from vinadv.planners.transpath.search import F_W, K_FLOOR, octile_heuristic, transpath_search
-from vinadv.planners.weights import weights_checksum
+from vinadv.planners.weights import weights_path_checksum
 
 __all__ = ["MOVES", "NAMES", "TransPathPlanner"]
 
@@ -67,8 +67,7 @@ class TransPathPlanner(SearchPlanner):
         self.model = model.to(self.device).eval()
         self.batch_size = max(1, int(batch_size))
         self.f_w = F_W
-        path = getattr(model, "weights_path", None)
-        self._checksum = weights_checksum(path) if path is not None else None
+        self._checksum = weights_path_checksum(model)
 
     @property
     def checksum(self) -> str | None:
@@ -85,22 +84,16 @@ class TransPathPlanner(SearchPlanner):
         out = np.empty(obstacles.shape, dtype=np.float32)
         exp = np.empty(obstacles.shape, dtype=np.float32) if self.mode == "f" else None
 
-        def forward(lo: int, hi: int) -> None:
-            with torch.no_grad():
-                for sl in forward_batches(lo, hi, self.device.type == "cpu", self.batch_size):
-                    obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
-                    s = None if starts is None else torch.from_numpy(starts[sl]).to(self.device)
-                    g = torch.from_numpy(goals[sl]).to(self.device)
-                    y = self.model(obs, s, g).to("cpu", torch.float32)  # (b, 1, 64, 64), as the authors' tensors
-                    out[sl] = y[:, 0].numpy()
-                    if exp is not None:
-                        exp[sl] = torch.exp(y)[:, 0].numpy()
+        def forward(sl: slice) -> None:
+            obs = torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device)
+            s = None if starts is None else torch.from_numpy(starts[sl]).to(self.device)
+            g = torch.from_numpy(goals[sl]).to(self.device)
+            y = self.model(obs, s, g).to("cpu", torch.float32)  # (b, 1, 64, 64), as the authors' tensors
+            out[sl] = y[:, 0].numpy()
+            if exp is not None:
+                exp[sl] = torch.exp(y)[:, 0].numpy()
 
-        if self.device.type != "cpu":
-            forward(0, b)
-        else:
-            with torch_threads(1):
-                over_maps(b, forward)
+        forward_maps(b, self.device, self.batch_size, forward)
         return out, exp
 
     def _check_inputs(self, obstacles, starts, goals):

@@ -36,8 +36,7 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.grid.moves import move_model
-from vinadv.grid.shortest_paths import legal_move
-from vinadv.planners.classical.astar import _heap_pop, _heap_push, _replica_key
+from vinadv.planners.classical.astar import _close, _heap_pop, _heap_push, _pop_current, _replica_key, _successor
 from vinadv.planners.result import GOAL, STEP_LIMIT, PlanResult, check_plan_inputs
 from vinadv.planners.search import SearchResult
 
@@ -132,45 +131,21 @@ def _search_one(h32, focal_exp, obstacles, sr, sc, gr, gc, params, cells_out, ex
                 i = stash[s]
                 fsize = _heap_push(fk1, fk2, fcell, fsize, -np.float64(focal_exp[i // m, i - (i // m) * m]), 0.0, i)
         else:
-            while size > 0:  # the best open cell: pop until an entry that is current
-                size = _heap_pop(hk1, hk2, hcell, size)
-                i = hcell[size]
-                if state[i] == 1 and hk1[size] == key1[i]:
-                    sel = i
-                    break
-        if sel < 0:
-            return 1, STEP_LIMIT  # open list empty: the goal cannot be reached
-        state[sel] = 2
-        r = sel // m
-        c = sel - r * m
-        expanded[r, c] = True
-        if sel == goal:
-            length = 0
-            i = goal
-            while i >= 0:
-                length += 1
-                i = parent[i]
-            i = goal
-            for k in range(length - 1, -1, -1):
-                cells_out[k, 0] = i // m
-                cells_out[k, 1] = i - (i // m) * m
-                i = parent[i]
-            return length, GOAL
+            sel, size = _pop_current(hk1, hk2, hcell, size, state, key1)  # the best open cell
+        length, term = _close(sel, goal, state, parent, expanded, cells_out)
+        if length > 0:
+            return length, term
         for a_ in range(deltas.shape[0]):
-            dr = deltas[a_, 0]
-            dc = deltas[a_, 1]
-            if not legal_move(obstacles, r, c, dr, dc, corner_cutting):
-                continue
-            j = (r + dr) * m + (c + dc)
-            if state[j] == 2:
+            j = _successor(obstacles, state, sel, deltas[a_, 0], deltas[a_, 1], corner_cutting)
+            if j < 0:
                 continue
             g2 = np.float32(g32[sel] + np.float32(move_costs[a_]))
             if state[j] == 1 and not g32[j] > g2:
                 continue
             g32[j] = g2
             parent[j] = sel
-            rj = r + dr
-            cj = c + dc
+            rj = j // m
+            cj = j - rj * m
             if focal:
                 if state[j] == 0:
                     fsize = _heap_push(fk1, fk2, fcell, fsize, -np.float64(focal_exp[rj, cj]), 0.0, j)
