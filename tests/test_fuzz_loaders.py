@@ -7,6 +7,7 @@ fails. ~30 examples per loader; well under a minute."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import io
 import sqlite3
@@ -51,6 +52,22 @@ FUZZ = settings(
 )
 
 
+def _write_maps(path):
+    """The maps file with vinadv.maps/3's optional fields too: a frozen mask and provenance."""
+    maps = MapSet.load(write_maps(path))
+    frozen = np.zeros(maps.obstacles.shape, dtype=bool)
+    frozen[:, -1] = True
+    n = len(maps)
+    dataclasses.replace(
+        maps,
+        frozen=frozen,
+        source=np.array(["a.map"] * n),
+        source_sha256=np.array(["0f" * 32] * n),
+        origin=np.zeros((n, 2), np.int64),
+    ).save(path)
+    return path
+
+
 def _load_maps(path):
     return MapSet.load(path)
 
@@ -90,7 +107,7 @@ def _load_database(path):
 
 
 WRITERS = {
-    "maps": (write_maps, _load_maps),
+    "maps": (_write_maps, _load_maps),
     "paths": (write_paths, _load_paths),
     "pairs": (write_pairs, _load_pairs),
     "weights": (write_weights, _load_weights),
@@ -113,7 +130,7 @@ NPZ = ("maps", "paths", "pairs", "classifier")
 #: the fields a loader reads with a default where a file lacks them (files written before the field existed):
 #: dropping or renaming one leaves a valid file. Every other field is required.
 OPTIONAL = {
-    "maps": {"corner_cutting", "seed"},
+    "maps": {"corner_cutting", "seed", "frozen", "source", "source_sha256", "origin"},
     "paths": {"corner_cutting", "model"},
     "pairs": {"corner_cutting", "edit"},
     "classifier": {"record"},

@@ -340,7 +340,15 @@ def robustness(
             name, per_map=1, seed=seed, budget=budget, radius=radius, obstacles=max_obstacles, edit=edit
         )
         result = attack.attack(
-            maps.obstacles, starts, goals, planner, cc, strength=strength, progress=progress, first_map=first_map
+            maps.obstacles,
+            starts,
+            goals,
+            planner,
+            cc,
+            strength=strength,
+            progress=progress,
+            first_map=first_map,
+            frozen=maps.frozen,
         )
         by_k, outcomes = [], []
         for k in range(1, int(max_obstacles) + 1):

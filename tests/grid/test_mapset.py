@@ -21,7 +21,7 @@ def test_round_trip(tmp_path, maps):
         np.testing.assert_array_equal(getattr(back, field), getattr(maps, field))
     assert back.expert == maps.expert
     assert back.corner_cutting == maps.corner_cutting and back.seed == 2
-    assert back.moves == "octile" and str(np.load(tmp_path / "m.npz")["format"]) == "vinadv.maps/2"
+    assert back.moves == "octile" and str(np.load(tmp_path / "m.npz")["format"]) == "vinadv.maps/3"
 
 
 @pytest.mark.parametrize("moves", ["moore", "news"])
@@ -186,3 +186,79 @@ def test_concat_of_parts_gives_the_whole_and_refuses_mismatched_parts(maps):
         MapSet.concat([maps, other])
     padded = dataclasses.replace(maps.take(np.arange(2)), start_counts=np.array([4, 2]))
     assert MapSet.concat([padded, maps.take(np.arange(2, 4))]).start_counts.tolist() == [4, 2, 4, 4]
+
+
+def _masked(maps):
+    """`maps` with a frozen mask and provenance (vinadv.maps/3's optional fields)."""
+    n = len(maps)
+    frozen = np.zeros(maps.obstacles.shape, dtype=bool)
+    frozen[:, -1, :] = True
+    frozen[::2, :, -2:] = True
+    return dataclasses.replace(
+        maps,
+        frozen=frozen,
+        source=np.array([f"m{i}.map" for i in range(n)]),
+        source_sha256=np.array(["ab" * 32 if i % 2 else "" for i in range(n)]),
+        origin=np.stack([np.arange(n), 2 * np.arange(n)], axis=1),
+    )
+
+
+def test_frozen_cells_and_provenance_round_trip(tmp_path, maps):
+    masked = _masked(maps)
+    masked.save(tmp_path / "m.npz")
+    back = MapSet.load(tmp_path / "m.npz")
+    for field in ("frozen", "source", "source_sha256", "origin"):
+        np.testing.assert_array_equal(getattr(back, field), getattr(masked, field))
+    assert back.frozen.dtype == bool and back.origin.dtype == np.int64
+
+
+def test_version_2_files_read_with_no_frozen_cells(tmp_path, maps):
+    fields = dict(np.load(_saved(tmp_path, maps)))
+    assert "frozen" not in fields and "source" not in fields  # a set without them writes neither
+    fields["format"] = np.array("vinadv.maps/2")
+    np.savez(tmp_path / "old.npz", **fields)
+    old = MapSet.load(tmp_path / "old.npz")
+    assert old.frozen is None and old.source is None and old.origin is None
+    assert not old.frozen_or_none().any()
+    assert old.obstacles.tobytes() == maps.obstacles.tobytes()
+
+
+def test_take_and_concat_keep_frozen_cells_and_provenance(maps):
+    masked = _masked(maps)
+    idx = np.array([5, 0, 3])
+    part = masked.take(idx)
+    for field in ("frozen", "source", "source_sha256", "origin"):
+        np.testing.assert_array_equal(getattr(part, field), getattr(masked, field)[idx])
+    whole = MapSet.concat([masked.take(np.arange(8)), masked.take(np.arange(8, 20))])
+    for field in ("frozen", "source", "source_sha256", "origin"):
+        np.testing.assert_array_equal(getattr(whole, field), getattr(masked, field))
+    # a part without them: its maps have no frozen cell and an unknown source
+    mixed = MapSet.concat([masked.take(np.arange(2)), maps.take(np.arange(2))])
+    assert mixed.frozen[:2].any() and not mixed.frozen[2:].any()
+    assert list(mixed.source) == ["m0.map", "m1.map", "", ""] and (mixed.origin[2:] == 0).all()
+    assert MapSet.concat([maps.take(np.arange(2))] * 2).frozen is None
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"frozen": np.zeros((20, 16, 15), dtype=bool)}, "'frozen' has shape"),
+        ({"frozen": np.zeros((20, 16, 16), dtype=np.int64)}, "'frozen' has dtype"),
+        ({"origin": None}, "'origin' is missing"),
+        ({"origin": np.full((20, 2), -1)}, "'origin' has a negative"),
+        ({"source_sha256": np.array(["xyz"] * 20)}, "'source_sha256' has 'xyz'"),
+        ({"source": np.zeros(20)}, "'source' has dtype"),
+    ],
+)
+def test_bad_frozen_cells_and_provenance_are_refused(tmp_path, maps, change, message):
+    path = tmp_path / "m.npz"
+    _masked(maps).save(path)
+    data = dict(np.load(path))
+    for k, v in change.items():
+        if v is None:
+            del data[k]
+        else:
+            data[k] = v
+    np.savez(path, **data)
+    with pytest.raises(InputError, match=message):
+        MapSet.load(path)

@@ -4,7 +4,7 @@ per map (the paper's setting), or K added greedily; or, with `edit="remove"`, on
 Every strategy follows the same three steps, and differs only in the first:
 
 1. score the candidate cells of each map (`candidate_scores`, `(B, N, N)`, `-inf` = not a candidate); only
-   valid cells (see `validity.valid_cells`) are ever candidates;
+   valid cells (see `validity.valid_cells`) are ever candidates, never a frozen cell (`frozen`);
 2. evaluate the `budget` best-scored candidates of each map: add the obstacle, plan on the adversarial map
    (the original map is planned once per map);
 3. keep `per_map` pairs per map: for the ranking strategies, the strongest by `strength` (default: a
@@ -212,6 +212,7 @@ class Attack:
         strength: Callable[[PairSet], np.ndarray] | None = None,
         progress: bool = False,
         first_map: int = 0,
+        frozen: np.ndarray | None = None,
     ) -> AttackResult:
         """Attack a batch of maps with `planner` (a `Planner`, or a `VIN`): obstacles `(B, N, N)` bool, starts
         and goals `(B, 2)`; `self.obstacles` cells per pair, greedily (see the module doc).
@@ -223,6 +224,9 @@ class Attack:
         batch's result for them (so a batch can be attacked in shards). Randomised strategies draw one
         `rng.random((B, N, N))` per step, one PCG64 step per number, so a shard starts `first_map * N * N` steps in
         (every step draws for all B maps, those out of the attack included, so no map's draw depends on another's).
+
+        `frozen`: `(B, N, N)` bool, the cells no step may add to or free (`MapSet.frozen`: an importer's padding), or
+        None; they are never candidates (`validity`), so no strategy edits them.
         """
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         starts = np.ascontiguousarray(starts, dtype=np.int64)
@@ -242,7 +246,7 @@ class Attack:
                 plans = planner.plan(current, starts, goals, corner_cutting)
                 calls += b
             candidates = removable_cells if self.edit == REMOVE else valid_cells
-            valid = candidates(current, starts, goals, corner_cutting, planner.moves) & alive[:, None, None]
+            valid = candidates(current, starts, goals, corner_cutting, planner.moves, frozen) & alive[:, None, None]
             ctx = AttackContext(
                 current,
                 starts,

@@ -16,6 +16,12 @@ Which cells may be freed (edit `remove`, DESIGN.md "Obstacle removal"): an obsta
 reachable from the start. Freeing a cell only adds moves, so the goal stays reachable, and K cells are valid exactly
 when each is a valid one-cell removal of the map with the cells before it freed (`valid_removals`).
 
+Frozen cells (a map set's `frozen` mask, DESIGN.md "Several obstacles" and "Obstacle removal": the padding an
+importer added around a map that was not square): no attack may add an obstacle to one or free one. Every function
+here takes `frozen` (`(B, N, N)` bool, or None for none) and leaves those cells out; the attack strategies draw
+every candidate from `valid_cells` or `removable_cells`, so none ever edits a frozen cell. Without a mask (or an
+all-False one) every result is the same as before, bit for bit.
+
 K obstacles (`valid_additions`): K distinct cells, each free on the original map and neither the start nor the
 goal, with the goal still reachable from the start once all K are added. Adding obstacles only removes paths, so a
 set is valid exactly when each of its cells, added one after the other in any order, is a valid cell
@@ -154,6 +160,7 @@ def valid_cells(
     goals: np.ndarray,
     corner_cutting: bool = True,
     moves: str = DEFAULT_MOVES,
+    frozen: np.ndarray | None = None,
 ) -> np.ndarray:
     """Cells where one added obstacle makes a valid adversarial map: `(B, N, N)` bool.
 
@@ -163,6 +170,7 @@ def valid_cells(
         goals: `(B, 2)` `(row, col)`; the goal must be reachable from the start.
         corner_cutting: the maps' move rule (whether a diagonal move may cut a corner).
         moves: the maps' movement model (`vinadv.grid.moves`).
+        frozen: `(B, N, N)` bool, cells no attack may edit (never valid), or None.
     """
     deltas = move_model(moves).deltas
     obstacles, starts, goals = _contiguous(obstacles, starts, goals)
@@ -196,7 +204,26 @@ def valid_cells(
     valid &= ~separator
     # a start that cannot reach its goal has no valid cell at all (the map is not a solvable map)
     valid[~reachable] = False
-    return valid
+    return _unfrozen(valid, frozen)
+
+
+def _unfrozen(cells: np.ndarray, frozen: np.ndarray | None) -> np.ndarray:
+    """`cells (B, N, N)` bool without the `frozen` cells (None: none are)."""
+    if frozen is None:
+        return cells
+    frozen = np.asarray(frozen, dtype=bool)
+    if frozen.shape != cells.shape:
+        raise ValueError(f"frozen has shape {frozen.shape}, the maps {cells.shape}")
+    return cells & ~frozen
+
+
+def _touches_frozen(cells: np.ndarray, frozen: np.ndarray | None) -> np.ndarray:
+    """`(B,)` bool: whether any of each map's `cells (B, K, 2)` is frozen (None: none is)."""
+    if frozen is None:
+        return np.zeros(len(cells), dtype=bool)
+    frozen = np.asarray(frozen, dtype=bool)
+    idx = np.arange(len(cells))[:, None]
+    return frozen[idx, cells[..., 0], cells[..., 1]].any(axis=1)
 
 
 @numba.njit(cache=True, parallel=True)
@@ -215,6 +242,7 @@ def valid_additions(
     added: np.ndarray,
     corner_cutting: bool = True,
     moves: str = DEFAULT_MOVES,
+    frozen: np.ndarray | None = None,
 ) -> np.ndarray:
     """Whether adding the cells `added` to each map makes a valid adversarial map: `(B,)` bool.
 
@@ -227,9 +255,11 @@ def valid_additions(
             (and from a start on an obstacle nothing is) with all K added.
         corner_cutting: the maps' move rule (whether a diagonal move may cut a corner).
         moves: the maps' movement model (`vinadv.grid.moves`).
+        frozen: `(B, N, N)` bool, cells no attack may edit (a set with one is never valid), or None.
     """
     obstacles, starts, goals = _contiguous(obstacles, starts, goals)
     ok, cells = _distinct_cells(obstacles, added)
+    ok &= ~_touches_frozen(cells, frozen)
     idx = np.arange(len(obstacles))[:, None]
     ok &= ~obstacles[idx, cells[..., 0], cells[..., 1]].any(axis=1)
     ok &= ~((cells == starts[:, None]).all(axis=2) | (cells == goals[:, None]).all(axis=2)).any(axis=1)
@@ -272,13 +302,14 @@ def removable_cells(
     goals: np.ndarray,
     corner_cutting: bool = True,
     moves: str = DEFAULT_MOVES,
+    frozen: np.ndarray | None = None,
 ) -> np.ndarray:
     """Cells where freeing one obstacle makes a valid adversarial map (edit `remove`): `(B, N, N)` bool, the obstacle
-    cells that are not border walls, on the maps whose goal is reachable from the start (arguments as for
+    cells that are not border walls nor frozen, on the maps whose goal is reachable from the start (arguments as for
     `valid_cells`)."""
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     ok = solvable(obstacles, starts, goals, corner_cutting, moves)
-    return obstacles & ~border_walls(obstacles) & ok[:, None, None]
+    return _unfrozen(obstacles & ~border_walls(obstacles) & ok[:, None, None], frozen)
 
 
 def valid_removals(
@@ -288,13 +319,16 @@ def valid_removals(
     removed: np.ndarray,
     corner_cutting: bool = True,
     moves: str = DEFAULT_MOVES,
+    frozen: np.ndarray | None = None,
 ) -> np.ndarray:
     """Whether freeing the cells `removed` (`(B, K, 2)`, or `(B, 2)` for K = 1) of each map makes a valid adversarial
-    map: `(B,)` bool. Valid when they are K distinct cells on the grid, each an obstacle of the original map and not
-    a border wall, and the goal is reachable from the start on the original map (so on the edited one too)."""
+    map: `(B,)` bool. Valid when they are K distinct cells on the grid, each an obstacle of the original map, not a
+    border wall and not `frozen` (`(B, N, N)` bool or None), and the goal is reachable from the start on the
+    original map (so on the edited one too)."""
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
     ok, cells = _distinct_cells(obstacles, removed)
     idx = np.arange(len(obstacles))[:, None]
     ok &= obstacles[idx, cells[..., 0], cells[..., 1]].all(axis=1)
     ok &= ~border_walls(obstacles)[idx, cells[..., 0], cells[..., 1]].any(axis=1)
+    ok &= ~_touches_frozen(cells, frozen)
     return ok & solvable(obstacles, starts, goals, corner_cutting, moves)

@@ -1,6 +1,10 @@
-"""A dataset of grid-world maps with starts, goals and expert (optimal) paths; file format "vinadv.maps/2".
+"""A dataset of grid-world maps with starts, goals and expert (optimal) paths; file format "vinadv.maps/3".
 
 Version 2 holds the movement model (field `moves`); a "vinadv.maps/1" file, which has none, reads as `octile`.
+Version 3 adds two optional parts: `frozen` `(n, N, N)` bool, the cells no attack may add an obstacle to or free
+(an importer's padding of a map that was not square), and each map's provenance, `source` `(n,)` (the file's name,
+"" unknown), `source_sha256` `(n,)` (its hex digest, "" unknown) and `origin` `(n, 2)` (the row and column of the
+map's cell (0, 0) in the source: a crop's window). A /1 or /2 file reads with neither.
 """
 
 from __future__ import annotations
@@ -16,9 +20,12 @@ from vinadv.grid.moves import DEFAULT_MOVES, check_moves, read_moves
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 
-MAPS_FORMAT = "vinadv.maps/2"
-#: the earlier format versions also read (a /1 file as `octile` maps)
-OLDER_MAPS_FORMATS = ("vinadv.maps/1",)
+MAPS_FORMAT = "vinadv.maps/3"
+#: the earlier format versions also read (a /1 file as `octile` maps; /1 and /2 without frozen cells or provenance)
+OLDER_MAPS_FORMATS = ("vinadv.maps/1", "vinadv.maps/2")
+#: the provenance fields, written and read together
+PROVENANCE = ("source", "source_sha256", "origin")
+_HEX = frozenset("0123456789abcdef")
 
 
 @dataclass(kw_only=True, eq=False)
@@ -38,6 +45,11 @@ class MapSet:
         start_counts: `(n,)` int64 or None. Maps imported from other codebases may have fewer starts than others:
             map `i` then has `start_counts[i]` real starts and its slots `s >= start_counts[i]` are explicit padding
             (start = the goal, cost 0, a one-cell path), to be skipped through `start_mask`. None: all S are real.
+        frozen: `(n, N, N)` bool or None: the cells no attack may add an obstacle to or free (an importer's padding
+            of a map that was not square; `vinadv.attacks.validity`). None: no cell is frozen.
+        source, source_sha256: `(n,)` str or None: each map's source file (its name) and the file's sha256 (hex),
+            "" where unknown. origin: `(n, 2)` int64 or None: the source cell (row, col) of each map's cell (0, 0)
+            (a crop's window; (0, 0) for a whole map). The three are given together or not at all.
     """
 
     obstacles: np.ndarray
@@ -49,9 +61,33 @@ class MapSet:
     seed: int = -1
     start_counts: np.ndarray | None = None
     moves: str = DEFAULT_MOVES
+    frozen: np.ndarray | None = None
+    source: np.ndarray | None = None
+    source_sha256: np.ndarray | None = None
+    origin: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.moves = check_moves(self.moves, self.corner_cutting)
+        if self.frozen is not None:
+            self.frozen = np.asarray(self.frozen, dtype=bool)
+            if self.frozen.shape != self.obstacles.shape:
+                raise InputError(f"frozen has shape {self.frozen.shape}, the obstacles {self.obstacles.shape}")
+        given = [getattr(self, f) is not None for f in PROVENANCE]
+        if any(given) and not all(given):
+            raise InputError("source, source_sha256 and origin go together (a map's provenance)", *PROVENANCE)
+        if all(given):
+            n = len(self.obstacles)
+            self.source = np.asarray(self.source, dtype=str).reshape(n)
+            self.source_sha256 = np.asarray(self.source_sha256, dtype=str).reshape(n)
+            self.origin = np.asarray(self.origin, dtype=np.int64).reshape(n, 2)
+
+    @property
+    def has_provenance(self) -> bool:
+        return self.source is not None
+
+    def frozen_or_none(self) -> np.ndarray:
+        """`(n, N, N)` bool: the frozen cells (all False where the set has no mask)."""
+        return np.zeros(self.obstacles.shape, dtype=bool) if self.frozen is None else self.frozen
 
     @property
     def start_mask(self) -> np.ndarray:
@@ -85,13 +121,16 @@ class MapSet:
             seed=self.seed,
             start_counts=None if self.start_counts is None else np.asarray(self.start_counts)[idx],
             moves=self.moves,
+            frozen=None if self.frozen is None else self.frozen[idx],
+            **({f: getattr(self, f)[idx] for f in PROVENANCE} if self.has_provenance else {}),
         )
 
     @classmethod
     def concat(cls, parts: list[MapSet], names: list[str] | None = None) -> MapSet:
         """The maps of `parts`, in order: one set of the same size, starts per map, corner cutting and movement
         model (a part that differs raises InputError naming it, `names[i]` or its index, and the field). The seed is
-        the parts' common one, else -1 (unknown: the maps came from several)."""
+        the parts' common one, else -1 (unknown: the maps came from several). Frozen cells and provenance are kept:
+        where some parts have them, the others' maps have no frozen cell and an unknown source ("", origin (0, 0))."""
         if not parts:
             raise InputError("no maps sets to concatenate")
         names = names or [f"part {i}" for i in range(len(parts))]
@@ -108,6 +147,7 @@ class MapSet:
                         f"{name}: {field} is {got!r}, {names[0]}'s is {want!r}: only like sets concatenate"
                     )
         padded = any(p.start_counts is not None for p in parts)
+        frozen = any(p.frozen is not None for p in parts)
         seeds = {int(p.seed) for p in parts}
         return cls(
             obstacles=np.concatenate([p.obstacles for p in parts]),
@@ -119,6 +159,8 @@ class MapSet:
             seed=seeds.pop() if len(seeds) == 1 else -1,
             start_counts=np.concatenate([p.start_mask.sum(axis=1) for p in parts]).astype(np.int64) if padded else None,
             moves=first.moves,
+            frozen=np.concatenate([p.frozen_or_none() for p in parts]) if frozen else None,
+            **(_joined_provenance(parts) if any(p.has_provenance for p in parts) else {}),
         )
 
     @classmethod
@@ -153,6 +195,16 @@ class MapSet:
                 "moves": np.array(self.moves),
                 "seed": np.array(int(self.seed)),
                 **({} if self.start_counts is None else {"start_counts": np.asarray(self.start_counts, np.int64)}),
+                **({} if self.frozen is None else {"frozen": self.frozen.astype(bool)}),
+                **(
+                    {
+                        "source": np.asarray(self.source, dtype=str),
+                        "source_sha256": np.asarray(self.source_sha256, dtype=str),
+                        "origin": np.asarray(self.origin, dtype=np.int64),
+                    }
+                    if self.has_provenance
+                    else {}
+                ),
             },
         )
 
@@ -182,6 +234,7 @@ class MapSet:
         corner_cutting = bool(r.scalar("corner_cutting", "b", default=True))
         moves = read_moves(r, corner_cutting)
         check_maps(r.path, obstacles, goals, starts, expert, corner_cutting, counts, moves)
+        frozen = r.array("frozen", "b", 3, obstacles.shape) if r.has("frozen") else None
         return cls(
             obstacles=obstacles.astype(bool),
             goals=goals,
@@ -192,4 +245,36 @@ class MapSet:
             seed=int(r.scalar("seed", "i", default=-1)),
             start_counts=counts,
             moves=moves,
+            frozen=frozen,
+            **_read_provenance(r, n),
         )
+
+
+def _read_provenance(r: NpzReader, n: int) -> dict:
+    """The provenance fields of the maps file `r` of `n` maps, checked: all three or none (a /1 or /2 file: none)."""
+    present = [f for f in PROVENANCE if r.has(f)]
+    if not present:
+        return {}
+    if len(present) < len(PROVENANCE):
+        missing = next(f for f in PROVENANCE if f not in present)
+        raise r.fail(missing, f"is missing (it goes with {', '.join(present)}: a map's provenance)")
+    source = r.array("source", "U", 1, (n,))
+    digests = r.array("source_sha256", "U", 1, (n,))
+    for d in digests:
+        if d and (len(d) != 64 or not set(d) <= _HEX):
+            raise r.fail("source_sha256", f"has {str(d)[:20]!r}, not a sha256 in hex (64 digits) or ''")
+    origin = r.array("origin", "i", 2, (n, 2)).astype(np.int64)
+    if origin.size and origin.min() < 0:
+        raise r.fail("origin", "has a negative row or column")
+    return {"source": source, "source_sha256": digests, "origin": origin}
+
+
+def _joined_provenance(parts: list[MapSet]) -> dict:
+    """The provenance of the parts' maps in order, unknown ("", origin (0, 0)) for the maps of a part without."""
+    out: dict[str, list] = {f: [] for f in PROVENANCE}
+    for p in parts:
+        n = len(p)
+        out["source"].append(p.source if p.has_provenance else np.full(n, ""))
+        out["source_sha256"].append(p.source_sha256 if p.has_provenance else np.full(n, ""))
+        out["origin"].append(p.origin if p.has_provenance else np.zeros((n, 2), np.int64))
+    return {f: np.concatenate(v) for f, v in out.items()}

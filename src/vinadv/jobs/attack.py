@@ -46,10 +46,11 @@ def attack_maps(
     objective: str = "paper",
     first_map: int = 0,
     progress: bool = False,
+    frozen=None,
 ) -> AttackResult:
     """`strategy`'s attack (`make_attack(strategy, **options)`) of the maps `obstacles`, `starts` (one per map),
     `goals` with `planner`, keeping the strongest candidates by `objective` ('paper' | 'harm'); the maps are maps
-    `first_map..` of a larger set (`Attack.attack`)."""
+    `first_map..` of a larger set (`Attack.attack`); `frozen` `(B, N, N)`: cells no edit may touch, or None."""
     attack = make_attack(strategy, **options)
     return attack.attack(
         obstacles,
@@ -60,6 +61,7 @@ def attack_maps(
         strength=objective_strength(objective),
         progress=progress,
         first_map=first_map,
+        frozen=frozen,
     )
 
 
@@ -140,8 +142,8 @@ class AttackOutcome:
 
 
 def _attack_chunk(strategy: str, options: dict, objective: str, planner, corner_cutting: bool, progress: bool, chunk):
-    """The task of `run`: chunk `(first_map, obstacles, starts, goals)` attacked (`attack_maps`)."""
-    first_map, obstacles, starts, goals = chunk
+    """The task of `run`: chunk `(first_map, obstacles, starts, goals, frozen)` attacked (`attack_maps`)."""
+    first_map, obstacles, starts, goals, frozen = chunk
     return attack_maps(
         strategy,
         options,
@@ -153,6 +155,7 @@ def _attack_chunk(strategy: str, options: dict, objective: str, planner, corner_
         objective=objective,
         first_map=first_map,
         progress=progress,
+        frozen=frozen,
     )
 
 
@@ -180,7 +183,11 @@ def run(
         maps.corner_cutting,
         progress and len(bounds) == 1,
     )
-    chunks = ((lo, maps.obstacles[lo:hi], maps.starts[lo:hi, 0], maps.goals[lo:hi]) for lo, hi in bounds)
+    frozen = maps.frozen
+    chunks = (
+        (lo, maps.obstacles[lo:hi], maps.starts[lo:hi, 0], maps.goals[lo:hi], None if frozen is None else frozen[lo:hi])
+        for lo, hi in bounds
+    )
     t0 = time.perf_counter()
     bar = None
     if progress and len(bounds) > 1:

@@ -13,12 +13,14 @@ from hypothesis import strategies as st
 
 from tests.grid.oracle import brute_distances
 from tests.needs import public_data
+from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.grid import generate_maps
+from vinadv.grid import MapSet, generate_maps
 from vinadv.grid.shortest_paths import shortest_distances
 from vinadv.interop import export_maps, import_maps, read_maps
 from vinadv.interop.formats.movingai import read_grid, read_problems
+from vinadv.planners.classical.optimal import OptimalPlanner
 
 SCEN = "movingai/random-32-32-20-random-1.scen"
 MAP = "movingai/random-32-32-20.map"
@@ -119,9 +121,13 @@ def test_a_crops_obstacles_equal_its_window_of_the_file():
     maps, info = read_maps(path, "movingai", crop=64, crops=6, seed=3, starts=2)
     grid = read_grid(path)
     assert len(maps) == 6 and maps.size == 64 and not maps.corner_cutting
+    assert maps.frozen is None  # a window holds no padding
     for i, crop in enumerate(info["crops"]):
         r, c = crop["origin"]
         assert crop["source"] == str(path) and len(crop["sha256"]) == 64
+        # the maps file keeps the same provenance
+        assert (maps.source[i], maps.source_sha256[i]) == ("Berlin_1_256.map", crop["sha256"])
+        assert maps.origin[i].tolist() == [r, c]
         np.testing.assert_array_equal(maps.obstacles[i], grid[r : r + 64, c : c + 64])
         assert (~maps.obstacles[i]).mean() >= 0.5
     # lengths recomputed in the window: the expert costs are the window's own shortest paths
@@ -139,6 +145,41 @@ def test_a_map_that_is_not_square_is_padded_with_obstacles(tmp_path):
     grid = read_grid(path)
     assert grid.shape == (81, 65) and maps.size == 81 and info["padding"] == {"rows": 0, "cols": 16}
     assert (maps.obstacles[0, :, :65] == grid).all() and maps.obstacles[0, :, 65:].all()
+    # the padding is frozen (no attack edits it), and the file keeps it and where the map came from
+    padding = np.zeros((81, 81), dtype=bool)
+    padding[:, 65:] = True
+    np.testing.assert_array_equal(maps.frozen[0], padding)
+    maps.save(tmp_path / "den.npz")
+    back = MapSet.load(tmp_path / "den.npz")
+    np.testing.assert_array_equal(back.frozen, maps.frozen)
+    assert list(back.source) == ["den312d.map"] and back.source_sha256[0] == info["sha256"]
+    assert back.origin.tolist() == [[0, 0]]
+
+
+def test_a_removal_attack_never_frees_the_padding():
+    maps, _ = read_maps(public_data("movingai/den312d.map"), "movingai", seed=1)
+    attack = make_attack("random", per_map=200, seed=0, edit="remove")
+    result = attack.attack(
+        maps.obstacles, maps.starts[:, 0], maps.goals, OptimalPlanner(81, False, "octile"), False, frozen=maps.frozen
+    )
+    cols = result.pairs.added[:, 0, 1]
+    assert len(cols) == 200 and (cols < 65).all()
+    unmasked = attack.attack(maps.obstacles, maps.starts[:, 0], maps.goals, OptimalPlanner(81, False, "octile"), False)
+    assert (unmasked.pairs.added[:, 0, 1] >= 65).any()  # without the mask the padding would be freed
+
+
+def test_export_of_a_padded_map_gives_back_the_original_grid(tmp_path):
+    path = public_data("movingai/den312d.map")
+    maps, _ = read_maps(path, "movingai", seed=1, starts=3)
+    summary = export_maps(maps, tmp_path / "den.scen", "movingai")
+    assert summary["problems"] == 3
+    grid = read_grid(tmp_path / "den.map")
+    assert grid.shape == (81, 65) and (grid == read_grid(path)).all()
+    back = import_maps(tmp_path / "den.map", "movingai", scen=tmp_path / "den.scen")
+    for name in ("obstacles", "goals", "frozen"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(maps, name)[[0, 0, 0]])
+    np.testing.assert_array_equal(back.starts[:, 0], maps.starts[0])
+    np.testing.assert_allclose(back.expert_costs[:, 0], maps.expert_costs[0], atol=1e-8)
 
 
 def test_export_then_import_is_the_identity(tmp_path):

@@ -16,7 +16,10 @@ map (a difference above `LENGTH_TOL` is one line naming the file, the line and b
 start is its goal (length 0) is left out and counted: a maps file's start is never its goal.
 
 A map that is not square (den312d: 81 rows of 65 columns) is padded with obstacles below and to the right into a
-square of its larger side; `padding` (in the info) says how many rows and columns.
+square of its larger side; `padding` (in the info) says how many rows and columns, and the padded cells are the
+map set's `frozen` cells (`MapSet.frozen`: no attack adds to or frees them). Every map records its provenance in
+the maps file (`MapSet.source`, `source_sha256`, `origin`): the `.map` file's name, its sha256 and the source cell of
+the map's (0, 0) (a crop's window origin; (0, 0) for the whole map).
 
 Crops (`crop` N, `crops` K, `seed`): maps larger than a planner's size are cut into K windows of N x N, each origin
 drawn uniformly (seeded) among the windows with at least `min_free` (default `MIN_FREE`, a half) of their cells
@@ -29,9 +32,10 @@ crop whose region has no cell in a band is drawn again. Each crop's source file,
 (row, col) are in the info (`crops`). Without `scen` and `crop`, the whole map is one map whose goal and starts are
 drawn by the same rule.
 
-Export writes the maps of a set back: one `.map` per distinct grid and one
-`.scen` of every real start (bucket `floor(length / 4)`, the benchmarks' rule; lengths with 8 decimals). Only
-`octile` maps without corner cutting are written: the format cannot say another rule.
+Export writes the maps of a set back: one `.map` per distinct grid, the frozen rows below and columns to the right
+cut off (the padding of import: a non-square map goes back as it was), and one `.scen` of every real start (bucket
+`floor(length / 4)`, the benchmarks' rule; lengths with 8 decimals). Only `octile` maps without corner cutting are
+written: the format cannot say another rule.
 """
 
 from __future__ import annotations
@@ -214,9 +218,13 @@ def _bound(path: str, n: int, side: int) -> None:
         )
 
 
-def _map_set(obstacles, goals, starts, dist, seed: int) -> MapSet:
-    starts = starts.reshape(len(goals), -1, 2)
+def _map_set(obstacles, goals, starts, dist, seed: int, info: dict, origins=None, padding=None) -> MapSet:
+    """The maps, with their provenance (the `.map` file's name and sha256 in `info`, `origins (n, 2)`, default (0, 0))
+    and `padding (N, N)`, the padded cells, as every map's frozen cells (None: none)."""
+    n = len(goals)
+    starts = starts.reshape(n, -1, 2)
     costs, expert = expert_paths_from(dist, obstacles, goals, starts, False, MOVES)
+    frozen = None if padding is None or not padding.any() else np.broadcast_to(padding, obstacles.shape).copy()
     return MapSet(
         obstacles=obstacles,
         goals=goals,
@@ -226,6 +234,10 @@ def _map_set(obstacles, goals, starts, dist, seed: int) -> MapSet:
         corner_cutting=False,
         seed=seed,
         moves=MOVES,
+        frozen=frozen,
+        source=np.full(n, os.path.basename(info["source"])),
+        source_sha256=np.full(n, info["sha256"]),
+        origin=np.zeros((n, 2), np.int64) if origins is None else np.asarray(origins, np.int64).reshape(n, 2),
     )
 
 
@@ -299,7 +311,7 @@ def _read_scen(path: str, grid: np.ndarray, scen: str, buckets: set[int] | None,
     kept = [(number, p) for number, p in kept if (p[4], p[5]) != (p[6], p[7])]
     if not kept:
         raise InputError(f"{scen}: no problem with its start apart from its goal in the buckets asked for", "bucket")
-    square, _ = _square(path, grid, info)
+    square, padding = _square(path, grid, info)
     n, side = len(kept), square.shape[0]
     _bound(path, n, side)
     p = np.array([q[4:8] for _, q in kept], dtype=np.int64)
@@ -318,7 +330,7 @@ def _read_scen(path: str, grid: np.ndarray, scen: str, buckets: set[int] | None,
             f"{ours[i]:.8f} (octile, no corner cutting; {int(bad.sum())} of {n} problems differ)"
         )
     obstacles = np.broadcast_to(square, (n, side, side)).copy()
-    maps = _map_set(obstacles, goals, starts, dist_u[which], seed=-1)
+    maps = _map_set(obstacles, goals, starts, dist_u[which], -1, info, padding=padding)
     info.update(
         scen=scen,
         scen_sha256=sha256_of(scen),
@@ -399,7 +411,7 @@ def _read_crops(path, grid, crop, crops, starts, seed, min_free, info):
     drawn = np.stack([p[2] for p in parts])
     counts = np.array([p[3] for p in parts], dtype=np.int64)
     dist = np.stack([p[4] for p in parts])
-    maps = _map_set(obstacles, goals, drawn, dist, seed=int(seed))
+    maps = _map_set(obstacles, goals, drawn, dist, int(seed), info, origins=origins)
     if counts.min() < k:
         maps.start_counts = counts
     info.update(
@@ -420,12 +432,12 @@ def _read_crops(path, grid, crop, crops, starts, seed, min_free, info):
 def _read_whole(path: str, grid: np.ndarray, k: int, seed: int, info: dict):
     if k < 1:
         raise InputError(f"starts must be >= 1, got {k}", "starts")
-    square, _ = _square(path, grid, info)
+    square, padding = _square(path, grid, info)
     _bound(path, 1, square.shape[0])
     ok, goals, drawn, counts, dist = _draw(square[None], k, np.random.default_rng(seed))
     if not ok[0]:
         raise InputError(f"{path}: no cell is far enough from a goal in the largest free region to be a start")
-    maps = _map_set(square[None].copy(), goals, drawn, dist, seed=int(seed))
+    maps = _map_set(square[None].copy(), goals, drawn, dist, int(seed), info, padding=padding)
     if counts[0] < k:
         maps.start_counts = counts.astype(np.int64)
     info.update(
@@ -451,9 +463,24 @@ def write_map(grid: np.ndarray, path: str | os.PathLike) -> None:
     Path(path).write_text(text, encoding="ascii")
 
 
+def unpadded(maps: MapSet, i: int) -> np.ndarray:
+    """Map `i`'s obstacles without its padding: the trailing rows and columns of frozen cells cut off (all of them
+    frozen in the row or column; the padding that import adds below and to the right)."""
+    grid = maps.obstacles[i]
+    if maps.frozen is None:
+        return grid
+    frozen = maps.frozen[i]
+    rows = np.flatnonzero(~frozen.all(axis=1))
+    cols = np.flatnonzero(~frozen.all(axis=0))
+    h = int(rows[-1]) + 1 if len(rows) else 0
+    w = int(cols[-1]) + 1 if len(cols) else 0
+    return grid[: max(h, 1), : max(w, 1)]
+
+
 def write(maps: MapSet, path: Path, split: str) -> dict:
     """Write `maps` (octile, no corner cutting) as `.map` files and one `.scen` file: `path` names the `.scen`
-    (its `.map` beside it, `STEM.map` for one grid, `STEM-0000.map`... for several). Returns the counts."""
+    (its `.map` beside it, `STEM.map` for one grid, `STEM-0000.map`... for several), each grid without its padding
+    (`unpadded`). Returns the counts."""
     if maps.corner_cutting or maps.moves != MOVES:
         raise InputError(
             f"maps: the Moving AI format holds octile moves without corner cutting; these maps have {maps.moves} "
@@ -465,7 +492,7 @@ def write(maps: MapSet, path: Path, split: str) -> dict:
     names: list[str] = []
     of_map: list[int] = []
     for i in range(len(maps)):
-        grid = maps.obstacles[i]
+        grid = unpadded(maps, i)
         for j, seen in enumerate(grids):
             if seen.shape == grid.shape and np.array_equal(seen, grid):
                 of_map.append(j)
@@ -485,6 +512,8 @@ def write(maps: MapSet, path: Path, split: str) -> dict:
         gr, gc = (int(v) for v in maps.goals[i])
         for s in np.flatnonzero(mask[i]):
             sr, sc = (int(v) for v in maps.starts[i, s])
+            if max(sr, gr) >= h or max(sc, gc) >= w:
+                raise InputError(f"maps: map {i}'s start or goal is on its frozen padding, outside the {w}x{h} map")
             length = float(maps.expert_costs[i, s])
             lines.append(f"{int(length // 4)}\t{names[of_map[i]]}\t{w}\t{h}\t{sc}\t{sr}\t{gc}\t{gr}\t{length:.8f}")
     scen = path if path.suffix == ".scen" else path.with_suffix(".scen")
