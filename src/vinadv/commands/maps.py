@@ -195,24 +195,26 @@ def cmd_show(args: argparse.Namespace) -> int:
     return 0
 
 
-FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn", "mpd", "movingai", "ascii", "png")
+FOREIGN_FORMATS = ("kentsommer", "avivt", "gppn", "mpd", "movingai", "ascii", "png", "transpath")
 
 
 def _register_interop(sub) -> None:
     imp = sub.add_parser(
         "import",
         help="read maps of the kentsommer PyTorch port, avivt's .mat files, GPPN, the MP dataset (mpd), the Moving "
-        "AI benchmarks (movingai), or a map drawn in text (ascii) or an image (png)",
+        "AI benchmarks (movingai), a map drawn in text (ascii) or an image (png), or TransPath's XML tasks (transpath)",
         description="Regroup another codebase's samples into maps and trajectories; expert costs "
         "are vinadv's under the maps' movement model (kentsommer, avivt: octile; gppn: the file's moore or news; "
         "mpd: moore; movingai: octile without corner cutting; ascii, png: --moves, corner cutting unless "
-        "--no-corner-cutting). See docs/guide/interop.md and docs/formats.md.",
+        "--no-corner-cutting; transpath: octile, corner cutting unless --no-corner-cutting). See "
+        "docs/guide/interop.md and docs/formats.md.",
     )
     imp.add_argument(
         "input",
+        nargs="+",
         metavar="IN",
         help="the file to read (.npz for kentsommer, gppn and mpd, .mat for avivt, .map for movingai, a text file for "
-        "ascii, an image for png)",
+        "ascii, an image for png); transpath: one or more .xml tasks, a task in several files counted once",
     )
     imp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the file's layout")
     imp.add_argument("--out", required=True, help="output maps file (.npz)")
@@ -260,7 +262,8 @@ def _register_interop(sub) -> None:
         type=int,
         default=None,
         metavar="N",
-        help="ascii, png: pad the drawing with obstacles into an N x N map (default: a square of its larger side)",
+        help="ascii, png, transpath: pad the map with obstacles into an N x N map (default: a square of its larger "
+        "side)",
     )
     add_corner_cutting_argument(imp)
     add_moves_argument(
@@ -298,7 +301,10 @@ def cmd_import(args: argparse.Namespace) -> int:
 
     if args.starts is not None and args.starts < 1:
         raise InputError(f"--starts must be >= 1, got {args.starts}")
-    check_output_path(args.out, inputs={"IN": args.input, "--scen": args.scen})  # before the work
+    if len(args.input) > 1 and args.format != "transpath":
+        raise InputError(f"format {args.format} reads one file, got {len(args.input)} (IN): give one")
+    inputs = {f"IN {i}" if i else "IN": p for i, p in enumerate(args.input)}
+    check_output_path(args.out, inputs={**inputs, "--scen": args.scen})  # before the work
     options = {
         "scen": args.scen,
         "bucket": args.bucket,
@@ -310,12 +316,13 @@ def cmd_import(args: argparse.Namespace) -> int:
         "goal": args.goal,
         "pad_to": args.pad_to,
     }
+    source = args.input if args.format == "transpath" else args.input[0]
     maps, info = read_maps(
-        args.input, args.format, split=args.split, starts=args.starts, seed=args.seed, moves=args.moves, **options
+        source, args.format, split=args.split, starts=args.starts, seed=args.seed, moves=args.moves, **options
     )
     if len(maps) == 0:  # a maps file holds at least one map (`MapSet.save`): say so of the file read
         split = args.split or info.get("split")
-        raise InputError(f"{args.input}: no maps to import{f' (split {split})' if split else ''}")
+        raise InputError(f"{args.input[0]}: no maps to import{f' (split {split})' if split else ''}")
     maps.save(args.out)
     info = {"out": args.out, **info}
 
@@ -332,6 +339,7 @@ def cmd_import(args: argparse.Namespace) -> int:
             "starts_rule",
             "maps_left_out_no_start",
             "lengths_checked",
+            "tasks_counted_once",
         ):
             if info.get(key):
                 print(f"  {key.replace('_', ' ')}: {info[key]}")

@@ -151,6 +151,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         require_policy,
     )
     from vinadv.evaluation.search_metrics import evaluate_search
+    from vinadv.planners.transpath.planner import TransPathPlanner
 
     protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
     if args.prior is not None and "kentsommer" not in (protocols or ()):
@@ -172,7 +173,8 @@ def cmd_eval(args: argparse.Namespace) -> int:
         elif protocol == "gppn":
             figures[protocol] = gppn_protocol(planner, maps)
         elif protocol == "search":
-            figures[protocol] = evaluate_search(planner, maps, progress=shows_progress(args))
+            theirs = isinstance(planner, TransPathPlanner) and maps.moves == "octile"  # TransPath's ratios beside
+            figures[protocol] = evaluate_search(planner, maps, progress=shows_progress(args), theirs=theirs)
         else:
             prior = PORT_TEST_PRIOR if args.prior is None else args.prior
             figures[protocol] = kentsommer_protocol(vin, maps, prior)
@@ -220,6 +222,8 @@ def print_eval(name: str, maps, figures: dict) -> None:
     found = figures.get("search")
     if found is not None:
         print(f"  search: {search_text(found)}")
+        if found.get("transpath") is not None:
+            print(f"  transpath: {transpath_text(found['transpath'])}")
     if ours is not None:
         print(by_length_text(ours))
 
@@ -228,7 +232,22 @@ def search_text(m: dict) -> str:
     """The search metrics (`vinadv.evaluation.search_metrics`) in one line; n/a where undefined."""
     ratio = "n/a" if m["cost_ratio"] is None else f"{m['cost_ratio']:.4f}"
     expanded = "" if m["expansions"] is None else f", {m['expansions']:.1f} cells expanded per search"
+    reference = "" if m["expansions"] is None else " (against vinadv's exact A*)"
     return (
         f"Opt {_pct(m['opt'])}, Exp {_pct(m['exp'])}, Hmean {_pct(m['hmean'])}, success {_pct(m['success'])}, "
-        f"cost ratio {ratio} over {m['rows']} (map, start) rows{expanded}"
+        f"cost ratio {ratio} over {m['rows']} (map, start) rows{expanded}{reference}"
+    )
+
+
+def transpath_text(t: dict) -> str:
+    """TransPath's ratios (`vinadv.evaluation.search_metrics.transpath_ratios`) in one line; n/a where undefined."""
+
+    def num(x) -> str:
+        return "n/a" if x is None else f"{x:.4f}"
+
+    unreached = f", {t['unreached']} not reached (left out of the cost ratio)" if t["unreached"] else ""
+    return (
+        f"expansions ratio {num(t['expansions_ratio'])}, cost ratio {num(t['cost_ratio'])} against their vanilla A* "
+        f"(f = 0.5 g + 0.501 h, h octile) on the {t['kept']} of {t['rows']} rows whose vanilla cost is at least "
+        f"{t['hardness']:g} x the octile heuristic at the start{unreached}"
     )

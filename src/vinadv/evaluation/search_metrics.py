@@ -21,11 +21,22 @@ where every move costs 1 and a searched path has no repeated cell); they count a
 their backtracking gives, vinadv as not optimal; Exp includes the rows that fail, as `calc_metrics` does (their
 `compute_opt_exp` leaves them out). On `octile` and `news` maps the reference A* is vinadv's (module doc of
 `vinadv.planners.classical.astar`), so Exp there is vinadv's extension of their definition.
+
+TransPath's own metrics (Kirilenko et al., AAAI 2023; their `eval.py`), `transpath_ratios`, beside these for a TransPath
+planner (`evaluate_search(..., theirs=True)`; `octile` maps only): the reference is their vanilla A*, their search
+(`vinadv.planners.transpath.search`, the compiled replica) with the plain octile heuristic, `f = 0.5 g + 0.501 h` (the
+`cf` search with every correction factor 1), not vinadv's exact A*; the rows kept are the hard ones, whose vanilla
+path cost is at least `HARDNESS` (1.05) times the octile heuristic at the start (their `hardness_limit`); on those,
+the expansions ratio is the mean of `E / E_vanilla` and the cost ratio the mean of `cost / vanilla cost` (over the
+kept rows the planner's path reaches; the others are counted, `unreached`). Below 1 is fewer cells and shorter paths
+than their vanilla A*. Costs are float64 path costs under the maps' movement model, the octile heuristic
+`min(dr, dc) * sqrt 2 + |dr - dc|` in float64.
 """
 
 from __future__ import annotations
 
-from typing import TypedDict
+import math
+from typing import NotRequired, TypedDict
 
 import numpy as np
 
@@ -38,6 +49,21 @@ from vinadv.planners.search import SearchResult
 
 #: the authors' guard against a zero in the harmonic mean
 EPS = 1e-10
+#: TransPath's `eval.py`: the rows kept are those whose vanilla cost is at least this times the octile heuristic
+HARDNESS = 1.05
+
+
+class TransPathRatios(TypedDict):
+    """TransPath's metrics (`transpath_ratios`): their vanilla A* the reference; None where no row is kept."""
+
+    rows: int
+    kept: int
+    hardness: float
+    expansions_ratio: float | None
+    cost_ratio: float | None
+    unreached: int
+    expansions: float | None
+    vanilla_expansions: float | None
 
 
 class SearchMetrics(TypedDict):
@@ -51,6 +77,8 @@ class SearchMetrics(TypedDict):
     cost_ratio: float | None
     expansions: float | None
     astar_expansions: float | None
+    #: TransPath's own ratios against their vanilla A* (`evaluate_search(..., theirs=True)` only)
+    transpath: NotRequired[TransPathRatios]
 
 
 def search_metrics(
@@ -117,9 +145,72 @@ def harmonic_mean(opt, exp):
     return 2.0 / (1.0 / (opt + EPS) + 1.0 / (exp + EPS))
 
 
-def evaluate_search(planner, maps: MapSet, chunk_size: int = 256, progress: bool = False) -> SearchMetrics:
+def octile_distances(starts: np.ndarray, goals: np.ndarray) -> np.ndarray:
+    """`(n,)` float64 octile heuristic `min(dr, dc) * sqrt 2 + |dr - dc|` from each start `(n, 2)` to its goal."""
+    d = np.abs(np.asarray(starts, dtype=np.int64) - np.asarray(goals, dtype=np.int64)).reshape(-1, 2)
+    return np.minimum(d[:, 0], d[:, 1]) * math.sqrt(2.0) + np.abs(d[:, 0] - d[:, 1])
+
+
+def transpath_ratios(
+    costs: np.ndarray,
+    reached: np.ndarray,
+    expansions: np.ndarray,
+    vanilla_costs: np.ndarray,
+    vanilla_reached: np.ndarray,
+    vanilla_expansions: np.ndarray,
+    octile_start: np.ndarray,
+    hardness: float = HARDNESS,
+) -> TransPathRatios:
+    """TransPath's expansions ratio and cost ratio of `n` rows against their vanilla A* (module doc).
+
+    Args:
+        costs, reached, expansions: `(n,)` the planner's path costs, whether each reaches the goal, cells expanded.
+        vanilla_costs, vanilla_reached, vanilla_expansions: the same of their vanilla A* on the same rows.
+        octile_start: `(n,)` the octile heuristic at each row's start (`octile_distances`).
+        hardness: the rows kept: reached by vanilla A*, start off the goal, vanilla cost >= hardness * octile_start.
+    """
+    arrays = [np.asarray(a, dtype=np.float64).reshape(-1) for a in (costs, expansions, vanilla_costs)]
+    costs, expansions, vanilla_costs = arrays
+    vanilla_expansions = np.asarray(vanilla_expansions, dtype=np.float64).reshape(-1)
+    octile_start = np.asarray(octile_start, dtype=np.float64).reshape(-1)
+    reached = np.asarray(reached, dtype=bool).reshape(-1)
+    vanilla_reached = np.asarray(vanilla_reached, dtype=bool).reshape(-1)
+    n = len(costs)
+    if any(
+        len(a) != n for a in (reached, expansions, vanilla_costs, vanilla_reached, vanilla_expansions, octile_start)
+    ):
+        raise InputError(f"transpath_ratios: every array must hold the {n} rows")
+    kept = vanilla_reached & (octile_start > 0) & (vanilla_costs >= hardness * octile_start)
+    both = kept & reached
+    return {
+        "rows": n,
+        "kept": int(kept.sum()),
+        "hardness": float(hardness),
+        "expansions_ratio": float((expansions[kept] / vanilla_expansions[kept]).mean()) if kept.any() else None,
+        "cost_ratio": float((costs[both] / vanilla_costs[both]).mean()) if both.any() else None,
+        "unreached": int((kept & ~reached).sum()),
+        "expansions": float(expansions[kept].mean()) if kept.any() else None,
+        "vanilla_expansions": float(vanilla_expansions[kept].mean()) if kept.any() else None,
+    }
+
+
+def vanilla_transpath(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True):
+    """TransPath's vanilla A* on `(B, N, N)` rows: their search (the compiled replica) with the plain octile heuristic,
+    `f = 0.5 g + 0.501 h` (the `cf` search with every correction factor 1: `octile / max(1, 0.1)` is the octile
+    heuristic, exactly). Returns its `SearchResult`."""
+    from vinadv.planners.transpath.search import transpath_search  # noqa: PLC0415 (Numba's compile, when asked)
+
+    ones = np.ones(np.shape(obstacles), dtype=np.float32)
+    return transpath_search(ones, obstacles, starts, goals, "cf", corner_cutting)
+
+
+def evaluate_search(
+    planner, maps: MapSet, chunk_size: int = 256, progress: bool = False, theirs: bool = False
+) -> SearchMetrics:
     """`search_metrics` of `planner` (any `Planner`, its `plan`) on every start of `maps`, against vanilla A*
-    (`astar` on the maps' movement model) from the same starts and the maps' exact expert costs."""
+    (`astar` on the maps' movement model) from the same starts and the maps' exact expert costs; with `theirs` (a
+    search planner on `octile` maps), also TransPath's ratios against their vanilla A* (`transpath_ratios`, under
+    the key `transpath`)."""
     mask = maps.start_mask.reshape(-1)
     result = planner.plan(
         maps.obstacles,
@@ -139,11 +230,21 @@ def evaluate_search(planner, maps: MapSet, chunk_size: int = 256, progress: bool
         ).expansions
         expansions, reference = expansions[mask], reference[mask]
     owner = np.repeat(np.arange(len(maps)), maps.n_starts)[mask]
-    return search_metrics(
-        path_costs(result.paths, maps.moves)[mask],
-        result.reached[mask],
-        maps.expert_costs.reshape(-1)[mask],
-        expansions,
-        reference,
-        owner,
-    )
+    costs = path_costs(result.paths, maps.moves)[mask]
+    out = search_metrics(costs, result.reached[mask], maps.expert_costs.reshape(-1)[mask], expansions, reference, owner)
+    if theirs:
+        if expansions is None or maps.moves != "octile":
+            raise InputError(f"TransPath's ratios need a search planner on octile maps, not {maps.moves} maps")
+        starts = maps.starts.reshape(-1, 2)[mask]
+        goals = maps.goals[owner]
+        vanilla = vanilla_transpath(maps.obstacles[owner], starts, goals, maps.corner_cutting)
+        out["transpath"] = transpath_ratios(
+            costs,
+            result.reached[mask],
+            expansions,
+            path_costs(vanilla.paths, maps.moves),
+            vanilla.reached,
+            vanilla.expansions,
+            octile_distances(starts, goals),
+        )
+    return out

@@ -11,14 +11,14 @@ maps and trajectories, the file's expert paths reconciled with vinadv's, drawn s
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import check_moves, require_moves
-from vinadv.interop.formats import avivt, drawn, gppn, kentsommer, movingai, mpd
+from vinadv.interop.formats import avivt, drawn, gppn, kentsommer, movingai, mpd, transpath
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,8 @@ class Format:
     moves: tuple[str, ...] = ("octile",)
     #: the keyword options `read` takes beyond the five above (movingai: `scen`, `bucket`, `crop`, ...)
     options: tuple[str, ...] = ()
+    #: whether `read` takes several files at once (a list of paths as its first argument: transpath)
+    several: bool = False
 
     @property
     def export_splits(self) -> tuple[str, ...]:
@@ -70,6 +72,9 @@ FORMATS: dict[str, Format] = {
     "png": Format(
         drawn.read_png, drawn.write_refused("png"), ("all",), drawn.MOVES, ("start", "goal", "pad_to", "corner_cutting")
     ),
+    "transpath": Format(
+        transpath.read, drawn.write_refused("transpath"), ("all",), transpath.MOVES, ("pad_to", "corner_cutting"), True
+    ),
 }
 
 
@@ -80,7 +85,7 @@ def _format(format: str) -> Format:
 
 
 def read_maps(
-    path: str | os.PathLike,
+    path: str | os.PathLike | Sequence[str | os.PathLike],
     format: str,
     split: str | None = None,
     starts: int | None = None,
@@ -91,7 +96,8 @@ def read_maps(
     """Read maps in another codebase's layout: `(MapSet, info)`; `info` says what was found and done.
 
     Args:
-        format: 'kentsommer', 'avivt', 'gppn', 'mpd', 'movingai', 'ascii' or 'png' (`FORMATS`).
+        path: the file; several files (a list) for a layout that reads them at once (`Format.several`: transpath).
+        format: 'kentsommer', 'avivt', 'gppn', 'mpd', 'movingai', 'ascii', 'png' or 'transpath' (`FORMATS`).
         split: kentsommer train|test|all (default test); gppn train|valid|test|all (default test); avivt
             train|test, the layout (default: the one the file has).
         starts: starts per map where the file has none (gppn, avivt's batched-only layout; default 7); files
@@ -102,7 +108,8 @@ def read_maps(
             is refused.
         options: what a layout takes beyond these (`Format.options`; None is not given): movingai's `scen`,
             `bucket`, `crop`, `crops`, `min_free` and `corner_cutting` (`vinadv.interop.formats.movingai`); ascii's
-            and png's `pad_to` and `corner_cutting`, png's `start` and `goal` (`vinadv.interop.formats.drawn`).
+            and png's `pad_to` and `corner_cutting`, png's `start` and `goal` (`vinadv.interop.formats.drawn`);
+            transpath's `pad_to` and `corner_cutting` (`vinadv.interop.formats.transpath`).
 
     Raises InputError naming the file and array for a missing array, a wrong shape, other polarity, a goal value
     or label out of range, or a path that is not a legal move sequence to the goal.
@@ -118,7 +125,15 @@ def read_maps(
     for name in given:
         if name not in layout.options:
             raise InputError(f"{name} is not an option of format {format}", name)
-    path = str(path)
+    if isinstance(path, (str, os.PathLike)):
+        path = str(path)
+    else:
+        paths = [str(p) for p in path]
+        if not paths:
+            raise InputError(f"no file given to read (format {format})")
+        if len(paths) > 1 and not layout.several:
+            raise InputError(f"format {format} reads one file, got {len(paths)}: {paths[0]}, {paths[1]}, ...")
+        path = paths if layout.several else paths[0]
     maps, info = layout.read(path, split, starts, seed, moves, **given)
     return maps, {"format": format, "file": path, "moves": maps.moves, **info}
 
