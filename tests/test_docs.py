@@ -360,7 +360,7 @@ def test_the_neural_astar_measurements_are_read_from_their_json(tmp_path):
     assert "Measured 2026-01-02 03:04 UTC on C (2 cores), PyTorch 9.9, niceness 10, load average 1.5" in modes[-1]
     speed_text = hooks.neural_astar_speed(path)
     assert speed_text.startswith("| search (`<data-dir>/mazes_032_moore_c8.npz`: 100 test maps, one start each; ")
-    assert "| `astar` (compiled, unit costs); 62.5 expansions per search | 5,000.0 |" in speed_text
+    assert "| `astar` (compiled, unit costs) | 5,000.0 |" in speed_text
     assert "plans 2.5 times as fast as the differentiable search" in speed_text
     assert "(100 of 100 in the same run); the encoder (the CNN) is 80.0% of its time" in speed_text
     assert "`astar` plans 500 times as fast" in speed_text and "best of 4 rounds" in speed_text
@@ -494,3 +494,91 @@ def test_the_suite_times_render_from_their_committed_json():
     if "base" in data:  # both commits' rows, and the ratio of the whole suites' medians
         ratio = data["whole_suite_median_s"] / data["base"]["whole_suite_median_s"]
         assert f"`{data['base']['commit']}`" in table and f"whole suite {ratio:.2f}x" in table
+
+
+def test_the_neural_astar_page_gives_each_search_one_expansion_count():
+    # the speed run draws its own starts: its mean expansions (35.2 / 62.1) beside the modes table's (63.5 / 148.0)
+    # read as two counts for one search; an expansion count on the page is one the eval commands measured
+    hooks = docs_module("hooks")
+    filled = hooks.on_page_markdown((DOCS / "guide" / "neural-astar.md").read_text(), page=None)
+    data = json.loads(hooks.NEURAL_ASTAR_JSON.read_text())
+    searches = [entry["eval"]["search"] for entry in data["modes"]]
+    measured = {f"{fig[key]:.1f}" for fig in searches for key in ("expansions", "astar_expansions")}
+    rows = [fig["rows"] for fig in searches]
+    for key in ("expansions", "astar_expansions"):  # the modes table's last row: over all seeds
+        measured.add(f"{sum(fig[key] * n for fig, n in zip(searches, rows, strict=True)) / sum(rows):.1f}")
+    given = re.findall(r"(\d[\d,]*\.\d+) expansions", filled) + re.findall(r"\| (\d+\.\d) \((\d+\.\d)\) \|", filled)
+    given = [number for found in given for number in ([found] if isinstance(found, str) else found)]
+    assert given and set(given) <= measured, f"expansion counts not from the eval figures: {set(given) - measured}"
+
+
+#: the README's word that the built site, not GitHub's rendering of docs/, is where the pages are read whole
+SITE_IS_THE_PLACE = "the site is the place to read the documentation"
+
+
+def test_pages_github_shows_incomplete_send_the_reader_to_the_site():
+    # GitHub renders docs/*.md without the snippets extension and without the hooks: a `--8<--` line shows as itself
+    # and a figure's marker as nothing; such pages are allowed only while the README says to read the built site
+    incomplete = [
+        str(page.relative_to(ROOT))
+        for page in sorted(DOCS.rglob("*.md"))
+        if re.search(r"^\s*--8<--|<!-- vinadv:", page.read_text(), re.M)
+    ]
+    assert "docs/own-planner.md" in incomplete and "docs/guide/neural-astar.md" in incomplete
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert SITE_IS_THE_PLACE in readme, (
+        f"{incomplete} read incomplete on GitHub; the README must say: {SITE_IS_THE_PLACE}"
+    )
+
+
+def shell_blocks(text: str) -> list[str]:
+    return re.findall(r"```(?:sh|bash|console)\n(.*?)```", text, re.S)
+
+
+def unmade_folders(text: str) -> list[str]:
+    """The commands of a page's shell blocks that write a file (`--out`, `--report`, `--db`, `--index`) into a
+    relative folder that nothing before them on the page made (`mkdir`, or an output that is a folder)."""
+    made, wrong = set(), []
+    for block in shell_blocks(text):
+        for line in block.splitlines():
+            made.update(folder.rstrip("/") for folder in re.findall(r"mkdir (?:-p )?(\S+)", line))
+            for value in re.findall(r"--(?:out|report|db|index)[ =](\S+)", line):
+                path = Path(value)
+                if value.endswith("/") or not path.suffix:  # a folder the command makes
+                    made.add(value.rstrip("/"))
+                elif (
+                    str(path.parent) != "."
+                    and not value.startswith(("/", "<", "$", "~"))
+                    and str(path.parent) not in made
+                ):
+                    wrong.append(line.strip())
+    return wrong
+
+
+def test_the_docs_commands_write_only_into_folders_that_exist():
+    assert unmade_folders("```sh\nvinadv bench run --out entries/vin.json\n```\n") == [
+        "vinadv bench run --out entries/vin.json"
+    ]
+    assert not unmade_folders("```sh\nmkdir -p entries\nvinadv bench run --out entries/vin.json\n```\n")
+    pages = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]
+    wrong = {str(p.relative_to(ROOT)): unmade_folders(p.read_text()) for p in pages}
+    assert not {page: lines for page, lines in wrong.items() if lines}
+
+
+def test_a_diagonal_of_sqrt_2_is_said_of_octile_moves():
+    # `moore` moves all cost 1 and `news` has no diagonal: a paragraph that gives a diagonal sqrt 2 says it is octile's
+    wrong = []
+    for page in [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]:
+        for paragraph in page.read_text().split("\n\n"):
+            if re.search(r"diagonal[^.|]*(sqrt ?\(?2|√2)", paragraph) and "octile" not in paragraph:
+                wrong.append(f"{page.relative_to(ROOT)}: {paragraph[:100]}")
+    assert not wrong
+
+
+def test_make_demo_says_how_long_it_takes():
+    makefile = (ROOT / "Makefile").read_text()
+    recipe = makefile.split("\ndemo:", 1)[1].split("\n\n", 1)[0]
+    (echo,) = [line for line in recipe.splitlines() if "@echo" in line and "minutes" in line]
+    minutes = re.search(r"about (\d+) minutes", echo).group(1)
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert f"about {minutes} minutes" in readme.split("make demo", 1)[1].split("make test", 1)[0]

@@ -23,6 +23,7 @@ from vinadv.cluster import open_executor
 from vinadv.errors import InputError
 from vinadv.planners.batching import set_torch_threads
 from vinadv.planners.device import resolve_device
+from vinadv.planners.registry.base import DEFAULT_PLANNER, REGISTRY  # names, loaders as text: no NumPy
 
 
 class LazyChoices:
@@ -61,8 +62,7 @@ def add_planner_arguments(parser, weights_help: str | None = None) -> None:
         "--planner",
         default=None,
         metavar="NAME|SPEC",
-        help="vin (default), gppn, optimal, or your own FILE.py:FACTORY / MODULE:FACTORY; +d4 after one averages it "
-        "over the 8 rotations and flips (see `vinadv planners`)",
+        help=planner_help(),
     )
     parser.add_argument(
         "--weights",
@@ -72,6 +72,16 @@ def add_planner_arguments(parser, weights_help: str | None = None) -> None:
         "planners`) (default: the shipped weights for the map size)",
     )
     add_device_argument(parser)
+
+
+def planner_help() -> str:
+    """`--planner`'s help: the registered planners by name, read from the registry (a light import: no NumPy), so a
+    planner registered in `vinadv.planners.registry.declarations` is listed without editing this text."""
+    names = ", ".join(f"{name} (default)" if name == DEFAULT_PLANNER else name for name in REGISTRY)
+    return (
+        f"a registered planner: {names}; NAME:key=value sets its parameters (wastar:w=3); or your own FILE.py:FACTORY "
+        "/ MODULE:FACTORY; +d4 after one averages it over the 8 rotations and flips (see `vinadv planners`)"
+    )
 
 
 def add_device_argument(parser) -> None:
@@ -179,7 +189,8 @@ def add_moves_argument(parser, default: str | None = "octile", what: str = "") -
         metavar="MOVES",  # checked by the library (`vinadv.grid.moves`): argparse choices would load it for --help
         help=(what or "movement model")
         + ": octile (default: 8 moves, diagonal sqrt 2, the original data's), moore (8 moves, all "
-        "cost 1: GPPN's and the MP dataset's) or news (4 moves N, S, E, W, cost 1; not with --no-corner-cutting)",
+        "cost 1: GPPN's and the MP dataset's) or news (4 moves N, S, E, W, cost 1; no diagonal, so refused on maps "
+        "that forbid corner cutting)",
     )
 
 

@@ -69,14 +69,15 @@ def attack_options(args: argparse.Namespace) -> dict:
     return option_values(args, "per_map", "seed", "budget", "radius", "obstacles", "edit")
 
 
-def add_edit_argument(parser) -> None:
-    """`--edit add|remove`: whether the attack adds obstacles or frees them (DESIGN.md "Obstacle removal")."""
+def add_edit_argument(parser, several: str = "--obstacles K frees K greedily") -> None:
+    """`--edit add|remove`: whether the attack adds obstacles or frees them (DESIGN.md "Obstacle removal"); `several`
+    says what the command's own flag for more than one edited cell does with `remove`."""
     parser.add_argument(
         "--edit",
         choices=("add", "remove"),  # vinadv.vocabulary.EDITS
         default="add",
         help="add obstacles (default, the paper's setting) or remove them: free obstacle cells, never a border wall "
-        "(the world gets easier, so any harm is the planner's own failure); --obstacles K frees K greedily",
+        "(the world gets easier, so any harm is the planner's own failure); " + several,
     )
 
 

@@ -86,7 +86,9 @@ def register(subparsers) -> None:
         default=None,
         help="map side the model is for (recorded; default: any, the GPPN is fully convolutional)",
     )
-    imp.add_argument("--out", required=True, help="output weights (.pt) for --planner gppn --weights")
+    imp.add_argument(
+        "--out", required=True, help="output weights (.pt), for `vinadv plan --planner gppn --weights OUT`"
+    )
     add_output_options(imp, json="what was written")
     imp.set_defaults(func=cmd_gppn_import_weights)
 

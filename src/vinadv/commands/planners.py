@@ -23,7 +23,9 @@ PROTOCOLS = ("vinadv", "gppn", "kentsommer", "search")
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("planners", help="list the planners (--planner NAME) and how to bring your own")
+    p = subparsers.add_parser(
+        "planners", help="list the planners (`vinadv plan --planner NAME`) and how to bring your own"
+    )
     p.add_argument("--size", type=int, default=28, help="map side whose shipped weights to look for (default 28)")
     add_output_options(p, json="the list")
     p.set_defaults(func=cmd_planners)

@@ -72,7 +72,7 @@ def register(subparsers) -> None:
     )
     p.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map and step")
     p.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
-    add_edit_argument(p)
+    add_edit_argument(p, several="the curve frees 1 to --max-obstacles cells")
     add_harm_arguments(p)
     p.add_argument("--db", help="store the benchmark in this database (URL or SQLite file)")
     p.add_argument(
