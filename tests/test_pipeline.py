@@ -381,6 +381,60 @@ def test_ctrl_c_marks_the_run_interrupted_and_says_how_to_resume(db_url, monkeyp
     assert run_status(db_url) == "done"
 
 
+# a run of three shards, every setting but the name and database other than the defaults
+MADE = ["run", "--n", "6", "--size", "8", "--shard-size", "2", "--planner", "optimal", "--seed", "3", "--name", "k"]
+#: what a summary says of this time only: the time, the pairs written and shards skipped, the planner calls
+THIS_TIME = {"seconds", "wall_seconds", "pairs_per_second", "stored", "skipped_shards", "planner_calls"}
+
+
+def whole_run(summary: dict) -> dict:
+    return {k: v for k, v in summary.items() if k not in {*THIS_TIME, "planner_calls_per_success", "db"}}
+
+
+def test_resume_with_the_name_alone_finishes_the_run_and_sums_it_up_whole(tmp_path, monkeypatch, capsys):
+    db, clean_db = f"sqlite:///{tmp_path / 'k.db'}", f"sqlite:///{tmp_path / 'clean.db'}"
+    stop_in_second_shard(monkeypatch, lambda: (_ for _ in ()).throw(KeyboardInterrupt))
+    assert main([*MADE, "--db", db, "--quiet"]) == 130
+    monkeypatch.undo()
+    capsys.readouterr()
+    assert main(["run", "--db", db, "--name", "k", "--resume", "--json"]) == 0
+    resumed = json.loads(capsys.readouterr().out)
+    assert main([*MADE, "--db", clean_db, "--json"]) == 0
+    clean = json.loads(capsys.readouterr().out)
+    assert resumed["skipped_shards"] == 1 and resumed["pairs"] > resumed["stored"] > 0
+    assert whole_run(resumed) == whole_run(clean)  # every shard's pairs, not only this time's
+    with Store.open(db) as a, Store.open(clean_db) as b:
+        assert a.read_pairs(a.find_run("k")).equals(b.read_pairs(b.find_run("k")))
+
+
+def test_resume_by_name_refuses_a_given_option_that_differs_naming_it(sqlite_url, capsys):
+    assert main([*MADE, "--db", sqlite_url, "--quiet"]) == 0
+    resume = ["run", "--db", sqlite_url, "--name", "k", "--resume", "--quiet"]
+    assert main([*resume, "--seed", "5"]) == 2
+    assert "was made with other settings (seed); use the same options" in capsys.readouterr().err
+    assert main([*resume, "--size", "8", "--seed", "3", "--planner", "optimal"]) == 0  # options that agree: taken
+    assert main(["run", "--db", sqlite_url, "--resume", "--quiet"]) == 2  # without --name: refused, as before
+    assert capsys.readouterr().err.strip() == "vinadv: error: --resume needs --name (the run to resume)"
+
+
+def test_resuming_a_finished_run_prints_its_totals(sqlite_url, capsys):
+    assert main([*MADE, "--db", sqlite_url]) == 0
+    first = capsys.readouterr().out
+    with Store.open(sqlite_url) as store:
+        timings = store.run_info(store.find_run("k"))["timings"]
+    assert main([*MADE, "--db", sqlite_url, "--resume"]) == 0  # all the options: the totals alone are tested here
+    again = capsys.readouterr().out
+    assert "resumed: 3 complete shards skipped" in again
+
+    def totals(text: str) -> list[str]:
+        return [line for line in text.splitlines() if not line.startswith(("run ", "resumed:", "time per stage"))]
+
+    assert totals(again) == totals(first) and "n/a" not in first
+    assert first.splitlines()[0].split(" on planner")[0] == again.splitlines()[0].split(" on planner")[0]
+    with Store.open(sqlite_url) as store:
+        assert store.run_info(store.find_run("k"))["timings"] == timings  # nothing computed: the run's timings stay
+
+
 def test_sigterm_marks_the_run_interrupted_and_exits_143(sqlite_url, monkeypatch, capsys):
     class Unhandled(Exception):
         pass

@@ -240,7 +240,9 @@ def shard_records(result: ShardResult):
 
 @dataclass
 class RunSummary:
-    """What a run made: counts per category, success rate, time per stage."""
+    """What a run made: counts per category, success rate, time per stage. After a resume (`whole_run`) the counts
+    are the whole run's, the shards skipped included; `stored`, the time per stage and `pairs_per_second` are this
+    time's, and the planner calls, not recorded per shard, are known only when no shard was skipped (else None)."""
 
     run_id: int
     name: str | None
@@ -251,7 +253,9 @@ class RunSummary:
     stored: int = 0
     skipped_shards: int = 0
     no_valid_cell: int = 0
-    planner_calls: int = 0
+    planner_calls: int | None = 0
+    #: pairs computed this time (`n_pairs` before `whole_run`)
+    computed: int = 0
     counts: dict = field(default_factory=lambda: {label: 0 for label in LABEL_STRENGTH})
     harm_table: dict = field(default_factory=lambda: cross_table([], []))
     seconds: dict = field(default_factory=lambda: {stage: 0.0 for stage in STAGES})
@@ -260,6 +264,7 @@ class RunSummary:
     def add(self, result: ShardResult, stored: int, store_seconds: float) -> None:
         self.n_maps += result.n_maps
         self.n_pairs += len(result.identification)
+        self.computed += len(result.identification)
         self.stored += stored
         self.no_valid_cell += result.no_valid_cell
         self.planner_calls += result.planner_calls
@@ -291,11 +296,31 @@ class RunSummary:
             "success_rate": success / valid if valid else None,
             **harm_summary(self.harm_table),
             "planner_calls": self.planner_calls,
-            "planner_calls_per_success": self.planner_calls / success if success else None,
+            "planner_calls_per_success": self.planner_calls / success
+            if success and self.planner_calls is not None
+            else None,
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
             "wall_seconds": round(self.wall_seconds, 3),
-            "pairs_per_second": self.n_pairs / self.wall_seconds if self.wall_seconds else None,
+            "pairs_per_second": self.computed / self.wall_seconds if self.wall_seconds else None,
         }
+
+    def whole_run(self, store, config: RunConfig) -> None:
+        """Make the summary of a resumed run, once every shard is stored, the whole run's: its maps, its pairs per
+        label and harm as stored (the shards skipped this time included), the maps without a pair (no valid cell);
+        the planner calls become None when shards were skipped (their calls were not recorded)."""
+        stored = store.label_counts(self.run_id)
+        self.counts = {label: stored.get(label, 0) for label in LABEL_STRENGTH}
+        self.n_pairs = sum(self.counts.values())
+        self.harm_table = cross_table([], [])
+        for label, row in store.harm_counts(self.run_id).items():
+            for value, count in row.items():
+                if value in self.harm_table.get(label, {}):
+                    self.harm_table[label][value] += count
+        self.n_maps = config.n
+        maps_with_pairs = len(np.unique(store.stored_indices(self.run_id) // config.slots))
+        self.no_valid_cell = config.n - maps_with_pairs
+        if self.skipped_shards:
+            self.planner_calls = None
 
 
 def resolve_planner(config: RunConfig, device: str | None = None) -> Planner:
@@ -310,15 +335,8 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
     planner, weights checksum included, only). A new run records `planner.spec()` in its config and the weights
     checksum in `runs.weights_checksum`."""
     if resume:
-        if not name:
-            raise InputError("resume needs name (the run to resume)", "resume", "name")
-        run_id = store.find_run(name)
-        if run_id is None:
-            raise InputError(f"resume: no run named '{name}' in {store.url}", "resume")
-        info = store.run_info(run_id)  # the config upgraded to today's form (`vinadv.records`)
-        if run_config_kind(info["config"]) != RUN:
-            raise InputError(f"resume: run '{name}' was not made by `vinadv run`; use another name", "resume", "name")
-        stored_config = {k: v for k, v in info["config"].items() if k not in (PLANNER_SPEC, VERSION_KEY)}
+        run_id, info = _run_to_resume(store, name)
+        stored_config = stored_settings(info)
         given = config.to_dict()
         # one planner however named: an old spelling (vin_robust), or a family with its planner's weights
         if same_choice((stored_config["planner"], stored_config["weights"]), (config.planner, config.weights)):
@@ -344,6 +362,36 @@ def open_run(store, config: RunConfig, name: str | None, resume: bool, planner: 
         version=__version__,
         moves=config.moves,
     )
+
+
+def _run_to_resume(store, name: str | None) -> tuple[int, dict]:
+    """The id and row (`Store.run_info`) of the latest run called `name`, to resume; InputError when there is none
+    or it was not made by `vinadv run`."""
+    if not name:
+        raise InputError("resume needs name (the run to resume)", "resume", "name")
+    run_id = store.find_run(name)
+    if run_id is None:
+        raise InputError(f"resume: no run named '{name}' in {store.url}", "resume")
+    info = store.run_info(run_id)  # the config upgraded to today's form (`vinadv.records`)
+    if run_config_kind(info["config"]) != RUN:
+        raise InputError(f"resume: run '{name}' was not made by `vinadv run`; use another name", "resume", "name")
+    return run_id, info
+
+
+def stored_settings(info: dict) -> dict:
+    """The `RunConfig` settings a run was made with, from its row (`Store.run_info`: the config in today's form)."""
+    return {k: v for k, v in info["config"].items() if k not in (PLANNER_SPEC, VERSION_KEY)}
+
+
+def resumed_config(db: str | None, name: str, **given) -> RunConfig:
+    """The config to resume the run `name` in `db` with (`run(..., resume=True)`): the settings it was made with,
+    read from the database, and the settings `given` (the options a user gave); `run` refuses a given setting that
+    differs from the stored one, naming it. InputError as `run` for a name that is no `vinadv run` run there."""
+    from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: computing a shard needs no store)
+
+    with Store.open(db) as store:
+        _, info = _run_to_resume(store, name)
+    return RunConfig(**{**stored_settings(info), **given})
 
 
 def _check_same_planner(name: str, info: dict, planner: Planner) -> None:
@@ -444,7 +492,12 @@ def run(
             if bar is not None:
                 bar.close()
         summary.wall_seconds = time.perf_counter() - t_start
-        store.finish_run(run_id, timings={**summary.to_dict()["seconds"], "wall": summary.wall_seconds})
+        timings = {**summary.to_dict()["seconds"], "wall": summary.wall_seconds}
+        if resume:
+            summary.whole_run(store, config)
+            if done == summary.skipped_shards:  # nothing computed this time (a finished run): its timings stay
+                timings = store.run_info(run_id)["timings"] or timings
+        store.finish_run(run_id, timings=timings)
     return summary
 
 

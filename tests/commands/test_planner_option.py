@@ -79,7 +79,8 @@ def test_run_records_the_planner_and_resume_refuses_another(weights, tmp_path, c
     assert info["config"][PLANNER_SPEC] == OptimalPlanner(SIZE).spec()
     capsys.readouterr()
     before = open(db, "rb").read()
-    assert main([*common, "--resume", "--weights", weights]) == 2  # the VIN: another planner
+    # the VIN: another planner (--weights alone would be the stored planner's, and optimal takes no weights file)
+    assert main([*common, "--resume", "--planner", "vin", "--weights", weights]) == 2
     err = capsys.readouterr().err
     assert "--resume" in err and "planner" in err and "Traceback" not in err
     assert open(db, "rb").read() == before

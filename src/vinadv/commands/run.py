@@ -23,7 +23,6 @@ from vinadv.commands.attack import (
     add_attack_arguments,
     add_harm_arguments,
     add_objective_argument,
-    attack_options,
     print_counts,
 )
 from vinadv.commands.output import add_output_options, emit, shows_progress
@@ -52,7 +51,11 @@ def register(subparsers) -> None:
     add_objective_argument(run)
     add_db_argument(run)
     run.add_argument("--name", help="run name (needed to --resume)")
-    run.add_argument("--resume", action="store_true", help="continue the latest run called --name")
+    run.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the latest run called --name, with the settings it was made with (options given must agree)",
+    )
     run.add_argument(
         "--report",
         metavar="DIR",
@@ -66,7 +69,9 @@ def register(subparsers) -> None:
     )
     add_output_options(run, json="the summary", quiet=True)
     add_cluster_arguments(run)
-    run.set_defaults(func=cmd_run)
+    # the run's settings are None unless given (`RunConfig` holds their defaults, as the help says): --resume takes
+    # the stored ones for the options not given
+    run.set_defaults(func=cmd_run, **dict.fromkeys(RUN_OPTIONS))
 
     ident = subparsers.add_parser("identify", help="label the pairs of a pairs file and store them as a run")
     ident.add_argument("--pairs", required=True, help="pairs file (.npz from `vinadv attack`)")
@@ -84,27 +89,43 @@ def register(subparsers) -> None:
     ident.set_defaults(func=cmd_identify)
 
 
+#: the options of `vinadv run` that are settings of `RunConfig` under their own name, besides the maps' and planner's
+RUN_OPTIONS = (
+    "attack",
+    "per_map",
+    "seed",
+    "budget",
+    "radius",
+    "obstacles",
+    "edit",
+    "shard_size",
+    "classifier",
+    "weights",
+    "harm_tolerance",
+    "harm_rtol",
+    "objective",
+    "no_corner_cutting",
+)
+
+
 def add_classifier_argument(parser) -> None:
     """`--classifier`: what labels the pairs of `run` and `identify` (`vinadv.identify`)."""
     parser.add_argument("--classifier", help="'rule' (default) or a model file from `vinadv classify train`")
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from vinadv.pipeline import RunConfig, run  # scikit-learn behind it: imported for this command only
+    from vinadv.pipeline import RunConfig, resumed_config, run  # scikit-learn behind it: for this command only
 
     if args.no_evaluate and not args.report:
         raise InputError("--no-evaluate: only with --report DIR")
     inputs = {"--maps": args.maps, "--classifier": args.classifier, **planner_inputs(args)}
     check_db_and_report(db_file(args.db), inputs, args.report)  # before the work: no input overwritten
     device = planner_device(args)
-    config = RunConfig(
-        **maps_settings(args),
-        **attack_options(args),
-        **option_values(
-            args, "attack", "shard_size", "classifier", "weights", "harm_tolerance", "harm_rtol", "objective"
-        ),
-        planner=args.planner or "vin",
-    )
+    settings = run_settings(args)
+    if args.resume and args.name:  # the stored settings, with the options given (the run refuses any that differs)
+        config = resumed_config(args.db, args.name, **settings)
+    else:  # RunConfig's defaults for the options not given (without --name, --resume is refused by `run`)
+        config = RunConfig(**settings)
     with open_args_executor(args) as executor:
         summary = run(
             config,
@@ -131,6 +152,21 @@ def cmd_run(args: argparse.Namespace) -> int:
         result["comparison"] = reason or "stored"
         result["seconds"]["report"] = round(time.perf_counter() - t0, 3)
     return emit(args, result, lambda: _print_run(result))
+
+
+def run_settings(args: argparse.Namespace) -> dict:
+    """The `RunConfig` settings of the options of `vinadv run` that were given (`RUN_OPTIONS`, `--planner` and the
+    maps': with `--maps FILE`, the file's, its `n` only with `--n` when resuming a named run)."""
+    given = {name: value for name, value in option_values(args, *RUN_OPTIONS, "planner").items() if value is not None}
+    if given.pop("no_corner_cutting", False):
+        given["corner_cutting"] = False
+    if args.maps is not None:
+        maps = maps_settings(args)  # the file's size, corner cutting and moves (refuses those options), all its maps
+        if args.n is None and args.resume and args.name:
+            del maps["n"]  # the run's
+        return {**given, **maps}
+    maps = {"n": args.n, "size": args.size, "moves": args.moves}
+    return {**given, **{name: value for name, value in maps.items() if value is not None}}
 
 
 def add_maps_arguments(parser, n: int, instead: str, record: str) -> None:
