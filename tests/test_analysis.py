@@ -36,6 +36,8 @@ from vinadv.analysis import (
 )
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.intervals import rate_interval
+from vinadv.plot.curves import k_series
 from vinadv.store import Store
 from vinadv.store.schema import HARM_FLOAT_COLUMNS, map_pairs
 from vinadv.testing.store import random_records
@@ -283,6 +285,15 @@ def test_robustness_is_one_row_per_benchmark_strategy_and_k(sqlite_url):
     assert worst["harmful"] == 5 and worst["harmful_rate"] == 5 / 9 and worst["seconds"] == 4.0
     assert worst["planner"] == "vin" and worst["clean_success"] == 0.9 and worst["size"] == 8
     assert frame["seconds"].tolist()[:2] == [1.5, 2.0] and frame["size"].tolist()[3:] == [12, 12]
+    # each rate's Wilson 95% interval, computed from the counts (this stored result holds none)
+    assert (worst["harmful_rate_low"], worst["harmful_rate_high"]) == rate_interval(5, 9)
+    assert (worst["paper_success_rate_low"], worst["paper_success_rate_high"]) == rate_interval(2, 9)
+    assert (worst["clean_success_low"], worst["clean_success_high"]) == rate_interval(9, 10)
+    assert (frame["harmful_rate_low"] <= frame["harmful_rate"]).all()
+    assert (frame["harmful_rate"] <= frame["harmful_rate_high"]).all()
+    # and the k curve draws them as bands, as it draws `{rate}_low` / `{rate}_high` points
+    series = dict(k_series(frame))
+    assert series["vin"][0]["harmful_rate_low"] == rate_interval(5, 9)[0]
 
 
 def test_import_vinadv_stays_light(sqlite_url):

@@ -17,6 +17,7 @@ from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.identify import objective_strength
+from vinadv.intervals import rate_interval
 from vinadv.planners.registry import load_planner
 from vinadv.planners.vin.reference import plan_reference
 from vinadv.planners.vin.weights import save_vin
@@ -289,6 +290,13 @@ def test_cli_json_db_and_report(weights, tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert list(out["strategies"]) == ["random", "key-points"] and len(out["overall"]) == 2
     assert out["settings"]["n"] == 12 and out["planner"]["name"] == "vin"
+    # every rate with its Wilson 95% interval, from its counts (vinadv.intervals)
+    for f in [*out["overall"], *(g for s in out["strategies"].values() for g in s["by_obstacles"])]:
+        for rate, count in (("harmful_rate", "harmful"), ("paper_success_rate", "broken")):
+            assert (f[f"{rate}_low"], f[f"{rate}_high"]) == rate_interval(f[count], f["valid"])
+            assert f[rate] is None or f[f"{rate}_low"] <= f[rate] <= f[f"{rate}_high"]
+    clean = out["clean"]
+    assert (clean["success_rate_low"], clean["success_rate_high"]) == rate_interval(clean["reached"], clean["maps"])
     with Store.open(str(db), readonly=True) as store:
         (row,) = store.read_robustness()
     assert row["id"] == out["id"] and row["result"]["overall"] == out["overall"]

@@ -45,6 +45,7 @@ import numpy as np
 
 from vinadv import __version__
 from vinadv.errors import InputError, one_line
+from vinadv.intervals import figure_intervals, rate_interval
 from vinadv.outfile import atomic_output
 from vinadv.robustness import WORST_CASE
 from vinadv.store import PairRecords, Store
@@ -84,7 +85,8 @@ PAIR_COLUMNS = (
     "path_o",
     "path_a",
 )
-#: the columns of `Results.robustness()`: the benchmark, then one strategy's figures at k added obstacles
+#: the columns of `Results.robustness()`: the benchmark, then one strategy's figures at k added obstacles; each rate
+#: with its Wilson 95% interval (`{rate}_low`, `{rate}_high`, computed from the counts: `vinadv.intervals`)
 ROBUSTNESS_COLUMNS = (
     "benchmark",
     "created",
@@ -95,6 +97,8 @@ ROBUSTNESS_COLUMNS = (
     "maps_seed",
     "objective",
     "clean_success",
+    "clean_success_low",
+    "clean_success_high",
     "clean_regret",
     "strategy",
     "k",
@@ -103,8 +107,12 @@ ROBUSTNESS_COLUMNS = (
     "valid",
     "broken",
     "paper_success_rate",
+    "paper_success_rate_low",
+    "paper_success_rate_high",
     "harmful",
     "harmful_rate",
+    "harmful_rate_low",
+    "harmful_rate_high",
     "reached",
     "mean_regret",
     "seconds",
@@ -397,7 +405,8 @@ class Results:
     def robustness(self) -> pd.DataFrame:
         """The stored robustness benchmarks (`vinadv robustness`), long form: one row per benchmark, strategy and
         number of added obstacles k, the worst case over the strategies as the strategy 'worst case'
-        (`ROBUSTNESS_COLUMNS`; rates are shares of the valid maps, None/NaN where no map is valid)."""
+        (`ROBUSTNESS_COLUMNS`; rates are shares of the valid maps, None/NaN where no map is valid, each with its
+        Wilson 95% interval as `{rate}_low` and `{rate}_high`, what `vinadv.plot.k_curve` draws as bands)."""
         import pandas as pd
 
         rows = [row for stored in self.store.read_robustness() for row in robustness_rows(stored)]
@@ -418,6 +427,10 @@ def robustness_rows(stored: dict) -> list[dict]:
         "maps_seed": settings.get("maps_seed"),
         "objective": settings.get("objective"),
         "clean_success": clean.get("success_rate"),
+        **{
+            f"clean_success_{end}": value
+            for end, value in zip(("low", "high"), rate_interval(clean.get("reached"), clean.get("maps")))
+        },
         "clean_regret": clean.get("mean_regret"),
     }
     strategies = [
@@ -426,7 +439,13 @@ def robustness_rows(stored: dict) -> list[dict]:
     strategies.append((WORST_CASE, result.get("overall", []), result.get("seconds")))
     figures = ROBUSTNESS_COLUMNS[ROBUSTNESS_COLUMNS.index("k") : ROBUSTNESS_COLUMNS.index("seconds")]
     return [
-        {**benchmark, "strategy": name, **{key: f.get(key) for key in figures}, "seconds": seconds}
+        {
+            **benchmark,
+            "strategy": name,
+            **{key: f.get(key) for key in figures},
+            **figure_intervals(f),  # from the counts: a benchmark stored before intervals has them too
+            "seconds": seconds,
+        }
         for name, by_k, seconds in strategies
         for f in by_k
     ]

@@ -52,6 +52,7 @@ from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.generator import MIN_SIZE, generate_maps
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import identify, objective_strength
+from vinadv.intervals import figure_intervals, interval_fields
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
 from vinadv.records import ROBUSTNESS, ROBUSTNESS_SETTINGS, stamp
@@ -153,8 +154,10 @@ class Figures:
             counts=counts,
         )
 
-    def to_dict(self) -> dict:
-        return {
+    def to_dict(self, intervals: bool = False) -> dict:
+        """The figures, JSON-able; with `intervals`, each rate's Wilson 95% interval too (`{rate}_low`, `{rate}_high`:
+        `vinadv.intervals`), as a robustness result carries them (an entry does not: its readers compute them)."""
+        out = {
             "k": self.k,
             "maps": self.maps,
             "attacked": self.attacked,
@@ -167,6 +170,7 @@ class Figures:
             "mean_regret": self.mean_regret,
             **({} if self.counts is None else {"counts": self.counts}),
         }
+        return {**out, **figure_intervals(out)} if intervals else out
 
 
 @dataclass
@@ -189,7 +193,7 @@ class StrategyResult:
             "seconds": round(self.seconds, 3),
             "planner_calls": self.planner_calls,
             "ranked_as": self.ranked_as,
-            "by_obstacles": [f.to_dict() for f in self.by_k],
+            "by_obstacles": [f.to_dict(intervals=True) for f in self.by_k],
         }
 
 
@@ -225,13 +229,17 @@ class RobustnessResult:
 
     def to_dict(self) -> dict:
         """Every figure, JSON-able (what `--json` prints and the database stores: the record
-        `vinadv.records.ROBUSTNESS`, its version included)."""
+        `vinadv.records.ROBUSTNESS`, its version included), each rate with its Wilson 95% interval (`{rate}_low`,
+        `{rate}_high`; readers compute them from the counts, so a result stored without them has them too)."""
         result = {
             "planner": self.planner,
             "settings": self.settings,
-            "clean": self.clean,
+            "clean": {
+                **self.clean,
+                **interval_fields("success_rate", self.clean.get("reached"), self.clean.get("maps")),
+            },
             "strategies": {name: s.to_dict() for name, s in self.strategies.items()},
-            "overall": [f.to_dict() for f in self.overall],
+            "overall": [f.to_dict(intervals=True) for f in self.overall],
             "seconds": round(self.seconds, 3),
         }
         return stamp(ROBUSTNESS, result)

@@ -8,6 +8,7 @@ import json
 from vinadv.bench.leaderboard import compute_time, planner_label, read_entries, render_markdown, rows
 from vinadv.bench.suites import ENTRY_FORMAT, FROZEN
 from vinadv.cli import main
+from vinadv.intervals import rate_interval
 
 
 def _entry(planner: str, harmful: float, flags=(), removal: float = 0.0) -> dict:
@@ -73,3 +74,41 @@ def test_a_planner_with_parameters_is_named_with_their_values():
     assert planner_label({"name": "wastar", "config": {"moves": "moore", "w": 2.5}}) == "wastar:w=2.5"
     assert planner_label({"name": "astar", "config": {"moves": "moore"}}) == "astar"
     assert planner_label({"name": "mine.py:make", "config": {"w": 1}}) == "mine.py:make"  # not registered
+
+
+def test_every_rate_has_its_wilson_interval_from_the_entrys_counts(tmp_path, capsys):
+    """A v1 entry holds counts, not intervals: the leaderboard computes each rate's from them, shows it as
+    `57.7% [47.9, 67.0]` and gives it in `--json` as `{rate}_low`, `{rate}_high`."""
+    e = _entry("vin", 0.0)
+    worst = {"k": 1, "valid": 90, "harmful": 52, "broken": 30, "harmful_rate": 52 / 90, "paper_success_rate": 30 / 90}
+    e["clean"].update(maps=100, reached=90, percent_optimal=0.62)
+    e["worst_case"] = [worst, {**worst, "k": 3, "harmful": 60, "harmful_rate": 60 / 90}]
+    e["attacks"]["remove:random"]["by_obstacles"] = [{**worst, "harmful": 9, "harmful_rate": 0.1}]
+    (tmp_path / "e").mkdir()
+    (tmp_path / "e" / "vin.json").write_text(json.dumps(e))
+    (row,) = rows(read_entries(tmp_path / "e"))["vin28-quick-v1"]
+    expected = {
+        "clean": (90, 100),
+        "optimal": (62, 100),
+        "harmful": (52, 90),
+        "paper": (30, 90),
+        "harmful_k": (60, 90),
+        "removal": (9, 90),
+    }
+    for name, (count, n) in expected.items():
+        assert (row[f"{name}_low"], row[f"{name}_high"]) == rate_interval(count, n), name
+        assert row[f"{name}_low"] <= row[name] <= row[f"{name}_high"]
+    assert row["format"] == "v1"
+    low, high = rate_interval(52, 90)
+    assert f"| 57.8% \\[{100 * low:.1f}, {100 * high:.1f}\\] |" in render_markdown({"s": [row]})
+    assert main(["bench", "leaderboard", str(tmp_path / "e"), "--out", str(tmp_path / "b"), "--json"]) == 0
+    (printed,) = json.loads(capsys.readouterr().out)["suites"]["vin28-quick-v1"]
+    assert (printed["harmful_low"], printed["harmful_high"]) == (low, high)
+    assert f"57.8% [{100 * low:.1f}, {100 * high:.1f}]" in (tmp_path / "b" / "leaderboard.html").read_text()
+    # no valid map: no rate, no interval
+    e["worst_case"] = [
+        {**worst, "valid": 0, "harmful": 0, "broken": 0, "harmful_rate": None, "paper_success_rate": None}
+    ]
+    (tmp_path / "e" / "vin.json").write_text(json.dumps(e))
+    (row,) = rows(read_entries(tmp_path / "e"))["vin28-quick-v1"]
+    assert (row["harmful"], row["harmful_low"], row["harmful_high"]) == (None, None, None)

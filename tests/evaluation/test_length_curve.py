@@ -1,10 +1,9 @@
-"""The success-by-path-length curve: Wilson intervals against a brute-force scan, the curve's points against the
-`by_length` rows it is drawn from, and `vinadv eval --figure` / `vin eval --figure` end to end."""
+"""The success-by-path-length curve: the curve's points against the `by_length` rows it is drawn from (its Wilson
+intervals: tests/test_intervals.py), and `vinadv eval --figure` / `vin eval --figure` end to end."""
 
 import json
 import math
 
-import numpy as np
 import pytest
 
 from tests.cli_files import generated_maps_file
@@ -15,26 +14,9 @@ from vinadv.evaluation.length_curve import (
     length_curve,
     success_by_length_figure,
     svg_text,
-    wilson_interval,
 )
 
 SIZE = 10
-
-
-def scanned_wilson(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
-    """The Wilson interval by its definition: the p in [0, 1] whose score test does not reject k of n,
-    |k - n p| <= z sqrt(n p (1 - p)), found on a fine grid of p (no closed form used)."""
-    p = np.linspace(0.0, 1.0, 400_001)
-    keep = np.abs(k - n * p) <= z * np.sqrt(n * p * (1 - p))
-    return float(p[keep].min()), float(p[keep].max())
-
-
-@pytest.mark.parametrize(("k", "n"), [(0, 1), (1, 1), (0, 12), (12, 12), (3, 7), (95, 100), (1, 2000), (1999, 2000)])
-def test_wilson_interval_is_the_score_tests_acceptance_region(k, n):
-    low, high = wilson_interval([k], [n])
-    want_low, want_high = scanned_wilson(k, n)
-    assert low[0] == pytest.approx(want_low, abs=5e-6) and high[0] == pytest.approx(want_high, abs=5e-6)
-    assert 0.0 <= low[0] <= k / n <= high[0] <= 1.0
 
 
 def rows_of(counts: dict[int, tuple[int, int]]) -> list[dict]:

@@ -1,5 +1,6 @@
 """The report's robustness section: the stored benchmarks of the database as a table (the worst case at one obstacle,
-the harmful rate by k), a CSV of every strategy and k read back against the stored figures, and the curves; a
+the harmful rate by k, each rate with its Wilson interval), a CSV of every strategy and k read back against the
+stored figures and their intervals, and the curves; a
 database without benchmarks says how to make one."""
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import math
 import pytest
 from tests.report.conftest import SIZE
 
+from vinadv.intervals import rate_interval
 from vinadv.planners.vin.weights import load_vin
 from vinadv.report import write_report
 from vinadv.robustness import heldout_maps, robustness, save_robustness
@@ -39,7 +41,11 @@ def test_robustness_section_shows_every_stored_benchmark(db_copy, report_weights
     table = section.split('id="robustness-table"', 1)[1].split("</table>", 1)[0]
     assert table.count("<tr><td>vin") == 2 and "harmful, k = 3" in table
     for d in made:
-        assert f"{100 * d['overall'][0]['harmful_rate']:.1f}%" in table
+        one = d["overall"][0]
+        low, high = rate_interval(one["harmful"], one["valid"])  # its Wilson 95% interval beside it
+        assert (
+            f'{100 * one["harmful_rate"]:.1f}% <span class="hint">[{100 * low:.1f}, {100 * high:.1f}]</span>' in table
+        )
     with open(out / "robustness.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     expected = [
@@ -53,6 +59,9 @@ def test_robustness_section_shows_every_stored_benchmark(db_copy, report_weights
         assert (int(row["benchmark"]), row["strategy"], int(row["k"])) == (bid, name, f["k"])
         assert int(row["valid"]) == f["valid"] and int(row["harmful"]) == f["harmful"]
         assert math.isclose(float(row["harmful_rate"]), f["harmful_rate"])
+        for rate, count in (("harmful_rate", "harmful"), ("paper_success_rate", "broken")):
+            low, high = rate_interval(f[count], f["valid"])
+            assert math.isclose(float(row[f"{rate}_low"]), low) and math.isclose(float(row[f"{rate}_high"]), high)
 
 
 def test_a_database_without_benchmarks_says_how_to_make_one(base_report):

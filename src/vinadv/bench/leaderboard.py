@@ -1,7 +1,9 @@
 """The leaderboard: benchmark entries (`vinadv.bench.scoring`) of one folder as a Markdown and an HTML table, per suite,
 sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at the
 largest k, then by name), each row linking to its entry file, its flags shown beside it, and how long it took (the
-sum of its chunks' seconds: on the machine and load of the time, not a speed figure).
+sum of its chunks' seconds: on the machine and load of the time, not a speed figure). Every rate is shown with its
+Wilson 95% interval (`vinadv.intervals`), computed here from the counts the entry holds (`vinadv.bench_entry/1`
+entries included; a row says its entry's format, `v1`), and each row carries it as `{rate}_low`, `{rate}_high`.
 
 Every entry is checked against the entry schema (`vinadv.bench.validate`) before it is used: a bad one is one line
 naming its file and field (`read_entries_checked`), the others still rendered. An entry whose suite checksum is not
@@ -21,6 +23,7 @@ from pathlib import Path
 from vinadv.bench.suites import ENTRY_FORMAT, FROZEN
 from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
+from vinadv.intervals import rate_interval
 from vinadv.jsonfile import read_json_document
 
 #: the columns: title, and how each reads an entry
@@ -92,11 +95,26 @@ def _search_exp(entry: dict) -> float | None:
     return None if not search else search["exp"]
 
 
-def _removal_harmful(entry: dict) -> float | None:
-    """The share of valid maps some removal attack harms (the worst over the removal attacks, at one cell)."""
-    rates = [a["by_obstacles"][0]["harmful_rate"] for a in entry["attacks"].values() if a["edit"] == "remove"]
-    rates = [r for r in rates if r is not None]
-    return max(rates) if rates else None
+def _removal_harmful(entry: dict) -> dict | None:
+    """The figures at one cell of the removal attack that harms the largest share of valid maps (the worst over the
+    removal attacks; ties: the first); None without a removal attack that has valid maps."""
+    figures = [a["by_obstacles"][0] for a in entry["attacks"].values() if a["edit"] == "remove"]
+    figures = [f for f in figures if f["harmful_rate"] is not None]
+    return max(figures, key=lambda f: f["harmful_rate"]) if figures else None
+
+
+def _optimal_count(clean: dict) -> int | None:
+    """The clean maps whose path is optimal, recovered from the stored share (`percent_optimal`, that count over the
+    maps: `round(share * maps)` is exact)."""
+    share, maps = clean.get("percent_optimal"), clean.get("maps")
+    return None if share is None or maps is None else round(share * maps)
+
+
+def _with_interval(row: dict, name: str, rate, count, n) -> None:
+    """`row[name]` = `rate`, and `row[name + "_low"]`, `row[name + "_high"]` its Wilson 95% interval from the counts
+    (`vinadv.intervals`; None where there is no rate)."""
+    row[name] = rate
+    row[f"{name}_low"], row[f"{name}_high"] = (None, None) if rate is None else rate_interval(count, n)
 
 
 def _value(value) -> str:
@@ -144,25 +162,28 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
     suites first."""
     by_suite: dict[str, list[dict]] = {}
     for path, e in entries:
-        worst = e["worst_case"]
+        worst, clean = e["worst_case"], e["clean"]
         weights = e.get("weights_sha256")
         key, heading = suite_heading(e["suite"])
+        removal = _removal_harmful(e)
         row = {
             "file": path.name,
+            "format": "v" + e["format"].rsplit("/", 1)[-1],  # v1: `vinadv.bench_entry/1`
             "suite": heading,
             "planner": planner_label(e["planner"]),
             "weights": weights[:12] if weights else "—",
-            "clean": e["clean"]["success_rate"],
-            "optimal": e["clean"].get("percent_optimal"),
-            "exp": _search_exp(e),
-            "harmful": worst[0]["harmful_rate"],
-            "paper": worst[0]["paper_success_rate"],
-            "harmful_k": worst[-1]["harmful_rate"],
-            "k": worst[-1]["k"],
-            "removal": _removal_harmful(e),
-            "flags": [name for name, f in e["flags"].items() if f["raised"]],
-            "time": compute_time(e),
         }
+        _with_interval(row, "clean", clean["success_rate"], clean.get("reached"), clean.get("maps"))
+        _with_interval(row, "optimal", clean.get("percent_optimal"), _optimal_count(clean), clean.get("maps"))
+        row["exp"] = _search_exp(e)
+        _with_interval(row, "harmful", worst[0]["harmful_rate"], worst[0].get("harmful"), worst[0].get("valid"))
+        _with_interval(row, "paper", worst[0]["paper_success_rate"], worst[0].get("broken"), worst[0].get("valid"))
+        _with_interval(row, "harmful_k", worst[-1]["harmful_rate"], worst[-1].get("harmful"), worst[-1].get("valid"))
+        row["k"] = worst[-1]["k"]
+        removal = removal or {"harmful_rate": None}
+        _with_interval(row, "removal", removal["harmful_rate"], removal.get("harmful"), removal.get("valid"))
+        row["flags"] = [name for name, f in e["flags"].items() if f["raised"]]
+        row["time"] = compute_time(e)
         by_suite.setdefault(key, []).append(row)
 
     def order(r):
@@ -179,17 +200,25 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
     return {suite: sorted(rs, key=order) for suite, rs in sorted(by_suite.items(), key=released_first)}
 
 
+def _pct_ci(r: dict, name: str) -> str:
+    """A rate with its Wilson 95% interval in points: `57.7% [47.9, 67.0]` ("—" without a rate)."""
+    low, high = r[f"{name}_low"], r[f"{name}_high"]
+    if r[name] is None or low is None or high is None:
+        return _pct(r[name])
+    return f"{_pct(r[name])} [{100 * low:.1f}, {100 * high:.1f}]"
+
+
 def _cells(r: dict) -> list[str]:
     return [
         r["planner"],
         r["weights"],
-        _pct(r["clean"]),
-        _pct(r["optimal"]),
+        _pct_ci(r, "clean"),
+        _pct_ci(r, "optimal"),
         _pct(r["exp"]),
-        _pct(r["harmful"]),
-        _pct(r["paper"]),
-        f"{_pct(r['harmful_k'])} (k = {r['k']})",
-        _pct(r["removal"]),
+        _pct_ci(r, "harmful"),
+        _pct_ci(r, "paper"),
+        f"{_pct_ci(r, 'harmful_k')} (k = {r['k']})",
+        _pct_ci(r, "removal"),
         ", ".join(r["flags"]) or "—",
         r["time"],
     ]
@@ -234,7 +263,8 @@ def render_html(table: dict[str, list[dict]], link_prefix: str = "") -> str:
         '<html lang="en"><head><meta charset="utf-8"><title>vinadv robustness leaderboard</title>',
         "<style>table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px}</style></head><body>",
         "<h1>vinadv robustness leaderboard</h1>",
-        "<p>Sorted by the worst-case harmful rate at one edited cell (the most robust first).</p>",
+        "<p>Sorted by the worst-case harmful rate at one edited cell (the most robust first). Each rate is followed "
+        "by its 95% Wilson score interval in points, over the maps counted in its denominator.</p>",
     ]
     for rs in table.values():
         parts.append(f"<h2>{html.escape(rs[0]['suite'])}</h2><table>")

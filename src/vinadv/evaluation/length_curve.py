@@ -22,6 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from vinadv.errors import InputError  # noqa: E402
+from vinadv.intervals import wilson_interval  # noqa: E402
 from vinadv.planners.records import LengthBucketMetrics  # noqa: E402
 from vinadv.plot.files import save_figure  # noqa: E402
 
@@ -32,11 +33,7 @@ __all__ = [
     "save_success_by_length",
     "success_by_length_figure",
     "svg_text",
-    "wilson_interval",
 ]
-
-#: z of the two-sided 95% interval
-Z95 = 1.959963984540054
 
 
 @dataclass(frozen=True)
@@ -58,21 +55,6 @@ class LengthCurve:
     rate: np.ndarray
     ci_low: np.ndarray
     ci_high: np.ndarray
-
-
-def wilson_interval(successes, n, z: float = Z95) -> tuple[np.ndarray, np.ndarray]:
-    """The Wilson score interval of the proportions `successes / n` (arrays of counts, `n >= 1`): `(low, high)`,
-    both in [0, 1]. Unlike the normal approximation it stays inside [0, 1] and is not empty at 0% or 100%."""
-    k = np.asarray(successes, dtype=np.float64)
-    n = np.asarray(n, dtype=np.float64)
-    p = k / n
-    z2 = z * z
-    centre = (p + z2 / (2 * n)) / (1 + z2 / n)
-    half = z * np.sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / (1 + z2 / n)
-    # at 0 and at n the ends are exactly 0 and 1 (centre -/+ half cancels there but for rounding)
-    low = np.where(k == 0, 0.0, np.clip(centre - half, 0.0, 1.0))
-    high = np.where(k == n, 1.0, np.clip(centre + half, 0.0, 1.0))
-    return low, high
 
 
 def length_curve(rows: Sequence[LengthBucketMetrics]) -> LengthCurve:

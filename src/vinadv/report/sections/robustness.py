@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from vinadv.intervals import figure_intervals
 from vinadv.report.data import Context, Figure, Table
 
 #: the worst case over the strategies, as `vinadv.robustness.WORST_CASE` names it (not imported: no torch here)
@@ -14,7 +15,8 @@ WORST_CASE = "worst case"
 @dataclass(frozen=True)
 class Benchmark:
     """One stored robustness benchmark (`vinadv robustness`): what was measured and its figures, as stored
-    (`worst`: the worst case by k, `by_strategy`: {strategy: figures by k}; figures as `Figures.to_dict`)."""
+    (`worst`: the worst case by k, `by_strategy`: {strategy: figures by k}; figures as `Figures.to_dict`, with their
+    rates' intervals computed from the counts: `with_intervals`)."""
 
     id: int | None
     created: str
@@ -64,6 +66,12 @@ class RobustnessData:
         return max([0] + [len(b.worst) for b in self.benchmarks])
 
 
+def with_intervals(by_k: list[dict]) -> list[dict]:
+    """Figures by k, each with its rates' Wilson 95% intervals (`{rate}_low`, `{rate}_high`), computed from the
+    counts (`vinadv.intervals.figure_intervals`): a benchmark stored before intervals has them too."""
+    return [{**f, **figure_intervals(f)} for f in by_k]
+
+
 def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
     """The robustness section of `rows`, robustness benchmarks as `Store.read_robustness` returns them (`id` None for
     one not stored): the comparison table, its CSV (every strategy and the worst case at every k) and the curves."""
@@ -85,8 +93,8 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
                 strategies=tuple(settings["strategies"]),
                 clean_success=result["clean"]["success_rate"],
                 clean_regret=result["clean"]["mean_regret"],
-                worst=list(result["overall"]),
-                by_strategy={name: s["by_obstacles"] for name, s in result["strategies"].items()},
+                worst=with_intervals(result["overall"]),
+                by_strategy={name: with_intervals(s["by_obstacles"]) for name, s in result["strategies"].items()},
                 seconds={
                     **{name: s["seconds"] for name, s in result["strategies"].items()},
                     "total": result["seconds"],
@@ -97,7 +105,19 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
     data = RobustnessData(benchmarks=benchmarks)
     if not benchmarks:
         return data
-    keys = ("valid", "broken", "paper_success_rate", "harmful", "harmful_rate", "reached", "mean_regret")
+    keys = (
+        "valid",
+        "broken",
+        "paper_success_rate",
+        "paper_success_rate_low",
+        "paper_success_rate_high",
+        "harmful",
+        "harmful_rate",
+        "harmful_rate_low",
+        "harmful_rate_high",
+        "reached",
+        "mean_regret",
+    )
     data.table = Table(
         "robustness.csv",
         (
@@ -137,7 +157,8 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
     data.figure = Figure(
         tuple(figures.robustness_curves([(b.name, b.worst) for b in benchmarks], out / "fig_robustness")),
         "Robustness curves: the share of valid maps that k added obstacles make harmful (left) or break by the "
-        "paper's definition, UrP or FP (right), worst case over the strategies of each benchmark.",
+        "paper's definition, UrP or FP (right), worst case over the strategies of each benchmark; the bands are "
+        "95% Wilson intervals over the valid maps.",
         "robustness curves",
         880,
     )
