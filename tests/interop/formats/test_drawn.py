@@ -8,9 +8,9 @@ import json
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 from PIL import Image
 
+from tests.byte_mutations import MUTATIONS, mutated
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.interop import export_maps, import_maps
@@ -102,12 +102,9 @@ def test_byte_mutations_load_or_give_one_line(tmp_path, fmt):
     refused = []
 
     @FUZZ
-    @given(cut=st.floats(0, 1), flips=st.lists(st.tuples(st.floats(0, 1), st.integers(0, 255)), max_size=4))
+    @given(**MUTATIONS)
     def check(cut, flips):
-        out = bytearray(data[: max(1, int(cut * len(data)))] if cut < 0.5 else data)
-        for where, value in flips:
-            out[min(len(out) - 1, int(where * len(out)))] = value
-        target.write_bytes(bytes(out))
+        target.write_bytes(mutated(data, cut, flips))
         options = {} if fmt == "ascii" else {"start": "1,1", "goal": "6,6"}
         try:
             import_maps(target, fmt, **options)

@@ -9,8 +9,8 @@ import json
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
+from tests.byte_mutations import MUTATIONS, mutated
 from tests.needs import public_data
 from tests.planners.transpath.literal import example_tasks
 from vinadv.cli import main
@@ -127,12 +127,9 @@ def test_byte_mutations_load_or_give_one_line(tmp_path):
     refused = []
 
     @FUZZ
-    @given(cut=st.floats(0, 1), flips=st.lists(st.tuples(st.floats(0, 1), st.integers(0, 255)), max_size=4))
+    @given(**MUTATIONS)
     def check(cut, flips):
-        out = bytearray(data[: max(1, int(cut * len(data)))] if cut < 0.5 else data)
-        for where, value in flips:
-            out[min(len(out) - 1, int(where * len(out)))] = value
-        target.write_bytes(bytes(out))
+        target.write_bytes(mutated(data, cut, flips))
         try:
             import_maps(target, "transpath")
         except InputError as exc:
