@@ -22,6 +22,7 @@ LAYERS = {
     "errors": 0,
     "vocabulary": 1,
     "seeds": 1,
+    "checksums": 1,
     # where a job's chunks run (in this process; the Dask executor is the cluster's): knows no job
     "executor": 2,
     "outfile": 1,
