@@ -307,6 +307,13 @@ def pair(
     return fig
 
 
+def figure_for(ax, figsize: tuple[float, float]):
+    """`(figure, axes)`: `ax` and its figure, or a new figure of `figsize` inches with one axes."""
+    if ax is None:
+        return plt.subplots(figsize=figsize, layout="constrained")
+    return ax.figure, ax
+
+
 def map(
     obstacles: np.ndarray,
     goal: np.ndarray | None = None,
@@ -322,10 +329,7 @@ def map(
 ):
     """Draw one map (`draw_map`: obstacles, start or starts, goal, labelled paths, edited and expanded cells) on `ax`
     or a new figure, with its legend below; returns the figure."""
-    if ax is None:
-        fig, ax = plt.subplots(figsize=(4, 4.4), layout="constrained")
-    else:
-        fig = ax.figure
+    fig, ax = figure_for(ax, (4, 4.4))
     draw_map(ax, obstacles, goal, start, paths, added=added, title=title, removed=removed, expanded=expanded)
     if legend:
         map_legend(fig, ax)
@@ -348,10 +352,7 @@ def value_map(
     values = np.asarray(values, dtype=np.float64)
     if values.ndim != 2 or values.shape[0] != values.shape[1]:
         raise InputError(f"value_map: expected an (N, N) map, got shape {values.shape}", "values")
-    if ax is None:
-        fig, ax = plt.subplots(figsize=(4.4, 4), layout="constrained")
-    else:
-        fig = ax.figure
+    fig, ax = figure_for(ax, (4.4, 4))
     shown = np.ma.masked_invalid(values)
     if obstacles is not None:
         shown = np.ma.masked_where(np.asarray(obstacles, dtype=bool), shown)
