@@ -72,6 +72,11 @@ def draw_map(
             else:
                 square = Rectangle((c - 0.5, r - 0.5), 1, 1, color=edited.colour, label=label)
             ax.add_patch(square)
+    finish_map(ax, n, goal, start, title)
+
+
+def finish_map(ax, n: int, goal, start, title: str | None) -> None:
+    """The start and goal marked on `ax`, its limits those of an `n x n` map, no ticks, and its title."""
     draw_map_markers(ax, goal, start)
     ax.set_xlim(-0.5, n - 0.5)
     ax.set_ylim(n - 0.5, -0.5)
@@ -358,14 +363,7 @@ def value_map(
         shown = np.ma.masked_where(np.asarray(obstacles, dtype=bool), shown)
     cmap = plt.get_cmap(PALETTE.values).with_extremes(bad=PALETTE.obstacle.colour)
     image = ax.imshow(shown, cmap=cmap, interpolation="nearest")
-    draw_map_markers(ax, goal, start)
-    n = values.shape[0]
-    ax.set_xlim(-0.5, n - 0.5)
-    ax.set_ylim(n - 0.5, -0.5)
-    ax.set_xticks([])
-    ax.set_yticks([])
-    if title:
-        ax.set_title(title, fontsize=9)
+    finish_map(ax, values.shape[0], goal, start, title)
     if colorbar:
         fig.colorbar(image, ax=ax, shrink=0.8)
     return fig
