@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.test_docs import docs_module
 from vinadv.cli import build_parser
 from vinadv.planners.registry import ALIASES, REGISTRY, canonical_name
 
@@ -16,13 +17,8 @@ FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
 def commands(parser: argparse.ArgumentParser, words: tuple[str, ...] = ()) -> dict[tuple[str, ...], object]:
     """Every command's parser by its words after `vinadv` (`()` the top level; aliases left out)."""
     found = {words: parser}
-    for action in parser._actions:  # argparse keeps subparsers only here
-        if isinstance(action, argparse._SubParsersAction):
-            seen = set()
-            for name, sub in action.choices.items():
-                if id(sub) not in seen:
-                    seen.add(id(sub))
-                    found |= commands(sub, (*words, name))
+    for name, sub in docs_module("gen_cli").subcommands(parser).items():
+        found |= commands(sub, (*words, name))
     return found
 
 

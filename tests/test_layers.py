@@ -24,6 +24,7 @@ LAYERS = {
     # the Wilson interval of every rate, from its counts: the bench, the report, robustness and analysis read it
     "intervals": 1,
     "seeds": 1,
+    "checksums": 1,
     # where a job's chunks run (in this process; the Dask executor is the cluster's): knows no job
     "executor": 2,
     "outfile": 1,

@@ -242,10 +242,15 @@ def entry_problem(entry) -> str | None:
     return None
 
 
-def _bools(value, field: str, n: int) -> list:
+def _per_map(value, field: str, n: int) -> list:
     values = _list(value, field)
     if len(values) != n:
         raise Bad(field, f"holds {len(values)} values, expected {n} (one per map)")
+    return values
+
+
+def _bools(value, field: str, n: int) -> list:
+    values = _per_map(value, field, n)
     for i, v in enumerate(values):
         if not isinstance(v, bool):
             raise Bad(f"{field}[{i}]", f"is {_kind(v)}, expected true or false")
@@ -253,9 +258,7 @@ def _bools(value, field: str, n: int) -> list:
 
 
 def _reals(value, field: str, n: int) -> list:
-    values = _list(value, field)
-    if len(values) != n:
-        raise Bad(field, f"holds {len(values)} values, expected {n} (one per map)")
+    values = _per_map(value, field, n)
     for i, v in enumerate(values):
         _number(v, f"{field}[{i}]", null=True)
     return values

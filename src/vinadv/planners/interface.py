@@ -380,7 +380,7 @@ def check_starts_inputs(obstacles, starts, goals) -> tuple[np.ndarray, np.ndarra
 def check_multi_inputs(obstacles, goals, starts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """`check_plan_inputs` for `starts (B, S, 2)`: normalised `(obstacles, goals, starts)`."""
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-    obstacles, _, goals = check_plan_inputs(obstacles, np.zeros((len(obstacles), 2)), goals)
+    obstacles, _, goals = check_plan_inputs(obstacles, None, goals)
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     b, n = obstacles.shape[0], obstacles.shape[1]
     if starts.ndim != 3 or starts.shape[0] != b or starts.shape[2] != 2:

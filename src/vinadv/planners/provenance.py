@@ -11,21 +11,14 @@ of a checkout is not known by the libraries it uses.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import sys
 from pathlib import Path
 
+from vinadv.checksums import file_sha256
+
 #: the module attribute a planner declares its version by
 VERSION_ATTRIBUTE = "PLANNER_VERSION"
-
-
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def _excluded() -> list[Path]:
@@ -54,5 +47,5 @@ def source_provenance(module, folder: str | os.PathLike) -> dict:
         if folder not in path.parents or any(e == path or e in path.parents for e in excluded):
             continue
         if path.is_file():
-            files[path.relative_to(folder).as_posix()] = _sha256(path)
+            files[path.relative_to(folder).as_posix()] = file_sha256(path)
     return {"files": dict(sorted(files.items()))}

@@ -66,15 +66,19 @@ class PlanResult(Columns):
         return termination_names(self.termination)
 
 
-def check_plan_inputs(obstacles, starts, goals) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Validate and normalise planner inputs: `(B, N, N)` bool, `(B, 2)` int64, `(B, 2)` int64, cells in the grid."""
+def check_plan_inputs(obstacles, starts, goals) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Validate and normalise planner inputs: `(B, N, N)` bool, `(B, 2)` int64, `(B, 2)` int64, cells in the grid.
+    `starts` None (what reads the goals alone: a value map) is returned as None."""
     obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-    starts = np.ascontiguousarray(starts, dtype=np.int64)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
     if obstacles.ndim != 3 or obstacles.shape[1] != obstacles.shape[2]:
         raise InputError(f"obstacles has shape {obstacles.shape}, expected (B, N, N)")
     b, n = obstacles.shape[0], obstacles.shape[1]
-    for name, arr in (("starts", starts), ("goals", goals)):
+    checked = [("goals", goals)]
+    if starts is not None:
+        starts = np.ascontiguousarray(starts, dtype=np.int64)
+        checked.insert(0, ("starts", starts))
+    for name, arr in checked:
         if arr.shape != (b, 2):
             raise InputError(f"{name} has shape {arr.shape}, expected ({b}, 2)")
         if arr.size and (arr.min() < 0 or arr.max() >= n):

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from vinadv.errors import InputError
+from vinadv.plot.maps import figure_for
 
 #: the strategy name of a benchmark's worst case over its strategies (`vinadv.robustness.WORST_CASE`)
 WORST_CASE = "worst case"
@@ -77,10 +77,7 @@ def k_curve(
         with vinadv.open("results.db") as results:
             vinadv.plot.k_curve(results.robustness())
     """
-    if ax is None:
-        fig, ax = plt.subplots(figsize=(5, 3.6), layout="constrained")
-    else:
-        fig = ax.figure
+    fig, ax = figure_for(ax, (5, 3.6))
     draw_k_curve(ax, data, rate, strategy, intervals)
     ax.set_ylabel(f"{rate.replace('_', ' ')} (% of valid maps)")
     ax.set_ylim(0, 100)

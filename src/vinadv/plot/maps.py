@@ -72,6 +72,11 @@ def draw_map(
             else:
                 square = Rectangle((c - 0.5, r - 0.5), 1, 1, color=edited.colour, label=label)
             ax.add_patch(square)
+    finish_map(ax, n, goal, start, title)
+
+
+def finish_map(ax, n: int, goal, start, title: str | None) -> None:
+    """The start and goal marked on `ax`, its limits those of an `n x n` map, no ticks, and its title."""
     draw_map_markers(ax, goal, start)
     ax.set_xlim(-0.5, n - 0.5)
     ax.set_ylim(n - 0.5, -0.5)
@@ -307,6 +312,13 @@ def pair(
     return fig
 
 
+def figure_for(ax, figsize: tuple[float, float]):
+    """`(figure, axes)`: `ax` and its figure, or a new figure of `figsize` inches with one axes."""
+    if ax is None:
+        return plt.subplots(figsize=figsize, layout="constrained")
+    return ax.figure, ax
+
+
 def map(
     obstacles: np.ndarray,
     goal: np.ndarray | None = None,
@@ -322,10 +334,7 @@ def map(
 ):
     """Draw one map (`draw_map`: obstacles, start or starts, goal, labelled paths, edited and expanded cells) on `ax`
     or a new figure, with its legend below; returns the figure."""
-    if ax is None:
-        fig, ax = plt.subplots(figsize=(4, 4.4), layout="constrained")
-    else:
-        fig = ax.figure
+    fig, ax = figure_for(ax, (4, 4.4))
     draw_map(ax, obstacles, goal, start, paths, added=added, title=title, removed=removed, expanded=expanded)
     if legend:
         map_legend(fig, ax)
@@ -348,23 +357,13 @@ def value_map(
     values = np.asarray(values, dtype=np.float64)
     if values.ndim != 2 or values.shape[0] != values.shape[1]:
         raise InputError(f"value_map: expected an (N, N) map, got shape {values.shape}", "values")
-    if ax is None:
-        fig, ax = plt.subplots(figsize=(4.4, 4), layout="constrained")
-    else:
-        fig = ax.figure
+    fig, ax = figure_for(ax, (4.4, 4))
     shown = np.ma.masked_invalid(values)
     if obstacles is not None:
         shown = np.ma.masked_where(np.asarray(obstacles, dtype=bool), shown)
     cmap = plt.get_cmap(PALETTE.values).with_extremes(bad=PALETTE.obstacle.colour)
     image = ax.imshow(shown, cmap=cmap, interpolation="nearest")
-    draw_map_markers(ax, goal, start)
-    n = values.shape[0]
-    ax.set_xlim(-0.5, n - 0.5)
-    ax.set_ylim(n - 0.5, -0.5)
-    ax.set_xticks([])
-    ax.set_yticks([])
-    if title:
-        ax.set_title(title, fontsize=9)
+    finish_map(ax, values.shape[0], goal, start, title)
     if colorbar:
         fig.colorbar(image, ax=ax, shrink=0.8)
     return fig

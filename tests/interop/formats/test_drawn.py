@@ -7,10 +7,9 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 from PIL import Image
 
+from tests.byte_mutations import refused_mutations
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.interop import export_maps, import_maps
@@ -86,9 +85,6 @@ def test_ascii_options_and_what_export_refuses(tmp_path, capsys):
         import_maps(tmp_path / "u.txt", "ascii")
 
 
-FUZZ = settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-
-
 @pytest.mark.parametrize("fmt", ["ascii", "png"])
 def test_byte_mutations_load_or_give_one_line(tmp_path, fmt):
     target = tmp_path / f"d.{'txt' if fmt == 'ascii' else 'png'}"
@@ -98,22 +94,5 @@ def test_byte_mutations_load_or_give_one_line(tmp_path, fmt):
         grey = np.full((8, 8), 255)
         grey[3, 1:6] = 0
         write_png(target, grey)
-    data = target.read_bytes()
-    refused = []
-
-    @FUZZ
-    @given(cut=st.floats(0, 1), flips=st.lists(st.tuples(st.floats(0, 1), st.integers(0, 255)), max_size=4))
-    def check(cut, flips):
-        out = bytearray(data[: max(1, int(cut * len(data)))] if cut < 0.5 else data)
-        for where, value in flips:
-            out[min(len(out) - 1, int(where * len(out)))] = value
-        target.write_bytes(bytes(out))
-        options = {} if fmt == "ascii" else {"start": "1,1", "goal": "6,6"}
-        try:
-            import_maps(target, fmt, **options)
-        except InputError as exc:
-            assert str(exc) and "\n" not in str(exc), repr(exc)
-            refused.append(True)
-
-    check()
-    assert refused
+    options = {} if fmt == "ascii" else {"start": "1,1", "goal": "6,6"}
+    assert refused_mutations(target, lambda: import_maps(target, fmt, **options), examples=25)

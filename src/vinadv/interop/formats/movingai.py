@@ -40,7 +40,6 @@ written: the format cannot say another rule.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 from collections.abc import Iterable
@@ -48,6 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vinadv.checksums import file_sha256
 from vinadv.errors import InputError, one_line
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
@@ -190,14 +190,6 @@ def parse_buckets(bucket: int | str | Iterable[int] | None) -> set[int] | None:
     return {int(b) for b in bucket}
 
 
-def sha256_of(path: str | os.PathLike) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def pad_square(grid: np.ndarray, side: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """`(padded (S, S), padding (S, S))`: `grid (H, W)` padded with obstacles below and to the right into a square of
     side `side` (default the larger of H and W), and the mask of the padded cells."""
@@ -261,7 +253,7 @@ def read(
     if corner_cutting:
         raise InputError(f"{path}: the Moving AI maps' moves never cut corners; corner cutting cannot be asked for")
     grid = read_grid(path)
-    info: dict = {"source": path, "sha256": sha256_of(path), "height": grid.shape[0], "width": grid.shape[1]}
+    info: dict = {"source": path, "sha256": file_sha256(path), "height": grid.shape[0], "width": grid.shape[1]}
     if (crops is not None or min_free is not None) and crop is None:
         raise InputError("crops and min_free go with crop (the window side)", "crops", "min_free", "crop")
     if crop is not None:
@@ -333,7 +325,7 @@ def _read_scen(path: str, grid: np.ndarray, scen: str, buckets: set[int] | None,
     maps = _map_set(obstacles, goals, starts, dist_u[which], -1, info, padding=padding)
     info.update(
         scen=scen,
-        scen_sha256=sha256_of(scen),
+        scen_sha256=file_sha256(scen),
         maps=n,
         starts_per_map=1,
         maps_padded=0,

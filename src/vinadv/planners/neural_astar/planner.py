@@ -72,10 +72,6 @@ class NeuralAstarPlanner(SearchPlanner):
         self._checksum = weights_path_checksum(model)
 
     @property
-    def checksum(self) -> str | None:
-        return self._checksum
-
-    @property
     def config(self) -> dict:
         return self.model.config.to_dict()
 
@@ -161,10 +157,7 @@ class NeuralAstarPlanner(SearchPlanner):
         searches; without, the start + goal channel holds the goal alone."""
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         self._check_size(obstacles)
-        if starts is None:
-            obstacles, _, goals = check_plan_inputs(obstacles, np.zeros((len(obstacles), 2)), goals)
-        else:
-            obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
+        obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
         cost = self.guidance(obstacles, starts, goals)
         heuristic = authors_heuristic(torch.from_numpy(goals), obstacles.shape[1]).numpy()
         return -(heuristic.astype(np.float64) + cost.astype(np.float64))

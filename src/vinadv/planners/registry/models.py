@@ -10,12 +10,12 @@ file is refused in one line naming it and both checksums. Hashes files only: no 
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from vinadv.checksums import file_sha256
 from vinadv.errors import InputError
 
 #: the weights shipped with vinadv (`vin28.pt`, `gppn28.pt`, ...): package data
@@ -26,15 +26,6 @@ KINDS = ("vin", "gppn", "neural-astar", "transpath-cf", "transpath-focal")
 MODELS: dict[str, ZooModel] = {}
 #: every old spelling of a model's name (`vin28_robust`) -> its name (`vin28-robust`)
 MODEL_ALIASES: dict[str, str] = {}
-
-
-def file_sha256(path: str | os.PathLike) -> str:
-    """SHA-256 of the file's bytes, as hex: identifies a model in run records."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 @dataclass(frozen=True)

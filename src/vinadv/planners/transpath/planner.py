@@ -70,10 +70,6 @@ class TransPathPlanner(SearchPlanner):
         self._checksum = weights_path_checksum(model)
 
     @property
-    def checksum(self) -> str | None:
-        return self._checksum
-
-    @property
     def config(self) -> dict:
         return {"mode": self.mode, **({"f_w": self.f_w} if self.mode == "f" else {})}
 
@@ -115,10 +111,7 @@ class TransPathPlanner(SearchPlanner):
         goal channel holds the goal alone)."""
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         self._check_size(obstacles)
-        if starts is None:
-            obstacles, _, goals = check_plan_inputs(obstacles, np.zeros((len(obstacles), 2)), goals)
-        else:
-            obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
+        obstacles, starts, goals = check_plan_inputs(obstacles, starts, goals)
         out, _ = self.outputs(obstacles, starts, goals)
         if self.mode == "f":
             return out.astype(np.float64)
