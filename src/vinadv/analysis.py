@@ -45,7 +45,7 @@ import numpy as np
 
 from vinadv import __version__
 from vinadv.errors import InputError, one_line
-from vinadv.intervals import figure_intervals, rate_interval
+from vinadv.intervals import figure_intervals, interval_columns, rate_interval
 from vinadv.outfile import atomic_output
 from vinadv.robustness import WORST_CASE
 from vinadv.store import PairRecords, Store
@@ -96,9 +96,7 @@ ROBUSTNESS_COLUMNS = (
     "size",
     "maps_seed",
     "objective",
-    "clean_success",
-    "clean_success_low",
-    "clean_success_high",
+    *interval_columns("clean_success"),
     "clean_regret",
     "strategy",
     "k",
@@ -106,13 +104,9 @@ ROBUSTNESS_COLUMNS = (
     "attacked",
     "valid",
     "broken",
-    "paper_success_rate",
-    "paper_success_rate_low",
-    "paper_success_rate_high",
+    *interval_columns("paper_success_rate"),
     "harmful",
-    "harmful_rate",
-    "harmful_rate_low",
-    "harmful_rate_high",
+    *interval_columns("harmful_rate"),
     "reached",
     "mean_regret",
     "seconds",

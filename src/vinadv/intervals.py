@@ -19,7 +19,15 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["FIGURE_RATES", "Z95", "figure_intervals", "interval_fields", "rate_interval", "wilson_interval"]
+__all__ = [
+    "FIGURE_RATES",
+    "Z95",
+    "figure_intervals",
+    "interval_fields",
+    "rate_interval",
+    "wilson_interval",
+    "interval_columns",
+]
 
 #: z of the two-sided 95% interval
 Z95 = 1.959963984540054
@@ -68,3 +76,9 @@ def figure_intervals(figures: Mapping) -> dict[str, float | None]:
     for rate, (count, n) in FIGURE_RATES.items():
         out.update(interval_fields(rate, figures.get(count), figures.get(n)))
     return out
+
+
+def interval_columns(*rates: str) -> tuple[str, ...]:
+    """Each rate's column followed by its interval's (`{rate}_low`, `{rate}_high`): the columns of a table or frame
+    that shows the rates with their intervals."""
+    return tuple(column for rate in rates for column in (rate, f"{rate}_low", f"{rate}_high"))

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from vinadv.intervals import figure_intervals
+from vinadv.intervals import figure_intervals, interval_columns
 from vinadv.report.data import Context, Figure, Table
 
 #: the worst case over the strategies, as `vinadv.robustness.WORST_CASE` names it (not imported: no torch here)
@@ -108,13 +108,9 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
     keys = (
         "valid",
         "broken",
-        "paper_success_rate",
-        "paper_success_rate_low",
-        "paper_success_rate_high",
+        *interval_columns("paper_success_rate"),
         "harmful",
-        "harmful_rate",
-        "harmful_rate_low",
-        "harmful_rate_high",
+        *interval_columns("harmful_rate"),
         "reached",
         "mean_regret",
     )
