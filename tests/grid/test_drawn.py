@@ -32,6 +32,20 @@ def test_the_characters_padding_and_expert_path():
     np.testing.assert_array_equal(maps.expert_path(0)[[0, -1]], [[1, 1], [1, 5]])
 
 
+def test_the_padding_is_frozen_and_no_attack_edits_it():
+    from vinadv.attacks.validity import removable_cells, valid_cells  # noqa: PLC0415 (this test only)
+
+    maps = MapSet.from_ascii(DRAWING, pad_to=9)  # 5x7 drawn, padded to 9x9
+    expected = np.ones((9, 9), dtype=bool)
+    expected[:5, :7] = False
+    np.testing.assert_array_equal(maps.frozen[0], expected)
+    add = valid_cells(maps.obstacles, maps.starts[:, 0], maps.goals, frozen=maps.frozen)
+    remove = removable_cells(maps.obstacles, maps.starts[:, 0], maps.goals, frozen=maps.frozen)
+    assert not (add | remove)[0][expected].any() and (add | remove)[0].any()
+    assert MapSet.from_ascii("S.\n.G\n..", pad_to=None).frozen is not None  # 3x2 made square: a column frozen
+    assert MapSet.from_ascii("S..\n...\n..G").frozen is None  # square already: nothing padded
+
+
 def test_pad_to_moves_and_corner_cutting(tmp_path):
     maps = MapSet.from_ascii("S.@\n.@.\n..G", pad_to=10, corner_cutting=False, moves="moore")
     assert maps.size == 10 and maps.obstacles[0, 3:].all() and maps.obstacles[0, :, 3:].all()

@@ -6,7 +6,8 @@ and after the drawing and spaces at the ends of lines are ignored, and every row
 vinadv's own small format, not the Moving AI `.map` grid (where `S` and `G` are terrain).
 
 A drawing that is not square, or smaller than `pad_to`, is padded with obstacles below and to the right into a
-square of side `max(H, W, pad_to)`, so that a small drawing can be planned by a planner of size N (`pad_to` N).
+square of side `max(H, W, pad_to)`, so that a small drawing can be planned by a planner of size N (`pad_to` N);
+the padding is the maps' frozen cells, which no attack adds to or frees (`MapSet.frozen`).
 Expert paths are vinadv's (Dijkstra under the movement model and corner-cutting rule asked for); a start that cannot
 reach the goal is refused, naming the start.
 """
@@ -109,6 +110,8 @@ def drawn_map_set(
         r, c = (int(v) for v in starts[np.flatnonzero(far)[0]])
         raise InputError(f"{where}: the start ({r}, {c}) cannot reach the goal ({moves} moves)", "start")
     costs, expert = expert_paths_from(dist, square, goal[None], starts[None], corner_cutting, moves)
+    padding = np.ones(square.shape, dtype=bool)
+    padding[:, :h, :w] = False  # the drawing's own cells; the rest no attack may edit (`MapSet.frozen`)
     return MapSet(
         obstacles=square,
         goals=goal[None],
@@ -118,6 +121,7 @@ def drawn_map_set(
         corner_cutting=bool(corner_cutting),
         seed=-1,
         moves=moves,
+        frozen=padding if padding.any() else None,
     )
 
 
