@@ -365,3 +365,19 @@ def test_a_curve_past_the_cells_left_ends_the_search_and_past_a_maps_cells_is_re
     assert last < cells // 2 and not any(made[last:]) and all(made[:last])
     # 2 maps: the clean plans, then per step a plan of each map (but the first step's) and at most one candidate each
     assert result.strategies["random"].planner_calls <= 2 + 4 * last
+
+
+def test_the_text_output_names_the_maps_and_gives_each_rate_its_interval(tmp_path, capsys):
+    # the generated maps are named by their seed (every record names `maps`, None here), a maps file by its path;
+    # the one-obstacle rates print with their Wilson intervals
+    argv = ["robustness", "--planner", "optimal", "--n", "5", "--max-obstacles", "1", "--quiet"]
+    assert main([*argv, "--size", "10", "--strategies", "random"]) == 0
+    text = capsys.readouterr().out
+    assert "(seed 1000)" in text and "None" not in text
+    (line,) = [row for row in text.splitlines() if row.startswith("worst case") and "[" in row]
+    assert line.count("[0.0, ") == 2  # no pair harms the optimal planner: 0% with an interval from 0
+    maps = tmp_path / "m.npz"
+    assert main(["maps", "generate", "--n", "5", "--size", "10", "--out", str(maps), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--strategies", "random", "--maps", str(maps)]) == 0
+    assert f"(from {maps})" in capsys.readouterr().out

@@ -131,12 +131,19 @@ def _pct(value) -> str:
     return "—" if value is None else f"{100 * value:.1f}%"
 
 
+def _pct_ci(figures: dict, rate: str) -> str:
+    """The rate with its Wilson 95% interval (`{rate}_low`, `{rate}_high`), in percent: `10.0% [2.8, 30.1]`."""
+    low, high = figures.get(f"{rate}_low"), figures.get(f"{rate}_high")
+    interval = "" if low is None or high is None else f" [{100 * low:.1f}, {100 * high:.1f}]"
+    return _pct(figures[rate]) + interval
+
+
 def print_robustness(out: dict) -> None:
     """The benchmark as text: the figures at one obstacle per strategy and worst case, then the k curve."""
     s, clean = out["settings"], out["clean"]
     planner = out["planner"]
     weights = (planner.get("weights_sha256") or "")[:12]
-    origin = f"from {s['maps']}" if "maps" in s else f"seed {s['maps_seed']}"
+    origin = f"from {s['maps']}" if s.get("maps") else f"seed {s['maps_seed']}"  # every record names `maps`
     print(
         f"robustness of planner {planner['name']}{f' (weights {weights})' if weights else ''} on {s['n']:,} maps "
         f"{s['size']}x{s['size']} ({origin}), kept by {s['objective']}, in {out['seconds']:.1f} s"
@@ -149,12 +156,13 @@ def print_robustness(out: dict) -> None:
     )
     rows = [(name, st["by_obstacles"], st["seconds"]) for name, st in out["strategies"].items()]
     rows.append(("worst case", out["overall"], out["seconds"]))
-    print(f"{'one obstacle':<12}{'valid':>8}{'paper success':>15}{'harmful':>10}{'mean regret':>13}{'seconds':>9}")
+    print("rates with their Wilson 95% intervals, in percent")
+    print(f"{'one obstacle':<12}{'valid':>8}{'paper success':>22}{'harmful':>22}{'mean regret':>13}{'seconds':>9}")
     for name, by_k, sec in rows:
         f = by_k[0]
         regret = "—" if f["mean_regret"] is None else f"{f['mean_regret']:.3f}"
         print(
-            f"{name:<12}{f['valid']:>8,}{_pct(f['paper_success_rate']):>15}{_pct(f['harmful_rate']):>10}"
+            f"{name:<12}{f['valid']:>8,}{_pct_ci(f, 'paper_success_rate'):>22}{_pct_ci(f, 'harmful_rate'):>22}"
             f"{regret:>13}{sec:>9.1f}"
         )
     ks = [f["k"] for f in out["overall"]]
