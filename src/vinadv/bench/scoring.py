@@ -435,15 +435,21 @@ def _stored_chunks(
             f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
         )
     for c, r in sorted(done.items()):  # one computation per entry: every chunk's fingerprint is this run's
-        if not reusable(r.get("fingerprint"), fingerprint):
-            stored_fp = r.get("fingerprint") or {**fingerprint, "format": 1}
-            raise InputError(
-                f"database {db}: chunk {c} of this entry was computed with {_describe(stored_fp, fingerprint)}, this "
-                f"run with {_describe(fingerprint, stored_fp)}; the entry would mix two computations: use another "
-                "database",
-                "resume",
-            )
+        _refuse_other_computation(db, c, r, fingerprint, "was computed with")
     return done, key
+
+
+def _refuse_other_computation(db: str, chunk: int, stored: dict, fingerprint: dict, how: str) -> None:
+    """InputError naming both computations where the stored chunk `chunk`'s fingerprint (none: a chunk stored before
+    chunks had one, results format 1) is not `reusable` by this run's `fingerprint`; `how` says how it was stored."""
+    if reusable(stored.get("fingerprint"), fingerprint):
+        return
+    theirs = stored.get("fingerprint") or {**fingerprint, "format": 1}
+    raise InputError(
+        f"database {db}: chunk {chunk} of this entry {how} {_describe(theirs, fingerprint)}, this run with "
+        f"{_describe(fingerprint, theirs)}; the entry would mix two computations: use another database",
+        "resume",
+    )
 
 
 #: the fields of a chunk's result that are not a function of the suite and the planner (`_same_chunk`)
@@ -454,14 +460,7 @@ def _same_chunk(db: str, chunk: int, stored: dict, result: dict, fingerprint: di
     """The chunk `chunk` another run stored while this one computed it (`stored`, read back), where it is the same
     as this run's `result` but for the time taken; InputError naming both where it was computed otherwise (another
     fingerprint) or came out otherwise (a planner that is not deterministic): the entry would mix two computations."""
-    if not reusable(stored.get("fingerprint"), fingerprint):
-        theirs = stored.get("fingerprint") or {**fingerprint, "format": 1}
-        raise InputError(
-            f"database {db}: chunk {chunk} of this entry was stored meanwhile by another run computed with "
-            f"{_describe(theirs, fingerprint)}, this run with {_describe(fingerprint, theirs)}; the entry would mix "
-            "two computations: use another database",
-            "resume",
-        )
+    _refuse_other_computation(db, chunk, stored, fingerprint, "was stored meanwhile by another run computed with")
 
     def kept(part: dict) -> dict:
         return {k: v for k, v in part.items() if k not in _CHUNK_VOLATILE}
