@@ -29,8 +29,9 @@ def open(url: str | None = None) -> Results:
 
 def lazy_names(package: str, modules: dict[str, tuple[str, ...]]) -> tuple[list[str], Callable, Callable]:
     """A package's names imported from their modules when first used (PEP 562): `modules` lists the names by the
-    submodule of `package` that defines them. Returns the package's `(__all__, __getattr__, __dir__)`; a name, once
-    imported, is kept in the package."""
+    submodule of `package` that defines them. Returns the lazy names (the package's `__all__`, or part of it), its
+    `__getattr__` and its `__dir__` (the package's own names and the lazy ones); a name, once imported, is kept in the
+    package."""
     exports = {name: module for module, names in modules.items() for name in names}
     names = sorted(exports)
 
@@ -43,6 +44,6 @@ def lazy_names(package: str, modules: dict[str, tuple[str, ...]]) -> tuple[list[
         return value
 
     def __dir__() -> list[str]:
-        return names
+        return sorted(set(vars(sys.modules[package])) | exports.keys())
 
     return names, __getattr__, __dir__

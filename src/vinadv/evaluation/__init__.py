@@ -23,34 +23,17 @@ their first use (PEP 562), so that the planner metrics load without the classifi
 
 from __future__ import annotations
 
-import importlib
+from vinadv import lazy_names
 
-#: the package's names and the module each comes from, imported at first use
-_LAZY = {
-    "CLASSIFIERS": "classifiers",
-    "compare_for_report": "classifiers",
-    "evaluate_run": "classifiers",
-    "evaluate_planner_quality": "planner_quality",
-    "evaluate_timing": "timing",
-    "EvaluateConfig": "job",
-    "EvaluateResult": "job",
+#: the package's names imported at first use, by the module that defines them
+_MODULES = {
+    "classifiers": ("CLASSIFIERS", "compare_for_report", "evaluate_run"),
+    "planner_quality": ("evaluate_planner_quality",),
+    "timing": ("evaluate_timing",),
+    "job": ("EvaluateConfig", "EvaluateResult"),
 }
-
-__all__ = [
-    "CLASSIFIERS",
-    "EvaluateConfig",
-    "EvaluateResult",
-    "evaluate_for_report",
-    "evaluate_planner_quality",
-    "evaluate_run",
-    "evaluate_timing",
-]
-
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        return getattr(importlib.import_module(f"vinadv.evaluation.{_LAZY[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+_lazy, __getattr__, __dir__ = lazy_names(__name__, _MODULES)
+__all__ = sorted([*_lazy, "evaluate_for_report"])
 
 
 def evaluate_for_report(store, run_id: int, *, compare: bool = True, progress: bool = False) -> str | None:

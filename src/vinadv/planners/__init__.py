@@ -8,15 +8,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from vinadv import lazy_names
+
 if TYPE_CHECKING:
-    from vinadv.planners.checks import check_planner
+    from vinadv.planners.checks import check_planner as check_planner
 
-__all__ = ["check_planner"]
-
-
-def __getattr__(name: str):
-    if name == "check_planner":
-        from vinadv.planners.checks import check_planner  # noqa: PLC0415 (NumPy and Numba: only when asked for)
-
-        return check_planner
-    raise AttributeError(f"module 'vinadv.planners' has no attribute {name!r}")
+# NumPy and Numba behind it: imported when first asked for
+__all__, __getattr__, __dir__ = lazy_names(__name__, {"checks": ("check_planner",)})

@@ -41,6 +41,7 @@ Importing this package is light (no NumPy, no PyTorch): the loading functions ar
 
 from __future__ import annotations
 
+from vinadv import lazy_names
 from vinadv.planners.registry.base import (
     ALIASES,
     DEFAULT_PLANNER,
@@ -94,10 +95,5 @@ __all__ = [
     *_LOADING,
 ]
 
-
-def __getattr__(name: str):
-    if name in _LOADING:
-        from vinadv.planners.registry import loading  # noqa: PLC0415 (NumPy: when a planner is loaded)
-
-        return getattr(loading, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# NumPy behind them: imported when a planner is loaded
+_, __getattr__, __dir__ = lazy_names(__name__, {"loading": _LOADING})

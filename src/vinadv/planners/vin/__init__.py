@@ -15,8 +15,7 @@ at their first use.
 
 from __future__ import annotations
 
-import importlib
-
+from vinadv import lazy_names
 from vinadv.planners.vin.arrays import (
     GOAL_VALUE,
     K_BY_SIZE,
@@ -58,12 +57,5 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str):
-    # PEP 562: `from vinadv.planners.vin import VIN` imports PyTorch then, and only then
-    if name in _MODEL_NAMES:
-        return getattr(importlib.import_module("vinadv.planners.vin.model"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_MODEL_NAMES))
+# PEP 562: `from vinadv.planners.vin import VIN` imports PyTorch then, and only then
+_, __getattr__, __dir__ = lazy_names(__name__, {"model": _MODEL_NAMES})
