@@ -82,6 +82,7 @@ from vinadv.attacks.neighbourhood import steepness, steepness_across, within_dis
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import removable_cells, valid_cells
 from vinadv.errors import InputError
+from vinadv.grid.selection import smallest_first
 from vinadv.planners.interface import Planner
 from vinadv.planners.result import PlanResult
 from vinadv.planners.vin.planner import as_planner
@@ -353,9 +354,7 @@ def _top_candidates(scores: np.ndarray, per_map: int | None):
     """The best `per_map` candidates of each map (all with None), best first: (map_idx, cells, rank)."""
     b, n, m = scores.shape
     flat = scores.reshape(b, -1)
-    order = np.argsort(-flat, axis=1, kind="stable")
-    if per_map is not None:
-        order = order[:, :per_map]
+    order = smallest_first(-flat, flat.shape[1] if per_map is None else per_map)
     picked = np.take_along_axis(flat, order, axis=1)
     ok = np.isfinite(picked)
     map_idx = np.repeat(np.arange(b), order.shape[1]).reshape(b, -1)[ok]

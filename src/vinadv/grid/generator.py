@@ -33,6 +33,7 @@ from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.grid.paths import PackedPaths
+from vinadv.grid.selection import smallest_first
 from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
 
 CHUNK = 512
@@ -186,7 +187,7 @@ def _generate_chunk(
     eligible = (counts >= MIN_START_MOVES).reshape(count, -1)
     # n_starts distinct eligible cells, uniformly: the smallest random keys among eligible cells.
     keys = np.where(eligible, rng.random(eligible.shape), np.inf)
-    picks = np.argsort(keys, axis=1)[:, :n_starts]
+    picks = smallest_first(keys, n_starts)
     ok = eligible.sum(axis=1) >= n_starts
     starts = np.stack(np.divmod(picks, size), axis=-1)
     obstacles, goals, starts = obstacles[ok], goals[ok].astype(np.int64), starts[ok].astype(np.int64)
