@@ -186,12 +186,15 @@ def _generate_chunk(
     dist, counts = shortest_distances(obstacles, goals, corner_cutting, moves)
     eligible = (counts >= MIN_START_MOVES).reshape(count, -1)
     # n_starts distinct eligible cells, uniformly: the smallest random keys among eligible cells.
-    keys = np.where(eligible, rng.random(eligible.shape), np.inf)
+    keys = rng.random(eligible.shape)
+    keys[~eligible] = np.inf
     picks = smallest_first(keys, n_starts)
-    ok = eligible.sum(axis=1) >= n_starts
-    starts = np.stack(np.divmod(picks, size), axis=-1)
-    obstacles, goals, starts = obstacles[ok], goals[ok].astype(np.int64), starts[ok].astype(np.int64)
-    costs, expert = expert_paths_from(dist[ok], obstacles, goals, starts, corner_cutting, moves)
+    starts = np.stack(np.divmod(picks, size), axis=-1).astype(np.int64)
+    goals = goals.astype(np.int64)
+    ok = np.count_nonzero(eligible, axis=1) >= n_starts
+    if not ok.all():  # usually every map is kept: no copies then
+        obstacles, goals, starts, dist = obstacles[ok], goals[ok], starts[ok], dist[ok]
+    costs, expert = expert_paths_from(dist, obstacles, goals, starts, corner_cutting, moves)
     return obstacles, goals, starts, costs, expert
 
 
