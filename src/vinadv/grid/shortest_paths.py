@@ -138,8 +138,10 @@ def _dijkstra_maps(lo, hi, obstacles, goals, corner_cutting, deltas, costs, dist
                 moves[b, r, c] = count[(r + 1) * w + c + 1]
 
 
-#: pieces of a batch per thread in `dijkstra_batch`: a thread that shares its core with another process does less
+#: pieces of a batch per thread in `dijkstra_batch`, and the fewest maps in a piece (about a millisecond of work;
+#: fewer maps are done in the calling thread)
 PIECES_PER_THREAD = 4
+MIN_PIECE = 16
 
 
 @numba.njit(cache=True, parallel=True)
@@ -175,8 +177,12 @@ def shortest_distances(
     model = move_model(moves)
     counts = np.empty(obstacles.shape, dtype=np.int32)
     if len(obstacles):
-        pieces = min(len(obstacles), PIECES_PER_THREAD * numba.get_num_threads())
-        dijkstra_batch(obstacles, goals, bool(corner_cutting), model.deltas, model.costs, dist, counts, pieces)
+        args = (obstacles, goals, bool(corner_cutting), model.deltas, model.costs, dist, counts)
+        pieces = min(len(obstacles) // MIN_PIECE, PIECES_PER_THREAD * numba.get_num_threads())
+        if pieces > 1:
+            dijkstra_batch(*args, pieces)
+        else:  # a few maps: starting the threads would cost more than they save
+            _dijkstra_maps(0, len(obstacles), *args)
     return dist, counts
 
 
