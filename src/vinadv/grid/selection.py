@@ -3,7 +3,8 @@ keys) and how an attack keeps its best candidates of a map (minus their scores).
 
 `smallest_first(keys, k)` is `np.argsort(keys, axis=1, kind="stable")[:, :k]` (ties to the lower index, NaN last),
 found in one pass over each row that keeps its `k` smallest so far in order: where a map's cells are the row and `k`
-is a few, a small fraction of a full sort (`perf/grid.py`).
+is a few, a small fraction of a full sort (`perf/grid.py` prints both; 1,000 rows of 784, k 1 to 8: 1-2 ms against
+30-150 ms on the loaded 2-core machine).
 """
 
 from __future__ import annotations
