@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -124,7 +125,9 @@ def test_chains_start_from_the_exhaustive_one_cell_optimum(planner):
     assert [f.k for f in chained.by_k] == [2, 3]
     has = best.outcomes[0].pair
     np.testing.assert_array_equal(chained.cells[0][has, 0], best.cells[0][has, 0])  # the first cell: the optimum's
-    np.testing.assert_array_equal(chained.cells[1][:, :2][chained.outcomes[1].pair], chained.cells[0][chained.outcomes[1].pair])
+    np.testing.assert_array_equal(
+        chained.cells[1][:, :2][chained.outcomes[1].pair], chained.cells[0][chained.outcomes[1].pair]
+    )
     none = robustness(planner, maps, ["random"], 2, budget=3, start=np.full((3, 1, 2), -1))
     assert not none.strategies["random"].outcomes[0].pair.any()  # a map without a start cell gets no pair
 
@@ -244,7 +247,5 @@ def test_a_v1_suite_refuses_the_sharing_options_and_keeps_its_checksum(capsys):
         assert any(g.start == "exhaustive" for g in v2.attacks) == exhaustive
 
 
-def _committed_v1():
-    from pathlib import Path
-
+def _committed_v1() -> Path:
     return Path(__file__).resolve().parents[2] / "docs" / "results" / "bench" / "vin28-quick-v1.optimal.json"

@@ -1,11 +1,11 @@
-"""The leaderboard: benchmark entries (`vinadv.bench.scoring`) of folders and files as a Markdown and an HTML table, per suite,
-sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at the
-largest k, then by name), each row linking to its entry file, its flags shown beside it, and how long it took (the
+"""The leaderboard: benchmark entries (`vinadv.bench.scoring`) of folders and files as a Markdown and an HTML table,
+per suite, sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at
+the largest k, then by name), each row linking to its entry file, its flags shown beside it, and how long it took (the
 sum of its chunks' seconds: on the machine and load of the time, not a speed figure). Every rate is shown with its
 Wilson 95% interval (`vinadv.intervals`), computed here from the counts the entry holds (`vinadv.bench_entry/1`
 entries included; a row says its entry's format, `v1` or `v2`, and a table of `v1` entries says so in its heading),
-and each row carries it as `{rate}_low`, `{rate}_high`. A row shows the entry's display name (`submission.display_name` of a
-`vinadv.bench_entry/2` entry) with the planner's label, or the label alone.
+and each row carries it as `{rate}_low`, `{rate}_high`. A row shows the entry's display name
+(`submission.display_name` of a `vinadv.bench_entry/2` entry) with the planner's label, or the label alone.
 
 Every entry is checked against the entry schema (`vinadv.bench.validate`) before it is used: a bad one is one line
 naming its file and field (`read_entries_checked`), the others still rendered. An entry whose suite checksum is not

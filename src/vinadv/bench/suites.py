@@ -291,7 +291,9 @@ register(
 )
 register(
     dataclasses.replace(
-        SUITES["vin28-quick-v1"], name="vin28-quick-v2", description=SUITES["vin28-quick-v1"].description + _V2,
+        SUITES["vin28-quick-v1"],
+        name="vin28-quick-v2",
+        description=SUITES["vin28-quick-v1"].description + _V2,
         definitions=2,
     )
 )
@@ -307,7 +309,9 @@ register(
 )
 register(
     dataclasses.replace(
-        SUITES["mpd32-quick-v1"], name="mpd32-quick-v2", description=SUITES["mpd32-quick-v1"].description + _V2,
+        SUITES["mpd32-quick-v1"],
+        name="mpd32-quick-v2",
+        description=SUITES["mpd32-quick-v1"].description + _V2,
         definitions=2,
     )
 )

@@ -30,7 +30,7 @@ import math
 import re
 import urllib.parse
 
-from vinadv.bench.suites import ENTRY_FORMAT, ENTRY_FORMAT_2, ENTRY_FORMATS, Suite
+from vinadv.bench.suites import ENTRY_FORMAT_2, ENTRY_FORMATS, Suite
 from vinadv.vocabulary import EDITS, LABELS
 
 #: the longest name or text field read (characters)
@@ -335,7 +335,7 @@ def _record(r: dict, at: str, n: int, k: int) -> None:
     labels = _per_map(_get(r, "label", at), f"{at}.label", n)
     for i, label in enumerate(labels):
         if label != "" and label not in LABELS:
-            raise Bad(f"{at}.label[{i}]", f"is {_show(label)}, expected \"\" or one of {', '.join(LABELS)}")
+            raise Bad(f"{at}.label[{i}]", f'is {_show(label)}, expected "" or one of {", ".join(LABELS)}')
     harmful = _bools(_get(r, "harmful", at), f"{at}.harmful", n)
     regret = _reals(_get(r, "regret", at), f"{at}.regret", n)
     for i, (label, h, g) in enumerate(zip(labels, harmful, regret)):

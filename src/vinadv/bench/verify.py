@@ -47,7 +47,11 @@ def differences(field: str, stored, expected, source: str) -> list[str]:
         return out
     nested = isinstance(stored, list) and isinstance(expected, list) and len(stored) == len(expected)
     if nested and any(isinstance(v, (dict, list)) for v in stored + expected):
-        return [line for i, (a, b) in enumerate(zip(stored, expected)) for line in differences(f"{field}[{i}]", a, b, source)]
+        return [
+            line
+            for i, (a, b) in enumerate(zip(stored, expected))
+            for line in differences(f"{field}[{i}]", a, b, source)
+        ]
     if json.dumps(stored, sort_keys=True) == json.dumps(expected, sort_keys=True):
         return []
     if isinstance(stored, list) and isinstance(expected, list) and len(stored) == len(expected):

@@ -1,5 +1,6 @@
-"""`vinadv bench run` (a planner on a frozen benchmark suite: one result entry), `vinadv bench verify` (does an entry
-hold what it says) and `vinadv bench leaderboard` (the entries of folders and files as a leaderboard); `vinadv.bench`."""
+"""`vinadv bench run` (a planner on a frozen benchmark suite: one result entry), `vinadv bench verify` (does an
+entry hold what it says) and `vinadv bench leaderboard` (the entries of folders and files as a leaderboard);
+`vinadv.bench`."""
 
 from __future__ import annotations
 
@@ -140,32 +141,27 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
 
 def cmd_bench_verify(args: argparse.Namespace) -> int:
     from vinadv.bench.leaderboard import planner_label
+    from vinadv.bench.suites import get_suite
     from vinadv.bench.verify import read_entry, verify_entry
+    from vinadv.planners.registry.loading import load_planner
 
     entry = read_entry(args.entry)
     if args.chunks < 0:
         raise InputError(f"--chunks must be >= 0, got {args.chunks}")
     planner = None
     if args.chunks > 0:
-        from vinadv.bench.suites import get_suite
-        from vinadv.planners.registry import load_planner
-
         suite = get_suite(entry["suite"]["name"])
         spec = args.planner or planner_label(entry["planner"])
         device = planner_device(args)
         planner = load_planner(spec, suite.size, weights=args.weights, device=device, moves=suite.movement())
-    result = verify_entry(
-        entry, args.chunks, args.seed, data=args.data, planner=planner, progress=shows_progress(args)
-    )
+    result = verify_entry(entry, args.chunks, args.seed, data=args.data, planner=planner, progress=shows_progress(args))
 
     def report() -> None:
         for line in result["differences"]:
             print(line)
         if not result["differences"]:
             chunks = ", ".join(map(str, result["chunks"])) or "none"
-            print(
-                f"{args.entry}: every figure follows from its per-map outcomes; chunks recomputed equal: {chunks}"
-            )
+            print(f"{args.entry}: every figure follows from its per-map outcomes; chunks recomputed equal: {chunks}")
 
     code = emit(args, {"entry": args.entry, **result}, report)
     return 1 if result["differences"] else code
