@@ -37,7 +37,6 @@ held-out seed of the evaluation tables), one start each. Results go to a databas
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import time
 from collections.abc import Sequence
@@ -100,21 +99,6 @@ class MapOutcomes:
     harmful: np.ndarray
     regret: np.ndarray
     label: np.ndarray
-
-
-def worst_case_within(per_k: list[list[MapOutcomes]]) -> list[MapOutcomes]:
-    """The worst case per map at each budget k over every attack of AT MOST k edits (`per_k[k - 1]`: the outcomes of
-    the attacks that edit exactly k cells, of the same maps), on a fixed denominator: a map is valid (attacked) at
-    every k when it is valid for (got a pair from) any attack at any k. A map broken or harmful at k stays so at every
-    larger k, so the rates cannot fall as k grows; its regret at k is that of its worst pair of at most k edits."""
-    every = [o for outs in per_k for o in outs]
-    pair = np.any([o.pair for o in every], axis=0)
-    valid = np.any([o.valid for o in every], axis=0)
-    out = []
-    for k in range(len(per_k)):
-        worst = worst_case([o for outs in per_k[: k + 1] for o in outs])
-        out.append(dataclasses.replace(worst, pair=pair, valid=valid))
-    return out
 
 
 def worst_case(outcomes: list[MapOutcomes]) -> MapOutcomes:
@@ -606,5 +590,4 @@ __all__ = [
     "run",
     "save_robustness",
     "worst_case",
-    "worst_case_within",
 ]

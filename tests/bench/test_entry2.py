@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vinadv.bench import suites
-from vinadv.bench.outcomes import entry_figures
+from vinadv.bench.outcomes import entry_figures, worst_case_within
 from vinadv.bench.scoring import entry_json, run_bench
 from vinadv.bench.suites import FROZEN, AttackGroup, Suite, get_suite, maps_sha256
 from vinadv.bench.validate import entry_problem
@@ -23,7 +23,7 @@ from vinadv.bench.verify import pick_chunks, verify_entry
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.planners.vin.planner import as_planner
-from vinadv.robustness import MapOutcomes, heldout_maps, robustness, worst_case_within
+from vinadv.robustness import MapOutcomes, heldout_maps, robustness
 from vinadv.testing.planners import planning_vin
 from vinadv.vocabulary import SUCCESS_LABELS
 

@@ -15,20 +15,21 @@ checks that they follow), and a recompute of some chunks is compared with the en
 
 From them: a map's pair was made where its label is not "", is valid where it is neither "" nor `invalid`, broken
 where valid and UrP or FP; the label counts are those of the pairs. The worst case at k is over every attack of at most
-k edits on a fixed denominator (`vinadv.robustness.worst_case_within`), so its k curve cannot fall; where efforts are
+k edits on a fixed denominator (`worst_case_within`), so its k curve cannot fall; where efforts are
 present, `per_map.worst_effort[k - 1]` is each map's largest effort over those attacks. Means are correctly rounded
 sums (`math.fsum`): the same bits on every CPU.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable
 
 import numpy as np
 
 from vinadv.evaluation.search_metrics import harmonic_mean
-from vinadv.robustness import Figures, MapOutcomes, worst_case_within
+from vinadv.robustness import Figures, MapOutcomes, worst_case
 from vinadv.vocabulary import SUCCESS_LABELS, label_counts
 
 #: a path is optimal when its cost is within this of the optimum
@@ -197,3 +198,91 @@ def worst_efforts(per_k: list[list[list]]) -> list[list]:
             best = values if best is None else np.fmax(best, values)
         out.append(_floats(best))
     return out
+
+
+def worst_case_within(per_k: list[list[MapOutcomes]]) -> list[MapOutcomes]:
+    """The worst case per map at each budget k over every attack of AT MOST k edits (`per_k[k - 1]`: the outcomes of
+    the attacks that edit exactly k cells, of the same maps), on a fixed denominator: a map is valid (attacked) at
+    every k when it is valid for (got a pair from) any attack at any k. A map broken or harmful at k stays so at every
+    larger k, so the rates cannot fall as k grows; its regret at k is that of its worst pair of at most k edits."""
+    every = [o for outs in per_k for o in outs]
+    pair = np.any([o.pair for o in every], axis=0)
+    valid = np.any([o.valid for o in every], axis=0)
+    out = []
+    for k in range(len(per_k)):
+        worst = worst_case([o for outs in per_k[: k + 1] for o in outs])
+        out.append(dataclasses.replace(worst, pair=pair, valid=valid))
+    return out
+
+
+def _outcome(parts: list[dict]) -> MapOutcomes:
+    """One attack's per-map outcomes at one k, the chunks' joined in map order."""
+
+    def join(name, dtype):
+        return np.array([v for p in parts for v in p[name]], dtype=dtype)
+
+    regret = np.array([np.nan if v is None else v for p in parts for v in p["regret"]], dtype=np.float64)
+    return MapOutcomes(
+        pair=join("pair", bool),
+        valid=join("valid", bool),
+        broken=join("broken", bool),
+        harmful=join("harmful", bool),
+        regret=regret,
+        label=join("label", "<U7"),
+    )
+
+
+def _counts(parts: list[dict]) -> dict:
+    total: dict[str, int] = {}
+    for p in parts:
+        for label, count in p["counts"].items():
+            total[label] = total.get(label, 0) + int(count)
+    return total
+
+
+def figures_v1(suite, order: list[dict]) -> tuple[dict, dict, list]:
+    """`clean`, `attacks` and `worst_case` of a `vinadv.bench_entry/1` entry, as they were computed when the format was
+    released (its committed entries recompute byte for byte): the worst case at k over the attacks that reach k."""
+    reached = np.array([v for c in order for v in c["clean"]["reached"]], dtype=bool)
+    regret = np.array([np.nan if v is None else v for c in order for v in c["clean"]["regret"]], dtype=np.float64)
+    n = len(reached)
+    weights = [c["maps"] for c in order]
+
+    def gppn(name):  # the chunks' means, weighted by their maps: the mean over every map
+        return weighted_mean(weights, [c["clean"][name] for c in order])
+
+    clean = {
+        "maps": n,
+        "reached": int(reached.sum()),
+        "success_rate": float(reached.mean()),
+        "percent_optimal": float((reached & (np.abs(regret) <= OPTIMAL_TOL)).mean()),
+        "mean_regret": float(np.nanmean(regret)) if reached.any() else None,
+    }
+    if "search" in order[0]["clean"]:
+        clean["gppn"] = None  # a search planner has no policy to follow from every cell
+        clean["search"] = join_search([c["clean"]["search"] for c in order])
+    else:
+        clean["gppn"] = {
+            "percent_optimal": gppn("gppn_percent_optimal"),
+            "percent_success": gppn("gppn_percent_success"),
+        }
+    outcomes: dict[str, list[MapOutcomes]] = {}
+    attacks = {}
+    for group in suite.attacks:
+        for key in group.keys():
+            per_k = [[c["attacks"][key][k] for c in order] for k in range(group.max_obstacles)]
+            outcomes[key] = [_outcome(parts) for parts in per_k]
+            attacks[key] = {
+                "strategy": key.split(":", 1)[1],
+                "edit": group.edit,
+                "by_obstacles": [
+                    Figures.of(k + 1, o, counts=_counts(parts)).to_dict()
+                    for k, (o, parts) in enumerate(zip(outcomes[key], per_k))
+                ],
+            }
+    max_k = max(g.max_obstacles for g in suite.attacks)
+    worst = []
+    for k in range(max_k):
+        at_k = [outs[k] for outs in outcomes.values() if len(outs) > k]
+        worst.append({**Figures.of(k + 1, worst_case(at_k)).to_dict(), "attacks": len(at_k)})
+    return clean, attacks, worst

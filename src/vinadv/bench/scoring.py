@@ -19,6 +19,11 @@ computed from the per-map outcomes of all chunks, in map order:
 - `worst_case`: per k, the worst case per map over the attacks that reach k (`vinadv.robustness.worst_case`).
 - `flags` (`vinadv.bench.flags`), `time` (wall seconds, per chunk) and `machine` (where it ran).
 
+That is the entry of a suite of definitions 1 (`vinadv.bench_entry/1`). A suite of definitions 2 writes
+`vinadv.bench_entry/2` (`vinadv.bench.outcomes`): the per-map outcomes of the chunks (`per_map`), every figure computed
+from them, the worst case at k over every attack of at most k edits; and its `checks` and `submission`. A group with a
+`start` (`AttackGroup.start`) chains from the cells the named strategy's group kept on each map in the same chunk.
+
 Everything but `time` and `machine` is a function of the suite, the planner and its weights: the same on the same
 device type, byte for byte (`entry_json` writes sorted keys, fixed indentation).
 """
@@ -38,7 +43,7 @@ import numpy as np
 
 from vinadv import __version__
 from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags
-from vinadv.bench.outcomes import OPTIMAL_TOL, chunk_per_map, entry_figures, join_search, weighted_mean
+from vinadv.bench.outcomes import chunk_per_map, entry_figures, figures_v1
 from vinadv.bench.suites import ENTRY_FORMAT_2, DataSuite, Suite, maps_sha256
 from vinadv.errors import InputError
 from vinadv.evaluation.protocols import gppn_protocol
@@ -47,7 +52,7 @@ from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.mapset import MapSet
 from vinadv.planners.interface import Planner
 from vinadv.records import BENCH_CHUNK, RECORD_VERSIONS, VERSION_KEY
-from vinadv.robustness import Figures, MapOutcomes, attack_settings, heldout_maps, robustness, worst_case
+from vinadv.robustness import attack_settings, heldout_maps, robustness
 
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
 VOLATILE_FIELDS = ("time", "machine")
@@ -260,31 +265,6 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     }
 
 
-def _outcome(parts: list[dict]) -> MapOutcomes:
-    """One attack's per-map outcomes at one k, the chunks' joined in map order."""
-
-    def join(name, dtype):
-        return np.array([v for p in parts for v in p[name]], dtype=dtype)
-
-    regret = np.array([np.nan if v is None else v for p in parts for v in p["regret"]], dtype=np.float64)
-    return MapOutcomes(
-        pair=join("pair", bool),
-        valid=join("valid", bool),
-        broken=join("broken", bool),
-        harmful=join("harmful", bool),
-        regret=regret,
-        label=join("label", "<U7"),
-    )
-
-
-def _counts(parts: list[dict]) -> dict:
-    total: dict[str, int] = {}
-    for p in parts:
-        for label, count in p["counts"].items():
-            total[label] = total.get(label, 0) + int(count)
-    return total
-
-
 def make_entry(
     suite: Suite,
     planner: Planner,
@@ -308,7 +288,7 @@ def make_entry(
     }
     submission = submission_fields(suite, submission)
     if suite.definitions == 1:
-        clean, attacks, worst = _figures_v1(suite, order)
+        clean, attacks, worst = figures_v1(suite, order)
         body = {"clean": clean, "attacks": attacks, "worst_case": worst}
     else:
         per_map = chunk_per_map(suite, order)
@@ -348,54 +328,6 @@ def submission_fields(suite: Suite, submission: dict | None) -> dict | None:
         name = exc.field.split(".")[1].split("[")[0]
         raise InputError(f"{name}: {exc.why}", name) from None
     return out
-
-
-def _figures_v1(suite: Suite, order: list[dict]) -> tuple[dict, dict, list]:
-    """`clean`, `attacks` and `worst_case` of a `vinadv.bench_entry/1` entry, as they were computed when the format was
-    released (its committed entries recompute byte for byte): the worst case at k over the attacks that reach k."""
-    reached = np.array([v for c in order for v in c["clean"]["reached"]], dtype=bool)
-    regret = np.array([np.nan if v is None else v for c in order for v in c["clean"]["regret"]], dtype=np.float64)
-    n = len(reached)
-    weights = [c["maps"] for c in order]
-
-    def gppn(name):  # the chunks' means, weighted by their maps: the mean over every map
-        return weighted_mean(weights, [c["clean"][name] for c in order])
-
-    clean = {
-        "maps": n,
-        "reached": int(reached.sum()),
-        "success_rate": float(reached.mean()),
-        "percent_optimal": float((reached & (np.abs(regret) <= OPTIMAL_TOL)).mean()),
-        "mean_regret": float(np.nanmean(regret)) if reached.any() else None,
-    }
-    if "search" in order[0]["clean"]:
-        clean["gppn"] = None  # a search planner has no policy to follow from every cell
-        clean["search"] = join_search([c["clean"]["search"] for c in order])
-    else:
-        clean["gppn"] = {
-            "percent_optimal": gppn("gppn_percent_optimal"),
-            "percent_success": gppn("gppn_percent_success"),
-        }
-    outcomes: dict[str, list[MapOutcomes]] = {}
-    attacks = {}
-    for group in suite.attacks:
-        for key in group.keys():
-            per_k = [[c["attacks"][key][k] for c in order] for k in range(group.max_obstacles)]
-            outcomes[key] = [_outcome(parts) for parts in per_k]
-            attacks[key] = {
-                "strategy": key.split(":", 1)[1],
-                "edit": group.edit,
-                "by_obstacles": [
-                    Figures.of(k + 1, o, counts=_counts(parts)).to_dict()
-                    for k, (o, parts) in enumerate(zip(outcomes[key], per_k))
-                ],
-            }
-    max_k = max(g.max_obstacles for g in suite.attacks)
-    worst = []
-    for k in range(max_k):
-        at_k = [outs[k] for outs in outcomes.values() if len(outs) > k]
-        worst.append({**Figures.of(k + 1, worst_case(at_k)).to_dict(), "attacks": len(at_k)})
-    return clean, attacks, worst
 
 
 def machine() -> dict:

@@ -22,6 +22,10 @@ Released suites:
   `vin28-v1`.
 - `mpd32-quick-v1`: 100 of those maps (the first 17 of the first four families in name order, the first 16 of the
   last two); the ensemble of `vin28-quick-v1`.
+- `vin28-v2`, `vin28-quick-v2`, `mpd32-v2`, `mpd32-quick-v2`: the maps and ensembles of their `-v1`, of definitions 2
+  (`Suite.definitions`): the worst case at k over every attack of at most k edits on a fixed denominator, entries
+  `vinadv.bench_entry/2` with per-map outcomes; in the full ones the cheap strategies' steps 2..3 also start from
+  exhaustive's one-cell optimum (`AttackGroup.start`).
 """
 
 from __future__ import annotations

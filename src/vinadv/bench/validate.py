@@ -5,7 +5,7 @@ leaderboard, the index or `make_entry` reads is checked before it is used, so a 
 field (`entry_problem`, `chunk_problem`: the first problem, or None), never a traceback or a figure that lies.
 
 What an entry must hold (fields not listed are not read, and not checked):
-- `format`: `ENTRY_FORMAT`; `suite`: `name` (a non-empty string of at most `MAX_TEXT` characters) and `checksum`
+- `format`: one of `ENTRY_FORMATS`; `suite`: `name` (a non-empty string of at most `MAX_TEXT` characters) and `checksum`
   (64 hex digits; one of a released suite's, `suites.FROZEN`, or the leaderboard labels it unknown);
 - `planner`: `name` (as `suite.name`), `config` (absent, null, or an object of plain JSON values, `MAX_DEPTH` deep at
   most, every float finite); `weights_sha256` (here and in `planner`): absent, null or 64 hex digits;
@@ -20,6 +20,12 @@ What an entry must hold (fields not listed are not read, and not checked):
 - `flags`: an object of flags, each `raised` (true or false) and `why` (text);
 - `time` (absent or null, or `wall_s` and every `chunks_s` finite and non-negative), `machine` (absent or null, or
   `device` text or null), `vinadv_version` (absent, null or text).
+
+An entry of format 2 (`ENTRY_FORMAT_2`) also holds `submission` (`check_submission`: `display_name` text or null,
+`authors` a list of at most `MAX_AUTHORS` names, `paper` and `code` null or http/https URLs with a host, `external` true
+or false), `checks` (`gradient_masked` and `non_deterministic` true, false or null) and `per_map` (`check_per_map`:
+one value per map in every list, one record per figure of every attack with its `k`, labels of the vocabulary or "",
+a harmful map or a regret only where the pair is valid, the chunks' maps summing to the maps).
 
 Strings are checked for type and length only: the renderers escape them (`vinadv.bench.leaderboard`).
 """
