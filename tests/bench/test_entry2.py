@@ -19,9 +19,10 @@ from vinadv.bench.outcomes import entry_figures, worst_case_within
 from vinadv.bench.scoring import entry_json, run_bench
 from vinadv.bench.suites import FROZEN, AttackGroup, Suite, get_suite, maps_sha256
 from vinadv.bench.validate import entry_problem
-from vinadv.bench.verify import pick_chunks, verify_entry
+from vinadv.bench.verify import pick_chunks, read_entry, verify_entry
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.planners.registry import load_planner
 from vinadv.planners.vin.planner import as_planner
 from vinadv.robustness import MapOutcomes, heldout_maps, robustness
 from vinadv.testing.planners import planning_vin
@@ -249,3 +250,40 @@ def test_a_v1_suite_refuses_the_sharing_options_and_keeps_its_checksum(capsys):
 
 def _committed_v1() -> Path:
     return Path(__file__).resolve().parents[2] / "docs" / "results" / "bench" / "vin28-quick-v1.optimal.json"
+
+
+COMMITTED = Path(__file__).resolve().parents[2] / "docs" / "results" / "bench"
+
+
+def test_every_committed_v2_entry_follows_from_its_outcomes_with_a_monotone_k_curve():
+    paths = sorted(COMMITTED.glob("*-v2.*.json"))
+    assert paths, "no committed -v2 entry"
+    for path in paths:
+        entry = read_entry(path)
+        assert verify_entry(entry)["differences"] == [], path.name
+        worst = entry["worst_case"]
+        for a, b in zip(worst, worst[1:]):
+            assert a["harmful"] <= b["harmful"] and a["broken"] <= b["broken"] and a["valid"] == b["valid"], path.name
+
+
+def test_bench_verify_names_the_field_of_a_tampered_committed_entry(tmp_path, capsys):
+    source = COMMITTED / "vin28-quick-v2.wastar-w2.json"
+    assert main(["bench", "verify", str(source)]) == 0
+    assert "every figure follows from its per-map outcomes" in capsys.readouterr().out
+    entry = json.loads(source.read_text())
+    record = entry["per_map"]["attacks"]["remove:saliency"][0]
+    m = record["label"].index("UcP")
+    record["label"][m], record["harmful"][m], record["regret"][m] = "UrP", True, None
+    tampered = tmp_path / "t.json"
+    tampered.write_text(json.dumps(entry))
+    assert main(["bench", "verify", str(tampered), "--json"]) == 1
+    lines = json.loads(capsys.readouterr().out)["differences"]
+    assert "field 'attacks.remove:saliency.by_obstacles[0].harmful': " in "\n".join(lines)
+    assert all(line.startswith("field '") for line in lines)
+
+
+@pytest.mark.slow
+def test_a_chunk_of_a_committed_v2_entry_recomputes_byte_for_byte():
+    entry = read_entry(COMMITTED / "vin28-quick-v2.astar.json")
+    planner = load_planner("astar", 28)
+    assert verify_entry(entry, chunks=1, seed=0, planner=planner)["differences"] == []
