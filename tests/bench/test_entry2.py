@@ -15,7 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vinadv.bench import suites
-from vinadv.bench.outcomes import entry_figures, worst_case_within
+from vinadv.bench.leaderboard import read_entries
+from vinadv.bench.outcomes import entry_figures, worst_case_within, worst_efforts
 from vinadv.bench.scoring import entry_json, run_bench
 from vinadv.bench.suites import FROZEN, AttackGroup, Suite, get_suite, maps_sha256
 from vinadv.bench.validate import entry_problem
@@ -287,3 +288,27 @@ def test_a_chunk_of_a_committed_v2_entry_recomputes_byte_for_byte():
     entry = read_entry(COMMITTED / "vin28-quick-v2.astar.json")
     planner = load_planner("astar", 28)
     assert verify_entry(entry, chunks=1, seed=0, planner=planner)["differences"] == []
+
+
+def test_worst_efforts_are_the_largest_over_at_most_k_edits_and_verify_checks_them(entry, registered):
+    assert "worst_effort" not in entry["per_map"]  # no suite's chunks carry efforts yet: the slot stays empty
+    assert worst_efforts([[[1.0, None, 2.0]], [[0.5, 3.0, None], [None, None, 4.0]], []]) == [
+        [1.0, None, 2.0],
+        [1.0, 3.0, 4.0],
+        [1.0, 3.0, 4.0],
+    ]
+    bad = json.loads(json.dumps(entry))
+    for records in bad["per_map"]["attacks"].values():
+        for record in records:
+            record["effort"] = [float(record["k"])] * 3
+    (line,) = verify_entry(bad)["differences"]  # the efforts give worst efforts the entry does not hold
+    assert line.startswith("field 'per_map.worst_effort': null in the entry, [[1.0, 1.0, 1.0], [2.0, 2.0, 2.0], ")
+
+
+def test_the_leaderboard_reads_a_file_named_twice_once(tmp_path):
+    source = COMMITTED / "vin28-quick-v2.astar.json"
+    entries = read_entries([source, COMMITTED, source.parent / ".." / "bench" / source.name])
+    assert [p.name for p, _ in entries].count(source.name) == 1
+    assert len(entries) == len(list(COMMITTED.glob("*.json")))
+    with pytest.raises(InputError, match="no such folder or file"):
+        read_entries([tmp_path / "none"])
