@@ -371,16 +371,15 @@ def robustness(
         )
         by_k, outcomes, cells = [], [], []
         for k in range(first_k, int(max_obstacles) + 1):
+            kept = np.full((n, k, 2), -1, dtype=np.int64)
             if k - first_k < len(result.steps):
                 pairs = result.steps[k - first_k]
                 expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
                 ident = identify(pairs, harm_tol=harm_tol, harm_rtol=harm_rtol, expert_o=expert_o)
                 outcome = _outcomes(n, pairs.map_index, ident.labels, ident.harm.harm, ident.harm.regret_a)
                 counts = label_counts(ident.labels)
-            # else: every map ran out of cells at the last step made (`AttackResult.steps`): no pair, as there
-            kept = np.full((n, k, 2), -1, dtype=np.int64)
-            if k - first_k < len(result.steps):
                 kept[pairs.map_index] = pairs.added
+            # else: every map ran out of cells at the last step made (`AttackResult.steps`): no pair, as there
             outcomes.append(outcome)
             cells.append(kept)
             by_k.append(Figures.of(k, outcome, counts=counts))

@@ -237,6 +237,13 @@ def test_bench_verify_of_a_v1_entry_or_a_missing_file_is_bad_input(tmp_path, cap
     assert "none.json" in capsys.readouterr().err
 
 
+def test_a_group_must_start_from_an_earlier_one_cell_group():
+    groups = (AttackGroup(("random",), "add", 3, start="exhaustive"), AttackGroup(("exhaustive",), "add", 1))
+    with pytest.raises(InputError, match="group 0 starts from 'exhaustive', which no earlier group"):
+        suites.register(tiny_suite(name="bad-start", attacks=groups))
+    assert "bad-start" not in suites.SUITES
+
+
 def test_a_v1_suite_refuses_the_sharing_options_and_keeps_its_checksum(capsys):
     assert main(["bench", "run", "--suite", "vin28-quick-v1", "--planner", "optimal", "--display-name", "x"]) == 2
     assert "--display-name: suite vin28-quick-v1's entries" in capsys.readouterr().err

@@ -182,9 +182,18 @@ SUITES: dict[str, Suite] = {}
 
 
 def register(suite: Suite) -> Suite:
-    """Register `suite` under its name; refuses a name already registered."""
+    """Register `suite` under its name; refuses a name already registered, and a group started from a strategy that
+    no earlier group of one cell and the same edit runs (`AttackGroup.start`)."""
     if suite.name in SUITES:
         raise InputError(f"suite {suite.name!r}: a suite of that name is already registered", "suite")
+    for i, group in enumerate(suite.attacks):
+        before = [g for g in suite.attacks[:i] if g.start is None and g.edit == group.edit and g.max_obstacles == 1]
+        if group.start is not None and not any(group.start in g.strategies for g in before):
+            raise InputError(
+                f"suite {suite.name!r}: group {i} starts from {group.start!r}, which no earlier group of one "
+                f"{group.edit}ed cell runs",
+                "suite",
+            )
     SUITES[suite.name] = suite
     return suite
 
