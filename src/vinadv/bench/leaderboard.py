@@ -216,7 +216,8 @@ def rows(entries: list[tuple[Path, dict]], base: str | os.PathLike | None = None
             # a suite's entries are all of its format: a table of format 1 entries says so in its heading
             "suite": heading + (", v1 entries" if e["format"] == ENTRY_FORMAT else ""),
             "planner": planner_label(e["planner"]),
-            "display_name": (e.get("submission") or {}).get("display_name"),
+            # the submission (an entry of format 1 has none: `NO_SUBMISSION`), for the renderers to show
+            **{name: (e.get("submission") or NO_SUBMISSION).get(name) for name in NO_SUBMISSION},
             "weights": weights[:12] if weights else "—",
         }
         _with_interval(row, "clean", clean["success_rate"], clean.get("reached"), clean.get("maps"))
