@@ -22,8 +22,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from common import cpu_model, load_average
 
+from common import cpu_model, load_average
 from vinadv.attacks.validity import valid_cells
 from vinadv.bench.suites import get_suite, maps_sha256
 from vinadv.exact_k2 import MODES, exact_k2
@@ -106,7 +106,8 @@ def _cost(suite, maps, planner, result, rate: float | None, n: int) -> dict:
     }
     if result.mode == "regret" and rate:
         searched = result.search.searched
-        full = float(result.search.candidate_pairs[searched].mean()) * searched.mean() * suite.n if searched.any() else 0
+        pairs = result.search.candidate_pairs[searched]
+        full = float(pairs.mean()) * searched.mean() * suite.n if searched.any() else 0.0
         out["whole_suite_pairs_estimate"] = round(full)
         out["whole_suite_seconds_estimate"] = round(full / rate)
     return out

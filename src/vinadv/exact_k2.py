@@ -36,7 +36,7 @@ from vinadv.errors import InputError
 from vinadv.identify import harm_order, identify
 from vinadv.intervals import interval_fields
 from vinadv.planners.vin.planner import as_planner
-from vinadv.robustness import EXHAUSTIVE, MapOutcomes, RobustnessResult, robustness
+from vinadv.robustness import EXHAUSTIVE, MapOutcomes, RobustnessConfig, RobustnessResult, robustness
 from vinadv.vocabulary import ADD
 
 if TYPE_CHECKING:
@@ -157,7 +157,7 @@ def _regret_figures(regret: np.ndarray, exact: np.ndarray | None) -> dict:
     if exact is not None:
         both = reached & np.isfinite(exact)
         out["exact_worse"] = int((exact > regret + DEFAULT_TOL).sum())
-        out["mean_gap"] = float((exact - regret)[both].mean()) if both.any() else None
+        out["mean_gap"] = float((exact[both] - regret[both]).mean()) if both.any() else None
     return out
 
 
@@ -239,4 +239,25 @@ def exact_k2(
     )
 
 
-__all__ = ["HARMFUL", "MODES", "REGRET", "ExactK2Result", "exact_k2", "greedy_k2"]
+def run(
+    config: RobustnessConfig, greedy: RobustnessResult, mode: str, *, device: str | None = None, progress: bool = False
+) -> ExactK2Result:
+    """The diagnostic of `config`'s planner on its maps, against `greedy` (the robustness run of `config`), in this
+    process (`vinadv robustness --exact-k2`)."""
+    from vinadv.planners.registry import load_planner_for  # noqa: PLC0415 (as `vinadv.robustness.run`)
+
+    if mode not in MODES:  # before the planner loads
+        raise InputError(f"exact k = 2 mode: {mode!r} is not one of {'|'.join(MODES)}", "exact_k2")
+    planner = load_planner_for(config.planner, config.weights, config, device)
+    return exact_k2(
+        planner,
+        config.load_maps(),
+        mode,
+        harm_tol=config.harm_tolerance,
+        harm_rtol=config.harm_rtol,
+        greedy=greedy,
+        progress=progress,
+    )
+
+
+__all__ = ["HARMFUL", "MODES", "REGRET", "ExactK2Result", "exact_k2", "greedy_k2", "run"]
