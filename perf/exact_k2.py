@@ -21,8 +21,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from common import cpu_model, load_average
 from vinadv.attacks.validity import valid_cells
 from vinadv.bench.suites import get_suite, maps_sha256
@@ -114,5 +112,4 @@ def _cost(suite, maps, planner, result, rate: float | None, n: int) -> dict:
 
 
 if __name__ == "__main__":
-    np.seterr(all="ignore")
     main()

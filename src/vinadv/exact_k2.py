@@ -246,8 +246,6 @@ def run(
     process (`vinadv robustness --exact-k2`)."""
     from vinadv.planners.registry import load_planner_for  # noqa: PLC0415 (as `vinadv.robustness.run`)
 
-    if mode not in MODES:  # before the planner loads
-        raise InputError(f"exact k = 2 mode: {mode!r} is not one of {'|'.join(MODES)}", "exact_k2")
     planner = load_planner_for(config.planner, config.weights, config, device)
     return exact_k2(
         planner,

@@ -17,6 +17,7 @@ from vinadv.planners.vin.planner import as_planner
 
 SIZE = 8
 TOL = 1e-6
+STEPS = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc]
 
 
 @pytest.fixture(scope="module")
@@ -37,14 +38,15 @@ def harm_judge(pairs):
 
 def reachable(obstacles, start, goal):
     """Breadth-first search over the 8 moves, corners cut (the test maps' rule)."""
+    grid = obstacles.tolist()
     seen, frontier = {start}, [start]
     while frontier:
         r, c = frontier.pop()
-        for dr, dc in itertools.product((-1, 0, 1), repeat=2):
-            cell = (r + dr, c + dc)
-            if 0 <= cell[0] < SIZE and 0 <= cell[1] < SIZE and not obstacles[cell] and cell not in seen:
-                seen.add(cell)
-                frontier.append(cell)
+        for dr, dc in STEPS:
+            nr, nc = r + dr, c + dc
+            if 0 <= nr < SIZE and 0 <= nc < SIZE and not grid[nr][nc] and (nr, nc) not in seen:
+                seen.add((nr, nc))
+                frontier.append((nr, nc))
     return goal in seen
 
 
