@@ -164,3 +164,19 @@ def test_only_the_maps_asked_for_are_searched(maps, planner):
     result = exact_pairs(maps.obstacles, maps.starts[:, 0], maps.goals, planner, harm_judge, search=search)
     assert result.searched.tolist() == search.tolist()
     assert (result.candidate_pairs[~search] == 0).all() and set(result.pairs.map_index.tolist()) <= {1}
+
+
+def test_pairs_that_cut_the_way_are_not_planned_in_any_round(planner):
+    # a corridor two cells high: the two cells of one column together cut it, neither alone does
+    obstacles = np.ones((1, SIZE, SIZE), dtype=bool)
+    obstacles[0, 2:4, 1:7] = False
+    starts, goals = np.array([[2, 1]]), np.array([[3, 6]])
+    results = [
+        exact_pairs(obstacles, starts, goals, planner, harm_judge, stop_at_harmful=False, chunk=chunk)
+        for chunk in (1, 8192)  # one pair a round: the rounds of a cutting pair plan nothing
+    ]
+    for result in results:
+        assert result.candidate_pairs[0] == result.tried[0] == 45  # 10 valid cells
+        assert result.planned[0] == 45 - 4  # the columns 2 to 5
+    assert results[0].harmful_pairs.tolist() == results[1].harmful_pairs.tolist()
+    assert results[0].pairs.added.tolist() == results[1].pairs.added.tolist()

@@ -33,6 +33,7 @@ import numpy as np
 from vinadv.attacks.neighbourhood import chebyshev_distance
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import solvable, valid_cells
+from vinadv.errors import InputError
 from vinadv.planners.interface import Planner
 from vinadv.planners.vin.planner import as_planner
 from vinadv.vocabulary import ADD
@@ -128,12 +129,14 @@ def exact_pairs(
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     goals = np.ascontiguousarray(goals, dtype=np.int64)
     b, size = len(obstacles), obstacles.shape[1]
+    if chunk < 1:
+        raise InputError(f"chunk must be >= 1, got {chunk}", "chunk")
     planner = as_planner(planner, size)
     search = np.ones(b, dtype=bool) if search is None else np.asarray(search, dtype=bool)
     base = planner.plan(obstacles, starts, goals, corner_cutting)
     path_mask = np.zeros_like(obstacles)
-    cells = base.paths.cells.astype(np.int64)
-    path_mask[base.paths.owners(), cells[:, 0], cells[:, 1]] = True
+    on_path = base.paths.cells.astype(np.int64)
+    path_mask[base.paths.owners(), on_path[:, 0], on_path[:, 1]] = True
     valid = valid_cells(obstacles, starts, goals, corner_cutting, planner.moves, frozen) & search[:, None, None]
     cells, offsets = ordered_cells(valid, path_mask)
     counts = np.diff(offsets)
@@ -152,7 +155,11 @@ def exact_pairs(
         rows = np.arange(len(map_idx))[:, None]
         obstacles_a[rows, added[..., 0], added[..., 1]] = True
         ok = solvable(obstacles_a, starts[map_idx], goals[map_idx], corner_cutting, planner.moves)
-        map_idx, position, added, obstacles_a = map_idx[ok], position[ok], added[ok], obstacles_a[ok]
+        map_idx, added, obstacles_a = map_idx[ok], added[ok], obstacles_a[ok]
+        if not len(map_idx):  # no pair of this round keeps the goal reachable
+            if bar is not None:
+                bar.update(int(share.sum()))
+            continue
         planned = planner.plan(obstacles_a, starts[map_idx], goals[map_idx], corner_cutting)
         calls += len(map_idx)
         pairs = PairSet(
