@@ -115,8 +115,10 @@ def planner_quality(
         }
     capabilities = planner.capabilities
     start = time.perf_counter()
-    metrics = evaluate_planner(planner, maps)
-    search = evaluate_search(planner, maps) if capabilities.expansions else None
+    planner = planner.for_moves(maps.moves)
+    plans = planner.plan(maps.obstacles, maps.starts, maps.goals, maps.corner_cutting, maps.moves)  # once for both
+    metrics = evaluate_planner(planner, maps, result=plans)
+    search = evaluate_search(planner, maps, result=plans) if capabilities.expansions else None
     value_map = None
     if capabilities.value_maps:  # the first map's, drawn in the report
         values = planner.value_maps(maps.obstacles[:1], maps.goals[:1])[0]
