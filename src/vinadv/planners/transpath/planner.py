@@ -1,9 +1,16 @@
 """`TransPathPlanner`: TransPath's two models as vinadv search planners, `transpath-cf` and `transpath-focal`.
 
-The exact mode (`plan_paths`, what `plan`, `attack`, `run`, `eval` use) is the compiled replica: the network's
-outputs (PyTorch, no gradients, batched), then the compiled search of `vinadv.planners.transpath.search` in the
-authors' float32 arithmetic (their octile heuristic, their f, selection and tie rule). The differentiable mode (the
-authors' search in PyTorch, for gradients) is not there yet: the planners declare no gradients.
+Two modes that give the same search, named as Neural A*'s:
+
+- Exact mode (`plan_paths`, what `plan`, `attack`, `run`, `eval` use), the compiled replica: the network's outputs
+  (PyTorch, no gradients, batched), then the compiled search of `vinadv.planners.transpath.search` in the authors'
+  float32 arithmetic (their octile heuristic, their f, selection and tie rule).
+- Differentiable mode (`differentiable_paths`, `plan_paths_differentiable`): the network, then the authors' search
+  in PyTorch (`vinadv.planners.transpath.differentiable`), for gradients (the saliency attack).
+
+They can part only where two open cells' values are equal in one computation and not in the other (PyTorch's
+vectorised float32 exp against the correctly rounded one, the division by the sum before the argmax): counted by
+`tests/planners/transpath` and `perf/transpath_faithfulness.py`.
 
 Movement: octile moves (the authors' cost filter: 1 and sqrt 2). The authors' search cuts corners; on maps without
 corner cutting this one keeps the maps' rule (a diagonal also needs both cells beside it free).
@@ -16,10 +23,11 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from vinadv.planners.batching import forward_maps
+from vinadv.planners.batching import forward_maps, over_maps, torch_threads
 from vinadv.planners.interface import Capabilities, PlannerError
-from vinadv.planners.result import check_plan_inputs
+from vinadv.planners.result import GOAL, STEP_LIMIT, PlanResult, check_plan_inputs
 from vinadv.planners.search import SearchPlanner, SearchResult
+from vinadv.planners.transpath.differentiable import TransPathPaths, as_search_arrays
 from vinadv.planners.transpath.model import SIZE, TransPath
 from vinadv.planners.transpath.search import F_W, K_FLOOR, octile_heuristic, transpath_search
 from vinadv.planners.weights import weights_path_checksum
@@ -44,12 +52,12 @@ class TransPathPlanner(SearchPlanner):
     """TransPath with a `TransPath` model of mode `cf` (A* with the octile heuristic divided by the predicted
     correction factor) or `f` (focal search on the predicted focal values, `f_w` 100) for 64x64 maps (module doc).
 
-    Capabilities: expansions (the authors' histories) and value maps of its own (`cf`: minus its heuristic,
-    `-octile / max(k, 0.1)`; `f`: the focal values). No gradients yet (the differentiable mode is to come).
+    Capabilities: expansions (the authors' histories), value maps of its own (`cf`: minus its heuristic,
+    `-octile / max(k, 0.1)`; `f`: the focal values) and gradients (the differentiable search, `differentiable_paths`).
     """
 
     moves = MOVES
-    capabilities = Capabilities(value_maps=True, expansions=True)
+    capabilities = Capabilities(value_maps=True, gradients=True, expansions=True)
 
     def __init__(
         self,
@@ -104,6 +112,47 @@ class TransPathPlanner(SearchPlanner):
         obstacles, starts, goals = self._check_inputs(obstacles, starts, goals)
         out, exp = self.outputs(obstacles, starts, goals)
         return transpath_search(out, obstacles, starts, goals, self.mode, corner_cutting, self.f_w, exp)
+
+    def plan_paths_differentiable(
+        self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+    ) -> SearchResult:
+        """The differentiable mode's search as a `SearchResult` (no gradients; `[start]` with termination `step_limit`
+        where the goal was not reached), `batch_size` maps at a time (on the CPU, split between threads of one torch
+        thread each, as Neural A*'s: the search's many small steps gain nothing from PyTorch's own threads)."""
+        obstacles, starts, goals = self._check_inputs(obstacles, starts, goals)
+        module = self.differentiable_module(corner_cutting)
+        parts: dict[int, SearchResult] = {}
+
+        def search(lo: int, hi: int) -> None:
+            with torch.no_grad():
+                for i in range(lo, hi, self.batch_size):
+                    sl = slice(i, min(hi, i + self.batch_size))
+                    out = module.search(
+                        torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device),
+                        torch.from_numpy(starts[sl]).to(self.device),
+                        torch.from_numpy(goals[sl]).to(self.device),
+                    )
+                    paths, reached, expanded = as_search_arrays(out, starts[sl], goals[sl])
+                    plan = PlanResult.from_paths(paths, np.where(reached, GOAL, STEP_LIMIT))
+                    parts[i] = SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)
+
+        if self.device.type != "cpu":
+            search(0, len(obstacles))
+        else:
+            with torch_threads(1):
+                over_maps(len(obstacles), search)
+        return SearchResult.concat([parts[i] for i in sorted(parts)])
+
+    def differentiable_module(self, corner_cutting: bool = True) -> TransPathPaths:
+        """The differentiable search's path-map module keeping the maps' rule `corner_cutting`."""
+        return TransPathPaths(self.model, self.f_w, corner_cutting)
+
+    @property
+    def differentiable_paths(self) -> TransPathPaths:
+        """`module(obstacles (B,64,64) float 1/0, starts, goals) -> (B, 64, 64)` path map, differentiable with respect
+        to the obstacles through the network (`differentiable.TransPathPaths`), searching as the authors (corners
+        cut): the saliency attack's ranking signal, whatever the maps' rule."""
+        return self.differentiable_module(True)
 
     def value_maps(self, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray | None = None) -> np.ndarray:
         """`(B, 64, 64)` float64, larger where the search goes first: `cf`, minus its heuristic `-octile / max(k,
