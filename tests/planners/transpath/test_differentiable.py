@@ -123,6 +123,7 @@ def test_the_straight_through_gradient_is_the_softmax_derivative_summed_over_ste
     assert np.abs(expected).max() > 1e-3  # a gradient there is
 
 
+@pytest.mark.slow
 def test_the_planner_s_modes_agree_and_its_module_differentiates_to_the_obstacles():
     """Two generated 64x64 maps, each model: `plan_paths_differentiable` gives `plan`'s paths and expansions; the
     saliency module's path map is the plan's path in value, with a finite gradient to the map that is not zero."""
