@@ -56,16 +56,16 @@ def octile_torch(goals: torch.Tensor, n: int) -> torch.Tensor:
     return torch.minimum(dr, dc) * (2**0.5) + (dr - dc).abs()
 
 
-def _selection(values, h, g, open_, mode: str, f_w: float, n: int):
+def _selection(focal_exp, h, g, open_, mode: str, f_w: float, n: int):
     """`(y, e, f)`: the selection's shares `y = E / sum(E)` (module doc), the unnormalised `E` and the f of every cell
-    (`(B, N*N)` each); a row whose E sums to 0 keeps E as its y."""
+    (`(B, N*N)` each); a row whose E sums to 0 keeps E as its y. `focal_exp`: `exp(focal values)` (mode `f`)."""
     if mode == "cf":
         f = 0.5 * g + (1 - 0.5 + 0.001) * h
         e = torch.exp(-1 * f / math.sqrt(n)) * open_
     else:
         f = 0.5 * g + (1 - 0.5) * h
         lowest = torch.where(open_ > 0, f, torch.full_like(f, math.inf)).min(dim=-1, keepdim=True).values
-        e = torch.exp(values) * ((f <= lowest * f_w) & (open_ > 0))
+        e = focal_exp * ((f <= lowest * f_w) & (open_ > 0))
     total = e.sum(dim=-1, keepdim=True)
     return e / torch.where(total == 0, torch.ones_like(total), total), e, f
 
@@ -120,7 +120,7 @@ def transpath_differentiable_search(
         h = (octile / torch.where(values > thr, values, thr)).reshape(b, cells)
     else:
         h = octile.reshape(b, cells)
-    flat_values = values.reshape(b, cells)
+    focal_exp = torch.exp(values).reshape(b, cells) if mode == "f" else None
     free_flat = free.detach().reshape(b, cells) > 0.5
     open_ = torch.zeros(b, cells, dtype=torch.float32, device=device)
     open_[rows, start_idx] = 1.0
@@ -136,7 +136,7 @@ def transpath_differentiable_search(
         active = active & is_open.any(dim=-1)  # nothing left to open: the goal cannot be reached
         if not bool(active.any()):
             break
-        y, e, f = _selection(flat_values, h, g, open_.clone(), mode, f_w, n)
+        y, e, f = _selection(focal_exp, h, g, open_.clone(), mode, f_w, n)
         selected = y.detach().argmax(dim=-1)  # the first index of the largest share
         if mode == "cf":
             top = e.detach().max(dim=-1, keepdim=True).values
