@@ -23,11 +23,12 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from vinadv.planners.batching import forward_maps, over_maps, torch_threads
+from vinadv.planners.batching import forward_maps
 from vinadv.planners.interface import Capabilities, PlannerError
-from vinadv.planners.result import GOAL, STEP_LIMIT, PlanResult, check_plan_inputs
+from vinadv.planners.neural_astar.differentiable import search_results
+from vinadv.planners.result import check_plan_inputs
 from vinadv.planners.search import SearchPlanner, SearchResult
-from vinadv.planners.transpath.differentiable import TransPathPaths, as_search_arrays
+from vinadv.planners.transpath.differentiable import TransPathPaths
 from vinadv.planners.transpath.model import SIZE, TransPath
 from vinadv.planners.transpath.search import F_W, K_FLOOR, octile_heuristic, transpath_search
 from vinadv.planners.weights import weights_path_checksum
@@ -116,32 +117,11 @@ class TransPathPlanner(SearchPlanner):
     def plan_paths_differentiable(
         self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
     ) -> SearchResult:
-        """The differentiable mode's search as a `SearchResult` (no gradients; `[start]` with termination `step_limit`
-        where the goal was not reached), `batch_size` maps at a time (on the CPU, split between threads of one torch
-        thread each, as Neural A*'s: the search's many small steps gain nothing from PyTorch's own threads)."""
+        """The differentiable mode's search as a `SearchResult` (no gradients), `batch_size` maps at a time, keeping
+        the maps' rule (`vinadv.planners.neural_astar.differentiable.search_results`)."""
         obstacles, starts, goals = self._check_inputs(obstacles, starts, goals)
-        module = self.differentiable_module(corner_cutting)
-        parts: dict[int, SearchResult] = {}
-
-        def search(lo: int, hi: int) -> None:
-            with torch.no_grad():
-                for i in range(lo, hi, self.batch_size):
-                    sl = slice(i, min(hi, i + self.batch_size))
-                    out = module.search(
-                        torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device),
-                        torch.from_numpy(starts[sl]).to(self.device),
-                        torch.from_numpy(goals[sl]).to(self.device),
-                    )
-                    paths, reached, expanded = as_search_arrays(out, starts[sl], goals[sl])
-                    plan = PlanResult.from_paths(paths, np.where(reached, GOAL, STEP_LIMIT))
-                    parts[i] = SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)
-
-        if self.device.type != "cpu":
-            search(0, len(obstacles))
-        else:
-            with torch_threads(1):
-                over_maps(len(obstacles), search)
-        return SearchResult.concat([parts[i] for i in sorted(parts)])
+        search = self.differentiable_module(corner_cutting).search
+        return search_results(search, obstacles, starts, goals, self.device, self.batch_size)
 
     def differentiable_module(self, corner_cutting: bool = True) -> TransPathPaths:
         """The differentiable search's path-map module keeping the maps' rule `corner_cutting`."""
