@@ -61,6 +61,12 @@ MPD_TABLE = "<!-- vinadv:mpd-table -->"
 MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
 MPD_ROBUSTNESS_STRATEGIES = "<!-- vinadv:mpd-robustness-strategies -->"
 MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
+TRANSPATH_JSON = ROOT / "docs" / "results" / "transpath.json"
+TRANSPATH_TABLE = "<!-- vinadv:transpath-table -->"
+TRANSPATH_RATIOS = "<!-- vinadv:transpath-ratios -->"
+TRANSPATH_ROBUSTNESS = "<!-- vinadv:transpath-robustness -->"
+TRANSPATH_ROBUSTNESS_STRATEGIES = "<!-- vinadv:transpath-robustness-strategies -->"
+TRANSPATH_COMMANDS = "<!-- vinadv:transpath-commands -->"
 MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
 MAP_SIZE_TABLE = "<!-- vinadv:map-size-table -->"
 MAP_SIZE_JSON = ROOT / "docs" / "results" / "map_size.json"
@@ -210,7 +216,7 @@ def shell_block(lines: list[str]) -> str:
     return "```sh\n" + "\n".join(lines) + "\n```"
 
 
-def mpd_table(path: Path = MPD_JSON) -> str:
+def mpd_table(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
     """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `perf/mpd_table.py`'s
     JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
     data = json.loads(path.read_text())
@@ -224,7 +230,7 @@ def mpd_table(path: Path = MPD_JSON) -> str:
                 + [percent(fig["success"])]
                 + ["—" if fig["expansions"] is None else f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"]
             )
-    header = ["family (test split)", "planner", "searches", "Opt", "Exp", "Hmean", "success", "expansions (A*'s)"]
+    header = [first, "planner", "searches", "Opt", "Exp", "Hmean", "success", "expansions (A*'s)"]
     return markdown_table(header, rows)
 
 
@@ -245,7 +251,7 @@ def _by_k(curve: list[dict], key: str) -> str:
     return " / ".join(percent(point[key]) for point in curve)
 
 
-def mpd_robustness(path: Path = MPD_JSON) -> str:
+def mpd_robustness(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
     """The robustness runs of `perf/mpd_table.py`'s JSON, worst case per map over the strategies: per family
     and planner, the harmful rate and the paper's success rate at k = 1..K added obstacles."""
     data = json.loads(path.read_text())
@@ -258,7 +264,7 @@ def mpd_robustness(path: Path = MPD_JSON) -> str:
             + [percent(figures["clean"]["success_rate"]), _by_k(overall, "harmful_rate")]
             + [_by_k(overall, "paper_success_rate"), decimal(overall[-1]["mean_regret"])]
         )
-    header = ["family (test split)", "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
+    header = [first, "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
     return markdown_table([*header, "mean regret at the largest k"], rows)
 
 
@@ -278,6 +284,24 @@ def mpd_robustness_strategies(path: Path = MPD_JSON) -> str:
         for run in runs
     ]
     return markdown_table(["family", "planner", *(f"{name}: harmful, k = 1 / 2 / ..." for name in names)], rows)
+
+
+def transpath_ratios(path: Path = TRANSPATH_JSON) -> str:
+    """TransPath's own figures per TransPath planner of `perf/transpath_table.py`'s JSON (their `eval.py`: against
+    their vanilla A*, on the rows whose vanilla cost is at least the hardness times the octile heuristic)."""
+    data = json.loads(path.read_text())
+    rows = []
+    for family in data["families"]:
+        for entry in family["planners"]:
+            fig = entry["search"].get("transpath")
+            if fig:
+                rows.append(
+                    [family["family"], f"`{entry['planner']}`", f"{fig['kept']} of {fig['rows']}"]
+                    + [decimal(fig["expansions_ratio"]), decimal(fig["cost_ratio"]), str(fig["unreached"])]
+                    + [decimal(fig["expansions"], 1), decimal(fig["vanilla_expansions"], 1)]
+                )
+    header = ["maps", "planner", "rows kept", "expansions ratio", "cost ratio", "unreached"]
+    return markdown_table([*header, "expansions", "vanilla A*'s"], rows)
 
 
 def mpd_commands(path: Path = MPD_JSON) -> str:
@@ -581,6 +605,11 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (MPD_ROBUSTNESS_STRATEGIES, mpd_robustness_strategies),
         (MPD_ROBUSTNESS, mpd_robustness),
         (MPD_COMMANDS, mpd_commands),
+        (TRANSPATH_TABLE, lambda: mpd_table(TRANSPATH_JSON, "maps")),
+        (TRANSPATH_RATIOS, transpath_ratios),
+        (TRANSPATH_ROBUSTNESS_STRATEGIES, lambda: mpd_robustness_strategies(TRANSPATH_JSON)),
+        (TRANSPATH_ROBUSTNESS, lambda: mpd_robustness(TRANSPATH_JSON, "maps")),
+        (TRANSPATH_COMMANDS, lambda: mpd_commands(TRANSPATH_JSON)),
         (MAP_SIZE_TABLE, map_size_table),
         (NEURAL_ASTAR_MODES, neural_astar_modes),
         (NEURAL_ASTAR_SPEED, neural_astar_speed),

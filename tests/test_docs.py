@@ -582,3 +582,27 @@ def test_make_demo_says_how_long_it_takes():
     minutes = re.search(r"about (\d+) minutes", echo).group(1)
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert f"about {minutes} minutes" in readme.split("make demo", 1)[1].split("make test", 1)[0]
+
+
+def test_the_transpath_page_is_read_from_its_json(tmp_path):
+    hooks = docs_module("hooks")
+    page = (DOCS / "results" / "transpath.md").read_text()
+    filled = hooks.on_page_markdown(page, page=None, config=None, files=None)
+    assert "<!-- vinadv:" not in filled
+    data = json.loads(hooks.TRANSPATH_JSON.read_text())
+    (family,) = data["families"]
+    assert family["import"] in filled and "--size 64" in family["import"]
+    for entry in family["planners"]:
+        assert entry["command"] in filled
+    for run in data["robustness"]:
+        assert run["command"] in filled and len(run["figures"]["overall"]) == 3
+    assert {"transpath-cf", "transpath-focal", "astar"} <= {run["planner"] for run in data["robustness"]}
+    # another JSON gives another table of TransPath's ratios: nothing is copied by hand
+    record = _mpd_record(0.5)
+    ratios = {"rows": 7, "kept": 4, "hardness": 1.05, "expansions_ratio": 0.25, "cost_ratio": 1.0625}
+    ratios |= {"unreached": 1, "expansions": 12.0, "vanilla_expansions": 48.0}
+    record["families"][0]["planners"][0]["search"]["transpath"] = ratios
+    path = tmp_path / "transpath.json"
+    path.write_text(json.dumps(record))
+    row = "| forest | `optimal` | 4 of 7 | 0.250 | 1.062 | 1 | 12.0 | 48.0 |"
+    assert hooks.transpath_ratios(path).splitlines()[2] == row
