@@ -96,6 +96,11 @@ class Suite:
         """The movement model of the suite's maps (`vinadv.grid.moves`): the generator's `octile`."""
         return "octile"
 
+    def cuts_corners(self) -> bool:
+        """Whether the suite's maps let a diagonal move pass between two obstacles: the generator's and the MP
+        layout's do."""
+        return True
+
 
 @dataclass(frozen=True)
 class DataFile:
@@ -121,6 +126,11 @@ class DataSuite(Suite):
 
     def movement(self) -> str:
         return self.moves
+
+    def read_options(self, file: DataFile) -> dict:
+        """The reader's options (`vinadv.interop.formats.read_maps`) for `file` beyond the layout, split, starts and
+        seed: none here (`vinadv.bench.movingai_suites` draws crops)."""
+        return {}
 
 
 def maps_sha256(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> str:
@@ -234,3 +244,7 @@ FROZEN = {
     "mpd32-v1": "7f077bd76099849020090308ff5ea0913f609d74e5e6d7643466646c184d92a4",
     "mpd32-quick-v1": "76f5d309d15f7d68838e18cd0c405dd6b4eefe391b4a2ddc02e9f3a4bc59a400",
 }
+
+# the Moving AI suites (real maps: crops of city streets, problems on the MAPF maps) register themselves and their
+# checksums; imported last, as it builds on the classes above
+from vinadv.bench import movingai_suites  # noqa: E402, F401
