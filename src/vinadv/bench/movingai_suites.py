@@ -2,8 +2,8 @@
 
 `MovingAISuite` is a data suite (`vinadv.bench.suites.DataSuite`) whose maps are 64x64 windows drawn by the Moving AI
 import (`vinadv.interop.formats.movingai`: `vinadv maps import --format movingai FILE --crop 64 --crops K --seed S`):
-each file named with its sha256, `draws` windows drawn from it with seed `maps_seed` and its first `DataFile.maps`
-taken, so a quick suite that draws as many as the full one holds the first maps of each file of the full one. A
+each file named with its sha256, `draws` windows drawn from it with seed `maps_seed` plus the file's place in the
+list (0 for the first) and its first `DataFile.maps` taken, so a quick suite that draws as many as the full one holds the first maps of each file of the full one. A
 256x256 city map gives crops of its streets; a 64x64 MAPF map has one window, itself, so each draw is a problem on
 the whole map (a goal in its largest connected region, a start by the Neural A* loader's distance bands). The maps'
 rule is the format's: `octile` moves without corner cutting (`cuts_corners`). A planner trained on maps of another
@@ -11,7 +11,7 @@ rule runs under this one, and its entry says so (the `other_rules` flag, `vinadv
 
 Released suites:
 - `movingai64-v1`: 50 crops of each city map (Berlin_1_256, Boston_0_256, Milan_0_256, Paris_1_256) and 25
-  problems on each 64x64 MAPF map (random-64-64-10, room-64-64-8, room-64-64-16): 275 maps, seed 0; the full
+  problems on each 64x64 MAPF map (random-64-64-10, room-64-64-8, room-64-64-16): 275 maps, seeds 0..6; the full
   ensemble of `vin28-v1`.
 - `movingai64-quick-v1`: the first 10 of each city's crops and of each MAPF map's problems (70 maps); the quick
   ensemble of `vin28-quick-v1`.
@@ -43,7 +43,10 @@ class MovingAISuite(DataSuite):
     draws: tuple[int, ...] = ()
 
     def read_options(self, file: DataFile) -> dict:
-        return {"crop": self.crop, "crops": self.draws[self.files.index(file)]}
+        """The crops of `file`: its draws, seeded `maps_seed` plus its place in `files` (the same seed would draw
+        the same window origins in every 256x256 city)."""
+        i = self.files.index(file)
+        return super().read_options(file) | {"seed": self.maps_seed + i, "crop": self.crop, "crops": self.draws[i]}
 
     def cuts_corners(self) -> bool:
         return False
@@ -69,12 +72,12 @@ register(
         name="movingai64-v1",
         description="275 real 64x64 maps: 50 seeded crops of each of four Moving AI city maps (Berlin, Boston, "
         "Milan, Paris) and 25 problems on each of the three 64x64 MAPF maps (random-64-64-10, room-64-64-8, "
-        "room-64-64-16), octile moves without corner cutting, one start each (seed 0); key-points, saliency, "
+        "room-64-64-16), octile moves without corner cutting, one start each (seeds 0..6, one a file); key-points, saliency, "
         "near-path, random adding k = 1..3; exhaustive adding 1; all five removing 1",
         n=sum(_DRAWS),
         size=64,
         maps_seed=0,
-        maps_sha256="d692b97b5205bbc615a6cff653afa1cbd7ba40be8e02f9884b419b5a27d0fb15",
+        maps_sha256="fc07f9593cf3a3efaab91e0fdd76f8fdf08e556fd70fc13a6175dfffae315564",
         attacks=_FULL_ENSEMBLE,
         chunk=25,
         files=tuple(DataFile(name, sha, k) for name, sha, k in _FILES),
@@ -90,7 +93,7 @@ register(
         n=QUICK_PER_FILE * len(_FILES),
         size=64,
         maps_seed=0,
-        maps_sha256="0e0c0f12c5ac7e2f2df3934a130652d0b6ce4ab43d497325e5ab81061dcfb0f1",
+        maps_sha256="732c212883f1eba1e329f16e1f3e73cc764386d047aa78ed61ee07b77795d92d",
         attacks=_QUICK_ENSEMBLE,
         chunk=10,
         files=tuple(DataFile(name, sha, QUICK_PER_FILE) for name, sha, _ in _FILES),
@@ -100,7 +103,7 @@ register(
 
 FROZEN.update(
     {
-        "movingai64-v1": "807fc40a6155892509d6e801017ef90f0e72086a24a4d0a6a3430ace3a5ebfae",
-        "movingai64-quick-v1": "bbed5c47c8919e9c4916ba9c0c0bfa82f6fa0302805fbd6e2837b29199d7abac",
+        "movingai64-v1": "1a971856708a8fe80773925edb2d7d402ee6f01a2579cb645e45643108785923",
+        "movingai64-quick-v1": "14091a91caa83b020f569e3db8da2486c3def398279f1a303a236bed978b84a1",
     }
 )

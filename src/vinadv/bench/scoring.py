@@ -98,10 +98,8 @@ def data_suite_maps(suite: DataSuite, data: str | os.PathLike | None) -> MapSet:
             raise InputError(
                 f"{path}: sha256 {digest} is not the {f.sha256} suite {suite.name} froze (another version of the file)"
             )
-        # one start per map: the reader's k > 1 draws are not needed (and each is its own draw)
-        maps, _ = read_maps(
-            str(path), suite.layout, split=suite.split, starts=1, seed=suite.maps_seed, **suite.read_options(f)
-        )
+        # one start per map (`read_options`): the reader's k > 1 draws are not needed (and each is its own draw)
+        maps, _ = read_maps(str(path), suite.layout, **suite.read_options(f))
         if len(maps) < f.maps:
             raise InputError(f"{path}: {len(maps)} maps in split {suite.split}, suite {suite.name} takes {f.maps}")
         parts.append(maps.take(np.arange(f.maps)))

@@ -128,9 +128,9 @@ class DataSuite(Suite):
         return self.moves
 
     def read_options(self, file: DataFile) -> dict:
-        """The reader's options (`vinadv.interop.formats.read_maps`) for `file` beyond the layout, split, starts and
-        seed: none here (`vinadv.bench.movingai_suites` draws crops)."""
-        return {}
+        """The reader's arguments (`vinadv.interop.formats.read_maps`) for `file` beyond its path and the layout:
+        the split, one start per map and the seed (`vinadv.bench.movingai_suites` adds its crops)."""
+        return {"split": self.split, "starts": 1, "seed": self.maps_seed}
 
 
 def maps_sha256(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> str:
