@@ -1,13 +1,14 @@
-"""The Moving AI suites: real maps (Sturtevant 2012; the multi-agent set, Stern et al. 2019; docs/guide/movingai.md).
+"""The Moving AI suites: real maps (Sturtevant 2012; the multi-agent set, Stern et al. 2019; docs/guide/real-maps.md).
 
-`MovingAISuite` is a data suite (`vinadv.bench.suites.DataSuite`) whose maps are 64x64 windows drawn by the Moving AI
-import (`vinadv.interop.formats.movingai`: `vinadv maps import --format movingai FILE --crop 64 --crops K --seed S`):
-each file named with its sha256, `draws` windows drawn from it with seed `maps_seed` plus the file's place in the
-list (0 for the first) and its first `DataFile.maps` taken, so a quick suite that draws as many as the full one holds the first maps of each file of the full one. A
-256x256 city map gives crops of its streets; a 64x64 MAPF map has one window, itself, so each draw is a problem on
-the whole map (a goal in its largest connected region, a start by the Neural A* loader's distance bands). The maps'
-rule is the format's: `octile` moves without corner cutting (`cuts_corners`). A planner trained on maps of another
-rule runs under this one, and its entry says so (the `other_rules` flag, `vinadv.bench.flags`).
+`MovingAISuite` is a data suite (`vinadv.bench.suites.DataSuite`) whose maps are 64x64 windows drawn by the Moving
+AI import (`vinadv.interop.formats.movingai`: `vinadv maps import --format movingai FILE --crop 64 --crops K --seed
+S`): each file named with its sha256, `draws` windows drawn from it with seed `maps_seed` plus the file's place in
+the list (0 for the first) and its first `DataFile.maps` taken, so a quick suite that draws as many as the full one
+holds the first maps of each file of the full one. A 256x256 city map gives crops of its streets; a 64x64 MAPF map
+has one window, itself, so each draw is a problem on the whole map (a goal in its largest connected region, a start
+by the Neural A* loader's distance bands). The maps' rule is the format's: `octile` moves without corner cutting
+(`cuts_corners`). A planner trained on maps of another rule runs under this one, and its entry says so (the
+`other_rules` flag, `vinadv.bench.flags`).
 
 Released suites:
 - `movingai64-v1`: 50 crops of each city map (Berlin_1_256, Boston_0_256, Milan_0_256, Paris_1_256) and 25
@@ -72,8 +73,8 @@ register(
         name="movingai64-v1",
         description="275 real 64x64 maps: 50 seeded crops of each of four Moving AI city maps (Berlin, Boston, "
         "Milan, Paris) and 25 problems on each of the three 64x64 MAPF maps (random-64-64-10, room-64-64-8, "
-        "room-64-64-16), octile moves without corner cutting, one start each (seeds 0..6, one a file); key-points, saliency, "
-        "near-path, random adding k = 1..3; exhaustive adding 1; all five removing 1",
+        "room-64-64-16), octile moves without corner cutting, one start each (seeds 0..6, one a file); key-points, "
+        "saliency, near-path, random adding k = 1..3; exhaustive adding 1; all five removing 1",
         n=sum(_DRAWS),
         size=64,
         maps_seed=0,
