@@ -97,9 +97,11 @@ def test_a_planner_trained_with_corner_cutting_is_flagged_under_the_moving_ai_ru
     vin64 = load_planner("vin", 64, weights="vin64", corner_cutting=False)
     assert trained_rules(vin64) == {"corner_cutting": True, "moves": "octile"}
     assert trained_rules(load_planner("astar", 64)) is None  # no weights: no training rule
-    checks = {"trained_rules": trained_rules(vin64)}
-    flag = raise_flags(get_suite("movingai64-quick-v1"), checks, 0.9, {})["other_rules"]
+    checks = {"trained_rules": trained_rules(vin64), "gradient_masked": True}
+    flags = raise_flags(get_suite("movingai64-quick-v1"), checks, 0.9, {})
+    flag = flags["other_rules"]
     assert flag["raised"] and "with corner cutting" in flag["why"] and "without corner cutting" in flag["why"]
+    assert "gradient is zero" in flags["gradient_masking"]["why"]  # each flag says its own why
     assert "other_rules" not in raise_flags(get_suite("vin28-quick-v1"), checks, 0.9, {})  # trained as it runs
 
 

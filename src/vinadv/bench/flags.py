@@ -100,11 +100,11 @@ def raise_flags(suite: Suite, checks: dict, clean_success: float | None, attacks
     if trained is not None and (
         trained["corner_cutting"] != suite.cuts_corners() or trained["moves"] not in (None, suite.movement())
     ):
-        why = (
+        rules = (
             f"trained on maps of {_rule(trained['corner_cutting'], trained['moves'])}; run under the suite's rule, "
             f"{_rule(suite.cuts_corners(), suite.movement())}"
         )
-        other = {"other_rules": {"raised": True, "why": why}}
+        other = {"other_rules": {"raised": True, "why": rules}}
     return other | {
         "gradient_masking": {"raised": bool(masked), "why": why},
         "non_deterministic": {
