@@ -17,6 +17,7 @@ from vinadv.bench.scoring import data_suite_maps, run_bench, suite_maps
 from vinadv.bench.suites import FROZEN, AttackGroup, DataFile, get_suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError
+from vinadv.interop import import_maps
 from vinadv.interop.formats.movingai import write_map
 from vinadv.planners.registry import load_planner
 
@@ -81,6 +82,10 @@ def test_a_moving_ai_suite_reads_windows_of_its_files(tmp_path):
         window = np.array([[ch == "@" for ch in row[c : c + 8]] for row in rows[r : r + 8]])
         np.testing.assert_array_equal(maps.obstacles[i], window)
     assert list(maps.source) == ["a.map", "a.map", "b.map", "b.map"]
+    for k, (name, draws, seed) in enumerate((("a.map", 3, 3), ("b.map", 2, 4))):  # maps_seed plus the file's place
+        alone = import_maps(tmp_path / name, "movingai", crop=8, crops=draws, seed=seed)
+        np.testing.assert_array_equal(maps.obstacles[2 * k : 2 * k + 2], alone.obstacles[:2])
+        np.testing.assert_array_equal(maps.goals[2 * k : 2 * k + 2], alone.goals[:2])
 
 
 @pytest.mark.slow
