@@ -81,9 +81,12 @@ def run(
     if resume and db is None:
         raise InputError("resume: only with db", "resume", "db")
     suite = config.frozen_suite
-    planner = load_planner(config.planner, suite.size, weights=config.weights, device=device, moves=suite.movement())
-    # every suite's maps cut corners (the generator's default, the MP layout's)
-    ref = PlannerRef.of(planner, config.planner, config.weights, corner_cutting=True) if executor.remote else None
+    # the planner runs under the suite's rule (a planner trained on other maps too: its entry's `other_rules` flag)
+    cuts = suite.cuts_corners()
+    planner = load_planner(
+        config.planner, suite.size, weights=config.weights, corner_cutting=cuts, device=device, moves=suite.movement()
+    )
+    ref = PlannerRef.of(planner, config.planner, config.weights, corner_cutting=cuts) if executor.remote else None
     entry = run_bench(
         suite,
         planner,

@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from vinadv import __version__
-from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags
+from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags, trained_rules
 from vinadv.bench.outcomes import chunk_per_map, entry_figures, figures_v1
 from vinadv.bench.suites import ENTRY_FORMAT_2, DataSuite, Suite, maps_sha256
 from vinadv.errors import InputError
@@ -100,8 +100,8 @@ def data_suite_maps(suite: DataSuite, data: str | os.PathLike | None) -> MapSet:
             raise InputError(
                 f"{path}: sha256 {digest} is not the {f.sha256} suite {suite.name} froze (another version of the file)"
             )
-        # one start per map: the reader's k > 1 draws are not needed (and each is its own draw)
-        maps, _ = read_maps(str(path), suite.layout, split=suite.split, starts=1, seed=suite.maps_seed)
+        # one start per map (`read_options`): the reader's k > 1 draws are not needed (and each is its own draw)
+        maps, _ = read_maps(str(path), suite.layout, **suite.read_options(f))
         if len(maps) < f.maps:
             raise InputError(f"{path}: {len(maps)} maps in split {suite.split}, suite {suite.name} takes {f.maps}")
         parts.append(maps.take(np.arange(f.maps)))
@@ -191,17 +191,8 @@ def _check_stored(suite: Suite, n_chunks: int):
 
 
 def chunk_maps(maps: MapSet, lo: int, hi: int) -> MapSet:
-    """Maps `lo:hi` of `maps` (with their starts and expert paths)."""
-    s = maps.n_starts
-    return dataclasses.replace(
-        maps,
-        obstacles=maps.obstacles[lo:hi],
-        goals=maps.goals[lo:hi],
-        starts=maps.starts[lo:hi],
-        expert_costs=maps.expert_costs[lo:hi],
-        expert=maps.expert.take(np.arange(lo * s, hi * s)),
-        start_counts=None if maps.start_counts is None else maps.start_counts[lo:hi],
-    )
+    """Maps `lo:hi` of `maps` (with their starts and expert paths, frozen cells and provenance)."""
+    return maps.take(np.arange(lo, min(hi, len(maps))))
 
 
 def _floats(values) -> list:
@@ -346,10 +337,15 @@ def machine() -> dict:
 
 
 def planner_checks(suite: Suite, planner: Planner, maps: MapSet) -> dict:
-    """The flags' checks on the suite's first maps: is the gradient masked, do two forward passes differ."""
+    """The flags' checks on the suite's first maps: is the gradient masked, do two forward passes differ; and the
+    rule the planner's weights were trained under (`trained_rules`)."""
     sub = chunk_maps(maps, 0, min(len(maps), CHECK_MAPS))
     args = (planner, sub.obstacles, sub.starts[:, 0], sub.goals, sub.corner_cutting)
-    return {"gradient_masked": gradient_is_masked(*args), "non_deterministic": differs_between_passes(*args)}
+    return {
+        "gradient_masked": gradient_is_masked(*args),
+        "non_deterministic": differs_between_passes(*args),
+        "trained_rules": trained_rules(planner),
+    }
 
 
 @dataclasses.dataclass(frozen=True)

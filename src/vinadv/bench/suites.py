@@ -142,6 +142,11 @@ class Suite:
         """The movement model of the suite's maps (`vinadv.grid.moves`): the generator's `octile`."""
         return "octile"
 
+    def cuts_corners(self) -> bool:
+        """Whether the suite's maps let a diagonal move pass between two obstacles: the generator's and the MP
+        layout's do."""
+        return True
+
 
 @dataclass(frozen=True)
 class DataFile:
@@ -167,6 +172,11 @@ class DataSuite(Suite):
 
     def movement(self) -> str:
         return self.moves
+
+    def read_options(self, file: DataFile) -> dict:
+        """The reader's arguments (`vinadv.interop.formats.read_maps`) for `file` beyond its path and the layout:
+        the split, one start per map and the seed (`vinadv.bench.movingai_suites` adds its crops)."""
+        return {"split": self.split, "starts": 1, "seed": self.maps_seed}
 
 
 def maps_sha256(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> str:
@@ -340,3 +350,7 @@ FROZEN = {
     "mpd32-v2": "b3063f6815a07bd1c3519194639d686837e01c41ceb96fdb7b4d14dcc935d395",
     "mpd32-quick-v2": "39389798b94a46f65fdf2fbf15d9874c930ea060756f42b4f5ab59126d662194",
 }
+
+# the Moving AI suites (real maps: crops of city streets, problems on the MAPF maps) register themselves and their
+# checksums; imported last, as it builds on the classes above
+from vinadv.bench import movingai_suites  # noqa: E402, F401

@@ -29,7 +29,10 @@ def register(subparsers) -> None:
         subparsers, "bench", help="the standard robustness benchmark: frozen suites, result entries, a leaderboard"
     )
     # named here, not read from the registry: `vinadv --help` does not import the suites (tests/test_cli_imports.py)
-    suites = "vin28-v1, vin28-quick-v1, mpd32-v1, mpd32-quick-v1, vin28-v2, vin28-quick-v2, mpd32-v2, mpd32-quick-v2"
+    suites = (
+        "vin28-v1, vin28-quick-v1, mpd32-v1, mpd32-quick-v1, vin28-v2, vin28-quick-v2, mpd32-v2, mpd32-quick-v2, "
+        "movingai64-v1, movingai64-quick-v1"
+    )
     run = sub.add_parser(
         "run",
         help="run a planner on a frozen benchmark suite and write its result entry",
@@ -41,8 +44,9 @@ def register(subparsers) -> None:
     run.add_argument(
         "--data",
         metavar="DIR",
-        help="the MP suites: the folder holding the MP dataset's six <family>_032_moore_c8.npz files "
-        "(docs/guide/mpd.md)",
+        help="the data suites' files: for the MP suites the folder holding the MP dataset's six "
+        "<family>_032_moore_c8.npz files (docs/guide/mpd.md); for the Moving AI suites the one holding the four city "
+        "maps and the three 64x64 MAPF maps (docs/guide/movingai.md)",
     )
     run.add_argument("--db", help="store each finished chunk of maps in this database (URL or SQLite file)")
     run.add_argument("--resume", action="store_true", help="with --db: continue, computing only the chunks not stored")
@@ -111,7 +115,8 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     if args.resume and args.db is None:
         raise InputError("--resume: only with --db")
     if args.out:  # before the suite is computed: writable, and not the database or a file the planner reads
-        data = sorted(Path(args.data).glob("*.npz")) if args.data and Path(args.data).is_dir() else args.data
+        folder = args.data and Path(args.data).is_dir()
+        data = sorted([*Path(args.data).glob("*.npz"), *Path(args.data).glob("*.map")]) if folder else args.data
         inputs = {"--db": db_file(args.db) if args.db else None, "--data": data, **planner_inputs(args)}
         check_output_path(args.out, inputs=inputs)
     device = planner_device(args)
