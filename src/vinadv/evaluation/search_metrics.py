@@ -164,8 +164,12 @@ def transpath_ratios(
     """TransPath's expansions ratio and cost ratio of `n` rows against their vanilla A* (module doc).
 
     Args:
-        costs, reached, expansions: `(n,)` the planner's path costs, whether each reaches the goal, cells expanded.
-        vanilla_costs, vanilla_reached, vanilla_expansions: the same of their vanilla A* on the same rows.
+        costs: `(n,)` the planner's path costs.
+        reached: `(n,)` whether each reaches the goal.
+        expansions: `(n,)` the cells each search expanded.
+        vanilla_costs: `costs` of their vanilla A* on the same rows.
+        vanilla_reached: `reached` of their vanilla A*.
+        vanilla_expansions: `expansions` of their vanilla A*.
         octile_start: `(n,)` the octile heuristic at each row's start (`octile_distances`).
         hardness: the rows kept: reached by vanilla A*, start off the goal, vanilla cost >= hardness * octile_start.
     """
