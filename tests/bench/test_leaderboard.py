@@ -234,7 +234,8 @@ def test_the_k_curve_has_each_planners_worst_case_with_its_wilson_interval(tmp_p
 def test_the_command_writes_each_suites_k_curve_with_figures(tmp_path):
     (tmp_path / "e").mkdir()
     (tmp_path / "e" / "vin.json").write_text(json.dumps(_counted_entry()))
-    assert main(["bench", "leaderboard", str(tmp_path / "e"), "--out", str(tmp_path / "b"), "--figures", "--quiet"]) == 0
+    out = str(tmp_path / "b")
+    assert main(["bench", "leaderboard", str(tmp_path / "e"), "--out", out, "--figures", "--quiet"]) == 0
     written = sorted(p.name for p in (tmp_path / "b").iterdir())
     assert written == ["k-curve.vin28-quick-v1.png", "k-curve.vin28-quick-v1.svg", "leaderboard.html", "leaderboard.md"]
     assert (tmp_path / "b" / "k-curve.vin28-quick-v1.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
