@@ -17,7 +17,8 @@ figure function, inlined as SVG). The MP benchmark's page (`docs/results/mpd.md`
 `docs/results/mpd.json`, written by `perf/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
 (Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (the worst case per map: harmful and
 paper success rates at k = 1..K added obstacles), `<!-- vinadv:mpd-robustness-strategies -->` (the harmful rates per
-strategy) and `<!-- vinadv:mpd-commands -->` (the commands, and the checksums of the weights files they name).
+strategy), `<!-- vinadv:mpd-robustness-times -->` (how long each planner's runs took, a sentence) and
+`<!-- vinadv:mpd-commands -->` (the commands, and the checksums of the weights files they name).
 `<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine and the exhaustive attack at 28x28 to 64x64
 beside the FMA count, from `docs/results/map_size.json` (`perf/map_size.py --out`), with its command and the
 machine's load.
@@ -41,6 +42,7 @@ import json
 import re
 from pathlib import Path
 
+from vinadv import display  # how a figure is shown: rounded, float noise as 0
 from vinadv.bench.leaderboard import (
     read_entries,
     render_legend,
@@ -69,6 +71,7 @@ MPD_TABLE = "<!-- vinadv:mpd-table -->"
 MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
 MPD_ROBUSTNESS_STRATEGIES = "<!-- vinadv:mpd-robustness-strategies -->"
 MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
+MPD_ROBUSTNESS_TIMES = "<!-- vinadv:mpd-robustness-times -->"
 MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
 MAP_SIZE_TABLE = "<!-- vinadv:map-size-table -->"
 MAP_SIZE_JSON = ROOT / "docs" / "results" / "map_size.json"
@@ -220,8 +223,9 @@ def bench_k_curves(folder: Path = BENCH_DIR) -> str:
 
 
 def decimal(value: float | None, digits: int = 3) -> str:
-    """A figure with `digits` decimals; an em dash where the planner has none (Exp without expansions)."""
-    return "—" if value is None else f"{value:.{digits}f}"
+    """A figure with `digits` decimals (float noise as 0: `vinadv.display.number`); an em dash where the planner has
+    none (Exp without expansions)."""
+    return display.number(None if value is None else float(value), digits)
 
 
 def markdown_table(header: list[str], rows: list[list[str]]) -> str:
@@ -285,6 +289,22 @@ def mpd_robustness(path: Path = MPD_JSON) -> str:
         )
     header = ["family (test split)", "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
     return markdown_table([*header, "mean regret at the largest k"], rows)
+
+
+def mpd_robustness_times(path: Path = MPD_JSON) -> str:
+    """How long the robustness runs took, as a sentence: per planner the fewest and most seconds of a family's run,
+    slowest planner first, and all the runs' minutes together."""
+    data = json.loads(path.read_text())
+    runs = _robustness_runs(data)
+    seconds: dict[str, list[float]] = {}
+    for run in runs:
+        seconds.setdefault(run["planner"], []).append(run["figures"]["seconds"])
+    each = [
+        f"`{planner}` {min(s):.0f} to {max(s):.0f} s"
+        for planner, s in sorted(seconds.items(), key=lambda item: (-max(item[1]), item[0]))
+    ]
+    total = sum(s for values in seconds.values() for s in values) / 60
+    return f"{', '.join(each)} per family, so the {len(runs)} runs took about {total:.0f} minutes"
 
 
 def mpd_robustness_strategies(path: Path = MPD_JSON) -> str:
@@ -607,6 +627,7 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (MPD_ROBUSTNESS_STRATEGIES, mpd_robustness_strategies),
         (MPD_ROBUSTNESS, mpd_robustness),
         (MPD_COMMANDS, mpd_commands),
+        (MPD_ROBUSTNESS_TIMES, mpd_robustness_times),
         (MAP_SIZE_TABLE, map_size_table),
         (NEURAL_ASTAR_MODES, neural_astar_modes),
         (NEURAL_ASTAR_SPEED, neural_astar_speed),
