@@ -54,6 +54,8 @@ LAYERS = {
     "evaluation": 8,
     "report": 9,
     "bench": 9,
+    # the exact k = 2 diagnostic: the pair search judged by harm, against a robustness run's greedy
+    "exact_k2": 9,
     "viewer": 9,
     # runs the stages on workers, the benchmark's chunks included; only the commands import it
     "cluster": 10,

@@ -195,6 +195,9 @@ class StrategyResult:
     #: the strategy whose ranking this one used on the planner, where it could not rank its own way (saliency
     #: without gradients: "key-points"), else None (`Attack.ranked_as`)
     ranked_as: str | None = None
+    #: the cells each map's pair edits at each k (`cells[i]`: `(n, k, 2)`, -1 where the map has no pair; not in
+    #: `to_dict`): what a chain started from this strategy's pairs starts from (`robustness(start=...)`)
+    cells: list[np.ndarray] = field(default_factory=list, repr=False)
 
     def to_dict(self) -> dict:
         return {
@@ -308,6 +311,7 @@ def robustness(
     first_map: int = 0,
     progress: bool = False,
     maps_source: dict | None = None,
+    start: np.ndarray | None = None,
 ) -> RobustnessResult:
     """Run the robustness benchmark of `planner` on `maps` (see the module doc).
 
@@ -329,6 +333,9 @@ def robustness(
         progress: show a progress bar.
         maps_source: where `maps` came from when not from `heldout_maps` (a maps file: `{"maps": path,
             "maps_sha256": ...}`), recorded in the settings.
+        start: `(n, j, 2)` cells every strategy's chain starts from (`StrategyResult.cells` of another strategy: the
+            exhaustive one-cell optimum; -1 where a map has none), or None: the figures are then those of k = j +
+            1..`max_obstacles` (`by_k[0].k` is j + 1), and the settings record `start_cells: j`.
     """
     harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
@@ -349,6 +356,9 @@ def robustness(
     n = len(maps)
     starts, goals, cc = maps.starts[:, 0], maps.goals, maps.corner_cutting
     clean = _clean(planner, maps)
+    first_k = 1 if start is None else np.asarray(start).shape[1] + 1
+    if first_k > int(max_obstacles):
+        raise InputError(f"max_obstacles {max_obstacles}: not above the {first_k - 1} start cells", "max_obstacles")
 
     results: dict[str, StrategyResult] = {}
     for name in strategies:
@@ -366,23 +376,27 @@ def robustness(
             progress=progress,
             first_map=first_map,
             frozen=maps.frozen,
+            start=start,
         )
-        by_k, outcomes = [], []
-        for k in range(1, int(max_obstacles) + 1):
-            if k <= len(result.steps):
-                pairs = result.steps[k - 1]
+        by_k, outcomes, cells = [], [], []
+        for k in range(first_k, int(max_obstacles) + 1):
+            kept = np.full((n, k, 2), -1, dtype=np.int64)
+            if k - first_k < len(result.steps):
+                pairs = result.steps[k - first_k]
                 expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
                 ident = identify(pairs, harm_tol=harm_tol, harm_rtol=harm_rtol, expert_o=expert_o)
                 outcome = _outcomes(n, pairs.map_index, ident.labels, ident.harm.harm, ident.harm.regret_a)
                 counts = label_counts(ident.labels)
+                kept[pairs.map_index] = pairs.added
             # else: every map ran out of cells at the last step made (`AttackResult.steps`): no pair, as there
             outcomes.append(outcome)
+            cells.append(kept)
             by_k.append(Figures.of(k, outcome, counts=counts))
         results[name] = StrategyResult(
-            name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes, attack.ranked_as(planner)
+            name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes, attack.ranked_as(planner), cells
         )
-    overall_outcomes = [worst_case([r.outcomes[k] for r in results.values()]) for k in range(int(max_obstacles))]
-    overall = [Figures.of(k + 1, o) for k, o in enumerate(overall_outcomes)]
+    overall_outcomes = [worst_case([r.outcomes[i] for r in results.values()]) for i in range(len(outcomes))]
+    overall = [Figures.of(first_k + i, o) for i, o in enumerate(overall_outcomes)]
     settings = {
         "n": n,
         "size": maps.size,
@@ -401,6 +415,7 @@ def robustness(
         "maps_sha256": None,
         **(maps_source or {}),
         "edit": edit,
+        **({} if start is None else {"start_cells": first_k - 1}),
     }
     return RobustnessResult(
         planner=planner.spec(),

@@ -82,6 +82,7 @@ from vinadv.attacks.neighbourhood import steepness, steepness_across, within_dis
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import removable_cells, valid_cells
 from vinadv.errors import InputError
+from vinadv.grid.selection import smallest_first
 from vinadv.planners.interface import Planner
 from vinadv.planners.result import PlanResult
 from vinadv.planners.vin.planner import as_planner
@@ -216,6 +217,7 @@ class Attack:
         progress: bool = False,
         first_map: int = 0,
         frozen: np.ndarray | None = None,
+        start: np.ndarray | None = None,
     ) -> AttackResult:
         """Attack a batch of maps with `planner` (a `Planner`, or a `VIN`): obstacles `(B, N, N)` bool, starts
         and goals `(B, 2)`; `self.obstacles` cells per pair, greedily (see the module doc).
@@ -230,6 +232,11 @@ class Attack:
 
         `frozen`: `(B, N, N)` bool, the cells no step may add to or free (`MapSet.frozen`: an importer's padding), or
         None; they are never candidates (`validity`), so no strategy edits them.
+
+        `start`: `(B, j, 2)` cells each map's chain starts from, edited already (another attack's kept cells: the
+        exhaustive one-cell optimum), a map's rows -1 where it has none (it gets no pair); the greedy steps then make
+        cells j + 1..`self.obstacles`, each step's stream the one it has without `start`, and `steps[i]` holds the
+        pairs of j + i + 1 cells.
         """
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         starts = np.ascontiguousarray(starts, dtype=np.int64)
@@ -242,8 +249,16 @@ class Attack:
         current, plans = obstacles, base
         chosen = np.zeros((b, 0, 2), np.int64)
         alive = np.ones(b, dtype=bool)  # maps that got a cell at every step so far
+        if start is not None:
+            chosen = np.asarray(start, dtype=np.int64).reshape(b, -1, 2)
+            alive = (chosen >= 0).all(axis=(1, 2))
+            chosen = np.where(alive[:, None, None], chosen, 0)
+            current = obstacles.copy()
+            rows = np.flatnonzero(alive)
+            for j in range(chosen.shape[1]):
+                current[rows, chosen[rows, j, 0], chosen[rows, j, 1]] = self.edit == ADD
         steps: list[PairSet] = []
-        for step in range(self.obstacles):
+        for step in range(chosen.shape[1], self.obstacles):
             last = step == self.obstacles - 1
             if step:
                 plans = planner.plan(current, starts, goals, corner_cutting)
@@ -365,9 +380,7 @@ def _top_candidates(scores: np.ndarray, per_map: int | None):
     """The best `per_map` candidates of each map (all with None), best first: (map_idx, cells, rank)."""
     b, n, m = scores.shape
     flat = scores.reshape(b, -1)
-    order = np.argsort(-flat, axis=1, kind="stable")
-    if per_map is not None:
-        order = order[:, :per_map]
+    order = smallest_first(-flat, flat.shape[1] if per_map is None else per_map)
     picked = np.take_along_axis(flat, order, axis=1)
     ok = np.isfinite(picked)
     map_idx = np.repeat(np.arange(b), order.shape[1]).reshape(b, -1)[ok]

@@ -1,9 +1,11 @@
-"""The leaderboard: benchmark entries (`vinadv.bench.scoring`) of one folder as a Markdown and an HTML table, per suite,
-sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at the
-largest k, then by name), each row linking to its entry file, its flags shown beside it, and how long it took (the
+"""The leaderboard: benchmark entries (`vinadv.bench.scoring`) of folders and files as a Markdown and an HTML table,
+per suite, sorted by the worst-case harmful rate at one edited cell (the most robust first; ties by the worst case at
+the largest k, then by name), each row linking to its entry file, its flags shown beside it, and how long it took (the
 sum of its chunks' seconds: on the machine and load of the time, not a speed figure). Every rate is shown with its
 Wilson 95% interval (`vinadv.intervals`), computed here from the counts the entry holds (`vinadv.bench_entry/1`
-entries included; a row says its entry's format, `v1`), and each row carries it as `{rate}_low`, `{rate}_high`.
+entries included; a row says its entry's format, `v1` or `v2`, and a table of `v1` entries says so in its heading),
+and each row carries it as `{rate}_low`, `{rate}_high`. A row shows the entry's display name
+(`submission.display_name` of a `vinadv.bench_entry/2` entry) with the planner's label, or the label alone.
 
 Every entry is checked against the entry schema (`vinadv.bench.validate`) before it is used: a bad one is one line
 naming its file and field (`read_entries_checked`), the others still rendered. An entry whose suite checksum is not
@@ -22,7 +24,7 @@ from importlib import resources
 from pathlib import Path
 
 from vinadv import display
-from vinadv.bench.suites import ENTRY_FORMAT, FROZEN
+from vinadv.bench.suites import ENTRY_FORMAT, ENTRY_FORMATS, FROZEN
 from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
 from vinadv.intervals import interval_fields, rate_interval
@@ -47,26 +49,27 @@ COLUMNS = (
 LEGEND = {
     "#": "the rank in the suite: by the worst-case harmful rate at one edited cell, the most robust first (ties: at "
     "the largest k, then the name).",
-    "planner": "the planner as `--planner` names it, with its parameters' values (`wastar:w=2`), linking to its entry "
-    "file; in the compact table the weights (first 12 hex digits of their SHA-256) and the entry's format (`v1`) "
-    "below it.",
+    "planner": "the planner as `--planner` names it, with its parameters' values (`wastar:w=2`), after the entry's "
+    "display name where it has one, linking to its entry file; in the compact table the weights (first 12 hex "
+    "digits of their SHA-256) and the entry's format (`v1`, `v2`) below it.",
     "weights": "the first 12 hex digits of the weights file's SHA-256; — for a planner without weights.",
     "clean success": "the share of the suite's maps on which the planner reaches the goal from the start on the "
     "unattacked map. Denominator: the suite's maps.",
     "clean optimal": "the share of the suite's maps whose clean path is optimal (Neural A*'s Opt). Denominator: the "
     "suite's maps.",
     "Exp": "search planners only: the share of A*'s expansions the planner saves on the clean maps, averaged over the "
-    "maps (the Neural A* authors' Exp); — for a policy, which expands nothing. A mean, shown without an interval: "
-    "the `v1` entries hold no per-map values to bootstrap.",
+    "maps (the Neural A* authors' Exp); — for a policy, which expands nothing. A mean, shown without an interval "
+    "(the entries hold no per-map values of it to bootstrap).",
     "worst-case harmful (k = 1)": "the share of the valid maps on which some attack of the suite with one edited "
     "cell makes a harmful pair (the adversarial path misses the goal, or its regret exceeds the clean path's by more "
     "than the harm tolerance). A map is valid when a pair was made and the planner reaches the goal on the clean "
     "map. Denominator: the valid maps.",
     "worst-case paper success (k = 1)": "the share of the valid maps on which some attack with one edited cell makes "
     "a pair the paper counts as a success (labelled UrP or FP). Denominator: the valid maps.",
-    "worst-case harmful (largest k)": "the harmful rate of the worst case at the suite's largest k (the greedy "
-    "attacks' k edited cells). Denominator: the valid maps at that k. In the `-v1` suites it can be below the one at "
-    "k = 1: only the cheap attacks make k > 1.",
+    "worst-case harmful (largest k)": "the harmful rate of the worst case at the suite's largest k. Denominator: "
+    "the valid maps at that k. In a `-v2` suite the worst case at k is over every attack of at most k edited cells, "
+    "so it never falls as k grows; in a `-v1` suite it is over the attacks of exactly k cells (only the cheap ones "
+    "make k > 1) and can be below the one at k = 1.",
     "removal harmful": "the harmful rate at one freed cell of the removal attack that harms the most valid maps. "
     "Denominator: that attack's valid maps.",
     "flags": "the raised flags (gradient_masking, non_deterministic, too_weak): figures not to be taken at face "
@@ -94,38 +97,67 @@ COMPACT = (
 )
 
 
+#: the submission of an entry that carries none (`vinadv.bench_entry/1`): what `upgrade_entry` fills in
+NO_SUBMISSION = {"display_name": None, "authors": [], "paper": None, "code": None, "external": False}
+
+
 def upgrade_entry(entry: dict) -> dict:
-    """An entry as read: its planner's name in today's spelling (`vin_robust` -> `vin-robust`); the rest as stored.
-    Its key (`entry_key`) is unchanged by this."""
+    """An entry as read: its planner's name in today's spelling (`vin_robust` -> `vin-robust`), and a
+    `vinadv.bench_entry/1` entry's `submission` filled in (`NO_SUBMISSION`: it had none); the rest as stored (a
+    format 1 entry has no per-map outcomes: its intervals come from its counts). Its key (`entry_key`) is unchanged
+    by this."""
     from vinadv.planners.registry import canonical_name  # noqa: PLC0415 (light: the declarations)
 
     planner = entry.get("planner")
     if isinstance(planner, dict) and isinstance(planner.get("name"), str):
         entry = {**entry, "planner": {**planner, "name": canonical_name(planner["name"])}}
+    if entry.get("format") == ENTRY_FORMAT:
+        entry = {**entry, "submission": dict(NO_SUBMISSION)}
     return entry
 
 
-def read_entries(folder: str | os.PathLike) -> list[tuple[Path, dict]]:
-    """Every entry file (`*.json` of format `ENTRY_FORMAT`) in `folder`, in name order, checked against the entry
-    schema (`vinadv.bench.validate`) and upgraded (`upgrade_entry`); InputError for a folder that is not there, or
-    for the first file that is not a valid entry (naming the file and the field)."""
-    entries, problems = read_entries_checked(folder)
+Sources = str | os.PathLike | list[str | os.PathLike] | tuple[str | os.PathLike, ...]
+
+
+def read_entries(sources: Sources) -> list[tuple[Path, dict]]:
+    """Every entry of `sources` (`entry_files`: a folder's `*.json`, or an entry file; one or a list), checked
+    against the entry schema (`vinadv.bench.validate`) and upgraded (`upgrade_entry`); InputError for a source that is
+    not there, or for the first file that is not a valid entry (naming the file and the field)."""
+    entries, problems = read_entries_checked(sources)
     if problems:
         raise InputError(problems[0])
     return entries
 
 
-def read_entries_checked(folder: str | os.PathLike) -> tuple[list[tuple[Path, dict]], list[str]]:
-    """The valid entries of `folder` as `read_entries` reads them, and one line per file that is not one (not
+def entry_files(sources: Sources) -> list[Path]:
+    """The entry files of `sources` (a folder or a file, or a list of them): each folder's `*.json` in name order,
+    each file as given, in the order given, a file named twice (the same file, by two paths) once. InputError for a
+    source that is neither."""
+    if isinstance(sources, (str, os.PathLike)):
+        sources = [sources]
+    files, seen = [], set()
+    for source in map(Path, sources):
+        if source.is_dir():
+            found = sorted(source.glob("*.json"))
+        elif source.exists():
+            found = [source]
+        else:
+            raise InputError(f"{source}: no such folder or file (the result entries)", "sources")
+        for path in found:
+            if path.resolve() not in seen:
+                seen.add(path.resolve())
+                files.append(path)
+    return files
+
+
+def read_entries_checked(sources: Sources) -> tuple[list[tuple[Path, dict]], list[str]]:
+    """The valid entries of `sources` as `read_entries` reads them, and one line per file that is not one (not
     readable, not JSON, not an entry, or a field the schema refuses), naming the file and the field; InputError for a
-    folder that is not there."""
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise InputError(f"{folder}: no such folder", "dir")
+    source that is not there."""
     entries, problems = [], []
-    for path in sorted(folder.glob("*.json")):
+    for path in entry_files(sources):
         try:
-            entry = read_json_document(path, ENTRY_FORMAT, "benchmark entry")
+            entry = _read_document(path)
         except InputError as exc:
             problems.append(str(exc))
             continue
@@ -135,6 +167,19 @@ def read_entries_checked(folder: str | os.PathLike) -> tuple[list[tuple[Path, di
             continue
         entries.append((path, upgrade_entry(entry)))
     return entries, problems
+
+
+def _read_document(path: Path) -> dict:
+    """The JSON document of `path`, an entry of one of `ENTRY_FORMATS` (InputError naming the file otherwise)."""
+    try:
+        return read_json_document(path, ENTRY_FORMATS[-1], "benchmark entry")
+    except InputError as exc:
+        for fmt in ENTRY_FORMATS[:-1]:
+            try:
+                return read_json_document(path, fmt, "benchmark entry")
+            except InputError:
+                pass
+        raise exc from None
 
 
 def _search_exp(entry: dict) -> float | None:
@@ -204,10 +249,10 @@ def suite_heading(suite: dict) -> tuple[str, str]:
     return f"{name} (unknown {checksum[:12]})", f"{name} ({checksum[:12]}, unknown: not a released suite)"
 
 
-def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
-    """{suite: rows, sorted}: each row the entry's file, its cells' values and its raised flags. A suite is keyed by
-    its name (for an unreleased checksum, by its name and checksum, labelled unknown: `suite_heading`); the released
-    suites first."""
+def rows(entries: list[tuple[Path, dict]], base: str | os.PathLike | None = None) -> dict[str, list[dict]]:
+    """{suite: rows, sorted}: each row the entry's file (its name; with `base`, its path from the folder `base`, where
+    the pages link from), its cells' values and its raised flags. A suite is keyed by its name (for an unreleased
+    checksum, by its name and checksum, labelled unknown: `suite_heading`); the released suites first."""
     by_suite: dict[str, list[dict]] = {}
     for path, e in entries:
         worst, clean = e["worst_case"], e["clean"]
@@ -215,10 +260,13 @@ def rows(entries: list[tuple[Path, dict]]) -> dict[str, list[dict]]:
         key, heading = suite_heading(e["suite"])
         removal = _removal_harmful(e)
         row = {
-            "file": path.name,
+            "file": path.name if base is None else os.path.relpath(path, base).replace(os.sep, "/"),
             "format": "v" + e["format"].rsplit("/", 1)[-1],  # v1: `vinadv.bench_entry/1`
-            "suite": heading,
+            # a suite's entries are all of its format: a table of format 1 entries says so in its heading
+            "suite": heading + (", v1 entries" if e["format"] == ENTRY_FORMAT else ""),
             "planner": planner_label(e["planner"]),
+            # the submission (an entry of format 1 has none: `NO_SUBMISSION`), for the renderers to show
+            **{name: (e.get("submission") or NO_SUBMISSION).get(name) for name in NO_SUBMISSION},
             "weights": weights[:12] if weights else "—",
         }
         _with_interval(row, "clean", clean["success_rate"], clean.get("reached"), clean.get("maps"))
@@ -264,9 +312,14 @@ def _pct_ci(r: dict, name: str) -> str:
     return f"{display.percent(r[name])} {interval}"
 
 
+def _name(r: dict) -> str:
+    """The row's name: its display name with the planner's label, or the label."""
+    return r["planner"] if not r.get("display_name") else f"{r['display_name']} ({r['planner']})"
+
+
 def _cells(r: dict) -> list[str]:
     return [
-        r["planner"],
+        _name(r),
         r["weights"],
         _pct_ci(r, "clean"),
         _pct_ci(r, "optimal"),
@@ -309,7 +362,7 @@ def _compact_cells(r: dict, show_k: bool) -> list[tuple[str, str]]:
     largest = _rate_lines(r, "harmful_k")
     below = " · ".join(x for x in (r["weights"] if r["weights"] != "—" else "", f"entry {r['format']}") if x)
     return [
-        (r["planner"], below),
+        (_name(r), below),
         _rate_lines(r, "clean"),
         _rate_lines(r, "harmful"),
         _rate_lines(r, "paper"),
@@ -357,7 +410,7 @@ def render_markdown(
                     markdown_text(a) + (f"<br><small>{markdown_text(b)}</small>" if b else "")
                     for a, b in _compact_cells(r, len(ks) > 1)
                 ]
-                name = markdown_text(r["planner"])
+                name = markdown_text(_name(r))
                 cells[0] = cells[0].replace(name, f"[{name}]({_link(link_prefix, r['file'])})", 1)
             else:
                 cells = [markdown_text(c) for c in _cells(r)]
@@ -442,10 +495,8 @@ def curve_series(rs: list[dict]) -> list[tuple[str, list[dict]]]:
     """The k curves of one suite's rows (`rows`): `[(name, points)]` in the table's order, each point the worst-case
     harmful rate at k with its interval (`harmful_rate_low`, `harmful_rate_high`); a planner listed with several
     weights is named with them."""
-    names = [r["planner"] for r in rs]
-    return [
-        (r["planner"] if names.count(r["planner"]) == 1 else f"{r['planner']} ({r['weights']})", r["curve"]) for r in rs
-    ]
+    names = [_name(r) for r in rs]
+    return [(_name(r) if names.count(_name(r)) == 1 else f"{_name(r)} ({r['weights']})", r["curve"]) for r in rs]
 
 
 def k_curve_figure(key: str, rs: list[dict]):

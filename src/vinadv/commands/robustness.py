@@ -74,6 +74,14 @@ def register(subparsers) -> None:
     p.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map and step")
     p.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
     add_edit_argument(p, several="the curve frees 1 to --max-obstacles cells")
+    p.add_argument(
+        "--exact-k2",
+        choices=("harmful", "regret"),
+        help="after the benchmark, the exact k = 2 diagnostic: the exhaustive one-cell search, then every pair of "
+        "addable cells on the valid maps no cell harms, stopping at a map's first harmful pair (harmful) or planning "
+        "all pairs for the largest regret (regret: about 165,000 planner calls per 28x28 map), and the gap of the "
+        "greedy worst case at k <= 2 to it; printed and in --json, not stored (adding only; --max-obstacles >= 2)",
+    )
     add_harm_arguments(p)
     p.add_argument("--db", help="store the benchmark in this database (URL or SQLite file)")
     p.add_argument(
@@ -97,6 +105,12 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     check_db_and_report(db_file(args.db) if args.db else None, inputs, args.report)  # no input overwritten
     if args.report and Path(args.report).exists() and not Path(args.report).is_dir():
         raise OutputError(f"cannot write the report to {args.report}: exists and is not a folder")
+    if args.exact_k2 and (args.edit == "remove" or args.max_obstacles < 2):
+        raise InputError(
+            "--exact-k2 compares pairs of added cells with the greedy k = 2: it needs --edit add and --max-obstacles "
+            ">= 2",
+            "exact_k2",
+        )
     settings = maps_settings(args, n=1000)  # a maps file is read and checked here, before anything is written
     config = RobustnessConfig(
         **settings,
@@ -108,6 +122,11 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     out = result.to_dict()
     if result.id is not None:
         out["id"] = result.id
+    if args.exact_k2:
+        from vinadv import exact_k2
+
+        diagnostic = exact_k2.run(config, result, args.exact_k2, device=device, progress=shows_progress(args))
+        out["exact_k2"] = diagnostic.to_dict()
     if args.report:
         from vinadv.report.build import robustness_report
 
@@ -176,7 +195,36 @@ def print_robustness(out: dict) -> None:
     print("harmful rate by obstacles added: " + "".join(f"{f'k = {k}':>9}" for k in ks))
     for name, by_k, _ in rows:
         print(f"{name:<33}" + "".join(f"{_pct(f['harmful_rate']):>9}" for f in by_k))
+    if "exact_k2" in out:
+        print_exact_k2(out["exact_k2"])
     if "id" in out:
         print(f"stored as robustness benchmark {out['id']}")
     if "report" in out:
         print(f"report: {out['report']}")
+
+
+def print_exact_k2(d: dict) -> None:
+    """The exact k = 2 diagnostic as text: the exact harmful rate at k <= 2, the search's cost, the greedy's gap."""
+    what = "first harmful pair" if d["mode"] == "harmful" else "all pairs"
+    print(
+        f"exact k <= 2 ({what}): {d['harmful_k1']:,} of {d['valid']:,} valid maps harmed by one cell; "
+        f"{d['searched']:,} searched, {d['planned_pairs']:,} of {d['candidate_pairs']:,} pairs planned in "
+        f"{d['seconds']:.1f} s; harmed by a pair: {d['harmful_pair']:,}"
+    )
+    print(f"exact harmful rate at k <= 2: {_pct_ci(d, 'harmful_rate')} ({d['harmful']:,} maps)")
+    greedy = d.get("greedy")
+    if greedy:
+        print(
+            f"greedy worst case at k <= 2: {_pct_ci(greedy, 'harmful_rate')} ({greedy['harmful']:,} maps); gap "
+            f"{greedy['gap']:,} maps ({_pct(greedy['gap_rate'])})"
+            + (f"; {greedy['greedy_only']} harmed by the greedy only (should be 0)" if greedy["greedy_only"] else "")
+        )
+    if "regret" in d:
+        r = d["regret"]
+        mean = "—" if r["mean"] is None else f"{r['mean']:.3f}"
+        line = f"largest regret over the pairs of {r['maps']:,} maps: {r['unreached']:,} unreached, mean {mean}"
+        if greedy and "regret" in greedy:
+            g = greedy["regret"]
+            gap = "—" if g["mean_gap"] is None else f"{g['mean_gap']:.3f}"
+            line += f"; worse than the greedy's on {g['exact_worse']:,}, by {gap} on average where both reach"
+        print(line)

@@ -165,11 +165,11 @@ def transpath_ratios(
 
     Args:
         costs: `(n,)` the planner's path costs.
-        reached: `(n,)` whether each reaches the goal.
-        expansions: `(n,)` the cells each search expanded.
-        vanilla_costs: `costs` of their vanilla A* on the same rows.
-        vanilla_reached: `reached` of their vanilla A*.
-        vanilla_expansions: `expansions` of their vanilla A*.
+        reached: `(n,)` whether each of the planner's paths reaches the goal.
+        expansions: `(n,)` the cells the planner expanded.
+        vanilla_costs: `(n,)` their vanilla A*'s path costs on the same rows.
+        vanilla_reached: `(n,)` whether each of vanilla A*'s paths reaches the goal.
+        vanilla_expansions: `(n,)` the cells vanilla A* expanded.
         octile_start: `(n,)` the octile heuristic at each row's start (`octile_distances`).
         hardness: the rows kept: reached by vanilla A*, start off the goal, vanilla cost >= hardness * octile_start.
     """
