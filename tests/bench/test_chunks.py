@@ -125,6 +125,7 @@ def test_a_declared_planner_version_is_its_provenance(tmp_path):
     assert load_planner(f"{tmp_path / 'versioned.py'}:make", 28).provenance == {"version": "2.1"}
 
 
+@pytest.mark.slow  # two bench runs of the two-map suite: about two seconds
 def test_the_progress_bar_counts_maps_the_stored_ones_done(tiny, tmp_path, monkeypatch):
     """`--resume`'s bar starts at the maps of the stored chunks and moves by each computed chunk's maps."""
     bars = []
