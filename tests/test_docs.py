@@ -9,10 +9,12 @@ import json
 import re
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import pytest
 import torch
 from torch.utils.flop_counter import FlopCounterMode
 
+import vinadv.plot.files
 from vinadv.attacks.pairs import PAIRS_FORMAT
 from vinadv.classify.base import MODEL_FORMAT
 from vinadv.cli import build_parser
@@ -223,8 +225,11 @@ def test_the_formats_page_names_every_file_format_version():
         assert f'"{name}"' in page or f"`{name}`" in page, f"docs/formats.md does not describe {name}"
 
 
-def test_the_benchmark_page_carries_the_leaderboard_of_the_committed_entries():
+@pytest.mark.slow  # matplotlib's import and a k curve per suite, drawn: seconds
+def test_the_benchmark_page_carries_the_leaderboard_of_the_committed_entries(monkeypatch):
     hooks = docs_module("hooks")
+    # the figures are drawn, not rendered to SVG (tests/plot/test_curves.py renders one): a second each
+    monkeypatch.setattr(vinadv.plot.files, "svg_text", lambda fig: plt.close(fig) or "<svg/>")
     page = (DOCS / "results" / "bench.md").read_text()
     assert hooks.BENCH_LEADERBOARD in page
     board = hooks.on_page_markdown(page)
@@ -232,6 +237,11 @@ def test_the_benchmark_page_carries_the_leaderboard_of_the_committed_entries():
     assert entries, "no committed benchmark entry"
     for path in entries:  # every committed entry is a row, linked from the page
         assert f"(bench/{path.name})" in board
+    # the compact table in its own box, its legend, and one k curve per suite drawn in place of the marker
+    assert '<div class="leaderboard" markdown>' in board and "**harmful, k = 1**:" in board
+    assert hooks.BENCH_K_CURVES in page and "<!-- vinadv:" not in board
+    suites = {json.loads(p.read_text())["suite"]["name"] for p in entries}
+    assert board.count("](data:image/svg+xml;base64,") == len(suites)
 
 
 def _map_size_record() -> dict:

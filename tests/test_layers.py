@@ -24,6 +24,8 @@ LAYERS = {
     # the Wilson interval of every rate, from its counts: the bench, the report, robustness and analysis read it
     "intervals": 1,
     "seeds": 1,
+    # how a figure is shown (rounded, float noise as 0): every page, table and command's text
+    "display": 1,
     "checksums": 1,
     # where a job's chunks run (in this process; the Dask executor is the cluster's): knows no job
     "executor": 2,

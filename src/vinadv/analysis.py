@@ -97,7 +97,7 @@ ROBUSTNESS_COLUMNS = (
     "maps_seed",
     "objective",
     *interval_columns("clean_success"),
-    "clean_regret",
+    *interval_columns("clean_regret"),
     "strategy",
     "k",
     "maps",
@@ -108,7 +108,7 @@ ROBUSTNESS_COLUMNS = (
     "harmful",
     *interval_columns("harmful_rate"),
     "reached",
-    "mean_regret",
+    *interval_columns("mean_regret"),
     "seconds",
 )
 
@@ -400,7 +400,8 @@ class Results:
         """The stored robustness benchmarks (`vinadv robustness`), long form: one row per benchmark, strategy and
         number of added obstacles k, the worst case over the strategies as the strategy 'worst case'
         (`ROBUSTNESS_COLUMNS`; rates are shares of the valid maps, None/NaN where no map is valid, each with its
-        Wilson 95% interval as `{rate}_low` and `{rate}_high`, what `vinadv.plot.k_curve` draws as bands)."""
+        Wilson 95% interval as `{rate}_low` and `{rate}_high`, what `vinadv.plot.k_curve` draws as bands; each mean
+        regret with its bootstrap 95% interval as stored, None for a benchmark stored before it)."""
         import pandas as pd
 
         rows = [row for stored in self.store.read_robustness() for row in robustness_rows(stored)]
@@ -426,6 +427,9 @@ def robustness_rows(stored: dict) -> list[dict]:
             for end, value in zip(("low", "high"), rate_interval(clean.get("reached"), clean.get("maps")))
         },
         "clean_regret": clean.get("mean_regret"),
+        # bootstrap intervals need the per-map regrets: None for a benchmark stored before them
+        "clean_regret_low": clean.get("mean_regret_low"),
+        "clean_regret_high": clean.get("mean_regret_high"),
     }
     strategies = [
         (name, s.get("by_obstacles", []), s.get("seconds")) for name, s in result.get("strategies", {}).items()

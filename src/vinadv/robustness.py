@@ -9,7 +9,8 @@ obstacles are the first k steps of one greedy attack of `max_obstacles`), labels
 - harmful rate: maps whose pair is harmful (UrP, or an adversarial path further from optimal than the original
   path was; DESIGN.md "Harm"), over the valid maps;
 - mean regret: the mean `regret_a` (adversarial path cost minus the optimal cost on the adversarial map, cost units)
-  over the valid maps whose adversarial path reaches the goal.
+  over the valid maps whose adversarial path reaches the goal, with its seeded percentile bootstrap 95% interval over
+  those maps (`mean_regret_low`, `mean_regret_high`: `vinadv.intervals.bootstrap_mean_interval`).
 
 A map is valid for a strategy when it got a pair (a valid cell at every step) and the planner reaches the goal on the
 clean map (else the pair is `invalid`: it says nothing about the attack). Worst case per map: a map counts as broken
@@ -52,7 +53,7 @@ from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.generator import MIN_SIZE, generate_maps
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import identify, objective_strength
-from vinadv.intervals import figure_intervals, interval_fields
+from vinadv.intervals import bootstrap_mean_interval, figure_intervals, interval_fields
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
 from vinadv.records import ROBUSTNESS, ROBUSTNESS_SETTINGS, stamp
@@ -130,6 +131,8 @@ class Figures:
     reached: int  # valid maps whose (worst) adversarial path reaches the goal: the mean regret's denominator
     mean_regret: float | None
     counts: dict[str, int] | None = None  # pairs per paper label (a strategy's own pairs; None for the worst case)
+    #: the per-map regrets behind `mean_regret` (`(reached,)`), for its bootstrap interval; None where unknown
+    regrets: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def paper_success_rate(self) -> float | None:
@@ -152,11 +155,14 @@ class Figures:
             reached=len(regrets),
             mean_regret=float(regrets.mean()) if len(regrets) else None,
             counts=counts,
+            regrets=regrets,
         )
 
     def to_dict(self, intervals: bool = False) -> dict:
         """The figures, JSON-able; with `intervals`, each rate's Wilson 95% interval too (`{rate}_low`, `{rate}_high`:
-        `vinadv.intervals`), as a robustness result carries them (an entry does not: its readers compute them)."""
+        `vinadv.intervals`) and the mean regret's bootstrap interval over the maps (`mean_regret_low`,
+        `mean_regret_high`; None without the per-map regrets), as a robustness result carries them (an entry does
+        not: its readers compute the rates' intervals)."""
         out = {
             "k": self.k,
             "maps": self.maps,
@@ -170,7 +176,10 @@ class Figures:
             "mean_regret": self.mean_regret,
             **({} if self.counts is None else {"counts": self.counts}),
         }
-        return {**out, **figure_intervals(out)} if intervals else out
+        if not intervals:
+            return out
+        low, high = (None, None) if self.regrets is None else bootstrap_mean_interval(self.regrets)
+        return {**out, **figure_intervals(out), "mean_regret_low": low, "mean_regret_high": high}
 
 
 @dataclass
@@ -437,11 +446,14 @@ def _clean(planner, maps) -> dict:
     plans = planner.plan(maps.obstacles, maps.starts[:, 0], maps.goals, maps.corner_cutting, maps.moves)
     reached = plans.reached
     regret = plans.paths.costs(maps.moves)[reached] - maps.expert_costs[reached, 0]
+    low, high = bootstrap_mean_interval(regret)
     return {
         "maps": len(maps),
         "reached": int(reached.sum()),
         "success_rate": float(reached.mean()),
         "mean_regret": float(regret.mean()) if len(regret) else None,
+        "mean_regret_low": low,
+        "mean_regret_high": high,
     }
 
 

@@ -88,8 +88,11 @@ from vinadv.planners.result import PlanResult
 from vinadv.planners.vin.planner import as_planner
 from vinadv.vocabulary import ADD, EDITS, REMOVE
 
-#: candidates planned together; bounds memory (each holds an N x N map and a path)
-EVAL_CHUNK = 8192
+#: candidates planned together, about (a chunk is whole maps: it ends at the first map starting past a multiple of
+#: this): bounds memory (each holds an N x N map and a path) and sets how often the progress bar moves, about once per
+#: map of an exhaustive attack. The planners cut a batch in chunks of this order themselves (`plan_maps`' 1024 maps),
+#: so larger ones would not plan faster (`perf/eval_chunk.py`)
+EVAL_CHUNK = 1024
 
 
 def planner_strength(pairs: PairSet) -> np.ndarray:
@@ -322,24 +325,33 @@ class Attack:
         self, ctx, map_idx, cells, rank, corner_cutting, strength, progress, keep: int, ranked: bool
     ) -> PairSet:
         """The pairs of the candidates `(map_idx, cells, rank)`: with `ranked`, the `keep` strongest of each map
-        (all with `keep` 0), else all. `progress`: a progress bar's description, or False."""
+        (all with `keep` 0), else all. `progress`: a progress bar's description, or False: the bar counts the maps,
+        moving as each chunk of them is judged, with tqdm's estimate of the time left."""
         # chunks of about EVAL_CHUNK candidates, split at map boundaries so a map's candidates are judged together
-        first = np.searchsorted(map_idx, np.arange(len(ctx.obstacles) + 1))
+        n_maps = len(ctx.obstacles)
+        first = np.searchsorted(map_idx, np.arange(n_maps + 1))
         chunk_of_map = first[:-1] // EVAL_CHUNK
-        bounds = np.append(first[np.searchsorted(chunk_of_map, np.unique(chunk_of_map))], len(map_idx))
-        spans = list(zip(bounds[:-1], bounds[1:]))
+        first_maps = np.append(np.searchsorted(chunk_of_map, np.unique(chunk_of_map)), n_maps)
+        bar = None
         if progress:
             from tqdm import tqdm
 
-            spans = tqdm(spans, desc=progress, unit="chunk")
+            bar = tqdm(total=n_maps, desc=progress, unit="map")
         parts = []
-        for lo, hi in spans:
-            if hi > lo:
-                parts.append(
-                    self._evaluate_chunk(
-                        ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi], corner_cutting, strength, keep, ranked
+        try:
+            for m0, m1 in zip(first_maps[:-1], first_maps[1:]):
+                lo, hi = first[m0], first[m1]
+                if hi > lo:
+                    parts.append(
+                        self._evaluate_chunk(
+                            ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi], corner_cutting, strength, keep, ranked
+                        )
                     )
-                )
+                if bar is not None:
+                    bar.update(int(m1 - m0))
+        finally:
+            if bar is not None:
+                bar.close()
         return PairSet.concat(
             parts,
             size=ctx.obstacles.shape[1],

@@ -20,12 +20,14 @@ import math
 import os
 import re
 import urllib.parse
+from importlib import resources
 from pathlib import Path
 
+from vinadv import display
 from vinadv.bench.suites import ENTRY_FORMAT, ENTRY_FORMATS, FROZEN
 from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
-from vinadv.intervals import rate_interval
+from vinadv.intervals import interval_fields, rate_interval
 from vinadv.jsonfile import read_json_document
 
 #: the columns: title, and how each reads an entry
@@ -41,6 +43,57 @@ COLUMNS = (
     "removal harmful",
     "flags",
     "time",
+)
+
+#: what each column of the leaderboard says: the figure, its denominator, its interval (`render_legend`)
+LEGEND = {
+    "#": "the rank in the suite: by the worst-case harmful rate at one edited cell, the most robust first (ties: at "
+    "the largest k, then the name).",
+    "planner": "the planner as `--planner` names it, with its parameters' values (`wastar:w=2`), after the entry's "
+    "display name where it has one, linking to its entry file; in the compact table the weights (first 12 hex "
+    "digits of their SHA-256) and the entry's format (`v1`, `v2`) below it.",
+    "weights": "the first 12 hex digits of the weights file's SHA-256; — for a planner without weights.",
+    "clean success": "the share of the suite's maps on which the planner reaches the goal from the start on the "
+    "unattacked map. Denominator: the suite's maps.",
+    "clean optimal": "the share of the suite's maps whose clean path is optimal (Neural A*'s Opt). Denominator: the "
+    "suite's maps.",
+    "Exp": "search planners only: the share of A*'s expansions the planner saves on the clean maps, averaged over the "
+    "maps (the Neural A* authors' Exp); — for a policy, which expands nothing. A mean, shown without an interval "
+    "(the entries hold no per-map values of it to bootstrap).",
+    "worst-case harmful (k = 1)": "the share of the valid maps on which some attack of the suite with one edited "
+    "cell makes a harmful pair (the adversarial path misses the goal, or its regret exceeds the clean path's by more "
+    "than the harm tolerance). A map is valid when a pair was made and the planner reaches the goal on the clean "
+    "map. Denominator: the valid maps.",
+    "worst-case paper success (k = 1)": "the share of the valid maps on which some attack with one edited cell makes "
+    "a pair the paper counts as a success (labelled UrP or FP). Denominator: the valid maps.",
+    "worst-case harmful (largest k)": "the harmful rate of the worst case at the suite's largest k. Denominator: "
+    "the valid maps at that k. In a `-v2` suite the worst case at k is over every attack of at most k edited cells, "
+    "so it never falls as k grows; in a `-v1` suite it is over the attacks of exactly k cells (only the cheap ones "
+    "make k > 1) and can be below the one at k = 1.",
+    "removal harmful": "the harmful rate at one freed cell of the removal attack that harms the most valid maps. "
+    "Denominator: that attack's valid maps.",
+    "flags": "the raised flags (gradient_masking, non_deterministic, too_weak): figures not to be taken at face "
+    "value; — for none.",
+    "time": "how long the entry took: the sum of its chunks' seconds, in minutes, and the device type; on the machine "
+    "and load of the time, not a speed figure.",
+}
+#: every rate is shown with its interval (`LEGEND` says over which maps)
+INTERVAL_NOTE = (
+    "Every rate is followed by its Wilson 95% score interval in percentage points, over the maps counted in its "
+    "denominator (`vinadv.intervals`): with 100 maps a rate near one half is known to about +-10 points, so two "
+    "planners whose intervals overlap are not told apart by these figures."
+)
+#: the compact table (the docs column): `(title, LEGEND key)`; the intervals on a second line of each cell
+COMPACT = (
+    ("#", "#"),
+    ("planner", "planner"),
+    ("clean success", "clean success"),
+    ("harmful, k = 1", "worst-case harmful (k = 1)"),
+    ("paper success, k = 1", "worst-case paper success (k = 1)"),
+    ("harmful, largest k", "worst-case harmful (largest k)"),  # the k in the title where the rows share it
+    ("removal harmful", "removal harmful"),
+    ("flags", "flags"),
+    ("time", "time"),
 )
 
 
@@ -127,10 +180,6 @@ def _read_document(path: Path) -> dict:
             except InputError:
                 pass
         raise exc from None
-
-
-def _pct(value) -> str:
-    return "—" if value is None else f"{100 * value:.1f}%"
 
 
 def _search_exp(entry: dict) -> float | None:
@@ -227,6 +276,14 @@ def rows(entries: list[tuple[Path, dict]], base: str | os.PathLike | None = None
         _with_interval(row, "paper", worst[0]["paper_success_rate"], worst[0].get("broken"), worst[0].get("valid"))
         _with_interval(row, "harmful_k", worst[-1]["harmful_rate"], worst[-1].get("harmful"), worst[-1].get("valid"))
         row["k"] = worst[-1]["k"]
+        row["curve"] = [
+            {
+                "k": f["k"],
+                "harmful_rate": f["harmful_rate"],
+                **interval_fields("harmful_rate", f.get("harmful"), f.get("valid")),
+            }
+            for f in worst
+        ]
         removal = removal or {"harmful_rate": None}
         _with_interval(row, "removal", removal["harmful_rate"], removal.get("harmful"), removal.get("valid"))
         row["flags"] = [name for name, f in e["flags"].items() if f["raised"]]
@@ -249,10 +306,10 @@ def rows(entries: list[tuple[Path, dict]], base: str | os.PathLike | None = None
 
 def _pct_ci(r: dict, name: str) -> str:
     """A rate with its Wilson 95% interval in points: `57.7% [47.9, 67.0]` ("—" without a rate)."""
-    low, high = r[f"{name}_low"], r[f"{name}_high"]
-    if r[name] is None or low is None or high is None:
-        return _pct(r[name])
-    return f"{_pct(r[name])} [{100 * low:.1f}, {100 * high:.1f}]"
+    interval = display.points(r[f"{name}_low"], r[f"{name}_high"])
+    if r[name] is None or interval == display.NONE:
+        return display.percent(r[name])
+    return f"{display.percent(r[name])} {interval}"
 
 
 def _name(r: dict) -> str:
@@ -266,7 +323,7 @@ def _cells(r: dict) -> list[str]:
         r["weights"],
         _pct_ci(r, "clean"),
         _pct_ci(r, "optimal"),
-        _pct(r["exp"]),
+        display.percent(r["exp"]),
         _pct_ci(r, "harmful"),
         _pct_ci(r, "paper"),
         f"{_pct_ci(r, 'harmful_k')} (k = {r['k']})",
@@ -292,40 +349,175 @@ def _link(prefix: str, file: str) -> str:
     return urllib.parse.quote(prefix + file, safe="/.-_~")
 
 
-def render_markdown(table: dict[str, list[dict]], link_prefix: str = "") -> str:
+def _rate_lines(r: dict, name: str) -> tuple[str, str]:
+    """A rate and its interval as two lines of a compact cell: `57.7%`, `[47.9, 67.0]` (the second empty without
+    one)."""
+    interval = display.points(r[f"{name}_low"], r[f"{name}_high"])
+    return display.percent(r[name]), "" if interval == display.NONE else interval
+
+
+def _compact_cells(r: dict, show_k: bool) -> list[tuple[str, str]]:
+    """The compact table's cells of row `r` (after the rank), each `(first line, second line)`, plain text; the
+    largest k beside its rate with `show_k` (else the column's title says it)."""
+    largest = _rate_lines(r, "harmful_k")
+    below = " · ".join(x for x in (r["weights"] if r["weights"] != "—" else "", f"entry {r['format']}") if x)
+    return [
+        (_name(r), below),
+        _rate_lines(r, "clean"),
+        _rate_lines(r, "harmful"),
+        _rate_lines(r, "paper"),
+        (f"{largest[0]} (k = {r['k']})" if show_k else largest[0], largest[1]),
+        _rate_lines(r, "removal"),
+        (", ".join(r["flags"]) or "—", ""),
+        _time_lines(r["time"]),
+    ]
+
+
+def _time_lines(time: str) -> tuple[str, str]:
+    """`compute_time`'s text as two lines: the minutes, then the device (`12.3 min`, `cpu`)."""
+    minutes, _, device = time.partition(" (")
+    return minutes, device.removesuffix(")")
+
+
+def render_legend(compact: bool = False) -> str:
+    """The legend of the leaderboard's columns as a Markdown list (the compact table's, or the full one's), with
+    the note on intervals."""
+    keys = [key for _, key in COMPACT] if compact else ["#", *COLUMNS]
+    titles = {key: title for title, key in COMPACT} if compact else {}
+    lines = [f"- **{markdown_text(titles.get(k, k))}**: {LEGEND[k]}" for k in keys]
+    return "\n".join([*lines, "", INTERVAL_NOTE])
+
+
+def render_markdown(
+    table: dict[str, list[dict]], link_prefix: str = "", compact: bool = False, legend: bool = False
+) -> str:
     """The leaderboard as Markdown: one table per suite, the planner cell linking to `link_prefix` + entry file; the
-    strings taken from the entries escaped (`markdown_text`)."""
+    strings taken from the entries escaped (`markdown_text`). `compact`: the columns of `COMPACT`, each interval on
+    a second line of its cell (a table that fits the docs' column; the cells hold `<br>` and `<small>`); `legend`:
+    the columns' legend after the tables (`render_legend`)."""
     out = []
     for rs in table.values():
+        titles = [t for t, _ in COMPACT] if compact else ["#", *COLUMNS]
+        ks = {r["k"] for r in rs}
+        if compact and len(ks) == 1:
+            titles[titles.index("harmful, largest k")] = f"harmful, k = {next(iter(ks))}"
         out.append(f"### {markdown_text(rs[0]['suite'])}\n")
-        out.append("| # | " + " | ".join(COLUMNS) + " |")
-        out.append("|" + " --- |" * (len(COLUMNS) + 1))
+        out.append("| " + " | ".join(titles) + " |")
+        out.append("|" + " --- |" * len(titles))
         for i, r in enumerate(rs, start=1):
-            cells = [markdown_text(c) for c in _cells(r)]
-            cells[0] = f"[{cells[0]}]({_link(link_prefix, r['file'])})"
+            if compact:
+                cells = [
+                    markdown_text(a) + (f"<br><small>{markdown_text(b)}</small>" if b else "")
+                    for a, b in _compact_cells(r, len(ks) > 1)
+                ]
+                name = markdown_text(_name(r))
+                cells[0] = cells[0].replace(name, f"[{name}]({_link(link_prefix, r['file'])})", 1)
+            else:
+                cells = [markdown_text(c) for c in _cells(r)]
+                cells[0] = f"[{cells[0]}]({_link(link_prefix, r['file'])})"
             out.append(f"| {i} | " + " | ".join(cells) + " |")
         out.append("")
+    if legend:
+        out += [render_legend(compact), ""]
     return "\n".join(out)
 
 
-def render_html(table: dict[str, list[dict]], link_prefix: str = "") -> str:
-    """The leaderboard as a standalone HTML page (escaped), the planner cell linking to its entry file."""
+def stylesheet() -> str:
+    """The report's stylesheet (`vinadv/report/templates/style.css`), read as package data: the leaderboard page is
+    styled like the report's pages."""
+    return (resources.files("vinadv.report") / "templates" / "style.css").read_text(encoding="utf-8")
+
+
+#: the leaderboard's own rules on top of the report's stylesheet: an interval in smaller grey type
+_BOARD_CSS = (
+    ".ci { color: #555; font-size: .85em; } dl.legend dt { font-weight: 600; } dl.legend dd { margin: 0 0 .4em 1.5em; }"
+)
+
+
+def _html_text(markdown: str) -> str:
+    """A legend's Markdown sentence as HTML text: escaped, code spans in `<code>`."""
+    return re.sub(r"`([^`]*)`", r"<code>\1</code>", html.escape(markdown))
+
+
+def k_curve_name(suite_key: str, ext: str) -> str:
+    """The file name of a suite's k-curve figure (`k-curve.vin28-v1.svg`): the suite's key, one safe word."""
+    return f"k-curve.{re.sub(r'[^A-Za-z0-9._-]+', '-', suite_key)}.{ext}"
+
+
+def render_html(table: dict[str, list[dict]], link_prefix: str = "", figures: bool = False) -> str:
+    """The leaderboard as a standalone HTML page styled like the report (its stylesheet inlined), every string
+    escaped, the planner cell linking to its entry file, each rate's interval in smaller type beside it, and the
+    columns' legend. `figures`: each suite's k curve (`k_curve_name(suite, "png")`, beside the page) under its
+    table."""
     parts = [
         "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8"><title>vinadv robustness leaderboard</title>',
-        "<style>table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px}</style></head><body>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        "<title>vinadv robustness leaderboard</title>",
+        f"<style>\n{stylesheet()}{_BOARD_CSS}\n</style></head><body>",
         "<h1>vinadv robustness leaderboard</h1>",
-        "<p>Sorted by the worst-case harmful rate at one edited cell (the most robust first). Each rate is followed "
-        "by its 95% Wilson score interval in points, over the maps counted in its denominator.</p>",
+        "<p>Sorted by the worst-case harmful rate at one edited cell (the most robust first). "
+        f'{_html_text(INTERVAL_NOTE)} The columns are explained <a href="#legend">below the tables</a>.</p>',
     ]
-    for rs in table.values():
-        parts.append(f"<h2>{html.escape(rs[0]['suite'])}</h2><table>")
-        parts.append("<tr><th>#</th>" + "".join(f"<th>{html.escape(c)}</th>" for c in COLUMNS) + "</tr>")
+    for key, rs in table.items():
+        parts.append(f"<h2>{html.escape(rs[0]['suite'])}</h2>")
+        parts.append('<div class="scroll"><table class="numbers lead3">')
+        parts.append(
+            "<thead><tr><th>#</th>"
+            + "".join(f'<th title="{html.escape(LEGEND[c], quote=True)}">{html.escape(c)}</th>' for c in COLUMNS)
+            + "</tr></thead><tbody>"
+        )
         for i, r in enumerate(rs, start=1):
             cells = [html.escape(c) for c in _cells(r)]
+            cells = [re.sub(r" (\[[^\]]*\])", r' <span class="ci">\1</span>', c) for c in cells]
             link = html.escape(_link(link_prefix, r["file"]), quote=True)
             cells[0] = f'<a href="{link}">{cells[0]}</a>'
             parts.append(f"<tr><td>{i}</td>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
-        parts.append("</table>")
+        parts.append("</tbody></table></div>")
+        if figures:
+            name = html.escape(k_curve_name(key, "png"), quote=True)
+            svg = html.escape(k_curve_name(key, "svg"), quote=True)
+            parts.append(
+                f'<figure><img src="{name}" alt="harmful rate against k, {html.escape(key)}" style="max-width:640px">'
+                f"<figcaption>The worst-case harmful rate against the number of edited cells k, one line per "
+                f'planner, its Wilson 95% interval as a bar (<a href="{svg}">SVG</a>, <a href="{name}">PNG'
+                "</a>).</figcaption></figure>"
+            )
+    parts.append('<h2 id="legend">Legend</h2><dl class="legend">')
+    for c in ["#", *COLUMNS]:
+        parts.append(f"<dt>{html.escape(c)}</dt><dd>{_html_text(LEGEND[c])}</dd>")
+    parts.append("</dl>")
     parts.append("</body></html>\n")
     return "\n".join(parts)
+
+
+def curve_series(rs: list[dict]) -> list[tuple[str, list[dict]]]:
+    """The k curves of one suite's rows (`rows`): `[(name, points)]` in the table's order, each point the worst-case
+    harmful rate at k with its interval (`harmful_rate_low`, `harmful_rate_high`); a planner listed with several
+    weights is named with them."""
+    names = [_name(r) for r in rs]
+    return [(_name(r) if names.count(_name(r)) == 1 else f"{_name(r)} ({r['weights']})", r["curve"]) for r in rs]
+
+
+def k_curve_figure(key: str, rs: list[dict]):
+    """The k-curve figure of one suite (`vinadv.plot.k_curve` of `curve_series`): the worst-case harmful rate against
+    k, one line per planner, with its interval."""
+    from vinadv.plot.curves import k_curve  # noqa: PLC0415 (matplotlib: only to draw)
+
+    return k_curve(
+        curve_series(rs), title=f"{rs[0]['suite']}: worst case over the attacks", xlabel="edited cells (k)", dodge=0.06
+    )
+
+
+def write_k_curves(table: dict[str, list[dict]], out: str | os.PathLike) -> list[Path]:
+    """Each suite's k curve as `k_curve_name(suite, "png")` and `.svg` in `out` (the SVG without a date: the same
+    entries give the same bytes); the paths written."""
+    from vinadv.plot.files import save_figure  # noqa: PLC0415 (matplotlib: only to draw)
+
+    written = []
+    for key, rs in table.items():
+        for ext in ("png", "svg"):
+            path = Path(out) / k_curve_name(key, ext)
+            save_figure(k_curve_figure(key, rs), path)
+            written.append(path)
+    return written

@@ -475,6 +475,11 @@ def run_bench(
             store.close()
             raise
     todo = [c for c in range(n_chunks) if c not in done]
+
+    def chunk_maps(chunk: int) -> int:
+        """The maps of chunk `chunk` (the last one may be short)."""
+        return min(suite.n, (chunk + 1) * suite.chunk) - chunk * suite.chunk
+
     absolute = None if data is None else os.path.abspath(os.fspath(data))  # workers may run in another folder
     task = functools.partial(
         _chunk_task,
@@ -486,7 +491,8 @@ def run_bench(
     if progress:
         from tqdm import tqdm  # noqa: PLC0415 (only with a progress bar)
 
-        bar = tqdm(desc=f"bench {suite.name}", unit="chunk", initial=len(done), total=n_chunks)
+        # counts maps (a chunk's at once as it completes), so that tqdm's time left reads in maps
+        bar = tqdm(desc=f"bench {suite.name}", unit="map", initial=sum(map(chunk_maps, done)), total=suite.n)
     try:
         for chunk, result in executor.map(task, todo, ordered=False):
             if store is not None:
@@ -497,7 +503,7 @@ def run_bench(
                     result = _same_chunk(db, chunk, stored, result, fingerprint)
             done[chunk] = result
             if bar is not None:
-                bar.update(1)
+                bar.update(chunk_maps(chunk))
     finally:
         if bar is not None:
             bar.close()

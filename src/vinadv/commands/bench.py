@@ -90,13 +90,20 @@ def register(subparsers) -> None:
         help="render the entries of folders and files as a leaderboard (HTML and Markdown)",
         description="Read every result entry (*.json) of each folder SOURCE, and each entry file SOURCE, and write "
         "OUT/leaderboard.html and OUT/leaderboard.md, one table per suite sorted by the worst-case harmful rate, each "
-        "row linking to its entry. Each entry is checked against the entry schema: a file that is not a valid entry "
-        "is one line naming it and the field, the rest still rendered, and the status is 2.",
+        "row linking to its entry, with a legend of the columns (with --figures, each suite's k curve too). Each "
+        "entry is checked against the entry schema: a file that is not a valid entry is one line naming it and the "
+        "field, the rest still rendered, and the status is 2.",
     )
     board.add_argument(
         "sources", nargs="+", metavar="SOURCE", help="folders of result entries (*.json), or entry files"
     )
     board.add_argument("--out", required=True, metavar="OUT", help="folder to write leaderboard.html and .md to")
+    board.add_argument(
+        "--figures",
+        action="store_true",
+        help="also draw each suite's k curve (the worst-case harmful rate against k, its 95%% interval as a bar, one "
+        "line per planner) as OUT/k-curve.SUITE.png and .svg, shown in leaderboard.html",
+    )
     board.add_argument(
         "--index",
         metavar="FILE",
@@ -173,7 +180,14 @@ def cmd_bench_verify(args: argparse.Namespace) -> int:
 
 
 def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
-    from vinadv.bench.leaderboard import entry_files, read_entries_checked, render_html, render_markdown, rows
+    from vinadv.bench.leaderboard import (
+        entry_files,
+        read_entries_checked,
+        render_html,
+        render_markdown,
+        rows,
+        write_k_curves,
+    )
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():
@@ -191,15 +205,22 @@ def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
             fh.write(index_json(make_index(entries)))
     out.mkdir(parents=True, exist_ok=True)
     for name, text in (
-        ("leaderboard.md", render_markdown(table)),
-        ("leaderboard.html", render_html(table)),
+        ("leaderboard.md", render_markdown(table, legend=True)),
+        ("leaderboard.html", render_html(table, figures=args.figures)),
     ):
         with atomic_output(out / name, "w", encoding="utf-8") as fh:
             fh.write(text)
+    figures = []
+    if args.figures:
+        import matplotlib  # noqa: PLC0415 (only to draw the k curves)
+
+        matplotlib.use("Agg")  # no display: the figures go to files
+        figures = write_k_curves(table, out)
 
     def report() -> None:
         n = sum(len(r) for r in table.values())
-        print(f"{n} entries of {len(table)} suites -> {out / 'leaderboard.html'}, {out / 'leaderboard.md'}")
+        drawn = f" and {len(figures)} k-curve figures" if figures else ""
+        print(f"{n} entries of {len(table)} suites -> {out / 'leaderboard.html'}, {out / 'leaderboard.md'}{drawn}")
 
     for problem in problems:  # one line per file that is not a valid entry; the others are rendered
         print(f"vinadv: error: {one_line(problem)}", file=sys.stderr)

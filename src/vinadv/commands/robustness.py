@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from vinadv import display
 from vinadv.commands import (
     add_moves_argument,
     add_planner_arguments,
@@ -147,13 +148,21 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
 
 def _pct(value) -> str:
-    return "—" if value is None else f"{100 * value:.1f}%"
+    return display.percent(value)
+
+
+def _regret(figures: dict) -> str:
+    """The mean regret with its bootstrap 95% interval where there is one: `0.412 [0.301, 0.530]` (rounded: float
+    noise shows as 0.000)."""
+    low, high = figures.get("mean_regret_low"), figures.get("mean_regret_high")
+    interval = "" if low is None or high is None else f" [{display.number(low)}, {display.number(high)}]"
+    return display.number(figures["mean_regret"]) + interval
 
 
 def _pct_ci(figures: dict, rate: str) -> str:
     """The rate with its Wilson 95% interval (`{rate}_low`, `{rate}_high`), in percent: `10.0% [2.8, 30.1]`."""
     low, high = figures.get(f"{rate}_low"), figures.get(f"{rate}_high")
-    interval = "" if low is None or high is None else f" [{100 * low:.1f}, {100 * high:.1f}]"
+    interval = "" if low is None or high is None else f" {display.points(low, high)}"
     return _pct(figures[rate]) + interval
 
 
@@ -168,21 +177,19 @@ def print_robustness(out: dict) -> None:
         f"{s['size']}x{s['size']} ({origin}), kept by {s['objective']}, in {out['seconds']:.1f} s"
         + (", obstacles removed" if s["edit"] == "remove" else "")
     )
-    regret = "—" if clean["mean_regret"] is None else f"{clean['mean_regret']:.3f}"
     print(
         f"clean success: {_pct(clean['success_rate'])} ({clean['reached']:,} of {clean['maps']:,} maps), mean "
-        f"regret of the reached paths {regret}"
+        f"regret of the reached paths {_regret(clean)}"
     )
     rows = [(name, st["by_obstacles"], st["seconds"]) for name, st in out["strategies"].items()]
     rows.append(("worst case", out["overall"], out["seconds"]))
-    print("rates with their Wilson 95% intervals, in percent")
-    print(f"{'one obstacle':<12}{'valid':>8}{'paper success':>22}{'harmful':>22}{'mean regret':>13}{'seconds':>9}")
+    print("rates with their Wilson 95% intervals, in percent; mean regrets with their bootstrap 95% intervals")
+    print(f"{'one obstacle':<12}{'valid':>8}{'paper success':>22}{'harmful':>22}{'mean regret':>26}{'seconds':>9}")
     for name, by_k, sec in rows:
         f = by_k[0]
-        regret = "—" if f["mean_regret"] is None else f"{f['mean_regret']:.3f}"
         print(
             f"{name:<12}{f['valid']:>8,}{_pct_ci(f, 'paper_success_rate'):>22}{_pct_ci(f, 'harmful_rate'):>22}"
-            f"{regret:>13}{sec:>9.1f}"
+            f"{_regret(f):>26}{sec:>9.1f}"
         )
     ks = [f["k"] for f in out["overall"]]
     print("harmful rate by obstacles added: " + "".join(f"{f'k = {k}':>9}" for k in ks))
