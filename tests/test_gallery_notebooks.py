@@ -1,9 +1,13 @@
 """The gallery (examples/gallery/*.ipynb) runs from top to bottom, each notebook in a fresh kernel (nbclient), and
-shows what it says it shows: its figures and the figures' captions, tables and verdicts in its text."""
+shows what it says it shows: its figures, and its tables and verdicts in its text. The site shows each notebook on a
+page of docs/gallery/ (docs/notebooks.py), its links to the docs resolving both from the notebook and from the page."""
 
 from __future__ import annotations
 
+import importlib.util
+import json
 import os
+import re
 import time
 from pathlib import Path
 
@@ -14,9 +18,8 @@ from traitlets.config import Config
 
 from tests.needs import PUBLIC_DATA, public_data
 
-GALLERY = Path(__file__).resolve().parents[1] / "examples" / "gallery"
-
-pytestmark = pytest.mark.slow  # a kernel each (its imports: torch, numba, pandas) and seconds of work: ~4-6 s each
+ROOT = Path(__file__).resolve().parents[1]
+GALLERY = ROOT / "examples" / "gallery"
 
 #: per notebook: the public data files it reads, how many figures it draws, and texts its outputs must hold
 SHOWS = {
@@ -30,10 +33,34 @@ SHOWS = {
 DATA_TEXT = ("text/plain", "text/markdown", "text/html")
 
 
-def test_every_notebook_is_tested():
+def test_every_notebook_is_tested_and_has_a_page_in_the_nav():
     assert sorted(p.stem for p in GALLERY.glob("*.ipynb")) == sorted(SHOWS)
+    nav = (ROOT / "mkdocs.yml").read_text()
+    for name in SHOWS:
+        assert (ROOT / "docs" / "gallery" / f"{name}.md").read_text() == f"<!-- vinadv:notebook {name} -->\n"
+        assert f"gallery/{name}.md" in nav
 
 
+def test_the_page_shows_the_notebooks_cells_with_links_that_resolve():
+    spec = importlib.util.spec_from_file_location("docs_notebooks", ROOT / "docs" / "notebooks.py")
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    for name in SHOWS:
+        cells = json.loads((GALLERY / f"{name}.ipynb").read_text())["cells"]
+        page = hook.on_page_markdown(f"<!-- vinadv:notebook {name} -->\n")
+        assert page.startswith("# ") and "<!-- vinadv:" not in page and f"examples/gallery/{name}.ipynb" in page
+        for cell in cells:
+            source = "".join(cell["source"]).strip("\n")
+            if cell["cell_type"] == "code":
+                assert f"```python\n{source}\n```" in page
+            # a link to the docs resolves from the notebook's folder, and from docs/gallery/ once rewritten
+            for link in re.findall(r"\]\(([^)#]+\.md)", source):
+                assert (GALLERY / link).resolve().is_file(), (name, link)
+                assert link.startswith("../../docs/"), (name, link)
+                assert f"](../{link.removeprefix('../../docs/')}" in page
+
+
+@pytest.mark.slow  # a kernel each (its imports: torch, numba, pandas: most of its time) and a few seconds of work
 @pytest.mark.parametrize("name", sorted(SHOWS))
 def test_gallery_notebook_runs_and_shows(name, tmp_path):
     files, figures, texts = SHOWS[name]
