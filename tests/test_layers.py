@@ -52,7 +52,8 @@ LAYERS = {
     "evaluation": 8,
     "report": 9,
     "bench": 9,
-    "viewer": 9,
+    # shows the bench's leaderboard (`vinadv serve --bench`)
+    "viewer": 10,
     # runs the stages on workers, the benchmark's chunks included; only the commands import it
     "cluster": 10,
     "analysis": 10,
