@@ -75,6 +75,17 @@ class PagingQueries(Database):
         """The sorts `page_pairs` takes on this database (`SORTS`; `effort` only where pairs can hold expansions)."""
         return SORTS if self.has_expansions else tuple(s for s in SORTS if s != "effort")
 
+    def run_has_expansions(self, run_id: int) -> bool:
+        """Whether some stored pair of the run holds its planner's expanded cells (a search planner's run)."""
+        if not self.has_expansions:
+            return False
+        c = map_pairs.c
+        with self.engine.connect() as conn:
+            found = conn.execute(
+                sa.select(c.pair_index).where(c.run_id == int(run_id), _column("expanded_o").is_not(None)).limit(1)
+            ).first()
+        return found is not None
+
     def _sort_key(self, sort: str) -> tuple[sa.ColumnElement, sa.ColumnElement, bool]:
         """`(missing, value, descending)` of a sort: `missing` 1 for a pair without the value, else 0."""
         c = map_pairs.c

@@ -70,7 +70,7 @@ def _float_param(name: str) -> float | None:
 
 
 def filters(sorts: tuple[str, ...]) -> dict:
-    """The grid's filters and sort from the query string; `sorts`: the sorts the database offers."""
+    """The grid's filters and sort from the query string; `sorts`: the sorts the run offers."""
     label = request.args.get("label") or None
     if label is not None and label not in LABELS:
         raise BadRequest(f"label: {label[:40]!r} is not one of {'|'.join(LABELS)}")
@@ -95,7 +95,7 @@ def filters(sorts: tuple[str, ...]) -> dict:
         raise BadRequest(f"sort: {sort[:40]!r} is not one of {'|'.join(sorts)}")
     min_effort = _float_param("min_effort")
     if min_effort is not None and "effort" not in sorts:
-        raise BadRequest("min_effort: this database holds no search effort (no expanded cells)")
+        raise BadRequest("min_effort: this run's pairs hold no search effort (no expanded cells)")
     return {
         "label": label,
         "attack": attack,

@@ -54,7 +54,7 @@ def register(app: Flask, state: ViewerState) -> None:
     def pair_page(run_id: int, pair_index: int):
         params.only_params(set(params.FILTER_PARAMS))
         run = state.require_run(run_id)
-        f = params.filters(state.store.sort_keys())
+        f = params.filters(state.sorts(run_id))
         pair = state.pair_json(run_id, pair_index)
         nav = state.neighbours(run_id, pair_index, f)
         return render_template(
@@ -85,7 +85,7 @@ def register(app: Flask, state: ViewerState) -> None:
             raise BadRequest(f"label: {label!r} is not one of {'|'.join(HUMAN_LABELS)}")
         annotator = params.valid_annotator(request.form.get("annotator", params.DEFAULT_ANNOTATOR))
         state.store.add_annotations(run_id, [pair_index], [label], annotator)
-        f = params.filters(state.store.sort_keys())
+        f = params.filters(state.sorts(run_id))
         nav = state.neighbours(run_id, pair_index, f)
         flash(f"pair {pair_index} labelled {label} by {annotator}")
         target = nav["next"] if nav["next"] is not None else pair_index

@@ -15,6 +15,7 @@ from vinadv.errors import InputError
 from vinadv.intervals import rate_interval
 from vinadv.store import LABELS, Store
 from vinadv.store.codec import decode_paths
+from vinadv.store.paging import SORTS
 from vinadv.store.records import PairRecords
 from vinadv.viewer import params
 from vinadv.viewer.formats import none_if_nan, none_if_negative, pair_row_json, run_planner
@@ -35,6 +36,7 @@ class ViewerState:
         self._rows_lock = threading.Lock()
         self._counts: tuple[float, dict, dict] | None = None
         self._sources: dict[int, tuple[float, list[str]]] = {}
+        self._sorts: dict[int, tuple[float, tuple[str, ...]]] = {}
 
     # counts change only when a pipeline writes pairs, and a count of 1,000,000 rows costs ~0.1 s: keep it briefly
     def counts(self) -> tuple[dict[int, dict[str, int]], dict[int, dict]]:
@@ -49,6 +51,16 @@ class ViewerState:
         cached = self._sources.get(run_id)
         if cached is None or now - cached[0] > _COUNTS_TTL_S:
             cached = self._sources[run_id] = (now, self.store.label_sources(run_id))
+        return cached[1]
+
+    def sorts(self, run_id: int) -> tuple[str, ...]:
+        """The grid's sorts for the run: the effort only where its pairs hold expanded cells (cached briefly: for a
+        run without them, finding none reads the whole run)."""
+        now = time.monotonic()
+        cached = self._sorts.get(run_id)
+        if cached is None or now - cached[0] > _COUNTS_TTL_S:
+            effort = self.store.run_has_expansions(run_id)
+            cached = self._sorts[run_id] = (now, tuple(s for s in SORTS if effort or s != "effort"))
         return cached[1]
 
     def runs_summary(self) -> list[dict]:
@@ -158,7 +170,7 @@ class ViewerState:
     def grid(self, run_id: int) -> dict:
         """The page of the grid the query string asks for (validated here)."""
         params.only_params(params.GRID_PARAMS)
-        f = params.filters(self.store.sort_keys())
+        f = params.filters(self.sorts(run_id))
         after, before = params.int_param("after"), params.int_param("before")
         if after is not None and before is not None:
             raise BadRequest("give at most one of 'after' and 'before'")
@@ -193,7 +205,7 @@ class ViewerState:
             "filter_query": params.filter_query(f),
             "page_query": params.page_query(f, size),
             "sources": self.sources(run_id),
-            "sorts": self.store.sort_keys(),
+            "sorts": self.sorts(run_id),
         }
 
     def neighbours(self, run_id: int, pair_index: int, f: dict) -> dict:
