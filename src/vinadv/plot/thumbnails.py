@@ -75,6 +75,8 @@ def thumbnail_images(
     obstacles = np.asarray(obstacles, dtype=bool)
     n, size = obstacles.shape[0], obstacles.shape[1]
     scale = thumbnail_scale(size) if scale is None else int(scale)
+    if n == 0:
+        return np.zeros((0, size * scale, size * scale, 3), np.uint8)
     cells = np.where(obstacles[..., None], PALETTE.obstacle.rgb, PALETTE.free.rgb).astype(np.uint8)
     if expanded is not None:
         cells[_packed_mask(n, size, *expanded) & ~obstacles] = PALETTE.expanded.rgb
