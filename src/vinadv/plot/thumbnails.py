@@ -49,10 +49,13 @@ def _block(scale: int, part: str) -> np.ndarray:
 
 
 def _paint(image: np.ndarray, cells: np.ndarray, style: Style, scale: int, part: str = "full") -> None:
-    """Paint the `part` of the blocks of `cells` (`(n, N, N)` bool) in `style`'s colour, in place."""
-    size = cells.shape[1]
-    pixels = np.repeat(np.repeat(cells, scale, axis=1), scale, axis=2) & np.tile(_block(scale, part), (size, size))
-    image[pixels] = style.rgb
+    """Paint the `part` of the blocks of `cells` (`(n, N, N)` bool) in `style`'s colour, in place: only the pixels
+    of those blocks are written."""
+    n, size = cells.shape[0], cells.shape[1]
+    blocks = image.reshape(n, size, scale, size, scale, 3)  # a view: [pair, row, y, col, x]
+    pair, row, col = np.nonzero(cells)
+    y, x = np.nonzero(_block(scale, part))
+    blocks[pair[:, None], row[:, None], y[None], col[:, None], x[None]] = style.rgb
 
 
 def thumbnail_images(

@@ -143,6 +143,7 @@ def render_thumbnails(records: PairRecords, expanded: tuple[np.ndarray, np.ndarr
     out = []
     for image in images:
         buf = io.BytesIO()
-        Image.fromarray(image, mode="RGB").save(buf, format="PNG", optimize=False)
+        # the fastest compression: a thumbnail is a few KB whatever the level, and encoding is most of its cost
+        Image.fromarray(image, mode="RGB").save(buf, format="PNG", compress_level=1)
         out.append(buf.getvalue())
     return out
