@@ -41,6 +41,11 @@ def _cell_count(name: str) -> sa.ColumnElement:
     return sa.case((sa.func.coalesce(sa.func.length(text), 0) == 0, sa.null()), else_=count)
 
 
+def _constant(value) -> sa.ColumnElement:
+    """`value` for every row as an expression of the row: a bare constant in ORDER BY is a column position on MySQL."""
+    return sa.case((map_pairs.c.pair_index.is_(None), value), else_=value)
+
+
 def _order(values: tuple[str, ...], column: sa.ColumnElement) -> sa.ColumnElement:
     """The position of `column`'s value in `values` (len(values) for any other)."""
     return sa.case({v: i for i, v in enumerate(values)}, value=column, else_=len(values))
@@ -91,14 +96,14 @@ class PagingQueries(Database):
         c = map_pairs.c
         absent = self.absent_columns
         if sort == "label":
-            return sa.literal(0), _order(LABELS, c.label), False
+            return _constant(0), _order(LABELS, c.label), False
         if sort == "harm":
             if "harm" in absent:
-                return sa.literal(1), sa.literal(0), False
+                return _constant(1), _constant(0), False
             return sa.case((c.harm.is_(None), 1), else_=0), _order(HARMS, c.harm), False
         if sort == "regret":
             if absent & {"regret_o", "regret_a"}:
-                return sa.literal(1), sa.literal(0.0), True
+                return _constant(1), _constant(0.0), True
             change = c.regret_a - c.regret_o
             return sa.case((change.is_(None), 1), else_=0), sa.func.coalesce(change, 0.0), True
         if sort == "effort":
