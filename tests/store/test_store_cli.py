@@ -38,6 +38,7 @@ def test_export_csv_matches_oracle(stored, tmp_path):
     header = "no map_o map_a path_o path_a label attack run_id pair_index start goal added_obstacle label_source score"
     header += " term_o term_a dh dv opt_cost_o opt_cost_a cost_o cost_a regret_o regret_a expert_label harm added_more"
     header += " edit expanded_o expanded_a astar_expansions_o astar_expansions_a"
+    header += " expansions_o expansions_a effort_ratio astar_effort_ratio relative_effort effort_harmful"
     assert list(rows[0]) == header.split()
     paths_a = records.path_a.unpack()
     for i, row in enumerate(rows):
@@ -50,6 +51,14 @@ def test_export_csv_matches_oracle(stored, tmp_path):
             value = getattr(records, name)[i]
             assert row[name] == ("" if np.isnan(value) else repr(float(value))), name
         assert row["harm"] == (records.harm[i] or "") and row["expert_label"] == (records.expert_label[i] or "")
+        counts = [len(getattr(records, f"expanded_{side}")[i]) for side in ("o", "a")]
+        astar = [int(getattr(records, f"astar_expansions_{side}")[i]) for side in ("o", "a")]
+        assert [row["expansions_o"], row["expansions_a"]] == [str(c) if c else "" for c in counts]
+        assert [row["astar_expansions_o"], row["astar_expansions_a"]] == [str(c) if c > 0 else "" for c in astar]
+        known = min(counts) > 0 and min(astar) > 0
+        relative = counts[1] / counts[0] / (astar[1] / astar[0]) if known else None
+        harmful = known and records.term_o[i] == "goal" and counts[1] > counts[0] and relative > 2
+        assert row["effort_harmful"] == ("" if not known or records.term_o[i] != "goal" else str(int(harmful)))
 
 
 def test_export_jsonl_successful_only_by_run_name(stored, capsys):
