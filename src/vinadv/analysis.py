@@ -101,10 +101,13 @@ PAIR_COLUMNS = (
 #: with its Wilson 95% interval (`{rate}_low`, `{rate}_high`, computed from the counts: `vinadv.intervals`)
 ROBUSTNESS_COLUMNS = (
     "benchmark",
+    "name",
     "created",
     "version",
     "planner",
     "weights_checksum",
+    "maps",
+    "maps_sha256",
     "size",
     "maps_seed",
     "objective",
@@ -121,6 +124,8 @@ ROBUSTNESS_COLUMNS = (
     *interval_columns("harmful_rate"),
     "reached",
     "mean_regret",
+    "effort_harmful",
+    *interval_columns("effort_harmful_rate"),
     "seconds",
 )
 
@@ -465,7 +470,10 @@ class Results:
         """The stored robustness benchmarks (`vinadv robustness`), long form: one row per benchmark, strategy and
         number of added obstacles k, the worst case over the strategies as the strategy 'worst case'
         (`ROBUSTNESS_COLUMNS`; rates are shares of the valid maps, None/NaN where no map is valid, each with its
-        Wilson 95% interval as `{rate}_low` and `{rate}_high`, what `vinadv.plot.k_curve` draws as bands)."""
+        Wilson 95% interval as `{rate}_low` and `{rate}_high`, what `vinadv.plot.k_curve` draws as bands). Each
+        row says which run it is: the run's `name` (`--name`), the planner's full spec (`wastar:w=3`), its weights'
+        SHA-256 and the maps file with its SHA-256 (None for generated maps, and the effort-harmful count and rate
+        None for a planner that reports no expansions)."""
         import pandas as pd
 
         rows = [row for stored in self.store.read_robustness() for row in robustness_rows(stored)]
@@ -478,10 +486,13 @@ def robustness_rows(stored: dict) -> list[dict]:
     clean = result.get("clean", {})
     benchmark = {
         "benchmark": stored.get("id"),
+        "name": settings.get("name"),
         "created": stored.get("created"),
         "version": stored.get("version"),
-        "planner": stored.get("planner"),
+        "planner": settings.get("planner") or stored.get("planner"),  # the full spec (older rows: the name)
         "weights_checksum": stored.get("weights_checksum"),
+        "maps": settings.get("maps"),
+        "maps_sha256": settings.get("maps_sha256"),
         "size": settings.get("size"),
         "maps_seed": settings.get("maps_seed"),
         "objective": settings.get("objective"),
