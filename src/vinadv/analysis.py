@@ -106,7 +106,7 @@ ROBUSTNESS_COLUMNS = (
     "version",
     "planner",
     "weights_checksum",
-    "maps",
+    "maps_file",
     "maps_sha256",
     "size",
     "maps_seed",
@@ -491,7 +491,7 @@ def robustness_rows(stored: dict) -> list[dict]:
         "version": stored.get("version"),
         "planner": settings.get("planner") or stored.get("planner"),  # the full spec (older rows: the name)
         "weights_checksum": stored.get("weights_checksum"),
-        "maps": settings.get("maps"),
+        "maps_file": settings.get("maps"),
         "maps_sha256": settings.get("maps_sha256"),
         "size": settings.get("size"),
         "maps_seed": settings.get("maps_seed"),
