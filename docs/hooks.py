@@ -11,11 +11,14 @@ Markers: `<!-- vinadv:weights-table -->` (one row per shipped weights file), `<!
 count, for the metrics files that have it), `<!-- vinadv:by-length-figure -->` (the same as a curve, drawn by
 `vinadv.evaluation.length_curve` as `vinadv eval --figure` draws it, inlined as SVG),
 `<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
-benchmark entries `docs/results/bench/*.json`). The MP benchmark's page (`docs/results/mpd.md`) reads
+benchmark entries `docs/results/bench/*.json`: the compact table that fits the column, and its legend),
+`<!-- vinadv:bench-k-curves -->` (each suite's k curve from the same entries, drawn by `vinadv bench leaderboard`'s
+figure function, inlined as SVG). The MP benchmark's page (`docs/results/mpd.md`) reads
 `docs/results/mpd.json`, written by `perf/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
 (Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (the worst case per map: harmful and
 paper success rates at k = 1..K added obstacles), `<!-- vinadv:mpd-robustness-strategies -->` (the harmful rates per
-strategy) and `<!-- vinadv:mpd-commands -->` (the commands, and the checksums of the weights files they name).
+strategy), `<!-- vinadv:mpd-robustness-times -->` (how long each planner's runs took, a sentence) and
+`<!-- vinadv:mpd-commands -->` (the commands, and the checksums of the weights files they name).
 `<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine and the exhaustive attack at 28x28 to 64x64
 beside the FMA count, from `docs/results/map_size.json` (`perf/map_size.py --out`), with its command and the
 machine's load.
@@ -39,7 +42,13 @@ import json
 import re
 from pathlib import Path
 
-from vinadv.bench.leaderboard import read_entries, render_markdown, rows  # the one renderer of a leaderboard
+from vinadv import display  # how a figure is shown: rounded, float noise as 0
+from vinadv.bench.leaderboard import (
+    read_entries,
+    render_legend,
+    render_markdown,
+    rows,
+)  # the one renderer of a leaderboard
 from vinadv.evaluation.planner_metrics import LENGTH_BUCKET  # the width of the `by_length` rows
 from vinadv.planners.registry import canonical_name  # a metrics file's planner in today's spelling
 
@@ -55,12 +64,20 @@ WEIGHTS_COMMANDS = "<!-- vinadv:weights-commands -->"
 BY_LENGTH = "<!-- vinadv:by-length -->"
 BY_LENGTH_FIGURE = "<!-- vinadv:by-length-figure -->"
 BENCH_LEADERBOARD = "<!-- vinadv:bench-leaderboard -->"
+BENCH_K_CURVES = "<!-- vinadv:bench-k-curves -->"
 #: the committed benchmark entries (`vinadv bench run --out`), the leaderboard's rows
 BENCH_DIR = ROOT / "docs" / "results" / "bench"
 MPD_TABLE = "<!-- vinadv:mpd-table -->"
 MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
 MPD_ROBUSTNESS_STRATEGIES = "<!-- vinadv:mpd-robustness-strategies -->"
 MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
+TRANSPATH_JSON = ROOT / "docs" / "results" / "transpath.json"
+TRANSPATH_TABLE = "<!-- vinadv:transpath-table -->"
+TRANSPATH_RATIOS = "<!-- vinadv:transpath-ratios -->"
+TRANSPATH_ROBUSTNESS = "<!-- vinadv:transpath-robustness -->"
+TRANSPATH_ROBUSTNESS_STRATEGIES = "<!-- vinadv:transpath-robustness-strategies -->"
+TRANSPATH_COMMANDS = "<!-- vinadv:transpath-commands -->"
+MPD_ROBUSTNESS_TIMES = "<!-- vinadv:mpd-robustness-times -->"
 MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
 MAP_SIZE_TABLE = "<!-- vinadv:map-size-table -->"
 MAP_SIZE_JSON = ROOT / "docs" / "results" / "map_size.json"
@@ -189,14 +206,32 @@ def by_length_figure(folder: Path = WEIGHTS_DIR) -> str:
 
 
 def bench_leaderboard(folder: Path = BENCH_DIR) -> str:
-    """The leaderboard of the committed benchmark entries in `folder` (`vinadv bench leaderboard`'s Markdown), each
-    row linking to its entry file (relative to docs/results/)."""
-    return render_markdown(rows(read_entries(folder)), "bench/")
+    """The leaderboard of the committed benchmark entries in `folder` (`vinadv bench leaderboard`'s Markdown, its
+    compact table: the intervals on a second line, so that it fits the docs' column; then the legend), each row
+    linking to its entry file (relative to docs/results/)."""
+    tables = render_markdown(rows(read_entries(folder)), "bench/", compact=True)
+    # its own class, so that docs/stylesheets/leaderboard.css sets its tables closer than the site's others
+    return f'<div class="leaderboard" markdown>\n\n{tables}\n</div>\n\n{render_legend(compact=True)}'
+
+
+def bench_k_curves(folder: Path = BENCH_DIR) -> str:
+    """Each suite's k curve (`vinadv.bench.leaderboard.k_curve_figure`, as `vinadv bench leaderboard` writes it) of
+    the committed entries, as Markdown images (SVG data URIs: no date in them, so unchanged entries give the same
+    page)."""
+    from vinadv.bench.leaderboard import k_curve_figure  # noqa: PLC0415 (matplotlib: only this page draws)
+    from vinadv.plot.files import svg_text  # noqa: PLC0415
+
+    images = []
+    for key, rs in rows(read_entries(folder)).items():
+        data = base64.b64encode(svg_text(k_curve_figure(key, rs)).encode()).decode()
+        images.append(f"![{key}: the worst-case harmful rate against k](data:image/svg+xml;base64,{data})")
+    return "\n\n".join(images)
 
 
 def decimal(value: float | None, digits: int = 3) -> str:
-    """A figure with `digits` decimals; an em dash where the planner has none (Exp without expansions)."""
-    return "—" if value is None else f"{value:.{digits}f}"
+    """A figure with `digits` decimals (float noise as 0: `vinadv.display.number`); an em dash where the planner has
+    none (Exp without expansions)."""
+    return display.number(None if value is None else float(value), digits)
 
 
 def markdown_table(header: list[str], rows: list[list[str]]) -> str:
@@ -210,7 +245,7 @@ def shell_block(lines: list[str]) -> str:
     return "```sh\n" + "\n".join(lines) + "\n```"
 
 
-def mpd_table(path: Path = MPD_JSON) -> str:
+def mpd_table(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
     """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `perf/mpd_table.py`'s
     JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
     data = json.loads(path.read_text())
@@ -224,7 +259,7 @@ def mpd_table(path: Path = MPD_JSON) -> str:
                 + [percent(fig["success"])]
                 + ["—" if fig["expansions"] is None else f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"]
             )
-    header = ["family (test split)", "planner", "searches", "Opt", "Exp", "Hmean", "success", "expansions (A*'s)"]
+    header = [first, "planner", "searches", "Opt", "Exp", "Hmean", "success", "expansions (A*'s)"]
     return markdown_table(header, rows)
 
 
@@ -245,7 +280,7 @@ def _by_k(curve: list[dict], key: str) -> str:
     return " / ".join(percent(point[key]) for point in curve)
 
 
-def mpd_robustness(path: Path = MPD_JSON) -> str:
+def mpd_robustness(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
     """The robustness runs of `perf/mpd_table.py`'s JSON, worst case per map over the strategies: per family
     and planner, the harmful rate and the paper's success rate at k = 1..K added obstacles."""
     data = json.loads(path.read_text())
@@ -258,8 +293,24 @@ def mpd_robustness(path: Path = MPD_JSON) -> str:
             + [percent(figures["clean"]["success_rate"]), _by_k(overall, "harmful_rate")]
             + [_by_k(overall, "paper_success_rate"), decimal(overall[-1]["mean_regret"])]
         )
-    header = ["family (test split)", "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
+    header = [first, "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
     return markdown_table([*header, "mean regret at the largest k"], rows)
+
+
+def mpd_robustness_times(path: Path = MPD_JSON) -> str:
+    """How long the robustness runs took, as a sentence: per planner the fewest and most seconds of a family's run,
+    slowest planner first, and all the runs' minutes together."""
+    data = json.loads(path.read_text())
+    runs = _robustness_runs(data)
+    seconds: dict[str, list[float]] = {}
+    for run in runs:
+        seconds.setdefault(run["planner"], []).append(run["figures"]["seconds"])
+    each = [
+        f"`{planner}` {min(s):.0f} to {max(s):.0f} s"
+        for planner, s in sorted(seconds.items(), key=lambda item: (-max(item[1]), item[0]))
+    ]
+    total = sum(s for values in seconds.values() for s in values) / 60
+    return f"{', '.join(each)} per family, so the {len(runs)} runs took about {total:.0f} minutes"
 
 
 def mpd_robustness_strategies(path: Path = MPD_JSON) -> str:
@@ -278,6 +329,24 @@ def mpd_robustness_strategies(path: Path = MPD_JSON) -> str:
         for run in runs
     ]
     return markdown_table(["family", "planner", *(f"{name}: harmful, k = 1 / 2 / ..." for name in names)], rows)
+
+
+def transpath_ratios(path: Path = TRANSPATH_JSON) -> str:
+    """TransPath's own figures per TransPath planner of `perf/transpath_table.py`'s JSON (their `eval.py`: against
+    their vanilla A*, on the rows whose vanilla cost is at least the hardness times the octile heuristic)."""
+    data = json.loads(path.read_text())
+    rows = []
+    for family in data["families"]:
+        for entry in family["planners"]:
+            fig = entry["search"].get("transpath")
+            if fig:
+                rows.append(
+                    [family["family"], f"`{entry['planner']}`", f"{fig['kept']} of {fig['rows']}"]
+                    + [decimal(fig["expansions_ratio"]), decimal(fig["cost_ratio"]), str(fig["unreached"])]
+                    + [decimal(fig["expansions"], 1), decimal(fig["vanilla_expansions"], 1)]
+                )
+    header = ["maps", "planner", "rows kept", "expansions ratio", "cost ratio", "unreached"]
+    return markdown_table([*header, "expansions", "vanilla A*'s"], rows)
 
 
 def mpd_commands(path: Path = MPD_JSON) -> str:
@@ -577,10 +646,17 @@ def on_page_markdown(markdown: str, **kwargs) -> str:
         (BY_LENGTH_FIGURE, by_length_figure),
         (BY_LENGTH, by_length_table),
         (BENCH_LEADERBOARD, bench_leaderboard),
+        (BENCH_K_CURVES, bench_k_curves),
         (MPD_TABLE, mpd_table),
         (MPD_ROBUSTNESS_STRATEGIES, mpd_robustness_strategies),
         (MPD_ROBUSTNESS, mpd_robustness),
         (MPD_COMMANDS, mpd_commands),
+        (TRANSPATH_TABLE, lambda: mpd_table(TRANSPATH_JSON, "maps")),
+        (TRANSPATH_RATIOS, transpath_ratios),
+        (TRANSPATH_ROBUSTNESS_STRATEGIES, lambda: mpd_robustness_strategies(TRANSPATH_JSON)),
+        (TRANSPATH_ROBUSTNESS, lambda: mpd_robustness(TRANSPATH_JSON, "maps")),
+        (TRANSPATH_COMMANDS, lambda: mpd_commands(TRANSPATH_JSON)),
+        (MPD_ROBUSTNESS_TIMES, mpd_robustness_times),
         (MAP_SIZE_TABLE, map_size_table),
         (NEURAL_ASTAR_MODES, neural_astar_modes),
         (NEURAL_ASTAR_SPEED, neural_astar_speed),

@@ -322,6 +322,8 @@ def test_robustness_is_one_row_per_benchmark_strategy_and_k(sqlite_url):
     assert (worst["clean_success_low"], worst["clean_success_high"]) == rate_interval(9, 10)
     assert (frame["harmful_rate_low"] <= frame["harmful_rate"]).all()
     assert (frame["harmful_rate"] <= frame["harmful_rate_high"]).all()
+    # a mean regret's bootstrap interval is as stored: none in this one, stored before them
+    assert worst[["mean_regret_low", "clean_regret_low"]].isna().all()
     # and the k curve draws them as bands, as it draws `{rate}_low` / `{rate}_high` points
     series = dict(k_series(frame))
     assert series["vin"][0]["harmful_rate_low"] == rate_interval(5, 9)[0]
@@ -363,3 +365,27 @@ def test_open_takes_a_path_object(tmp_path):
         store.create_run("p")
     with vinadv.open(tmp_path / "r.db") as db:
         assert len(db.runs()) == 1
+
+
+def test_a_mean_regrets_bootstrap_interval_is_read_as_stored(sqlite_url):
+    settings = {"n": 10, "size": 8, "maps_seed": 1000, "objective": "harm", "strategies": ["random"]}
+    one = {**figures(1, 9, 2), "mean_regret_low": 0.25, "mean_regret_high": 0.75}
+    result = {
+        "clean": {
+            "maps": 10,
+            "reached": 9,
+            "success_rate": 0.9,
+            "mean_regret": 0.0,
+            "mean_regret_low": -0.1,
+            "mean_regret_high": 0.1,
+        },
+        "strategies": {"random": {"name": "random", "seconds": 1.0, "planner_calls": 3, "by_obstacles": [one]}},
+        "overall": [one],
+        "seconds": 1.0,
+    }
+    with Store.open(sqlite_url) as store:
+        store.add_robustness("vin", "ab" * 32, settings, result)
+    with vinadv.open(sqlite_url) as results:
+        row = results.robustness().iloc[0]
+    assert (row["mean_regret_low"], row["mean_regret_high"]) == (0.25, 0.75)
+    assert (row["clean_regret_low"], row["clean_regret_high"]) == (-0.1, 0.1)

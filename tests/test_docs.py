@@ -9,10 +9,12 @@ import json
 import re
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import pytest
 import torch
 from torch.utils.flop_counter import FlopCounterMode
 
+import vinadv.plot.files
 from vinadv.attacks.pairs import PAIRS_FORMAT
 from vinadv.classify.base import MODEL_FORMAT
 from vinadv.cli import build_parser
@@ -223,8 +225,11 @@ def test_the_formats_page_names_every_file_format_version():
         assert f'"{name}"' in page or f"`{name}`" in page, f"docs/formats.md does not describe {name}"
 
 
-def test_the_benchmark_page_carries_the_leaderboard_of_the_committed_entries():
+@pytest.mark.slow  # matplotlib's import and a k curve per suite, drawn: seconds
+def test_the_benchmark_page_carries_the_leaderboard_of_the_committed_entries(monkeypatch):
     hooks = docs_module("hooks")
+    # the figures are drawn, not rendered to SVG (tests/plot/test_curves.py renders one): a second each
+    monkeypatch.setattr(vinadv.plot.files, "svg_text", lambda fig: plt.close(fig) or "<svg/>")
     page = (DOCS / "results" / "bench.md").read_text()
     assert hooks.BENCH_LEADERBOARD in page
     board = hooks.on_page_markdown(page)
@@ -232,6 +237,11 @@ def test_the_benchmark_page_carries_the_leaderboard_of_the_committed_entries():
     assert entries, "no committed benchmark entry"
     for path in entries:  # every committed entry is a row, linked from the page
         assert f"(bench/{path.name})" in board
+    # the compact table in its own box, its legend, and one k curve per suite drawn in place of the marker
+    assert '<div class="leaderboard" markdown>' in board and "**harmful, k = 1**:" in board
+    assert hooks.BENCH_K_CURVES in page and "<!-- vinadv:" not in board
+    suites = {json.loads(p.read_text())["suite"]["name"] for p in entries}
+    assert board.count("](data:image/svg+xml;base64,") == len(suites)
 
 
 def _map_size_record() -> dict:
@@ -582,3 +592,27 @@ def test_make_demo_says_how_long_it_takes():
     minutes = re.search(r"about (\d+) minutes", echo).group(1)
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert f"about {minutes} minutes" in readme.split("make demo", 1)[1].split("make test", 1)[0]
+
+
+def test_the_transpath_page_is_read_from_its_json(tmp_path):
+    hooks = docs_module("hooks")
+    page = (DOCS / "results" / "transpath.md").read_text()
+    filled = hooks.on_page_markdown(page, page=None, config=None, files=None)
+    assert "<!-- vinadv:" not in filled
+    data = json.loads(hooks.TRANSPATH_JSON.read_text())
+    (family,) = data["families"]
+    assert family["import"] in filled and "--size 64" in family["import"]
+    for entry in family["planners"]:
+        assert entry["command"] in filled
+    for run in data["robustness"]:
+        assert run["command"] in filled and len(run["figures"]["overall"]) == 3
+    assert {"transpath-cf", "transpath-focal", "astar"} <= {run["planner"] for run in data["robustness"]}
+    # another JSON gives another table of TransPath's ratios: nothing is copied by hand
+    record = _mpd_record(0.5)
+    ratios = {"rows": 7, "kept": 4, "hardness": 1.05, "expansions_ratio": 0.25, "cost_ratio": 1.0625}
+    ratios |= {"unreached": 1, "expansions": 12.0, "vanilla_expansions": 48.0}
+    record["families"][0]["planners"][0]["search"]["transpath"] = ratios
+    path = tmp_path / "transpath.json"
+    path.write_text(json.dumps(record))
+    row = "| forest | `optimal` | 4 of 7 | 0.250 | 1.062 | 1 | 12.0 | 48.0 |"
+    assert hooks.transpath_ratios(path).splitlines()[2] == row

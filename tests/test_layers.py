@@ -24,6 +24,8 @@ LAYERS = {
     # the Wilson interval of every rate, from its counts: the bench, the report, robustness and analysis read it
     "intervals": 1,
     "seeds": 1,
+    # how a figure is shown (rounded, float noise as 0): every page, table and command's text
+    "display": 1,
     "checksums": 1,
     # where a job's chunks run (in this process; the Dask executor is the cluster's): knows no job
     "executor": 2,
@@ -52,6 +54,8 @@ LAYERS = {
     "evaluation": 8,
     "report": 9,
     "bench": 9,
+    # the exact k = 2 diagnostic: the pair search judged by harm, against a robustness run's greedy
+    "exact_k2": 9,
     "viewer": 9,
     # runs the stages on workers, the benchmark's chunks included; only the commands import it
     "cluster": 10,

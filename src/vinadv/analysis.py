@@ -112,7 +112,7 @@ ROBUSTNESS_COLUMNS = (
     "maps_seed",
     "objective",
     *interval_columns("clean_success"),
-    "clean_regret",
+    *interval_columns("clean_regret"),
     "strategy",
     "k",
     "maps",
@@ -123,7 +123,7 @@ ROBUSTNESS_COLUMNS = (
     "harmful",
     *interval_columns("harmful_rate"),
     "reached",
-    "mean_regret",
+    *interval_columns("mean_regret"),
     "effort_harmful",
     *interval_columns("effort_harmful_rate"),
     "seconds",
@@ -473,7 +473,8 @@ class Results:
         Wilson 95% interval as `{rate}_low` and `{rate}_high`, what `vinadv.plot.k_curve` draws as bands). Each
         row says which run it is: the run's `name` (`--name`), the planner's full spec (`wastar:w=3`), its weights'
         SHA-256 and the maps file with its SHA-256 (None for generated maps, and the effort-harmful count and rate
-        None for a planner that reports no expansions)."""
+        None for a planner that reports no expansions); each mean regret with its bootstrap 95% interval as stored,
+        None for a benchmark stored before it."""
         import pandas as pd
 
         rows = [row for stored in self.store.read_robustness() for row in robustness_rows(stored)]
@@ -502,6 +503,9 @@ def robustness_rows(stored: dict) -> list[dict]:
             for end, value in zip(("low", "high"), rate_interval(clean.get("reached"), clean.get("maps")))
         },
         "clean_regret": clean.get("mean_regret"),
+        # bootstrap intervals need the per-map regrets: None for a benchmark stored before them
+        "clean_regret_low": clean.get("mean_regret_low"),
+        "clean_regret_high": clean.get("mean_regret_high"),
     }
     strategies = [
         (name, s.get("by_obstacles", []), s.get("seconds")) for name, s in result.get("strategies", {}).items()

@@ -209,7 +209,12 @@ def harm_strength(pairs: PairSet) -> np.ndarray:
     path's excess over the optimum; a map's candidates share the original path, so this ranks the harm), invalid
     pairs weakest. `(n,)` float64."""
     labels = label_batch(PathPairBatch.from_pairs(pairs)).labels
-    regret_a = pairset_harm(pairs, labels).regret_a
+    return harm_order(labels, pairset_harm(pairs, labels).regret_a)
+
+
+def harm_order(labels, regret_a) -> np.ndarray:
+    """`harm_strength` from pairs' labels and adversarial regrets already computed (an `Identification`'s)."""
+    labels = np.asarray(labels)
     return np.where(labels == "UrP", np.inf, np.where(labels == "invalid", -np.inf, np.nan_to_num(regret_a)))
 
 

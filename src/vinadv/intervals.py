@@ -9,6 +9,12 @@ as every reader writes them: `{rate}_low` and `{rate}_high`, fractions in [0, 1]
 is None. The Wilson interval, unlike the normal approximation, stays inside [0, 1] and is not empty at 0% or 100%:
 with 100 maps a rate near one half is known to about +-10 points.
 
+A mean over maps (a mean regret, and to come Exp and the cost and effort ratios) gets a seeded percentile bootstrap
+interval instead (`bootstrap_mean_interval`): the maps are resampled with replacement `BOOTSTRAP_RESAMPLES` times,
+and the interval is the 2.5th and 97.5th percentiles of the resamples' means. It needs the per-map values, so it is
+computed where they exist (a robustness run's per-map outcomes); a record that holds only the mean has none. The
+seed is fixed (`BOOTSTRAP_SEED`): the same values give the same interval, so an entry or a result reproduces.
+
 This module knows only NumPy and the rates' names: the bench, the report, the robustness run, the analysis and the
 evaluation all read it.
 """
@@ -19,7 +25,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from vinadv.errors import InputError
+
 __all__ = [
+    "BOOTSTRAP_RESAMPLES",
+    "BOOTSTRAP_SEED",
     "FIGURE_RATES",
     "Z95",
     "figure_intervals",
@@ -27,7 +37,16 @@ __all__ = [
     "rate_interval",
     "wilson_interval",
     "interval_columns",
+    "bootstrap_mean_interval",
+    "bootstrap_means",
 ]
+
+#: resamples of a bootstrap interval, drawn in blocks of `BOOTSTRAP_BLOCK` (each from its own child stream of the
+#: seed, so memory stays `BOOTSTRAP_BLOCK` x n whatever n, and the draws never depend on it)
+BOOTSTRAP_RESAMPLES = 2000
+BOOTSTRAP_BLOCK = 250
+#: the bootstrap's seed: fixed, so that the same values give the same interval
+BOOTSTRAP_SEED = 0
 
 #: z of the two-sided 95% interval
 Z95 = 1.959963984540054
@@ -92,3 +111,34 @@ def interval_columns(*rates: str) -> tuple[str, ...]:
     """Each rate's column followed by its interval's (`{rate}_low`, `{rate}_high`): the columns of a table or frame
     that shows the rates with their intervals."""
     return tuple(column for rate in rates for column in (rate, f"{rate}_low", f"{rate}_high"))
+
+
+def bootstrap_means(values, resamples: int = BOOTSTRAP_RESAMPLES, seed: int = BOOTSTRAP_SEED) -> np.ndarray:
+    """`(resamples,)` the means of `resamples` resamples with replacement of `values` (`(n,)`, n >= 1, finite).
+    Resample block `b` (`BOOTSTRAP_BLOCK` resamples) draws its indices as
+    `default_rng(SeedSequence(seed).spawn(blocks)[b]).integers(0, n, (size, n))`."""
+    x = np.asarray(values, dtype=np.float64).reshape(-1)
+    if len(x) == 0:
+        raise InputError("values: no value to resample", "values")
+    if resamples < 1:
+        raise InputError(f"resamples must be >= 1, got {resamples}", "resamples")
+    sizes = [min(BOOTSTRAP_BLOCK, resamples - lo) for lo in range(0, resamples, BOOTSTRAP_BLOCK)]
+    children = np.random.SeedSequence(seed).spawn(len(sizes))
+    means = [
+        x[np.random.default_rng(c).integers(0, len(x), (size, len(x)))].mean(axis=1) for c, size in zip(children, sizes)
+    ]
+    return np.concatenate(means)
+
+
+def bootstrap_mean_interval(
+    values, level: float = 0.95, resamples: int = BOOTSTRAP_RESAMPLES, seed: int = BOOTSTRAP_SEED
+) -> tuple[float | None, float | None]:
+    """The percentile bootstrap interval of the mean of `values` (`(n,)`; NaN, a map without a value, left out):
+    the `(1 - level) / 2` and `(1 + level) / 2` quantiles (linear interpolation) of `bootstrap_means`;
+    `(None, None)` without a value."""
+    x = np.asarray(values, dtype=np.float64).reshape(-1)
+    x = x[~np.isnan(x)]
+    if len(x) == 0:
+        return None, None
+    low, high = np.quantile(bootstrap_means(x, resamples, seed), [(1 - level) / 2, (1 + level) / 2])
+    return float(low), float(high)

@@ -9,7 +9,8 @@ obstacles are the first k steps of one greedy attack of `max_obstacles`), labels
 - harmful rate: maps whose pair is harmful (UrP, or an adversarial path further from optimal than the original
   path was; DESIGN.md "Harm"), over the valid maps;
 - mean regret: the mean `regret_a` (adversarial path cost minus the optimal cost on the adversarial map, cost units)
-  over the valid maps whose adversarial path reaches the goal.
+  over the valid maps whose adversarial path reaches the goal, with its seeded percentile bootstrap 95% interval over
+  those maps (`mean_regret_low`, `mean_regret_high`: `vinadv.intervals.bootstrap_mean_interval`).
 
 A map is valid for a strategy when it got a pair (a valid cell at every step) and the planner reaches the goal on the
 clean map (else the pair is `invalid`: it says nothing about the attack). Worst case per map: a map counts as broken
@@ -61,7 +62,7 @@ from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.generator import MIN_SIZE, generate_maps
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import identify, objective_strength
-from vinadv.intervals import figure_intervals, interval_fields
+from vinadv.intervals import bootstrap_mean_interval, figure_intervals, interval_fields
 from vinadv.planners.registry import spec_label
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
@@ -158,6 +159,9 @@ class Figures:
     def effort_harmful_rate(self) -> float | None:
         return self.effort_harmful / self.valid if self.valid and self.effort_harmful is not None else None
 
+    #: the per-map regrets behind `mean_regret` (`(reached,)`), for its bootstrap interval; None where unknown
+    regrets: np.ndarray | None = field(default=None, repr=False, compare=False)
+
     @property
     def paper_success_rate(self) -> float | None:
         return self.broken / self.valid if self.valid else None
@@ -180,11 +184,14 @@ class Figures:
             mean_regret=float(regrets.mean()) if len(regrets) else None,
             counts=counts,
             effort_harmful=None if outcome.effort_harmful is None else int(outcome.effort_harmful.sum()),
+            regrets=regrets,
         )
 
     def to_dict(self, intervals: bool = False) -> dict:
         """The figures, JSON-able; with `intervals`, each rate's Wilson 95% interval too (`{rate}_low`, `{rate}_high`:
-        `vinadv.intervals`), as a robustness result carries them (an entry does not: its readers compute them)."""
+        `vinadv.intervals`) and the mean regret's bootstrap interval over the maps (`mean_regret_low`,
+        `mean_regret_high`; None without the per-map regrets), as a robustness result carries them (an entry does
+        not: its readers compute the rates' intervals)."""
         out = {
             "k": self.k,
             "maps": self.maps,
@@ -203,7 +210,10 @@ class Figures:
                 else {"effort_harmful": self.effort_harmful, "effort_harmful_rate": self.effort_harmful_rate}
             ),
         }
-        return {**out, **figure_intervals(out)} if intervals else out
+        if not intervals:
+            return out
+        low, high = (None, None) if self.regrets is None else bootstrap_mean_interval(self.regrets)
+        return {**out, **figure_intervals(out), "mean_regret_low": low, "mean_regret_high": high}
 
 
 @dataclass
@@ -219,6 +229,9 @@ class StrategyResult:
     #: the strategy whose ranking this one used on the planner, where it could not rank its own way (saliency
     #: without gradients: "key-points"), else None (`Attack.ranked_as`)
     ranked_as: str | None = None
+    #: the cells each map's pair edits at each k (`cells[i]`: `(n, k, 2)`, -1 where the map has no pair; not in
+    #: `to_dict`): what a chain started from this strategy's pairs starts from (`robustness(start=...)`)
+    cells: list[np.ndarray] = field(default_factory=list, repr=False)
 
     def to_dict(self) -> dict:
         return {
@@ -333,6 +346,7 @@ def robustness(
     progress: bool = False,
     maps_source: dict | None = None,
     run_name: str | None = None,
+    start: np.ndarray | None = None,
 ) -> RobustnessResult:
     """Run the robustness benchmark of `planner` on `maps` (see the module doc).
 
@@ -356,6 +370,9 @@ def robustness(
         maps_source: where `maps` came from when not from `heldout_maps` (a maps file: `{"maps": path,
             "maps_sha256": ...}`), recorded in the settings.
         run_name: the run's name (`--name`), recorded in the settings (`name`) to tell runs apart; None: none.
+        start: `(n, j, 2)` cells every strategy's chain starts from (`StrategyResult.cells` of another strategy: the
+            exhaustive one-cell optimum; -1 where a map has none), or None: the figures are then those of k = j +
+            1..`max_obstacles` (`by_k[0].k` is j + 1), and the settings record `start_cells: j`.
     """
     harm_tol = DEFAULT_TOL if harm_tol is None else harm_tol
     check_tolerances(harm_tol, harm_rtol, ("harm_tol", "harm_rtol"))
@@ -383,6 +400,9 @@ def robustness(
     n = len(maps)
     starts, goals, cc = maps.starts[:, 0], maps.goals, maps.corner_cutting
     clean = _clean(planner, maps)
+    first_k = 1 if start is None else np.asarray(start).shape[1] + 1
+    if first_k > int(max_obstacles):
+        raise InputError(f"max_obstacles {max_obstacles}: not above the {first_k - 1} start cells", "max_obstacles")
 
     results: dict[str, StrategyResult] = {}
     for name in strategies:
@@ -400,23 +420,27 @@ def robustness(
             progress=progress,
             first_map=first_map,
             frozen=maps.frozen,
+            start=start,
         )
-        by_k, outcomes = [], []
-        for k in range(1, int(max_obstacles) + 1):
-            if k <= len(result.steps):
-                pairs = result.steps[k - 1]
+        by_k, outcomes, cells = [], [], []
+        for k in range(first_k, int(max_obstacles) + 1):
+            kept = np.full((n, k, 2), -1, dtype=np.int64)
+            if k - first_k < len(result.steps):
+                pairs = result.steps[k - first_k]
                 expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
                 ident = identify(pairs, harm_tol=harm_tol, harm_rtol=harm_rtol, expert_o=expert_o)
                 outcome = _outcomes(n, pairs, ident.labels, ident.harm.harm, ident.harm.regret_a)
                 counts = label_counts(ident.labels)
+                kept[pairs.map_index] = pairs.added
             # else: every map ran out of cells at the last step made (`AttackResult.steps`): no pair, as there
             outcomes.append(outcome)
+            cells.append(kept)
             by_k.append(Figures.of(k, outcome, counts=counts))
         results[name] = StrategyResult(
-            name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes, attack.ranked_as(planner)
+            name, by_k, time.perf_counter() - t0, result.planner_calls, outcomes, attack.ranked_as(planner), cells
         )
-    overall_outcomes = [worst_case([r.outcomes[k] for r in results.values()]) for k in range(int(max_obstacles))]
-    overall = [Figures.of(k + 1, o) for k, o in enumerate(overall_outcomes)]
+    overall_outcomes = [worst_case([r.outcomes[i] for r in results.values()]) for i in range(len(outcomes))]
+    overall = [Figures.of(first_k + i, o) for i, o in enumerate(overall_outcomes)]
     settings = {
         "n": n,
         "size": maps.size,
@@ -438,6 +462,7 @@ def robustness(
         "planner": spec_label(planner.spec()),
         "name": run_name,
         "effort_tolerance": EFFORT_TOL if planner.capabilities.expansions else None,
+        **({} if start is None else {"start_cells": first_k - 1}),
     }
     return RobustnessResult(
         planner=planner.spec(),
@@ -468,11 +493,14 @@ def _clean(planner, maps) -> dict:
     plans = planner.plan(maps.obstacles, maps.starts[:, 0], maps.goals, maps.corner_cutting, maps.moves)
     reached = plans.reached
     regret = plans.paths.costs(maps.moves)[reached] - maps.expert_costs[reached, 0]
+    low, high = bootstrap_mean_interval(regret)
     return {
         "maps": len(maps),
         "reached": int(reached.sum()),
         "success_rate": float(reached.mean()),
         "mean_regret": float(regret.mean()) if len(regret) else None,
+        "mean_regret_low": low,
+        "mean_regret_high": high,
     }
 
 

@@ -1,7 +1,9 @@
 import numpy as np
 import pytest
+import tqdm
 
 from tests.grid.oracle import reachable
+from vinadv.attacks import strategies
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES, make_attack, within_distance
 from vinadv.attacks.validity import valid_cells
@@ -185,3 +187,33 @@ def test_within_distance_is_the_chebyshev_neighbourhood(radius):
     for b, r, c in np.ndindex(mask.shape):  # brute force: any marked cell at most `radius` king moves away
         want = any(mask[b, i, j] for i in range(9) for j in range(9) if max(abs(i - r), abs(j - c)) <= radius)
         assert got[b, r, c] == want, (b, r, c)
+
+
+class _Bar:
+    """A stand-in for tqdm that records what the bar was told."""
+
+    made: list = []
+
+    def __init__(self, total=None, desc=None, unit=None):
+        self.total, self.desc, self.unit, self.updates = total, desc, unit, []
+        _Bar.made.append(self)
+
+    def update(self, n):
+        self.updates.append(n)
+
+    def close(self):
+        pass
+
+
+def test_the_progress_bar_counts_maps_chunk_by_chunk_and_the_chunks_change_no_pair(model, maps, monkeypatch):
+    args = (maps.obstacles[:5], maps.starts[:5, 0], maps.goals[:5], model)
+    whole = make_attack("exhaustive").attack(*args).pairs
+    monkeypatch.setattr(tqdm, "tqdm", _Bar)
+    monkeypatch.setattr(strategies, "EVAL_CHUNK", 1)  # a chunk per map
+    _Bar.made = []
+    per_map = make_attack("exhaustive").attack(*args, progress=True).pairs
+    (bar,) = _Bar.made
+    assert (bar.total, bar.unit, bar.updates) == (5, "map", [1] * 5)
+    for name in ("map_index", "added", "obstacles_a", "term_a"):
+        np.testing.assert_array_equal(getattr(per_map, name), getattr(whole, name))
+    np.testing.assert_array_equal(per_map.path_a.cells, whole.path_a.cells)

@@ -8,6 +8,7 @@ import json
 
 import pytest
 import sqlalchemy as sa
+import tqdm
 
 from tests.bench.two_maps import two_map_suite
 from vinadv.bench import scoring, suites
@@ -122,3 +123,29 @@ def test_a_declared_planner_version_is_its_provenance(tmp_path):
         '    return load_planner("astar", size)\n'
     )
     assert load_planner(f"{tmp_path / 'versioned.py'}:make", 28).provenance == {"version": "2.1"}
+
+
+@pytest.mark.slow  # two bench runs of the two-map suite: about two seconds
+def test_the_progress_bar_counts_maps_the_stored_ones_done(tiny, tmp_path, monkeypatch):
+    """`--resume`'s bar starts at the maps of the stored chunks and moves by each computed chunk's maps."""
+    bars = []
+
+    class Bar:
+        def __init__(self, desc=None, unit=None, initial=0, total=None):
+            self.unit, self.initial, self.total, self.updates = unit, initial, total, []
+            bars.append(self)
+
+        def update(self, n):
+            self.updates.append(n)
+
+        def close(self):
+            pass
+
+    planner = load_planner("optimal", 28)
+    db = tmp_path / "b.db"
+    run_bench(tiny, planner, db=str(db))
+    _sql(db, "DELETE FROM bench_chunks WHERE chunk = 1")
+    monkeypatch.setattr(tqdm, "tqdm", Bar)
+    run_bench(tiny, planner, db=str(db), resume=True, progress=True)
+    (bar,) = bars
+    assert (bar.unit, bar.initial, bar.total, bar.updates) == ("map", 1, 2, [1])

@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 
 from tests.bench.two_maps import two_map_suite
 from vinadv.bench import scoring, suites
-from vinadv.bench.scoring import deterministic_part, entry_json, make_entry, run_bench, weighted_mean
+from vinadv.bench.outcomes import weighted_mean
+from vinadv.bench.scoring import deterministic_part, entry_json, make_entry, run_bench
 from vinadv.bench.suites import AttackGroup, Suite, get_suite, maps_sha256
 from vinadv.cli import main
 from vinadv.errors import InputError

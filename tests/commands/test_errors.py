@@ -61,10 +61,10 @@ def test_bench_run_names_the_missing_file_of_data_as_it_is(tmp_path, monkeypatch
     assert line.startswith("vinadv: error: data/") and "no such file" in line and line.rstrip().endswith("--data)")
 
 
-def test_bench_leaderboard_names_its_folder_argument(tmp_path, capsys):
+def test_bench_leaderboard_names_its_source_argument(tmp_path, capsys):
     assert main(["bench", "leaderboard", str(tmp_path / "nonexist"), "--out", str(tmp_path / "lb")]) == 2
     line = capsys.readouterr().err
-    assert "--folder" not in line and f"DIR {tmp_path / 'nonexist'}: no such folder" in line
+    assert "--sources" not in line and f"SOURCE {tmp_path / 'nonexist'}: no such folder or file" in line
     assert not (tmp_path / "lb").exists()
 
 

@@ -140,7 +140,7 @@ def test_report_and_viewer_show_the_runs_planner(tmp_path):
         evaluate_planner_quality(store, store.list_runs()[-1]["id"])
     html = write_report(db, tmp_path / "rep").read_text()
     assert "<td>planner</td><td>optimal</td>" in html
-    assert "quick evaluation of planner &#39;optimal&#39;" in html  # its quality, not the VIN's
+    assert "planner &#39;optimal&#39;, " in html and "on the first 20 distinct maps" in html  # its quality, on its maps
     with Store.open(db, readonly=True) as store:
         runs = create_app(store).test_client().get("/api/runs").get_json()["runs"]
     assert [r["planner"] for r in runs] == ["optimal"]

@@ -12,6 +12,8 @@ from vinadv.grid import (
     shortest_distances,
     valid_moves,
 )
+from vinadv.grid.moves import move_model
+from vinadv.grid.shortest_paths import dijkstra_batch
 
 
 @st.composite
@@ -66,11 +68,21 @@ def test_batches_agree_with_single_maps():
     obstacles = rng.random((20, 12, 12)) < 0.3
     goals = rng.integers(0, 12, (20, 2))
     obstacles[np.arange(20), goals[:, 0], goals[:, 1]] = False
+    obstacles[[4, 5], goals[[4, 5], 0], goals[[4, 5], 1]] = True  # goals on an obstacle: nothing reaches them
     dist, moves = shortest_distances(obstacles, goals)
+    assert np.isinf(dist[4]).all() and (moves[5] == -1).all()
     for i in range(20):
         d1, m1 = shortest_distances(obstacles[i : i + 1], goals[i : i + 1])
         np.testing.assert_array_equal(d1[0], dist[i])
         np.testing.assert_array_equal(m1[0], moves[i])
+    # the kernel's runs of maps share their scratch: any cut of the batch gives the same maps
+    model = move_model("octile")
+    for pieces in (1, 3, 20):
+        d, m = np.empty_like(dist), np.empty_like(moves)
+        dijkstra_batch(obstacles, goals.astype(np.int64), False, model.deltas, model.costs, d, m, pieces)
+        d1, m1 = shortest_distances(obstacles, goals, corner_cutting=False)
+        np.testing.assert_array_equal(d, d1)
+        np.testing.assert_array_equal(m, m1)
 
 
 def test_corner_cutting_option_blocks_squeezing_between_two_obstacles():

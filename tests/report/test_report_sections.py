@@ -104,7 +104,7 @@ def _section(page: str, sid: str) -> str:
 
 
 #: the sections that show what `vinadv evaluate` stores
-EVALUATED = ["vin", "classifiers", "timing"]
+EVALUATED = ["planner", "classifiers", "timing"]
 
 
 def test_a_store_without_the_evaluation_says_so_until_vinadv_evaluate_stores_it(db_copy, tmp_path):
@@ -118,7 +118,7 @@ def test_a_store_without_the_evaluation_says_so_until_vinadv_evaluate_stores_it(
     command = f"<code>vinadv evaluate --db {url} --run {saliency}</code>"
     for sid in EVALUATED:
         assert command in _section(page, sid), sid
-    assert "Not evaluated" in _section(page, "vin") and "Source:" not in page
+    assert "Not evaluated" in _section(page, "planner") and "Source:" not in page
     assert _section(page, "timing").count("<td>not evaluated</td>") == 2
     rows = {row[0]: row for row in data.sections["timing"].table.rows}
     assert rows["rule"][1:4] == rows["database_read"][1:4] == [None, None, None]
@@ -126,6 +126,6 @@ def test_a_store_without_the_evaluation_says_so_until_vinadv_evaluate_stores_it(
     assert main(["evaluate", *quiet, "--classifiers", "rule"]) == 0
     data = _gather(url, tmp_path / "evaluated", EVALUATED, [saliency])
     page = render_page(data)
-    assert "Not evaluated" not in page and "Source: " in _section(page, "vin")
+    assert "Not evaluated" not in page and "Source: " in _section(page, "planner")
     assert "stored pairs of run" in _section(page, "timing") and "<td>not evaluated</td>" not in page
     assert data.sections["timing"].pairs == sum(data.sections["timing"].counts.values()) > 0

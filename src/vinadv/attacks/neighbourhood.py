@@ -53,3 +53,15 @@ def steepness_across(value: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
                 hi = np.fmax(hi, v)
                 lo = np.fmin(lo, v)
     return np.where(hi > lo, hi - lo, 0.0)
+
+
+def chebyshev_distance(mask: np.ndarray) -> np.ndarray:
+    """King moves (Chebyshev distance) from each cell to the nearest True cell of the same map, `(B, N, N)` int64 for
+    `mask (B, N, N)` bool; `N` on a map with no True cell (further than any cell of the map)."""
+    b, n, m = mask.shape
+    distance = np.full(mask.shape, max(n, m), np.int64)
+    reached = mask.copy()
+    for radius in range(max(n, m)):
+        distance[reached & (distance > radius)] = radius
+        reached = within_distance(reached, 1)
+    return distance

@@ -83,13 +83,17 @@ from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import removable_cells, valid_cells
 from vinadv.errors import InputError
 from vinadv.grid.paths import PackedPaths
+from vinadv.grid.selection import smallest_first
 from vinadv.planners.interface import Planner
 from vinadv.planners.result import PlanResult
 from vinadv.planners.vin.planner import as_planner
 from vinadv.vocabulary import ADD, EDITS, REMOVE
 
-#: candidates planned together; bounds memory (each holds an N x N map and a path)
-EVAL_CHUNK = 8192
+#: candidates planned together, about (a chunk is whole maps: it ends at the first map starting past a multiple of
+#: this): bounds memory (each holds an N x N map and a path) and sets how often the progress bar moves, about once per
+#: map of an exhaustive attack. The planners cut a batch in chunks of this order themselves (`plan_maps`' 1024 maps),
+#: so larger ones would not plan faster (`perf/eval_chunk.py`)
+EVAL_CHUNK = 1024
 
 
 def planner_strength(pairs: PairSet) -> np.ndarray:
@@ -218,6 +222,7 @@ class Attack:
         progress: bool = False,
         first_map: int = 0,
         frozen: np.ndarray | None = None,
+        start: np.ndarray | None = None,
     ) -> AttackResult:
         """Attack a batch of maps with `planner` (a `Planner`, or a `VIN`): obstacles `(B, N, N)` bool, starts
         and goals `(B, 2)`; `self.obstacles` cells per pair, greedily (see the module doc).
@@ -232,6 +237,11 @@ class Attack:
 
         `frozen`: `(B, N, N)` bool, the cells no step may add to or free (`MapSet.frozen`: an importer's padding), or
         None; they are never candidates (`validity`), so no strategy edits them.
+
+        `start`: `(B, j, 2)` cells each map's chain starts from, edited already (another attack's kept cells: the
+        exhaustive one-cell optimum), a map's rows -1 where it has none (it gets no pair); the greedy steps then make
+        cells j + 1..`self.obstacles`, each step's stream the one it has without `start`, and `steps[i]` holds the
+        pairs of j + i + 1 cells.
         """
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
         starts = np.ascontiguousarray(starts, dtype=np.int64)
@@ -246,8 +256,16 @@ class Attack:
         current, plans = obstacles, base
         chosen = np.zeros((b, 0, 2), np.int64)
         alive = np.ones(b, dtype=bool)  # maps that got a cell at every step so far
+        if start is not None:
+            chosen = np.asarray(start, dtype=np.int64).reshape(b, -1, 2)
+            alive = (chosen >= 0).all(axis=(1, 2))
+            chosen = np.where(alive[:, None, None], chosen, 0)
+            current = obstacles.copy()
+            rows = np.flatnonzero(alive)
+            for j in range(chosen.shape[1]):
+                current[rows, chosen[rows, j, 0], chosen[rows, j, 1]] = self.edit == ADD
         steps: list[PairSet] = []
-        for step in range(self.obstacles):
+        for step in range(chosen.shape[1], self.obstacles):
             last = step == self.obstacles - 1
             if step:
                 plans = planner.plan(current, starts, goals, corner_cutting)
@@ -316,24 +334,33 @@ class Attack:
         self, ctx, map_idx, cells, rank, corner_cutting, strength, progress, keep: int, ranked: bool
     ) -> PairSet:
         """The pairs of the candidates `(map_idx, cells, rank)`: with `ranked`, the `keep` strongest of each map
-        (all with `keep` 0), else all. `progress`: a progress bar's description, or False."""
+        (all with `keep` 0), else all. `progress`: a progress bar's description, or False: the bar counts the maps,
+        moving as each chunk of them is judged, with tqdm's estimate of the time left."""
         # chunks of about EVAL_CHUNK candidates, split at map boundaries so a map's candidates are judged together
-        first = np.searchsorted(map_idx, np.arange(len(ctx.obstacles) + 1))
+        n_maps = len(ctx.obstacles)
+        first = np.searchsorted(map_idx, np.arange(n_maps + 1))
         chunk_of_map = first[:-1] // EVAL_CHUNK
-        bounds = np.append(first[np.searchsorted(chunk_of_map, np.unique(chunk_of_map))], len(map_idx))
-        spans = list(zip(bounds[:-1], bounds[1:]))
+        first_maps = np.append(np.searchsorted(chunk_of_map, np.unique(chunk_of_map)), n_maps)
+        bar = None
         if progress:
             from tqdm import tqdm
 
-            spans = tqdm(spans, desc=progress, unit="chunk")
+            bar = tqdm(total=n_maps, desc=progress, unit="map")
         parts = []
-        for lo, hi in spans:
-            if hi > lo:
-                parts.append(
-                    self._evaluate_chunk(
-                        ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi], corner_cutting, strength, keep, ranked
+        try:
+            for m0, m1 in zip(first_maps[:-1], first_maps[1:]):
+                lo, hi = first[m0], first[m1]
+                if hi > lo:
+                    parts.append(
+                        self._evaluate_chunk(
+                            ctx, map_idx[lo:hi], cells[lo:hi], rank[lo:hi], corner_cutting, strength, keep, ranked
+                        )
                     )
-                )
+                if bar is not None:
+                    bar.update(int(m1 - m0))
+        finally:
+            if bar is not None:
+                bar.close()
         return PairSet.concat(
             parts,
             size=ctx.obstacles.shape[1],
@@ -365,9 +392,7 @@ def _top_candidates(scores: np.ndarray, per_map: int | None):
     """The best `per_map` candidates of each map (all with None), best first: (map_idx, cells, rank)."""
     b, n, m = scores.shape
     flat = scores.reshape(b, -1)
-    order = np.argsort(-flat, axis=1, kind="stable")
-    if per_map is not None:
-        order = order[:, :per_map]
+    order = smallest_first(-flat, flat.shape[1] if per_map is None else per_map)
     picked = np.take_along_axis(flat, order, axis=1)
     ok = np.isfinite(picked)
     map_idx = np.repeat(np.arange(b), order.shape[1]).reshape(b, -1)[ok]

@@ -10,6 +10,10 @@ at face value.
 - `non_deterministic`: two forward passes on the same maps differ (the logits, or the planned paths).
 - `too_weak`: the clean success rate is under `suite.weak_clean_success` (50%): a planner that mostly fails on clean
   maps leaves few valid maps, and its robustness figures say little.
+- `other_rules`: the planner's weights were trained on maps of another move rule than the suite's (`vin64`, trained
+  with corner cutting, on the Moving AI suites, whose maps never cut corners): it runs under the suite's rule, which
+  it never saw. Read from the training record of the zoo model of its weights (`trained_rules`); in an entry only
+  where raised, so the entries of planners trained under their suite's rule are as they were.
 """
 
 from __future__ import annotations
@@ -47,9 +51,30 @@ def differs_between_passes(planner: Planner, obstacles, starts, goals, corner_cu
     return a.paths != b.paths or not np.array_equal(a.termination_names, b.termination_names)
 
 
+def trained_rules(planner: Planner) -> dict | None:
+    """The move rule of the maps the planner's weights were trained on, `{"corner_cutting": bool, "moves": str |
+    None}`, from the training record of the zoo model of its weights (`vinadv.planners.registry.models`); None for a
+    planner without weights, weights outside the zoo or a record that does not say."""
+    from vinadv.planners.registry.models import read_zoo  # noqa: PLC0415 (light: hashes and JSON only)
+
+    sha = planner.spec().get("weights_sha256")
+    model = next((m for m in read_zoo().values() if sha is not None and m.sha256 == sha), None)
+    record = model.training_record() if model is not None else None
+    if not isinstance(record, dict):
+        return None
+    data = record.get("data") if isinstance(record.get("data"), dict) else {}
+    cuts = record.get("corner_cutting", data.get("corner_cutting"))
+    moves = record.get("moves", data.get("moves"))
+    return None if not isinstance(cuts, bool) else {"corner_cutting": cuts, "moves": moves}
+
+
+def _rule(corner_cutting: bool, moves: str | None) -> str:
+    return f"{moves or 'its'} moves {'with' if corner_cutting else 'without'} corner cutting"
+
+
 def raise_flags(suite: Suite, checks: dict, clean_success: float | None, attacks: dict) -> dict:
     """The entry's flags: {flag: {"raised": bool, "why": str}} from the `checks` made on the planner
-    (`gradient_masked`, `non_deterministic`), the clean success rate and the per-attack figures."""
+    (`gradient_masked`, `non_deterministic`, `trained_rules`), the clean success rate and the per-attack figures."""
     masked = checks.get("gradient_masked")
     why = "the saliency gradient is zero or not finite on every checked map" if masked else ""
     exhaustive = attacks.get("add:exhaustive")
@@ -70,7 +95,17 @@ def raise_flags(suite: Suite, checks: dict, clean_success: float | None, attacks
                 f"gradient or ranking attack's {best:.1%}"
             )
     weak = clean_success is None or clean_success < suite.weak_clean_success
-    return {
+    other = {}
+    trained = checks.get("trained_rules")
+    if trained is not None and (
+        trained["corner_cutting"] != suite.cuts_corners() or trained["moves"] not in (None, suite.movement())
+    ):
+        rules = (
+            f"trained on maps of {_rule(trained['corner_cutting'], trained['moves'])}; run under the suite's rule, "
+            f"{_rule(suite.cuts_corners(), suite.movement())}"
+        )
+        other = {"other_rules": {"raised": True, "why": rules}}
+    return other | {
         "gradient_masking": {"raised": bool(masked), "why": why},
         "non_deterministic": {
             "raised": bool(checks.get("non_deterministic")),

@@ -24,13 +24,14 @@ INDEX_FORMAT = "vinadv.bench_index/1"
 SHIPPED_INDEX = Path(__file__).resolve().parent / "entries.json"
 
 
-def make_index(entries: list[tuple[Path, dict]], folder: str) -> dict:
-    """The index of `entries` (`vinadv.bench.leaderboard.read_entries`), their files named `folder/NAME`."""
+def make_index(entries: list[tuple[Path, dict]], folder: str | None = None) -> dict:
+    """The index of `entries` (`vinadv.bench.leaderboard.read_entries`), their files named `folder/NAME`, or without
+    `folder` as read (the paths as given)."""
     rows = []
     for path, e in entries:
         rows.append(
             {
-                "file": f"{folder.rstrip('/')}/{path.name}",
+                "file": path.as_posix() if folder is None else f"{folder.rstrip('/')}/{path.name}",
                 "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
                 "suite": e["suite"]["name"],
                 "suite_checksum": e["suite"]["checksum"],

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from vinadv.bench.scoring import entry_json, run_bench
+from vinadv.bench.scoring import entry_json, run_bench, submission_fields
 from vinadv.bench.suites import Suite, get_suite
 from vinadv.executor import LOCAL, Executor
 
@@ -13,15 +13,34 @@ from vinadv.executor import LOCAL, Executor
 @dataclass(frozen=True)
 class BenchConfig:
     """What determines a bench entry: the suite (`vinadv.bench.suites`, by name), the planner's spec and weights,
-    and the folder of a data suite's files (`data`); checked when made (an unknown suite: InputError naming it)."""
+    the folder of a data suite's files (`data`), and how the entry is shared (an entry of format 2: its display name,
+    authors, paper and code links, whether it is submitted from outside; `vinadv.bench.scoring.submission_fields`);
+    checked when made (an unknown suite, a link that is not http or https: InputError naming it)."""
 
     suite: str
     planner: str | None = None
     weights: str | None = None
     data: str | None = None
+    display_name: str | None = None
+    authors: tuple[str, ...] = ()
+    paper: str | None = None
+    code: str | None = None
+    external: bool = False
 
     def __post_init__(self):
-        get_suite(self.suite)
+        object.__setattr__(self, "authors", tuple(self.authors))
+        submission_fields(get_suite(self.suite), self.submission)
+
+    @property
+    def submission(self) -> dict:
+        """The entry's submission fields."""
+        return {
+            "display_name": self.display_name,
+            "authors": list(self.authors),
+            "paper": self.paper,
+            "code": self.code,
+            "external": self.external,
+        }
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -62,11 +81,22 @@ def run(
     if resume and db is None:
         raise InputError("resume: only with db", "resume", "db")
     suite = config.frozen_suite
-    planner = load_planner(config.planner, suite.size, weights=config.weights, device=device, moves=suite.movement())
-    # every suite's maps cut corners (the generator's default, the MP layout's)
-    ref = PlannerRef.of(planner, config.planner, config.weights, corner_cutting=True) if executor.remote else None
+    # the planner runs under the suite's rule (a planner trained on other maps too: its entry's `other_rules` flag)
+    cuts = suite.cuts_corners()
+    planner = load_planner(
+        config.planner, suite.size, weights=config.weights, corner_cutting=cuts, device=device, moves=suite.movement()
+    )
+    ref = PlannerRef.of(planner, config.planner, config.weights, corner_cutting=cuts) if executor.remote else None
     entry = run_bench(
-        suite, planner, db=db, resume=resume, progress=progress, data=config.data, executor=executor, planner_ref=ref
+        suite,
+        planner,
+        db=db,
+        resume=resume,
+        progress=progress,
+        data=config.data,
+        executor=executor,
+        planner_ref=ref,
+        submission=config.submission,
     )
     return BenchResult(entry)
 

@@ -19,6 +19,11 @@ computed from the per-map outcomes of all chunks, in map order:
 - `worst_case`: per k, the worst case per map over the attacks that reach k (`vinadv.robustness.worst_case`).
 - `flags` (`vinadv.bench.flags`), `time` (wall seconds, per chunk) and `machine` (where it ran).
 
+That is the entry of a suite of definitions 1 (`vinadv.bench_entry/1`). A suite of definitions 2 writes
+`vinadv.bench_entry/2` (`vinadv.bench.outcomes`): the per-map outcomes of the chunks (`per_map`), every figure computed
+from them, the worst case at k over every attack of at most k edits; and its `checks` and `submission`. A group with a
+`start` (`AttackGroup.start`) chains from the cells the named strategy's group kept on each map in the same chunk.
+
 Everything but `time` and `machine` is a function of the suite, the planner and its weights: the same on the same
 device type, byte for byte (`entry_json` writes sorted keys, fixed indentation).
 """
@@ -29,31 +34,28 @@ import dataclasses
 import functools
 import hashlib
 import json
-import math
 import os
 import platform
 import time
-from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
 
 from vinadv import __version__
-from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags
-from vinadv.bench.suites import ENTRY_FORMAT, DataSuite, Suite, maps_sha256
+from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags, trained_rules
+from vinadv.bench.outcomes import chunk_per_map, entry_figures, figures_v1
+from vinadv.bench.suites import ENTRY_FORMAT_2, DataSuite, Suite, maps_sha256
 from vinadv.errors import InputError
 from vinadv.evaluation.protocols import gppn_protocol
-from vinadv.evaluation.search_metrics import evaluate_search, harmonic_mean, path_costs
+from vinadv.evaluation.search_metrics import evaluate_search, path_costs
 from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.mapset import MapSet
 from vinadv.planners.interface import Planner
 from vinadv.records import BENCH_CHUNK, RECORD_VERSIONS, VERSION_KEY
-from vinadv.robustness import Figures, MapOutcomes, attack_settings, heldout_maps, robustness, worst_case
+from vinadv.robustness import attack_settings, heldout_maps, robustness
 
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
 VOLATILE_FIELDS = ("time", "machine")
-#: a path is optimal when its cost is within this of the optimum
-OPTIMAL_TOL = 1e-9
 #: the results-format version of a stored chunk: bumped whenever what `compute_chunk` computes changes, so that
 #: `--resume` never joins chunks of two computations (chunks stored before fingerprints are this version, 1)
 CHUNK_FORMAT = 1
@@ -98,8 +100,8 @@ def data_suite_maps(suite: DataSuite, data: str | os.PathLike | None) -> MapSet:
             raise InputError(
                 f"{path}: sha256 {digest} is not the {f.sha256} suite {suite.name} froze (another version of the file)"
             )
-        # one start per map: the reader's k > 1 draws are not needed (and each is its own draw)
-        maps, _ = read_maps(str(path), suite.layout, split=suite.split, starts=1, seed=suite.maps_seed)
+        # one start per map (`read_options`): the reader's k > 1 draws are not needed (and each is its own draw)
+        maps, _ = read_maps(str(path), suite.layout, **suite.read_options(f))
         if len(maps) < f.maps:
             raise InputError(f"{path}: {len(maps)} maps in split {suite.split}, suite {suite.name} takes {f.maps}")
         parts.append(maps.take(np.arange(f.maps)))
@@ -189,17 +191,8 @@ def _check_stored(suite: Suite, n_chunks: int):
 
 
 def chunk_maps(maps: MapSet, lo: int, hi: int) -> MapSet:
-    """Maps `lo:hi` of `maps` (with their starts and expert paths)."""
-    s = maps.n_starts
-    return dataclasses.replace(
-        maps,
-        obstacles=maps.obstacles[lo:hi],
-        goals=maps.goals[lo:hi],
-        starts=maps.starts[lo:hi],
-        expert_costs=maps.expert_costs[lo:hi],
-        expert=maps.expert.take(np.arange(lo * s, hi * s)),
-        start_counts=None if maps.start_counts is None else maps.start_counts[lo:hi],
-    )
+    """Maps `lo:hi` of `maps` (with their starts and expert paths, frozen cells and provenance)."""
+    return maps.take(np.arange(lo, min(hi, len(maps))))
 
 
 def _floats(values) -> list:
@@ -220,8 +213,10 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     else:
         gppn = gppn_protocol(planner, sub)
         clean = {"gppn_percent_optimal": gppn["percent_optimal"], "gppn_percent_success": gppn["percent_success"]}
-    attacks = {}
+    attacks, cells = {}, {}
     for group in suite.attacks:
+        # a group started from an earlier group's one-cell pairs (the exhaustive optimum) chains from its cells
+        start = None if group.start is None else cells[f"{group.edit}:{group.start}"]
         result = robustness(
             planner,
             sub,
@@ -229,10 +224,13 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
             group.max_obstacles,
             edit=group.edit,
             first_map=lo,
+            start=start,
             **attack_settings(suite),
         )
-        for name, strategy in result.strategies.items():
-            attacks[f"{group.edit}:{name}"] = [
+        for key, strategy in zip(group.keys(), result.strategies.values()):
+            if group.start is None:
+                cells[key] = strategy.cells[0]
+            attacks[key] = [
                 {
                     "pair": o.pair.tolist(),
                     "valid": o.valid.tolist(),
@@ -258,123 +256,68 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     }
 
 
-def _outcome(parts: list[dict]) -> MapOutcomes:
-    """One attack's per-map outcomes at one k, the chunks' joined in map order."""
-
-    def join(name, dtype):
-        return np.array([v for p in parts for v in p[name]], dtype=dtype)
-
-    regret = np.array([np.nan if v is None else v for p in parts for v in p["regret"]], dtype=np.float64)
-    return MapOutcomes(
-        pair=join("pair", bool),
-        valid=join("valid", bool),
-        broken=join("broken", bool),
-        harmful=join("harmful", bool),
-        regret=regret,
-        label=join("label", "<U7"),
-    )
-
-
-def _counts(parts: list[dict]) -> dict:
-    total: dict[str, int] = {}
-    for p in parts:
-        for label, count in p["counts"].items():
-            total[label] = total.get(label, 0) + int(count)
-    return total
-
-
-def weighted_mean(weights: Iterable[float], values: Iterable[float]) -> float:
-    """sum(w * v) / sum(w), each sum correctly rounded (`math.fsum`): the same bits on every CPU, where a BLAS dot
-    product sums in the order of the CPU's kernel (an entry made on an Intel and on an AMD CPU differed in the last
-    digit)."""
-    weights, values = list(weights), list(values)
-    return math.fsum(w * v for w, v in zip(weights, values)) / math.fsum(weights)
-
-
-def make_entry(suite: Suite, planner: Planner, chunks: dict[int, dict], checks: dict, seconds: float) -> dict:
-    """The entry of `planner` on `suite` from its chunks' results (`compute_chunk`, {chunk: result}, all of them)."""
+def make_entry(
+    suite: Suite,
+    planner: Planner,
+    chunks: dict[int, dict],
+    checks: dict,
+    seconds: float,
+    submission: dict | None = None,
+) -> dict:
+    """The entry of `planner` on `suite` from its chunks' results (`compute_chunk`, {chunk: result}, all of them):
+    `vinadv.bench_entry/1` for a suite of definitions 1, else `vinadv.bench_entry/2`, its figures computed from the
+    per-map outcomes it holds (`vinadv.bench.outcomes`), with `checks` and the `submission` (`submission_fields`;
+    an entry of format 1 has none: InputError where one is given)."""
     order = [chunks[c] for c in sorted(chunks)]
-    reached = np.array([v for c in order for v in c["clean"]["reached"]], dtype=bool)
-    regret = np.array([np.nan if v is None else v for c in order for v in c["clean"]["regret"]], dtype=np.float64)
-    n = len(reached)
-    weights = [c["maps"] for c in order]
-
-    def gppn(name):  # the chunks' means, weighted by their maps: the mean over every map
-        return weighted_mean(weights, [c["clean"][name] for c in order])
-
-    clean = {
-        "maps": n,
-        "reached": int(reached.sum()),
-        "success_rate": float(reached.mean()),
-        "percent_optimal": float((reached & (np.abs(regret) <= OPTIMAL_TOL)).mean()),
-        "mean_regret": float(np.nanmean(regret)) if reached.any() else None,
-    }
-    if "search" in order[0]["clean"]:
-        clean["gppn"] = None  # a search planner has no policy to follow from every cell
-        clean["search"] = join_search([c["clean"]["search"] for c in order])
-    else:
-        clean["gppn"] = {
-            "percent_optimal": gppn("gppn_percent_optimal"),
-            "percent_success": gppn("gppn_percent_success"),
-        }
-    outcomes: dict[str, list[MapOutcomes]] = {}
-    attacks = {}
-    for group in suite.attacks:
-        for key in group.keys():
-            per_k = [[c["attacks"][key][k] for c in order] for k in range(group.max_obstacles)]
-            outcomes[key] = [_outcome(parts) for parts in per_k]
-            attacks[key] = {
-                "strategy": key.split(":", 1)[1],
-                "edit": group.edit,
-                "by_obstacles": [
-                    Figures.of(k + 1, o, counts=_counts(parts)).to_dict()
-                    for k, (o, parts) in enumerate(zip(outcomes[key], per_k))
-                ],
-            }
-    max_k = max(g.max_obstacles for g in suite.attacks)
-    worst = []
-    for k in range(max_k):
-        at_k = [outs[k] for outs in outcomes.values() if len(outs) > k]
-        worst.append({**Figures.of(k + 1, worst_case(at_k)).to_dict(), "attacks": len(at_k)})
     spec = planner.spec()
-    return {
-        "format": ENTRY_FORMAT,
+    head = {
+        "format": suite.entry_format,
         "suite": {"name": suite.name, "checksum": suite.checksum},
         "vinadv_version": __version__,
         "planner": spec,
         "weights_sha256": spec.get("weights_sha256"),
-        "clean": clean,
-        "attacks": attacks,
-        "worst_case": worst,
-        "flags": raise_flags(suite, checks, clean["success_rate"], attacks),
+    }
+    submission = submission_fields(suite, submission)
+    if suite.definitions == 1:
+        clean, attacks, worst = figures_v1(suite, order)
+        body = {"clean": clean, "attacks": attacks, "worst_case": worst}
+    else:
+        per_map = chunk_per_map(suite, order)
+        body = entry_figures(suite, per_map)
+        if "worst_effort" in body:
+            per_map["worst_effort"] = body.pop("worst_effort")
+        body = {"submission": submission, "checks": checks, **body, "per_map": per_map}
+    return {
+        **head,
+        **body,
+        "flags": raise_flags(suite, checks, body["clean"]["success_rate"], body["attacks"]),
         "time": {"wall_s": round(seconds, 3), "chunks_s": [c["seconds"] for c in order]},
         "machine": machine(),
     }
 
 
-def join_search(parts: list[dict]) -> dict:
-    """The search metrics (`vinadv.evaluation.search_metrics`) over every row of the chunks `parts` (each chunk's, one
-    start per map): the means weighted by their rows (the cost ratio by the rows that reached the goal), Hmean the
-    harmonic mean of the joined Opt and Exp, as the authors take it with one start per map."""
-    rows = np.array([p["rows"] for p in parts], dtype=np.float64)
+def submission_fields(suite: Suite, submission: dict | None) -> dict | None:
+    """An entry's submission, every field (`vinadv.bench.validate.check_submission` checks them): `display_name`
+    (text or null: the planner's label), `authors` (a list of names), `paper` and `code` (http or https links, or
+    null) and `external` (submitted from outside the project: false by default). None for a suite of definitions 1,
+    whose entries (format 1) carry none: InputError naming the first field given. InputError naming the field for a
+    value the schema refuses."""
+    from vinadv.bench.validate import Bad, check_submission  # noqa: PLC0415 (the schema: light, plain Python)
 
-    def mean(name, weights=rows):  # over the chunks that weigh (a chunk where nothing reached has no cost ratio)
-        used = [(w, p[name]) for w, p in zip(weights, parts) if w > 0]
-        if not used or any(v is None for _, v in used):
-            return None
-        return weighted_mean(*zip(*used))
-
-    reached = rows * np.array([p["success"] or 0.0 for p in parts])
-    out = {
-        "rows": int(rows.sum()),
-        "opt": mean("opt"),
-        "exp": mean("exp"),
-        "success": mean("success"),
-        "cost_ratio": mean("cost_ratio", reached) if reached.sum() else None,
-        "expansions": mean("expansions"),
-        "astar_expansions": mean("astar_expansions"),
-    }
-    out["hmean"] = None if out["exp"] is None else float(harmonic_mean(out["opt"], out["exp"]))
+    given = [name for name, value in (submission or {}).items() if value]
+    if suite.definitions == 1:
+        if given:
+            raise InputError(
+                f"{given[0]}: suite {suite.name}'s entries ({suite.entry_format}) carry no submission; run its -v2",
+                given[0],
+            )
+        return None
+    out = {"display_name": None, "authors": [], "paper": None, "code": None, "external": False, **(submission or {})}
+    try:
+        check_submission(out)
+    except Bad as exc:
+        name = exc.field.split(".")[1].split("[")[0]
+        raise InputError(f"{name}: {exc.why}", name) from None
     return out
 
 
@@ -394,10 +337,15 @@ def machine() -> dict:
 
 
 def planner_checks(suite: Suite, planner: Planner, maps: MapSet) -> dict:
-    """The flags' checks on the suite's first maps: is the gradient masked, do two forward passes differ."""
+    """The flags' checks on the suite's first maps: is the gradient masked, do two forward passes differ; and the
+    rule the planner's weights were trained under (`trained_rules`)."""
     sub = chunk_maps(maps, 0, min(len(maps), CHECK_MAPS))
     args = (planner, sub.obstacles, sub.starts[:, 0], sub.goals, sub.corner_cutting)
-    return {"gradient_masked": gradient_is_masked(*args), "non_deterministic": differs_between_passes(*args)}
+    return {
+        "gradient_masked": gradient_is_masked(*args),
+        "non_deterministic": differs_between_passes(*args),
+        "trained_rules": trained_rules(planner),
+    }
 
 
 @dataclasses.dataclass(frozen=True)
@@ -495,6 +443,7 @@ def run_bench(
     data: str | os.PathLike | None = None,
     executor: Executor = LOCAL,
     planner_ref=None,
+    submission: dict | None = None,
 ) -> dict:
     """The entry of `planner` on `suite` (module doc). With `db` each chunk is stored when done; with `resume` the
     chunks stored there are read, not recomputed (without it, a database already holding chunks of this entry is
@@ -502,10 +451,12 @@ def run_bench(
 
     The chunks are computed on `executor` (`vinadv.executor`: in this process, in order, by default) and stored as
     they come back, in any order; a remote executor needs the planner by reference, `planner_ref`
-    (`vinadv.planners.registry.PlannerRef.of`)."""
+    (`vinadv.planners.registry.PlannerRef.of`). `submission`: the entry's submission fields (`submission_fields`;
+    an entry of format 2 only), checked before the work."""
     t0 = time.perf_counter()
     if executor.remote and planner_ref is None:
         raise InputError("planner_ref: a remote executor needs the planner by reference", "planner_ref")
+    submission_fields(suite, submission)  # refused in one line before the work
     maps = suite_maps(suite, data)
     checks = planner_checks(suite, planner, maps)
     keys = entry_keys(suite, planner)
@@ -524,6 +475,11 @@ def run_bench(
             store.close()
             raise
     todo = [c for c in range(n_chunks) if c not in done]
+
+    def chunk_maps(chunk: int) -> int:
+        """The maps of chunk `chunk` (the last one may be short)."""
+        return min(suite.n, (chunk + 1) * suite.chunk) - chunk * suite.chunk
+
     absolute = None if data is None else os.path.abspath(os.fspath(data))  # workers may run in another folder
     task = functools.partial(
         _chunk_task,
@@ -535,7 +491,8 @@ def run_bench(
     if progress:
         from tqdm import tqdm  # noqa: PLC0415 (only with a progress bar)
 
-        bar = tqdm(desc=f"bench {suite.name}", unit="chunk", initial=len(done), total=n_chunks)
+        # counts maps (a chunk's at once as it completes), so that tqdm's time left reads in maps
+        bar = tqdm(desc=f"bench {suite.name}", unit="map", initial=sum(map(chunk_maps, done)), total=suite.n)
     try:
         for chunk, result in executor.map(task, todo, ordered=False):
             if store is not None:
@@ -546,18 +503,32 @@ def run_bench(
                     result = _same_chunk(db, chunk, stored, result, fingerprint)
             done[chunk] = result
             if bar is not None:
-                bar.update(1)
+                bar.update(chunk_maps(chunk))
     finally:
         if bar is not None:
             bar.close()
         if store is not None:
             store.close()
-    return make_entry(suite, planner, done, checks, time.perf_counter() - t0)
+    return make_entry(suite, planner, done, checks, time.perf_counter() - t0, submission)
 
 
 def entry_json(entry: dict) -> str:
-    """The entry as written: sorted keys, two-space indentation, a final newline."""
+    """The entry as written: sorted keys, two-space indentation, a final newline; in an entry of format 2 a list of
+    plain values (the per-map outcomes, one value per map) on one line."""
+    if entry.get("format") == ENTRY_FORMAT_2:
+        return _compact(entry, "") + "\n"
     return json.dumps(entry, sort_keys=True, indent=2) + "\n"
+
+
+def _compact(value, indent: str) -> str:
+    """`value` as `json.dumps(sort_keys=True, indent=2)` writes it, but for its lists of plain values, one line each."""
+    inner = indent + "  "
+    if isinstance(value, dict) and value:
+        items = [f"{inner}{json.dumps(k)}: {_compact(value[k], inner)}" for k in sorted(value)]
+        return "{\n" + ",\n".join(items) + f"\n{indent}}}"
+    if isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value):
+        return "[\n" + ",\n".join(inner + _compact(v, inner) for v in value) + f"\n{indent}]"
+    return json.dumps(value, sort_keys=True)
 
 
 def deterministic_part(entry: dict) -> dict:

@@ -22,10 +22,15 @@ Released suites:
   `vin28-v1`.
 - `mpd32-quick-v1`: 100 of those maps (the first 17 of the first four families in name order, the first 16 of the
   last two); the ensemble of `vin28-quick-v1`.
+- `vin28-v2`, `vin28-quick-v2`, `mpd32-v2`, `mpd32-quick-v2`: the maps and ensembles of their `-v1`, of definitions 2
+  (`Suite.definitions`): the worst case at k over every attack of at most k edits on a fixed denominator, entries
+  `vinadv.bench_entry/2` with per-map outcomes; in the full ones the cheap strategies' steps 2..3 also start from
+  exhaustive's one-cell optimum (`AttackGroup.start`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 from dataclasses import asdict, dataclass
@@ -36,22 +41,51 @@ from vinadv.errors import InputError
 
 #: the format of a suite's spec (part of what its checksum covers)
 SUITE_FORMAT = "vinadv.bench_suite/1"
-#: the format of a result entry file (`vinadv.bench.scoring`)
+#: the format of a result entry file of a suite of definitions 1 (`vinadv.bench.scoring`), and of definitions 2
+#: (per-map outcomes, budgets of at most k edits: `vinadv.bench.outcomes`)
 ENTRY_FORMAT = "vinadv.bench_entry/1"
+ENTRY_FORMAT_2 = "vinadv.bench_entry/2"
+#: every entry format this vinadv reads
+ENTRY_FORMATS = (ENTRY_FORMAT, ENTRY_FORMAT_2)
 
 
 @dataclass(frozen=True)
 class AttackGroup:
     """Strategies run together under one edit, each making one pair per map with 1..`max_obstacles` cells edited
-    greedily (`vinadv.robustness.robustness`)."""
+    greedily (`vinadv.robustness.robustness`).
+
+    `start`: None, or a strategy of an earlier group of the suite with the same edit and one cell (`exhaustive`):
+    each strategy's greedy chain then starts from the one-cell pair that strategy kept on each map (the exhaustive
+    one-cell optimum) and makes the pairs of k = 2..`max_obstacles` (`first_k` 2), named `edit:start+strategy`."""
 
     strategies: tuple[str, ...]
     edit: str
     max_obstacles: int
+    start: str | None = None
 
     def keys(self) -> list[str]:
-        """The attacks' names in entries: `edit:strategy` (say `add:saliency`, `remove:random`)."""
-        return [f"{self.edit}:{s}" for s in self.strategies]
+        """The attacks' names in entries: `edit:strategy` (say `add:saliency`, `remove:random`), and for a group
+        started from another strategy's cell `edit:start+strategy` (`add:exhaustive+saliency`)."""
+        prefix = "" if self.start is None else f"{self.start}+"
+        return [f"{self.edit}:{prefix}{s}" for s in self.strategies]
+
+    @property
+    def ks(self) -> range:
+        """The numbers of edited cells k of the group's pairs, `first_k..max_obstacles`."""
+        return range(self.first_k, self.max_obstacles + 1)
+
+    @property
+    def first_k(self) -> int:
+        """The fewest cells the group's pairs edit: 1, or 2 for a group started from a one-cell pair."""
+        return 1 if self.start is None else 2
+
+    def spec(self) -> dict:
+        """The group as JSON types; `start` only where set (the released suites' groups have none, and their
+        checksums were taken before the field existed)."""
+        out = asdict(self) | {"strategies": list(self.strategies)}
+        if self.start is None:
+            del out["start"]
+        return out
 
 
 @dataclass(frozen=True)
@@ -76,12 +110,24 @@ class Suite:
     masking_ratio: float = 3.0
     masking_min_rate: float = 0.10
     weak_clean_success: float = 0.5
+    #: the benchmark's definitions: 1, the worst case at k over the attacks that reach k, entries
+    #: `vinadv.bench_entry/1`; 2, the worst case at k over every attack of at most k edits on a fixed denominator (a
+    #: k curve that cannot fall), entries `vinadv.bench_entry/2` holding the per-map outcomes (`vinadv.bench.outcomes`)
+    definitions: int = 1
 
     def spec(self) -> dict:
-        """The canonical specification: every field, as JSON types."""
+        """The canonical specification: every field, as JSON types; `definitions` only where it is not 1 (the
+        released suites of definitions 1 had their checksums taken before the field existed)."""
         out = asdict(self)
-        out["attacks"] = [asdict(g) | {"strategies": list(g.strategies)} for g in self.attacks]
+        out["attacks"] = [g.spec() for g in self.attacks]
+        if self.definitions == 1:
+            del out["definitions"]
         return {"format": SUITE_FORMAT, **out}
+
+    @property
+    def entry_format(self) -> str:
+        """The format of the suite's entries: `ENTRY_FORMAT` (definitions 1) or `ENTRY_FORMAT_2`."""
+        return ENTRY_FORMAT if self.definitions == 1 else ENTRY_FORMAT_2
 
     @property
     def checksum(self) -> str:
@@ -95,6 +141,11 @@ class Suite:
     def movement(self) -> str:
         """The movement model of the suite's maps (`vinadv.grid.moves`): the generator's `octile`."""
         return "octile"
+
+    def cuts_corners(self) -> bool:
+        """Whether the suite's maps let a diagonal move pass between two obstacles: the generator's and the MP
+        layout's do."""
+        return True
 
 
 @dataclass(frozen=True)
@@ -122,6 +173,11 @@ class DataSuite(Suite):
     def movement(self) -> str:
         return self.moves
 
+    def read_options(self, file: DataFile) -> dict:
+        """The reader's arguments (`vinadv.interop.formats.read_maps`) for `file` beyond its path and the layout:
+        the split, one start per map and the seed (`vinadv.bench.movingai_suites` adds its crops)."""
+        return {"split": self.split, "starts": 1, "seed": self.maps_seed}
+
 
 def maps_sha256(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray) -> str:
     """sha256 of a suite's maps: the obstacles (bool bytes), then the starts and goals (int64 bytes), `(n, 2)` each."""
@@ -136,9 +192,18 @@ SUITES: dict[str, Suite] = {}
 
 
 def register(suite: Suite) -> Suite:
-    """Register `suite` under its name; refuses a name already registered."""
+    """Register `suite` under its name; refuses a name already registered, and a group started from a strategy that
+    no earlier group of one cell and the same edit runs (`AttackGroup.start`)."""
     if suite.name in SUITES:
         raise InputError(f"suite {suite.name!r}: a suite of that name is already registered", "suite")
+    for i, group in enumerate(suite.attacks):
+        before = [g for g in suite.attacks[:i] if g.start is None and g.edit == group.edit and g.max_obstacles == 1]
+        if group.start is not None and not any(group.start in g.strategies for g in before):
+            raise InputError(
+                f"suite {suite.name!r}: group {i} starts from {group.start!r}, which no earlier group of one "
+                f"{group.edit}ed cell runs",
+                "suite",
+            )
     SUITES[suite.name] = suite
     return suite
 
@@ -158,6 +223,13 @@ _FULL_ENSEMBLE = (
     AttackGroup((*_CHEAP, "exhaustive"), "remove", 1),
 )
 _QUICK_ENSEMBLE = (AttackGroup(_CHEAP, "add", 3), AttackGroup(_CHEAP, "remove", 1))
+#: the full ensemble of definitions 2: the cheap strategies' chains also start from the exhaustive one-cell optimum
+_FULL_ENSEMBLE_2 = (
+    AttackGroup(_CHEAP, "add", 3),
+    AttackGroup(("exhaustive",), "add", 1),
+    AttackGroup(_CHEAP, "add", 3, start="exhaustive"),
+    AttackGroup((*_CHEAP, "exhaustive"), "remove", 1),
+)
 
 register(
     Suite(
@@ -227,10 +299,58 @@ register(
     )
 )
 
+#: the suites of definitions 2 (`Suite.definitions`): the maps of their v1, budgets of at most k edits; the full
+#: ones' cheap chains also start from the exhaustive one-cell optimum
+_V2 = "; the worst case at k over every attack of at most k edits (definitions 2)"
+register(
+    dataclasses.replace(
+        SUITES["vin28-v1"],
+        name="vin28-v2",
+        description=SUITES["vin28-v1"].description + "; key-points, saliency, near-path, random also adding k = 2..3 "
+        "from exhaustive's one-cell optimum" + _V2,
+        attacks=_FULL_ENSEMBLE_2,
+        definitions=2,
+    )
+)
+register(
+    dataclasses.replace(
+        SUITES["vin28-quick-v1"],
+        name="vin28-quick-v2",
+        description=SUITES["vin28-quick-v1"].description + _V2,
+        definitions=2,
+    )
+)
+register(
+    dataclasses.replace(
+        SUITES["mpd32-v1"],
+        name="mpd32-v2",
+        description=SUITES["mpd32-v1"].description + "; key-points, saliency, near-path, random also adding k = 2..3 "
+        "from exhaustive's one-cell optimum" + _V2,
+        attacks=_FULL_ENSEMBLE_2,
+        definitions=2,
+    )
+)
+register(
+    dataclasses.replace(
+        SUITES["mpd32-quick-v1"],
+        name="mpd32-quick-v2",
+        description=SUITES["mpd32-quick-v1"].description + _V2,
+        definitions=2,
+    )
+)
+
 #: the checksum of every released suite: a released suite never changes (a test holds the registry to these)
 FROZEN = {
     "vin28-v1": "1dad52e25d05f3eca3fab2960c02af1cc15d81736c4e50acf7d569dfdbb92203",
     "vin28-quick-v1": "5d96a8431b05e56aac524464fe37b3794ba7763ca17233523073ad69b78d6157",
     "mpd32-v1": "7f077bd76099849020090308ff5ea0913f609d74e5e6d7643466646c184d92a4",
     "mpd32-quick-v1": "76f5d309d15f7d68838e18cd0c405dd6b4eefe391b4a2ddc02e9f3a4bc59a400",
+    "vin28-v2": "e9e3f6e3aa13f726f9749fb94e8f4d97c846e4f29072e8a3071bfb59fecc01ce",
+    "vin28-quick-v2": "a9453e8ed147a2cceddd35543a835645304284e8bafe7028c88c1372e26102a0",
+    "mpd32-v2": "b3063f6815a07bd1c3519194639d686837e01c41ceb96fdb7b4d14dcc935d395",
+    "mpd32-quick-v2": "39389798b94a46f65fdf2fbf15d9874c930ea060756f42b4f5ab59126d662194",
 }
+
+# the Moving AI suites (real maps: crops of city streets, problems on the MAPF maps) register themselves and their
+# checksums; imported last, as it builds on the classes above
+from vinadv.bench import movingai_suites  # noqa: E402, F401

@@ -5,7 +5,7 @@ leaderboard, the index or `make_entry` reads is checked before it is used, so a 
 field (`entry_problem`, `chunk_problem`: the first problem, or None), never a traceback or a figure that lies.
 
 What an entry must hold (fields not listed are not read, and not checked):
-- `format`: `ENTRY_FORMAT`; `suite`: `name` (a non-empty string of at most `MAX_TEXT` characters) and `checksum`
+- `format`: one of `ENTRY_FORMATS`; `suite`: `name` (a non-empty string of at most `MAX_TEXT` characters) and `checksum`
   (64 hex digits; one of a released suite's, `suites.FROZEN`, or the leaderboard labels it unknown);
 - `planner`: `name` (as `suite.name`), `config` (absent, null, or an object of plain JSON values, `MAX_DEPTH` deep at
   most, every float finite); `weights_sha256` (here and in `planner`): absent, null or 64 hex digits;
@@ -21,6 +21,12 @@ What an entry must hold (fields not listed are not read, and not checked):
 - `time` (absent or null, or `wall_s` and every `chunks_s` finite and non-negative), `machine` (absent or null, or
   `device` text or null), `vinadv_version` (absent, null or text).
 
+An entry of format 2 (`ENTRY_FORMAT_2`) also holds `submission` (`check_submission`: `display_name` text or null,
+`authors` a list of at most `MAX_AUTHORS` names, `paper` and `code` null or http/https URLs with a host, `external` true
+or false), `checks` (`gradient_masked` and `non_deterministic` true, false or null) and `per_map` (`check_per_map`:
+one value per map in every list, one record per figure of every attack with its `k`, labels of the vocabulary or "",
+a harmful map or a regret only where the pair is valid, the chunks' maps summing to the maps).
+
 Strings are checked for type and length only: the renderers escape them (`vinadv.bench.leaderboard`).
 """
 
@@ -28,8 +34,9 @@ from __future__ import annotations
 
 import math
 import re
+import urllib.parse
 
-from vinadv.bench.suites import ENTRY_FORMAT, Suite
+from vinadv.bench.suites import ENTRY_FORMAT_2, ENTRY_FORMATS, Suite
 from vinadv.vocabulary import EDITS, LABELS
 
 #: the longest name or text field read (characters)
@@ -40,7 +47,10 @@ MAX_COUNT = 10**9
 MAX_K = 1000
 #: how deep a planner's config may nest
 MAX_DEPTH = 4
+#: the most authors a submission names
+MAX_AUTHORS = 50
 _HEX64 = re.compile(r"[0-9a-f]{64}")
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 _FIGURE_COUNTS = ("maps", "valid", "attacked", "broken", "harmful", "reached", "attacks")
 
 
@@ -168,8 +178,8 @@ def figures(value, field: str) -> dict:
 def check_entry(entry) -> None:
     """Raise `Bad` for the first field of `entry` that is not what the schema (module doc) says."""
     e = _obj(entry, "(entry)")
-    if e.get("format") != ENTRY_FORMAT:
-        raise Bad("format", f"is {_show(e.get('format'))}, expected {ENTRY_FORMAT!r}")
+    if e.get("format") not in ENTRY_FORMATS:
+        raise Bad("format", f"is {_show(e.get('format'))}, expected one of {', '.join(ENTRY_FORMATS)}")
     suite = _obj(_get(e, "suite", ""), "suite")
     text(_get(suite, "name", "suite"), "suite.name", nonempty=True)
     sha256(_get(suite, "checksum", "suite"), "suite.checksum")
@@ -231,6 +241,115 @@ def check_entry(entry) -> None:
                 _number(s, f"time.chunks_s[{i}]", lo=0.0)
     if e.get("machine") is not None:
         text(_obj(e["machine"], "machine").get("device"), "machine.device", null=True)
+    if e["format"] == ENTRY_FORMAT_2:
+        check_submission(_get(e, "submission", ""), "submission")
+        checks = _obj(_get(e, "checks", ""), "checks")
+        for name in ("gradient_masked", "non_deterministic"):
+            if checks.get(name) is not None and not isinstance(checks[name], bool):
+                raise Bad(f"checks.{name}", f"is {_kind(checks[name])}, expected true, false or null")
+        check_per_map(_get(e, "per_map", ""), attacks, e["clean"])
+
+
+def url(value, field: str) -> str | None:
+    """A link an entry shows: null, or an http or https URL with a host (no other scheme: `javascript:`, `file:`)."""
+    if value is None:
+        return None
+    text(value, field)
+    parts = urllib.parse.urlsplit(value)
+    if parts.scheme not in ("http", "https") or not parts.netloc or _CONTROL.search(value) or " " in value:
+        raise Bad(field, f"is {_show(value)}, expected an http or https URL")
+    return value
+
+
+def check_submission(value, field: str = "submission") -> None:
+    """An entry's submission (`vinadv.bench.scoring.submission_fields`): `display_name` text or null, `authors` a list
+    of names (at most `MAX_AUTHORS`), `paper` and `code` links (`url`) or null, `external` true or false."""
+    s = _obj(value, field)
+    text(_get(s, "display_name", field), f"{field}.display_name", null=True, nonempty=True)
+    authors = _list(_get(s, "authors", field), f"{field}.authors")
+    if len(authors) > MAX_AUTHORS:
+        raise Bad(f"{field}.authors", f"holds {len(authors)} names, expected at most {MAX_AUTHORS}")
+    for i, name in enumerate(authors):
+        text(name, f"{field}.authors[{i}]", nonempty=True)
+    for name in ("paper", "code"):
+        url(_get(s, name, field), f"{field}.{name}")
+    if not isinstance(_get(s, "external", field), bool):
+        raise Bad(f"{field}.external", f"is {_kind(s['external'])}, expected true or false")
+
+
+def submission_problem(submission) -> str | None:
+    """The first problem of an entry's submission fields as "field 'F' ...", or None."""
+    try:
+        check_submission(submission)
+    except Bad as exc:
+        return str(exc)
+    return None
+
+
+def check_per_map(value, attacks: dict, clean: dict) -> None:
+    """The per-map outcomes of a `vinadv.bench_entry/2` entry (`vinadv.bench.outcomes`): one value per map in every
+    list, a record per figure of every attack (its `k` that figure's), labels of the vocabulary, a harmful map or a
+    regret only where the pair is valid, the chunks' maps summing to the maps."""
+    p = _obj(value, "per_map")
+    pc = _obj(_get(p, "clean", "per_map"), "per_map.clean")
+    reached = _list(_get(pc, "reached", "per_map.clean"), "per_map.clean.reached", nonempty=True)
+    n = len(reached)
+    if n > MAX_COUNT:
+        raise Bad("per_map.clean.reached", f"holds {n} values, expected at most {MAX_COUNT}")
+    _bools(reached, "per_map.clean.reached", n)
+    _reals(_get(pc, "regret", "per_map.clean"), "per_map.clean.regret", n)
+    if clean.get("maps", n) != n:
+        raise Bad("per_map.clean.reached", f"holds {n} values, expected {clean['maps']} (clean.maps)")
+    chunks = _list(_get(p, "chunks", "per_map"), "per_map.chunks", nonempty=True)
+    for i, c in enumerate(chunks):
+        at = f"per_map.chunks[{i}]"
+        c = _obj(c, at)
+        count(_get(c, "maps", at), f"{at}.maps")
+        if "search" in c:
+            search = _obj(c["search"], f"{at}.search")
+            count(_get(search, "rows", f"{at}.search"), f"{at}.search.rows")
+            for name in ("opt", "exp", "success"):
+                rate(_get(search, name, f"{at}.search"), f"{at}.search.{name}", null=True)
+            for name in ("cost_ratio", "expansions", "astar_expansions"):
+                _number(_get(search, name, f"{at}.search"), f"{at}.search.{name}", lo=0.0, null=True)
+        else:
+            for name in ("gppn_percent_optimal", "gppn_percent_success"):
+                rate(_get(c, name, at), f"{at}.{name}")
+    if sum(c["maps"] for c in chunks) != n:
+        raise Bad("per_map.chunks", f"hold {sum(c['maps'] for c in chunks)} maps, expected {n}")
+    records = _obj(_get(p, "attacks", "per_map"), "per_map.attacks")
+    for key, attack in attacks.items():
+        field = f"per_map.attacks.{key}"
+        per_k = _list(_get(records, key, "per_map.attacks"), field)
+        ks = [f["k"] for f in attack["by_obstacles"]]
+        if len(per_k) != len(ks):
+            raise Bad(field, f"holds {len(per_k)} records, expected {len(ks)} (one per figure of attacks.{key})")
+        for i, (record, k) in enumerate(zip(per_k, ks)):
+            _record(_obj(record, f"{field}[{i}]"), f"{field}[{i}]", n, k)
+    if set(records) != set(attacks):
+        extra = sorted(set(records) - set(attacks))[0]
+        raise Bad(f"per_map.attacks.{extra}", "is an attack the entry has no figures of")
+    if "worst_effort" in p:
+        for i, values in enumerate(_list(p["worst_effort"], "per_map.worst_effort")):
+            _reals(values, f"per_map.worst_effort[{i}]", n)
+
+
+def _record(r: dict, at: str, n: int, k: int) -> None:
+    """One attack's per-map record at k."""
+    if _get(r, "k", at) != k or isinstance(r["k"], bool):
+        raise Bad(f"{at}.k", f"is {_show(r['k'])}, expected {k}")
+    labels = _per_map(_get(r, "label", at), f"{at}.label", n)
+    for i, label in enumerate(labels):
+        if label != "" and label not in LABELS:
+            raise Bad(f"{at}.label[{i}]", f'is {_show(label)}, expected "" or one of {", ".join(LABELS)}')
+    harmful = _bools(_get(r, "harmful", at), f"{at}.harmful", n)
+    regret = _reals(_get(r, "regret", at), f"{at}.regret", n)
+    for i, (label, h, g) in enumerate(zip(labels, harmful, regret)):
+        if label in ("", "invalid") and (h or g is not None):
+            name = "harmful" if h else "regret"
+            raise Bad(f"{at}.{name}[{i}]", f"is {_show(h if h else g)} on a map without a valid pair")
+    if "effort" in r:
+        _reals(r["effort"], f"{at}.effort", n)
 
 
 def entry_problem(entry) -> str | None:
@@ -294,8 +413,8 @@ def check_chunk(result, suite: Suite, chunk: int) -> None:
         for key in group.keys():
             field = f"attacks.{key}"
             per_k = _list(_get(attacks, key, "attacks"), field)
-            if len(per_k) != group.max_obstacles:
-                raise Bad(field, f"holds {len(per_k)} values of k, expected {group.max_obstacles}")
+            if len(per_k) != len(group.ks):
+                raise Bad(field, f"holds {len(per_k)} values of k, expected {len(group.ks)}")
             for k, part in enumerate(per_k):
                 at = f"{field}[{k}]"
                 part = _obj(part, at)

@@ -1,10 +1,10 @@
-"""`vinadv bench run` (a planner on a frozen benchmark suite: one result entry) and `vinadv bench leaderboard` (the
-entries of a folder as a leaderboard); `vinadv.bench`."""
+"""`vinadv bench run` (a planner on a frozen benchmark suite: one result entry), `vinadv bench verify` (does an
+entry hold what it says) and `vinadv bench leaderboard` (the entries of folders and files as a leaderboard);
+`vinadv.bench`."""
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -29,7 +29,10 @@ def register(subparsers) -> None:
         subparsers, "bench", help="the standard robustness benchmark: frozen suites, result entries, a leaderboard"
     )
     # named here, not read from the registry: `vinadv --help` does not import the suites (tests/test_cli_imports.py)
-    suites = "vin28-v1, vin28-quick-v1, mpd32-v1, mpd32-quick-v1"
+    suites = (
+        "vin28-v1, vin28-quick-v1, mpd32-v1, mpd32-quick-v1, vin28-v2, vin28-quick-v2, mpd32-v2, mpd32-quick-v2, "
+        "movingai64-v1, movingai64-quick-v1"
+    )
     run = sub.add_parser(
         "run",
         help="run a planner on a frozen benchmark suite and write its result entry",
@@ -41,26 +44,66 @@ def register(subparsers) -> None:
     run.add_argument(
         "--data",
         metavar="DIR",
-        help="the MP suites: the folder holding the MP dataset's six <family>_032_moore_c8.npz files "
-        "(docs/guide/mpd.md)",
+        help="the data suites' files: for the MP suites the folder holding the MP dataset's six "
+        "<family>_032_moore_c8.npz files (docs/guide/mpd.md); for the Moving AI suites the one holding the four city "
+        "maps and the three 64x64 MAPF maps (docs/guide/movingai.md)",
     )
     run.add_argument("--db", help="store each finished chunk of maps in this database (URL or SQLite file)")
     run.add_argument("--resume", action="store_true", help="with --db: continue, computing only the chunks not stored")
     run.add_argument("--out", help="write the entry to this file (.json; default: print it)")
+    share = run.add_argument_group("sharing (entries of the -v2 suites; docs/guide/submit.md)")
+    share.add_argument("--display-name", metavar="TEXT", help="the name the leaderboard shows (default: the planner's)")
+    share.add_argument(
+        "--author", action="append", default=[], metavar="NAME", dest="authors", help="an author (repeat for each)"
+    )
+    share.add_argument("--paper", metavar="URL", help="the paper's link (http or https)")
+    share.add_argument("--code", metavar="URL", help="the code's link (http or https)")
+    share.add_argument("--external", action="store_true", help="the entry is submitted from outside the project")
     add_cluster_arguments(run)
     add_output_options(run, json="the entry", quiet=True)
     run.set_defaults(func=cmd_bench_run)
 
+    verify = sub.add_parser(
+        "verify",
+        help="check that a result entry holds what it says: its figures, and chunks of it recomputed",
+        description="Check a vinadv.bench_entry/2 entry: every figure (clean, per attack, worst case, flags) "
+        "recomputed from the per-map outcomes it holds, and --chunks K chunks of maps (drawn with --seed) recomputed "
+        "with its planner and compared byte for byte. One line per difference, naming the field; exit status 1 on a "
+        "difference, 2 on bad input (not an entry of format 2, another suite, another planner).",
+    )
+    verify.add_argument("entry", metavar="ENTRY", help="the entry file (.json)")
+    verify.add_argument(
+        "--chunks", type=int, default=0, metavar="K", help="recompute K chunks of maps (default 0: the figures only)"
+    )
+    verify.add_argument("--seed", type=int, default=0, help="the draw of the chunks (default 0)")
+    verify.add_argument("--data", metavar="DIR", help="the MP suites: the folder of the MP dataset's files")
+    add_planner_arguments(
+        verify,
+        weights_help="the entry's weights file or zoo name (default: the planner's shipped weights; checked against "
+        "the entry's weights sha256)",
+    )
+    add_output_options(verify, json="the differences", quiet=True)
+    verify.set_defaults(func=cmd_bench_verify)
+
     board = sub.add_parser(
         "leaderboard",
-        help="render the entries of a folder as a leaderboard (HTML and Markdown)",
-        description="Read every result entry (*.json) of DIR and write OUT/leaderboard.html and OUT/leaderboard.md, "
-        "one table per suite sorted by the worst-case harmful rate, each row linking to its entry. Each entry is "
-        "checked against the entry schema: a file that is not a valid entry is one line naming it and the field, the "
-        "rest still rendered, and the status is 2.",
+        help="render the entries of folders and files as a leaderboard (HTML and Markdown)",
+        description="Read every result entry (*.json) of each folder SOURCE, and each entry file SOURCE, and write "
+        "OUT/leaderboard.html and OUT/leaderboard.md, one table per suite sorted by the worst-case harmful rate, each "
+        "row linking to its entry, with a legend of the columns (with --figures, each suite's k curve too). Each "
+        "entry is checked against the entry schema: a file that is not a valid entry is one line naming it and the "
+        "field, the rest still rendered, and the status is 2.",
     )
-    board.add_argument("dir", metavar="DIR", help="folder of result entries (*.json)")
+    board.add_argument(
+        "sources", nargs="+", metavar="SOURCE", help="folders of result entries (*.json), or entry files"
+    )
     board.add_argument("--out", required=True, metavar="OUT", help="folder to write leaderboard.html and .md to")
+    board.add_argument(
+        "--figures",
+        action="store_true",
+        help="also draw each suite's k curve (the worst-case harmful rate against k, its 95%% interval as a bar, one "
+        "line per planner) as OUT/k-curve.SUITE.png and .svg, shown in leaderboard.html",
+    )
     board.add_argument(
         "--index",
         metavar="FILE",
@@ -74,11 +117,13 @@ def register(subparsers) -> None:
 def cmd_bench_run(args: argparse.Namespace) -> int:
     from vinadv.bench.job import BenchConfig, run
 
-    config = BenchConfig(**option_values(args, "suite", "planner", "weights", "data"))  # an unknown suite: one line
+    names = ("suite", "planner", "weights", "data", "display_name", "authors", "paper", "code", "external")
+    config = BenchConfig(**option_values(args, *names))  # an unknown suite, a bad link: one line
     if args.resume and args.db is None:
         raise InputError("--resume: only with --db")
     if args.out:  # before the suite is computed: writable, and not the database or a file the planner reads
-        data = sorted(Path(args.data).glob("*.npz")) if args.data and Path(args.data).is_dir() else args.data
+        folder = args.data and Path(args.data).is_dir()
+        data = sorted([*Path(args.data).glob("*.npz"), *Path(args.data).glob("*.map")]) if folder else args.data
         inputs = {"--db": db_file(args.db) if args.db else None, "--data": data, **planner_inputs(args)}
         check_output_path(args.out, inputs=inputs)
     device = planner_device(args)
@@ -106,35 +151,76 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     return emit(args, entry, report)
 
 
+def cmd_bench_verify(args: argparse.Namespace) -> int:
+    from vinadv.bench.leaderboard import planner_label
+    from vinadv.bench.suites import get_suite
+    from vinadv.bench.verify import read_entry, verify_entry
+    from vinadv.planners.registry.loading import load_planner
+
+    entry = read_entry(args.entry)
+    if args.chunks < 0:
+        raise InputError(f"--chunks must be >= 0, got {args.chunks}")
+    planner = None
+    if args.chunks > 0:
+        suite = get_suite(entry["suite"]["name"])
+        spec = args.planner or planner_label(entry["planner"])
+        device = planner_device(args)
+        planner = load_planner(spec, suite.size, weights=args.weights, device=device, moves=suite.movement())
+    result = verify_entry(entry, args.chunks, args.seed, data=args.data, planner=planner, progress=shows_progress(args))
+
+    def report() -> None:
+        for line in result["differences"]:
+            print(line)
+        if not result["differences"]:
+            chunks = ", ".join(map(str, result["chunks"])) or "none"
+            print(f"{args.entry}: every figure follows from its per-map outcomes; chunks recomputed equal: {chunks}")
+
+    code = emit(args, {"entry": args.entry, **result}, report)
+    return 1 if result["differences"] else code
+
+
 def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
-    from vinadv.bench.leaderboard import read_entries_checked, render_html, render_markdown, rows
+    from vinadv.bench.leaderboard import (
+        entry_files,
+        read_entries_checked,
+        render_html,
+        render_markdown,
+        rows,
+        write_k_curves,
+    )
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out: {out} exists and is not a folder")
-    if not Path(args.dir).is_dir():  # named as the command line names it: the argument DIR
-        what = "is not a folder" if Path(args.dir).exists() else "no such folder"
-        raise InputError(f"DIR {args.dir}: {what} (the folder of result entries)")
-    entries_read = sorted(Path(args.dir).glob("*.json")) if Path(args.dir).is_dir() else []
+    for source in args.sources:  # named as the command line names it: the argument SOURCE
+        if not Path(source).exists():
+            raise InputError(f"SOURCE {source}: no such folder or file (the result entries)")
+    entries_read = entry_files(args.sources)
     if args.index:  # not one of the entries it indexes
-        check_output_path(args.index, inputs={"DIR": entries_read})
-    entries, problems = read_entries_checked(args.dir)
-    table = rows(entries)
-    if args.index:  # the folder as given: the index names the files the way the user does
+        check_output_path(args.index, inputs={"SOURCE": entries_read})
+    entries, problems = read_entries_checked(args.sources)
+    table = rows(entries, base=out)
+    if args.index:  # the files as given: the index names them the way the user does
         with atomic_output(args.index, "w", encoding="utf-8") as fh:
-            fh.write(index_json(make_index(entries, Path(args.dir).as_posix())))
+            fh.write(index_json(make_index(entries)))
     out.mkdir(parents=True, exist_ok=True)
-    prefix = os.path.relpath(Path(args.dir), out).replace(os.sep, "/") + "/"
     for name, text in (
-        ("leaderboard.md", render_markdown(table, prefix)),
-        ("leaderboard.html", render_html(table, prefix)),
+        ("leaderboard.md", render_markdown(table, legend=True)),
+        ("leaderboard.html", render_html(table, figures=args.figures)),
     ):
         with atomic_output(out / name, "w", encoding="utf-8") as fh:
             fh.write(text)
+    figures = []
+    if args.figures:
+        import matplotlib  # noqa: PLC0415 (only to draw the k curves)
+
+        matplotlib.use("Agg")  # no display: the figures go to files
+        figures = write_k_curves(table, out)
 
     def report() -> None:
         n = sum(len(r) for r in table.values())
-        print(f"{n} entries of {len(table)} suites -> {out / 'leaderboard.html'}, {out / 'leaderboard.md'}")
+        drawn = f" and {len(figures)} k-curve figures" if figures else ""
+        print(f"{n} entries of {len(table)} suites -> {out / 'leaderboard.html'}, {out / 'leaderboard.md'}{drawn}")
 
     for problem in problems:  # one line per file that is not a valid entry; the others are rendered
         print(f"vinadv: error: {one_line(problem)}", file=sys.stderr)

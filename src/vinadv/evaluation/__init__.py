@@ -10,8 +10,8 @@ Planners:
 A run's report:
 - `classifiers`: the paper's classifier comparison on a run's FP/DP pairs (section 5.2: tables 5, 6, figs. 8, 9),
   rows of the `evaluations` table.
-- `planner_quality`: the quality of the planner the run used (a shipped metrics file, the weights' training record
-  or a quick evaluation on fresh maps), a measurement of the run.
+- `planner_quality`: the quality of the planner the run used, measured on the run's own maps (the first distinct
+  original maps of its stored pairs) as the planner's capabilities allow, a measurement of the run.
 - `timing`: table 7's processing time of the rule labeller and the database read, a measurement of the run.
 - `job`: `vinadv evaluate` as a job (`EvaluateConfig`, `run(config, executor)`, `EvaluateResult`): the three above
   on a stored run, stored.

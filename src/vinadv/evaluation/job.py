@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass
 
 from vinadv.errors import InputError
 from vinadv.evaluation.classifiers import CLASSIFIERS, DEFAULT_SIZES, SETTINGS, evaluate_run, parse_list, parse_sizes
-from vinadv.evaluation.planner_quality import evaluate_planner_quality
+from vinadv.evaluation.planner_quality import QUALITY_MAPS, evaluate_planner_quality
 from vinadv.evaluation.timing import evaluate_timing
 from vinadv.executor import LOCAL, Executor
 from vinadv.seeds import check_seed
@@ -27,7 +27,9 @@ class EvaluateConfig:
     `db`: the database (URL or SQLite file; None: `$VINADV_DB`, else `vinadv.db`) holding the run, where the results
     are stored; `run`: the run's id or name (its latest run), None for the latest run; `classifiers`: names from
     `CLASSIFIERS` (a tuple, or joined by commas); `setting`: 'baseline' or 'tuned'; `sizes`: the training-set
-    fractions of fig. 8, in (0, 1] (1.0 always added); `seed`: of the split, augmentation and training."""
+    fractions of fig. 8, in (0, 1] (1.0 always added); `seed`: of the split, augmentation and training;
+    `quality_maps`: the most of the run's maps its planner's quality is measured on (`planner_quality.run_maps`: the
+    first, in pair-index order)."""
 
     db: str | None = None
     run: str | int | None = None
@@ -35,6 +37,7 @@ class EvaluateConfig:
     setting: str = "baseline"
     sizes: tuple[float, ...] = DEFAULT_SIZES
     seed: int = 0
+    quality_maps: int = QUALITY_MAPS
 
     def __post_init__(self):
         object.__setattr__(self, "classifiers", tuple(parse_list(self.classifiers, CLASSIFIERS, "classifiers")))
@@ -42,6 +45,8 @@ class EvaluateConfig:
         if self.setting not in SETTINGS:
             raise InputError(f"setting: {self.setting!r} not in {','.join(SETTINGS)}", "setting")
         check_seed(self.seed)
+        if isinstance(self.quality_maps, bool) or not isinstance(self.quality_maps, int) or self.quality_maps < 1:
+            raise InputError(f"quality_maps: at least 1 map, got {self.quality_maps!r}", "quality_maps")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -83,7 +88,7 @@ def _evaluate_task(config: EvaluateConfig, progress: bool, chunk: int) -> Evalua
     with Store.open(config.db, create=False) as store:
         run_id = store.resolve_run(config.run, "run") if config.run is not None else _latest_run(store)
         # the measurements first: a run with too few FP/DP pairs to compare classifiers still gets them
-        quality = evaluate_planner_quality(store, run_id)
+        quality = evaluate_planner_quality(store, run_id, config.quality_maps)
         timing = evaluate_timing(store, run_id)
         rows = evaluate_run(
             store, run_id, config.classifiers, config.setting, config.sizes, config.seed, progress=progress

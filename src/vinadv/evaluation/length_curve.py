@@ -10,7 +10,6 @@ scale, so a reader sees where the curve rests on few paths.
 
 from __future__ import annotations
 
-import io
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -24,7 +23,7 @@ import numpy as np  # noqa: E402
 from vinadv.errors import InputError  # noqa: E402
 from vinadv.intervals import wilson_interval  # noqa: E402
 from vinadv.planners.records import LengthBucketMetrics  # noqa: E402
-from vinadv.plot.files import save_figure  # noqa: E402
+from vinadv.plot.files import save_figure, svg_text  # noqa: E402
 
 __all__ = [
     "LengthCurve",
@@ -117,18 +116,6 @@ def success_by_length_figure(curves: Sequence[tuple[str, Sequence[LengthBucketMe
     if title:
         ax.set_title(title, fontsize=10)
     return fig
-
-
-def svg_text(fig) -> str:
-    """`fig` as SVG text, then closed: text kept as text, no date and fixed ids, so the same figure gives the same
-    bytes (a docs page that inlines it changes only when its data does)."""
-    buffer = io.StringIO()
-    try:
-        with plt.rc_context({"svg.hashsalt": "vinadv", "svg.fonttype": "none"}):
-            fig.savefig(buffer, format="svg", metadata={"Date": None}, bbox_inches="tight")
-    finally:
-        plt.close(fig)
-    return buffer.getvalue()
 
 
 def save_success_by_length(

@@ -159,11 +159,14 @@ def evaluate_vin(
     )
 
 
-def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: bool = False) -> PlannerMetrics:
+def evaluate_planner(
+    planner, maps: MapSet, batch_size: int = 256, progress: bool = False, result: PlanResult | None = None
+) -> PlannerMetrics:
     """All figures for any `vinadv.planners.interface.Planner` on `maps`: action accuracy from its logits, rollouts
     (from every start) by its `plan`, under the maps' movement model, which the planner must plan
     (`Planner.for_moves`: one of another model is refused in one line). A search planner's paths get the rollout
-    figures, and no action accuracy (it declares no policy)."""
+    figures, and no action accuracy (it declares no policy). `result`: the planner's `plan` of every start of `maps`
+    already made (path `b*S+s`), used instead of planning again."""
     planner = planner.for_moves(maps.moves)
 
     def counts(obs, goals):
@@ -173,15 +176,20 @@ def evaluate_planner(planner, maps: MapSet, batch_size: int = 256, progress: boo
     return _evaluate(
         maps,
         counts if planner.capabilities.policy else None,
-        lambda obs, goals, starts: planner.plan(obs, starts, goals, maps.corner_cutting, maps.moves),
+        None
+        if result is not None
+        else lambda obs, goals, starts: planner.plan(obs, starts, goals, maps.corner_cutting, maps.moves),
         batch_size,
         progress,
+        result,
     )
 
 
-def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> PlannerMetrics:
+def _evaluate(
+    maps: MapSet, counts, plan, batch_size: int, progress: bool, result: PlanResult | None = None
+) -> PlannerMetrics:
     """Figures over `maps` in chunks: `counts(obs, goals) -> (correct, cells)` (None: no action accuracy, a search
-    planner's), `plan(obs, goals, starts)`."""
+    planner's), `plan(obs, goals, starts)` (None: `result`, the plan of every start, is given)."""
     obstacles, goals, starts = maps.obstacles, maps.goals, maps.starts
     chunks = range(0, len(maps), batch_size)
     if progress:
@@ -193,8 +201,10 @@ def _evaluate(maps: MapSet, counts, plan, batch_size: int, progress: bool) -> Pl
             c, n = counts(obstacles[sl], goals[sl])
             correct += c
             cells += n
-        parts.append(plan(obstacles[sl], goals[sl], starts[sl]))
-    result = PlanResult.concat(parts)
+        if plan is not None:
+            parts.append(plan(obstacles[sl], goals[sl], starts[sl]))
+    if plan is not None:
+        result = PlanResult.concat(parts)
     lengths = maps.expert.lengths - 1  # cells - 1: an optimal path's move count L, the same for all of them
     return {
         "maps": len(maps),

@@ -45,6 +45,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.grid.paths import path_costs
 from vinadv.grid.shortest_paths import COST_TOL
 from vinadv.planners.classical.astar import AStarPlanner
+from vinadv.planners.result import PlanResult
 from vinadv.planners.search import SearchResult
 
 #: the authors' guard against a zero in the harmonic mean
@@ -164,8 +165,12 @@ def transpath_ratios(
     """TransPath's expansions ratio and cost ratio of `n` rows against their vanilla A* (module doc).
 
     Args:
-        costs, reached, expansions: `(n,)` the planner's path costs, whether each reaches the goal, cells expanded.
-        vanilla_costs, vanilla_reached, vanilla_expansions: the same of their vanilla A* on the same rows.
+        costs: `(n,)` the planner's path costs.
+        reached: `(n,)` whether each of the planner's paths reaches the goal.
+        expansions: `(n,)` the cells the planner expanded.
+        vanilla_costs: `(n,)` their vanilla A*'s path costs on the same rows.
+        vanilla_reached: `(n,)` whether each of vanilla A*'s paths reaches the goal.
+        vanilla_expansions: `(n,)` the cells vanilla A* expanded.
         octile_start: `(n,)` the octile heuristic at each row's start (`octile_distances`).
         hardness: the rows kept: reached by vanilla A*, start off the goal, vanilla cost >= hardness * octile_start.
     """
@@ -205,22 +210,29 @@ def vanilla_transpath(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarr
 
 
 def evaluate_search(
-    planner, maps: MapSet, chunk_size: int = 256, progress: bool = False, theirs: bool = False
+    planner,
+    maps: MapSet,
+    chunk_size: int = 256,
+    progress: bool = False,
+    theirs: bool = False,
+    result: PlanResult | None = None,
 ) -> SearchMetrics:
     """`search_metrics` of `planner` (any `Planner`, its `plan`) on every start of `maps`, against vanilla A*
     (`astar` on the maps' movement model) from the same starts and the maps' exact expert costs; with `theirs` (a
     search planner on `octile` maps), also TransPath's ratios against their vanilla A* (`transpath_ratios`, under
-    the key `transpath`)."""
+    the key `transpath`). `result`: the planner's `plan` of every start of `maps` already made, used instead of
+    planning again."""
     mask = maps.start_mask.reshape(-1)
-    result = planner.plan(
-        maps.obstacles,
-        maps.starts,
-        maps.goals,
-        maps.corner_cutting,
-        maps.moves,
-        chunk_size=chunk_size,
-        progress=progress,
-    )
+    if result is None:
+        result = planner.plan(
+            maps.obstacles,
+            maps.starts,
+            maps.goals,
+            maps.corner_cutting,
+            maps.moves,
+            chunk_size=chunk_size,
+            progress=progress,
+        )
     expansions = result.expansions if isinstance(result, SearchResult) else None
     reference = None
     if expansions is not None:

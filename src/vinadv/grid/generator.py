@@ -33,6 +33,7 @@ from vinadv.errors import InputError
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.grid.paths import PackedPaths
+from vinadv.grid.selection import smallest_first
 from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
 
 CHUNK = 512
@@ -185,12 +186,15 @@ def _generate_chunk(
     dist, counts = shortest_distances(obstacles, goals, corner_cutting, moves)
     eligible = (counts >= MIN_START_MOVES).reshape(count, -1)
     # n_starts distinct eligible cells, uniformly: the smallest random keys among eligible cells.
-    keys = np.where(eligible, rng.random(eligible.shape), np.inf)
-    picks = np.argsort(keys, axis=1)[:, :n_starts]
-    ok = eligible.sum(axis=1) >= n_starts
-    starts = np.stack(np.divmod(picks, size), axis=-1)
-    obstacles, goals, starts = obstacles[ok], goals[ok].astype(np.int64), starts[ok].astype(np.int64)
-    costs, expert = expert_paths_from(dist[ok], obstacles, goals, starts, corner_cutting, moves)
+    keys = rng.random(eligible.shape)
+    keys[~eligible] = np.inf
+    picks = smallest_first(keys, n_starts)
+    starts = np.stack(np.divmod(picks, size), axis=-1).astype(np.int64)
+    goals = goals.astype(np.int64)
+    ok = np.count_nonzero(eligible, axis=1) >= n_starts
+    if not ok.all():  # usually every map is kept: no copies then
+        obstacles, goals, starts, dist = obstacles[ok], goals[ok], starts[ok], dist[ok]
+    costs, expert = expert_paths_from(dist, obstacles, goals, starts, corner_cutting, moves)
     return obstacles, goals, starts, costs, expert
 
 

@@ -88,52 +88,72 @@ def heap_pop(keys, values, size):
 
 
 @numba.njit(cache=True, nogil=True)
-def _dijkstra_one(obstacles, gr, gc, corner_cutting, deltas, costs, dist, moves):
-    n, m = obstacles.shape
-    inf = np.inf
-    for r in range(n):
-        for c in range(m):
-            dist[r, c] = inf
-            moves[r, c] = -1
-    if obstacles[gr, gc]:
-        return
-    cap = 8 * n * m + 1
+def _dijkstra_maps(lo, hi, obstacles, goals, corner_cutting, deltas, costs, dist, moves):
+    """Dijkstra from the goal of maps `lo..hi-1` (see `dijkstra_batch`), on a copy of each map inside a ring of
+    obstacles with cells as flat indices: no move needs a bounds check, and the scratch is allocated once."""
+    n, m = obstacles.shape[1], obstacles.shape[2]
+    w = m + 2
+    n_act = deltas.shape[0]
+    step = np.empty(n_act, dtype=np.int64)
+    for a in range(n_act):
+        step[a] = deltas[a, 0] * w + deltas[a, 1]
+    blocked = np.ones((n + 2) * w, dtype=np.bool_)
+    d = np.empty((n + 2) * w, dtype=np.float64)
+    count = np.empty((n + 2) * w, dtype=np.int32)
+    cap = n_act * n * m + 1  # a cell is pushed at most once per neighbour
     heap_key = np.empty(cap, dtype=np.float64)
     heap_val = np.empty(cap, dtype=np.int64)
-    done = np.zeros((n, m), dtype=np.bool_)
-    dist[gr, gc] = 0.0
-    moves[gr, gc] = 0
-    size = heap_push(heap_key, heap_val, 0, 0.0, gr * m + gc)
-    while size > 0:
-        key, node, size = heap_pop(heap_key, heap_val, size)
-        r = node // m
-        c = node - r * m
-        if done[r, c] or key > dist[r, c]:
-            continue
-        done[r, c] = True
-        for a in range(deltas.shape[0]):
-            nr = r + deltas[a, 0]
-            nc = c + deltas[a, 1]
-            if nr < 0 or nr >= n or nc < 0 or nc >= m or obstacles[nr, nc] or done[nr, nc]:
-                continue
-            if not corner_cutting and deltas[a, 0] != 0 and deltas[a, 1] != 0:
-                if obstacles[nr, c] or obstacles[r, nc]:
+    for b in range(lo, hi):
+        for r in range(n):
+            for c in range(m):
+                blocked[(r + 1) * w + c + 1] = obstacles[b, r, c]
+        d[:] = np.inf
+        count[:] = -1
+        gr, gc = goals[b, 0], goals[b, 1]
+        if not obstacles[b, gr, gc]:
+            goal = (gr + 1) * w + gc + 1
+            d[goal] = 0.0
+            count[goal] = 0
+            size = heap_push(heap_key, heap_val, 0, 0.0, goal)
+            while size > 0:
+                key, node, size = heap_pop(heap_key, heap_val, size)
+                if key > d[node]:  # a stale entry: each push lowers its cell's cost, so only the last one is not
                     continue
-            nd = key + costs[a]
-            if nd < dist[nr, nc] - 1e-9:
-                dist[nr, nc] = nd
-                moves[nr, nc] = moves[r, c] + 1
-                size = heap_push(heap_key, heap_val, size, nd, nr * m + nc)
+                for a in range(n_act):
+                    nb = node + step[a]
+                    if blocked[nb]:
+                        continue
+                    if not corner_cutting and deltas[a, 0] != 0 and deltas[a, 1] != 0:
+                        if blocked[node + deltas[a, 0] * w] or blocked[node + deltas[a, 1]]:
+                            continue
+                    # a cell already settled never passes: its cost is at most `key`
+                    nd = key + costs[a]
+                    if nd < d[nb] - 1e-9:
+                        d[nb] = nd
+                        count[nb] = count[node] + 1
+                        size = heap_push(heap_key, heap_val, size, nd, nb)
+        for r in range(n):
+            for c in range(m):
+                dist[b, r, c] = d[(r + 1) * w + c + 1]
+                moves[b, r, c] = count[(r + 1) * w + c + 1]
+
+
+#: pieces of a batch per thread in `dijkstra_batch`, and the fewest maps in a piece (about a millisecond of work;
+#: fewer maps are done in the calling thread)
+PIECES_PER_THREAD = 4
+MIN_PIECE = 16
 
 
 @numba.njit(cache=True, parallel=True)
-def dijkstra_batch(obstacles, goals, corner_cutting, deltas, costs, dist, moves):
-    """Dijkstra from each goal, in parallel over maps, with any move costs: obstacles `(B, N, N)` bool, goals
-    `(B, 2)` int64, moves `deltas (A, 2)` costing `costs (A,)`; fills `dist (B, N, N)` float64 (inf: unreachable)
-    and `moves (B, N, N)` int32 (-1: unreachable). `shortest_distances` is it with the action costs of
-    DESIGN.md."""
-    for b in numba.prange(obstacles.shape[0]):
-        _dijkstra_one(obstacles[b], goals[b, 0], goals[b, 1], corner_cutting, deltas, costs, dist[b], moves[b])
+def dijkstra_batch(obstacles, goals, corner_cutting, deltas, costs, dist, moves, pieces):
+    """Dijkstra from each goal, in parallel over maps in `pieces` runs of maps, with any move costs: obstacles
+    `(B, N, N)` bool, goals `(B, 2)` int64, moves `deltas (A, 2)` costing `costs (A,)`; fills `dist (B, N, N)`
+    float64 (inf: unreachable) and `moves (B, N, N)` int32 (-1: unreachable). `shortest_distances` is it with the
+    action costs of DESIGN.md."""
+    b = obstacles.shape[0]
+    for p in numba.prange(pieces):
+        lo, hi = b * p // pieces, b * (p + 1) // pieces
+        _dijkstra_maps(lo, hi, obstacles, goals, corner_cutting, deltas, costs, dist, moves)
 
 
 def shortest_distances(
@@ -157,7 +177,12 @@ def shortest_distances(
     model = move_model(moves)
     counts = np.empty(obstacles.shape, dtype=np.int32)
     if len(obstacles):
-        dijkstra_batch(obstacles, goals, bool(corner_cutting), model.deltas, model.costs, dist, counts)
+        args = (obstacles, goals, bool(corner_cutting), model.deltas, model.costs, dist, counts)
+        pieces = min(len(obstacles) // MIN_PIECE, PIECES_PER_THREAD * numba.get_num_threads())
+        if pieces > 1:
+            dijkstra_batch(*args, pieces)
+        else:  # a few maps: starting the threads would cost more than they save
+            _dijkstra_maps(0, len(obstacles), *args)
     return dist, counts
 
 

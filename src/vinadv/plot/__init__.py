@@ -19,6 +19,6 @@ _MODULES = {
     "palette": ("PALETTE", "Palette", "Style"),
     "maps": ("Pair", "as_pair", "draw_map", "draw_map_markers", "draw_pair", "map", "map_legend", "pair", "value_map"),
     "curves": ("WORST_CASE", "draw_k_curve", "k_curve", "k_series"),
-    "files": ("figure_format", "save_figure"),
+    "files": ("figure_format", "save_figure", "svg_text"),
 }
 __all__, __getattr__, __dir__ = lazy_names(__name__, _MODULES)

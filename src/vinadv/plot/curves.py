@@ -9,6 +9,7 @@ import numpy as np
 
 from vinadv.errors import InputError
 from vinadv.plot.maps import figure_for
+from vinadv.plot.palette import PALETTE
 
 #: the strategy name of a benchmark's worst case over its strategies (`vinadv.robustness.WORST_CASE`)
 WORST_CASE = "worst case"
@@ -41,24 +42,39 @@ def k_series(data, rate: str = "harmful_rate", strategy: str = WORST_CASE) -> li
     return [(str(name), [dict(p) for p in points]) for name, points in items]
 
 
-def draw_k_curve(ax, data, rate: str = "harmful_rate", strategy: str = WORST_CASE, intervals: bool = True) -> None:
-    """The k curve on `ax` (see `k_series` for `data`): `rate` in % against k, one line per series in
-    matplotlib's colour cycle (`C0`, `C1`, ...), each point's interval (`{rate}_low`, `{rate}_high`) a band where
-    given and `intervals`. A missing value (None) leaves a gap."""
+def draw_k_curve(
+    ax,
+    data,
+    rate: str = "harmful_rate",
+    strategy: str = WORST_CASE,
+    intervals: bool = True,
+    xlabel: str = "obstacles added (k)",
+    dodge: float = 0.0,
+) -> None:
+    """The k curve on `ax` (see `k_series` for `data`): `rate` in % against k, one line per series in the palette's
+    chart lines (`PALETTE.line(i)`: a colour and a marker each), each point's interval (`{rate}_low`, `{rate}_high`)
+    a band where given and `intervals`. A missing value (None) leaves a gap. `dodge`: each line shifted along k by
+    this much from the next (centred on k), its intervals then drawn as error bars: lines that coincide (several
+    planners at 0%) stay apart."""
     series = k_series(data, rate, strategy)
     for i, (name, points) in enumerate(series):
-        ks = np.array([p["k"] for p in points], dtype=np.float64)
+        shift = dodge * (i - (len(series) - 1) / 2)
+        ks = np.array([p["k"] for p in points], dtype=np.float64) + shift
         values = np.array([np.nan if p.get(rate) is None else 100.0 * p[rate] for p in points])
-        colour = f"C{i % 10}"
-        ax.plot(ks, values, "o-", color=colour, label=name)
+        style = PALETTE.line(i)
+        colour = style.colour
+        ax.plot(ks, values, marker=style.marker, ls=style.line, color=colour, mec=PALETTE.edge.colour, label=name)
         low, high = (f"{rate}_low", f"{rate}_high")
         if intervals and all(p.get(low) is not None and p.get(high) is not None for p in points) and points:
             lows = np.array([100.0 * p[low] for p in points])
             highs = np.array([100.0 * p[high] for p in points])
-            ax.fill_between(ks, lows, highs, color=colour, alpha=0.18, linewidth=0)
+            if dodge:
+                ax.errorbar(ks, values, yerr=[values - lows, highs - values], fmt="none", ecolor=colour, capsize=2)
+            else:
+                ax.fill_between(ks, lows, highs, color=colour, alpha=0.18, linewidth=0)
     top = max([1] + [int(p["k"]) for _, points in series for p in points])
     ax.set_xticks(range(1, top + 1))
-    ax.set_xlabel("obstacles added (k)")
+    ax.set_xlabel(xlabel)
     ax.grid(alpha=0.3)
 
 
@@ -70,17 +86,19 @@ def k_curve(
     intervals: bool = True,
     ax=None,
     title: str | None = None,
+    xlabel: str = "obstacles added (k)",
+    dodge: float = 0.0,
 ):
     """Draw the k curve (`draw_k_curve`): `rate` (`harmful_rate`, `paper_success_rate`, any rate column) against k,
-    one line per planner, on `ax` or a new figure; returns the figure.
+    one line per planner, on `ax` or a new figure (`xlabel`, `dodge`: as `draw_k_curve`); returns the figure.
 
         with vinadv.open("results.db") as results:
             vinadv.plot.k_curve(results.robustness())
     """
     fig, ax = figure_for(ax, (5, 3.6))
-    draw_k_curve(ax, data, rate, strategy, intervals)
+    draw_k_curve(ax, data, rate, strategy, intervals, xlabel, dodge)
     ax.set_ylabel(f"{rate.replace('_', ' ')} (% of valid maps)")
-    ax.set_ylim(0, 100)
+    ax.set_ylim(-2, 102)  # a point at 0% or 100% drawn whole
     ax.set_title(title or rate.replace("_", " "), fontsize=9)
     ax.legend(fontsize=8)
     return fig

@@ -5,6 +5,7 @@ commands, the report) chooses Agg itself."""
 
 from __future__ import annotations
 
+import io
 import os
 
 import matplotlib.pyplot as plt
@@ -24,11 +25,29 @@ def figure_format(path: str | os.PathLike) -> str | None:
     return fmt
 
 
+#: how an SVG is written: text kept as text, fixed ids (no random salt), so the same figure gives the same bytes
+SVG_RC = {"svg.hashsalt": "vinadv", "svg.fonttype": "none"}
+
+
 def save_figure(fig, path: str | os.PathLike) -> None:
-    """Save and close `fig`; the format follows the file extension (png, svg, pdf; see `figure_format`)."""
+    """Save and close `fig`; the format follows the file extension (png, svg, pdf; see `figure_format`). An SVG
+    has no date and fixed ids (`SVG_RC`): the same figure, the same bytes."""
     try:
         fmt = figure_format(path)
-        with atomic_output(path, "wb") as fh:
-            fig.savefig(fh, format=fmt, dpi=150, bbox_inches="tight")
+        svg = fmt == "svg"
+        with atomic_output(path, "wb") as fh, plt.rc_context(SVG_RC if svg else {}):
+            fig.savefig(fh, format=fmt, dpi=150, bbox_inches="tight", metadata={"Date": None} if svg else None)
     finally:
         plt.close(fig)
+
+
+def svg_text(fig) -> str:
+    """`fig` as SVG text, then closed: text kept as text, no date and fixed ids, so the same figure gives the same
+    bytes (a docs page that inlines it changes only when its data does)."""
+    buffer = io.StringIO()
+    try:
+        with plt.rc_context(SVG_RC):
+            fig.savefig(buffer, format="svg", metadata={"Date": None}, bbox_inches="tight")
+    finally:
+        plt.close(fig)
+    return buffer.getvalue()

@@ -49,6 +49,8 @@ class Palette:
         edge: marker edges and reference lines (black).
         harmful, harmless: harm verdicts in charts (red, grey).
         values: the matplotlib colour map of value maps.
+        series: the lines of a chart with one line per planner (k curves), in order: each a colour and its own
+            marker, so that lines stay apart in grey print too.
     """
 
     free: Style = Style("#ffffff", "white")
@@ -65,10 +67,26 @@ class Palette:
     harmful: Style = Style("#d62728", "red")
     harmless: Style = Style("#7f7f7f", "grey")
     values: str = "viridis"
+    series: tuple[Style, ...] = (
+        Style("#1f77b4", "blue", marker="o", line="-"),
+        Style("#ff7f0e", "orange", marker="s", line="-"),
+        Style("#2ca02c", "green", marker="^", line="-"),
+        Style("#d62728", "red", marker="D", line="-"),
+        Style("#9467bd", "purple", marker="v", line="-"),
+        Style("#8c564b", "brown", marker="P", line="-"),
+        Style("#e377c2", "pink", marker="X", line="-"),
+        Style("#7f7f7f", "grey", marker="*", line="-"),
+        Style("#bcbd22", "olive", marker="h", line="--"),
+        Style("#17becf", "cyan", marker="p", line="--"),
+    )
 
     def styles(self) -> dict[str, Style]:
         """{role: Style} of every role that has one."""
         return {f.name: getattr(self, f.name) for f in fields(self) if isinstance(getattr(self, f.name), Style)}
+
+    def line(self, i: int) -> Style:
+        """The style of a chart's `i`-th line (`series`, round again after the last)."""
+        return self.series[i % len(self.series)]
 
     def path(self, label: str) -> Style | None:
         """The style of a path labelled `label` (`original`, `adversarial`, `expert`; `planned`, a planner's path on

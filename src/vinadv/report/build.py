@@ -5,7 +5,8 @@ through `Store`, what the evaluation stage stored included) and renders it (`vin
 templates, one stylesheet, CSV files) into `out_dir`: `index.html` (relative links only, no script, no external
 resource), PNG + SVG figures and CSV tables. The report computes no evaluation: `vinadv evaluate`
 (`vinadv.evaluation`) does, and `vinadv run --report` runs it first. The paper's numbers are shown beside ours
-wherever the paper has one.
+wherever the paper has one, when the run is in the paper's setting (its VIN on 28x28 octile maps,
+one obstacle added: `vinadv.report.paper.papers_setting`); for any other run the page says why they are left out.
 """
 
 from __future__ import annotations
@@ -31,8 +32,9 @@ class ReportResult:
     runs: list[int]
     files: list[str] = field(default_factory=list)
     timing: dict = field(default_factory=dict)
-    vin: dict = field(default_factory=dict)
+    planner: dict = field(default_factory=dict)
     evaluated: bool = False
+    not_papers: str | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -41,8 +43,9 @@ class ReportResult:
             "runs": self.runs,
             "files": self.files,
             "timing": self.timing,
-            "vin": self.vin,
+            "planner": self.planner,
             "evaluated": self.evaluated,
+            "not_papers": self.not_papers,
         }
 
 
@@ -70,7 +73,7 @@ def build_report(
         out.mkdir(parents=True, exist_ok=True)
         data = gather_report(ctx)
     index = render_report(data, out)
-    vin, timing = data.sections["vin"], data.sections["timing"]
+    quality, timing = data.sections["planner"], data.sections["timing"]
     return ReportResult(
         index=index,
         run_id=ctx.run_id,
@@ -83,12 +86,20 @@ def build_report(
             "rule_s": timing.rule_s,
             "hybrid_svm_s": {setting: s for setting, _, s in timing.hybrid},
         },
-        vin={
-            "source": vin.source,
-            **{k: vin.metrics.get(k) for k in ("success_rate", "optimal_rate", "action_accuracy")},
-            "run_original_reached": vin.reached / vin.total if vin.total else None,
+        planner={
+            "source": quality.source,
+            "capabilities": quality.capabilities,
+            **{k: quality.metrics.get(k) for k in ("success_rate", "optimal_rate")},
+            **(
+                {"action_accuracy": quality.metrics.get("action_accuracy")}
+                if quality.capabilities.get("policy")
+                else {}
+            ),
+            **({"search": quality.search} if quality.search is not None else {}),
+            "run_original_reached": quality.reached / quality.total if quality.total else None,
         },
         evaluated=any(ev.main for ev in data.sections["classifiers"].evaluations),
+        not_papers=data.not_papers,
     )
 
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
 
+from vinadv.report.paper import papers_setting
 from vinadv.vocabulary import STRENGTH_ORDER
 
 ALL_LABELS = STRENGTH_ORDER
@@ -60,6 +61,11 @@ class Context:
     compare: list[int]
     runs: dict[int, dict]
 
+    def not_papers(self, run_id: int | None = None) -> str | None:
+        """Why the run (default the main run) is not in the paper's setting, or None when it is: the paper's numbers
+        are shown beside a run's only then (`vinadv.report.paper.papers_setting`)."""
+        return papers_setting(self.runs[self.run_id if run_id is None else run_id])
+
     def prefix(self, run_id: int) -> str:
         """File-name prefix of a run's own tables and figures: none for the main run, `runK_` for the others."""
         return "" if run_id == self.run_id else f"run{run_id}_"
@@ -75,7 +81,9 @@ class SectionData(Protocol):
 
 @dataclass
 class ReportData:
-    """Every section's data ({section id: its dataclass}, in the page's order), and the page's header facts."""
+    """Every section's data ({section id: its dataclass}, in the page's order), and the page's header facts:
+    `header` (what the run was: planner spec, maps, seed), `not_papers` (why the main run is not in the paper's
+    setting, None when it is: the paper's numbers are shown only then)."""
 
     run_id: int
     run_name: str | None
@@ -83,6 +91,8 @@ class ReportData:
     url: str
     version: str
     generated: str
+    header: list[tuple[str, object]] = field(default_factory=list)
+    not_papers: str | None = None
     sections: dict[str, SectionData] = field(default_factory=dict)
 
     def tables(self) -> list[Table]:

@@ -5,15 +5,13 @@ the filters below, so the gathered data stays numbers."""
 from __future__ import annotations
 
 import csv
-import math
-import numbers
 import time
 from importlib import resources
 from pathlib import Path
 
 import jinja2
 
-from vinadv import __version__
+from vinadv import __version__, display
 from vinadv.outfile import atomic_output
 from vinadv.report import paper
 from vinadv.report.data import ALL_LABELS, CATEGORY_ORDER, ReportData, Table
@@ -25,16 +23,14 @@ PAGE_SECTIONS = (*((s.id, s.heading) for s in SECTIONS), ("files", "Files"))
 
 
 def num(value, digits: int = 3) -> str:
-    """`1,234` for integers, `0.913` for floats (never `-0.000`), an em dash for None/NaN."""
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "—"
-    if isinstance(value, numbers.Integral):
-        return f"{int(value):,}"
-    return f"{round(float(value), digits) + 0.0:.{digits}f}"  # + 0.0: float noise below 0 shows as 0.000
+    """`1,234` for integers, `0.913` for floats (float noise and `-0.000` as `0.000`), an em dash for None/NaN
+    (`vinadv.display.number`)."""
+    return display.number(value, digits)
 
 
 def pct(value) -> str:
-    return "—" if value is None else f"{100.0 * float(value):.1f}%"
+    """A share in percent, `57.7%` (`vinadv.display.percent`)."""
+    return display.percent(value)
 
 
 def share(part, total) -> str:

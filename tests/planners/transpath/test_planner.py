@@ -1,8 +1,11 @@
-"""`transpath-cf` and `transpath-focal`: the compiled replica against the literal restatement of the authors' search
-on their six example tasks (paths and expanded cells, float32 ties counted), end to end through `plan`, the maps'
-corner-cutting rule, the capabilities, and the refusal of other sizes."""
+"""`transpath-cf` and `transpath-focal`: both modes (the compiled replica, the differentiable search) against the
+literal restatement of the authors' search on their six example tasks and generated maps (paths and expanded cells,
+float32 ties counted), end to end through `plan`, the maps' corner-cutting rule, the capabilities, and the refusal of
+other sizes."""
 
 from __future__ import annotations
+
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -13,6 +16,7 @@ from vinadv.grid import generate_maps
 from vinadv.planners import check_planner
 from vinadv.planners.interface import PlannerError
 from vinadv.planners.registry import load_planner
+from vinadv.planners.transpath.differentiable import as_search_arrays, transpath_differentiable_search
 from vinadv.planners.transpath.model import SHIPPED_WEIGHTS
 from vinadv.planners.transpath.planner import TransPathPlanner
 from vinadv.planners.transpath.search import transpath_search
@@ -44,19 +48,35 @@ def mismatches(result, answers) -> list[int]:
     ]
 
 
+def both_modes_mismatches(values: torch.Tensor, obstacles, starts, goals, mode, answers) -> tuple[list, list]:
+    """The tasks where the compiled replica, and where the differentiable search, part from the literal answers, on
+    the same network values."""
+    replica = transpath_search(values.numpy(), obstacles, starts, goals, mode, focal_exp=torch.exp(values).numpy())
+    assert replica.reached.all()
+    with torch.no_grad():
+        out = transpath_differentiable_search(
+            values,
+            torch.from_numpy((~obstacles).astype(np.float32)),
+            torch.from_numpy(starts),
+            torch.from_numpy(goals),
+            mode,
+        )
+    paths, _, expanded = as_search_arrays(out, starts, goals)
+    return mismatches(replica, answers), mismatches(SimpleNamespace(paths=paths, expanded=expanded), answers)
+
+
 @pytest.mark.parametrize("mode", ["cf", "f"])
-def test_the_compiled_replica_equals_the_literal_search_on_the_six_examples(examples, mode):
+def test_both_modes_equal_the_literal_search_on_the_six_examples(examples, mode):
     """The authors' forward (plain, one batch of the six, as their notebook) and their search, restated literally,
-    against the compiled replica on the same values: the same paths and expanded cells on every task, and no float32
-    tie met (where two cells tie, both take the row-major first; the count would show it)."""
+    against the compiled replica and the differentiable search on the same values: the same paths and expanded cells
+    on every task, and no float32 tie met (where two cells tie, all take the row-major first; the count would show
+    it)."""
     torch.set_num_threads(1)
     obstacles, starts, goals, _ = examples
     with torch.no_grad():
         values = plain_forward(state(mode), obstacles, starts if mode == "f" else None, goals)[:, 0]
     answers = literal_answers(values, obstacles, starts, goals, mode)
-    result = transpath_search(values.numpy(), obstacles, starts, goals, mode, focal_exp=torch.exp(values).numpy())
-    assert result.reached.all()
-    assert mismatches(result, answers) == []
+    assert both_modes_mismatches(values, obstacles, starts, goals, mode, answers) == ([], [])
     assert [ties for _, _, ties in answers] == [0] * 6
 
 
@@ -102,7 +122,7 @@ def test_the_planners_pass_the_checks_and_declare_what_they_do():
         planner = check_planner(load_planner(name, 64))
         assert isinstance(planner, TransPathPlanner) and planner.moves == "octile"
         assert planner.capabilities.expansions and planner.capabilities.value_maps
-        assert not planner.capabilities.gradients and not planner.capabilities.policy
+        assert planner.capabilities.gradients and not planner.capabilities.policy
         assert planner.checksum == weights_checksum(SHIPPED_WEIGHTS[mode])
         assert planner.spec()["name"] == name and planner.config["mode"] == mode
 
@@ -130,15 +150,14 @@ def test_other_sizes_are_refused_in_one_line():
 
 
 @pytest.mark.parametrize("mode", ["cf", "f"])
-def test_the_compiled_replica_equals_the_literal_search_on_generated_maps(mode):
+def test_both_modes_equal_the_literal_search_on_generated_maps(mode):
     """Three generated 64x64 maps (vinadv's generator, corner cutting: the authors' rule), one start each: the same
-    paths and expanded cells, no float32 tie met."""
+    paths and expanded cells in both modes, no float32 tie met (200 maps: docs/results/transpath_faithfulness.json)."""
     torch.set_num_threads(1)
     maps = generate_maps(3, 64, seed=11, n_starts=1)
     obstacles, starts, goals = maps.obstacles, maps.starts[:, 0], maps.goals
     with torch.no_grad():
         values = plain_forward(state(mode), obstacles, starts if mode == "f" else None, goals)[:, 0]
     answers = literal_answers(values, obstacles, starts, goals, mode)
-    result = transpath_search(values.numpy(), obstacles, starts, goals, mode, focal_exp=torch.exp(values).numpy())
-    assert mismatches(result, answers) == []
+    assert both_modes_mismatches(values, obstacles, starts, goals, mode, answers) == ([], [])
     assert [ties for _, _, ties in answers] == [0] * 3

@@ -21,6 +21,7 @@ from vinadv.grid.generator import MIN_START_MOVES
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES, move_model
 from vinadv.grid.paths import PackedPaths
+from vinadv.grid.selection import smallest_first
 from vinadv.grid.shortest_paths import COST_TOL, expert_paths_from, shortest_distances
 from vinadv.interop.formats.files import ForeignArrays
 
@@ -198,7 +199,7 @@ def with_drawn_starts(
     dist, counts_of_moves = shortest_distances(obstacles, goals, True, moves)
     eligible = (counts_of_moves >= MIN_START_MOVES).reshape(n, size * size)
     keys = np.where(eligible, np.random.default_rng(seed).random(eligible.shape), np.inf)
-    picks = np.argsort(keys, axis=1, kind="stable")[:, :k]
+    picks = smallest_first(keys, k)
     counts = np.minimum(eligible.sum(axis=1), k)
     keep = counts > 0
     starts = np.stack(np.divmod(picks, size), axis=-1).astype(np.int64)

@@ -38,12 +38,15 @@ import torch
 from torch import nn
 
 from vinadv.grid.actions import ACTION_DELTAS
+from vinadv.planners.batching import over_maps, torch_threads
 from vinadv.planners.classical.astar import FLOAT32_TINY, TIE_BREAK
 from vinadv.planners.neural_astar.model import NeuralAstar
+from vinadv.planners.result import GOAL, STEP_LIMIT, PlanResult
+from vinadv.planners.search import SearchResult
 
 #: the smallest normal float32: below it exp(-f / sqrt(N)) is subnormal (`vinadv.planners.classical.astar.FLOAT32_TINY`)
 TINY = float(FLOAT32_TINY)
-__all__ = ["DifferentiableSearch", "NeuralAstarPaths", "authors_heuristic", "differentiable_astar"]
+__all__ = ["DifferentiableSearch", "NeuralAstarPaths", "authors_heuristic", "differentiable_astar", "search_results"]
 
 
 def authors_heuristic(goals: torch.Tensor, n: int, tb_factor: float = TIE_BREAK) -> torch.Tensor:
@@ -93,6 +96,38 @@ class DifferentiableSearch:
             cells = np.asarray(chain[::-1], dtype=np.int64)
             out.append(np.stack([cells // n, cells % n], axis=1))
         return out
+
+
+def search_results(
+    search, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, device: torch.device, batch_size: int
+) -> SearchResult:
+    """A differentiable search's answers as a `SearchResult`, without gradients: `search(obstacles (b, N, N) float
+    1/0, starts, goals) -> DifferentiableSearch` (a module's `search`) on checked inputs, `batch_size` maps at a time
+    on `device`; the paths are the chains of parents, `[start]` with termination `step_limit` where the goal was not
+    reached. On the CPU the maps are split between threads of one torch thread each: the search's many small steps
+    gain nothing from PyTorch's own threads and lose much to their synchronisation on a busy machine."""
+    parts: dict[int, SearchResult] = {}
+
+    def run(lo: int, hi: int) -> None:
+        with torch.no_grad():
+            for i in range(lo, hi, batch_size):
+                sl = slice(i, min(hi, i + batch_size))
+                out = search(
+                    torch.from_numpy(obstacles[sl].astype(np.float32)).to(device),
+                    torch.from_numpy(starts[sl]).to(device),
+                    torch.from_numpy(goals[sl]).to(device),
+                )
+                reached = out.reached.cpu().numpy()
+                plan = PlanResult.from_paths(out.paths(starts[sl], goals[sl]), np.where(reached, GOAL, STEP_LIMIT))
+                expanded = out.histories.detach().cpu().numpy() > 0.5
+                parts[i] = SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)
+
+    if device.type != "cpu":
+        run(0, len(obstacles))
+    else:
+        with torch_threads(1):
+            over_maps(len(obstacles), run)
+    return SearchResult.concat([parts[i] for i in sorted(parts)])
 
 
 def differentiable_astar(

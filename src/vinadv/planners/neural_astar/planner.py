@@ -25,12 +25,12 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from vinadv.planners.batching import forward_maps, over_maps, torch_threads
+from vinadv.planners.batching import forward_maps
 from vinadv.planners.classical.astar import best_first_search
 from vinadv.planners.interface import Capabilities, PlannerError
-from vinadv.planners.neural_astar.differentiable import NeuralAstarPaths, authors_heuristic
+from vinadv.planners.neural_astar.differentiable import NeuralAstarPaths, authors_heuristic, search_results
 from vinadv.planners.neural_astar.model import NeuralAstar
-from vinadv.planners.result import GOAL, STEP_LIMIT, PlanResult, check_plan_inputs
+from vinadv.planners.result import check_plan_inputs
 from vinadv.planners.search import SearchPlanner, SearchResult
 from vinadv.planners.weights import weights_path_checksum
 
@@ -119,30 +119,7 @@ class NeuralAstarPlanner(SearchPlanner):
         CPU, split between threads of one torch thread each: the search's many small steps gain nothing from
         PyTorch's own threads and lose much to their synchronisation on a busy machine)."""
         obstacles, starts, goals = self._check_inputs(obstacles, starts, goals, corner_cutting)
-        module = self.differentiable_paths
-        parts: dict[int, SearchResult] = {}
-
-        def search(lo: int, hi: int) -> None:
-            with torch.no_grad():
-                for i in range(lo, hi, self.batch_size):
-                    sl = slice(i, min(hi, i + self.batch_size))
-                    out = module.search(
-                        torch.from_numpy(obstacles[sl].astype(np.float32)).to(self.device),
-                        torch.from_numpy(starts[sl]).to(self.device),
-                        torch.from_numpy(goals[sl]).to(self.device),
-                    )
-                    reached = out.reached.cpu().numpy()
-                    paths = out.paths(starts[sl], goals[sl])
-                    plan = PlanResult.from_paths(paths, np.where(reached, GOAL, STEP_LIMIT))
-                    expanded = out.histories.detach().cpu().numpy() > 0.5
-                    parts[i] = SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)
-
-        if self.device.type != "cpu":
-            search(0, len(obstacles))
-        else:
-            with torch_threads(1):
-                over_maps(len(obstacles), search)
-        return SearchResult.concat([parts[i] for i in sorted(parts)])
+        return search_results(self.differentiable_paths.search, obstacles, starts, goals, self.device, self.batch_size)
 
     @property
     def differentiable_paths(self) -> NeuralAstarPaths:

@@ -6,5 +6,7 @@ Transformers", AAAI 2023), from the authors' public repository (AIRI-Institute/T
 - `checkpoint`: the authors' `cf.pth` / `focal.pth` read with the allow-list reader and checked key by key.
 - `search`: their search (`modules/planners.py`) as a compiled best-first search in their float32 arithmetic: A*
   with the octile heuristic divided by the correction factor (`cf`), focal search on the focal values (`f`).
+- `differentiable`: the same search in PyTorch, batched, with a straight-through selection (the differentiable mode,
+  for the saliency attack's gradients).
 - `planner`: `TransPathPlanner`, the search planners `transpath-cf` and `transpath-focal`, and the registry's loader.
 """

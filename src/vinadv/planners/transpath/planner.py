@@ -1,9 +1,16 @@
 """`TransPathPlanner`: TransPath's two models as vinadv search planners, `transpath-cf` and `transpath-focal`.
 
-The exact mode (`plan_paths`, what `plan`, `attack`, `run`, `eval` use) is the compiled replica: the network's
-outputs (PyTorch, no gradients, batched), then the compiled search of `vinadv.planners.transpath.search` in the
-authors' float32 arithmetic (their octile heuristic, their f, selection and tie rule). The differentiable mode (the
-authors' search in PyTorch, for gradients) is not there yet: the planners declare no gradients.
+Two modes that give the same search, named as Neural A*'s:
+
+- Exact mode (`plan_paths`, what `plan`, `attack`, `run`, `eval` use), the compiled replica: the network's outputs
+  (PyTorch, no gradients, batched), then the compiled search of `vinadv.planners.transpath.search` in the authors'
+  float32 arithmetic (their octile heuristic, their f, selection and tie rule).
+- Differentiable mode (`differentiable_paths`, `plan_paths_differentiable`): the network, then the authors' search
+  in PyTorch (`vinadv.planners.transpath.differentiable`), for gradients (the saliency attack).
+
+They can part only where two open cells' values are equal in one computation and not in the other (PyTorch's
+vectorised float32 exp against the correctly rounded one, the division by the sum before the argmax): counted by
+`tests/planners/transpath` and `perf/transpath_faithfulness.py`.
 
 Movement: octile moves (the authors' cost filter: 1 and sqrt 2). The authors' search cuts corners; on maps without
 corner cutting this one keeps the maps' rule (a diagonal also needs both cells beside it free).
@@ -18,8 +25,10 @@ import torch
 
 from vinadv.planners.batching import forward_maps
 from vinadv.planners.interface import Capabilities, PlannerError
+from vinadv.planners.neural_astar.differentiable import search_results
 from vinadv.planners.result import check_plan_inputs
 from vinadv.planners.search import SearchPlanner, SearchResult
+from vinadv.planners.transpath.differentiable import TransPathPaths
 from vinadv.planners.transpath.model import SIZE, TransPath
 from vinadv.planners.transpath.search import F_W, K_FLOOR, octile_heuristic, transpath_search
 from vinadv.planners.weights import weights_path_checksum
@@ -44,12 +53,12 @@ class TransPathPlanner(SearchPlanner):
     """TransPath with a `TransPath` model of mode `cf` (A* with the octile heuristic divided by the predicted
     correction factor) or `f` (focal search on the predicted focal values, `f_w` 100) for 64x64 maps (module doc).
 
-    Capabilities: expansions (the authors' histories) and value maps of its own (`cf`: minus its heuristic,
-    `-octile / max(k, 0.1)`; `f`: the focal values). No gradients yet (the differentiable mode is to come).
+    Capabilities: expansions (the authors' histories), value maps of its own (`cf`: minus its heuristic,
+    `-octile / max(k, 0.1)`; `f`: the focal values) and gradients (the differentiable search, `differentiable_paths`).
     """
 
     moves = MOVES
-    capabilities = Capabilities(value_maps=True, expansions=True)
+    capabilities = Capabilities(value_maps=True, gradients=True, expansions=True)
 
     def __init__(
         self,
@@ -104,6 +113,26 @@ class TransPathPlanner(SearchPlanner):
         obstacles, starts, goals = self._check_inputs(obstacles, starts, goals)
         out, exp = self.outputs(obstacles, starts, goals)
         return transpath_search(out, obstacles, starts, goals, self.mode, corner_cutting, self.f_w, exp)
+
+    def plan_paths_differentiable(
+        self, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool = True
+    ) -> SearchResult:
+        """The differentiable mode's search as a `SearchResult` (no gradients), `batch_size` maps at a time, keeping
+        the maps' rule (`vinadv.planners.neural_astar.differentiable.search_results`)."""
+        obstacles, starts, goals = self._check_inputs(obstacles, starts, goals)
+        search = self.differentiable_module(corner_cutting).search
+        return search_results(search, obstacles, starts, goals, self.device, self.batch_size)
+
+    def differentiable_module(self, corner_cutting: bool = True) -> TransPathPaths:
+        """The differentiable search's path-map module keeping the maps' rule `corner_cutting`."""
+        return TransPathPaths(self.model, self.f_w, corner_cutting)
+
+    @property
+    def differentiable_paths(self) -> TransPathPaths:
+        """`module(obstacles (B,64,64) float 1/0, starts, goals) -> (B, 64, 64)` path map, differentiable with respect
+        to the obstacles through the network (`differentiable.TransPathPaths`), searching as the authors (corners
+        cut): the saliency attack's ranking signal, whatever the maps' rule."""
+        return self.differentiable_module(True)
 
     def value_maps(self, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray | None = None) -> np.ndarray:
         """`(B, 64, 64)` float64, larger where the search goes first: `cf`, minus its heuristic `-octile / max(k,

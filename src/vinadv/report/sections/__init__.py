@@ -21,10 +21,10 @@ from vinadv.report.sections import (
     distribution,
     examples,
     harm,
+    planner,
     robustness,
     run,
     timing,
-    vin,
 )
 
 
@@ -41,7 +41,7 @@ class Section:
 #: the page's sections in order
 SECTIONS = (
     Section("run", "Run and configuration", run.gather),
-    Section("vin", "The planner's quality", vin.gather),
+    Section("planner", "The planner's quality", planner.gather),
     Section("examples", "Example map pairs (figs. 1, 2, 5)", examples.gather),
     Section("categories", "The four categories (fig. 3)", categories.gather),
     Section("distribution", "Category distribution (table 4)", distribution.gather),
@@ -63,6 +63,8 @@ def gather_report(ctx: Context, order: list[str] | None = None) -> ReportData:
         url=ctx.store.url,
         version=__version__,
         generated=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+        header=run.header_rows(ctx.store.run_info(ctx.run_id)),
+        not_papers=ctx.not_papers(),
     )
     for sid in order or list(by_id):
         data.sections[sid] = by_id[sid].gather(ctx)

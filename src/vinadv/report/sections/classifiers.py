@@ -37,6 +37,8 @@ class RunEvaluation:
     table6: Table
     detail: Table
     fig8_table: Table | None
+    #: the paper's numbers shown beside this run's: it is in the paper's setting (`Context.not_papers`)
+    papers: bool = True
 
     def tables(self) -> list[Table]:
         return [t for t in (self.table5, self.table6, self.detail, self.fig8_table) if t is not None]
@@ -123,6 +125,7 @@ def _run_evaluation(ctx: Context, rid: int, stored: list[dict]) -> RunEvaluation
         )
     classifiers = list(dict.fromkeys(r["classifier"] for r in rows))
     newest = rows[-1]["metrics"]
+    papers = ctx.not_papers(rid) is None
     return RunEvaluation(
         run_id=rid,
         main=rid == ctx.run_id,
@@ -135,13 +138,15 @@ def _run_evaluation(ctx: Context, rid: int, stored: list[dict]) -> RunEvaluation
         classifiers=classifiers,
         settings=results,
         fig8=fig8,
-        **_classifier_tables(classifiers, results, rows, points, prefix),
+        papers=papers,
+        **_classifier_tables(classifiers, results, rows, points, prefix, papers),
     )
 
 
 def _classifier_tables(
-    classifiers: list[str], settings: list[SettingResult], rows: list[dict], points: dict, prefix: str
+    classifiers: list[str], settings: list[SettingResult], rows: list[dict], points: dict, prefix: str, papers: bool
 ) -> dict[str, Table | None]:
+    """Tables 5 and 6, the detail and fig. 8's points; tables 5 and 6 with the paper's column only with `papers`."""
     table5, table6, detail = [], [], []
     for kind in classifiers:
         for s in settings:
@@ -155,7 +160,7 @@ def _classifier_tables(
                     s.setting,
                     bal["train_size"],
                     bal["metrics"].get("training_s"),
-                    paper.TRAINING_S.get(kind) if s.setting == "baseline" else None,
+                    *([paper.TRAINING_S.get(kind) if s.setting == "baseline" else None] if papers else []),
                 ]
             )
             table6.append(
@@ -165,7 +170,7 @@ def _classifier_tables(
                     bal["metrics"].get("accuracy"),
                     imb["metrics"].get("accuracy") if imb else None,
                     bal["metrics"]["per_class"]["FP"]["f1"],
-                    paper.ACCURACY.get(kind) if s.setting == "baseline" else None,
+                    *([paper.ACCURACY.get(kind) if s.setting == "baseline" else None] if papers else []),
                 ]
             )
     for r in rows:
@@ -203,12 +208,19 @@ def _classifier_tables(
     return {
         "table5": Table(
             f"{prefix}table5_training_time.csv",
-            ("classifier", "setting", "train_size", "training_s", "paper_s"),
+            ("classifier", "setting", "train_size", "training_s", *(("paper_s",) if papers else ())),
             table5,
         ),
         "table6": Table(
             f"{prefix}table6_accuracy.csv",
-            ("classifier", "setting", "accuracy_balanced", "accuracy_imbalanced", "fp_f1_balanced", "paper_accuracy"),
+            (
+                "classifier",
+                "setting",
+                "accuracy_balanced",
+                "accuracy_imbalanced",
+                "fp_f1_balanced",
+                *(("paper_accuracy",) if papers else ()),
+            ),
             table6,
         ),
         "detail": Table(

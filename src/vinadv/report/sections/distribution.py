@@ -36,7 +36,7 @@ class RunCounts:
 @dataclass
 class DistributionData:
     runs: list[RunCounts]
-    paper: dict[str, int]
+    paper: dict[str, int] | None  # None: the main run is not in the paper's setting
     table: Table
     figure: Figure
 
@@ -66,6 +66,7 @@ def gather(ctx: Context) -> DistributionData:
                 counts={lab: int(ctx.store.label_counts(rid).get(lab, 0)) for lab in ALL_LABELS},
             )
         )
+    theirs = paper.TABLE4 if ctx.not_papers() is None else None
     table = Table(
         "table4_categories.csv",
         ("run", "attack", "labelled_by", "pairs", *ALL_LABELS, "successful", "valid"),
@@ -84,13 +85,14 @@ def gather(ctx: Context) -> DistributionData:
                 paper.TABLE4["UrP"] + paper.TABLE4["FP"],
                 sum(paper.TABLE4.values()),
             ]
-        ],
+        ]
+        * (theirs is not None),
     )
     bars = [(f"run {r.run_id} ({r.attack or '—'})" + (" †" if r.by_model else ""), r.counts) for r in rows]
     figure = Figure(
-        tuple(figures.category_bars(bars, paper.TABLE4, ctx.out / "fig_table4_categories")),
-        "Table 4 as bars: share of each category (paper: no invalid category).",
+        tuple(figures.category_bars(bars, theirs, ctx.out / "fig_table4_categories")),
+        "Table 4 as bars: share of each category" + (" (paper: no invalid category)." if theirs else "."),
         "category distribution",
         760,
     )
-    return DistributionData(runs=rows, paper=dict(paper.TABLE4), table=table, figure=figure)
+    return DistributionData(runs=rows, paper=None if theirs is None else dict(theirs), table=table, figure=figure)

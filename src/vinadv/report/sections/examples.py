@@ -87,7 +87,7 @@ def gather(ctx: Context) -> ExamplesData:
     )
     fig2 = Figure(
         tuple(figures.map_pair(records, i, ctx.out / "fig2_path_pair", with_paths=True, distances=pairs[i])),
-        f"Fig. 2: the pair of paths the VIN plans on them (original {PALETTE.original.name}, adversarial "
+        f"Fig. 2: the pair of paths the planner plans on them (original {PALETTE.original.name}, adversarial "
         f"{PALETTE.adversarial.name} dashed).",
         "original and adversarial path",
         760,

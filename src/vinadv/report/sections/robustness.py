@@ -81,8 +81,9 @@ class RobustnessData:
 
 def with_intervals(by_k: list[dict]) -> list[dict]:
     """Figures by k, each with its rates' Wilson 95% intervals (`{rate}_low`, `{rate}_high`), computed from the
-    counts (`vinadv.intervals.figure_intervals`): a benchmark stored before intervals has them too."""
-    return [{**f, **figure_intervals(f)} for f in by_k]
+    counts (`vinadv.intervals.figure_intervals`): a benchmark stored before intervals has them too; and the mean
+    regret's bootstrap interval as stored (None for a benchmark stored before it: it needs the per-map regrets)."""
+    return [{"mean_regret_low": None, "mean_regret_high": None, **f, **figure_intervals(f)} for f in by_k]
 
 
 def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
@@ -128,7 +129,7 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
         "harmful",
         *interval_columns("harmful_rate"),
         "reached",
-        "mean_regret",
+        *interval_columns("mean_regret"),
         "effort_harmful",
         *interval_columns("effort_harmful_rate"),
     )
