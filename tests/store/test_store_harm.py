@@ -66,7 +66,7 @@ def test_version_1_database_is_upgraded_on_open(db_url):
         store.write_pairs(run_id, new)
         assert store.read_pairs(run_id, pair_indices=new.pair_index).equals(new)
     columns, version = columns_and_version(db_url)
-    assert version == SCHEMA_VERSION == "7" and {*HARM_COLUMNS, "added_more"} <= columns
+    assert version == SCHEMA_VERSION == "8" and {*HARM_COLUMNS, "added_more"} <= columns
     assert "moves" in run_columns(db_url)
     with Store.open(db_url) as store:  # opening again changes nothing
         assert store.count_pairs(run_id) == 40
