@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vinadv import display
 from vinadv.bench.outcomes import exact_mean, outcome, worst_case_within
 from vinadv.bench.suites import ENTRY_FORMAT_2, SUITES, DataSuite
 from vinadv.errors import InputError
@@ -176,3 +177,45 @@ def mean_intervals(entry: dict) -> dict:
     regrets = [r if ok else None for r, ok in zip(clean["regret"], clean["reached"])]
     worst = [{"k": k, **mean(o.regret)} for k, o in enumerate(worst_per_map(entry), start=1)]
     return {"clean_regret": mean(regrets), "worst_regret": worst}
+
+
+def vs_next(a: dict, b: dict) -> dict | None:
+    """The leaderboard's paired test of a row's entry `a` against the next row's `b` at k = 1 (the rank's key:
+    `compare_entries`), or None where either holds no per-map outcomes or their suites differ."""
+    if not (has_outcomes(a) and has_outcomes(b)) or a["suite"] != b["suite"]:
+        return None
+    return compare_entries(a, b)[0]
+
+
+def p_text(p: float) -> str:
+    """A p-value as shown: `p < 0.001`, or `p = 0.041`."""
+    return "p < 0.001" if p < 0.001 else f"p = {p:.3f}"
+
+
+def family_table(rs: list[dict], name) -> tuple[list[str], list[list[tuple[str, str]]]]:
+    """The per-family table of one suite's rows (`vinadv.bench.comparison.family_rows`; ([], []) where no row has
+    families; `name(row)`: the row's name): the titles (planner, then each family) and per row with families its
+    cells, each family's `(worst-case harmful at the largest k, its interval and the clean success)`."""
+    with_families = [r for r in rs if r.get("families")]
+    if not with_families:
+        return [], []
+    titles = ["planner", *(f["family"] for f in with_families[0]["families"])]
+    table = []
+    for r in with_families:
+        cells = [(name(r), "")]
+        for f in r["families"]:
+            worst = f["worst_case"][-1]
+            interval = display.points(worst["harmful_rate_low"], worst["harmful_rate_high"])
+            cells.append(
+                (display.percent(worst["harmful_rate"]), f"{interval} · clean {display.percent(f['clean_success'])}")
+            )
+        table.append(cells)
+    return titles, table
+
+
+#: what the per-family table says (`family_table`)
+FAMILY_NOTE = (
+    "By family: the worst-case harmful rate at the suite's largest k over each family's valid maps, with its Wilson "
+    "95% interval, and the family's clean success (computed from the entries' per-map outcomes: v2 entries only). "
+    "`vinadv bench leaderboard --json` holds every k."
+)
