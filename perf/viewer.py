@@ -9,6 +9,8 @@ client (query + template + response), best of --rounds, side by side in one run:
   attack, label source and label + source, with the viewer's keyset paging (`after=`) and, for the ratio, the same
   page fetched by LIMIT/OFFSET (what a naive pager does);
 - the runs list (label counts of every pair: uncached, then from the viewer's 10 s cache);
+- grid pages sorted by label, harm and regret added (first and at 90%: each reads and sorts the run's pairs);
+- the grid page with its thumbnails drawn (one batch) and cached, and one cached thumbnail;
 - a pair page, and its three PNG images rendered cold and then served from the LRU cache.
 """
 
@@ -129,6 +131,28 @@ def main() -> None:
             "offset_over_keyset": naive / keyset,
         }
 
+    # sorted grids: every page reads and sorts the run's pairs (no index serves the key): first and deep page (JSON)
+    results["sorted"] = {}
+    for sort in ("label", "harm", "regret"):
+        rows = store.page_pairs(run_id, sort=sort, limit=int(args.n * 0.9))
+        deep_after = rows[-1]["pair_index"]
+        results["sorted"][sort] = {
+            "first_page_ms": best_ms(lambda: get(f"/api/runs/{run_id}/pairs?sort={sort}"), args.rounds),
+            "deep_page_ms": best_ms(
+                lambda: get(f"/api/runs/{run_id}/pairs?sort={sort}&after={deep_after}"), args.rounds
+            ),
+        }
+    # the grid page with its 50 thumbnails drawn in one batch (the cache emptied each time), and once they are cached
+    deep = args.n // 3
+
+    def cold_grid() -> None:
+        state.images = type(state.images)(state.images.max_bytes)
+        get(f"/runs/{run_id}/pairs?after={deep}")
+
+    results["grid_thumbnails_cold_ms"] = best_ms(cold_grid, args.rounds)
+    results["grid_thumbnails_cached_ms"] = best_ms(lambda: get(f"/runs/{run_id}/pairs?after={deep}"), args.rounds)
+    results["thumbnail_cached_ms"] = best_ms(lambda: get(f"/thumb/{run_id}/{deep + 1}.png"), args.rounds)
+
     state._counts = None
     results["runs_list_uncached_ms"] = best_ms(lambda: (setattr(state, "_counts", None), get("/")), 2)
     results["runs_list_cached_ms"] = best_ms(lambda: get("/"), args.rounds)
@@ -167,6 +191,13 @@ def main() -> None:
             f"{g['deep_api_ms']:>8.1f}ms{g['deep_query_keyset_ms']:>12.2f}ms{g['deep_query_offset_ms']:>12.1f}ms"
             f"{g['offset_over_keyset']:>14.0f}x"
         )
+    for sort, g in results["sorted"].items():
+        print(f"grid sorted by {sort:<8} first page {g['first_page_ms']:.1f} ms, page @90% {g['deep_page_ms']:.1f} ms")
+    cold, cached = results["grid_thumbnails_cold_ms"], results["grid_thumbnails_cached_ms"]
+    print(
+        f"grid page with 50 thumbnails: {cold:.1f} ms drawing them, {cached:.1f} ms cached ({cold / cached:.1f}x); "
+        f"a cached thumbnail {results['thumbnail_cached_ms']:.2f} ms"
+    )
     print(
         f"runs list: {results['runs_list_uncached_ms']:.0f} ms counting every pair, "
         f"{results['runs_list_cached_ms']:.1f} ms from the cache"

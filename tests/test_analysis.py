@@ -45,6 +45,8 @@ from vinadv.testing.store import random_records
 GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guide" / "analysis.md"
 NULLABLE_FLOATS = ("score", *HARM_FLOAT_COLUMNS)
 NULLABLE_STRINGS = ("expert_label", "harm")
+EFFORT = ("expanded_o", "expanded_a", "expansions_o", "expansions_a", "astar_expansions_o", "astar_expansions_a")
+EFFORT += ("effort_ratio", "astar_effort_ratio", "relative_effort", "effort_harmful")
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +58,8 @@ def stored(module_db_url):
         one = store.create_run("one", config={"n": 40, "size": 7, "attack": "near-path"}, seed=5, attack="near-path")
         store.write_pairs(one, random_records(40, size=7, seed=11))
         three = store.create_run("three", attack="greedy")
-        store.write_pairs(three, random_records(23, size=6, seed=3, n_added=3, removes=0.4))
+        # with the search effort (NULL where not reported)
+        store.write_pairs(three, random_records(23, size=6, seed=3, n_added=3, removes=0.4, effort=True))
     return db_url, {"one": one, "three": three}
 
 
@@ -92,6 +95,28 @@ def check_row(row: dict, db: dict) -> None:
     assert cell_text(row["added"][0]) == db["added_obstacle"]
     more = [tuple(int(v) for v in c) for c in row["added"][1:]]
     assert more == (parse_path(db["added_more"]) if db["added_more"] is not None else [])
+    check_effort(row, db)
+
+
+def check_effort(row: dict, db: dict) -> None:
+    """The search-effort columns against the database's text, by the definition (DESIGN.md "Search effort")."""
+    counts = {}
+    for side in ("o", "a"):
+        expanded = None if db[f"expanded_{side}"] is None else parse_path(db[f"expanded_{side}"])
+        got = row[f"expanded_{side}"]
+        assert (None if got is None else [tuple(int(v) for v in c) for c in got]) == expanded
+        counts[side] = None if expanded is None else len(expanded)
+        assert row[f"expansions_{side}"] == counts[side]
+        assert row[f"astar_expansions_{side}"] == db[f"astar_expansions_{side}"]
+    e_o, e_a, a_o, a_a = counts["o"], counts["a"], db["astar_expansions_o"], db["astar_expansions_a"]
+    if None in (e_o, e_a, a_o, a_a):
+        assert row["relative_effort"] is None and row["effort_harmful"] is None
+        return
+    assert row["effort_ratio"] == pytest.approx(e_a / e_o) and row["astar_effort_ratio"] == pytest.approx(a_a / a_o)
+    relative = (e_a / e_o) / (a_a / a_o)
+    assert row["relative_effort"] == pytest.approx(relative)
+    harmful = None if db["term_o"] != "goal" else (e_a > e_o and relative > 2)
+    assert row["effort_harmful"] == harmful
 
 
 def export(url: str, run: str, out, *extra: str) -> int:
@@ -111,7 +136,13 @@ def test_parquet_read_with_pyarrow_equals_the_database(stored, tmp_path):
             check_row(row, db_row)
         # the nullable columns do hold NULLs here, and none of the others may
         assert all(table[c].null_count > 0 for c in (*NULLABLE_FLOATS, *NULLABLE_STRINGS, "dh", "dv"))
-        assert {f.name for f in table.schema if f.nullable} == {*NULLABLE_FLOATS, *NULLABLE_STRINGS, "dh", "dv"}
+        # run 'one' has no search effort (a planner without expansions): every effort column null
+        nullable = {*NULLABLE_FLOATS, *NULLABLE_STRINGS, "dh", "dv", *EFFORT}
+        assert {f.name for f in table.schema if f.nullable} == nullable
+        if name == "one":
+            assert all(table[c].null_count == len(rows) for c in EFFORT)
+        else:  # some pairs are effort-harmful, others not
+            assert {True, False} <= set(table["effort_harmful"].to_pylist())
     assert {len(r["added"]) for r in pq.read_table(tmp_path / "three.parquet").to_pylist()} == {3}
     assert set(pq.read_table(tmp_path / "three.parquet")["edit"].to_pylist()) == {"add", "remove"}
 

@@ -56,7 +56,8 @@ LAYERS = {
     "bench": 9,
     # the exact k = 2 diagnostic: the pair search judged by harm, against a robustness run's greedy
     "exact_k2": 9,
-    "viewer": 9,
+    # shows the bench's leaderboard (`vinadv serve --bench`)
+    "viewer": 10,
     # runs the stages on workers, the benchmark's chunks included; only the commands import it
     "cluster": 10,
     "analysis": 10,

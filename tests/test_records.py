@@ -199,7 +199,10 @@ def test_robustness_records_of_version_0_read_with_every_field():
         "maps": None,
         "maps_sha256": None,
         "edit": "add",
-        VERSION_KEY: 1,
+        "planner": None,  # version 2's provenance and effort test: none recorded before
+        "name": None,
+        "effort_tolerance": None,
+        VERSION_KEY: 2,
     }
     assert upgrade(ROBUSTNESS_SETTINGS, ROBUSTNESS_SETTINGS_V0) == settings
     strategies = copy.deepcopy(ROBUSTNESS_V0["strategies"])
@@ -208,7 +211,7 @@ def test_robustness_records_of_version_0_read_with_every_field():
         **ROBUSTNESS_V0,
         "settings": settings,
         "strategies": strategies,
-        VERSION_KEY: 1,
+        VERSION_KEY: 2,
     }
 
 
@@ -288,8 +291,9 @@ def test_a_robustness_benchmark_stores_every_setting_and_reads_back_unchanged(sq
 
     maps = generate_maps(3, 8, seed=5, n_starts=1)
     result = robustness(load_planner("optimal", 8), maps, ["random"], 1, seed=1)
-    assert set(result.settings) == {*ROBUSTNESS_SETTINGS_V0, "moves", "maps", "maps_sha256", "edit", VERSION_KEY}
-    assert result.to_dict()[VERSION_KEY] == 1 and result.to_dict()["strategies"]["random"]["ranked_as"] is None
+    provenance = ("moves", "maps", "maps_sha256", "edit", "planner", "name", "effort_tolerance")
+    assert set(result.settings) == {*ROBUSTNESS_SETTINGS_V0, *provenance, VERSION_KEY}
+    assert result.to_dict()[VERSION_KEY] == 2 and result.to_dict()["strategies"]["random"]["ranked_as"] is None
     row_id = save_robustness(result, sqlite_url)
     assert raw_json(sqlite_url, "settings", "robustness", row_id) == result.settings
     with Store.open(sqlite_url) as store:

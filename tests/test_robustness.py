@@ -13,6 +13,7 @@ import pytest
 
 from tests.classify.oracle import rule_oracle
 from tests.classify.test_harm import optimal_path, path_cost
+from vinadv import checksums
 from vinadv.attacks.strategies import make_attack
 from vinadv.cli import main
 from vinadv.errors import InputError
@@ -380,4 +381,4 @@ def test_the_text_output_names_the_maps_and_gives_each_rate_its_interval(tmp_pat
     assert main(["maps", "generate", "--n", "5", "--size", "10", "--out", str(maps), "--quiet"]) == 0
     capsys.readouterr()
     assert main([*argv, "--strategies", "random", "--maps", str(maps)]) == 0
-    assert f"(from {maps})" in capsys.readouterr().out
+    assert f"(from {maps}, sha256 {checksums.file_sha256(maps)[:12]})" in capsys.readouterr().out

@@ -17,6 +17,11 @@ the exported file as `read_parquet` reads it). One row per pair, in pair-index o
 - `added`: the edited cells, list<fixed_size_list<int16>[2]> (one cell per added, or freed, obstacle, in order);
 - `map_o`, `map_a`: the maps, list<list<bool>>, N rows of N cells (True = obstacle);
 - `path_o`, `path_a`: the paths, list<fixed_size_list<int16>[2]>, the (row, col) cells in order (empty: no path).
+- the search effort (DESIGN.md "Search effort", `vinadv.classify.effort`; null for a planner that reports no
+  expansions): `expanded_o`, `expanded_a`, the cells the planner's search expanded on each map (as the paths);
+  `expansions_o`, `expansions_a`, their counts, and `astar_expansions_o`, `astar_expansions_a`, the exact A*'s, int64;
+  `effort_ratio`, `astar_effort_ratio`, `relative_effort` float64 and `effort_harmful` bool (null for an invalid
+  pair), computed from the counts.
 
 In the DataFrames of `Results` and `read_parquet` the list columns stay Arrow arrays (`pandas.ArrowDtype`: no
 conversion, a value is a Python list); `pandas.read_parquet` makes them object columns of NumPy arrays instead (20
@@ -44,6 +49,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from vinadv import __version__
+from vinadv.classify.effort import EFFORT_FIELDS, effort_figures
 from vinadv.errors import InputError, one_line
 from vinadv.intervals import figure_intervals, interval_columns, rate_interval
 from vinadv.outfile import atomic_output
@@ -57,11 +63,13 @@ if TYPE_CHECKING:
     import pyarrow as pa
 
 #: the layout of an exported Parquet file, in its metadata (`parquet_metadata(path)["format"]`)
-PARQUET_FORMAT = "vinadv.pairs.parquet/2"
+PARQUET_FORMAT = "vinadv.pairs.parquet/3"
 #: the Parquet file metadata key that holds the run (JSON)
 METADATA_KEY = "vinadv"
 #: pairs read from the database at a time: one Parquet row group, one DataFrame of `iter_pairs`
 DEFAULT_BATCH = 10_000
+#: the expansion counts of a run's pairs (the planner's, then the exact A*'s, on each map; null: not reported)
+SEARCH_COUNT_COLUMNS = ("expansions_o", "expansions_a", "astar_expansions_o", "astar_expansions_a")
 #: the columns of a run's pairs, in order (see the module doc for their types)
 PAIR_COLUMNS = (
     "no",
@@ -84,15 +92,22 @@ PAIR_COLUMNS = (
     "map_a",
     "path_o",
     "path_a",
+    "expanded_o",
+    "expanded_a",
+    *SEARCH_COUNT_COLUMNS,
+    *EFFORT_FIELDS,
 )
 #: the columns of `Results.robustness()`: the benchmark, then one strategy's figures at k added obstacles; each rate
 #: with its Wilson 95% interval (`{rate}_low`, `{rate}_high`, computed from the counts: `vinadv.intervals`)
 ROBUSTNESS_COLUMNS = (
     "benchmark",
+    "name",
     "created",
     "version",
     "planner",
     "weights_checksum",
+    "maps_file",
+    "maps_sha256",
     "size",
     "maps_seed",
     "objective",
@@ -109,6 +124,8 @@ ROBUSTNESS_COLUMNS = (
     *interval_columns("harmful_rate"),
     "reached",
     *interval_columns("mean_regret"),
+    "effort_harmful",
+    *interval_columns("effort_harmful_rate"),
     "seconds",
 )
 
@@ -141,8 +158,24 @@ def pair_schema() -> pa.Schema:
         "map_a": pa.list_(pa.list_(pa.bool_())),
         "path_o": pa.list_(cell),
         "path_a": pa.list_(cell),
+        "expanded_o": pa.list_(cell),
+        "expanded_a": pa.list_(cell),
+        **{name: pa.int64() for name in SEARCH_COUNT_COLUMNS},
+        **{name: pa.float64() for name in EFFORT_FIELDS[:-1]},
+        "effort_harmful": pa.bool_(),
     }
-    nullable = {"score", "dh", "dv", *HARM_FLOAT_COLUMNS, "expert_label", "harm"}
+    nullable = {
+        "score",
+        "dh",
+        "dv",
+        *HARM_FLOAT_COLUMNS,
+        "expert_label",
+        "harm",
+        "expanded_o",
+        "expanded_a",
+        *SEARCH_COUNT_COLUMNS,
+        *EFFORT_FIELDS,
+    }
     return pa.schema([pa.field(name, types[name], nullable=name in nullable) for name in PAIR_COLUMNS])
 
 
@@ -204,8 +237,45 @@ def pairs_table(records: PairRecords, run_id: int) -> pa.Table:
         "map_a": maps(records.obstacles_a),
         "path_o": cell_lists(records.path_o.cells, np.diff(records.path_o.offsets)),
         "path_a": cell_lists(records.path_a.cells, np.diff(records.path_a.offsets)),
+        **_effort_columns(records, cell_lists),
     }
     return pa.Table.from_arrays([columns[name] for name in PAIR_COLUMNS], schema=schema)
+
+
+def search_effort(records: PairRecords) -> dict[str, np.ndarray]:
+    """The search effort of `records` (`vinadv.classify.effort`): `SEARCH_COUNT_COLUMNS` as float64 (NaN: not
+    reported) and the `effort_figures` (the verdict None for an invalid pair), one value per pair."""
+    n = len(records)
+    counts = {}
+    for name in SEARCH_COUNT_COLUMNS:
+        values = getattr(records, name)
+        counts[name] = np.full(n, np.nan) if values is None else np.where(values >= 1, values, np.nan)
+    valid = records.reached_o
+    return {**counts, **effort_figures(*counts.values(), valid=valid)}
+
+
+def _effort_columns(records: PairRecords, cell_lists) -> dict:
+    """The search-effort columns of `pairs_table` (nulls where not reported)."""
+    import pyarrow as pa
+
+    n = len(records)
+    out = {}
+    for side in ("o", "a"):
+        expanded = getattr(records, f"expanded_{side}")
+        if expanded is None:
+            out[f"expanded_{side}"] = pa.nulls(n, pa.list_(pa.list_(pa.int16(), 2)))
+        else:
+            lists = cell_lists(expanded.cells, expanded.lengths)
+            out[f"expanded_{side}"] = pa.ListArray.from_arrays(
+                lists.offsets, lists.values, mask=pa.array(expanded.lengths == 0)
+            )
+    effort = search_effort(records)
+    for name in SEARCH_COUNT_COLUMNS:
+        out[name] = pa.array(np.nan_to_num(effort[name], nan=-1).astype(np.int64), mask=np.isnan(effort[name]))
+    for name in EFFORT_FIELDS[:-1]:
+        out[name] = pa.array(effort[name], mask=np.isnan(effort[name]))
+    out["effort_harmful"] = pa.array(effort["effort_harmful"].tolist(), pa.bool_())
+    return out
 
 
 def grid(value) -> np.ndarray:
@@ -400,8 +470,11 @@ class Results:
         """The stored robustness benchmarks (`vinadv robustness`), long form: one row per benchmark, strategy and
         number of added obstacles k, the worst case over the strategies as the strategy 'worst case'
         (`ROBUSTNESS_COLUMNS`; rates are shares of the valid maps, None/NaN where no map is valid, each with its
-        Wilson 95% interval as `{rate}_low` and `{rate}_high`, what `vinadv.plot.k_curve` draws as bands; each mean
-        regret with its bootstrap 95% interval as stored, None for a benchmark stored before it)."""
+        Wilson 95% interval as `{rate}_low` and `{rate}_high`, what `vinadv.plot.k_curve` draws as bands). Each
+        row says which run it is: the run's `name` (`--name`), the planner's full spec (`wastar:w=3`), its weights'
+        SHA-256 and the maps file with its SHA-256 (None for generated maps, and the effort-harmful count and rate
+        None for a planner that reports no expansions); each mean regret with its bootstrap 95% interval as stored,
+        None for a benchmark stored before it."""
         import pandas as pd
 
         rows = [row for stored in self.store.read_robustness() for row in robustness_rows(stored)]
@@ -414,10 +487,13 @@ def robustness_rows(stored: dict) -> list[dict]:
     clean = result.get("clean", {})
     benchmark = {
         "benchmark": stored.get("id"),
+        "name": settings.get("name"),
         "created": stored.get("created"),
         "version": stored.get("version"),
-        "planner": stored.get("planner"),
+        "planner": settings.get("planner") or stored.get("planner"),  # the full spec (older rows: the name)
         "weights_checksum": stored.get("weights_checksum"),
+        "maps_file": settings.get("maps"),
+        "maps_sha256": settings.get("maps_sha256"),
         "size": settings.get("size"),
         "maps_seed": settings.get("maps_seed"),
         "objective": settings.get("objective"),

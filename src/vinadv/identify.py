@@ -133,6 +133,18 @@ def replan(pairs: PairSet, planner: Planner) -> PairSet:
     planner = as_planner(planner, pairs.size)
     o = planner.plan(pairs.obstacles_o, pairs.starts, pairs.goals, pairs.corner_cutting, pairs.moves)
     a = planner.plan(pairs.obstacles_a, pairs.starts, pairs.goals, pairs.corner_cutting, pairs.moves)
+    expanded_o, expanded_a = getattr(o, "expanded_cells", None), getattr(a, "expanded_cells", None)
+    effort = expanded_o is not None and expanded_a is not None
+    astar = {}
+    if effort:  # A*'s counts depend on the maps alone: kept where the pairs carry them
+        from vinadv.planners.classical.astar import reference_expansions  # noqa: PLC0415 (Numba: search planners)
+
+        for side in ("o", "a"):
+            known = getattr(pairs, f"astar_expansions_{side}")
+            if known is None or (known < 1).any():
+                obstacles = getattr(pairs, f"obstacles_{side}")
+                known = reference_expansions(obstacles, pairs.starts, pairs.goals, pairs.corner_cutting, pairs.moves)
+            astar[f"astar_expansions_{side}"] = known
     return replace(
         pairs,
         path_o=o.paths,
@@ -140,6 +152,10 @@ def replan(pairs: PairSet, planner: Planner) -> PairSet:
         term_o=o.termination_names,
         term_a=a.termination_names,
         params=dict(pairs.params),
+        expanded_o=expanded_o if effort else None,
+        expanded_a=expanded_a if effort else None,
+        astar_expansions_o=astar.get("astar_expansions_o"),
+        astar_expansions_a=astar.get("astar_expansions_a"),
     )
 
 
@@ -202,12 +218,26 @@ def harm_order(labels, regret_a) -> np.ndarray:
     return np.where(labels == "UrP", np.inf, np.where(labels == "invalid", -np.inf, np.nan_to_num(regret_a)))
 
 
-#: what "strongest" means for the ranking attacks (`--objective`): the paper's label order, or harm
-OBJECTIVES = {"paper": rule_strength, "harm": harm_strength}
+def effort_strength(pairs: PairSet) -> np.ndarray:
+    """Attack strength by search effort, for the ranking attacks: the cells the planner's search expanded on the
+    adversarial map (a map's candidates share the original search, so this ranks the growth of the search), invalid
+    pairs weakest. `(n,)` float64. InputError naming `objective` for pairs without expansions (a planner that does
+    not report them: `Capabilities.expansions`)."""
+    if pairs.expanded_a is None:
+        raise InputError(
+            "objective: effort ranks by the cells a search expands; the planner reports no expansions "
+            "(use a search planner: astar, wastar, neural-astar, transpath-*)",
+            "objective",
+        )
+    return np.where(pairs.reached_o, pairs.expansions_a.astype(np.float64), -np.inf)
+
+
+#: what "strongest" means for the ranking attacks (`--objective`): the paper's label order, harm, or search effort
+OBJECTIVES = {"paper": rule_strength, "harm": harm_strength, "effort": effort_strength}
 
 
 def objective_strength(objective: str):
-    """The strength function of `objective` ('paper' or 'harm')."""
+    """The strength function of `objective` ('paper', 'harm' or 'effort')."""
     if objective not in OBJECTIVES:
         raise InputError(f"objective: {objective!r} is not one of {'|'.join(OBJECTIVES)}", "objective")
     return OBJECTIVES[objective]

@@ -1,13 +1,13 @@
 """Intervals of vinadv's rates: the Wilson score interval at 95% (z = 1.96), over the maps (or rollouts) counted in
 the rate's denominator.
 
-Every rate vinadv reports is a count over a count: paper success and harmful rate are maps over the valid maps
-(`vinadv.robustness.Figures`), clean success and the share of optimal paths are maps over the maps. Its interval is
-computed at read from those counts (`wilson_interval`, `rate_interval`), so what was stored before intervals existed
-(robustness results, `vinadv.bench_entry/1` entries) gets them too. `interval_fields` names them as every reader
-writes them: `{rate}_low` and `{rate}_high`, fractions in [0, 1] like the rate, None where the rate is None. The
-Wilson interval, unlike the normal approximation, stays inside [0, 1] and is not empty at 0% or 100%: with 100 maps
-a rate near one half is known to about +-10 points.
+Every rate vinadv reports is a count over a count: paper success, harmful and effort-harmful rate are maps over the
+valid maps (`vinadv.robustness.Figures`), clean success and the share of optimal paths are maps over the maps. Its
+interval is computed at read from those counts (`wilson_interval`, `rate_interval`), so what was stored before
+intervals existed (robustness results, `vinadv.bench_entry/1` entries) gets them too. `interval_fields` names them
+as every reader writes them: `{rate}_low` and `{rate}_high`, fractions in [0, 1] like the rate, None where the rate
+is None. The Wilson interval, unlike the normal approximation, stays inside [0, 1] and is not empty at 0% or 100%:
+with 100 maps a rate near one half is known to about +-10 points.
 
 A mean over maps (a mean regret, and to come Exp and the cost and effort ratios) gets a seeded percentile bootstrap
 interval instead (`bootstrap_mean_interval`): the maps are resampled with replacement `BOOTSTRAP_RESAMPLES` times,
@@ -53,7 +53,14 @@ Z95 = 1.959963984540054
 
 #: the rates of a robustness figure (`vinadv.robustness.Figures.to_dict`, an entry's `by_obstacles` and
 #: `worst_case`): rate -> (its numerator's count, its denominator's count)
-FIGURE_RATES = {"paper_success_rate": ("broken", "valid"), "harmful_rate": ("harmful", "valid")}
+FIGURE_RATES = {
+    "paper_success_rate": ("broken", "valid"),
+    "harmful_rate": ("harmful", "valid"),
+    # a search planner's figures only (`vinadv.classify.effort`): absent from the others' figures
+    "effort_harmful_rate": ("effort_harmful", "valid"),
+}
+#: the rates a figure has only where its planner reports expansions: no interval where their count is absent
+OPTIONAL_RATES = ("effort_harmful_rate",)
 
 
 def wilson_interval(successes, n, z: float = Z95) -> tuple[np.ndarray, np.ndarray]:
@@ -90,9 +97,12 @@ def interval_fields(rate: str, count, n) -> dict[str, float | None]:
 
 def figure_intervals(figures: Mapping) -> dict[str, float | None]:
     """The intervals of a robustness figure's rates (`FIGURE_RATES`), from its counts: `paper_success_rate_low`,
-    `paper_success_rate_high`, `harmful_rate_low`, `harmful_rate_high` (None where a count is missing)."""
+    `paper_success_rate_high`, `harmful_rate_low`, `harmful_rate_high` (None where a count is missing), and
+    `effort_harmful_rate_low`, `effort_harmful_rate_high` where the figure has an `effort_harmful` count."""
     out: dict[str, float | None] = {}
     for rate, (count, n) in FIGURE_RATES.items():
+        if rate in OPTIONAL_RATES and figures.get(count) is None:
+            continue
         out.update(interval_fields(rate, figures.get(count), figures.get(n)))
     return out
 

@@ -40,7 +40,7 @@ BENCH_CHUNK = "bench-chunk"
 TRAINING = "training"
 
 #: each kind's current version: what its writers write
-RECORD_VERSIONS = {RUN: 1, IDENTIFY: 1, ROBUSTNESS_SETTINGS: 1, ROBUSTNESS: 1, BENCH_CHUNK: 1, TRAINING: 1}
+RECORD_VERSIONS = {RUN: 1, IDENTIFY: 1, ROBUSTNESS_SETTINGS: 2, ROBUSTNESS: 2, BENCH_CHUNK: 1, TRAINING: 1}
 
 
 def _run_1(config: dict) -> dict:
@@ -101,6 +101,22 @@ def _robustness_1(result: dict) -> dict:
     return out
 
 
+def _robustness_settings_2(settings: dict) -> dict:
+    """Version 1 -> 2 of a robustness benchmark's settings: its provenance and the effort test. Version 1 recorded
+    neither the planner's full spec (`planner`, `wastar:w=3`: None, the stored row's planner name stands for it) nor a
+    run name (`name`: None) nor the effort-harmful tolerance (`effort_tolerance`: None, no effort figures)."""
+    return {"planner": None, "name": None, "effort_tolerance": None, **settings}
+
+
+def _robustness_2(result: dict) -> dict:
+    """Version 1 -> 2 of a robustness benchmark's result: its `settings` as `ROBUSTNESS_SETTINGS` reads them (the
+    figures gained the effort-harmful count and rate only for planners that report expansions: none before)."""
+    out = dict(result)
+    if isinstance(out.get("settings"), dict):
+        out["settings"] = upgrade(ROBUSTNESS_SETTINGS, out["settings"])
+    return out
+
+
 def _bench_chunk_1(chunk: dict) -> dict:
     """Version 0 -> 1 of a benchmark chunk: the version only (version 0 already wrote every field)."""
     return dict(chunk)
@@ -122,6 +138,8 @@ STEPS: dict[tuple[str, int], Callable[[dict], dict]] = {
     (IDENTIFY, 0): _identify_1,
     (ROBUSTNESS_SETTINGS, 0): _robustness_settings_1,
     (ROBUSTNESS, 0): _robustness_1,
+    (ROBUSTNESS_SETTINGS, 1): _robustness_settings_2,
+    (ROBUSTNESS, 1): _robustness_2,
     (BENCH_CHUNK, 0): _bench_chunk_1,
     (TRAINING, 0): _training_1,
 }

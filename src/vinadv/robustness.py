@@ -19,17 +19,25 @@ a pair; its regret is that of its worst pair (the most harmful: none when some s
 else the largest `regret_a` over the strategies). The clean figures are the planner's on the unattacked maps: rollout
 success and the mean regret of the reached paths.
 
-The ranking strategies keep, per map and step, the strongest candidate by `objective`: `harm` (default: UrP, then the
-largest `regret_a`, so the exhaustive harmful rate is exactly the share of maps some single cell harms) or `paper`
-(UrP > FP > DP > UcP). The paper success rate is that of the kept pairs, so under `harm` it can be below what
-`vinadv attack --objective paper` finds, and the other way round.
+For a planner that reports its expansions (`Capabilities.expansions`: a search planner), each strategy and the worst
+case also have the effort-harmful rate: valid maps whose pair is effort-harmful (the planner's search grew more than
+`EFFORT_TOL` times beyond A*'s on the same pair; DESIGN.md "Search effort", `vinadv.classify.effort`), over the valid
+maps; the worst case counts a map when any strategy's pair is. Other planners' figures have no such field.
+
+The ranking strategies keep, per map and step, the strongest candidate by `objective`: `harm` (default: UrP, then
+the largest `regret_a`, so the exhaustive harmful rate is exactly the share of maps some single cell harms), `paper`
+(UrP > FP > DP > UcP) or `effort` (the most cells expanded on the adversarial map, a search planner only). The paper
+success rate is that of the kept pairs, so under `harm` it can be below what `vinadv attack --objective paper`
+finds, and the other way round.
 
 With `edit="remove"` every strategy frees obstacle cells instead of adding them (DESIGN.md "Obstacle removal"): k
 cells freed greedily, the same figures; the settings then say `edit: remove` (absent: `add`).
 
 As a job: `RobustnessConfig` (the maps by their settings or a maps file, the strategies and their options, the planner
 by its spec; checked when made), `run(config, executor)` and the `RobustnessResult` (`to_dict()`: what `--json`
-prints and the database stores).
+prints and the database stores). Provenance: the settings record the maps file (path and SHA-256, None for generated
+maps), the planner's full spec (`planner`: `wastar:w=3`, `vinadv.planners.registry.spec_label`; the result's
+`planner` holds its `PlannerSpec`, weights SHA-256 included) and the run's name (`name`, `--name`; None: none).
 
 `heldout_maps(n, size, seed)` makes the fixed maps: the generator's first `n` maps of `seed` (default 1000, the
 held-out seed of the evaluation tables), one start each. Results go to a database's `robustness` table
@@ -47,6 +55,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from vinadv.attacks.strategies import STRATEGIES, make_attack
+from vinadv.classify.effort import EFFORT_TOL, effort_figures
 from vinadv.classify.harm import DEFAULT_TOL, check_tolerances
 from vinadv.errors import InputError
 from vinadv.executor import LOCAL, Executor, resolve, shipped
@@ -54,6 +63,7 @@ from vinadv.grid.generator import MIN_SIZE, generate_maps
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves
 from vinadv.identify import identify, objective_strength
 from vinadv.intervals import bootstrap_mean_interval, figure_intervals, interval_fields
+from vinadv.planners.registry import spec_label
 from vinadv.planners.spec import PlannerSpec
 from vinadv.planners.vin.planner import as_planner
 from vinadv.records import ROBUSTNESS, ROBUSTNESS_SETTINGS, stamp
@@ -92,6 +102,8 @@ class MapOutcomes:
         harmful: valid and the pair is harmful.
         regret: `regret_a` of a valid pair whose adversarial path reaches the goal, NaN elsewhere.
         label: the pair's paper label, '' without a pair.
+        effort_harmful: valid and the pair is effort-harmful (`vinadv.classify.effort`); None for a planner that
+            reports no expansions.
     """
 
     pair: np.ndarray
@@ -100,6 +112,7 @@ class MapOutcomes:
     harmful: np.ndarray
     regret: np.ndarray
     label: np.ndarray
+    effort_harmful: np.ndarray | None = None
 
 
 def worst_case(outcomes: list[MapOutcomes]) -> MapOutcomes:
@@ -113,8 +126,15 @@ def worst_case(outcomes: list[MapOutcomes]) -> MapOutcomes:
     reached = ~np.isnan(regrets)
     largest = np.where(reached.any(axis=0), np.where(reached, regrets, -np.inf).max(axis=0), np.nan)
     regret = np.where(valid & ~unreached, largest, np.nan)
+    efforts = [o.effort_harmful for o in outcomes if o.effort_harmful is not None]
     return MapOutcomes(
-        pair=pair, valid=valid, broken=broken, harmful=harmful, regret=regret, label=np.full(len(pair), "")
+        pair=pair,
+        valid=valid,
+        broken=broken,
+        harmful=harmful,
+        regret=regret,
+        label=np.full(len(pair), ""),
+        effort_harmful=np.any(efforts, axis=0) if efforts else None,
     )
 
 
@@ -131,6 +151,14 @@ class Figures:
     reached: int  # valid maps whose (worst) adversarial path reaches the goal: the mean regret's denominator
     mean_regret: float | None
     counts: dict[str, int] | None = None  # pairs per paper label (a strategy's own pairs; None for the worst case)
+    effort_harmful: int | None = (
+        None  # valid maps with an effort-harmful pair (None: the planner reports no expansions)
+    )
+
+    @property
+    def effort_harmful_rate(self) -> float | None:
+        return self.effort_harmful / self.valid if self.valid and self.effort_harmful is not None else None
+
     #: the per-map regrets behind `mean_regret` (`(reached,)`), for its bootstrap interval; None where unknown
     regrets: np.ndarray | None = field(default=None, repr=False, compare=False)
 
@@ -155,6 +183,7 @@ class Figures:
             reached=len(regrets),
             mean_regret=float(regrets.mean()) if len(regrets) else None,
             counts=counts,
+            effort_harmful=None if outcome.effort_harmful is None else int(outcome.effort_harmful.sum()),
             regrets=regrets,
         )
 
@@ -175,6 +204,11 @@ class Figures:
             "reached": self.reached,
             "mean_regret": self.mean_regret,
             **({} if self.counts is None else {"counts": self.counts}),
+            **(
+                {}
+                if self.effort_harmful is None
+                else {"effort_harmful": self.effort_harmful, "effort_harmful_rate": self.effort_harmful_rate}
+            ),
         }
         if not intervals:
             return out
@@ -311,6 +345,7 @@ def robustness(
     first_map: int = 0,
     progress: bool = False,
     maps_source: dict | None = None,
+    run_name: str | None = None,
     start: np.ndarray | None = None,
 ) -> RobustnessResult:
     """Run the robustness benchmark of `planner` on `maps` (see the module doc).
@@ -321,7 +356,8 @@ def robustness(
         strategies: names of `vinadv.attacks.strategies.STRATEGIES`, run in this order (exhaustive included only when
             named; see `check_strategies`).
         max_obstacles: the curve's largest k, >= 1.
-        objective: 'harm' or 'paper', what the ranking strategies keep (`vinadv.identify.objective_strength`).
+        objective: 'harm', 'paper' or 'effort' (a search planner only), what the ranking strategies keep
+            (`vinadv.identify.objective_strength`).
         seed: the randomised strategies' seed.
         budget: key-points/saliency candidates per map and step.
         radius: near-path's distance to the path.
@@ -333,6 +369,7 @@ def robustness(
         progress: show a progress bar.
         maps_source: where `maps` came from when not from `heldout_maps` (a maps file: `{"maps": path,
             "maps_sha256": ...}`), recorded in the settings.
+        run_name: the run's name (`--name`), recorded in the settings (`name`) to tell runs apart; None: none.
         start: `(n, j, 2)` cells every strategy's chain starts from (`StrategyResult.cells` of another strategy: the
             exhaustive one-cell optimum; -1 where a map has none), or None: the figures are then those of k = j +
             1..`max_obstacles` (`by_k[0].k` is j + 1), and the settings record `start_cells: j`.
@@ -343,6 +380,7 @@ def robustness(
         raise InputError(f"max_obstacles must be >= 1, got {max_obstacles}", "max_obstacles")
     strategies = _known(strategies.split(",") if isinstance(strategies, str) else strategies)
     strength = objective_strength(objective)
+    check_name(run_name)
     if len(maps) < 1:
         raise InputError("maps: no maps to attack", "n")
     if int(max_obstacles) > maps.size**2:  # the curve has a point per k: bounded before any is computed
@@ -353,6 +391,12 @@ def robustness(
     t_start = time.perf_counter()
     # the maps' movement model: costs, regret and harm are its; a planner of another model is refused in one line
     planner = as_planner(planner, maps.size).for_moves(maps.moves)
+    if objective == "effort" and not planner.capabilities.expansions:
+        raise InputError(
+            f"objective: effort ranks by the cells a search expands; planner {planner.name!r} reports no expansions "
+            "(a search planner does: astar, wastar, neural-astar, transpath-*)",
+            "objective",
+        )
     n = len(maps)
     starts, goals, cc = maps.starts[:, 0], maps.goals, maps.corner_cutting
     clean = _clean(planner, maps)
@@ -385,7 +429,7 @@ def robustness(
                 pairs = result.steps[k - first_k]
                 expert_o = (maps.expert_costs[pairs.map_index, 0], maps.expert.take(pairs.map_index * maps.n_starts))
                 ident = identify(pairs, harm_tol=harm_tol, harm_rtol=harm_rtol, expert_o=expert_o)
-                outcome = _outcomes(n, pairs.map_index, ident.labels, ident.harm.harm, ident.harm.regret_a)
+                outcome = _outcomes(n, pairs, ident.labels, ident.harm.harm, ident.harm.regret_a)
                 counts = label_counts(ident.labels)
                 kept[pairs.map_index] = pairs.added
             # else: every map ran out of cells at the last step made (`AttackResult.steps`): no pair, as there
@@ -415,6 +459,9 @@ def robustness(
         "maps_sha256": None,
         **(maps_source or {}),
         "edit": edit,
+        "planner": spec_label(planner.spec()),
+        "name": run_name,
+        "effort_tolerance": EFFORT_TOL if planner.capabilities.expansions else None,
         **({} if start is None else {"start_cells": first_k - 1}),
     }
     return RobustnessResult(
@@ -457,8 +504,9 @@ def _clean(planner, maps) -> dict:
     }
 
 
-def _outcomes(n: int, map_index, labels, harm, regret_a) -> MapOutcomes:
-    """Per-map outcomes of one pair per map (`map_index`), the maps without a pair empty."""
+def _outcomes(n: int, pairs, labels, harm, regret_a) -> MapOutcomes:
+    """Per-map outcomes of one pair per map (`pairs.map_index`), the maps without a pair empty."""
+    map_index = pairs.map_index
     pair = np.zeros(n, dtype=bool)
     pair[map_index] = True
     label = np.full(n, "", dtype="<U7")
@@ -470,7 +518,23 @@ def _outcomes(n: int, map_index, labels, harm, regret_a) -> MapOutcomes:
     regret = np.full(n, np.nan)
     regret[map_index] = regret_a
     regret[~valid] = np.nan  # NaN already where the adversarial path misses the goal
-    return MapOutcomes(pair=pair, valid=valid, broken=broken, harmful=harmful & valid, regret=regret, label=label)
+    effort_harmful = None
+    if pairs.expanded_o is not None and pairs.astar_expansions_a is not None:
+        verdict = effort_figures(
+            pairs.expansions_o, pairs.expansions_a, pairs.astar_expansions_o, pairs.astar_expansions_a
+        )["effort_harmful"]
+        effort_harmful = np.zeros(n, dtype=bool)
+        effort_harmful[map_index] = np.equal(verdict, True)
+        effort_harmful &= valid
+    return MapOutcomes(
+        pair=pair,
+        valid=valid,
+        broken=broken,
+        harmful=harmful & valid,
+        regret=regret,
+        label=label,
+        effort_harmful=effort_harmful,
+    )
 
 
 @dataclass(frozen=True)
@@ -498,8 +562,10 @@ class RobustnessConfig:
     edit: str = ADD
     harm_tolerance: float = DEFAULT_TOL
     harm_rtol: float = 0.0
+    name: str | None = None
 
     def __post_init__(self):
+        check_name(self.name)
         strategies = self.strategies.split(",") if isinstance(self.strategies, str) else self.strategies
         object.__setattr__(self, "strategies", _known(s.strip() for s in strategies))
         least = {"n": 1, "max_obstacles": 1, "budget": 1, "radius": 0, "size": MIN_SIZE}
@@ -541,6 +607,7 @@ def _robustness_task(config: RobustnessConfig, planner, maps, progress: bool, ch
         edit=config.edit,
         progress=progress,
         maps_source=source,
+        run_name=config.name,
         **attack_settings(config),
     )
 
@@ -577,13 +644,26 @@ def run(
 
 
 def save_robustness(result: RobustnessResult, db: str | None) -> int:
-    """Store `result` as a row of the database's `robustness` table; return its id."""
+    """Store `result` as a row of the database's `robustness` table (the planner's full spec, its weights' SHA-256,
+    the run's name); return its id."""
     from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only to store the result)
 
     with Store.open(db) as store:
         return store.add_robustness(
-            result.planner["name"], result.planner["weights_sha256"], result.settings, result.to_dict()
+            result.settings.get("planner") or spec_label(result.planner),
+            result.planner["weights_sha256"],
+            result.settings,
+            result.to_dict(),
+            run_name=result.settings.get("name"),
         )
+
+
+def check_name(name: str | None) -> None:
+    """InputError naming `name` unless it is None or a run name the store takes (`vinadv.store.runs`' rule)."""
+    if name is not None:
+        from vinadv.store.runs import check_run_name  # noqa: PLC0415 (SQLAlchemy: only with a name)
+
+        check_run_name(name)
 
 
 __all__ = [

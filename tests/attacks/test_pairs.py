@@ -23,7 +23,7 @@ def pairs_file(tmp_path_factory):
 
 def test_round_trip_and_version_1(pairs_file, tmp_path):
     pairs = PairSet.load(pairs_file)
-    assert pairs.moves == "octile" and str(np.load(pairs_file)["format"]) == "vinadv.pairs/3"
+    assert pairs.moves == "octile" and str(np.load(pairs_file)["format"]) == "vinadv.pairs/4"
     dataclasses.replace(pairs, moves="moore").save(tmp_path / "m.npz")
     assert PairSet.load(tmp_path / "m.npz").moves == "moore"
     old = {k: v for k, v in read_npz(pairs_file).items() if k not in ("format", "moves")}

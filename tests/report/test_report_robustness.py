@@ -39,7 +39,7 @@ def test_robustness_section_shows_every_stored_benchmark(db_copy, report_weights
     assert (out / "fig_robustness.png").exists() and (out / "fig_robustness.svg").exists()
     # the comparison table: one row per benchmark, its worst case at k = 1 and its harmful rate at every k
     table = section.split('id="robustness-table"', 1)[1].split("</table>", 1)[0]
-    assert table.count("<tr><td>vin") == 2 and "harmful, k = 3" in table
+    assert table.count("<tr><td><code>vin") == 2 and "harmful, k = 3" in table
     for d in made:
         one = d["overall"][0]
         low, high = rate_interval(one["harmful"], one["valid"])  # its Wilson 95% interval beside it

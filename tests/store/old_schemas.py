@@ -7,7 +7,7 @@ from collections.abc import Callable
 import sqlalchemy as sa
 
 from vinadv.store import Store
-from vinadv.store.schema import map_pairs
+from vinadv.store.schema import EFFORT_COLUMNS, map_pairs
 from vinadv.testing.store import random_records
 
 Undo = Callable[[sa.Connection, Callable[[str], str]], None]
@@ -15,7 +15,8 @@ Undo = Callable[[sa.Connection, Callable[[str], str]], None]
 
 def old_database(url: str, version: int, n_pairs: int, undo: Undo, name: str = "old") -> int:
     """Write one run `name` of `n_pairs` random 7x7 one-obstacle pairs with today's schema, then undo what the
-    versions after `version` added (version 7: `map_pairs.edit`; version 6: the run's `moves`; version 5: the run
+    versions after `version` added (version 8: the search effort's columns and `robustness.run_name`; version 7:
+    `map_pairs.edit`; version 6: the run's `moves`; version 5: the run
     name's binary collation on MariaDB; version 4: the table `measurements`) and `undo(conn, quote)` what the
     versions after `version` added before those (in one transaction), and stamp the schema `version`; the run's id."""
     with Store.open(url) as store:
@@ -24,6 +25,10 @@ def old_database(url: str, version: int, n_pairs: int, undo: Undo, name: str = "
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     quote = engine.dialect.identifier_preparer.quote
     with engine.begin() as conn:
+        if version < 8:  # the step to 8's columns: the search effort, the robustness run's name
+            for column in EFFORT_COLUMNS:
+                conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote(column)}"))
+            conn.execute(sa.text(f"ALTER TABLE robustness DROP COLUMN {quote('run_name')}"))
         if version < 7:
             conn.execute(sa.text(f"ALTER TABLE map_pairs DROP COLUMN {quote('edit')}"))  # the step to 7's column
         if version < 6:

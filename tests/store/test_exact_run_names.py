@@ -133,7 +133,7 @@ def test_a_version_4_database_holding_names_is_upgraded_in_place(db_url):
         assert [store.run_info(i)["name"] for i in ids] == names
         assert store.read_pairs(run_id).equals(before)
         assert store.create_run("OLD") not in ids
-    assert columns_and_version(db_url)[1] == SCHEMA_VERSION == "7"
+    assert columns_and_version(db_url)[1] == SCHEMA_VERSION == "8"
     engine = sa.create_engine(db_url, poolclass=sa.pool.NullPool)
     engine.connect().close()  # the dialect learns the server
     assert run_name_collation(db_url) == exact_collation(engine.dialect)
@@ -152,7 +152,7 @@ def test_a_version_1_database_gains_the_columns_and_the_exact_names(db_url):
         assert [store.find_run("Run"), store.find_run("run")] == [run_id, other]
         assert len(store.read_pairs(run_id)) == 6
     columns, version = columns_and_version(db_url)
-    assert version == SCHEMA_VERSION == "7" and set(LATER_COLUMNS) <= columns
+    assert version == SCHEMA_VERSION == "8" and set(LATER_COLUMNS) <= columns
 
 
 def test_an_upgrade_cut_short_is_finished_by_the_next_open(mysql_url):
@@ -169,4 +169,4 @@ def test_an_upgrade_cut_short_is_finished_by_the_next_open(mysql_url):
     with Store.open(mysql_url) as store:
         assert [store.find_run("Cut"), store.find_run("cut")] == [run_id, other]
         np.testing.assert_array_equal(store.stored_indices(run_id), np.arange(3))
-    assert columns_and_version(mysql_url)[1] == "7" and run_name_collation(mysql_url) == "utf8mb4_nopad_bin"
+    assert columns_and_version(mysql_url)[1] == "8" and run_name_collation(mysql_url) == "utf8mb4_nopad_bin"

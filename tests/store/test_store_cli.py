@@ -21,7 +21,7 @@ from vinadv.testing.store import random_records
 def stored(module_db_url):
     """A run of 40 pairs, stored once per module and backend: the export tests only read it."""
     db_url = module_db_url
-    records = random_records(40, size=7, seed=11)
+    records = random_records(40, size=7, seed=11, effort=True)
     with Store.open(db_url) as store:
         run_id = store.create_run("exported", attack="near-path")
         store.write_pairs(run_id, records)
@@ -37,7 +37,8 @@ def test_export_csv_matches_oracle(stored, tmp_path):
     # the format's columns, in order (vinadv.labelled_pairs/1: Table 2's first; one-obstacle readers rely on it)
     header = "no map_o map_a path_o path_a label attack run_id pair_index start goal added_obstacle label_source score"
     header += " term_o term_a dh dv opt_cost_o opt_cost_a cost_o cost_a regret_o regret_a expert_label harm added_more"
-    header += " edit"
+    header += " edit expanded_o expanded_a astar_expansions_o astar_expansions_a"
+    header += " expansions_o expansions_a effort_ratio astar_effort_ratio relative_effort effort_harmful"
     assert list(rows[0]) == header.split()
     paths_a = records.path_a.unpack()
     for i, row in enumerate(rows):
@@ -50,6 +51,14 @@ def test_export_csv_matches_oracle(stored, tmp_path):
             value = getattr(records, name)[i]
             assert row[name] == ("" if np.isnan(value) else repr(float(value))), name
         assert row["harm"] == (records.harm[i] or "") and row["expert_label"] == (records.expert_label[i] or "")
+        counts = [len(getattr(records, f"expanded_{side}")[i]) for side in ("o", "a")]
+        astar = [int(getattr(records, f"astar_expansions_{side}")[i]) for side in ("o", "a")]
+        assert [row["expansions_o"], row["expansions_a"]] == [str(c) if c else "" for c in counts]
+        assert [row["astar_expansions_o"], row["astar_expansions_a"]] == [str(c) if c > 0 else "" for c in astar]
+        known = min(counts) > 0 and min(astar) > 0
+        relative = counts[1] / counts[0] / (astar[1] / astar[0]) if known else None
+        harmful = known and records.term_o[i] == "goal" and counts[1] > counts[0] and relative > 2
+        assert row["effort_harmful"] == ("" if not known or records.term_o[i] != "goal" else str(int(harmful)))
 
 
 def test_export_jsonl_successful_only_by_run_name(stored, capsys):

@@ -54,9 +54,20 @@ def _oracle_rows(run_id: int, records: PairRecords) -> list[tuple]:
                 records.harm[i],
                 ";".join("{},{}".format(*c) for c in records.added[i, 1:].tolist()) or None,  # NULL: one obstacle
                 str(records.edit[i]),
+                *[_expanded_text(getattr(records, f"expanded_{side}"), i) for side in ("o", "a")],
+                *[_count(getattr(records, f"astar_expansions_{side}"), i) for side in ("o", "a")],
             )
         )
     return sorted(rows, key=lambda r: r[1])
+
+
+def _expanded_text(expanded, i: int) -> str | None:
+    """Pair i's expanded cells as the oracle writes them: path text, None (NULL) where none are reported."""
+    return None if expanded is None or not len(expanded[i]) else path_text(expanded[i])
+
+
+def _count(counts, i: int) -> int | None:
+    return None if counts is None or counts[i] < 1 else int(counts[i])
 
 
 def _raw_rows(url: str) -> list[tuple]:
@@ -64,7 +75,7 @@ def _raw_rows(url: str) -> list[tuple]:
     cols = (
         "run_id pair_index map_o map_a path_o path_a label attack start goal added_obstacle label_source "
         "score term_o term_a dh dv"
-    ).split() + [*HARM_FLOATS, "expert_label", "harm", "added_more", "edit"]
+    ).split() + [*HARM_FLOATS, "expert_label", "harm", "added_more", "edit", *schema.EFFORT_COLUMNS]
     with engine.connect() as conn:
         table = schema.map_pairs  # not reflected: a reflected MySQL DOUBLE reads back as a 10-digit Decimal
         rows = conn.execute(sa.select(*[table.c[c] for c in cols]).order_by(table.c.pair_index)).all()
@@ -73,7 +84,7 @@ def _raw_rows(url: str) -> list[tuple]:
 
 
 def test_write_read_round_trip_matches_oracle(db_url):
-    records = random_records(300, size=11, seed=1)
+    records = random_records(300, size=11, seed=1, effort=True)  # the search effort too: NULL where not reported
     with Store.open(db_url) as store:
         run_id = store.create_run(
             "rt", config={"n": 300, "size": 11}, seed=7, attack="near-path", classifier="rule", weights_checksum="abc"

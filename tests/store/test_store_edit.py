@@ -40,4 +40,4 @@ def test_version_4_database_is_upgraded_and_its_rows_read_as_add(db_url):
         store.write_pairs(fresh, new)
         assert np.array_equal(store.read_pairs(fresh).edit, new.edit)
     columns, version = columns_and_version(db_url)
-    assert version == SCHEMA_VERSION == "7" and "edit" in columns
+    assert version == SCHEMA_VERSION == "8" and "edit" in columns

@@ -48,6 +48,14 @@ def test_version_1_database_is_upgraded_on_open(db_url):
         page = store.page_pairs(run_id, limit=5)
         assert len(page) == 5 and all(r["harm"] is None and r["regret_a"] is None for r in page)
         assert store.page_pairs(run_id, harm="harmful") == []
+        # sorted by what it lacks: every pair without the value, so in pair order, paged as any other order
+        for sort in ("harm", "regret"):
+            first = store.page_pairs(run_id, sort=sort, limit=5)
+            assert [r["pair_index"] for r in first] == sorted(old.pair_index.tolist())[:5]
+            after = store.page_pairs(run_id, sort=sort, after=first[-1]["pair_index"], limit=5)
+            assert [r["pair_index"] for r in after] == sorted(old.pair_index.tolist())[5:10]
+        assert store.page_pairs(run_id, min_regret=0.0) == []
+        assert store.harm_counts_by_run() == {run_id: {None: 30}}
         with pytest.raises(InputError, match="opened without create"):
             store.write_pairs(run_id, random_records(2, size=7, seed=9, first_index=500))
     assert columns_and_version(db_url) == (columns, "1")
@@ -58,7 +66,7 @@ def test_version_1_database_is_upgraded_on_open(db_url):
         store.write_pairs(run_id, new)
         assert store.read_pairs(run_id, pair_indices=new.pair_index).equals(new)
     columns, version = columns_and_version(db_url)
-    assert version == SCHEMA_VERSION == "7" and {*HARM_COLUMNS, "added_more"} <= columns
+    assert version == SCHEMA_VERSION == "8" and {*HARM_COLUMNS, "added_more"} <= columns
     assert "moves" in run_columns(db_url)
     with Store.open(db_url) as store:  # opening again changes nothing
         assert store.count_pairs(run_id) == 40

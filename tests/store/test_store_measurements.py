@@ -9,6 +9,7 @@ import sqlalchemy as sa
 from tests.store.old_schemas import columns_and_version, old_database, table_names
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
+from vinadv.store.schema import EFFORT_COLUMNS
 from vinadv.testing.store import random_records
 from vinadv.vocabulary import PLANNER_QUALITY, TIMING
 
@@ -50,7 +51,9 @@ def test_version_3_database_is_upgraded_on_open_and_read_only_reads_no_measureme
         assert store.read_measurement(run_id, TIMING) == {"pairs": 20}
         fresh = store.create_run("new")
         store.write_pairs(fresh, random_records(4, size=7, seed=5))
-    assert columns_and_version(db_url) == (before[0] | {"edit"}, SCHEMA_VERSION) and SCHEMA_VERSION == "7"
+    assert (
+        columns_and_version(db_url) == (before[0] | {"edit", *EFFORT_COLUMNS}, SCHEMA_VERSION) and SCHEMA_VERSION == "8"
+    )
     assert "measurements" in table_names(db_url)
 
 

@@ -9,6 +9,7 @@ import sqlalchemy as sa
 from tests.store.old_schemas import columns_and_version, old_database, run_columns
 from vinadv.errors import InputError
 from vinadv.store import SCHEMA_VERSION, Store
+from vinadv.store.schema import EFFORT_COLUMNS
 from vinadv.testing.store import random_records
 
 
@@ -59,6 +60,8 @@ def test_an_older_database_is_upgraded_on_open_and_its_runs_read_as_octile(db_ur
         }
         fresh = store.create_run("new", moves="moore")
         store.write_pairs(fresh, random_records(4, size=7, seed=5))
-    assert columns_and_version(db_url) == (before[0] | {"edit"}, SCHEMA_VERSION) and SCHEMA_VERSION == "7"
+    assert (
+        columns_and_version(db_url) == (before[0] | {"edit", *EFFORT_COLUMNS}, SCHEMA_VERSION) and SCHEMA_VERSION == "8"
+    )
     assert "moves" in run_columns(db_url)
     assert _stored_moves(db_url) == {run_id: None, fresh: "moore"}  # the old run keeps NULL: it reads as octile

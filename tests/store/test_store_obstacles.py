@@ -84,7 +84,7 @@ def test_version_2_database_is_upgraded_on_open_and_read_only_reads_one_obstacle
         assert store.read_pairs(fresh).equals(new)
         assert store.add_robustness("vin", None, {"n": 3}, {"clean": {}}) >= 1
     columns, version = columns_and_version(db_url)
-    assert version == SCHEMA_VERSION == "7" and "added_more" in columns
+    assert version == SCHEMA_VERSION == "8" and "added_more" in columns
 
 
 def test_version_2_database_read_only_stays_byte_identical(tmp_path):

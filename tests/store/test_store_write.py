@@ -31,13 +31,19 @@ def _sqlite_form(row: tuple) -> tuple:
     for name in HARM_FLOATS:
         col[name] = math.nan if col[name] is None else col[name]
     col["added_more"] = "" if col["added_more"] is None else col["added_more"]
+    for side in ("o", "a"):
+        col[f"expanded_{side}"] = col[f"expanded_{side}"] or ""
+        col[f"astar_expansions_{side}"] = (
+            -1 if col[f"astar_expansions_{side}"] is None else col[f"astar_expansions_{side}"]
+        )
     return tuple(col.values())
 
 
 @pytest.mark.parametrize("n_added", [1, 3])
 @pytest.mark.parametrize(("lo", "hi"), [(0, None), (0, 0), (5, 17), (59, 60), (40, 1000)])
 def test_encode_rows_match_oracle(lo, hi, n_added):
-    records = random_records(60, size=13, seed=11, n_added=n_added)  # pair_index 0..59: the oracle's order
+    # pair_index 0..59: the oracle's order; the search effort with 3 obstacles (both forms: with and without)
+    records = random_records(60, size=13, seed=11, n_added=n_added, effort=n_added == 3)
     expected = _oracle_rows(3, records)[lo:hi]
     assert [_comparable(r) for r in encode_rows(3, records, lo, hi)] == [_comparable(r) for r in expected]
     native = encode_rows(3, records, lo, hi, sqlite=True)

@@ -13,7 +13,8 @@ from PIL import Image
 from tests.viewer.conftest import N_RANDOM, csrf_from
 from vinadv.store import LABELS, Store
 from vinadv.testing.store import random_records
-from vinadv.viewer.app import _fmt_cost, create_app
+from vinadv.viewer.app import create_app
+from vinadv.viewer.formats import fmt_cost as _fmt_cost
 from vinadv.viewer.render import PATH_IMAGE_SCALE, PngCache
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

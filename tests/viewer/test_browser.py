@@ -1,13 +1,16 @@
 """End to end in a real browser: headless Chromium (Debian's package, /usr/bin/chromium) driven by Playwright's
 Python package, against the viewer served from a thread on 127.0.0.1. Open the runs list, filter to FP, open a
-pair, label it with the keyboard, and find the label in the database.
+pair, label it with the keyboard, and find the label in the database; sort and filter the grid with its form and
+see its thumbnails load; open the robustness and bench pages from the header.
 
 Skipped when Chromium or Playwright is missing, except with env CI=true, where that fails the test.
 """
 
 from __future__ import annotations
 
+import math
 import threading
+from pathlib import Path
 
 import pytest
 from werkzeug.serving import make_server
@@ -19,13 +22,19 @@ from vinadv.viewer.app import create_app
 
 pytestmark = pytest.mark.slow
 
+#: the committed bench entries: the bench page's folder
+BENCH = Path(__file__).resolve().parents[2] / "docs" / "results" / "bench"
+
 
 @pytest.fixture
 def served(db):
     """(base URL, url of the database, runs) with the viewer served from a thread on a free 127.0.0.1 port."""
     url, runs = db
     store = Store.open(url, create=False)
-    server = make_server("127.0.0.1", 0, create_app(store), threaded=True)
+    worst = {"k": 1, "valid": 9, "broken": 1, "harmful": 3, "paper_success_rate": 1 / 9, "harmful_rate": 3 / 9}
+    settings = {"n": 10, "size": 8, "maps_seed": 1, "objective": "harm", "strategies": ["random"]}
+    store.add_robustness("wastar", None, settings, {"clean": {}, "overall": [worst]})
+    server = make_server("127.0.0.1", 0, create_app(store, bench_dir=BENCH), threaded=True)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
     try:
@@ -58,7 +67,7 @@ def test_label_a_pair_with_the_keyboard(served):
             page.select_option("#filter-label", "FP")
             page.click("#filter-apply")
             page.wait_for_url(f"**/runs/{run_id}/pairs?label=FP")
-            shown = page.locator("#pairs tbody tr td:nth-child(2)").all_inner_texts()
+            shown = page.locator("#pairs tbody tr td.auto-label").all_inner_texts()
             assert shown and set(shown) == {"FP"}
             first = page.locator("a.pair-link").first
             assert first.inner_text() == str(fp[0])
@@ -88,3 +97,61 @@ def test_label_a_pair_with_the_keyboard(served):
         stored = [(a["pair_index"], a["label"], a["annotator"]) for a in store.read_annotations(run_id)]
         assert stored == [(fp[0], "DP", "e2e tester")]
         assert store.read_pairs(run_id, pair_indices=[fp[0]]).label.tolist() == ["FP"]
+
+
+def test_sort_filter_thumbnails_and_results_pages(served):
+    chromium = needs.chromium()
+    from playwright.sync_api import sync_playwright  # noqa: PLC0415 (the dev extra: needs.chromium() skips or fails without it)
+
+    base, _, runs = served
+    run_id, records = runs["random"]
+    change = records.regret_a - records.regret_o
+    # regret added, largest first; pairs without it last; ties by pair index
+    by_regret = sorted(
+        range(len(records)),
+        key=lambda i: (math.isnan(change[i]), 0 if math.isnan(change[i]) else -change[i], records.pair_index[i]),
+    )
+    harmful = {int(i) for i in records.pair_index[records.harm == "harmful"]}
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, headless=True, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page()
+            page.set_default_timeout(20_000)
+            page.goto(base + "/")
+            assert "%" in page.locator("#runs tbody tr").first.locator("td.harmful-rate").inner_text()
+            page.goto(f"{base}/runs/{run_id}/pairs")
+            page.wait_for_load_state("load")
+            before = page.locator("a.pair-link").all_inner_texts()
+            # the thumbnails load lazily: scrolled to, every one of them arrives
+            page.locator("img.thumbnail").last.scroll_into_view_if_needed()
+            page.wait_for_function(
+                "() => [...document.querySelectorAll('img.thumbnail')].every(i => i.complete && i.naturalWidth > 0)"
+            )
+            assert page.locator("img.thumbnail").count() == len(before)
+            # sort by regret added with the form: the order changes to the oracle's
+            page.select_option("#sort", "regret")
+            page.click("#filter-apply")
+            page.wait_for_url(f"**/runs/{run_id}/pairs?sort=regret")
+            shown = [int(t) for t in page.locator("a.pair-link").all_inner_texts()]
+            assert shown == [int(records.pair_index[i]) for i in by_regret[: len(shown)]]
+            assert shown != [int(t) for t in before]
+            # and filter to harmful pairs: only those are shown, still by regret
+            page.select_option("#filter-harm", "harmful")
+            page.click("#filter-apply")
+            page.wait_for_url(f"**/runs/{run_id}/pairs?harm=harmful&sort=regret")
+            shown = [int(t) for t in page.locator("a.pair-link").all_inner_texts()]
+            assert shown and set(shown) <= harmful
+            assert (
+                shown
+                == [int(records.pair_index[i]) for i in by_regret if records.pair_index[i] in harmful][: len(shown)]
+            )
+            # the results pages, from the header
+            page.click("#nav-robustness")
+            page.wait_for_url("**/robustness")
+            assert "33.3%" in page.locator("#robustness td.harmful-rate").first.inner_text()
+            page.click("#nav-bench")
+            page.wait_for_url("**/bench")
+            assert page.locator("table.bench").count() >= 1
+            assert page.locator("table.bench tbody tr").count() >= 2
+        finally:
+            browser.close()

@@ -48,6 +48,11 @@ def test_serve_refuses_bad_port(db, capsys, port):
     assert "--port" in capsys.readouterr().err
 
 
+def test_serve_refuses_a_bench_folder_that_is_not_there(db, tmp_path, capsys):
+    assert main(["serve", "--db", db[0], "--bench", str(tmp_path / "nope")]) == 2
+    assert f"--bench {tmp_path / 'nope'}: no such folder" in capsys.readouterr().err
+
+
 def test_serve_refuses_missing_database(tmp_path, capsys):
     assert main(["serve", "--db", str(tmp_path / "missing.db")]) == 2
     assert "no such file" in capsys.readouterr().err

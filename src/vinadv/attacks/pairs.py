@@ -1,10 +1,13 @@
 """Map pairs (original map + K added obstacles, K >= 1, or minus K freed ones) with both planned paths; file format
-"vinadv.pairs/3".
+"vinadv.pairs/4".
 
 The field `added` is `(n, 2)` in a file of one-obstacle pairs (the one-obstacle layout of every format version) and
 `(n, K, 2)` in a file of K > 1 obstacles per pair. Version 2 holds the movement model (field `moves`); a
 "vinadv.pairs/1" file reads as `octile`. Version 3 holds each pair's edit (field `edit`, `(n,)` str: `add` or
-`remove`, `vocabulary.EDITS`); a /1 or /2 file reads as `add`.
+`remove`, `vocabulary.EDITS`); a /1 or /2 file reads as `add`. Version 4 holds, for a planner that reports its
+expansions, both searches' expanded cells packed as the paths are (`expanded_o_cells`/`expanded_o_offsets`,
+`expanded_a_*`) and the exact A*'s expansion counts on both maps (`astar_expansions_o`, `astar_expansions_a`, `(n,)`
+int64), all four or none; a file without them (every older one) reads with none (DESIGN.md "Search effort").
 """
 
 from __future__ import annotations
@@ -17,15 +20,15 @@ import numpy as np
 
 from vinadv.grid.checks import check_pairs
 from vinadv.grid.moves import DEFAULT_MOVES, check_moves, read_moves
-from vinadv.grid.pairs import PathPairs, int_column
+from vinadv.grid.pairs import EXPANSION_FIELDS, PathPairs, int_column
 from vinadv.grid.paths import PackedPaths
 from vinadv.npzfile import NpzReader, check_cells_in_grid, save_npz
 from vinadv.planners.spec import is_planner_spec
 from vinadv.vocabulary import ADD, EDITS, REMOVE, TERMINATIONS
 
-PAIRS_FORMAT = "vinadv.pairs/3"
-#: the earlier format versions also read (`/1` as `octile` pairs; both as edit `add`)
-OLDER_PAIRS_FORMATS = ("vinadv.pairs/1", "vinadv.pairs/2")
+PAIRS_FORMAT = "vinadv.pairs/4"
+#: the earlier format versions also read (`/1` as `octile` pairs; `/1`, `/2` as edit `add`; none with expansions)
+OLDER_PAIRS_FORMATS = ("vinadv.pairs/1", "vinadv.pairs/2", "vinadv.pairs/3")
 
 
 @dataclass(kw_only=True, eq=False)
@@ -76,8 +79,20 @@ class PairSet(PathPairs):
                 "params": np.array(json.dumps(self.params, sort_keys=True)),
                 "corner_cutting": np.array(bool(self.corner_cutting)),
                 "moves": np.array(self.moves),
+                **self._effort_fields(),
             },
         )
+
+    def _effort_fields(self) -> dict[str, np.ndarray]:
+        """The file fields of the search effort: all four where the pairs carry them, else none."""
+        if any(getattr(self, name) is None for name in EXPANSION_FIELDS):
+            return {}
+        return {
+            **self.expanded_o.to_fields("expanded_o"),
+            **self.expanded_a.to_fields("expanded_a"),
+            "astar_expansions_o": self.astar_expansions_o,
+            "astar_expansions_a": self.astar_expansions_a,
+        }
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> PairSet:
@@ -129,7 +144,28 @@ class PairSet(PathPairs):
             params=params,
             corner_cutting=corner_cutting,
             moves=moves,
+            **_read_effort(r, n, size),
         )
+
+
+def _read_effort(r: NpzReader, n: int, size: int) -> dict:
+    """The file's search-effort fields (`PairSet._effort_fields`): all four, or none (a /3 file or older, or pairs of
+    a planner without expansions)."""
+    names = ("expanded_o_offsets", "expanded_a_offsets", "astar_expansions_o", "astar_expansions_a")
+    present = [r.has(name) for name in names]
+    if not any(present):
+        return {}
+    if not all(present):
+        missing = names[present.index(False)]
+        raise r.fail(missing, "is missing: the search-effort fields go together (expanded_o/a, astar_expansions_o/a)")
+    out = {f"expanded_{side}": PackedPaths.read(r, f"expanded_{side}", n, size) for side in ("o", "a")}
+    for side in ("o", "a"):
+        name = f"astar_expansions_{side}"
+        counts = r.array(name, "i", 1, (n,)).astype(np.int64)
+        if (counts < 1).any():
+            raise r.fail(name, f"has value {int(counts[counts < 1][0])}, expected counts >= 1 (the start is expanded)")
+        out[name] = counts
+    return out
 
 
 def _read_edit(r: NpzReader, n: int) -> np.ndarray:

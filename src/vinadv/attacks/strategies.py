@@ -82,6 +82,7 @@ from vinadv.attacks.neighbourhood import steepness, steepness_across, within_dis
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.validity import removable_cells, valid_cells
 from vinadv.errors import InputError
+from vinadv.grid.paths import PackedPaths
 from vinadv.grid.selection import smallest_first
 from vinadv.planners.interface import Planner
 from vinadv.planners.result import PlanResult
@@ -135,6 +136,8 @@ class AttackContext:
         base_obstacles, base: the original maps and the planner's paths on them (the pairs are made against them;
             default: `obstacles` and `plans`). added: `(B, k, 2)`, the k cells chosen at the steps before (default
             none). edit: `add` (the candidates are free cells to fill) or `remove` (obstacle cells to free).
+        base_expanded, base_astar: for a planner that reports expansions, the cells it expanded on the original maps
+            (`PackedPaths`) and the exact A*'s expansion counts there (`(B,)`), which every pair carries; else None.
     """
 
     obstacles: np.ndarray
@@ -148,6 +151,8 @@ class AttackContext:
     base: PlanResult | None = None
     added: np.ndarray | None = None
     edit: str = ADD
+    base_expanded: PackedPaths | None = None
+    base_astar: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.base_obstacles is None:
@@ -245,6 +250,8 @@ class Attack:
         strength = strength or planner_strength
         b = len(obstacles)
         base = planner.plan(obstacles, starts, goals, corner_cutting)
+        base_expanded = getattr(base, "expanded_cells", None)  # a search planner's, where it reports them
+        base_astar = None if base_expanded is None else _astar(obstacles, starts, goals, corner_cutting, planner.moves)
         calls = b
         current, plans = obstacles, base
         chosen = np.zeros((b, 0, 2), np.int64)
@@ -277,6 +284,8 @@ class Attack:
                 base=base,
                 added=chosen,
                 edit=self.edit,
+                base_expanded=base_expanded,
+                base_astar=base_astar,
             )
             scores = np.where(valid, self.candidate_scores(ctx), -np.inf)
             alive &= np.isfinite(scores).any(axis=(1, 2))
@@ -367,13 +376,16 @@ class Attack:
         obstacles_a[np.arange(len(map_idx)), cells[:, 0], cells[:, 1]] = ctx.edit == ADD
         planned = ctx.planner.plan(obstacles_a, ctx.starts[map_idx], ctx.goals[map_idx], corner_cutting)
         pairs = _make_pairs(ctx, map_idx, cells, obstacles_a, planned, corner_cutting)
-        if not ranked or keep == 0:
-            return pairs
-        # per map, the `keep` strongest; ties to the better rank (lexsort: last key is the primary one)
-        order = np.lexsort((rank, -np.asarray(strength(pairs)), map_idx))
-        group_start = np.searchsorted(map_idx[order], map_idx[order], side="left")
-        kept = order[np.arange(len(order)) - group_start < keep]
-        return pairs.take(np.sort(kept))
+        if ranked and keep:
+            # per map, the `keep` strongest; ties to the better rank (lexsort: last key is the primary one)
+            order = np.lexsort((rank, -np.asarray(strength(pairs)), map_idx))
+            group_start = np.searchsorted(map_idx[order], map_idx[order], side="left")
+            pairs = pairs.take(np.sort(order[np.arange(len(order)) - group_start < keep]))
+        if pairs.expanded_a is not None:  # A*'s reference on the kept pairs' maps only
+            pairs.astar_expansions_a = _astar(
+                pairs.obstacles_a, pairs.starts, pairs.goals, corner_cutting, ctx.planner.moves
+            )
+        return pairs
 
 
 def _top_candidates(scores: np.ndarray, per_map: int | None):
@@ -389,9 +401,19 @@ def _top_candidates(scores: np.ndarray, per_map: int | None):
     return map_idx, cells, rank
 
 
+def _astar(obstacles, starts, goals, corner_cutting: bool, moves: str) -> np.ndarray:
+    """The exact A*'s expansion counts on these maps, the effort figures' reference."""
+    from vinadv.planners.classical.astar import reference_expansions  # noqa: PLC0415 (Numba: search planners only)
+
+    return reference_expansions(obstacles, starts, goals, corner_cutting, moves)
+
+
 def _make_pairs(ctx: AttackContext, map_idx, cells, obstacles_a, planned: PlanResult, corner_cutting) -> PairSet:
-    """The pairs (original map, searched map + cell): the original map's path against the new one's."""
+    """The pairs (original map, searched map + cell): the original map's path against the new one's, and both
+    searches' expanded cells where the planner reports them (A*'s on the adversarial maps are added once kept)."""
     added = np.concatenate([ctx.added[map_idx], cells.astype(np.int64)[:, None, :]], axis=1)
+    expanded_a = getattr(planned, "expanded_cells", None)
+    effort = ctx.base_expanded is not None and expanded_a is not None
     return PairSet(
         obstacles_o=ctx.base_obstacles[map_idx],
         obstacles_a=obstacles_a,
@@ -406,6 +428,9 @@ def _make_pairs(ctx: AttackContext, map_idx, cells, obstacles_a, planned: PlanRe
         edit=ctx.edit,
         corner_cutting=corner_cutting,
         moves=ctx.planner.moves,
+        expanded_o=ctx.base_expanded.take(map_idx) if effort else None,
+        expanded_a=expanded_a if effort else None,
+        astar_expansions_o=ctx.base_astar[map_idx] if effort else None,
     )
 
 

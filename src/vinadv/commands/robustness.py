@@ -66,10 +66,11 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--objective",
-        choices=("harm", "paper"),
+        choices=("harm", "paper", "effort"),
         default="harm",
-        help="what the ranking strategies keep per map: the most harmful candidate (default) or the "
-        "strongest by the paper's label (UrP > FP > DP > UcP)",
+        help="what the ranking strategies keep per map: the most harmful candidate (default), the "
+        "strongest by the paper's label (UrP > FP > DP > UcP), or the one whose search expands the most cells "
+        "(effort: a planner that reports expansions, astar, wastar, neural-astar, transpath-*)",
     )
     p.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map and step")
     p.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
@@ -84,6 +85,10 @@ def register(subparsers) -> None:
     )
     add_harm_arguments(p)
     p.add_argument("--db", help="store the benchmark in this database (URL or SQLite file)")
+    p.add_argument(
+        "--name",
+        help="a name for this benchmark, stored and shown with it (tells runs of one planner apart)",
+    )
     p.add_argument(
         "--report",
         metavar="DIR",
@@ -115,7 +120,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     config = RobustnessConfig(
         **settings,
         **option_values(args, "planner", "weights", "seed", "max_obstacles", "objective", "budget", "radius", "edit"),
-        **option_values(args, "harm_tolerance", "harm_rtol"),
+        **option_values(args, "harm_tolerance", "harm_rtol", "name"),
         strategies=strategies,
     )
     result = run(config, db=args.db, device=device, progress=shows_progress(args))
@@ -136,7 +141,8 @@ def cmd_robustness(args: argparse.Namespace) -> int:
             else [
                 {
                     "id": None,
-                    "planner": result.planner["name"],
+                    "planner": result.settings["planner"],
+                    "run_name": result.settings["name"],
                     "weights_checksum": result.planner.get("weights_sha256"),
                     "settings": result.settings,
                     "result": result.to_dict(),
@@ -172,8 +178,12 @@ def print_robustness(out: dict) -> None:
     planner = out["planner"]
     weights = (planner.get("weights_sha256") or "")[:12]
     origin = f"from {s['maps']}" if s.get("maps") else f"seed {s['maps_seed']}"  # every record names `maps`
+    if s.get("maps_sha256"):
+        origin += f", sha256 {s['maps_sha256'][:12]}"
+    named = f"{s['name']!r}: " if s.get("name") else ""
     print(
-        f"robustness of planner {planner['name']}{f' (weights {weights})' if weights else ''} on {s['n']:,} maps "
+        f"{named}robustness of planner {s.get('planner') or planner['name']}"
+        f"{f' (weights {weights})' if weights else ''} on {s['n']:,} maps "
         f"{s['size']}x{s['size']} ({origin}), kept by {s['objective']}, in {out['seconds']:.1f} s"
         + (", obstacles removed" if s["edit"] == "remove" else "")
     )
@@ -191,6 +201,10 @@ def print_robustness(out: dict) -> None:
             f"{name:<12}{f['valid']:>8,}{_pct_ci(f, 'paper_success_rate'):>22}{_pct_ci(f, 'harmful_rate'):>22}"
             f"{_regret(f):>26}{sec:>9.1f}"
         )
+    if "effort_harmful" in out["overall"][0]:  # a planner that reports expansions
+        print(f"effort-harmful at one obstacle (search grown over {s['effort_tolerance']:g} times A*'s growth)")
+        for name, by_k, _ in rows:
+            print(f"{name:<12}{_pct_ci(by_k[0], 'effort_harmful_rate'):>30}")
     ks = [f["k"] for f in out["overall"]]
     print("harmful rate by obstacles added: " + "".join(f"{f'k = {k}':>9}" for k in ks))
     for name, by_k, _ in rows:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import socket
 
 from vinadv.commands import add_db_argument
@@ -15,9 +16,11 @@ def register(subparsers) -> None:
     serve = subparsers.add_parser(
         "serve",
         help="browse runs and map pairs in a web browser, and label pairs by hand",
-        description="Serve the viewer: runs with their category counts, a filterable pair grid, pair pages "
-        "with both maps, paths and the path image, and labelling (keys f/d/u/c = FP/DP/UrP/UcP, n/p = "
-        "next/previous). Human labels go to the annotations table, beside the automatic ones. Binds to "
+        description="Serve the viewer: runs with their category counts and harmful rate, a pair grid with "
+        "thumbnails to filter and sort by label, harm, regret and search effort, pair pages with both maps, paths, "
+        "the search's expanded cells and the path image, the robustness benchmarks, (--bench) a leaderboard, "
+        "and labelling (keys f/d/u/c = FP/DP/UrP/UcP, n/p = next/previous). Human labels go to the annotations "
+        "table, beside the automatic ones. Binds to "
         "127.0.0.1; there is no login, so serving other addresses needs --allow-remote.",
     )
     add_db_argument(serve)
@@ -27,6 +30,13 @@ def register(subparsers) -> None:
         "--allow-remote",
         action="store_true",
         help="allow binding a non-loopback address (anyone who can reach it can label pairs)",
+    )
+    serve.add_argument(
+        "--bench",
+        metavar="DIR",
+        default=None,
+        help="a folder of benchmark entries (`vinadv bench run --out`, e.g. docs/results/bench) whose leaderboard "
+        "the page /bench shows (default: none, no bench page)",
     )
     add_output_options(serve, quiet=True)
     serve.set_defaults(func=cmd_serve)
@@ -49,6 +59,8 @@ def check_bind(host: str, port: int, allow_remote: bool) -> None:
 
 def cmd_serve(args: argparse.Namespace) -> int:
     check_bind(args.host, args.port, args.allow_remote)
+    if args.bench is not None and not os.path.isdir(args.bench):
+        raise InputError(f"--bench {args.bench}: no such folder")
     try:
         from werkzeug.serving import make_server
 
@@ -69,7 +81,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         note(args, f"database {store.url} is read-only: browsing only, labels cannot be stored")
     if created:
         note(args, f"created indexes {', '.join(created)} (once per database)")
-    app = create_app(store, allow_remote=args.allow_remote)
+    app = create_app(store, allow_remote=args.allow_remote, bench_dir=args.bench)
     # import the image renderers now (matplotlib; torch behind vinadv.classify), not on the first pair page
     import vinadv.classify.images  # noqa: F401
     import vinadv.plot.maps  # noqa: F401

@@ -25,7 +25,47 @@ def export_columns() -> tuple[str, ...]:
     back (`PAIR_COLUMNS`), in the store's order."""
     from vinadv.store.codec import PAIR_COLUMNS  # imported here so `vinadv --help` stays fast
 
-    return (*LEADING_COLUMNS, *(name for name in PAIR_COLUMNS if name not in LEADING_COLUMNS))
+    return (*LEADING_COLUMNS, *(name for name in PAIR_COLUMNS if name not in LEADING_COLUMNS), *DERIVED_COLUMNS)
+
+
+#: the columns a text export computes from the stored ones: the search effort's counts and figures
+#: (`vinadv.classify.effort`; empty where the planner reports no expansions)
+DERIVED_COLUMNS = (
+    "expansions_o",
+    "expansions_a",
+    "effort_ratio",
+    "astar_effort_ratio",
+    "relative_effort",
+    "effort_harmful",
+)
+
+
+def _with_effort(chunk: list[dict]) -> None:
+    """Add the `DERIVED_COLUMNS` to the rows of `chunk` (text rows of one run), in place, the chunk at once."""
+    import numpy as np
+
+    from vinadv.classify.effort import effort_figures
+
+    def count(text: str | None) -> float:
+        return np.nan if not text else text.count(";") + 1.0
+
+    counts = {name: np.array([count(r[f"expanded_{side}"]) for r in chunk]) for name, side in (("o", "o"), ("a", "a"))}
+    astar = {
+        side: np.array(
+            [np.nan if r[f"astar_expansions_{side}"] is None else r[f"astar_expansions_{side}"] for r in chunk],
+            dtype=np.float64,
+        )
+        for side in ("o", "a")
+    }
+    valid = np.array([r["term_o"] == "goal" for r in chunk], dtype=bool)
+    figures = effort_figures(counts["o"], counts["a"], astar["o"], astar["a"], valid=valid)
+    for i, row in enumerate(chunk):
+        row["expansions_o"] = None if np.isnan(counts["o"][i]) else int(counts["o"][i])
+        row["expansions_a"] = None if np.isnan(counts["a"][i]) else int(counts["a"][i])
+        for name in ("effort_ratio", "astar_effort_ratio", "relative_effort"):
+            value = figures[name][i]
+            row[name] = None if np.isnan(value) else float(value)
+        row["effort_harmful"] = None if figures["effort_harmful"][i] is None else bool(figures["effort_harmful"][i])
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -104,10 +144,24 @@ def _export_npz(store, run_id: int, out: str, successful_only: bool) -> int:
         "expert_label": np.where(np.equal(records.expert_label, None), "", records.expert_label).astype(str),
         "harm": np.where(np.equal(records.harm, None), "", records.harm).astype(str),
         "edit": records.edit,  # add | remove (vocabulary.EDITS)
+        **_npz_effort(records),
     }
     with atomic_output(out, "wb") as fh:  # a failed export never leaves a half-written file behind
         np.savez_compressed(fh, **arrays)
     return len(records)
+
+
+def _npz_effort(records) -> dict:
+    """The search effort of an npz export: the expanded cells as the paths are (an empty list: none reported) and
+    A*'s counts (-1: none), where any pair has them (`vinadv.pairs/4`'s fields)."""
+    out = {}
+    for side in ("o", "a"):
+        expanded, astar = getattr(records, f"expanded_{side}"), getattr(records, f"astar_expansions_{side}")
+        if expanded is not None:
+            out.update(expanded.to_fields(f"expanded_{side}"))
+        if astar is not None:
+            out[f"astar_expansions_{side}"] = astar
+    return out
 
 
 def _export_parquet(store, run_id: int, out: str, successful_only: bool, args: argparse.Namespace) -> int:
@@ -134,9 +188,16 @@ def _export_text(store, run_id: int, fmt: str, out: str | None, successful_only:
                     row["run_id"] = run_id
                     row["attack"] = bool(row["attack"])
                     row["edit"] = row["edit"] or "add"  # NULL (a row of schema 6 or below) reads as add
+                _with_effort(chunk)
                 if writer is not None:
                     writer.writerows(
-                        [["" if r[c] is None else int(r[c]) if c == "attack" else r[c] for c in columns] for r in chunk]
+                        [
+                            [
+                                "" if r[c] is None else int(r[c]) if c in ("attack", "effort_harmful") else r[c]
+                                for c in columns
+                            ]
+                            for r in chunk
+                        ]
                     )
                 else:
                     stream.write("".join(json.dumps({c: r[c] for c in columns}) + "\n" for r in chunk))

@@ -35,6 +35,11 @@ class PathPairs(Columns):
         term_o, term_a: `(n,)` str, why each path ended: one of `vocabulary.TERMINATIONS`.
         edit: `(n,)` str, each pair's edit, one of `vocabulary.EDITS` (`add`: obstacles added, the paper's
             setting; `remove`: obstacle cells freed); a single str is broadcast (default `add`).
+        expanded_o, expanded_a: `PackedPaths` of n cell lists, the cells the planner's search expanded on each map
+            (a planner that reports expansions, `Capabilities.expansions`; an empty list: none reported for that
+            pair), or None (no pair has them).
+        astar_expansions_o, astar_expansions_a: `(n,)` int64, the cells the exact A* of the pairs' movement model
+            expands on each map, the reference of the effort figures (`vinadv.classify.effort`; -1: none), or None.
     """
 
     obstacles_o: np.ndarray
@@ -47,6 +52,10 @@ class PathPairs(Columns):
     term_o: np.ndarray
     term_a: np.ndarray
     edit: np.ndarray | str = ADD
+    expanded_o: PackedPaths | None = None
+    expanded_a: PackedPaths | None = None
+    astar_expansions_o: np.ndarray | None = None
+    astar_expansions_a: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         name = type(self).__name__
@@ -71,6 +80,24 @@ class PathPairs(Columns):
                 raise InputError(f"{name}.{field}: expected shape ({n},), got {term.shape}")
             setattr(self, field, term)
         self.edit = edit_column(self.edit, f"{name}.edit", n)
+        for field in EXPANSION_FIELDS:
+            value = getattr(self, field)
+            if value is None:
+                continue
+            if field.startswith("astar"):
+                setattr(self, field, int_column(value, f"{name}.{field}", (n,)))
+            elif not isinstance(value, PackedPaths) or len(value) != n:
+                raise InputError(f"{name}.{field}: expected PackedPaths of {n} cell lists or None, got {value!r}")
+
+    @property
+    def expansions_o(self) -> np.ndarray | None:
+        """`(n,)` int64, the cells the planner expanded on the original maps (0: none reported), or None."""
+        return None if self.expanded_o is None else self.expanded_o.lengths
+
+    @property
+    def expansions_a(self) -> np.ndarray | None:
+        """`(n,)` int64, the cells the planner expanded on the adversarial maps (0: none reported), or None."""
+        return None if self.expanded_a is None else self.expanded_a.lengths
 
     @classmethod
     def concat(cls, parts, size: int | None = None, n_added: int | None = None, **settings):
@@ -135,6 +162,10 @@ class PathPairs(Columns):
     def reached_a(self) -> np.ndarray:
         """`(n,)` bool: the adversarial path ends at the goal."""
         return np.asarray(self.term_a) == TERMINATIONS[GOAL]
+
+
+#: the optional search-effort fields of `PathPairs` (the planner's expanded cells and A*'s counts on both maps)
+EXPANSION_FIELDS = ("expanded_o", "expanded_a", "astar_expansions_o", "astar_expansions_a")
 
 
 def added_column(value, name: str, n: int) -> np.ndarray:

@@ -85,6 +85,20 @@ class SearchResult(PlanResult):
         """`(B,)` int64, how many cells each search expanded; None where the planner does not report them."""
         return None if self.expanded is None else self.expanded.sum(axis=(1, 2), dtype=np.int64)
 
+    @property
+    def expanded_cells(self) -> PackedPaths | None:
+        """The expanded cells of each search packed as paths are (`PackedPaths`, row-major order within a search:
+        what a pair stores, `PathPairs.expanded_o`); None where the planner does not report them."""
+        return None if self.expanded is None else expanded_cells(self.expanded)
+
+
+def expanded_cells(expanded: np.ndarray) -> PackedPaths:
+    """`(B, N, N)` bool expansion masks as `PackedPaths`: search b's expanded cells in row-major order."""
+    owners, rows, cols = np.nonzero(expanded)
+    offsets = np.zeros(len(expanded) + 1, dtype=np.int64)
+    np.cumsum(np.bincount(owners, minlength=len(expanded)), out=offsets[1:])
+    return PackedPaths(np.stack([rows, cols], axis=1), offsets)
+
 
 def _expansion_mask(expanded) -> np.ndarray:
     """`expanded` as a bool mask, checked in its own dtype first: numbers must be 0 or 1 (a NaN, a negative, a count

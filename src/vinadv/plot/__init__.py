@@ -9,7 +9,8 @@
     vinadv.plot.k_curve(results.robustness())
 
 The names below are imported from their modules when first used: `vinadv.plot.palette` needs no matplotlib (the
-viewer's pages and the report's captions read it), the drawing modules import it at their top.
+viewer's pages and the report's captions read it), the drawing modules import it at their top
+(`thumbnails` draws pixels without it).
 """
 
 from vinadv import lazy_names
@@ -20,5 +21,6 @@ _MODULES = {
     "maps": ("Pair", "as_pair", "draw_map", "draw_map_markers", "draw_pair", "map", "map_legend", "pair", "value_map"),
     "curves": ("WORST_CASE", "draw_k_curve", "k_curve", "k_series"),
     "files": ("figure_format", "save_figure", "svg_text"),
+    "thumbnails": ("THUMBNAIL_PIXELS", "thumbnail_images", "thumbnail_scale"),
 }
 __all__, __getattr__, __dir__ = lazy_names(__name__, _MODULES)

@@ -24,7 +24,14 @@ import numpy as np
 from vinadv.errors import InputError
 from vinadv.grid.paths import PackedPaths
 from vinadv.store.records import PairRecords
-from vinadv.store.schema import EDIT_COLUMN, HARM_COLUMNS, HARM_FLOAT_COLUMNS, MORE_ADDED_COLUMN, map_pairs
+from vinadv.store.schema import (
+    EDIT_COLUMN,
+    EFFORT_COLUMNS,
+    HARM_COLUMNS,
+    HARM_FLOAT_COLUMNS,
+    MORE_ADDED_COLUMN,
+    map_pairs,
+)
 from vinadv.vocabulary import ADD
 
 if TYPE_CHECKING:
@@ -311,6 +318,7 @@ PAIR_COLUMNS = (
     *HARM_COLUMNS,
     MORE_ADDED_COLUMN,
     EDIT_COLUMN,
+    *EFFORT_COLUMNS,
 )
 
 
@@ -323,13 +331,16 @@ def driver_insert_sql(dialect: sa.Dialect, rows: int = 1) -> str | None:
     driver's positional paramstyle, or None.
 
     For SQLite it takes `encode_rows(..., sqlite=True)` rows (dh and dv as `NULLIF(?, -1)`, added_more as
-    `NULLIF(?, '')`)."""
+    `NULLIF(?, '')`, as are the expanded cells; A*'s counts as `NULLIF(?, -1)`)."""
     marker = {"qmark": "?", "format": "%s", "pyformat": "%s"}.get(dialect.paramstyle)
     if marker is None:
         return None
     prep = dialect.identifier_preparer
     names = ", ".join(prep.quote(name) for name in INSERT_COLUMNS)
-    sqlite_null = {"dh": "-1", "dv": "-1", MORE_ADDED_COLUMN: "''"} if dialect.name == "sqlite" else {}
+    sqlite_null = {"dh": "-1", "dv": "-1", MORE_ADDED_COLUMN: "''", "expanded_o": "''", "expanded_a": "''"}
+    sqlite_null.update({"astar_expansions_o": "-1", "astar_expansions_a": "-1"})
+    if dialect.name != "sqlite":
+        sqlite_null = {}
     values = [
         f"NULLIF({marker}, {sqlite_null[name]})" if name in sqlite_null else marker  # see encode_rows
         for name in INSERT_COLUMNS
@@ -347,7 +358,7 @@ def encode_rows(
     floats and strs, which the sqlite3 module binds without looking for an adapter (it does for any other value,
     bool and None included: ~0.5 us each): `attack` 0/1, a NULL score a NaN (SQLite stores a NaN as NULL), a NULL
     dh/dv -1 (`driver_insert_sql` wraps them in `NULLIF(?, -1)`), a NULL harm cost a NaN, a NULL added_more ''
-    (`NULLIF(?, '')`).
+    (`NULLIF(?, '')`), NULL expanded cells '' and a NULL A* count -1 (the same).
     """
     return list(zip(*encode_columns(run_id, records, lo, hi, sqlite)))
 
@@ -362,11 +373,24 @@ def encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, s
     n = hi - lo
     rows = slice(lo, hi)
 
-    def path(side: str) -> list[str]:
-        paths = getattr(records, f"path_{side}")
+    def path(name: str) -> list[str]:
+        paths = getattr(records, name)
         offsets = paths.offsets[lo : hi + 1]
         cells = paths.cells[offsets[0] : offsets[-1]]
         return encode_paths(cells, offsets - offsets[0])
+
+    def expanded(side: str) -> list:
+        """The expanded cells as path text; NULL where none are reported (an empty list, or no column)."""
+        if getattr(records, f"expanded_{side}") is None:
+            return ["" if sqlite else None] * n
+        texts = path(f"expanded_{side}")
+        return texts if sqlite else [t or None for t in texts]
+
+    def count(side: str) -> list:
+        values = getattr(records, f"astar_expansions_{side}")
+        if values is None:
+            return [-1 if sqlite else None] * n
+        return nullable(values[rows], values[rows] < 1)
 
     def nullable(values: np.ndarray, null: np.ndarray) -> list:
         if sqlite:
@@ -382,8 +406,8 @@ def encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, s
         "pair_index": records.pair_index[rows].tolist(),
         "map_o": encode_maps(records.obstacles_o[rows]),
         "map_a": encode_maps(records.obstacles_a[rows]),
-        "path_o": path("o"),
-        "path_a": path("a"),
+        "path_o": path("path_o"),
+        "path_a": path("path_a"),
         "label": records.label[rows].tolist(),
         "attack": (attack.astype(np.int64) if sqlite else attack).tolist(),
         "start": encode_cells(records.starts[rows]),
@@ -403,6 +427,10 @@ def encode_columns(run_id: int, records: PairRecords, lo: int, hi: int | None, s
         "harm": records.harm[rows].tolist(),
         MORE_ADDED_COLUMN: _encode_more_added(records.added[rows], "" if sqlite else None),
         EDIT_COLUMN: records.edit[rows].tolist(),
+        "expanded_o": expanded("o"),
+        "expanded_a": expanded("a"),
+        "astar_expansions_o": count("o"),
+        "astar_expansions_a": count("a"),
     }
     assert tuple(columns) == INSERT_COLUMNS
     return list(columns.values())
@@ -431,6 +459,20 @@ def _decode_added(first: Sequence[str], more: Sequence[str | None]) -> np.ndarra
         )
     rest = cells.astype(np.int64).reshape(len(first_cells), int(counts[0]), 2)
     return np.concatenate([first_cells, rest], axis=1)
+
+
+def _decode_effort(col: dict) -> dict:
+    """The search-effort fields of decoded rows: None for each where no row has it (NULL), else the cells
+    (`PackedPaths`, an empty list for a NULL row) and the counts (-1 for NULL)."""
+    out: dict = {}
+    for side in ("o", "a"):
+        texts = col[f"expanded_{side}"]
+        if any(t is not None for t in texts):
+            out[f"expanded_{side}"] = PackedPaths(*decode_paths(["" if t is None else t for t in texts]))
+        counts = col[f"astar_expansions_{side}"]
+        if any(c is not None for c in counts):
+            out[f"astar_expansions_{side}"] = np.array([-1 if c is None else c for c in counts], dtype=np.int64)
+    return out
 
 
 def decode_rows(rows: Sequence) -> PairRecords:
@@ -467,4 +509,5 @@ def decode_rows(rows: Sequence) -> PairRecords:
         expert_label=np.array(col["expert_label"], dtype=object),
         harm=np.array(col["harm"], dtype=object),
         edit=np.array([ADD if e is None else e for e in col[EDIT_COLUMN]], dtype=str).reshape(-1),  # NULL reads as add
+        **_decode_effort(col),
     )

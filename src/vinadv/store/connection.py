@@ -32,15 +32,13 @@ from sqlalchemy import exc as sa_exc
 from vinadv.errors import InputError, OutputError, first_line
 from vinadv.store.schema import (
     ADDITIVE_TABLES,
-    RUN_UPGRADE_COLUMNS,
     SCHEMA_VERSION,
+    TABLE_UPGRADE_COLUMNS,
     TABLES,
     UPGRADABLE_VERSIONS,
-    UPGRADE_COLUMNS,
     UPGRADE_TABLES,
     UPGRADE_TABLES_SINCE,
     exact_collation,
-    map_pairs,
     meta_table,
     metadata,
     runs,
@@ -78,7 +76,7 @@ def utcnow() -> dt.datetime:
 class Database:
     """What every part of a `Store` shares: the engine, the URL (password hidden) and what the schema check found.
 
-    `absent_columns`: the `UPGRADE_COLUMNS` an older database opened read-only lacks (they read as NULL).
+    `absent_columns`: the `TABLE_UPGRADE_COLUMNS` an older database opened read-only lacks (they read as NULL).
     """
 
     def __init__(
@@ -227,10 +225,8 @@ def _check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool
                 raise InputError(f"database {shown}: wrong schema: table {table.name} is missing")
             have = {c["name"] for c in inspector.get_columns(table.name)}
             missing = {c.name for c in table.columns} - have
-            if version in UPGRADABLE_VERSIONS and table is map_pairs:
-                missing -= set(UPGRADE_COLUMNS)  # added by `upgrade`
-            if version in UPGRADABLE_VERSIONS and table is runs:
-                missing -= set(RUN_UPGRADE_COLUMNS)  # added by `upgrade`
+            if version in UPGRADABLE_VERSIONS:
+                missing -= set(TABLE_UPGRADE_COLUMNS.get(table, ()))  # added by `upgrade`
             if missing:
                 raise InputError(f"database {shown}: wrong schema: table {table.name} lacks columns {sorted(missing)}")
     absent: frozenset[str] = frozenset()
@@ -240,8 +236,11 @@ def _check_schema(engine: sa.Engine, shown: str, *, create: bool, readonly: bool
             upgrade(engine)
         else:  # read-only use: nothing changes, the columns it lacks read as NULL
             inspector = sa.inspect(engine)
-            absent = (frozenset(UPGRADE_COLUMNS) - {c["name"] for c in inspector.get_columns(map_pairs.name)}) | (
-                frozenset(RUN_UPGRADE_COLUMNS) - {c["name"] for c in inspector.get_columns(runs.name)}
+            absent = frozenset(
+                name
+                for table, names in TABLE_UPGRADE_COLUMNS.items()
+                if table.name in present
+                for name in set(names) - {c["name"] for c in inspector.get_columns(table.name)}
             )
     if readonly:
         return absent
@@ -337,10 +336,12 @@ def create_tables(engine: sa.Engine) -> bool:
 
 
 def upgrade(engine: sa.Engine) -> None:
-    """Schema version 1 to 6 -> 7, under the `schema_lock` (two processes opening one old database at once upgrade
+    """Schema version 1 to 7 -> 8, under the `schema_lock` (two processes opening one old database at once upgrade
     it once; the second finds it done): add the `UPGRADE_COLUMNS` the database lacks (the harm columns, `added_more`,
-    version 7's `edit`; all nullable, existing rows read them as NULL), the `RUN_UPGRADE_COLUMNS` (`runs.moves`,
-    version 6: NULL reads as octile), the `UPGRADE_TABLES` (`measurements`) and `ADDITIVE_TABLES` it lacks, give
+    version 7's `edit`, version 8's search effort; all nullable, existing rows read them as NULL), the
+    `RUN_UPGRADE_COLUMNS` (`runs.moves`, version 6: NULL reads as octile), the `ROBUSTNESS_UPGRADE_COLUMNS` of an
+    existing `robustness` table (version 8's `run_name`), the `UPGRADE_TABLES` (`measurements`) and
+    `ADDITIVE_TABLES` it lacks, give
     `runs.name` its exact collation on MySQL/MariaDB (version 5: the column is changed in place, its rows kept), then
     record the new version. Only what is missing is done, so an upgrade cut short (MariaDB commits each ALTER on its
     own) is finished by the next open, and the steps compose."""
@@ -352,7 +353,10 @@ def upgrade(engine: sa.Engine) -> None:
         if version not in (SCHEMA_VERSION, *UPGRADABLE_VERSIONS):  # changed by another program meanwhile
             raise InputError(f"database {safe_url(engine.url)}: schema version {version!r} changed while opening it")
         inspector = sa.inspect(conn)
-        for table, names in ((map_pairs, UPGRADE_COLUMNS), (runs, RUN_UPGRADE_COLUMNS)):
+        present = set(inspector.get_table_names())
+        for table, names in TABLE_UPGRADE_COLUMNS.items():
+            if table.name not in present:
+                continue  # an additive table made below, with every column
             have = {c["name"] for c in inspector.get_columns(table.name)}
             for name in names:
                 if name not in have:

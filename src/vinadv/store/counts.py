@@ -53,6 +53,18 @@ class CountQueries(Database):
             counts.setdefault(int(run_id), {lab: 0 for lab in LABELS})[label] = int(k)
         return counts
 
+    def harm_counts_by_run(self) -> dict[int, dict[str | None, int]]:
+        """Stored pairs per harm of every run, in one GROUP BY: {run_id: {harm: n}}, only the values present (None:
+        not computed; every pair of a version-1 database opened read-only)."""
+        c = map_pairs.c
+        keys = (c.run_id,) if "harm" in self.absent_columns else (c.run_id, c.harm)
+        with self.engine.connect() as conn:
+            rows = conn.execute(sa.select(*keys, sa.func.count()).group_by(*keys)).all()
+        counts: dict[int, dict[str | None, int]] = {}
+        for row in rows:
+            counts.setdefault(int(row[0]), {})[row[1] if len(keys) == 2 else None] = int(row[-1])
+        return counts
+
     def label_sources(self, run_id: int) -> list[str]:
         """The distinct label sources of the run's pairs, sorted."""
         with self.engine.connect() as conn:

@@ -93,10 +93,22 @@ class EvaluationQueries(RunQueries):
             ).scalar_one_or_none()
 
     def add_robustness(
-        self, planner: str, weights_checksum: str | None, settings: dict, result: dict, version: str = __version__
+        self,
+        planner: str,
+        weights_checksum: str | None,
+        settings: dict,
+        result: dict,
+        version: str = __version__,
+        run_name: str | None = None,
     ) -> int:
-        """Store one robustness benchmark (`vinadv robustness`): the planner's name and weights checksum, the
-        benchmark's settings and its figures (`vinadv.robustness.RobustnessResult.to_dict()`), JSON; return its id."""
+        """Store one robustness benchmark (`vinadv robustness`): the planner's full spec (`wastar:w=3`) and weights
+        checksum, the benchmark's settings and its figures (`vinadv.robustness.RobustnessResult.to_dict()`), JSON, and
+        its run name (`--name`, None: none); return its id."""
+        if self.absent_columns:
+            raise InputError(
+                f"database {self.url}: an older schema version opened without create; "
+                "open it with create to upgrade it before writing"
+            )
         self.ensure_table(robustness)
         with self.engine.begin() as conn:
             row = conn.execute(
@@ -107,6 +119,7 @@ class EvaluationQueries(RunQueries):
                     settings=settings,
                     result=result,
                     version=version,
+                    run_name=run_name,
                 )
             )
             return int(row.inserted_primary_key[0])
@@ -170,7 +183,8 @@ class EvaluationQueries(RunQueries):
         with self.engine.connect() as conn:
             if not sa.inspect(conn).has_table(robustness.name):
                 return []
-            query = sa.select(robustness).order_by(robustness.c.id)
+            columns = [sa.null().label(c.name) if c.name in self.absent_columns else c for c in robustness.columns]
+            query = sa.select(*columns).order_by(robustness.c.id)
             if ids is not None:
                 query = query.where(robustness.c.id.in_([int(i) for i in ids]))
             rows = [dict(r) for r in conn.execute(query).mappings().all()]

@@ -29,6 +29,8 @@ class PairRecords(PathPairs):
         (DESIGN.md "Harm"), NaN = none (NULL)
       expert_label (n,) object, 'invalid|UrP|UcP|DP|FP' or None; harm (n,) object, 'harmful|harmless|invalid' or
         None (None = not computed, NULL)
+      expanded_o, expanded_a, astar_expansions_o, astar_expansions_a — the search effort (`PathPairs`; stored as
+        `expanded_*` path text and A*'s counts, NULL where not reported)
       no (n,) int64 or None — the table's global sequence number; filled when read back, ignored on write
     String columns are object arrays.
     """
@@ -119,7 +121,10 @@ class PairRecords(PathPairs):
             if f.name == "no":
                 continue
             a, b = getattr(self, f.name), getattr(other, f.name)
-            if isinstance(a, PackedPaths):
+            if a is None or b is None:
+                if a is not b:
+                    return False
+            elif isinstance(a, PackedPaths):
                 if a != b:
                     return False
             elif a.shape != b.shape or not np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):

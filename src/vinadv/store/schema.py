@@ -27,10 +27,15 @@ already); an older MariaDB database has the column changed in place, its rows ke
 (nullable, `RUN_UPGRADE_COLUMNS`): the run's movement model (`vinadv.grid.moves`); NULL (every run of a version 5
 database) reads as `octile`. Version 7 adds `map_pairs.edit` (nullable): each pair's
 edit, `add` or `remove` (DESIGN.md "Obstacle removal"; NULL, in the rows of an older database, reads as `add`)
-and the table `bench_chunks`. A database of an older version (`UPGRADABLE_VERSIONS`)
-gains the columns (`UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`), tables and collation it lacks on open (see
-`connection.upgrade`); opened read-only it reads the columns as NULL and the tables as empty; any other version is
-refused untouched.
+and the table `bench_chunks`. Version 8 adds the search effort of a pair (`EFFORT_COLUMNS`, nullable; DESIGN.md
+"Search effort"): `map_pairs.expanded_o` and `expanded_a`, the cells the planner's search expanded on each map as
+path text (`"r,c;r,c"`), and `astar_expansions_o`, `astar_expansions_a`, the exact A*'s counts on the same maps
+(NULL: a planner that reports no expansions, and every row of an older database); and the provenance of a robustness
+benchmark (`ROBUSTNESS_UPGRADE_COLUMNS`): `robustness.run_name` (`vinadv robustness --name`, NULL: none) while its
+`planner` column holds the full planner spec (`wastar:w=3`; a bare name in older rows). A database of an older
+version (`UPGRADABLE_VERSIONS`) gains the columns (`TABLE_UPGRADE_COLUMNS`, `ALTER TABLE ... ADD COLUMN`), tables
+and collation it lacks on open (see `connection.upgrade`); opened read-only it reads the columns as NULL and the
+tables as empty; any other version is refused untouched.
 
 Maps and paths are `Text` (MEDIUMTEXT on MySQL): an N=28 map is 811 characters, paths are unbounded, and a
 VARCHAR would cap both.
@@ -46,10 +51,10 @@ from vinadv.vocabulary import HARMS as HARMS  # the harm column's values; re-exp
 from vinadv.vocabulary import LABELS as LABELS  # the label column's values; re-exported for the store's users
 
 #: bump when a table or column changes; a database with another version is refused with a clear error.
-SCHEMA_VERSION = "7"
+SCHEMA_VERSION = "8"
 #: the versions before: upgraded on open by adding what they lack (`UPGRADE_COLUMNS`, `UPGRADE_TABLES`, the run
 #: name's collation; nothing existing is lost)
-UPGRADABLE_VERSIONS = ("1", "2", "3", "4", "5", "6")
+UPGRADABLE_VERSIONS = ("1", "2", "3", "4", "5", "6", "7")
 
 metadata = sa.MetaData()
 
@@ -149,6 +154,12 @@ map_pairs = sa.Table(
     sa.Column("added_more", _LongText, nullable=True),
     # obstacle removal (the step to schema version 7): 'add' or 'remove' (`vocabulary.EDITS`); NULL reads as 'add'
     sa.Column("edit", sa.String(8), nullable=True),
+    # search effort (the step to schema version 8): the planner's expanded cells on each map, "r,c;r,c" (as a
+    # path), and the exact A*'s expansion counts on the same maps; NULL = not reported (a planner without them)
+    sa.Column("expanded_o", _LongText, nullable=True),
+    sa.Column("expanded_a", _LongText, nullable=True),
+    sa.Column("astar_expansions_o", sa.Integer(), nullable=True),
+    sa.Column("astar_expansions_a", sa.Integer(), nullable=True),
     sa.UniqueConstraint("run_id", "pair_index", name="uq_map_pairs_run_pair"),
     # pair_index last: a filtered page of a run (`Store.page_pairs`, the viewer's grid) is one ordered index range
     sa.Index("ix_map_pairs_run_label", "run_id", "label", "pair_index"),
@@ -195,11 +206,14 @@ robustness = sa.Table(
     metadata,
     sa.Column("id", _BigId, primary_key=True, autoincrement=True),
     sa.Column("created", sa.DateTime(), nullable=False),  # UTC, naive
-    sa.Column("planner", sa.String(255), nullable=False),  # the planner's name (`Planner.name`)
+    # the full planner spec with its parameters (`wastar:w=3`, `vinadv.planners.registry.spec_label`); older rows:
+    # the bare name (`Planner.name`)
+    sa.Column("planner", sa.String(255), nullable=False),
     sa.Column("weights_checksum", sa.String(128), nullable=True),  # its weights' SHA-256 (None: no weights)
     sa.Column("settings", sa.JSON(), nullable=False),  # maps, strategies, obstacles, objective, ...
     sa.Column("result", sa.JSON(), nullable=False),  # `RobustnessResult.to_dict()`: every figure
     sa.Column("version", sa.String(64), nullable=False),
+    sa.Column("run_name", ExactString(255), nullable=True),  # `vinadv robustness --name` (schema version 8)
     sa.Index("ix_robustness_planner", "planner", "id"),
 )
 
@@ -234,10 +248,14 @@ HARM_COLUMNS = HARM_FIELDS
 MORE_ADDED_COLUMN = "added_more"
 #: `map_pairs` column added by the step to schema version 7
 EDIT_COLUMN = "edit"
+#: `map_pairs` columns added by the step to schema version 8: the search effort (`vinadv.classify.effort`)
+EFFORT_COLUMNS = ("expanded_o", "expanded_a", "astar_expansions_o", "astar_expansions_a")
 #: `map_pairs` columns added after version 1: an older database gains those it lacks on open
-UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN, EDIT_COLUMN)
+UPGRADE_COLUMNS = (*HARM_COLUMNS, MORE_ADDED_COLUMN, EDIT_COLUMN, *EFFORT_COLUMNS)
 #: `runs` column added by schema version 6: an older database gains it on open (NULL reads as octile)
 RUN_UPGRADE_COLUMNS = ("moves",)
+#: `robustness` column added by the step to schema version 8: an older database's table gains it on open
+ROBUSTNESS_UPGRADE_COLUMNS = ("run_name",)
 #: tables added by schema version 4: an older database gains them on open
 UPGRADE_TABLES = (measurements,)
 #: the version that added the `UPGRADE_TABLES`: a database of that version or later without them is refused
@@ -247,3 +265,6 @@ TABLES = (meta_table, runs, map_pairs, annotations, evaluations, robustness, mea
 #: tables added to the schema later: created when missing, never a reason to refuse a database (`bench_chunks`: the
 #: step to 7, the resumable units of `vinadv bench run --db`)
 ADDITIVE_TABLES = (evaluations, robustness, bench_chunks)
+#: the columns each table gained after it first shipped, added on open to an older database's table (names unique
+#: across the tables: a read-only reader of an older database reads them as NULL by name, `Database.absent_columns`)
+TABLE_UPGRADE_COLUMNS = {map_pairs: UPGRADE_COLUMNS, runs: RUN_UPGRADE_COLUMNS, robustness: ROBUSTNESS_UPGRADE_COLUMNS}

@@ -19,10 +19,12 @@ def random_records(
     first_index: int = 0,
     n_added: int = 1,
     removes: float = 0.0,
+    effort: bool = False,
 ) -> PairRecords:
     """n random pairs on `size` x `size` maps, `n_added` added cells each; paths of 0..max_path random cells; some
     NULL scores and dh/dv. `removes`: the share of pairs (drawn last, so the rest is as without it) of edit `remove`,
-    whose cells are freed instead of added."""
+    whose cells are freed instead of added. `effort`: the search-effort fields too (drawn last, likewise): 0..20
+    expanded cells per map (0: none reported, NULL) and A*'s counts (some NULL, -1)."""
     rng = np.random.default_rng(seed)
     obstacles_o = rng.random((n, size, size)) < 0.3
     obstacles_a = obstacles_o.copy()
@@ -50,6 +52,14 @@ def random_records(
         freed = obstacles_o.copy()
         freed[np.arange(n)[:, None], added[..., 0], added[..., 1]] = False
         obstacles_a = np.where((edit == REMOVE)[:, None, None], freed, obstacles_a)
+    searched = {}
+    if effort:
+        for side in ("o", "a"):
+            lengths = rng.integers(0, 21, n)
+            offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
+            searched[f"expanded_{side}"] = PackedPaths(rng.integers(0, size, (offsets[-1], 2)), offsets)
+        for side in ("o", "a"):
+            searched[f"astar_expansions_{side}"] = np.where(rng.random(n) < 0.2, -1, rng.integers(1, size * size, n))
     return PairRecords(
         pair_index=first_index + np.arange(n),
         obstacles_o=obstacles_o,
@@ -71,4 +81,5 @@ def random_records(
         expert_label=expert_label,
         harm=harm,
         edit=edit,
+        **searched,
     )

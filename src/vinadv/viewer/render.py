@@ -16,6 +16,7 @@ from collections import OrderedDict
 import numpy as np
 
 from vinadv.classify.images import render_path_images
+from vinadv.plot.thumbnails import thumbnail_images
 from vinadv.store.records import PairRecords
 
 #: the images of a pair, in page order
@@ -60,12 +61,17 @@ class PngCache:
     def __len__(self) -> int:
         return len(self._items)
 
+    def __contains__(self, key) -> bool:
+        with self._lock:
+            return key in self._items
+
 
 _render_lock = threading.Lock()
 
 
-def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
-    """PNG bytes of image `kind` (one of KINDS) of pair `i` of `records`."""
+def render_pair_png(records: PairRecords, i: int, kind: str, expanded: np.ndarray | None = None) -> bytes:
+    """PNG bytes of image `kind` (one of KINDS) of pair `i` of `records`; `expanded`: the cells `(k, 2)` the planner's
+    search expanded on that map (a search planner's pair), tinted under the paths, or None."""
     if kind == "pathimage":
         return _path_image_png(records, i)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -87,6 +93,8 @@ def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
             paths.append(("adversarial", pair.path_a))
     else:
         raise ValueError(f"unknown image kind {kind!r}")
+    if expanded is not None:
+        title += ", expanded cells"
     with _render_lock:
         fig = Figure(figsize=(_MAP_INCHES, _MAP_INCHES), dpi=_MAP_DPI)
         FigureCanvasAgg(fig)
@@ -100,6 +108,7 @@ def render_pair_png(records: PairRecords, i: int, kind: str) -> bytes:
             added=added,
             title=title,
             removed=pair.removed,
+            expanded=expanded,
         )
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=_MAP_DPI)
@@ -114,3 +123,27 @@ def _path_image_png(records: PairRecords, i: int) -> bytes:
     buf = io.BytesIO()
     Image.fromarray(big, mode="RGB").save(buf, format="PNG", optimize=False)
     return buf.getvalue()
+
+
+def render_thumbnails(records: PairRecords, expanded: tuple[np.ndarray, np.ndarray] | None = None) -> list[bytes]:
+    """PNG bytes of the thumbnails of every pair of `records` (`vinadv.plot.thumbnails`, drawn in one pass);
+    `expanded`: packed cells `(cells, offsets)` the search expanded on each adversarial map, or None."""
+    from PIL import Image
+
+    images = thumbnail_images(
+        records.obstacles_a,
+        records.starts,
+        records.goals,
+        records.added,
+        records.removes,
+        (records.path_o.cells, records.path_o.offsets),
+        (records.path_a.cells, records.path_a.offsets),
+        expanded=expanded,
+    )
+    out = []
+    for image in images:
+        buf = io.BytesIO()
+        # the fastest compression: a thumbnail is a few KB whatever the level, and encoding is most of its cost
+        Image.fromarray(image, mode="RGB").save(buf, format="PNG", compress_level=1)
+        out.append(buf.getvalue())
+    return out

@@ -391,6 +391,16 @@ def best_first_search(
     return SearchResult(paths=plan.paths, termination=plan.termination, expanded=expanded)
 
 
+def reference_expansions(
+    obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, corner_cutting: bool, moves: str
+) -> np.ndarray:
+    """`(B,)` int64: the cells the exact A* (`AStarPlanner`) of the movement model `moves` expands from each start
+    to its goal, the reference a search planner's expansions are judged against (`vinadv.classify.effort`)."""
+    obstacles = np.asarray(obstacles, dtype=bool)
+    planner = AStarPlanner(obstacles.shape[-1], moves)
+    return planner.plan(obstacles, starts, goals, corner_cutting, moves).expansions
+
+
 class AStarPlanner(SearchPlanner):
     """Vanilla A* on the maps' movement model (`g_ratio` 0.5, cost 1 on free cells; module doc): exact shortest
     paths, with the cells it expanded; on `moore` maps the Neural A* authors' vanilla A*, expansion for expansion.

@@ -53,6 +53,7 @@ from vinadv.planners.registry.base import (
     canonical_name,
     recorded_name,
     register,
+    spec_label,
     unregister,
 )
 
@@ -76,6 +77,7 @@ _LOADING = (
 )
 
 __all__ = [
+    "spec_label",
     "ALIASES",
     "DEFAULT_PLANNER",
     "MODELS",

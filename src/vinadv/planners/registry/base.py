@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import importlib
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -243,3 +243,14 @@ def recorded_name(name: str) -> str:
         return recorded_name(text[: -len(SUFFIX)]) + SUFFIX
     info = REGISTRY.get(text)
     return text if info is None or info.recorded_as is None else info.recorded_as
+
+
+def spec_label(spec: Mapping[str, Any]) -> str:
+    """The planner of a recorded `PlannerSpec` as one names it, with its parameters: the registered name followed by
+    the values its `PlannerParam`s have in the spec's config (`wastar:w=3`; `wastar`, its default w = 2, is
+    `wastar:w=2`), else the name as recorded (`vin`, `gppn+d4`, `file.py:factory`). What tells `wastar:w=2` and
+    `wastar:w=3` apart where results are stored and shown (a robustness benchmark's `planner`)."""
+    name, config = str(spec["name"]), spec.get("config") or {}
+    info = REGISTRY.get(name)
+    values = [f"{p.name}={config[p.name]:g}" for p in (info.params if info else ()) if p.name in config]
+    return f"{name}:{','.join(values)}" if values else name

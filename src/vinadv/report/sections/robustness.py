@@ -33,14 +33,27 @@ class Benchmark:
     by_strategy: dict[str, list[dict]]
     seconds: dict[str, float]
     edit: str = "add"
+    run_name: str | None = None  # `vinadv robustness --name`
+    maps_file: str | None = None  # the maps file (None: the generator's maps of `maps_seed`)
+    maps_sha256: str | None = None
 
     @property
     def name(self) -> str:
-        """The benchmark in a legend: planner, weights (first 8 hex digits), `removal` for a benchmark that frees
-        obstacles, and id."""
+        """The benchmark in a legend: its run name, the planner's full spec, weights (first 8 hex digits), the maps
+        file's name where it came from one, `removal` for a benchmark that frees obstacles, and id: two runs of one
+        planner on two maps files read apart."""
+        named = f"{self.run_name}: " if self.run_name else ""
         weights = f" {self.weights[:8]}" if self.weights else ""
+        maps = f" on {Path(self.maps_file).name}" if self.maps_file else ""
         removal = " removal" if self.edit == "remove" else ""
-        return f"{self.planner}{weights}{removal}" + (f" (#{self.id})" if self.id is not None else "")
+        return f"{named}{self.planner}{weights}{maps}{removal}" + (f" (#{self.id})" if self.id is not None else "")
+
+    @property
+    def maps(self) -> str:
+        """Where the maps came from: the maps file's name and SHA-256 (first 12 hex digits), or the seed."""
+        if self.maps_file:
+            return f"{Path(self.maps_file).name} ({(self.maps_sha256 or '')[:12]})"
+        return f"seed {self.maps_seed}"
 
     def strategy_name(self, name: str) -> str:
         """A strategy (or the worst case) in the table: `(remove)` added where the benchmark frees obstacles."""
@@ -85,7 +98,7 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
             Benchmark(
                 id=row.get("id"),
                 created=str(row.get("created") or ""),
-                planner=str(row["planner"]),
+                planner=str(settings.get("planner") or row["planner"]),  # the full spec (older rows: the name)
                 weights=row.get("weights_checksum"),
                 n=int(settings["n"]),
                 size=int(settings["size"]),
@@ -101,6 +114,9 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
                     "total": result["seconds"],
                 },
                 edit=str(settings["edit"]),
+                run_name=settings.get("name"),
+                maps_file=settings.get("maps"),
+                maps_sha256=settings.get("maps_sha256"),
             )
         )
     data = RobustnessData(benchmarks=benchmarks)
@@ -114,13 +130,18 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
         *interval_columns("harmful_rate"),
         "reached",
         *interval_columns("mean_regret"),
+        "effort_harmful",
+        *interval_columns("effort_harmful_rate"),
     )
     data.table = Table(
         "robustness.csv",
         (
             "benchmark",
+            "name",
             "planner",
             "weights_sha256",
+            "maps_file",
+            "maps_sha256",
             "maps",
             "size",
             "maps_seed",
@@ -134,8 +155,11 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
         [
             [
                 b.id,
+                b.run_name,
                 b.planner,
                 b.weights,
+                b.maps_file,
+                b.maps_sha256,
                 b.n,
                 b.size,
                 b.maps_seed,
@@ -143,7 +167,7 @@ def robustness_section(rows: list[dict], out: Path) -> RobustnessData:
                 b.clean_success,
                 b.strategy_name(name),
                 f["k"],
-                *(f[key] for key in keys),
+                *(f.get(key) for key in keys),  # the effort figures: a planner that reports expansions only
                 b.seconds.get(name, b.seconds["total"]),
             ]
             for b in benchmarks
