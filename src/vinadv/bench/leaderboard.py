@@ -24,6 +24,7 @@ from importlib import resources
 from pathlib import Path
 
 from vinadv import display
+from vinadv.bench.comparison import FAMILY_NOTE, family_rows, family_table, mean_intervals, p_text, vs_next
 from vinadv.bench.suites import ENTRY_FORMAT, ENTRY_FORMATS, FROZEN
 from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
@@ -41,6 +42,7 @@ COLUMNS = (
     "worst-case paper success (k = 1)",
     "worst-case harmful (largest k)",
     "removal harmful",
+    "vs next",
     "flags",
     "time",
 )
@@ -72,6 +74,10 @@ LEGEND = {
     "make k > 1) and can be below the one at k = 1.",
     "removal harmful": "the harmful rate at one freed cell of the removal attack that harms the most valid maps. "
     "Denominator: that attack's valid maps.",
+    "vs next": "McNemar's exact test (two-sided) of this planner against the next row's on the worst-case harmful "
+    "verdict at k = 1, map by map, over the maps valid for both (`vinadv bench compare` tests every k): more robust "
+    "than the next (or less, on their shared maps) where p < 0.05, else not distinguishable; — for the last row and "
+    "for a v1 entry, which holds no per-map outcomes (needs a format 2 entry).",
     "flags": "the raised flags (gradient_masking, non_deterministic, too_weak): figures not to be taken at face "
     "value; — for none.",
     "time": "how long the entry took: the sum of its chunks' seconds, in minutes, and the device type; on the machine "
@@ -92,6 +98,7 @@ COMPACT = (
     ("paper success, k = 1", "worst-case paper success (k = 1)"),
     ("harmful, largest k", "worst-case harmful (largest k)"),  # the k in the title where the rows share it
     ("removal harmful", "removal harmful"),
+    ("vs next", "vs next"),
     ("flags", "flags"),
     ("time", "time"),
 )
@@ -253,7 +260,7 @@ def rows(entries: list[tuple[Path, dict]], base: str | os.PathLike | None = None
     """{suite: rows, sorted}: each row the entry's file (its name; with `base`, its path from the folder `base`, where
     the pages link from), its cells' values and its raised flags. A suite is keyed by its name (for an unreleased
     checksum, by its name and checksum, labelled unknown: `suite_heading`); the released suites first."""
-    by_suite: dict[str, list[dict]] = {}
+    by_suite: dict[str, list[tuple[dict, dict]]] = {}
     for path, e in entries:
         worst, clean = e["worst_case"], e["clean"]
         weights = e.get("weights_sha256")
@@ -288,9 +295,12 @@ def rows(entries: list[tuple[Path, dict]], base: str | os.PathLike | None = None
         _with_interval(row, "removal", removal["harmful_rate"], removal.get("harmful"), removal.get("valid"))
         row["flags"] = [name for name, f in e["flags"].items() if f["raised"]]
         row["time"] = compute_time(e)
-        by_suite.setdefault(key, []).append(row)
+        row["families"] = family_rows(e)
+        row["means"] = mean_intervals(e)
+        by_suite.setdefault(key, []).append((row, e))
 
-    def order(r):
+    def order(item):
+        r = item[0]
         return (
             1.0 if r["harmful"] is None else r["harmful"],
             1.0 if r["harmful_k"] is None else r["harmful_k"],
@@ -301,7 +311,25 @@ def rows(entries: list[tuple[Path, dict]], base: str | os.PathLike | None = None
     def released_first(item):
         return (item[0] not in FROZEN, item[0])
 
-    return {suite: sorted(rs, key=order) for suite, rs in sorted(by_suite.items(), key=released_first)}
+    return {suite: _ranked(sorted(rs, key=order)) for suite, rs in sorted(by_suite.items(), key=released_first)}
+
+
+def _ranked(items: list[tuple[dict, dict]]) -> list[dict]:
+    """The rows of one suite in rank order, each with its paired test against the next (`vs_next`: None for the last
+    and where one of the two entries holds no per-map outcomes)."""
+    for (row, e), (_, after) in zip(items, items[1:] + [(None, None)]):
+        row["vs_next"] = None if after is None else vs_next(e, after)
+    return [row for row, _ in items]
+
+
+def _vs_next_lines(r: dict) -> tuple[str, str]:
+    """The paired test's cell: its verdict against the next row, and its p-value ("—" without a test)."""
+    test = r.get("vs_next")
+    if test is None:
+        return display.NONE, ""
+    if test["verdict"] == "not distinguishable":
+        return test["verdict"], p_text(test["p_value"])
+    return f"{test['verdict']} than the next", p_text(test["p_value"])
 
 
 def _pct_ci(r: dict, name: str) -> str:
@@ -328,6 +356,7 @@ def _cells(r: dict) -> list[str]:
         _pct_ci(r, "paper"),
         f"{_pct_ci(r, 'harmful_k')} (k = {r['k']})",
         _pct_ci(r, "removal"),
+        "{} ({})".format(*_vs_next_lines(r)) if r.get("vs_next") else display.NONE,
         ", ".join(r["flags"]) or "—",
         r["time"],
     ]
@@ -356,6 +385,11 @@ def _rate_lines(r: dict, name: str) -> tuple[str, str]:
     return display.percent(r[name]), "" if interval == display.NONE else interval
 
 
+def _second_line(text: str, compact: bool) -> str:
+    """A cell's second line in Markdown: below the first in smaller type (`compact`), else after it."""
+    return f"<br><small>{text}</small>" if compact else f" {text}"
+
+
 def _compact_cells(r: dict, show_k: bool) -> list[tuple[str, str]]:
     """The compact table's cells of row `r` (after the rank), each `(first line, second line)`, plain text; the
     largest k beside its rate with `show_k` (else the column's title says it)."""
@@ -368,6 +402,7 @@ def _compact_cells(r: dict, show_k: bool) -> list[tuple[str, str]]:
         _rate_lines(r, "paper"),
         (f"{largest[0]} (k = {r['k']})" if show_k else largest[0], largest[1]),
         _rate_lines(r, "removal"),
+        _vs_next_lines(r),
         (", ".join(r["flags"]) or "—", ""),
         _time_lines(r["time"]),
     ]
@@ -417,6 +452,14 @@ def render_markdown(
                 cells[0] = f"[{cells[0]}]({_link(link_prefix, r['file'])})"
             out.append(f"| {i} | " + " | ".join(cells) + " |")
         out.append("")
+        titles, family_cells = family_table(rs, _name)
+        if family_cells:
+            out += [FAMILY_NOTE, "", "| " + " | ".join(markdown_text(t) for t in titles) + " |"]
+            out.append("|" + " --- |" * len(titles))
+            for cells in family_cells:
+                joined = [markdown_text(a) + (_second_line(markdown_text(b), compact) if b else "") for a, b in cells]
+                out.append("| " + " | ".join(joined) + " |")
+            out.append("")
     if legend:
         out += [render_legend(compact), ""]
     return "\n".join(out)
@@ -474,6 +517,15 @@ def render_html(table: dict[str, list[dict]], link_prefix: str = "", figures: bo
             cells[0] = f'<a href="{link}">{cells[0]}</a>'
             parts.append(f"<tr><td>{i}</td>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
         parts.append("</tbody></table></div>")
+        titles, family_cells = family_table(rs, _name)
+        if family_cells:
+            parts.append(f"<p>{_html_text(FAMILY_NOTE)}</p>")
+            parts.append('<div class="scroll"><table class="numbers"><thead><tr>')
+            parts.append("".join(f"<th>{html.escape(t)}</th>" for t in titles) + "</tr></thead><tbody>")
+            for cells in family_cells:
+                tds = "".join(f'<td>{html.escape(a)} <span class="ci">{html.escape(b)}</span></td>' for a, b in cells)
+                parts.append(f"<tr>{tds}</tr>")
+            parts.append("</tbody></table></div>")
         if figures:
             name = html.escape(k_curve_name(key, "png"), quote=True)
             svg = html.escape(k_curve_name(key, "svg"), quote=True)

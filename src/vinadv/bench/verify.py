@@ -93,9 +93,10 @@ def _chunk_slice(per_map: dict, suite, chunk: int) -> dict:
     return {"clean": clean, "chunks": [per_map["chunks"][chunk]], "attacks": attacks}
 
 
-def read_entry(path: str | os.PathLike) -> dict:
+def read_entry(path: str | os.PathLike, reader: str = "verify") -> dict:
     """The entry in the file `path`, checked (a valid `vinadv.bench_entry/2` entry): InputError naming the file
-    otherwise (a `vinadv.bench_entry/1` entry, which holds no per-map outcomes, included)."""
+    otherwise (a `vinadv.bench_entry/1` entry, which holds no per-map outcomes, included; `reader` names what needs
+    them in the message)."""
     from vinadv.bench.leaderboard import upgrade_entry  # noqa: PLC0415 (the readers' upgrade)
     from vinadv.jsonfile import read_json_document  # noqa: PLC0415 (light)
 
@@ -107,8 +108,8 @@ def read_entry(path: str | os.PathLike) -> dict:
         except InputError:
             raise InputError(f"{path}: not a {ENTRY_FORMAT_2} entry (field 'format', or not readable)") from None
         raise InputError(
-            f"{path}: a {ENTRY_FORMAT} entry, which holds no per-map outcomes: verify reads {ENTRY_FORMAT_2} entries "
-            "(a format 1 entry is recomputed whole by `vinadv bench run` of its suite)"
+            f"{path}: a {ENTRY_FORMAT} entry, which holds no per-map outcomes: {reader} needs a format 2 entry "
+            f"({ENTRY_FORMAT_2}; a format 1 entry is recomputed whole by `vinadv bench run` of its suite)"
         ) from None
     problem = entry_problem(entry)
     if problem is not None:

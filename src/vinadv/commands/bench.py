@@ -1,6 +1,6 @@
 """`vinadv bench run` (a planner on a frozen benchmark suite: one result entry), `vinadv bench verify` (does an
-entry hold what it says) and `vinadv bench leaderboard` (the entries of folders and files as a leaderboard);
-`vinadv.bench`."""
+entry hold what it says), `vinadv bench compare` (two planners on the same maps: a paired test) and `vinadv bench
+leaderboard` (the entries of folders and files as a leaderboard); `vinadv.bench`."""
 
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ from vinadv.commands import (
     planner_inputs,
 )
 from vinadv.commands.output import add_output_options, emit, shows_progress
+from vinadv.display import number
 from vinadv.errors import InputError, one_line
 from vinadv.outfile import atomic_output, check_output_path
 
@@ -84,6 +85,19 @@ def register(subparsers) -> None:
     )
     add_output_options(verify, json="the differences", quiet=True)
     verify.set_defaults(func=cmd_bench_verify)
+
+    compare = sub.add_parser(
+        "compare",
+        help="is one planner more robust than another on the same maps: McNemar's exact test per k",
+        description="Compare two vinadv.bench_entry/2 entries of one suite map by map: at each k, the maps valid for "
+        "both planners, those harmful (worst case) for A only and for B only, and the two-sided p-value of McNemar's "
+        "exact test (binomial on the discordant maps); A is more (less) robust than B where p < 0.05. Also each "
+        "entry's mean regrets (clean, and worst case per k) with their bootstrap 95% intervals over the maps.",
+    )
+    compare.add_argument("entry_a", metavar="ENTRY_A", help="the first entry file (.json)")
+    compare.add_argument("entry_b", metavar="ENTRY_B", help="the second entry file (.json), of the same suite")
+    add_output_options(compare, json="the tests and the means")
+    compare.set_defaults(func=cmd_bench_compare)
 
     board = sub.add_parser(
         "leaderboard",
@@ -177,6 +191,42 @@ def cmd_bench_verify(args: argparse.Namespace) -> int:
 
     code = emit(args, {"entry": args.entry, **result}, report)
     return 1 if result["differences"] else code
+
+
+def cmd_bench_compare(args: argparse.Namespace) -> int:
+    from vinadv.bench.comparison import compare_entries, mean_intervals, p_text
+    from vinadv.bench.leaderboard import planner_label
+    from vinadv.bench.verify import read_entry
+
+    a, b = (read_entry(path, reader="bench compare") for path in (args.entry_a, args.entry_b))
+    tests = compare_entries(a, b)
+    names = [planner_label(e["planner"]) for e in (a, b)]
+    result = {
+        "suite": a["suite"],
+        "a": {"entry": args.entry_a, "planner": names[0], "means": mean_intervals(a)},
+        "b": {"entry": args.entry_b, "planner": names[1], "means": mean_intervals(b)},
+        "tests": tests,
+    }
+
+    def report() -> None:
+        print(f"{a['suite']['name']}: A = {names[0]} ({args.entry_a}), B = {names[1]} ({args.entry_b})")
+        for t in tests:
+            print(
+                f"k = {t['k']}: {t['maps']} maps valid for both, harmful for A only {t['a_only']}, for B only "
+                f"{t['b_only']}, both {t['both']}; McNemar {p_text(t['p_value'])}: "
+                + (
+                    "A and B not distinguishable"
+                    if t["verdict"] == "not distinguishable"
+                    else f"A {t['verdict']} than B"
+                )
+            )
+        for side in ("a", "b"):
+            means = result[side]["means"]
+            parts = [("clean", means["clean_regret"])] + [(f"k = {m['k']}", m) for m in means["worst_regret"]]
+            shown = ", ".join(f"{k} {number(m['mean'])} [{number(m['low'])}, {number(m['high'])}]" for k, m in parts)
+            print(f"{side.upper()} mean regret (95% bootstrap interval over the maps): {shown}")
+
+    return emit(args, result, report)
 
 
 def cmd_bench_leaderboard(args: argparse.Namespace) -> int:
