@@ -98,6 +98,57 @@ class DifferentiableSearch:
         return out
 
 
+def search_state(start_idx: torch.Tensor, goal_idx: torch.Tensor, cells: int, dtype: torch.dtype) -> tuple:
+    """The batched search's starting state for B maps of `cells` cells: `(open, closed, g, parents, histories,
+    active, reached)`, the start open, every parent the goal's index, histories of `dtype` (the gradient's)."""
+    b, device = len(start_idx), start_idx.device
+    open_ = torch.zeros(b, cells, dtype=torch.float32, device=device)
+    open_[torch.arange(b, device=device), start_idx] = 1.0
+    closed = torch.zeros(b, cells, dtype=torch.bool, device=device)
+    g = torch.zeros(b, cells, dtype=torch.float32, device=device)
+    parents = goal_idx[:, None].expand(b, cells).clone()
+    histories = torch.zeros(b, cells, dtype=dtype, device=device)
+    active = torch.ones(b, dtype=torch.bool, device=device)
+    reached = torch.zeros(b, dtype=torch.bool, device=device)
+    return open_, closed, g, parents, histories, active, reached
+
+
+def smallest_f_where_tiny(
+    selected: torch.Tensor, e: torch.Tensor, f: torch.Tensor, is_open: torch.Tensor, active: torch.Tensor
+) -> torch.Tensor:
+    """`selected`, except on the maps whose largest open exp `e` is subnormal or 0 (below `TINY`): there the open
+    cell of that largest value with the smallest f (the first on ties), the exact mode's rule (module doc)."""
+    top = e.detach().max(dim=-1, keepdim=True).values
+    low = top[:, 0] < TINY
+    if not bool((low & active).any()):
+        return selected
+    tied = is_open & (e.detach() == top)
+    lowest = torch.where(tied, f.detach(), torch.full_like(f, math.inf)).argmin(dim=-1)
+    return torch.where(low, lowest, selected)
+
+
+def traced_search(
+    parents: torch.Tensor, histories: torch.Tensor, reached: torch.Tensor, goal_idx: torch.Tensor, traced, t: int
+) -> DifferentiableSearch:
+    """The search's result after its last selection `t`: the path maps hold each goal and, on the maps `traced`
+    (row indices), its chain of `t` parents (the authors' backtrack)."""
+    b, cells = parents.shape
+    n = math.isqrt(cells)
+    path = torch.zeros(b, cells, dtype=torch.float32, device=parents.device)
+    path[torch.arange(b, device=parents.device), goal_idx] = 1.0
+    loc = parents[traced, goal_idx[traced]]
+    for _ in range(t):
+        path[traced, loc] = 1.0
+        loc = parents[traced, loc]
+    return DifferentiableSearch(
+        histories=histories.reshape(b, n, n),
+        path_maps=path.reshape(b, n, n),
+        parents=parents,
+        reached=reached,
+        iterations=t + 1,
+    )
+
+
 def search_results(
     search, obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarray, device: torch.device, batch_size: int
 ) -> SearchResult:
@@ -162,14 +213,7 @@ def differentiable_astar(
     cost = cost_maps.reshape(b, cells)
     h = authors_heuristic(goals, n).reshape(b, cells) + cost
     free_flat = free.detach().reshape(b, cells) > 0.5
-    open_ = torch.zeros(b, cells, dtype=torch.float32, device=device)
-    open_[rows, start_idx] = 1.0
-    closed = torch.zeros(b, cells, dtype=torch.bool, device=device)
-    g = torch.zeros(b, cells, dtype=torch.float32, device=device)
-    parents = goal_idx[:, None].expand(b, cells).clone()
-    histories = torch.zeros(b, cells, dtype=cost.dtype, device=device)
-    active = torch.ones(b, dtype=torch.bool, device=device)
-    reached = torch.zeros(b, dtype=torch.bool, device=device)
+    open_, closed, g, parents, histories, active, reached = search_state(start_idx, goal_idx, cells, cost.dtype)
     deltas = torch.as_tensor(ACTION_DELTAS, device=device)  # the 8 Moore neighbours
     temperature = math.sqrt(n)
     steps = int(tmax * n * n)
@@ -187,12 +231,7 @@ def differentiable_astar(
         underflow = total[:, 0] == 0
         y = e / torch.where(underflow[:, None], torch.ones_like(total), total)
         selected = y.detach().argmax(dim=-1)  # the first index of the largest share
-        top = e.detach().max(dim=-1, keepdim=True).values
-        low = top[:, 0] < TINY  # the largest open exp is subnormal or 0: the exact mode's rule (module doc)
-        if bool((low & active).any()):
-            tied = is_open & (e.detach() == top)
-            lowest = torch.where(tied, f.detach(), torch.full_like(f, math.inf)).argmin(dim=-1)
-            selected = torch.where(low, lowest, selected)
+        selected = smallest_f_where_tiny(selected, e, f, is_open, active)
         hard = torch.zeros_like(y)
         hard[rows, selected] = 1.0
         histories = histories + (hard + (y - y.detach())) * active[:, None]
@@ -221,19 +260,7 @@ def differentiable_astar(
         g[ub, un] = g2.expand_as(nb)[update]
         open_[ub, un] = 1.0
         parents[ub, un] = sel[:, None].expand_as(nb)[update]
-    path = torch.zeros(b, cells, dtype=torch.float32, device=device)
-    path[rows, goal_idx] = 1.0
-    loc = parents[rows, goal_idx]
-    for _ in range(t):
-        path[rows, loc] = 1.0
-        loc = parents[rows, loc]
-    return DifferentiableSearch(
-        histories=histories.reshape(b, n, n),
-        path_maps=path.reshape(b, n, n),
-        parents=parents,
-        reached=reached,
-        iterations=t + 1,
-    )
+    return traced_search(parents, histories, reached, goal_idx, rows, t)
 
 
 class NeuralAstarPaths(nn.Module):

@@ -35,7 +35,12 @@ import torch
 from torch import nn
 
 from vinadv.grid.actions import ACTION_DELTAS
-from vinadv.planners.neural_astar.differentiable import TINY, DifferentiableSearch
+from vinadv.planners.neural_astar.differentiable import (
+    DifferentiableSearch,
+    search_state,
+    smallest_f_where_tiny,
+    traced_search,
+)
 from vinadv.planners.transpath.model import TransPath
 from vinadv.planners.transpath.search import F_W
 
@@ -122,14 +127,7 @@ def transpath_differentiable_search(
         h = octile.reshape(b, cells)
     focal_exp = torch.exp(values).reshape(b, cells) if mode == "f" else None
     free_flat = free.detach().reshape(b, cells) > 0.5
-    open_ = torch.zeros(b, cells, dtype=torch.float32, device=device)
-    open_[rows, start_idx] = 1.0
-    closed = torch.zeros(b, cells, dtype=torch.bool, device=device)
-    g = torch.zeros(b, cells, dtype=torch.float32, device=device)
-    parents = goal_idx[:, None].expand(b, cells).clone()
-    histories = torch.zeros(b, cells, dtype=values.dtype, device=device)
-    active = torch.ones(b, dtype=torch.bool, device=device)
-    reached = torch.zeros(b, dtype=torch.bool, device=device)
+    open_, closed, g, parents, histories, active, reached = search_state(start_idx, goal_idx, cells, values.dtype)
     t = 0
     for t in range(cells):  # noqa: B007 (the last t bounds the backtrack)
         is_open = open_ > 0
@@ -138,13 +136,8 @@ def transpath_differentiable_search(
             break
         y, e, f = _selection(focal_exp, h, g, open_.clone(), mode, f_w, n)
         selected = y.detach().argmax(dim=-1)  # the first index of the largest share
-        if mode == "cf":
-            top = e.detach().max(dim=-1, keepdim=True).values
-            low = top[:, 0] < TINY  # every open exp subnormal or 0: the compiled replica's rule (module doc)
-            if bool((low & active).any()):
-                tied = is_open & (e.detach() == top)
-                lowest = torch.where(tied, f.detach(), torch.full_like(f, math.inf)).argmin(dim=-1)
-                selected = torch.where(low, lowest, selected)
+        if mode == "cf":  # every open exp subnormal or 0: the compiled replica's rule (module doc)
+            selected = smallest_f_where_tiny(selected, e, f, is_open, active)
         hard = torch.zeros_like(y)
         hard[rows, selected] = 1.0
         histories = histories + (hard + (y - y.detach())) * active[:, None]
@@ -167,20 +160,8 @@ def transpath_differentiable_search(
         g[ub, un] = g2[update]
         open_[ub, un] = 1.0
         parents[ub, un] = sel[:, None].expand_as(nb)[update]
-    path = torch.zeros(b, cells, dtype=torch.float32, device=device)
-    path[rows, goal_idx] = 1.0  # a search that did not reach its goal: the goal alone, as Neural A*'s
-    done = rows[reached]
-    loc = parents[done, goal_idx[done]]
-    for _ in range(t):
-        path[done, loc] = 1.0
-        loc = parents[done, loc]
-    return DifferentiableSearch(
-        histories=histories.reshape(b, n, n),
-        path_maps=path.reshape(b, n, n),
-        parents=parents,
-        reached=reached,
-        iterations=t + 1,
-    )
+    # a search that did not reach its goal: the goal alone, as Neural A*'s
+    return traced_search(parents, histories, reached, goal_idx, rows[reached], t)
 
 
 class TransPathPaths(nn.Module):
