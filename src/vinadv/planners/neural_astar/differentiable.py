@@ -98,10 +98,13 @@ class DifferentiableSearch:
         return out
 
 
-def search_state(start_idx: torch.Tensor, goal_idx: torch.Tensor, cells: int, dtype: torch.dtype) -> tuple:
-    """The batched search's starting state for B maps of `cells` cells: `(open, closed, g, parents, histories,
-    active, reached)`, the start open, every parent the goal's index, histories of `dtype` (the gradient's)."""
-    b, device = len(start_idx), start_idx.device
+def search_state(starts: torch.Tensor, goals: torch.Tensor, n: int, dtype: torch.dtype) -> tuple:
+    """`(goal_idx, state)`: the goals' flat indices `(B,)` and the batched search's starting state on B maps of N x N
+    cells, `(open, closed, g, parents, histories, active, reached)`, the start open, every parent the goal's index,
+    histories of `dtype` (the gradient's)."""
+    b, device, cells = len(starts), starts.device, n * n
+    start_idx = starts[:, 0] * n + starts[:, 1]
+    goal_idx = goals[:, 0] * n + goals[:, 1]
     open_ = torch.zeros(b, cells, dtype=torch.float32, device=device)
     open_[torch.arange(b, device=device), start_idx] = 1.0
     closed = torch.zeros(b, cells, dtype=torch.bool, device=device)
@@ -110,7 +113,7 @@ def search_state(start_idx: torch.Tensor, goal_idx: torch.Tensor, cells: int, dt
     histories = torch.zeros(b, cells, dtype=dtype, device=device)
     active = torch.ones(b, dtype=torch.bool, device=device)
     reached = torch.zeros(b, dtype=torch.bool, device=device)
-    return open_, closed, g, parents, histories, active, reached
+    return goal_idx, (open_, closed, g, parents, histories, active, reached)
 
 
 def smallest_f_where_tiny(
@@ -125,6 +128,32 @@ def smallest_f_where_tiny(
     tied = is_open & (e.detach() == top)
     lowest = torch.where(tied, f.detach(), torch.full_like(f, math.inf)).argmin(dim=-1)
     return torch.where(low, lowest, selected)
+
+
+def close_selected(
+    selected: torch.Tensor, active: torch.Tensor, closed: torch.Tensor, reached: torch.Tensor, goal_idx: torch.Tensor
+) -> torch.Tensor:
+    """Closes each active map's selected cell (in place, as `reached` for the maps that selected their goal) and
+    returns the maps that go on: active and not at their goal."""
+    rows = torch.arange(len(selected), device=selected.device)
+    at_goal = active & (selected == goal_idx)
+    closed[rows[active], selected[active]] = True
+    reached |= at_goal
+    return active & ~at_goal
+
+
+def relax(open_, closed, g, parents, ex, sel, nb, legal, g2) -> None:
+    """Expands the selected cells `sel` of the maps `ex` in place: each leaves the open set, and each of its
+    neighbours `nb` `(k, 8)` where `legal` opens with cost `g2` and parent `sel` if it is neither open nor closed,
+    or is open at a higher cost."""
+    open_[ex, sel] = 0.0
+    exb = ex[:, None].expand_as(nb)
+    nb_open = open_[exb, nb] > 0
+    update = legal & ((~nb_open & ~closed[exb, nb]) | (nb_open & (g[exb, nb] > g2)))
+    ub, un = exb[update], nb[update]
+    g[ub, un] = g2.expand_as(nb)[update]
+    open_[ub, un] = 1.0
+    parents[ub, un] = sel[:, None].expand_as(nb)[update]
 
 
 def traced_search(
@@ -208,12 +237,10 @@ def differentiable_astar(
     device = cost_maps.device
     cells = n * n
     rows = torch.arange(b, device=device)
-    start_idx = starts[:, 0] * n + starts[:, 1]
-    goal_idx = goals[:, 0] * n + goals[:, 1]
     cost = cost_maps.reshape(b, cells)
     h = authors_heuristic(goals, n).reshape(b, cells) + cost
     free_flat = free.detach().reshape(b, cells) > 0.5
-    open_, closed, g, parents, histories, active, reached = search_state(start_idx, goal_idx, cells, cost.dtype)
+    goal_idx, (open_, closed, g, parents, histories, active, reached) = search_state(starts, goals, n, cost.dtype)
     deltas = torch.as_tensor(ACTION_DELTAS, device=device)  # the 8 Moore neighbours
     temperature = math.sqrt(n)
     steps = int(tmax * n * n)
@@ -238,28 +265,17 @@ def differentiable_astar(
         if solved_gradients and bool(reached.any()):
             done = reached[:, None] & (torch.arange(cells, device=device)[None, :] != goal_idx[:, None])
             histories = histories + (y - y.detach()) * done
-        at_goal = active & (selected == goal_idx)
-        closed[rows[active], selected[active]] = True
-        expand = active & ~at_goal
-        reached |= at_goal
-        active = expand
-        if not bool(expand.any()):
+        active = close_selected(selected, active, closed, reached, goal_idx)
+        if not bool(active.any()):
             break
-        ex = rows[expand]
-        sel = selected[expand]
-        open_[ex, sel] = 0.0
+        ex = rows[active]
+        sel = selected[active]
         r, c = sel // n, sel % n
         nr, nc = r[:, None] + deltas[None, :, 0], c[:, None] + deltas[None, :, 1]
         inside = (nr >= 0) & (nr < n) & (nc >= 0) & (nc < n)
         nb = nr.clamp(0, n - 1) * n + nc.clamp(0, n - 1)
-        exb = ex[:, None].expand_as(nb)
         g2 = (g[ex, sel] + cost.detach()[ex, sel])[:, None]
-        nb_open = open_[exb, nb] > 0
-        update = inside & free_flat[exb, nb] & ((~nb_open & ~closed[exb, nb]) | (nb_open & (g[exb, nb] > g2)))
-        ub, un = exb[update], nb[update]
-        g[ub, un] = g2.expand_as(nb)[update]
-        open_[ub, un] = 1.0
-        parents[ub, un] = sel[:, None].expand_as(nb)[update]
+        relax(open_, closed, g, parents, ex, sel, nb, inside & free_flat[ex[:, None], nb], g2)
     return traced_search(parents, histories, reached, goal_idx, rows, t)
 
 

@@ -37,6 +37,8 @@ from torch import nn
 from vinadv.grid.actions import ACTION_DELTAS
 from vinadv.planners.neural_astar.differentiable import (
     DifferentiableSearch,
+    close_selected,
+    relax,
     search_state,
     smallest_f_where_tiny,
     traced_search,
@@ -117,8 +119,6 @@ def transpath_differentiable_search(
     device = values.device
     cells = n * n
     rows = torch.arange(b, device=device)
-    start_idx = starts[:, 0] * n + starts[:, 1]
-    goal_idx = goals[:, 0] * n + goals[:, 1]
     octile = octile_torch(goals, n)
     if mode == "cf":
         thr = torch.tensor(0.1, device=device)
@@ -127,7 +127,7 @@ def transpath_differentiable_search(
         h = octile.reshape(b, cells)
     focal_exp = torch.exp(values).reshape(b, cells) if mode == "f" else None
     free_flat = free.detach().reshape(b, cells) > 0.5
-    open_, closed, g, parents, histories, active, reached = search_state(start_idx, goal_idx, cells, values.dtype)
+    goal_idx, (open_, closed, g, parents, histories, active, reached) = search_state(starts, goals, n, values.dtype)
     t = 0
     for t in range(cells):  # noqa: B007 (the last t bounds the backtrack)
         is_open = open_ > 0
@@ -141,25 +141,13 @@ def transpath_differentiable_search(
         hard = torch.zeros_like(y)
         hard[rows, selected] = 1.0
         histories = histories + (hard + (y - y.detach())) * active[:, None]
-        at_goal = active & (selected == goal_idx)
-        closed[rows[active], selected[active]] = True
-        expand = active & ~at_goal
-        reached |= at_goal
-        active = expand
-        if not bool(expand.any()):
+        active = close_selected(selected, active, closed, reached, goal_idx)
+        if not bool(active.any()):
             break
-        ex = rows[expand]
-        sel = selected[expand]
-        open_[ex, sel] = 0.0
+        ex = rows[active]
+        sel = selected[active]
         nb, legal, cost = _neighbours(free_flat[ex], sel, n, corner_cutting)
-        exb = ex[:, None].expand_as(nb)
-        g2 = g[ex, sel][:, None] + cost
-        nb_open = open_[exb, nb] > 0
-        update = legal & ((~nb_open & ~closed[exb, nb]) | (nb_open & (g[exb, nb] > g2)))
-        ub, un = exb[update], nb[update]
-        g[ub, un] = g2[update]
-        open_[ub, un] = 1.0
-        parents[ub, un] = sel[:, None].expand_as(nb)[update]
+        relax(open_, closed, g, parents, ex, sel, nb, legal, g[ex, sel][:, None] + cost)
     # a search that did not reach its goal: the goal alone, as Neural A*'s
     return traced_search(parents, histories, reached, goal_idx, rows[reached], t)
 
