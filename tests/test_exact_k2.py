@@ -13,6 +13,7 @@ import pytest
 
 from tests.classify.oracle import rule_oracle
 from tests.classify.test_harm import optimal_path, path_cost
+from tests.grid.oracle import reachable
 from vinadv.cli import main
 from vinadv.commands.robustness import print_robustness
 from vinadv.errors import InputError
@@ -24,7 +25,6 @@ from vinadv.testing.planners import planning_vin
 
 SIZE = 8
 TOL = 1e-6
-STEPS = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc]
 
 
 @pytest.fixture(scope="module")
@@ -47,20 +47,6 @@ def results(planner, maps, greedy):
     return {mode: exact_k2(planner, maps, mode, greedy=greedy) for mode in ("harmful", "regret")}
 
 
-def _reachable(obstacles, start, goal):
-    """Breadth-first search over the 8 moves, corners cut (the test maps' rule)."""
-    grid = obstacles.tolist()
-    seen, frontier = {start}, [start]
-    while frontier:
-        r, c = frontier.pop()
-        for dr, dc in STEPS:
-            nr, nc = r + dr, c + dc
-            if 0 <= nr < SIZE and 0 <= nc < SIZE and not grid[nr][nc] and (nr, nc) not in seen:
-                seen.add((nr, nc))
-                frontier.append((nr, nc))
-    return goal in seen
-
-
 def _plain(planner, maps, i):
     """(valid, harmed by one cell, harmed by a pair, the largest regret over the pairs) of map i, the plain way."""
     obstacles, start, goal = maps.obstacles[i], tuple(maps.starts[i, 0]), tuple(maps.goals[i])
@@ -70,7 +56,7 @@ def _plain(planner, maps, i):
         for cells in itertools.combinations(free, k):
             adv = obstacles.copy()
             adv[tuple(np.array(cells).T)] = True
-            if _reachable(adv, start, goal):
+            if reachable(adv, start, goal):
                 edits[k].append(adv)
     original = planner.plan(obstacles[None], np.array([start]), np.array([goal])).paths.cells.tolist()
     if [tuple(c) for c in original[-1:]] != [goal] or not edits[1]:

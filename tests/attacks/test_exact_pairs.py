@@ -9,6 +9,7 @@ import pytest
 
 from tests.classify.oracle import rule_oracle
 from tests.classify.test_harm import optimal_path, path_cost
+from tests.grid.oracle import reachable
 from vinadv.attacks.exact_pairs import exact_pairs, pair_at
 from vinadv.attacks.neighbourhood import chebyshev_distance
 from vinadv.grid import generate_maps
@@ -17,7 +18,6 @@ from vinadv.planners.vin.planner import as_planner
 
 SIZE = 8
 TOL = 1e-6
-STEPS = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc]
 
 
 @pytest.fixture(scope="module")
@@ -34,20 +34,6 @@ def planner(model):
 def harm_judge(pairs):
     ident = identify(pairs, harm_tol=TOL)
     return ident.harm.harm == "harmful", harm_order(ident.labels, ident.harm.regret_a)
-
-
-def reachable(obstacles, start, goal):
-    """Breadth-first search over the 8 moves, corners cut (the test maps' rule)."""
-    grid = obstacles.tolist()
-    seen, frontier = {start}, [start]
-    while frontier:
-        r, c = frontier.pop()
-        for dr, dc in STEPS:
-            nr, nc = r + dr, c + dc
-            if 0 <= nr < SIZE and 0 <= nc < SIZE and not grid[nr][nc] and (nr, nc) not in seen:
-                seen.add((nr, nc))
-                frontier.append((nr, nc))
-    return goal in seen
 
 
 def oracle_order(obstacles, start, goal, path):
