@@ -278,7 +278,7 @@ def test_api_refuses_what_it_cannot_read(sqlite_url):
 
 
 def figures(k: int, valid: int, harmful: int) -> dict:
-    """One `Figures.to_dict()` as the robustness benchmark stores it."""
+    """One `Figures.to_dict()` as the robustness benchmark stores it (without intervals: readers compute them)."""
     return {
         "k": k,
         "maps": 10,

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from tests.test_analysis import figures
 from tests.viewer.conftest import viewer_for_tests
 from vinadv.intervals import rate_interval
 from vinadv.plot.palette import PALETTE
@@ -64,21 +65,6 @@ def test_grid_thumbnails_are_rendered_in_one_batch_and_cached(app, client, db):
     assert client.get(f"/thumb/{run_id}/999999.png").status_code == 404
     assert client.get(f"/thumb/{run_id}/1.png?x=1").status_code == 400
 
-
-def figures(k: int, valid: int, harmful: int) -> dict:
-    """One `Figures.to_dict()` as a robustness benchmark stores it (without intervals: the page computes them)."""
-    return {
-        "k": k,
-        "maps": 10,
-        "attacked": 9,
-        "valid": valid,
-        "broken": harmful // 2,
-        "paper_success_rate": (harmful // 2) / valid,
-        "harmful": harmful,
-        "harmful_rate": harmful / valid,
-        "reached": valid - harmful,
-        "mean_regret": 0.5 * k,
-    }
 
 
 def test_robustness_page_lists_each_benchmark_by_k_with_intervals(tmp_path):
