@@ -302,42 +302,28 @@ register(
 #: the suites of definitions 2 (`Suite.definitions`): the maps of their v1, budgets of at most k edits; the full
 #: ones' cheap chains also start from the exhaustive one-cell optimum
 _V2 = "; the worst case at k over every attack of at most k edits (definitions 2)"
-register(
-    dataclasses.replace(
-        SUITES["vin28-v1"],
-        name="vin28-v2",
-        description=SUITES["vin28-v1"].description + "; key-points, saliency, near-path, random also adding k = 2..3 "
-        "from exhaustive's one-cell optimum" + _V2,
-        attacks=_FULL_ENSEMBLE_2,
-        definitions=2,
+
+
+def _register_v2(v1: str, full: bool) -> Suite:
+    """The definitions-2 suite of the registered suite `v1` (named `...-v1`): its maps; a `full` one's attacks are
+    `_FULL_ENSEMBLE_2`, a quick one keeps its own."""
+    suite = SUITES[v1]
+    chains = "; key-points, saliency, near-path, random also adding k = 2..3 from exhaustive's one-cell optimum"
+    return register(
+        dataclasses.replace(
+            suite,
+            name=v1.removesuffix("-v1") + "-v2",
+            description=suite.description + (chains if full else "") + _V2,
+            attacks=_FULL_ENSEMBLE_2 if full else suite.attacks,
+            definitions=2,
+        )
     )
-)
-register(
-    dataclasses.replace(
-        SUITES["vin28-quick-v1"],
-        name="vin28-quick-v2",
-        description=SUITES["vin28-quick-v1"].description + _V2,
-        definitions=2,
-    )
-)
-register(
-    dataclasses.replace(
-        SUITES["mpd32-v1"],
-        name="mpd32-v2",
-        description=SUITES["mpd32-v1"].description + "; key-points, saliency, near-path, random also adding k = 2..3 "
-        "from exhaustive's one-cell optimum" + _V2,
-        attacks=_FULL_ENSEMBLE_2,
-        definitions=2,
-    )
-)
-register(
-    dataclasses.replace(
-        SUITES["mpd32-quick-v1"],
-        name="mpd32-quick-v2",
-        description=SUITES["mpd32-quick-v1"].description + _V2,
-        definitions=2,
-    )
-)
+
+
+_register_v2("vin28-v1", full=True)
+_register_v2("vin28-quick-v1", full=False)
+_register_v2("mpd32-v1", full=True)
+_register_v2("mpd32-quick-v1", full=False)
 
 #: the checksum of every released suite: a released suite never changes (a test holds the registry to these)
 FROZEN = {
