@@ -37,7 +37,7 @@ from tests.planners.transpath.literal import literal_search, plain_forward, stat
 from common import cpu_model, load_average  # noqa: E402 (perf/common.py)
 from vinadv.grid import generate_maps  # noqa: E402
 from vinadv.planners.registry import load_planner  # noqa: E402
-from vinadv.planners.transpath.differentiable import as_search_arrays, transpath_differentiable_search  # noqa: E402
+from vinadv.planners.transpath.differentiable import search_arrays  # noqa: E402
 from vinadv.planners.transpath.search import transpath_search  # noqa: E402
 
 MODELS = {"cf": "transpath-cf", "f": "transpath-focal"}
@@ -56,15 +56,7 @@ def rows_for(mode: str, planner, obstacles, starts, goals, first: int) -> list[d
     with torch.no_grad():
         values = plain_forward(state(mode), obstacles, starts if mode == "f" else None, goals)[:, 0]
     replica = transpath_search(values.numpy(), obstacles, starts, goals, mode, focal_exp=torch.exp(values).numpy())
-    with torch.no_grad():
-        out = transpath_differentiable_search(
-            values,
-            torch.from_numpy((~obstacles).astype(np.float32)),
-            torch.from_numpy(starts),
-            torch.from_numpy(goals),
-            mode,
-        )
-    diff_paths, _, diff_expanded = as_search_arrays(out, starts, goals)
+    diff_paths, _, diff_expanded = search_arrays(values, obstacles, starts, goals, mode)
     plan = planner.plan_paths(obstacles, starts, goals)
     plan_diff = planner.plan_paths_differentiable(obstacles, starts, goals)
     own, _ = planner.outputs(obstacles, starts, goals)

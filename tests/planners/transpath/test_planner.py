@@ -16,7 +16,7 @@ from vinadv.grid import generate_maps
 from vinadv.planners import check_planner
 from vinadv.planners.interface import PlannerError
 from vinadv.planners.registry import load_planner
-from vinadv.planners.transpath.differentiable import as_search_arrays, transpath_differentiable_search
+from vinadv.planners.transpath.differentiable import search_arrays
 from vinadv.planners.transpath.model import SHIPPED_WEIGHTS
 from vinadv.planners.transpath.planner import TransPathPlanner
 from vinadv.planners.transpath.search import transpath_search
@@ -53,15 +53,7 @@ def both_modes_mismatches(values: torch.Tensor, obstacles, starts, goals, mode, 
     the same network values."""
     replica = transpath_search(values.numpy(), obstacles, starts, goals, mode, focal_exp=torch.exp(values).numpy())
     assert replica.reached.all()
-    with torch.no_grad():
-        out = transpath_differentiable_search(
-            values,
-            torch.from_numpy((~obstacles).astype(np.float32)),
-            torch.from_numpy(starts),
-            torch.from_numpy(goals),
-            mode,
-        )
-    paths, _, expanded = as_search_arrays(out, starts, goals)
+    paths, _, expanded = search_arrays(values, obstacles, starts, goals, mode)
     return mismatches(replica, answers), mismatches(SimpleNamespace(paths=paths, expanded=expanded), answers)
 
 

@@ -46,7 +46,7 @@ from vinadv.planners.neural_astar.differentiable import (
 from vinadv.planners.transpath.model import TransPath
 from vinadv.planners.transpath.search import F_W
 
-__all__ = ["TransPathPaths", "octile_torch", "transpath_differentiable_search"]
+__all__ = ["TransPathPaths", "octile_torch", "search_arrays", "transpath_differentiable_search"]
 
 #: the diagonal move's cost as the authors' cost filter holds it (a float32 tensor of sqrt 2)
 DIAGONAL = float(torch.tensor(2**0.5, dtype=torch.float32))
@@ -182,3 +182,25 @@ def as_search_arrays(out: DifferentiableSearch, starts: np.ndarray, goals: np.nd
     """`(paths, reached, expanded)` of a differentiable search as NumPy: the ordered paths (`[start]` where not
     reached), `(B,)` bool and the `(B, N, N)` bool selected cells."""
     return out.paths(starts, goals), out.reached.cpu().numpy(), out.histories.detach().cpu().numpy() > 0.5
+
+
+def search_arrays(
+    values: torch.Tensor,
+    obstacles: np.ndarray,
+    starts: np.ndarray,
+    goals: np.ndarray,
+    mode: str,
+    corner_cutting: bool = True,
+):
+    """`as_search_arrays` of the differentiable search on the network's `values`, without gradients, for NumPy
+    `(B, N, N)` bool obstacles, starts and goals: `(paths, reached, expanded)`."""
+    with torch.no_grad():
+        out = transpath_differentiable_search(
+            values,
+            torch.from_numpy((~obstacles).astype(np.float32)),
+            torch.from_numpy(starts),
+            torch.from_numpy(goals),
+            mode,
+            corner_cutting,
+        )
+    return as_search_arrays(out, starts, goals)
