@@ -14,11 +14,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.bench.two_maps import heldout_suite
 from vinadv.bench import suites
 from vinadv.bench.leaderboard import read_entries
 from vinadv.bench.outcomes import entry_figures, worst_case_within, worst_efforts
 from vinadv.bench.scoring import entry_json, run_bench
-from vinadv.bench.suites import FROZEN, AttackGroup, Suite, get_suite, maps_sha256
+from vinadv.bench.suites import FROZEN, AttackGroup, Suite, get_suite
 from vinadv.bench.validate import entry_problem
 from vinadv.bench.verify import pick_chunks, read_entry, verify_entry
 from vinadv.cli import main
@@ -82,24 +83,13 @@ def test_the_worst_case_within_k_edits_cannot_fall_and_is_the_brute_force_one(pe
 
 
 def tiny_suite(**change) -> Suite:
-    maps = heldout_maps(3, SIZE, seed=1000)
-    suite = Suite(
-        name="tiny2",
-        description="a test suite of definitions 2",
-        n=3,
-        size=SIZE,
-        maps_seed=1000,
-        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
-        attacks=(
-            AttackGroup(("random",), "add", 2),
-            AttackGroup(("exhaustive",), "add", 1),
-            AttackGroup(("random", "near-path"), "add", 3, start="exhaustive"),
-            AttackGroup(("random",), "remove", 1),
-        ),
-        budget=3,
-        chunk=2,
-        definitions=2,
+    attacks = (
+        AttackGroup(("random",), "add", 2),
+        AttackGroup(("exhaustive",), "add", 1),
+        AttackGroup(("random", "near-path"), "add", 3, start="exhaustive"),
+        AttackGroup(("random",), "remove", 1),
     )
+    suite = heldout_suite("tiny2", 3, SIZE, attacks, "a test suite of definitions 2", budget=3, chunk=2, definitions=2)
     return dataclasses.replace(suite, **change)
 
 

@@ -12,11 +12,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from tests.bench.two_maps import two_map_suite
+from tests.bench.two_maps import heldout_suite, two_map_suite
 from vinadv.bench import scoring, suites
 from vinadv.bench.outcomes import weighted_mean
 from vinadv.bench.scoring import deterministic_part, entry_json, make_entry, run_bench
-from vinadv.bench.suites import AttackGroup, Suite, get_suite, maps_sha256
+from vinadv.bench.suites import AttackGroup, Suite, get_suite
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.planners.registry import load_planner
@@ -29,18 +29,8 @@ SIZE = 10
 
 
 def tiny_suite(n: int = 9, chunk: int = 4) -> Suite:
-    maps = heldout_maps(n, SIZE, seed=1000)
-    return Suite(
-        name="tiny",
-        description="a test suite",
-        n=n,
-        size=SIZE,
-        maps_seed=1000,
-        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
-        attacks=(AttackGroup(("random", "key-points"), "add", 2), AttackGroup(("random",), "remove", 1)),
-        budget=3,
-        chunk=chunk,
-    )
+    attacks = (AttackGroup(("random", "key-points"), "add", 2), AttackGroup(("random",), "remove", 1))
+    return heldout_suite("tiny", n, SIZE, attacks, budget=3, chunk=chunk)
 
 
 @pytest.fixture(scope="module")

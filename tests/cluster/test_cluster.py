@@ -25,11 +25,12 @@ except ImportError:
 
 from distributed import Client  # noqa: E402
 
+from tests.bench.two_maps import heldout_suite  # noqa: E402
 from tests.cli_files import command_line, generate_and_attack  # noqa: E402
 from vinadv.attacks.pairs import PairSet  # noqa: E402
 from vinadv.bench import suites  # noqa: E402
 from vinadv.bench.scoring import deterministic_part, entry_json, run_bench  # noqa: E402
-from vinadv.bench.suites import AttackGroup, Suite, maps_sha256  # noqa: E402
+from vinadv.bench.suites import AttackGroup  # noqa: E402
 from vinadv.cli import main  # noqa: E402
 from vinadv.cluster import DaskExecutor, start_local_cluster  # noqa: E402
 from vinadv.cluster.worker import plugin_class  # noqa: E402
@@ -39,7 +40,6 @@ from vinadv.grid import generate_maps  # noqa: E402
 from vinadv.pipeline import RunConfig, compute_shard, maps_file_config, run_pipeline  # noqa: E402
 from vinadv.planners.registry import PlannerRef, load_planner  # noqa: E402
 from vinadv.planners.vin.weights import load_vin, save_vin  # noqa: E402
-from vinadv.robustness import heldout_maps  # noqa: E402
 from vinadv.store import Store  # noqa: E402
 from vinadv.testing.planners import planning_vin  # noqa: E402
 
@@ -325,18 +325,8 @@ def test_a_search_planner_on_a_maps_file_runs_on_the_cluster_as_locally(cluster,
 
 
 def tiny_bench_suite():
-    maps = heldout_maps(12, SIZE, seed=1000)
-    return Suite(
-        name="tiny-cluster",
-        description="a test suite",
-        n=12,
-        size=SIZE,
-        maps_seed=1000,
-        maps_sha256=maps_sha256(maps.obstacles, maps.starts[:, 0], maps.goals),
-        attacks=(AttackGroup(("random", "key-points"), "add", 2), AttackGroup(("random",), "remove", 1)),
-        budget=3,
-        chunk=4,
-    )
+    attacks = (AttackGroup(("random", "key-points"), "add", 2), AttackGroup(("random",), "remove", 1))
+    return heldout_suite("tiny-cluster", 12, SIZE, attacks, budget=3, chunk=4)
 
 
 @pytest.mark.slow
