@@ -100,15 +100,15 @@ def add_harm_arguments(parser) -> None:
     )
 
 
-def add_objective_argument(parser) -> None:
+def add_objective_argument(parser, default: str = "paper") -> None:
     """`--objective paper|harm|effort`: what the ranking attacks keep as the strongest candidates of a map."""
     parser.add_argument(
         "--objective",
         choices=("paper", "harm", "effort"),
-        default="paper",
-        help="ranking strategies (key-points, saliency, exhaustive with --per-map >= 1): keep the "
-        "strongest by the paper's label (UrP > FP > DP > UcP, default), by harm (UrP, then "
-        "the largest regret_a) or by search effort (the most cells expanded: a planner that reports expansions)",
+        default=default,
+        help="what the ranking strategies (key-points, saliency, exhaustive unless it keeps every cell) keep per "
+        "map: the strongest by the paper's label (UrP > FP > DP > UcP), by harm (UrP, then the largest regret_a) or "
+        f"by search effort (the most cells expanded: a planner that reports expansions); default {default}",
     )
 
 

@@ -15,7 +15,7 @@ from vinadv.commands import (
     planner_device,
     planner_inputs,
 )
-from vinadv.commands.attack import add_edit_argument, add_harm_arguments
+from vinadv.commands.attack import add_edit_argument, add_harm_arguments, add_objective_argument
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
 from vinadv.errors import InputError, OutputError
@@ -64,14 +64,7 @@ def register(subparsers) -> None:
         metavar="K",
         help="the curve's largest number of added obstacles (default 3; at most a map's N*N cells)",
     )
-    p.add_argument(
-        "--objective",
-        choices=("harm", "paper", "effort"),
-        default="harm",
-        help="what the ranking strategies keep per map: the most harmful candidate (default), the "
-        "strongest by the paper's label (UrP > FP > DP > UcP), or the one whose search expands the most cells "
-        "(effort: a planner that reports expansions, astar, wastar, neural-astar, transpath-*)",
-    )
+    add_objective_argument(p, default="harm")
     p.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map and step")
     p.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
     add_edit_argument(p, several="the curve frees 1 to --max-obstacles cells")
