@@ -66,7 +66,6 @@ def test_grid_thumbnails_are_rendered_in_one_batch_and_cached(app, client, db):
     assert client.get(f"/thumb/{run_id}/1.png?x=1").status_code == 400
 
 
-
 def test_robustness_page_lists_each_benchmark_by_k_with_intervals(tmp_path):
     settings = {"n": 10, "size": 8, "maps_seed": 1000, "objective": "harm", "strategies": ["random"]}
     result = {
