@@ -109,7 +109,8 @@ def test_robustness_rows_round_trip(db_url):
         assert rows[0]["planner"] == "vin" and rows[0]["weights_checksum"] == "ab" * 32
         # version 0 records (`vinadv.records`): read with the fields their writers left out
         filled = {"moves": "octile", "maps": None, "maps_sha256": None, "edit": "add"}
-        assert rows[0]["settings"] == {**filled, **settings, "record_version": 1}
-        assert rows[0]["result"] == {**result, "record_version": 1}
+        filled |= {"planner": None, "name": None, "effort_tolerance": None}  # and those of version 2
+        assert rows[0]["settings"] == {**filled, **settings, "record_version": 2}
+        assert rows[0]["result"] == {**result, "record_version": 2}
         assert rows[1]["weights_checksum"] is None
         assert [r["id"] for r in store.read_robustness([second])] == [second]
