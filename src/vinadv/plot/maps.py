@@ -163,7 +163,8 @@ def _cells(value) -> np.ndarray:
 
 def _optional(row, name: str):
     value = row.get(name) if hasattr(row, "get") else None
-    if value is None or (isinstance(value, float) and np.isnan(value)):
+    # a DataFrame holds a missing value as None, NaN or pandas' NA (whose truth value raises: compare by identity)
+    if value is None or (isinstance(value, float) and np.isnan(value)) or type(value).__name__ == "NAType":
         return None
     return value
 
