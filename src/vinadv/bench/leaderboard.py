@@ -192,7 +192,7 @@ def _read_document(path: Path) -> dict:
 def _search_exp(entry: dict) -> float | None:
     """Exp, Neural A*'s share of A*'s expansions a search planner saves on the clean maps; None for a policy."""
     search = entry["clean"].get("search")
-    return None if not search else search["exp"]
+    return None if not search else search.get("exp")  # a v1 entry may leave a figure out (null)
 
 
 def _removal_harmful(entry: dict) -> dict | None:
