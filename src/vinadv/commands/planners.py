@@ -153,7 +153,6 @@ def cmd_eval(args: argparse.Namespace) -> int:
         require_policy,
     )
     from vinadv.evaluation.search_metrics import evaluate_search
-    from vinadv.planners.transpath.planner import TransPathPlanner
 
     protocols = check_protocols(args.protocol)  # every option checked before the maps are read or made
     if args.prior is not None and "kentsommer" not in (protocols or ()):
@@ -175,7 +174,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         elif protocol == "gppn":
             figures[protocol] = gppn_protocol(planner, maps)
         elif protocol == "search":
-            theirs = isinstance(planner, TransPathPlanner) and maps.moves == "octile"  # TransPath's ratios beside
+            theirs = planner.vanilla_ratios and maps.moves == "octile"  # TransPath's ratios beside
             figures[protocol] = evaluate_search(planner, maps, progress=shows_progress(args), theirs=theirs)
         else:
             prior = PORT_TEST_PRIOR if args.prior is None else args.prior

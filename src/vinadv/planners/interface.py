@@ -212,6 +212,9 @@ class Planner(ABC):
     moves: str = DEFAULT_MOVES
     capabilities: Capabilities = Capabilities(policy=True)
     chunk_size: int | None = DEFAULT_CHUNK
+    #: `vinadv eval`'s search protocol adds TransPath's expansions and cost ratios against their vanilla A* (its
+    #: `eval.py`) on octile maps: declared by the planners those ratios are published for
+    vanilla_ratios: bool = False
     #: the device type (`cpu`, `cuda`) its forward was asked to run on (`--device`), recorded in `spec()`; None: the
     #: planner's default (the VIN's exact CPU engine, a torch planner on the CPU), left out of `spec()`
     device_type: str | None = None

@@ -59,6 +59,7 @@ class TransPathPlanner(SearchPlanner):
 
     moves = MOVES
     capabilities = Capabilities(value_maps=True, gradients=True, expansions=True)
+    vanilla_ratios = True
 
     def __init__(
         self,
