@@ -5,18 +5,17 @@ from __future__ import annotations
 import argparse
 import hashlib
 import time
-from pathlib import Path
 
 from vinadv.commands import add_actions, add_device_argument, command_line, option_values, planner_device, set_threads
 from vinadv.commands.output import add_output_options, emit, progress_bar
 from vinadv.commands.train_options import (
+    add_import_arguments,
     add_run_arguments,
     add_weights_out_argument,
     check_weights_out,
     file_beside,
-    import_stamp,
-    read_licence,
     save_import,
+    start_import,
     train_and_save,
     training_checkpoint,
     training_record,
@@ -44,18 +43,7 @@ def register(subparsers) -> None:
         help="the authors' train.yaml the model was trained with, recorded (default: train.yaml beside CKPT, if "
         "there; its encoder must be the checkpoint's)",
     )
-    imp.add_argument(
-        "--license",
-        default=None,
-        help="the licence of the authors' code, copied into the record (default: LICENSE beside CKPT, if there)",
-    )
-    imp.add_argument(
-        "--source",
-        default=None,
-        help="where the checkpoint comes from, recorded (say the repository, commit and path in it)",
-    )
-    add_weights_out_argument(imp)
-    add_output_options(imp, json="the record")
+    add_import_arguments(imp, "CKPT", "checkpoint")
     imp.set_defaults(func=cmd_import_weights)
 
     cmp = sub.add_parser(
@@ -114,13 +102,9 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
     from vinadv.planners.neural_astar.model import save_neural_astar
     from vinadv.planners.neural_astar.planner import MOVES
 
-    out = check_weights_out(
-        args.out, {"CKPT": args.checkpoint, "--train-config": args.train_config, "--license": args.license}
-    )
-    if not Path(args.checkpoint).is_file():
-        raise InputError(f"{args.checkpoint}: no such checkpoint file")
+    inputs = {"CKPT": args.checkpoint, "--train-config": args.train_config}
+    out, license_path = start_import(args, args.checkpoint, "checkpoint", inputs)
     config_path = file_beside(args.checkpoint, args.train_config, "train.yaml")
-    license_path = file_beside(args.checkpoint, args.license, "LICENSE")
     model, source = from_lightning_checkpoint(args.checkpoint)
     train_config = None
     if config_path is not None:
@@ -138,11 +122,9 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
         "train_config_file": None
         if config_path is None
         else {"path": str(config_path), "sha256": weights_checksum(config_path)},
-        "license": read_licence(license_path),
         "model": model.config.to_dict(),
         "moves": MOVES,
         "corner_cutting": True,
-        **import_stamp(),
     }
     return save_import(
         args,
@@ -152,6 +134,7 @@ def cmd_import_weights(args: argparse.Namespace) -> int:
         save_neural_astar,
         f"Neural A* (CNN encoder, depth {model.config.depth}) from {args.checkpoint} (epoch {source['epoch']}); "
         f"use --planner neural-astar --weights {out}",
+        license_path,
     )
 
 

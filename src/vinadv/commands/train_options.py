@@ -195,6 +195,35 @@ def write_record(out: Path, record: dict) -> Path:
     return record_path
 
 
+def add_import_arguments(imp: argparse.ArgumentParser, file: str, what: str) -> None:
+    """The options every `import-weights` command of an authors' file shares (`neural-astar`, `transpath`): the
+    licence and origin recorded, `--out` (`add_weights_out_argument`) and `--json`. `file` is the metavar of the
+    authors' file, `what` what it is ("checkpoint", "file")."""
+    imp.add_argument(
+        "--license",
+        default=None,
+        help=f"the licence of the authors' code and weights, copied into the record (default: LICENSE beside {file}, "
+        "if there)",
+    )
+    imp.add_argument(
+        "--source",
+        default=None,
+        help=f"where the {what} comes from, recorded (say the repository, commit and path in it)",
+    )
+    add_weights_out_argument(imp)
+    add_output_options(imp, json="the record")
+
+
+def start_import(args: argparse.Namespace, path: str, what: str, inputs: Inputs) -> tuple[Path, Path | None]:
+    """Start an `import-weights` command (`add_import_arguments`) of the authors' file `path` (`what` it is, for the
+    error): `--out` checked before the work (`check_weights_out`: none of `inputs` nor `--license`), `path` there,
+    and the licence file to record (`--license`, else LICENSE beside `path`). Returns `(out, licence or None)`."""
+    out = check_weights_out(args.out, {**inputs, "--license": args.license})
+    if not Path(path).is_file():
+        raise InputError(f"{path}: no such {what} file")
+    return out, file_beside(path, args.license, "LICENSE")
+
+
 def file_beside(weights: str, given: str | None, name: str) -> Path | None:
     """`given` (an input of an import: it must be a file), or the file `name` in the folder of the imported
     `weights` when there (None if not)."""
@@ -227,10 +256,18 @@ def import_stamp() -> dict:
 
 
 def save_import(
-    args: argparse.Namespace, model: Any, out: Path, record: dict, save: Callable[..., None], summary: str
+    args: argparse.Namespace,
+    model: Any,
+    out: Path,
+    record: dict,
+    save: Callable[..., None],
+    summary: str,
+    licence: Path | None,
 ) -> int:
-    """Write imported weights with `save(model, out, record)` and the record beside them, then report: `wrote OUT
-    and RECORD: summary`, or the record with `--json`."""
+    """Complete an import's `record` with the text of the licence file `licence` (`read_licence`) and the import's
+    stamp (`import_stamp`), write the imported weights with `save(model, out, record)` and the record beside them,
+    then report: `wrote OUT and RECORD: summary`, or the record with `--json`."""
+    record = {**record, "license": read_licence(licence), **import_stamp()}
     save(model, out, record)
     record_path = write_record(out, record)
     return emit(args, record, f"wrote {out} and {record_path}: {summary}")
