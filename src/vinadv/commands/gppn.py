@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from typing import Any
 
 from vinadv.commands import add_actions, command_line
 from vinadv.commands.eval_options import add_eval_arguments, emit_metrics, start_eval
@@ -102,7 +103,7 @@ def cmd_gppn_train(args: argparse.Namespace) -> int:
 
 
 def cmd_gppn_widen(args: argparse.Namespace) -> int:
-    from vinadv.planners.gppn import load_gppn, save_gppn, widen_gppn
+    from vinadv.planners.gppn import load_gppn, widen_gppn
 
     check_output_path(args.out, mkdir=True, inputs={"WEIGHTS": args.weights})
     model = load_gppn(args.weights)
@@ -118,19 +119,18 @@ def cmd_gppn_widen(args: argparse.Namespace) -> int:
         "seed": args.seed,
         "command": command_line(),
     }
-    save_gppn(wide, args.out, record)
-    summary = {"out": args.out, "config": wide.config.to_dict(), "from": args.weights, "noise": args.noise}
-    return emit(
+    return _write_gppn(
         args,
-        summary,
-        f"wrote {args.out}: GPPN {wide.config.to_dict()} widened from {args.weights} (l_h {model.config.l_h}); "
-        f"continue with `vinadv gppn train --init {args.out} --l-h {args.l_h}`",
+        wide,
+        record,
+        {"from": args.weights, "noise": args.noise},
+        f"widened from {args.weights} (l_h {model.config.l_h}); continue with `vinadv gppn train --init {args.out} "
+        f"--l-h {args.l_h}`",
     )
 
 
 def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
     from vinadv.interop.checkpoints import gppn_from_checkpoint
-    from vinadv.planners.gppn import save_gppn
 
     check_output_path(args.out, mkdir=True, inputs={"CKPT": args.checkpoint})
     model = gppn_from_checkpoint(args.checkpoint, args.k, args.entry)
@@ -141,14 +141,23 @@ def cmd_gppn_import_weights(args: argparse.Namespace) -> int:
     }
     if args.size is not None:
         record["size"] = args.size
-    save_gppn(model, args.out, record)
-    summary = {"out": args.out, "config": model.config.to_dict(), **record}
-    return emit(
+    return _write_gppn(
         args,
-        summary,
-        f"wrote {args.out}: GPPN {model.config.to_dict()} from {args.checkpoint} "
-        f"({model.source['entry']}); use --planner gppn --weights {args.out}",
+        model,
+        record,
+        record,
+        f"from {args.checkpoint} ({model.source['entry']}); use --planner gppn --weights {args.out}",
     )
+
+
+def _write_gppn(args: argparse.Namespace, model: Any, record: dict, summary: dict, made: str) -> int:
+    """Save the GPPN `model` with `record` to `--out` (`gppn widen`, `gppn import-weights`), then report it: with
+    `--json` the file, the model's config and `summary`, else `wrote OUT: GPPN CONFIG made`."""
+    from vinadv.planners.gppn import save_gppn
+
+    save_gppn(model, args.out, record)
+    config = model.config.to_dict()
+    return emit(args, {"out": args.out, "config": config, **summary}, f"wrote {args.out}: GPPN {config} {made}")
 
 
 def cmd_gppn_eval(args: argparse.Namespace) -> int:
