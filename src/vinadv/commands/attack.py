@@ -48,10 +48,7 @@ def add_attack_arguments(parser) -> None:
         "--per-map", type=int, default=1, help="pairs per map (default 1; 0 with exhaustive: every valid cell)"
     )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    parser.add_argument(
-        "--budget", type=int, default=8, help="key-points and saliency: candidates evaluated per map (default 8)"
-    )
-    parser.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
+    add_strategy_arguments(parser)
     parser.add_argument(
         "--obstacles",
         type=int,
@@ -62,6 +59,15 @@ def add_attack_arguments(parser) -> None:
         "against the original map's path each time; the search stops when no map has a valid cell left",
     )
     add_edit_argument(parser)
+
+
+def add_strategy_arguments(parser) -> None:
+    """`--budget` and `--radius`: the parameters of the strategies that take one (`make_attack`'s), which `attack`,
+    `run` and `robustness` share."""
+    parser.add_argument(
+        "--budget", type=int, default=8, help="key-points and saliency: candidates evaluated per map (default 8)"
+    )
+    parser.add_argument("--radius", type=int, default=2, help="near-path: Chebyshev distance to the path (default 2)")
 
 
 def attack_options(args: argparse.Namespace) -> dict:

@@ -15,7 +15,12 @@ from vinadv.commands import (
     planner_device,
     planner_inputs,
 )
-from vinadv.commands.attack import add_edit_argument, add_harm_arguments, add_objective_argument
+from vinadv.commands.attack import (
+    add_edit_argument,
+    add_harm_arguments,
+    add_objective_argument,
+    add_strategy_arguments,
+)
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.commands.run import add_maps_arguments, maps_settings
 from vinadv.errors import InputError, OutputError
@@ -65,8 +70,7 @@ def register(subparsers) -> None:
         help="the curve's largest number of added obstacles (default 3; at most a map's N*N cells)",
     )
     add_objective_argument(p, default="harm")
-    p.add_argument("--budget", type=int, default=8, help="key-points/saliency: candidates tried per map and step")
-    p.add_argument("--radius", type=int, default=2, help="near-path: distance to the path")
+    add_strategy_arguments(p)
     add_edit_argument(p, several="the curve frees 1 to --max-obstacles cells")
     p.add_argument(
         "--exact-k2",
