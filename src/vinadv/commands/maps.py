@@ -21,7 +21,7 @@ def register(subparsers) -> None:
     gen.add_argument("--starts", type=int, default=7, help="starts per map (default 7)")
     add_corner_cutting_argument(gen)
     add_moves_argument(gen)
-    gen.add_argument("--out", required=True, help="output maps file (.npz)")
+    add_maps_out_argument(gen)
     add_output_options(gen, json="the summary", quiet=True)
     gen.set_defaults(func=cmd_generate)
 
@@ -44,10 +44,15 @@ def register(subparsers) -> None:
         help="write the maps of several maps files as one (same size, starts per map, corner cutting and moves)",
     )
     cat.add_argument("maps", nargs="+", metavar="MAPS", help="maps files (.npz), in order")
-    cat.add_argument("--out", required=True, help="output maps file (.npz)")
+    add_maps_out_argument(cat)
     add_output_options(cat, json="the summary", quiet=True)
     cat.set_defaults(func=cmd_concat)
     _register_interop(sub)
+
+
+def add_maps_out_argument(parser) -> None:
+    """`--out`: the maps file a command writes (`maps generate`, `maps concat`, `maps import`)."""
+    parser.add_argument("--out", required=True, help="output maps file (.npz)")
 
 
 def cmd_concat(args: argparse.Namespace) -> int:
@@ -217,7 +222,7 @@ def _register_interop(sub) -> None:
         "ascii, an image for png); transpath: one or more .xml tasks, a task in several files counted once",
     )
     imp.add_argument("--format", required=True, choices=FOREIGN_FORMATS, help="the file's layout")
-    imp.add_argument("--out", required=True, help="output maps file (.npz)")
+    add_maps_out_argument(imp)
     imp.add_argument(
         "--split",
         default=None,
