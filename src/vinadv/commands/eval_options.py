@@ -20,9 +20,16 @@ if TYPE_CHECKING:  # NumPy and Numba behind it: imported by the command that eva
     from vinadv.grid.mapset import MapSet
 
 
-def add_eval_arguments(ev: argparse.ArgumentParser) -> None:
+def add_eval_arguments(ev: argparse.ArgumentParser, weights: str | None = None) -> None:
     """The options of every `eval` command: the maps (a maps file, or N maps generated on the fly: `start_eval`),
-    torch threads and where the figures go."""
+    torch threads and where the figures go; first, for the `eval` of one planner (`vin eval`, `gppn eval`: `weights`
+    names it, "VIN"), that planner's `--weights` (`vinadv eval` has `add_planner_arguments`' own)."""
+    if weights is not None:
+        ev.add_argument(
+            "--weights",
+            default=None,
+            help=f"{weights} weights file or model zoo name (default: the shipped weights for the map size)",
+        )
     src = ev.add_mutually_exclusive_group(required=True)
     src.add_argument("--data", help="maps file (.npz)")
     src.add_argument("--n", type=int, help="generate N maps on the fly (with --seed and --size)")

@@ -39,12 +39,7 @@ def register(subparsers) -> None:
         help="action accuracy and rollout figures of a GPPN: an alias of `vinadv eval --planner gppn --protocol "
         "vinadv`, with a flat record",
     )
-    ev.add_argument(
-        "--weights",
-        default=None,
-        help="GPPN weights file or model zoo name (default: the shipped weights for the size)",
-    )
-    add_eval_arguments(ev)
+    add_eval_arguments(ev, weights="GPPN")
     ev.set_defaults(func=cmd_gppn_eval)
 
     widen = sub.add_parser(

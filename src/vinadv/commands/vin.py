@@ -35,10 +35,7 @@ def register(subparsers) -> None:
         help="action accuracy and rollout figures of a VIN: an alias of `vinadv eval --planner vin --protocol P`, "
         "with a flat record (and --k for port-style weights)",
     )
-    ev.add_argument(
-        "--weights", default=None, help="weights file or model zoo name (default: the shipped weights for the map size)"
-    )
-    add_eval_arguments(ev)
+    add_eval_arguments(ev, weights="VIN")
     ev.add_argument("--k", type=int, default=None, help="value-iteration steps for a port-style weights file")
     ev.add_argument(
         "--protocol",
