@@ -194,9 +194,12 @@ def add_moves_argument(parser, default: str | None = "octile", what: str = "") -
     )
 
 
-def add_db_argument(parser) -> None:
-    """`--db`: the results database a command reads or writes (`vinadv.store.Store.open`)."""
-    parser.add_argument("--db", default=None, help="database URL or SQLite file (default $VINADV_DB or vinadv.db)")
+def add_db_argument(parser, when: str = "") -> None:
+    """`--db`: the results database a command reads or writes (`vinadv.store.Store.open`); `when` begins the help of
+    a command that reads it only with some option ("with --labels human: ")."""
+    parser.add_argument(
+        "--db", default=None, help=f"{when}database URL or SQLite file (default $VINADV_DB or vinadv.db)"
+    )
 
 
 #: library parameters whose flag is not `--` plus the name with dashes

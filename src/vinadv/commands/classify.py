@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from vinadv.commands import add_actions, db_file, option_values
+from vinadv.commands import add_actions, add_db_argument, db_file, option_values
 from vinadv.commands.output import add_output_options, emit, shows_progress
 from vinadv.errors import InputError
 from vinadv.outfile import check_output_path
@@ -45,7 +45,7 @@ def register(subparsers) -> None:
         help="where training labels come from: the exact rule labeller on --pairs (default), or "
         "people's annotations (`vinadv serve`) of the stored pairs of --db/--run",
     )
-    train.add_argument("--db", default=None, help="with --labels human: the results database (URL or SQLite file)")
+    add_db_argument(train, when="with --labels human: ")
     train.add_argument(
         "--run", default=None, help="with --labels human: the run (id or name) whose labelled pairs to use"
     )
