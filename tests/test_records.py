@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import inspect
 import json
 
 import pytest
@@ -15,6 +16,7 @@ from hypothesis import strategies as st
 
 from vinadv.errors import InputError
 from vinadv.grid import generate_maps
+from vinadv.identify import identify_pairs
 from vinadv.pipeline import RunConfig, run
 from vinadv.planners.weights import trained_moves
 from vinadv.records import (
@@ -169,15 +171,10 @@ def test_a_run_config_of_version_0_reads_with_every_field(stored, expected):
 
 
 def test_an_identify_config_of_version_0_reads_with_every_field_and_its_edit():
-    filled = {
-        "planner": None,
-        "weights": None,
-        "planner_spec": None,
-        "attack_planner": None,
-        "harm_tolerance": 1e-6,
-        "harm_rtol": 0.0,
-        "edit": "add",
-    }
+    # no planner recorded; the tolerances `identify_pairs`'s defaults (version 0 wrote none); an addition attack
+    tol = {key: inspect.signature(identify_pairs).parameters[key].default for key in ("harm_tol", "harm_rtol")}
+    filled = dict.fromkeys(("planner", "weights", "planner_spec", "attack_planner"))
+    filled |= {"harm_tolerance": tol["harm_tol"], "harm_rtol": tol["harm_rtol"], "edit": "add"}
     assert run_config_kind(IDENTIFY_V0_FIRST) == IDENTIFY
     assert upgrade_run_config(IDENTIFY_V0_FIRST) == {**filled, **IDENTIFY_V0_FIRST, VERSION_KEY: 1}
     assert upgrade_run_config(IDENTIFY_V0_REMOVE) == {**IDENTIFY_V0_REMOVE, "edit": "remove", VERSION_KEY: 1}
