@@ -1,4 +1,4 @@
-"""MkDocs hook: the Results page's figures, read at build time from committed JSON, never copied by hand.
+"""MkDocs hook: the pages' figures, read at build time from committed JSON, never copied by hand.
 
 Each shipped weights file `src/vinadv/weights/NAME.pt` has `NAME.metrics.json` beside it: the evaluation on the
 1,000 held-out maps, written by `vinadv vin eval --out` or `vinadv eval --out`, with the command that made it. A page
@@ -6,33 +6,22 @@ holding one of the markers below gets the table built from those files in its pl
 changes the page at the next build and nothing goes stale. The README's headline table is the same table between
 the README's markers: `python docs/hooks.py` rewrites it there, and a test (`tests/test_docs.py`) holds the two equal.
 
-Markers: `<!-- vinadv:weights-table -->` (one row per shipped weights file), `<!-- vinadv:weights-commands -->`
-(the command and checksum behind each row), `<!-- vinadv:by-length -->` (rollout success by the optimal path's move
-count, for the metrics files that have it), `<!-- vinadv:by-length-figure -->` (the same as a curve, drawn by
-`vinadv.evaluation.length_curve` as `vinadv eval --figure` draws it, inlined as SVG),
-`<!-- vinadv:bench-leaderboard -->` (the leaderboard of the committed
-benchmark entries `docs/results/bench/*.json`: the compact table that fits the column, and its legend),
-`<!-- vinadv:bench-k-curves -->` (each suite's k curve from the same entries, drawn by `vinadv bench leaderboard`'s
-figure function, inlined as SVG). The MP benchmark's page (`docs/results/mpd.md`) reads
-`docs/results/mpd.json`, written by `perf/mpd_table.py` with the commands it ran: `<!-- vinadv:mpd-table -->`
-(Opt / Exp / Hmean per family and planner), `<!-- vinadv:mpd-robustness -->` (the worst case per map: harmful and
-paper success rates at k = 1..K added obstacles), `<!-- vinadv:mpd-robustness-strategies -->` (the harmful rates per
-strategy), `<!-- vinadv:mpd-robustness-times -->` (how long each planner's runs took, a sentence) and
-`<!-- vinadv:mpd-commands -->` (the commands, and the checksums of the weights files they name).
-`<!-- vinadv:map-size-table -->` (docs/guide/gpu.md): the VIN engine and the exhaustive attack at 28x28 to 64x64
-beside the FMA count, from `docs/results/map_size.json` (`perf/map_size.py --out`), with its command and the
-machine's load.
-Neural A*'s page (`docs/guide/neural-astar.md`) reads `docs/results/neural_astar.json`, written by
-`perf/neural_astar_table.py` with the commands it ran and the machine: `<!-- vinadv:neural-astar-modes -->` (the
-exact against the differentiable search per seed, beside Opt / Exp / Hmean), `<!-- vinadv:neural-astar-speed -->`
-(plans/s side by side, and the ratios the prose would otherwise copy) and `<!-- vinadv:neural-astar-commands -->`.
-`<!-- vinadv:suite-times -->` (docs/development.md): the suite's wall times from `docs/results/suite_times.json`,
-written by `OUT=docs/results/suite_times.json bash .ci/suite-times`.
-The 64x64 VIN's section (docs/guide/planners.md) reads `docs/results/vin64_reach.json`, written by
-`perf/vin64_reach.py` with its commands: `<!-- vinadv:vin64-transfer -->` (the 28x28 weights on 64x64 maps, and
-the commands) and `<!-- vinadv:vin64-reach -->` (the optimal move counts that set k); and the committed weights
-files: `<!-- vinadv:vin64-training -->` (`vin64.json`: the epochs' time and validation accuracy) and
-`<!-- vinadv:vin64-held-out -->` (`vin64.metrics.json`: success on the held-out maps, and on the starts beyond reach).
+A marker is `<!-- vinadv:NAME -->`, NAME a key of `BUILDERS`. Read here: `weights-table` (one row per shipped weights
+file), `weights-commands` (the command and checksum behind each row), `by-length` (rollout success by the optimal
+path's move count, for the metrics files that have it), `by-length-figure` (the same as a curve, drawn by
+`vinadv.evaluation.length_curve` as `vinadv eval --figure` draws it, inlined as SVG), `bench-leaderboard` (the
+leaderboard of the committed benchmark entries `docs/results/bench/*.json`: the compact table that fits the column,
+and its legend), `bench-k-curves` (each suite's k curve from the same entries, drawn by `vinadv bench leaderboard`'s
+figure function, inlined as SVG). The others are the benchmark scripts' measurements, built by `docs/measured.py`
+(its docstring names the files): `mpd-table` (Opt / Exp / Hmean per family and planner), `mpd-robustness` (the worst
+case per map: harmful and paper success rates at k = 1..K added obstacles), `mpd-robustness-strategies` (the harmful
+rates per strategy), `mpd-robustness-times` (how long each planner's runs took, a sentence) and `mpd-commands` (the
+commands, and the checksums of the weights files they name); the same five as `transpath-*` from TransPath's JSON,
+with `transpath-ratios` (TransPath's own figures); `map-size-table`; `neural-astar-modes` (the exact against the
+differentiable search per seed, beside Opt / Exp / Hmean), `neural-astar-speed` (plans/s side by side, and the ratios
+the prose would otherwise copy) and `neural-astar-commands`; `suite-times`; `vin64-transfer` (the 28x28 weights on
+64x64 maps, and the commands), `vin64-reach` (the optimal move counts that set k), `vin64-training` (the epochs' time
+and validation accuracy) and `vin64-held-out` (success on the held-out maps, and on the starts beyond reach).
 """
 
 from __future__ import annotations
@@ -42,64 +31,42 @@ import json
 import re
 from pathlib import Path
 
-from vinadv import display  # how a figure is shown: rounded, float noise as 0
+# the measured pages' builders; MkDocs runs a hook with its folder on the path, as `python docs/hooks.py` does
+from measured import (
+    ROOT,
+    TRANSPATH_JSON,
+    WEIGHTS_DIR,
+    map_size_table,
+    mpd_commands,
+    mpd_robustness,
+    mpd_robustness_strategies,
+    mpd_robustness_times,
+    mpd_table,
+    neural_astar_commands,
+    neural_astar_modes,
+    neural_astar_speed,
+    percent,
+    suite_times,
+    transpath_ratios,
+    vin64_held_out,
+    vin64_reach,
+    vin64_training,
+    vin64_transfer,
+)
+
 from vinadv.bench.leaderboard import (
     read_entries,
     render_legend,
     render_markdown,
     rows,
 )  # the one renderer of a leaderboard
-from vinadv.evaluation.planner_metrics import LENGTH_BUCKET  # the width of the `by_length` rows
 from vinadv.planners.registry import canonical_name  # a metrics file's planner in today's spelling
-
-ROOT = Path(__file__).resolve().parents[1]
-WEIGHTS_DIR = ROOT / "src" / "vinadv" / "weights"
 
 README = ROOT / "README.md"
 README_TABLE_START = "<!-- results-table: generated by docs/hooks.py weights_table() -->\n"
 README_TABLE_END = "\n<!-- /results-table -->"
-
-WEIGHTS_TABLE = "<!-- vinadv:weights-table -->"
-WEIGHTS_COMMANDS = "<!-- vinadv:weights-commands -->"
-BY_LENGTH = "<!-- vinadv:by-length -->"
-BY_LENGTH_FIGURE = "<!-- vinadv:by-length-figure -->"
-BENCH_LEADERBOARD = "<!-- vinadv:bench-leaderboard -->"
-BENCH_K_CURVES = "<!-- vinadv:bench-k-curves -->"
 #: the committed benchmark entries (`vinadv bench run --out`), the leaderboard's rows
 BENCH_DIR = ROOT / "docs" / "results" / "bench"
-MPD_TABLE = "<!-- vinadv:mpd-table -->"
-MPD_ROBUSTNESS = "<!-- vinadv:mpd-robustness -->"
-MPD_ROBUSTNESS_STRATEGIES = "<!-- vinadv:mpd-robustness-strategies -->"
-MPD_COMMANDS = "<!-- vinadv:mpd-commands -->"
-TRANSPATH_JSON = ROOT / "docs" / "results" / "transpath.json"
-TRANSPATH_TABLE = "<!-- vinadv:transpath-table -->"
-TRANSPATH_RATIOS = "<!-- vinadv:transpath-ratios -->"
-TRANSPATH_ROBUSTNESS = "<!-- vinadv:transpath-robustness -->"
-TRANSPATH_ROBUSTNESS_STRATEGIES = "<!-- vinadv:transpath-robustness-strategies -->"
-TRANSPATH_COMMANDS = "<!-- vinadv:transpath-commands -->"
-MPD_ROBUSTNESS_TIMES = "<!-- vinadv:mpd-robustness-times -->"
-MPD_JSON = ROOT / "docs" / "results" / "mpd.json"
-MAP_SIZE_TABLE = "<!-- vinadv:map-size-table -->"
-MAP_SIZE_JSON = ROOT / "docs" / "results" / "map_size.json"
-NEURAL_ASTAR_MODES = "<!-- vinadv:neural-astar-modes -->"
-NEURAL_ASTAR_SPEED = "<!-- vinadv:neural-astar-speed -->"
-NEURAL_ASTAR_COMMANDS = "<!-- vinadv:neural-astar-commands -->"
-NEURAL_ASTAR_JSON = ROOT / "docs" / "results" / "neural_astar.json"
-SUITE_TIMES = "<!-- vinadv:suite-times -->"
-SUITE_TIMES_JSON = ROOT / "docs" / "results" / "suite_times.json"
-VIN64_TRANSFER = "<!-- vinadv:vin64-transfer -->"
-VIN64_REACH = "<!-- vinadv:vin64-reach -->"
-VIN64_TRAINING = "<!-- vinadv:vin64-training -->"
-VIN64_HELD_OUT = "<!-- vinadv:vin64-held-out -->"
-VIN64_JSON = ROOT / "docs" / "results" / "vin64_reach.json"
-
-
-def percent(fraction: float | None) -> str:
-    """A share as a percentage with one decimal; two where one would round a share below 1 up to 100%."""
-    if fraction is None:
-        return ""
-    text = f"{100 * fraction:.1f}%"
-    return f"{100 * fraction:.2f}%" if text == "100.0%" and fraction < 1 else text
 
 
 def weights_metrics(folder: Path = WEIGHTS_DIR) -> list[dict]:
@@ -228,445 +195,40 @@ def bench_k_curves(folder: Path = BENCH_DIR) -> str:
     return "\n\n".join(images)
 
 
-def decimal(value: float | None, digits: int = 3) -> str:
-    """A figure with `digits` decimals (float noise as 0: `vinadv.display.number`); an em dash where the planner has
-    none (Exp without expansions)."""
-    return display.number(None if value is None else float(value), digits)
-
-
-def markdown_table(header: list[str], rows: list[list[str]]) -> str:
-    """A Markdown table of `rows` (lists of cell texts) under `header`."""
-    lines = [header, ["---"] * len(header), *rows]
-    return "\n".join("| " + " | ".join(cells) + " |" for cells in lines)
-
-
-def shell_block(lines: list[str]) -> str:
-    """Commands as a fenced `sh` block."""
-    return "```sh\n" + "\n".join(lines) + "\n```"
-
-
-def mpd_table(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
-    """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `perf/mpd_table.py`'s
-    JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
-    data = json.loads(path.read_text())
-    rows = []
-    for family in sorted(data["families"], key=lambda f: f["family"]):
-        for entry in family["planners"]:
-            fig = entry["search"]
-            rows.append(
-                [family["family"], f"`{entry['planner']}`", str(fig["rows"])]
-                + [decimal(fig[key]) for key in ("opt", "exp", "hmean")]
-                + [percent(fig["success"])]
-                + ["—" if fig["expansions"] is None else f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"]
-            )
-    header = [first, "planner", "searches", "Opt", "Exp", "Hmean", "success", "expansions (A*'s)"]
-    return markdown_table(header, rows)
-
-
-def _robustness_runs(data: dict) -> list[dict]:
-    """The robustness runs of the MP JSON by family (in the table's order), then in the order they were run."""
-    order = {f["family"]: i for i, f in enumerate(sorted(data["families"], key=lambda f: f["family"]))}
-    planners = list(dict.fromkeys(r["planner"] for r in data["robustness"] if r.get("family", "mazes") != "mazes"))
-
-    def key(run: dict) -> tuple[int, int]:
-        planner = planners.index(run["planner"]) if run["planner"] in planners else len(planners)
-        return order.get(run.get("family", "mazes"), len(order)), planner
-
-    return sorted(data["robustness"], key=key)
-
-
-def _by_k(curve: list[dict], key: str) -> str:
-    """A curve's `key` rates at k = 1, 2, ... joined by slashes."""
-    return " / ".join(percent(point[key]) for point in curve)
-
-
-def mpd_robustness(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
-    """The robustness runs of `perf/mpd_table.py`'s JSON, worst case per map over the strategies: per family
-    and planner, the harmful rate and the paper's success rate at k = 1..K added obstacles."""
-    data = json.loads(path.read_text())
-    rows = []
-    for run in _robustness_runs(data):
-        figures = run["figures"]
-        overall = figures["overall"]
-        rows.append(
-            [run.get("family", "mazes"), f"`{run['planner']}`", str(overall[0]["maps"])]
-            + [percent(figures["clean"]["success_rate"]), _by_k(overall, "harmful_rate")]
-            + [_by_k(overall, "paper_success_rate"), decimal(overall[-1]["mean_regret"])]
-        )
-    header = [first, "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
-    return markdown_table([*header, "mean regret at the largest k"], rows)
-
-
-def mpd_robustness_times(path: Path = MPD_JSON) -> str:
-    """How long the robustness runs took, as a sentence: per planner the fewest and most seconds of a family's run,
-    slowest planner first, and all the runs' minutes together."""
-    data = json.loads(path.read_text())
-    runs = _robustness_runs(data)
-    seconds: dict[str, list[float]] = {}
-    for run in runs:
-        seconds.setdefault(run["planner"], []).append(run["figures"]["seconds"])
-    each = [
-        f"`{planner}` {min(s):.0f} to {max(s):.0f} s"
-        for planner, s in sorted(seconds.items(), key=lambda item: (-max(item[1]), item[0]))
-    ]
-    total = sum(s for values in seconds.values() for s in values) / 60
-    return f"{', '.join(each)} per family, so the {len(runs)} runs took about {total:.0f} minutes"
-
-
-def mpd_robustness_strategies(path: Path = MPD_JSON) -> str:
-    """The same runs per strategy: the harmful rate at k = 1..K of each strategy, and its seconds."""
-    data = json.loads(path.read_text())
-    runs = _robustness_runs(data)
-    names = list(dict.fromkeys(name for run in runs for name in run["figures"]["strategies"]))
-    rows = [
-        [run.get("family", "mazes"), f"`{run['planner']}`"]
-        + [
-            _by_k(run["figures"]["strategies"][name]["by_obstacles"], "harmful_rate")
-            if name in run["figures"]["strategies"]
-            else "—"
-            for name in names
-        ]
-        for run in runs
-    ]
-    return markdown_table(["family", "planner", *(f"{name}: harmful, k = 1 / 2 / ..." for name in names)], rows)
-
-
-def transpath_ratios(path: Path = TRANSPATH_JSON) -> str:
-    """TransPath's own figures per TransPath planner of `perf/transpath_table.py`'s JSON (their `eval.py`: against
-    their vanilla A*, on the rows whose vanilla cost is at least the hardness times the octile heuristic)."""
-    data = json.loads(path.read_text())
-    rows = []
-    for family in data["families"]:
-        for entry in family["planners"]:
-            fig = entry["search"].get("transpath")
-            if fig:
-                rows.append(
-                    [family["family"], f"`{entry['planner']}`", f"{fig['kept']} of {fig['rows']}"]
-                    + [decimal(fig["expansions_ratio"]), decimal(fig["cost_ratio"]), str(fig["unreached"])]
-                    + [decimal(fig["expansions"], 1), decimal(fig["vanilla_expansions"], 1)]
-                )
-    header = ["maps", "planner", "rows kept", "expansions ratio", "cost ratio", "unreached"]
-    return markdown_table([*header, "expansions", "vanilla A*'s"], rows)
-
-
-def mpd_commands(path: Path = MPD_JSON) -> str:
-    """Every command behind `mpd_table` and `mpd_robustness`, as a shell block."""
-    data = json.loads(path.read_text())
-    lines = []
-    for family in data["families"]:
-        lines += [family["import"], *(entry["command"] for entry in family["planners"])]
-    lines += [run["command"] for run in data["robustness"]]
-    weights = {}
-    for run in data["robustness"]:  # the checksum the run recorded (a --weighted file's, or a shipped one's)
-        sha = run.get("weights_sha256") or run["figures"].get("planner", {}).get("weights_sha256")
-        if sha:
-            weights[run["planner"]] = sha
-    for entry in (e for f in data["families"] for e in f["planners"] if e.get("weights_sha256")):
-        weights[entry["planner"]] = entry["weights_sha256"]
-    lines += [f"# {name}: weights with SHA-256 {sha}" for name, sha in weights.items()]
-    return shell_block(lines)
-
-
-#: the growth columns of `map_size_table`: FMA per map, then the time per value map and per plan
-GROWTH_KEYS = ("fma_per_map", "value_map_time_per_map", "engine_time_per_map")
-
-
-def map_size_table(path: Path = MAP_SIZE_JSON) -> str:
-    """The VIN's value maps/s, the engine's plans/s (near-tie replays included) and the exhaustive attack's seconds
-    per map by map size, beside the multiply-adds per map and the rate they allow at the CPU's FMA peak, and each
-    figure's growth from the first size; then the machine, its load and the command (`perf/map_size.py`)."""
-    data = json.loads(path.read_text())
-    rows = []
-    for row in data["sizes"]:
-        grow = row["growth_from_first"]
-        rows.append(
-            [
-                f"{row['size']}x{row['size']}",
-                str(row["k"]),
-                f"{row['fma_per_map']['engine'] / 1e6:.1f} M ({row['fma_per_map']['forward'] / 1e6:.1f} M)",
-                f"{row['fma_limit_plans_per_s']:,.0f}",
-                f"{row['value_maps_per_s']:,.0f} ({percent(row['value_maps_share_of_fma_peak'])})",
-                f"{row['engine_plans_per_s']:,.0f} ({row['near_tie_maps']} of {row['maps']:,})",
-                f"{row['candidates_per_map']:,.0f}",
-                f"{row['attack_s_per_map']:.3g} s ({percent(row['attack_share_of_fma_peak'])})",
-                " / ".join(
-                    f"{grow[key]:.1f}x" for key in ("fma_per_map", "value_map_time_per_map", "engine_time_per_map")
-                ),
-                f"{grow['attack_fma_per_map']:.0f}x / {grow['attack_time_per_map']:.0f}x",
-            ]
-        )
-    first = data["sizes"][0]["size"]
-    header = [
-        "maps",
-        "k",
-        "FMA per map: engine (forward)",
-        "maps/s at the FMA peak",
-        "value maps/s (share of peak)",
-        "engine plans/s (near-tie maps)",
-        "attack candidates per map",
-        "exhaustive attack per map (share of peak)",
-        f"x {first}x{first}: FMA / value map / plan",
-        f"x {first}x{first}: attack FMA / time",
-    ]
-    m = data["machine"]
-    weights = ", ".join(sorted({f"`{row['weights']}`" for row in data["sizes"]}))
-    note = (
-        f"Measured on {m['cpu']} ({m['cores']} cores, {m['engine_threads']} engine threads, "
-        f"FMA peak {m['fma_peak_per_s'] / 1e9:.0f} G/s), load average {m['load_average_before']} before and "
-        f"{m['load_average_after']} after: a loaded, shared machine, so the absolute rates are low and noisy; the "
-        f"sizes ran in one run, minutes apart, so the ratios are the figures to read. Weights {weights}. Command: "
-        f"`{data['command']}`"
-    )
-    return markdown_table(header, rows) + "\n\n" + note
-
-
-def _machine_note(machine: dict) -> str:
-    """The machine of a Neural A* record in words: CPU, cores, PyTorch, niceness and load."""
-    return (
-        f"{machine['cpu']} ({machine['cores']} cores), PyTorch {machine['torch']}, niceness {machine['niceness']}, "
-        f"load average {machine['load_average_before']} before and {machine['load_average_after']} after"
-    )
-
-
-def neural_astar_modes(path: Path = NEURAL_ASTAR_JSON) -> str:
-    """Per seed of the mazes test split's import: the searches where the exact and the differentiable mode gave the
-    same path and the same expanded cells (`vinadv neural-astar compare-modes`), beside Opt / Exp / Hmean and the mean
-    expansions against A*'s (`vinadv eval`); a last row over all seeds (Opt, Exp and the expansions over all searches,
-    Hmean the mean of the seeds', as the authors average it over batches); then the machine."""
-    data = json.loads(path.read_text())
-    rows, searches, compared = [], [], []
-    for entry in data["modes"]:
-        same, fig = entry["compare_modes"]["figures"], entry["eval"]["search"]
-        searches.append(fig)
-        compared.append(same)
-        rows.append(
-            [str(entry["seed"]), str(same["searches"]), str(same["identical_paths"]), str(same["identical_expansions"])]
-            + [decimal(fig["opt"], 2), decimal(fig["exp"]), decimal(fig["hmean"]), percent(fig["success"])]
-            + [f"{fig['expansions']:.1f} ({fig['astar_expansions']:.1f})"]
-        )
-    total = sum(s["searches"] for s in compared)
-    weight = [fig["rows"] for fig in searches]
-
-    def mean(key: str) -> float:
-        return sum(fig[key] * w for fig, w in zip(searches, weight, strict=True)) / sum(weight)
-
-    paths, cells = sum(s["identical_paths"] for s in compared), sum(s["identical_expansions"] for s in compared)
-    rows.append(
-        ["all", str(total), f"{paths} ({percent(paths / total)})", f"{cells} ({percent(cells / total)})"]
-        + [decimal(mean("opt")), decimal(mean("exp"))]
-        + [f"{decimal(sum(fig['hmean'] for fig in searches) / len(searches))} (mean of the {len(searches)})"]
-        + [percent(mean("success")), f"{mean('expansions'):.1f} ({mean('astar_expansions'):.1f})"]
-    )
-    header = ["seed", "searches", "identical paths", "identical expanded cells", "Opt", "Exp", "Hmean", "success"]
-    note = f"Measured {data['date']} on {_machine_note(data['machine'])}."
-    return markdown_table([*header, "mean expansions (A*'s)"], rows) + "\n\n" + note
-
-
-#: the rows of `neural_astar_speed`: the key of `perf/neural_astar.py`'s `plans_per_s`, and what it times
-SPEED_ROWS = (
-    ("astar", "`astar` (compiled, unit costs)"),
-    ("neural-astar exact", "`neural-astar`, exact mode (encoder, then the compiled search)"),
-    ("encoder only", "the encoder alone"),
-    ("differentiable", "the differentiable search (encoder, then the PyTorch search; no gradients)"),
-    (
-        "differentiable + gradient",
-        "the differentiable search with the gradient to the obstacles (`differentiable_paths`, forward and backward)",
-    ),
-)
-
-
-def neural_astar_speed(path: Path = NEURAL_ASTAR_JSON) -> str:
-    """Plans per second of `perf/neural_astar.py` (best of its rounds, side by side in one run), then the
-    ratios between them: the exact mode against the differentiable search, the encoder's share of the exact mode's
-    time, `astar` against the exact mode; and the machine, its load and the command."""
-    data = json.loads(path.read_text())
-    speed = data["speed"]["figures"]
-    rate = speed["plans_per_s"]
-    # rates only: the speed run's starts are `perf/search.py`'s, not the Neural A* loader's of the table above, so its
-    # `mean_expansions` would be a second, different expansion count for the same maps (the modes table has them)
-    rows = [[label, f"{rate[key]:,.1f}"] for key, label in SPEED_ROWS]
-    data_file, _, maps = speed["source"].partition(": ")  # `<data-dir>/NAME.npz: N test maps`: the path as code
-    measured_on = f"`{data_file}`: {maps}" if maps else speed["source"]
-    table = markdown_table([f"search ({measured_on}, one start each; torch on {speed['device']})", "plans/s"], rows)
-    encoder_share = rate["neural-astar exact"] / rate["encoder only"]  # the encoder's time over the exact mode's
-    # the exact mode is the encoder and then a search of a few ms: under load its best round can beat the encoder's
-    encoder = (
-        f"the encoder (the CNN) is {percent(encoder_share)} of its time"
-        if encoder_share < 1
-        else f"the encoder alone took as long as the whole of it ({percent(encoder_share)}: the compiled search's part "
-        "is within the timing noise)"
-    )
-    note = (
-        f"The exact mode plans {speed['exact_over_differentiable']:.1f} times as fast as the differentiable search "
-        f"and gives the same paths and expanded cells ({speed['identical_searches']} of {speed['rows']} in the same "
-        f"run); {encoder}. `astar` plans "
-        f"{speed['astar_over_neural_exact']:,.0f} times as fast as the exact mode: it has no network to run.\n\n"
-        f"Measured {data['date']} on {_machine_note(data['machine'])}: a shared machine, so the absolute rates are "
-        f"low and noisy; the searches took turns in one run, best of {data['speed']['rounds']} rounds, so the ratios "
-        f"are the figures to read "
-        f"({speed['numba_threads']} Numba threads, {speed['torch_threads']} torch threads). Command: "
-        f"`{data['speed']['command']}`"
-    )
-    return table + "\n\n" + note
-
-
-def neural_astar_commands(path: Path = NEURAL_ASTAR_JSON) -> str:
-    """The command that wrote the JSON and every command behind `neural_astar_modes` and `neural_astar_speed`, as a
-    shell block."""
-    data = json.loads(path.read_text())
-    lines = [f"# {data['command']}  (the data: {data['source']})"]
-    for entry in data["modes"]:
-        lines += [entry["import"], entry["compare_modes"]["command"], entry["eval"]["command"]]
-    lines.append(data["speed"]["command"])
-    return shell_block(lines)
-
-
-def suite_times(path: Path = SUITE_TIMES_JSON) -> str:
-    """The suite's wall times as `.ci/suite-times` measured them (fresh clones, two workers, `CI=true`): each run's
-    whole suite and quick tier with the load average around it, the medians, the tests, the commit, the machine; with
-    a `base` (`BASE=REV`), that commit's runs too, taken in turn with these, and the ratios of the medians."""
-    data = json.loads(path.read_text())
-    blocks = [(data["commit"], data)] + ([(data["base"]["commit"], data["base"])] if "base" in data else [])
-    rows = []
-    for commit, block in blocks:
-        for i, run in enumerate(block["runs"]):
-            for what, key in (
-                ("whole suite (fresh clone, cold caches)", "whole_suite"),
-                ("quick tier (warm)", "quick_tier"),
-            ):
-                r = run[key]
-                tests = ", ".join(f"{n:,} {kind}" for kind, n in r["tests"].items())
-                load = f"{r['load_average_before']} / {r['load_average_after']}"
-                rows.append([f"`{commit}`", str(i + 1), what, f"{block[key + '_s'][i]:.1f} s", tests, load])
-    header = ["commit", "clone", "what", "pytest's wall time", "tests", "load average before / after"]
-    m = data["machine"]
-    medians = [
-        f"`{c}`: whole suite {b['whole_suite_median_s']:.1f} s, quick tier {b['quick_tier_median_s']:.1f} s"
-        for c, b in blocks
-    ]
-    text = f"Medians: {'; '.join(medians)}."
-    if "base" in data:
-        base = data["base"]
-        text += (
-            f" `{data['commit']}` against `{base['commit']}`, in the same runs: whole suite "
-            f"{data['whole_suite_median_s'] / base['whole_suite_median_s']:.2f}x, quick tier "
-            f"{data['quick_tier_median_s'] / base['quick_tier_median_s']:.2f}x."
-        )
-    where = f"on {data['date']}, on {m['cpu']} ({m['cores']} cores)"
-    return markdown_table(header, rows) + f"\n\n{text} Measured {where}, by `{data['command']}`."
-
-
-def _vi_start(weights: str, folder: Path) -> str:
-    """The value-iteration start a weights file was trained from, as its training record names it."""
-    record = json.loads((folder / weights).with_suffix(".json").read_text())
-    start = record.get("train_config", {}).get("vi_init") or "default"
-    return f"`{start}` (the paper's)" if start == "default" else f"`{start}`"
-
-
-def vin64_transfer(path: Path = VIN64_JSON, folder: Path = WEIGHTS_DIR) -> str:
-    """The shipped 28x28 weights on generated 64x64 maps (`perf/vin64_reach.py`): per weights file and k, the
-    share of the starts from which the rollout reaches the goal; then the maps, the date and every command."""
-    data = json.loads(path.read_text())
-    rows, commands, settings = [], [], set()
-    for entry in data["transfer"]:
-        commands.append(entry["export"])
-        for run in entry["runs"]:
-            fig = run["figures"]
-            settings.add((fig["maps"], fig["seed"], fig["size"], fig["starts_per_map"]))
-            rows.append(
-                [f"`{entry['weights']}`", _vi_start(entry["weights"], folder), str(run["k"])]
-                + [f"{percent(fig['success_rate'])} of {fig['rollouts']:,}", percent(fig["optimal_rate"])]
-            )
-            commands.append(run["command"])
-    ((maps, seed, size, starts),) = settings  # one set of maps for every run, or the table would compare apples
-    header = ["weights", "value-iteration start", "k", "reaches the goal (of the starts)", "optimal paths"]
-    note = (
-        f"Measured {data['date']} on {maps:,} generated {size}x{size} maps (seed {seed}, {starts} starts each) by "
-        f"`{data['command']}`, which ran (`<work>`: a scratch folder):"
-    )
-    return markdown_table(header, rows) + "\n\n" + note + "\n\n" + shell_block(commands)
-
-
-def vin64_reach(path: Path = VIN64_JSON) -> str:
-    """The optimal move counts on the training set's generator (`perf/vin64_reach.py`), as a sentence: the
-    longest from a start, the share of the cells that reach the goal within each k, each map's farthest cell."""
-    data = json.loads(path.read_text())
-    reach = data["reach"]
-    within = sorted(reach["cells_within"].items(), key=lambda item: -int(item[0]))
-    first, *others = within
-    also = "".join(f"; within {k} moves: {percent(share)}" for k, share in others)
-    starts = "one start" if reach["starts_per_map"] == 1 else f"{reach['starts_per_map']} starts"
-    return (
-        f"On the generator's first {reach['maps']:,} {reach['size']}x{reach['size']} maps of seed {reach['seed']} "
-        f"({starts} each, the training set's settings) the longest optimal path from a start has "
-        f"{reach['longest_from_a_start']} moves, and {percent(first[1])} of the {reach['cells']:,} free cells that "
-        f"reach the goal do so within {first[0]} moves{also}; the per-map farthest cell has median "
-        f"{reach['farthest_cell_median']:g}, 99th percentile {reach['farthest_cell_p99']:g} and at most "
-        f"{reach['farthest_cell_max']} moves (`{data['command']}`, {data['date']})"
-    )
-
-
-def vin64_training(folder: Path = WEIGHTS_DIR) -> str:
-    """`vin64.pt`'s training record as a sentence: the epochs, their wall time, the machine and the validation
-    action accuracy after each epoch."""
-    record = json.loads((folder / "vin64.json").read_text())
-    hardware = record["hardware"]
-    accuracy = " / ".join(percent(epoch["val_action_accuracy"]) for epoch in record["epochs"])
-    threads = hardware["torch_threads"]
-    return (
-        f"The {record['epochs_done']} epochs took {record['wall_time_s'] / 60:.1f} minutes on "
-        f"{hardware['cpu_model']} ({hardware['cpu_count']} cores, {threads} torch thread{'s' * (threads != 1)}; "
-        f"`vin64.json`); validation action accuracy after epochs 1 to {len(record['epochs'])}: {accuracy}"
-    )
-
-
-def vin64_held_out(folder: Path = WEIGHTS_DIR) -> str:
-    """`vin64.pt`'s figures on the held-out maps (`vin64.metrics.json`) as a sentence: its success, then the starts
-    whose optimal path is within one length bucket of k or longer (k from `vin64.json`), and how many of them reach
-    the goal."""
-    fig = json.loads((folder / "vin64.metrics.json").read_text())
-    k = json.loads((folder / "vin64.json").read_text())["model"]["k"]
-    far = [row for row in fig["by_length"] if row["moves"][0] >= k - LENGTH_BUCKET]
-    starts = sum(row["rollouts"] for row in far)
-    missed_far = starts - round(sum(row["success_rate"] * row["rollouts"] for row in far))
-    missed = fig["rollouts"] - fig["terminations"]["goal"]
-    return (
-        f"On the {fig['maps']:,} held-out {fig['size']}x{fig['size']} maps (seed {fig['seed']}, never trained on) it "
-        f"reaches the goal from {percent(fig['success_rate'])} of the {fig['rollouts']:,} starts (`{fig['command']}`); "
-        f"of the {missed} starts it misses, {missed_far} are among the {starts} ({percent(starts / fig['rollouts'])} "
-        f"of the starts) whose optimal path has {k - LENGTH_BUCKET} moves or more"
-    )
+#: each marker's NAME (`<!-- vinadv:NAME -->` on a page) and what builds the text put in its place
+BUILDERS = {
+    "weights-table": weights_table,
+    "weights-commands": weights_commands,
+    "by-length-figure": by_length_figure,
+    "by-length": by_length_table,
+    "bench-leaderboard": bench_leaderboard,
+    "bench-k-curves": bench_k_curves,
+    "mpd-table": mpd_table,
+    "mpd-robustness-strategies": mpd_robustness_strategies,
+    "mpd-robustness": mpd_robustness,
+    "mpd-robustness-times": mpd_robustness_times,
+    "mpd-commands": mpd_commands,
+    "transpath-table": lambda: mpd_table(TRANSPATH_JSON, "maps"),
+    "transpath-ratios": transpath_ratios,
+    "transpath-robustness-strategies": lambda: mpd_robustness_strategies(TRANSPATH_JSON),
+    "transpath-robustness": lambda: mpd_robustness(TRANSPATH_JSON, "maps"),
+    "transpath-commands": lambda: mpd_commands(TRANSPATH_JSON),
+    "map-size-table": map_size_table,
+    "neural-astar-modes": neural_astar_modes,
+    "neural-astar-speed": neural_astar_speed,
+    "neural-astar-commands": neural_astar_commands,
+    "suite-times": suite_times,
+    "vin64-transfer": vin64_transfer,
+    "vin64-reach": vin64_reach,
+    "vin64-training": vin64_training,
+    "vin64-held-out": vin64_held_out,
+}
 
 
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """MkDocs event: put the tables in place of their markers."""
-    for marker, build in (
-        (WEIGHTS_TABLE, weights_table),
-        (WEIGHTS_COMMANDS, weights_commands),
-        (BY_LENGTH_FIGURE, by_length_figure),
-        (BY_LENGTH, by_length_table),
-        (BENCH_LEADERBOARD, bench_leaderboard),
-        (BENCH_K_CURVES, bench_k_curves),
-        (MPD_TABLE, mpd_table),
-        (MPD_ROBUSTNESS_STRATEGIES, mpd_robustness_strategies),
-        (MPD_ROBUSTNESS, mpd_robustness),
-        (MPD_COMMANDS, mpd_commands),
-        (TRANSPATH_TABLE, lambda: mpd_table(TRANSPATH_JSON, "maps")),
-        (TRANSPATH_RATIOS, transpath_ratios),
-        (TRANSPATH_ROBUSTNESS_STRATEGIES, lambda: mpd_robustness_strategies(TRANSPATH_JSON)),
-        (TRANSPATH_ROBUSTNESS, lambda: mpd_robustness(TRANSPATH_JSON, "maps")),
-        (TRANSPATH_COMMANDS, lambda: mpd_commands(TRANSPATH_JSON)),
-        (MPD_ROBUSTNESS_TIMES, mpd_robustness_times),
-        (MAP_SIZE_TABLE, map_size_table),
-        (NEURAL_ASTAR_MODES, neural_astar_modes),
-        (NEURAL_ASTAR_SPEED, neural_astar_speed),
-        (NEURAL_ASTAR_COMMANDS, neural_astar_commands),
-        (SUITE_TIMES, suite_times),
-        (VIN64_TRANSFER, vin64_transfer),
-        (VIN64_REACH, vin64_reach),
-        (VIN64_TRAINING, vin64_training),
-        (VIN64_HELD_OUT, vin64_held_out),
-    ):
+    for name, build in BUILDERS.items():
+        marker = f"<!-- vinadv:{name} -->"
         if marker in markdown:
             markdown = markdown.replace(marker, build())
     return escape_algorithm_stars(markdown)

@@ -10,12 +10,15 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import json
 import os
 import platform
 import shlex
 import subprocess
 import sys
+import tempfile
 import time
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -37,16 +40,34 @@ def timed_side_by_side(fns, rounds: int):
 
 
 def add_output_arguments(parser: argparse.ArgumentParser, rounds: int) -> None:
-    """`--rounds` (best of, default `rounds`) and `--json`."""
+    """`--rounds` (best of, default `rounds`) and `--json` (`print_figures`)."""
     parser.add_argument("--rounds", type=int, default=rounds, help=f"rounds of timing, best kept (default {rounds})")
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
 
 
-def add_maps_arguments(parser: argparse.ArgumentParser, n: int, seed: int, size: int = 28) -> None:
-    """`--n` generated maps of `--size` from the generator's `--seed`."""
+def add_maps_arguments(
+    parser: argparse.ArgumentParser, n: int, seed: int, size: int = 28, planner: str | None = None
+) -> None:
+    """`--n` generated maps of `--size` from the generator's `--seed`; with `planner`, also `--planner` (default
+    `planner`)."""
     parser.add_argument("--n", type=int, default=n, help=f"generated maps (default {n})")
     parser.add_argument("--size", type=int, default=size, help=f"side of the maps (default {size})")
     parser.add_argument("--seed", type=int, default=seed, help=f"the generator's seed (default {seed})")
+    if planner is not None:
+        parser.add_argument("--planner", default=planner, help=f"the registry's planner to time (default {planner})")
+
+
+def print_figures(figures: dict | list, as_json: bool, lines: Iterable[str]) -> None:
+    """With `--json` (`as_json`) the figures as one JSON line, for a script that reads them; else `lines`, the same
+    figures worded for a reader."""
+    print(json.dumps(figures) if as_json else "\n".join(lines))
+
+
+def add_record_arguments(parser: argparse.ArgumentParser, out: Path, scratch: str) -> None:
+    """`--out`, the JSON record to write (default `out`), and `--work`, the scratch folder for `scratch` (default: a
+    new temporary folder; `scratch_folder`)."""
+    parser.add_argument("--out", type=Path, default=out, help="the JSON file to write")
+    parser.add_argument("--work", type=Path, default=None, help=f"scratch folder for {scratch} (default: a temp)")
 
 
 def add_rows_arguments(parser: argparse.ArgumentParser, n: int, size: int) -> None:
@@ -95,6 +116,14 @@ def cpu_model() -> str:
             return next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
     except (OSError, StopIteration):
         return platform.processor() or platform.machine()
+
+
+def scratch_folder(work: Path | None, prefix: str) -> Path:
+    """`--work` made, or without it a new temporary folder named from `prefix`: absolute, as the commands recorded
+    name it, and `run_vinadv`'s `folders` write it as a placeholder."""
+    folder = Path(work or tempfile.mkdtemp(prefix=prefix)).resolve()
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
 
 
 def shown(text: str, folders: dict[str, str]) -> str:

@@ -35,8 +35,7 @@ def attack_with(chunk: int, attack, maps, planner):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_maps_arguments(parser, n=60, seed=2026)
-    parser.add_argument("--planner", default="vin")
+    add_maps_arguments(parser, n=60, seed=2026, planner="vin")
     parser.add_argument("--moves", default="octile", help="the maps' movement model (neural-astar: moore)")
     add_output_arguments(parser, rounds=2)
     args = parser.parse_args()

@@ -13,11 +13,10 @@ Goal (issue 19): the attack at most 1.3x `plan_batch`.
 from __future__ import annotations
 
 import argparse
-import json
 
 import numpy as np
 
-from common import add_maps_arguments, add_output_arguments, timed_side_by_side  # perf/common.py
+from common import add_maps_arguments, add_output_arguments, print_figures, timed_side_by_side  # perf/common.py
 from vinadv.attacks.strategies import EVAL_CHUNK, make_attack
 from vinadv.attacks.validity import valid_cells
 from vinadv.grid import generate_maps
@@ -38,8 +37,7 @@ def plan_candidates(planner, obstacles, starts, goals) -> int:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_maps_arguments(parser, n=1000, seed=2026)
-    parser.add_argument("--planner", default="vin")
+    add_maps_arguments(parser, n=1000, seed=2026, planner="vin")
     add_output_arguments(parser, rounds=2)
     args = parser.parse_args()
     planner = load_planner(args.planner, args.size)
@@ -66,20 +64,19 @@ def main() -> None:
         "ratio": attack_s / plan_batch_s,
         "plans_per_second": candidates / plan_batch_s,
     }
-    print(json.dumps(row) if args.json else describe(row, args.size, args.rounds))
+    print_figures(row, args.json, describe(row, args.size, args.rounds))
 
 
-def describe(row: dict, size: int, rounds: int) -> str:
-    return "\n".join(
-        [
-            f"{row['maps']} maps of {size}x{size}, planner {row['planner']}: {row['candidates']:,} candidate maps "
-            f"({row['attack_planner_calls']:,} planner calls in the attack, the original maps included), "
-            f"best of {rounds}",
-            f"  exhaustive attack {row['attack_s']:8.2f} s",
-            f"  plan_batch alone  {row['plan_batch_s']:8.2f} s  ({row['plans_per_second']:,.0f} plans/s)",
-            f"  ratio {row['ratio']:.2f}x (goal: at most 1.3x)",
-        ]
-    )
+def describe(row: dict, size: int, rounds: int) -> list[str]:
+    """The figures in words: the maps, both times and their ratio beside the goal."""
+    return [
+        f"{row['maps']} maps of {size}x{size}, planner {row['planner']}: {row['candidates']:,} candidate maps "
+        f"({row['attack_planner_calls']:,} planner calls in the attack, the original maps included), "
+        f"best of {rounds}",
+        f"  exhaustive attack {row['attack_s']:8.2f} s",
+        f"  plan_batch alone  {row['plan_batch_s']:8.2f} s  ({row['plans_per_second']:,.0f} plans/s)",
+        f"  ratio {row['ratio']:.2f}x (goal: at most 1.3x)",
+    ]
 
 
 if __name__ == "__main__":

@@ -23,11 +23,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import tempfile
 import time
 from pathlib import Path
 
-from common import run_vinadv, sha256  # perf/common.py
+from common import add_record_arguments, run_vinadv, scratch_folder, sha256  # perf/common.py
 
 FAMILIES = ["mazes", "alternating_gaps", "forest", "multiple_bugtraps", "shifting_gaps", "single_bugtrap"]
 PLANNERS = ["astar", "wastar:w=2", "optimal", "neural-astar"]
@@ -55,8 +54,7 @@ def merge(old: list[dict], new: list[dict], key) -> list[dict]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data-dir", type=Path, required=True, help="folder holding the MP dataset's .npz files")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="the JSON file to write")
-    parser.add_argument("--work", type=Path, default=None, help="scratch folder for the imports (default: a temp)")
+    add_record_arguments(parser, DEFAULT_OUT, "the imports")
     parser.add_argument("--families", default=",".join(FAMILIES), help="families, joined by commas")
     parser.add_argument("--planners", default=",".join(PLANNERS), help="the table's planners, joined by commas")
     parser.add_argument(
@@ -77,8 +75,7 @@ def main() -> None:
     parser.add_argument("--update", action="store_true", help="merge into the existing --out (module doc)")
     args = parser.parse_args()
     data_dir = args.data_dir.resolve()
-    work = Path(args.work or tempfile.mkdtemp(prefix="mpd_table_")).resolve()
-    work.mkdir(parents=True, exist_ok=True)
+    work = scratch_folder(args.work, "mpd_table_")
     extra = [weighted(s) for s in args.weighted]
     folders = {str(data_dir): "<data-dir>", str(work): "<work>"}
     for _, _, file in extra:

@@ -19,13 +19,13 @@ The exact and the differentiable mode give the same paths and expansions (counte
 from __future__ import annotations
 
 import argparse
-import json
 
 import numba
 import numpy as np
 import torch
 
-from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # perf/common.py
+# perf/common.py
+from common import add_output_arguments, add_rows_arguments, print_figures, search_rows, timed_side_by_side
 from vinadv.planners.classical.astar import AStarPlanner
 from vinadv.planners.neural_astar.model import load_neural_astar
 from vinadv.planners.neural_astar.planner import NeuralAstarPlanner
@@ -86,19 +86,19 @@ def main(argv=None) -> int:
         "astar_over_neural_exact": round(timing["neural-astar exact"] / timing["astar"], 2),
         "identical_searches": int(same.sum()),
     }
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(f"{source}; torch on {args.device}, {out['numba_threads']} Numba threads")
-        for name, rate in out["plans_per_s"].items():
-            print(f"  {name:<26} {rate:>10.1f} plans/s")
-        print(
+    print_figures(
+        out,
+        args.json,
+        [
+            f"{source}; torch on {args.device}, {out['numba_threads']} Numba threads",
+            *(f"  {name:<26} {rate:>10.1f} plans/s" for name, rate in out["plans_per_s"].items()),
             f"  expansions per search: astar {out['mean_expansions']['astar']:.1f}, neural-astar "
-            f"{out['mean_expansions']['neural-astar']:.1f}"
-        )
-        print(f"  neural-astar exact is {out['exact_over_differentiable']:.2f}x the differentiable search's rate")
-        print(f"  astar is {out['astar_over_neural_exact']:.2f}x neural-astar exact's rate")
-        print(f"  identical paths and expansions, exact vs differentiable: {out['identical_searches']} of {rows}")
+            f"{out['mean_expansions']['neural-astar']:.1f}",
+            f"  neural-astar exact is {out['exact_over_differentiable']:.2f}x the differentiable search's rate",
+            f"  astar is {out['astar_over_neural_exact']:.2f}x neural-astar exact's rate",
+            f"  identical paths and expansions, exact vs differentiable: {out['identical_searches']} of {rows}",
+        ],
+    )
     return 0
 
 

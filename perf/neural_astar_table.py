@@ -27,10 +27,17 @@ import os
 import shlex
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
-from common import ROOT, cpu_model, load_average, run_vinadv, shown  # perf/common.py
+from common import (  # perf/common.py
+    ROOT,
+    add_record_arguments,
+    cpu_model,
+    load_average,
+    run_vinadv,
+    scratch_folder,
+    shown,
+)
 from mpd_table import SOURCE  # perf/mpd_table.py: the same dataset
 
 DEFAULT_OUT = ROOT / "docs" / "results" / "neural_astar.json"
@@ -52,15 +59,13 @@ def speed(data: Path, rounds: int, folders: dict[str, str]) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data-dir", type=Path, required=True, help=f"folder holding the MP dataset's {DATA_FILE}")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="the JSON file to write")
-    parser.add_argument("--work", type=Path, default=None, help="scratch folder for the imports (default: a temp)")
+    add_record_arguments(parser, DEFAULT_OUT, "the imports")
     parser.add_argument("--seeds", default="0,1,2,3,4", help="the imports' seeds, joined by commas")
     parser.add_argument("--rounds", type=int, default=10, help="the speed's rounds, best kept (default 10)")
     args = parser.parse_args()
     data_dir = args.data_dir.resolve()
     data = data_dir / DATA_FILE
-    work = Path(args.work or tempfile.mkdtemp(prefix="neural_astar_table_")).resolve()
-    work.mkdir(parents=True, exist_ok=True)
+    work = scratch_folder(args.work, "neural_astar_table_")
     folders = {str(data_dir): "<data-dir>", str(work): "<work>"}
     out = args.out.resolve()
     shown_out = os.path.relpath(out, ROOT) if out.is_relative_to(ROOT) else "OUT"

@@ -15,12 +15,12 @@ Both give the same paths and expansions (checked). The kernel is compiled (and c
 from __future__ import annotations
 
 import argparse
-import json
 
 import numba
 import numpy as np
 
-from common import add_output_arguments, add_rows_arguments, search_rows, timed_side_by_side  # perf/common.py
+# perf/common.py
+from common import add_output_arguments, add_rows_arguments, print_figures, search_rows, timed_side_by_side
 from vinadv.planners.classical.astar import AStarPlanner
 
 
@@ -59,13 +59,16 @@ def main(argv=None) -> int:
         "one_at_a_time_rows_per_s": round(rows / t_one, 1),
         "speedup": round(t_one / t_batch, 2),
     }
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(f"{source}, {moves} moves, {out['threads']} Numba threads, {out['mean_expansions']:.1f} expansions/row")
-        print(f"  batched        {out['batched_rows_per_s']:>10.1f} rows/s")
-        print(f"  one at a time  {out['one_at_a_time_rows_per_s']:>10.1f} rows/s")
-        print(f"  batched / one at a time: {out['speedup']:.2f}x")
+    print_figures(
+        out,
+        args.json,
+        [
+            f"{source}, {moves} moves, {out['threads']} Numba threads, {out['mean_expansions']:.1f} expansions/row",
+            f"  batched        {out['batched_rows_per_s']:>10.1f} rows/s",
+            f"  one at a time  {out['one_at_a_time_rows_per_s']:>10.1f} rows/s",
+            f"  batched / one at a time: {out['speedup']:.2f}x",
+        ],
+    )
     return 0
 
 

@@ -9,10 +9,9 @@ of `--rounds` each, side by side in one run; prints both times and their ratio.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
-from common import add_maps_arguments, add_output_arguments  # perf/common.py
+from common import add_maps_arguments, add_output_arguments, print_figures  # perf/common.py
 from vinadv.grid import generate_maps
 from vinadv.planners.registry import load_planner
 from vinadv.planners.search import SearchPlanner, check_paths
@@ -20,8 +19,7 @@ from vinadv.planners.search import SearchPlanner, check_paths
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_maps_arguments(parser, n=2000, seed=5)
-    parser.add_argument("--planner", default="astar")
+    add_maps_arguments(parser, n=2000, seed=5, planner="astar")
     add_output_arguments(parser, rounds=15)
     args = parser.parse_args()
     maps = generate_maps(args.n, args.size, seed=args.seed, n_starts=1)
@@ -46,13 +44,14 @@ def main() -> None:
         "check_ms": round(1e3 * check, 2),
         "check_over_search": round(check / search, 4),
     }
-    if args.json:
-        print(json.dumps(result))
-    else:
-        print(
+    print_figures(
+        result,
+        args.json,
+        [
             f"{args.planner}: {args.n} rows of {args.size}x{args.size}: search {result['search_ms']} ms, "
             f"check_paths {result['check_ms']} ms ({100 * result['check_over_search']:.1f}% of the search)"
-        )
+        ],
+    )
 
 
 if __name__ == "__main__":

@@ -18,11 +18,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import tempfile
 import time
 from pathlib import Path
 
-from common import cpu_model, load_average, run_vinadv  # perf/common.py
+from common import add_record_arguments, cpu_model, load_average, run_vinadv, scratch_folder  # perf/common.py
 
 PLANNERS = ["transpath-cf", "transpath-focal", "astar", "wastar:w=2", "optimal"]
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "docs" / "results" / "transpath.json"
@@ -37,8 +36,7 @@ def merge(old: list[dict], new: list[dict]) -> list[dict]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="the JSON file to write")
-    parser.add_argument("--work", type=Path, default=None, help="scratch folder for the maps (default: a temp)")
+    add_record_arguments(parser, DEFAULT_OUT, "the maps")
     parser.add_argument("--n", type=int, default=20, help="generated maps of the clean figures (default 20)")
     parser.add_argument("--seed", type=int, default=1000, help="the maps' seed (default 1000: the held-out maps)")
     parser.add_argument("--robustness-n", type=int, default=10, help="maps of the robustness runs (default 10)")
@@ -46,8 +44,7 @@ def main() -> None:
     parser.add_argument("--planners", default=",".join(PLANNERS), help="planners, joined by commas")
     parser.add_argument("--update", action="store_true", help="merge into the existing --out (module doc)")
     args = parser.parse_args()
-    work = Path(args.work or tempfile.mkdtemp(prefix="transpath_table_")).resolve()
-    work.mkdir(parents=True, exist_ok=True)
+    work = scratch_folder(args.work, "transpath_table_")
     folders = {str(work): "<work>"}
     maps = work / "generated64.npz"
     family = f"generated 64x64 (seed {args.seed})"

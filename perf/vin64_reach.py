@@ -29,7 +29,6 @@ import json
 import os
 import shlex
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -39,7 +38,14 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
 sys.path.insert(0, str(SRC))  # the library measured is this checkout's, as the commands' is
 
-from common import cpu_model, load_average, run_vinadv, sha256  # noqa: E402 (perf/common.py)
+from common import (  # noqa: E402 (perf/common.py)
+    add_record_arguments,
+    cpu_model,
+    load_average,
+    run_vinadv,
+    scratch_folder,
+    sha256,
+)
 from vinadv.grid.generator import generate_maps  # noqa: E402
 from vinadv.grid.shortest_paths import shortest_distances  # noqa: E402
 
@@ -106,15 +112,13 @@ def reach(n_maps: int, seed: int, n_starts: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="the JSON file to write")
-    parser.add_argument("--work", type=Path, default=None, help="scratch folder for the exports (default: a temp)")
+    add_record_arguments(parser, DEFAULT_OUT, "the exports")
     parser.add_argument("--n", type=int, default=200, help="generated 64x64 maps of the transfer runs (default 200)")
     parser.add_argument("--seed", type=int, default=5000, help="their seed (default 5000)")
     parser.add_argument("--reach-maps", type=int, default=500, help="maps of the reach figures (default 500)")
     parser.add_argument("--reach-seed", type=int, default=64, help="their seed (default 64, the training set's)")
     args = parser.parse_args()
-    work = Path(args.work or tempfile.mkdtemp(prefix="vin64_reach_")).resolve()
-    work.mkdir(parents=True, exist_ok=True)
+    work = scratch_folder(args.work, "vin64_reach_")
     folders = {str(work): "<work>"}
     out = args.out.resolve()
     shown_out = os.path.relpath(out, ROOT) if out.is_relative_to(ROOT) else "OUT"

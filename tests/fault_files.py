@@ -1,5 +1,6 @@
 """Small valid vinadv files (maps, paths, pairs, weights, classifier model, database) and ways to rewrite them, for
-the bad-input tests (tests/grid/test_checks.py, tests/test_fuzz_loaders.py)."""
+the bad-input tests (tests/grid/test_checks.py, tests/test_fuzz_loaders.py); a small file system for the full-disk
+tests (`tmpfs`) and a child process to crash (`killed_at_exit`) for the resume tests."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import io
 import sqlite3
 import subprocess
 import zipfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -134,3 +136,16 @@ def tmpfs(path: Path, size: str = "4M", options: str = ""):
         yield path
     finally:
         subprocess.run(["umount", "-l", str(path)], check=False)
+
+
+@contextlib.contextmanager
+def killed_at_exit(argv: list[str], **popen) -> Iterator[subprocess.Popen]:
+    """`argv` started as a child process (`popen`: more of `subprocess.Popen`'s arguments), then killed with SIGKILL
+    when the block ends, however it ends, and reaped: a crash, in which none of the child's own cleanup runs. The
+    block waits for the moment to crash it and asserts that the child is still running then."""
+    child = subprocess.Popen(argv, **popen)
+    try:
+        yield child
+    finally:
+        child.kill()  # SIGKILL on POSIX
+        child.wait()

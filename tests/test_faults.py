@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
 import textwrap
@@ -15,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.fault_files import tmpfs
+from tests.fault_files import killed_at_exit, tmpfs
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.executor import LocalExecutor
@@ -131,20 +130,10 @@ _KILLED_IN_A_TRANSACTION = textwrap.dedent("""
 def test_kill_inside_a_transaction_then_resume_stores_every_pair_once(weights, tmp_path):
     db = str(tmp_path / "killed.db")
     args = _args(weights, db, "--name", "k", n=100, shard=20)
-    child = subprocess.Popen(
-        [sys.executable, "-c", _KILLED_IN_A_TRANSACTION, *args],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=ENV,
-    )
-    try:
+    argv = [sys.executable, "-c", _KILLED_IN_A_TRANSACTION, *args]
+    with killed_at_exit(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV) as child:
         line = child.stdout.readline()
         assert line.strip() == "in transaction", child.stderr.read()
-        os.kill(child.pid, signal.SIGKILL)
-    finally:
-        child.kill()
-        child.wait()
     with Store.open(db) as store:
         run_id = store.find_run("k")
         partial = store.stored_indices(run_id)

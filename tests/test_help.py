@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_docs import docs_module
+from tests.docs_hooks import docs_module
 from vinadv.cli import build_parser
 from vinadv.planners.registry import ALIASES, REGISTRY, canonical_name
 

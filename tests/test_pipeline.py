@@ -3,7 +3,6 @@
 import json
 import os
 import signal
-import subprocess
 import sys
 import time
 
@@ -14,6 +13,7 @@ import sqlalchemy as sa
 from tests.classify.oracle import rule_oracle
 from tests.classify.test_harm import optimal_path, path_cost
 from tests.cli_files import command_line, generate_and_attack
+from tests.fault_files import killed_at_exit
 from tests.planner_files import EXITING, NO_PARAMETERS
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import make_attack
@@ -146,22 +146,21 @@ def test_killed_run_resumes_with_every_pair_exactly_once(weights, tmp_path):
     # the clean run redo most of them in this process, so more maps cost the suite twice)
     common = command_line("run", n=N_KILLED, size=SIZE, shard_size=20, weights=weights, seed=9)
     args = [*common, "--db", db, "--name", "k", "--quiet"]
-    proc = subprocess.Popen([sys.executable, "-m", "vinadv.cli", *args], env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    argv = [sys.executable, "-m", "vinadv.cli", *args]
     engine = sa.create_engine(db)
-    deadline = time.time() + 120
-    count = 0
-    while time.time() < deadline and proc.poll() is None:
-        time.sleep(0.01)
-        try:
-            with engine.connect() as conn:
-                count = conn.execute(sa.text("SELECT COUNT(*) FROM map_pairs")).scalar()
-        except sa.exc.OperationalError:
-            continue
-        if count > 0:
-            break
-    assert proc.poll() is None, "the run finished before it could be killed; make it longer"
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
+    with killed_at_exit(argv, env={**os.environ, "PYTHONUNBUFFERED": "1"}) as proc:
+        deadline = time.time() + 120
+        count = 0
+        while time.time() < deadline and proc.poll() is None:
+            time.sleep(0.01)
+            try:
+                with engine.connect() as conn:
+                    count = conn.execute(sa.text("SELECT COUNT(*) FROM map_pairs")).scalar()
+            except sa.exc.OperationalError:
+                continue
+            if count > 0:
+                break
+        assert proc.poll() is None, "the run finished before it could be killed; make it longer"
     with engine.connect() as conn:
         partial = conn.execute(sa.text("SELECT COUNT(*) FROM map_pairs")).scalar()
     assert 0 < partial < N_KILLED

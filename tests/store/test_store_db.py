@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
-import signal
 import subprocess
 import sys
 import textwrap
@@ -15,6 +13,7 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 
+from tests.fault_files import killed_at_exit
 from tests.store.oracle import map_text, path_text
 from vinadv.errors import InputError
 from vinadv.store import LABELS, PairRecords, Store, resolve_url, schema
@@ -161,10 +160,8 @@ def test_killed_writer_resumes_with_every_pair_exactly_once(db_url):
     n, batch = 2000, 50
     with Store.open(db_url) as store:  # create the schema up front so the child only writes
         pass
-    child = subprocess.Popen(
-        [sys.executable, "-c", _WRITER, db_url, str(n)], stdout=subprocess.PIPE, stderr=subprocess.PIPE
-    )
-    try:
+    argv = [sys.executable, "-c", _WRITER, db_url, str(n)]
+    with killed_at_exit(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as child:
         with Store.open(db_url) as store:
             deadline = time.monotonic() + 120
             stored = 0
@@ -173,10 +170,6 @@ def test_killed_writer_resumes_with_every_pair_exactly_once(db_url):
                 stored = store.count_pairs(run_id) if run_id else 0
                 time.sleep(0.05)
         assert child.poll() is None, f"writer ended before it was killed: {child.communicate()}"
-        os.kill(child.pid, signal.SIGKILL)
-    finally:
-        child.kill()
-        child.wait()
     with Store.open(db_url) as store:
         run_id = store.find_run("killed")
         partial = store.count_pairs(run_id)

@@ -89,22 +89,7 @@ def test_grid_page_shows_the_sort_and_the_regret_filter(client, db):
     assert "next ›" in html and "sort=regret" in html
 
 
-@pytest.mark.parametrize(
-    ("query", "message"),
-    [
-        ("sort=nope", "sort"),
-        ("sort=effort", "sort"),  # the run holds no expansions
-        ("min_effort=2", "min_effort"),
-        ("min_regret=abc", "min_regret"),
-        ("min_regret=nan", "min_regret"),
-        ("sort=regret&after=99999", "no pair 99999"),
-    ],
-)
-def test_bad_sort_or_filter_is_a_400_naming_it(client, db, query, message):
-    run_id, _ = db[1]["random"]
-    response = client.get(f"/api/runs/{run_id}/pairs?{query}")
-    assert response.status_code == 400
-    assert message in response.get_json()["message"]
+# a bad sort or filter is a 400 naming it: test_malformed_grid_params_are_400_naming_the_parameter in test_app.py
 
 
 # ------------------------------------------------------------------------------------------- search effort

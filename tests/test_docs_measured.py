@@ -1,0 +1,357 @@
+"""The measured pages cannot go stale: each table and sentence of `docs/measured.py` is read from the JSON the
+benchmark scripts commit, and another JSON gives another text (nothing is copied by hand)."""
+
+import importlib.util
+import json
+import re
+from pathlib import Path
+
+import pytest
+import torch
+from torch.utils.flop_counter import FlopCounterMode
+
+from tests.docs_hooks import DOCS, ROOT, WEIGHTS, docs_module, filled_page
+from vinadv.planners.vin.arrays import VINConfig
+from vinadv.planners.vin.model import VIN
+
+
+def _mpd_record(opt: float) -> dict:
+    search = {"rows": 100, "opt": opt, "exp": None, "hmean": None, "success": 0.5, "expansions": None}
+    by_k = {"k": 1, "maps": 20, "valid": 19, "harmful_rate": 0.25, "paper_success_rate": 0.1, "mean_regret": 0.5}
+    k2 = {**by_k, "k": 2, "harmful_rate": 0.5, "paper_success_rate": 0.2, "mean_regret": 1.25}
+    return {
+        "families": [
+            {
+                "family": "forest",
+                "import": "vinadv maps import F",
+                "planners": [{"planner": "optimal", "command": "vinadv eval --planner optimal", "search": search}],
+            }
+        ],
+        "robustness": [
+            {
+                "family": "forest",
+                "planner": "vin",
+                "command": "vinadv robustness --planner vin --weights <weights>/vin32.pt",
+                "weights_sha256": "ab12",
+                "figures": {
+                    "clean": {"success_rate": 1.0},
+                    "strategies": {"random": {"by_obstacles": [by_k, k2]}},
+                    "overall": [by_k, k2],
+                },
+            }
+        ],
+    }
+
+
+def test_the_mp_benchmark_page_is_read_from_its_json(tmp_path):
+    measured = docs_module("measured")
+    filled = filled_page("results/mpd.md")
+    data = json.loads(measured.MPD_JSON.read_text())
+    assert len(data["families"]) == 6 and "a982a04" in data["source"]
+    for family in data["families"]:
+        assert family["import"] in filled
+        for entry in family["planners"]:
+            assert entry["command"] in filled and "shared" not in entry["command"]
+            fig = entry["search"]
+            assert f"| {family['family']} | `{entry['planner']}` | {fig['rows']} | {fig['opt']:.3f} |" in filled
+    assert {"wastar:w=2", "neural-astar", "astar", "optimal"} <= {run["planner"] for run in data["robustness"]}
+    assert {run["family"] for run in data["robustness"]} == {family["family"] for family in data["families"]}
+    assert all(len(run["figures"]["overall"]) == 3 for run in data["robustness"])
+    # another JSON gives another table: nothing is copied by hand
+    path = tmp_path / "mpd.json"
+    path.write_text(json.dumps(_mpd_record(0.125)))
+    assert measured.mpd_table(path).splitlines()[2] == "| forest | `optimal` | 100 | 0.125 | — | — | 50.0% | — |"
+    row = "| forest | `vin` | 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | 1.250 |"
+    assert measured.mpd_robustness(path).splitlines()[2] == row
+    assert measured.mpd_robustness_strategies(path).splitlines()[2] == "| forest | `vin` | 25.0% / 50.0% |"
+    commands = measured.mpd_commands(path)
+    assert "vinadv robustness --planner vin --weights <weights>/vin32.pt" in commands
+    assert "vin: weights with SHA-256 ab12" in commands
+
+
+def _map_size_record() -> dict:
+    fma = {"h_conv": 1, "r_conv": 1, "q_conv_of_r": 1, "value_iteration": 1, "forward": 4_500_000, "engine": 2_000_000}
+    row = {
+        "size": 28,
+        "weights": "w.pt",
+        "k": 36,
+        "maps": 500,
+        "value_maps_per_s": 4321.0,
+        "value_maps_share_of_fma_peak": 0.125,
+        "engine_plans_per_s": 12345.6,
+        "near_tie_maps": 3,
+        "attack_share_of_fma_peak": 0.5,
+        "attack_s_per_map": 0.0456,
+        "candidates_per_map": 401.2,
+        "fma_per_map": fma,
+        "fma_limit_plans_per_s": 50000.0,
+        "engine_share_of_fma_peak": 0.25,
+        "growth_from_first": {
+            "value_map_time_per_map": 1.0,
+            "engine_time_per_map": 1.0,
+            "fma_per_map": 1.0,
+            "attack_time_per_map": 1.0,
+            "attack_fma_per_map": 1.0,
+        },
+    }
+    machine = {"cpu": "C", "cores": 2, "engine_threads": 2, "fma_peak_per_s": 1e11}
+    return {
+        "command": "python perf/map_size.py --sizes 28",
+        "machine": {**machine, "load_average_before": 1.5, "load_average_after": 2.5},
+        "sizes": [row],
+    }
+
+
+def test_the_map_size_table_is_read_from_its_json(tmp_path):
+    measured = docs_module("measured")
+    assert "<!-- vinadv:map-size-table -->" in (DOCS / "guide" / "gpu.md").read_text()
+    filled = filled_page("guide/gpu.md")
+    data = json.loads(measured.MAP_SIZE_JSON.read_text())
+    assert data["command"] in filled
+    assert [row["size"] for row in data["sizes"]] == [28, 32, 64]
+    for row in data["sizes"]:
+        assert f"| {row['size']}x{row['size']} | {row['k']} | {row['fma_per_map']['engine'] / 1e6:.1f} M" in filled
+        assert f"| {row['engine_plans_per_s']:,.0f} ({row['near_tie_maps']} of {row['maps']:,}) |" in filled
+    # another JSON gives another table: nothing is copied by hand
+    path = tmp_path / "map_size.json"
+    path.write_text(json.dumps(_map_size_record()))
+    table = measured.map_size_table(path)
+    assert table.splitlines()[2] == (
+        "| 28x28 | 36 | 2.0 M (4.5 M) | 50,000 | 4,321 (12.5%) | 12,346 (3 of 500) | 401 | 0.0456 s (50.0%) "
+        "| 1.0x / 1.0x / 1.0x | 1x / 1x |"
+    )
+    assert "load average 1.5 before and 2.5 after" in table
+
+
+def _neural_astar_record() -> dict:
+    same = {"searches": 100, "identical_paths": 99, "identical_expansions": 98}
+    search = {"rows": 100, "opt": 0.8, "exp": 0.5, "hmean": 0.6, "success": 1.0, "expansions": 60.0}
+    search["astar_expansions"] = 150.0
+    seed = {
+        "seed": 7,
+        "import": "vinadv maps import --format mpd <data-dir>/mazes_032_moore_c8.npz --seed 7",
+        "compare_modes": {"command": "vinadv neural-astar compare-modes --data <work>/m7.npz", "figures": same},
+        "eval": {"command": "vinadv eval --data <work>/m7.npz", "search": search},
+    }
+    seed8 = {**seed, "seed": 8, "eval": {**seed["eval"], "search": {**search, "opt": 0.9, "hmean": 0.7}}}
+    rate = {"astar": 5000.0, "neural-astar exact": 10.0, "encoder only": 12.5, "differentiable": 4.0}
+    speed = {
+        "source": "<data-dir>/mazes_032_moore_c8.npz: 100 test maps",
+        "rows": 100,
+        "device": "cpu",
+        "numba_threads": 2,
+        "torch_threads": 1,
+        "mean_expansions": {"astar": 62.5, "neural-astar": 35.25},
+        "plans_per_s": {**rate, "differentiable + gradient": 1.0},
+        "exact_over_differentiable": 2.5,
+        "astar_over_neural_exact": 500.0,
+        "identical_searches": 100,
+    }
+    machine = {"cpu": "C", "cores": 2, "torch": "9.9", "niceness": 10}
+    return {
+        "command": "python perf/neural_astar_table.py --data-dir <data-dir>",
+        "date": "2026-01-02 03:04 UTC",
+        "source": "S",
+        "machine": {**machine, "load_average_before": 1.5, "load_average_after": 2.5},
+        "modes": [seed, seed8],
+        "speed": {"command": "python perf/neural_astar.py --rounds 4", "rounds": 4, "figures": speed},
+    }
+
+
+def test_the_neural_astar_measurements_are_read_from_their_json(tmp_path):
+    measured = docs_module("measured")
+    page = (DOCS / "guide" / "neural-astar.md").read_text()
+    for name in ("neural-astar-modes", "neural-astar-speed", "neural-astar-commands"):
+        assert page.count(f"<!-- vinadv:{name} -->") == 1
+    # the section as written holds no table and no measured number: the hook brings them all
+    section = page.split("\n## Measured\n", 1)[1].split("\n## ", 1)[0]
+    assert not [line for line in section.splitlines() if line.startswith("|")]
+    assert not re.search(r"\d\.\d|times as fast|\d+ of \d+", section)
+    filled = filled_page("guide/neural-astar.md")
+    data = json.loads(measured.NEURAL_ASTAR_JSON.read_text())
+    assert [entry["seed"] for entry in data["modes"]] == [0, 1, 2, 3, 4] and "a982a04" in data["source"]
+    assert data["command"] in filled and data["speed"]["command"] in filled
+    for entry in data["modes"]:
+        commands = [entry["import"], entry["compare_modes"]["command"], entry["eval"]["command"]]
+        for command in commands:
+            assert command in filled and "shared" not in command and "/tmp" not in command
+        same, fig = entry["compare_modes"]["figures"], entry["eval"]["search"]
+        assert f"| {entry['seed']} | {same['searches']} | {same['identical_paths']} | " in filled
+        assert f" | {fig['opt']:.2f} | {fig['exp']:.3f} | {fig['hmean']:.3f} | " in filled
+    speed = data["speed"]["figures"]
+    assert "/tmp" not in json.dumps(data) and "shared" not in json.dumps(data)
+    assert f"| {speed['plans_per_s']['astar']:,.1f} |" in filled
+    assert f"load average {data['machine']['load_average_before']} before" in filled
+    # another JSON gives other tables and other ratios: nothing is copied by hand
+    path = tmp_path / "neural_astar.json"
+    path.write_text(json.dumps(_neural_astar_record()))
+    modes = measured.neural_astar_modes(path).splitlines()
+    assert modes[2] == "| 7 | 100 | 99 | 98 | 0.80 | 0.500 | 0.600 | 100.0% | 60.0 (150.0) |"
+    assert modes[4] == (
+        "| all | 200 | 198 (99.0%) | 196 (98.0%) | 0.850 | 0.500 | 0.650 (mean of the 2) | 100.0% | 60.0 (150.0) |"
+    )
+    assert "Measured 2026-01-02 03:04 UTC on C (2 cores), PyTorch 9.9, niceness 10, load average 1.5" in modes[-1]
+    speed_text = measured.neural_astar_speed(path)
+    assert speed_text.startswith("| search (`<data-dir>/mazes_032_moore_c8.npz`: 100 test maps, one start each; ")
+    assert "| `astar` (compiled, unit costs) | 5,000.0 |" in speed_text
+    assert "plans 2.5 times as fast as the differentiable search" in speed_text
+    assert "(100 of 100 in the same run); the encoder (the CNN) is 80.0% of its time" in speed_text
+    assert "`astar` plans 500 times as fast" in speed_text and "best of 4 rounds" in speed_text
+    assert "vinadv eval --data <work>/m7.npz" in measured.neural_astar_commands(path)
+    record = _neural_astar_record()
+    record["speed"]["figures"]["plans_per_s"]["encoder only"] = 9.0  # the exact mode's best round beat the encoder's
+    path.write_text(json.dumps(record))
+    assert "the encoder alone took as long as the whole of it (111.1%: " in measured.neural_astar_speed(path)
+
+
+def _vin64_files(folder: Path) -> Path:
+    """A made-up `vin64_reach.json` and the weights records the 64x64 VIN's section reads, in `folder`."""
+    figures = {"maps": 10, "seed": 3, "size": 64, "starts_per_map": 7, "rollouts": 70}
+    runs = [
+        {"k": 9, "command": "vinadv vin eval --k 9", "figures": {**figures, "success_rate": 0.5, "optimal_rate": 0.25}}
+    ]
+    record = {
+        "command": "python perf/vin64_reach.py --n 10",
+        "date": "2026-01-02 03:04 UTC",
+        "transfer": [{"weights": "a28.pt", "export": "vinadv vin export-weights a28.pt", "runs": runs}],
+        "reach": {
+            "maps": 20,
+            "size": 64,
+            "seed": 4,
+            "starts_per_map": 1,
+            "longest_from_a_start": 77,
+            "cells": 1234,
+            "cells_within": {"50": 0.75, "70": 0.875},
+            "farthest_cell_median": 40.5,
+            "farthest_cell_p99": 66.0,
+            "farthest_cell_max": 90,
+        },
+    }
+    (folder / "a28.json").write_text(json.dumps({"train_config": {"vi_init": "shift"}}))
+    epochs = [{"val_action_accuracy": 0.9}, {"val_action_accuracy": 0.95}]
+    hardware = {"cpu_model": "C", "cpu_count": 4, "torch_threads": 2}
+    training = {"epochs_done": 2, "wall_time_s": 90.0, "hardware": hardware, "epochs": epochs, "model": {"k": 20}}
+    (folder / "vin64.json").write_text(json.dumps(training))
+    by_length = [
+        {"moves": [10, 14], "rollouts": 90, "success_rate": 1.0},
+        {"moves": [15, 19], "rollouts": 8, "success_rate": 0.5},
+        {"moves": [20, 24], "rollouts": 2, "success_rate": 0.0},
+    ]
+    held_out = {"maps": 50, "size": 64, "seed": 1000, "rollouts": 100, "success_rate": 0.94, "command": "vinadv x"}
+    held_out |= {"terminations": {"goal": 94}, "by_length": by_length}
+    (folder / "vin64.metrics.json").write_text(json.dumps(held_out))
+    path = folder / "vin64_reach.json"
+    path.write_text(json.dumps(record))
+    return path
+
+
+def test_the_vin64_section_is_read_from_its_json_and_the_weights_files(tmp_path):
+    hooks, measured = docs_module("hooks"), docs_module("measured")
+    page = (DOCS / "guide" / "planners.md").read_text()
+    section = page.split("\n### The 64x64 VIN (`vin64.pt`)\n", 1)[1].split("\n## ", 1)[0]
+    for name in ("vin64-transfer", "vin64-reach", "vin64-training", "vin64-held-out"):
+        marker = f"<!-- vinadv:{name} -->"
+        assert page.count(marker) == 1 and marker in section
+    # the prose holds no measured number: no percentage, and no decimal but the settings (k = 1.3 N) outside code
+    prose = re.sub(r"```.*?```", "", section, flags=re.S)
+    assert "%" not in prose and re.findall(r"\d+\.\d+", prose) == ["1.3"]
+    assert not re.search(r"\d+ minutes|median \d|\d+ of the \d", prose)
+    filled = hooks.on_page_markdown(section, page=None, config=None, files=None)
+    assert "<!-- vinadv:" not in filled
+    data = json.loads(measured.VIN64_JSON.read_text())
+    assert data["command"] in filled and "/tmp" not in json.dumps(data)
+    for entry in data["transfer"]:
+        assert entry["export"] in filled and (WEIGHTS / entry["weights"]).is_file()
+        for run in entry["runs"]:
+            assert run["command"] in filled
+            assert f" | {run['k']} | {measured.percent(run['figures']['success_rate'])} of " in filled
+    assert f"within {max(data['reach']['cells_within'], key=int)} moves" in filled
+    training = json.loads((WEIGHTS / "vin64.json").read_text())
+    assert f"took {training['wall_time_s'] / 60:.1f} minutes" in filled
+    assert measured.percent(training["epochs"][-1]["val_action_accuracy"]) in filled
+    metrics = json.loads((WEIGHTS / "vin64.metrics.json").read_text())
+    assert f"from {measured.percent(metrics['success_rate'])} of the {metrics['rollouts']:,} starts" in filled
+    # other files give other text: nothing is copied by hand
+    path = _vin64_files(tmp_path)
+    assert measured.vin64_transfer(path, tmp_path).splitlines()[2] == "| `a28.pt` | `shift` | 9 | 50.0% of 70 | 25.0% |"
+    assert "on 10 generated 64x64 maps (seed 3, 7 starts each)" in measured.vin64_transfer(path, tmp_path)
+    assert measured.vin64_reach(path) == (
+        "On the generator's first 20 64x64 maps of seed 4 (one start each, the training set's settings) the longest "
+        "optimal path from a start has 77 moves, and 87.5% of the 1,234 free cells that reach the goal do so within 70 "
+        "moves; within 50 moves: 75.0%; the per-map farthest cell has median 40.5, 99th percentile 66 and at most 90 "
+        "moves (`python perf/vin64_reach.py --n 10`, 2026-01-02 03:04 UTC)"
+    )
+    assert measured.vin64_training(tmp_path) == (
+        "The 2 epochs took 1.5 minutes on C (4 cores, 2 torch threads; `vin64.json`); validation action accuracy "
+        "after epochs 1 to 2: 90.0% / 95.0%"
+    )
+    assert measured.vin64_held_out(tmp_path).endswith(
+        "from 94.0% of the 100 starts (`vinadv x`); of the 6 starts it misses, 6 are among the 10 (10.0% of the "
+        "starts) whose optimal path has 15 moves or more"
+    )
+
+
+@pytest.mark.slow  # loads the benchmark script and what it imports: seconds
+def test_the_published_fma_count_is_the_forwards_as_pytorch_counts_it():
+    # perf/map_size.py's formula against PyTorch's own count of the VIN's convolutions (2 flops a multiply-add)
+    spec = importlib.util.spec_from_file_location("map_size", ROOT / "perf" / "map_size.py")
+    map_size = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(map_size)
+    for size, k, l_h in ((8, 3, 150), (11, 5, 7)):
+        config = VINConfig(k=k, l_h=l_h)
+        with FlopCounterMode(display=False) as counter:
+            VIN(config).q_values(torch.zeros(1, 2, size, size))
+        fma = map_size.fma_per_map(size, k, config.l_i, config.l_h, config.l_q)
+        assert 2 * fma["forward"] == counter.get_total_flops()
+        assert fma["forward"] == fma["h_conv"] + fma["r_conv"] + fma["q_conv_of_r"] + fma["value_iteration"]
+        # the engine's count: h and r folded into one 2 -> 1 convolution, the rest as the forward
+        assert fma["engine"] == fma["forward"] - fma["h_conv"] - fma["r_conv"] + size * size * 9 * config.l_i
+
+
+def test_the_suite_times_render_from_their_committed_json():
+    measured = docs_module("measured")
+    data = json.loads(measured.SUITE_TIMES_JSON.read_text())
+    page = filled_page("development.md")
+    table = measured.suite_times()
+    assert table in page and data["commit"] in table and f"{data['whole_suite_median_s']:.1f} s" in table
+    assert len(data["runs"]) == len(data["whole_suite_s"]) == len(data["quick_tier_s"])
+    if "base" in data:  # both commits' rows, and the ratio of the whole suites' medians
+        ratio = data["whole_suite_median_s"] / data["base"]["whole_suite_median_s"]
+        assert f"`{data['base']['commit']}`" in table and f"whole suite {ratio:.2f}x" in table
+
+
+def test_the_neural_astar_page_gives_each_search_one_expansion_count():
+    # the speed run draws its own starts: its mean expansions (35.2 / 62.1) beside the modes table's (63.5 / 148.0)
+    # read as two counts for one search; an expansion count on the page is one the eval commands measured
+    filled = filled_page("guide/neural-astar.md")
+    data = json.loads(docs_module("measured").NEURAL_ASTAR_JSON.read_text())
+    searches = [entry["eval"]["search"] for entry in data["modes"]]
+    measured = {f"{fig[key]:.1f}" for fig in searches for key in ("expansions", "astar_expansions")}
+    rows = [fig["rows"] for fig in searches]
+    for key in ("expansions", "astar_expansions"):  # the modes table's last row: over all seeds
+        measured.add(f"{sum(fig[key] * n for fig, n in zip(searches, rows, strict=True)) / sum(rows):.1f}")
+    given = re.findall(r"(\d[\d,]*\.\d+) expansions", filled) + re.findall(r"\| (\d+\.\d) \((\d+\.\d)\) \|", filled)
+    given = [number for found in given for number in ([found] if isinstance(found, str) else found)]
+    assert given and set(given) <= measured, f"expansion counts not from the eval figures: {set(given) - measured}"
+
+
+def test_the_transpath_page_is_read_from_its_json(tmp_path):
+    measured = docs_module("measured")
+    filled = filled_page("results/transpath.md")
+    data = json.loads(measured.TRANSPATH_JSON.read_text())
+    (family,) = data["families"]
+    assert family["import"] in filled and "--size 64" in family["import"]
+    for entry in family["planners"]:
+        assert entry["command"] in filled
+    for run in data["robustness"]:
+        assert run["command"] in filled and len(run["figures"]["overall"]) == 3
+    assert {"transpath-cf", "transpath-focal", "astar"} <= {run["planner"] for run in data["robustness"]}
+    # another JSON gives another table of TransPath's ratios: nothing is copied by hand
+    record = _mpd_record(0.5)
+    ratios = {"rows": 7, "kept": 4, "hardness": 1.05, "expansions_ratio": 0.25, "cost_ratio": 1.0625}
+    ratios |= {"unreached": 1, "expansions": 12.0, "vanilla_expansions": 48.0}
+    record["families"][0]["planners"][0]["search"]["transpath"] = ratios
+    path = tmp_path / "transpath.json"
+    path.write_text(json.dumps(record))
+    row = "| forest | `optimal` | 4 of 7 | 0.250 | 1.062 | 1 | 12.0 | 48.0 |"
+    assert measured.transpath_ratios(path).splitlines()[2] == row
