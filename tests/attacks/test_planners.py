@@ -15,7 +15,7 @@ from vinadv.grid import generate_maps
 from vinadv.identify import identify, rule_strength
 from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.gppn import GPPN, GPPNConfig
-from vinadv.planners.interface import PlannerError, TorchPlanner
+from vinadv.planners.interface import Capabilities, PlannerError, TorchPlanner
 from vinadv.planners.registry import load_custom
 from vinadv.planners.spec import is_planner_spec
 from vinadv.planners.vin import make_input
@@ -158,3 +158,27 @@ def test_the_planner_spec_survives_the_pairs_file_and_a_mangled_one_is_refused(m
         pairs.save(tmp_path / "bad.npz")
         with pytest.raises(InputError, match="field 'params' has a 'planner' that is not a planner spec"):
             PairSet.load(tmp_path / "bad.npz")
+
+
+class _StartValues(OptimalPlanner):
+    """`optimal` whose value maps read the start, as an encoder with a start channel does: plus a bump at each start
+    (minus the exact cost-to-go elsewhere), so that the key-points ranking differs where the start is read."""
+
+    capabilities = Capabilities(policy=True, value_maps=True, start_values=True)
+
+    def value_maps(self, obstacles, goals, starts=None):
+        value = super().value_maps(obstacles, goals)
+        if starts is not None:
+            value[np.arange(len(value)), starts[:, 0], starts[:, 1]] += 100.0
+        return value
+
+
+def test_key_points_give_a_planner_whose_values_read_the_start_the_starts_it_attacks(maps):
+    ctx = context(_StartValues(SIZE), maps)
+    scores = KeyPointsAttack().candidate_scores(ctx)
+    # the ranking of the value maps read with the searches' starts, not of the goal-only maps
+    told = context(OptimalPlanner(SIZE), maps)
+    told_value = _StartValues(SIZE).value_maps(ctx.obstacles, ctx.goals, ctx.starts)
+    told.planner.value_maps = lambda obstacles, goals: told_value
+    np.testing.assert_array_equal(scores, KeyPointsAttack().candidate_scores(told))
+    assert not np.array_equal(scores, KeyPointsAttack().candidate_scores(context(OptimalPlanner(SIZE), maps)))

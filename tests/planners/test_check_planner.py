@@ -40,7 +40,12 @@ def test_every_cheap_registered_planner_passes_and_declares_what_its_family_offe
     [
         ("gppn", 28, "octile", Capabilities(policy=True, gradients=True)),
         ("vin+d4", 28, "octile", Capabilities(policy=True, gradients=True)),
-        ("neural-astar", 32, "moore", Capabilities(value_maps=True, gradients=True, expansions=True)),
+        (
+            "neural-astar",
+            32,
+            "moore",
+            Capabilities(value_maps=True, gradients=True, expansions=True, start_values=True),
+        ),
     ],
 )
 def test_the_torch_planners_pass_too(spec, size, moves, declared):

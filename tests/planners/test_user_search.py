@@ -277,3 +277,30 @@ def test_expansions_as_a_0_1_number_mask_are_counted_as_the_bool_mask():
     expanded[:, 1, 1:5] = 1.0
     result = run(lambda o, s, g: SearchResult.from_paths(straight(o, s, g), g, expanded=expanded))
     assert result.expanded.dtype == bool and result.expansions.tolist() == [4, 4]
+
+
+def test_a_user_planner_that_declares_start_values_gets_the_starts_and_one_that_does_not_never_does():
+    class Reads:
+        capabilities = {"start_values": True}
+
+        def plan_paths(self, obstacles, starts, goals, corner_cutting=True):
+            return [np.array([s]) for s in starts]
+
+        def value_maps(self, obstacles, goals, starts=None):
+            self.got = starts
+            return np.zeros(obstacles.shape)
+
+    class Ignores(Reads):
+        capabilities = {}
+
+        def value_maps(self, obstacles, goals):  # two arguments: never given the starts
+            return np.ones(obstacles.shape)
+
+    obstacles, goals, starts = np.zeros((2, 6, 6), bool), np.array([[1, 4], [1, 4]]), np.array([[0, 0], [5, 5]])
+    reads = UserSearchPlanner(Reads(), "reads", 6)
+    assert reads.capabilities.start_values
+    reads.value_maps(obstacles, goals, starts)
+    assert np.array_equal(reads.impl.got, starts)
+    ignores = UserSearchPlanner(Ignores(), "ignores", 6)
+    assert not ignores.capabilities.start_values
+    assert (ignores.value_maps(obstacles, goals, starts) == 1).all()

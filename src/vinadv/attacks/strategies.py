@@ -476,7 +476,10 @@ class KeyPointsAttack(Attack):
         on_path = ctx.path_mask()
         scores = np.full((b, n, n), -np.inf)
 
-        value = ctx.planner.value_maps(ctx.obstacles, ctx.goals)
+        # an encoder with a start channel gets the starts, to rank the cells of the searches attacked, not of a map
+        # whose start channel holds the goal alone
+        starts = {"starts": ctx.starts} if ctx.planner.capabilities.start_values else {}
+        value = ctx.planner.value_maps(ctx.obstacles, ctx.goals, **starts)
         near = within_distance(on_path, 1) & ~on_path
         if ctx.edit == REMOVE:
             # tier 4 (lowest): every obstacle, in [0, 1); tier 3: those next to the path, in [1, 2); both by the

@@ -70,7 +70,9 @@ def check_planner(
     _check_expansions(planner, capabilities, result, rows)
     if capabilities.policy:
         planner.logits(obstacles, goals)  # checked by `check_logits`
-    value = np.asarray(planner.value_maps(obstacles, goals))
+    # a planner whose value maps read the start is asked as the key-points ranking asks it
+    with_starts = {"starts": starts[:, 0]} if capabilities.start_values else {}
+    value = np.asarray(planner.value_maps(obstacles, goals, **with_starts))
     if value.shape != obstacles.shape or value.dtype.kind != "f":
         raise PlannerError(
             f"planner {name!r}: value_maps returned shape {value.shape} and dtype {value.dtype}; expected "

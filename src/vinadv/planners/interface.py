@@ -75,12 +75,16 @@ class Capabilities:
         gradients: a differentiable module (the saliency attack): of the logits for a policy planner
             (`logits_module`), of a path map for a search planner (`differentiable_paths`).
         expansions: `plan` reports the cells each search expanded (`SearchResult.expanded`: the Exp metric).
+        start_values: its value maps depend on the search's start, and `value_maps(obstacles, goals, starts)` takes
+            the starts `(B, 2)` (an encoder with a start channel: Neural A*'s, TransPath's); the key-points ranking
+            passes them, so that it ranks the cells of the search it attacks.
     """
 
     policy: bool = False
     value_maps: bool = False
     gradients: bool = False
     expansions: bool = False
+    start_values: bool = False
 
     @classmethod
     def from_mapping(cls, name: str, declared) -> Capabilities:
@@ -105,6 +109,7 @@ CAPABILITY_TEXT = {
     "value_maps": "value maps of its own",
     "gradients": "a differentiable module (gradients)",
     "expansions": "the cells each search expanded",
+    "start_values": "value maps that read the start",
 }
 
 

@@ -317,7 +317,8 @@ class UserSearchPlanner(SearchPlanner):
     model are refused, as for every planner), `value_maps(obstacles, goals) -> (B, N, N)` (its own cost or heuristic
     map, for the key-points ranking; default minus the exact cost-to-go), `differentiable_paths` (a torch module,
     for the saliency attack) and `capabilities` (a `Capabilities`, or a dict of some of its fields: say
-    `{"expansions": True}` where its answers carry the expanded cells). Its capabilities are what it offers: value
+    `{"expansions": True}` where its answers carry the expanded cells, `"start_values": True` where its `value_maps`
+    takes the starts as a third argument). Its capabilities are what it offers: value
     maps where it has `value_maps`, gradients where `differentiable_paths` is not None, expansions where it declares
     them; never a policy. Whatever it raises, `sys.exit` included, is one `PlannerError` naming the planner.
     """
@@ -338,6 +339,7 @@ class UserSearchPlanner(SearchPlanner):
             value_maps=declared.value_maps or callable(getattr(impl, "value_maps", None)),
             gradients=declared.gradients or getattr(impl, "differentiable_paths", None) is not None,
             expansions=declared.expansions,
+            start_values=declared.start_values and callable(getattr(impl, "value_maps", None)),
         )
 
     def _call(self, what: str, method, *args):
@@ -349,12 +351,15 @@ class UserSearchPlanner(SearchPlanner):
     def plan_paths(self, obstacles, starts, goals, corner_cutting: bool = True):
         return self._call("plan_paths", self.impl.plan_paths, obstacles, starts, goals, corner_cutting)
 
-    def value_maps(self, obstacles: np.ndarray, goals: np.ndarray) -> np.ndarray:
+    def value_maps(self, obstacles: np.ndarray, goals: np.ndarray, starts: np.ndarray | None = None) -> np.ndarray:
         own = getattr(self.impl, "value_maps", None)
         if own is None:
             return super().value_maps(obstacles, goals)
         obstacles = np.ascontiguousarray(obstacles, dtype=bool)
-        value = np.asarray(self._call("value_maps", own, obstacles, np.asarray(goals, dtype=np.int64)))
+        args = [obstacles, np.asarray(goals, dtype=np.int64)]
+        if starts is not None and self.capabilities.start_values:  # only an object that declares it takes starts
+            args.append(np.asarray(starts, dtype=np.int64))
+        value = np.asarray(self._call("value_maps", own, *args))
         if value.shape != obstacles.shape or value.dtype.kind != "f":
             raise PlannerError(
                 f"planner {self.name!r} returned value maps of shape {value.shape} and dtype {value.dtype}; "

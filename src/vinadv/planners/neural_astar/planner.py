@@ -53,7 +53,7 @@ class NeuralAstarPlanner(SearchPlanner):
     """
 
     moves = MOVES
-    capabilities = Capabilities(value_maps=True, gradients=True, expansions=True)
+    capabilities = Capabilities(value_maps=True, gradients=True, expansions=True, start_values=True)
 
     def __init__(
         self,

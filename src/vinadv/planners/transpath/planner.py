@@ -58,7 +58,7 @@ class TransPathPlanner(SearchPlanner):
     """
 
     moves = MOVES
-    capabilities = Capabilities(value_maps=True, gradients=True, expansions=True)
+    capabilities = Capabilities(value_maps=True, gradients=True, expansions=True, start_values=True)
     vanilla_ratios = True
 
     def __init__(
