@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 import re
 import urllib.parse
+from collections.abc import Callable
 
 from vinadv.bench.suites import ENTRY_FORMAT_2, ENTRY_FORMATS, Suite
 from vinadv.vocabulary import EDITS, LABELS
@@ -277,13 +278,19 @@ def check_submission(value, field: str = "submission") -> None:
         raise Bad(f"{field}.external", f"is {_kind(s['external'])}, expected true or false")
 
 
-def submission_problem(submission) -> str | None:
-    """The first problem of an entry's submission fields as "field 'F' ...", or None."""
+def _problem(check: Callable[..., None], *args) -> str | None:
+    """What `check(*args)` refuses, as "field 'F' ...", or None where it accepts them: the one way the
+    `*_problem` functions turn a `Bad` into their answer."""
     try:
-        check_submission(submission)
+        check(*args)
     except Bad as exc:
         return str(exc)
     return None
+
+
+def submission_problem(submission) -> str | None:
+    """The first problem of an entry's submission fields as "field 'F' ...", or None."""
+    return _problem(check_submission, submission)
 
 
 def check_per_map(value, attacks: dict, clean: dict) -> None:
@@ -354,11 +361,7 @@ def _record(r: dict, at: str, n: int, k: int) -> None:
 
 def entry_problem(entry) -> str | None:
     """The first problem of `entry` as "field 'F' ...", or None for an entry the schema accepts."""
-    try:
-        check_entry(entry)
-    except Bad as exc:
-        return str(exc)
-    return None
+    return _problem(check_entry, entry)
 
 
 def _per_map(value, field: str, n: int) -> list:
@@ -436,8 +439,4 @@ def check_chunk(result, suite: Suite, chunk: int) -> None:
 
 def chunk_problem(result, suite: Suite, chunk: int) -> str | None:
     """The first problem of a stored chunk result as "field 'F' ...", or None for one the schema accepts."""
-    try:
-        check_chunk(result, suite, chunk)
-    except Bad as exc:
-        return str(exc)
-    return None
+    return _problem(check_chunk, result, suite, chunk)

@@ -28,6 +28,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     import numpy as np
 
     from vinadv.grid import MapSet
+    from vinadv.planners.interface import plan_every_start
     from vinadv.planners.pathset import PathSet
     from vinadv.vocabulary import TERMINATIONS
 
@@ -39,15 +40,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     maps = MapSet.load(args.maps)
     planner = load_args_planner(args, maps, device)
     t0 = time.perf_counter()
-    result = planner.plan(
-        maps.obstacles,
-        maps.starts,
-        maps.goals,
-        maps.corner_cutting,
-        maps.moves,
-        chunk_size=args.chunk_size,
-        progress=shows_progress(args),
-    )
+    result = plan_every_start(planner, maps, chunk_size=args.chunk_size, progress=shows_progress(args))
     elapsed = time.perf_counter() - t0
     k = planner.config.get("k")
     label = " ".join(

@@ -27,6 +27,7 @@ from vinadv.evaluation.planner_metrics import evaluate_planner
 from vinadv.evaluation.search_metrics import evaluate_search
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths
+from vinadv.planners.interface import plan_every_start
 from vinadv.planners.registry import default_weights, load_planner
 from vinadv.vocabulary import PLANNER_QUALITY
 
@@ -116,7 +117,7 @@ def planner_quality(
     capabilities = planner.capabilities
     start = time.perf_counter()
     planner = planner.for_moves(maps.moves)
-    plans = planner.plan(maps.obstacles, maps.starts, maps.goals, maps.corner_cutting, maps.moves)  # once for both
+    plans = plan_every_start(planner, maps)  # once for both
     metrics = evaluate_planner(planner, maps, result=plans)
     search = evaluate_search(planner, maps, result=plans) if capabilities.expansions else None
     value_map = None

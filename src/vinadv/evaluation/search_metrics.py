@@ -45,6 +45,7 @@ from vinadv.grid.mapset import MapSet
 from vinadv.grid.paths import path_costs
 from vinadv.grid.shortest_paths import COST_TOL
 from vinadv.planners.classical.astar import AStarPlanner
+from vinadv.planners.interface import plan_every_start
 from vinadv.planners.result import PlanResult
 from vinadv.planners.search import SearchResult
 
@@ -224,22 +225,12 @@ def evaluate_search(
     planning again."""
     mask = maps.start_mask.reshape(-1)
     if result is None:
-        result = planner.plan(
-            maps.obstacles,
-            maps.starts,
-            maps.goals,
-            maps.corner_cutting,
-            maps.moves,
-            chunk_size=chunk_size,
-            progress=progress,
-        )
+        result = plan_every_start(planner, maps, chunk_size=chunk_size, progress=progress)
     expansions = result.expansions if isinstance(result, SearchResult) else None
     reference = None
     if expansions is not None:
         astar = AStarPlanner(maps.size, maps.moves)
-        reference = astar.plan(
-            maps.obstacles, maps.starts, maps.goals, maps.corner_cutting, maps.moves, chunk_size=chunk_size
-        ).expansions
+        reference = plan_every_start(astar, maps, chunk_size=chunk_size).expansions
         expansions, reference = expansions[mask], reference[mask]
     owner = np.repeat(np.arange(len(maps)), maps.n_starts)[mask]
     costs = path_costs(result.paths, maps.moves)[mask]

@@ -51,6 +51,8 @@ if TYPE_CHECKING:  # PyTorch is loaded only by the planners that run it
     import torch
     from torch import nn
 
+    from vinadv.grid.mapset import MapSet
+
 #: maps per chunk of `plan_maps`: bounds the memory of the logits (B * 8 * N * N floats) and of the path buffers.
 DEFAULT_CHUNK = 1024
 #: maps per forward of a torch planner on a GPU (`TorchPlanner.device_batch_size`): a whole planning chunk, so the
@@ -373,6 +375,22 @@ class Planner(ABC):
         if obstacles.ndim == 3 and obstacles.shape[1] != self.size:
             n = obstacles.shape[1]
             raise PlannerError(f"planner {self.name!r} is for {self.size}x{self.size} maps, the maps are {n}x{n}")
+
+
+def plan_every_start(
+    planner: Planner, maps: MapSet, *, chunk_size: int | None = None, progress: bool = False
+) -> PlanResult:
+    """`planner.plan` of every start of `maps` (a `vinadv.grid.MapSet`) under the maps' corner-cutting rule and
+    movement model: path `b * S + s` from start `s` of map `b`. `chunk_size`, `progress`: as `Planner.plan`'s."""
+    return planner.plan(
+        maps.obstacles,
+        maps.starts,
+        maps.goals,
+        maps.corner_cutting,
+        maps.moves,
+        chunk_size=chunk_size,
+        progress=progress,
+    )
 
 
 def check_starts_inputs(obstacles, starts, goals) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -23,7 +23,7 @@ import re
 import sqlite3
 import time
 import urllib.parse
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import sqlalchemy as sa
@@ -87,6 +87,21 @@ class Database:
         self.readonly = readonly
         self.sqlite = engine.dialect.name == "sqlite"  # rows in SQLite's native form (see `codec.encode_rows`)
         self.absent_columns = frozenset(absent_columns)
+
+    def refuse_outdated(self, columns: Iterable[str] | None = None) -> None:
+        """InputError before a write where the database is of an older schema version opened without create: it
+        lacks one of `columns` (None: any `absent_columns` at all), which the write needs."""
+        absent = self.absent_columns if columns is None else self.absent_columns & set(columns)
+        if absent:
+            raise InputError(
+                f"database {self.url}: an older schema version opened without create; "
+                "open it with create to upgrade it before writing"
+            )
+
+    def insert_row(self, table: sa.Table, **values) -> int:
+        """Insert one row of `values` into `table`, in a transaction of its own; return its id."""
+        with self.engine.begin() as conn:
+            return int(conn.execute(table.insert().values(**values)).inserted_primary_key[0])
 
     def ensure_table(self, table: sa.Table) -> None:
         """Create `table` unless the database has it (an additive table, see `schema.ADDITIVE_TABLES`), under the

@@ -71,13 +71,9 @@ class EvaluationQueries(RunQueries):
         if kind not in MEASUREMENTS:
             raise InputError(f"kind: {kind!r} not in {', '.join(MEASUREMENTS)}", "kind")
         self.run_info(run_id)  # InputError for an unknown run
-        with self.engine.begin() as conn:
-            row = conn.execute(
-                measurements.insert().values(
-                    run_id=int(run_id), created=utcnow(), kind=kind, result=result, version=version
-                )
-            )
-            return int(row.inserted_primary_key[0])
+        return self.insert_row(
+            measurements, run_id=int(run_id), created=utcnow(), kind=kind, result=result, version=version
+        )
 
     def read_measurement(self, run_id: int, kind: str) -> dict | None:
         """The newest stored `kind` measurement of the run (the `result` dict), None when there is none (or the
@@ -104,25 +100,18 @@ class EvaluationQueries(RunQueries):
         """Store one robustness benchmark (`vinadv robustness`): the planner's full spec (`wastar:w=3`) and weights
         checksum, the benchmark's settings and its figures (`vinadv.robustness.RobustnessResult.to_dict()`), JSON, and
         its run name (`--name`, None: none); return its id."""
-        if self.absent_columns:
-            raise InputError(
-                f"database {self.url}: an older schema version opened without create; "
-                "open it with create to upgrade it before writing"
-            )
+        self.refuse_outdated()
         self.ensure_table(robustness)
-        with self.engine.begin() as conn:
-            row = conn.execute(
-                robustness.insert().values(
-                    created=utcnow(),
-                    planner=str(planner),
-                    weights_checksum=weights_checksum,
-                    settings=settings,
-                    result=result,
-                    version=version,
-                    run_name=run_name,
-                )
-            )
-            return int(row.inserted_primary_key[0])
+        return self.insert_row(
+            robustness,
+            created=utcnow(),
+            planner=str(planner),
+            weights_checksum=weights_checksum,
+            settings=settings,
+            result=result,
+            version=version,
+            run_name=run_name,
+        )
 
     def add_bench_chunk(
         self, entry: str, chunk: int, result: dict, version: str = __version__, check=None

@@ -75,11 +75,7 @@ class PairQueries(Database):
         whole batches only. `progress(n_rows)` is called after each batch.
         """
         run_id = int(run_id)
-        if self.absent_columns:
-            raise InputError(
-                f"database {self.url}: an older schema version opened without create; "
-                "open it with create to upgrade it before writing"
-            )
+        self.refuse_outdated()
         # strictly increasing, as jobs write them, means no duplicates: the sort of np.unique only otherwise
         increasing = bool((np.diff(records.pair_index) > 0).all())
         if not increasing and len(np.unique(records.pair_index)) != len(records):

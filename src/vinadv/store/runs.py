@@ -67,11 +67,7 @@ class RunQueries(Database):
         follows `check_run_name`: InputError otherwise. `moves`: the movement model of the run's maps
         (`vinadv.grid.moves`), stored in `runs.moves`."""
         moves = move_model(moves).name
-        if "moves" in self.absent_columns:
-            raise InputError(
-                f"database {self.url}: an older schema version opened without create; "
-                "open it with create to upgrade it before writing"
-            )
+        self.refuse_outdated(["moves"])
         if name is not None:
             check_run_name(name)
             found = self.find_run(name)
@@ -83,23 +79,20 @@ class RunQueries(Database):
                     "resume",
                     "name",
                 )
-        with self.engine.begin() as conn:
-            result = conn.execute(
-                runs.insert().values(
-                    name=name,
-                    created=utcnow(),
-                    config=config,
-                    seed=None if seed is None else int(seed),
-                    weights_checksum=weights_checksum,
-                    attack=attack,
-                    classifier=classifier,
-                    version=version,
-                    timings=None,
-                    status=status,
-                    moves=moves,
-                )
-            )
-            return int(result.inserted_primary_key[0])
+        return self.insert_row(
+            runs,
+            name=name,
+            created=utcnow(),
+            config=config,
+            seed=None if seed is None else int(seed),
+            weights_checksum=weights_checksum,
+            attack=attack,
+            classifier=classifier,
+            version=version,
+            timings=None,
+            status=status,
+            moves=moves,
+        )
 
     def find_run(self, name: str) -> int | None:
         """The id of the latest run called exactly `name` (for `--resume`), or None: on MySQL/MariaDB compared under

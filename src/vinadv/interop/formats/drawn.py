@@ -7,7 +7,6 @@ and corner cutting are asked for (default octile, corner cutting allowed). Read 
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 
@@ -17,20 +16,12 @@ from vinadv.errors import InputError, one_line
 from vinadv.grid.drawn import MAX_SIDE, drawn_map_set, from_ascii
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.moves import DEFAULT_MOVES
+from vinadv.interop.formats.files import ascii_text, check_file
 
 MAX_FILE_BYTES = 64 * 2**20
 #: a grey level below this is an obstacle
 DARK = 128
 MOVES = ("octile", "moore", "news")
-
-
-def _check_file(path: str) -> None:
-    if not os.path.exists(path):
-        raise InputError(f"{path}: no such file")
-    if os.path.isdir(path):
-        raise InputError(f"{path}: is a directory, expected a file")
-    if os.path.getsize(path) > MAX_FILE_BYTES:
-        raise InputError(f"{path}: more than the {MAX_FILE_BYTES} bytes read")
 
 
 def _refuse(path: str, split: str | None, starts: int | None) -> None:
@@ -49,13 +40,9 @@ def read_ascii(
     corner_cutting: bool | None = None,
 ) -> tuple[MapSet, dict]:
     """The one map drawn in the ASCII file at `path` (`vinadv.grid.drawn`)."""
-    _check_file(path)
+    check_file(path, MAX_FILE_BYTES)
     _refuse(path, split, starts)
-    data = Path(path).read_bytes()
-    try:
-        text = data.decode("ascii")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: not an ASCII text file (byte {exc.start} is {data[exc.start]:#04x})") from None
+    text = ascii_text(path, Path(path).read_bytes())
     maps = from_ascii(
         text,
         pad_to=pad_to,
@@ -106,7 +93,7 @@ def read_png(
     """The map drawn in the image at `path` (module docstring), with `start` and `goal` (`ROW,COL`)."""
     from PIL import Image, UnidentifiedImageError
 
-    _check_file(path)
+    check_file(path, MAX_FILE_BYTES)
     _refuse(path, split, starts)
     if start is None or goal is None:
         raise InputError(f"{path}: give start and goal (ROW,COL): an image draws neither", "start", "goal")

@@ -1,5 +1,5 @@
 """The arrays of a foreign maps file (`.npz` or MATLAB `.mat`), read with checks whose errors name the file and
-the array."""
+the array; and the checks of a foreign file that a reader reads whole (`check_file`, `ascii_text`)."""
 
 from __future__ import annotations
 
@@ -44,6 +44,24 @@ class ForeignArrays:
         if arr.size and (np.any(arr != np.round(arr)) or arr.min() < lo or arr.max() > hi):
             raise self.fail(name, f"has values outside the integers {lo}..{hi}")
         return arr.astype(np.int64)
+
+
+def check_file(path: str, max_bytes: int) -> None:
+    """InputError naming `path` unless it is a file of at most `max_bytes` bytes (a reader that reads it whole)."""
+    if not os.path.exists(path):
+        raise InputError(f"{path}: no such file")
+    if os.path.isdir(path):
+        raise InputError(f"{path}: is a directory, expected a file")
+    if os.path.getsize(path) > max_bytes:
+        raise InputError(f"{path}: more than the {max_bytes} bytes read")
+
+
+def ascii_text(path: str, data: bytes) -> str:
+    """`data`, the bytes of the file at `path`, as ASCII text; InputError naming the first byte that is not ASCII."""
+    try:
+        return data.decode("ascii")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not an ASCII text file (byte {exc.start} is {data[exc.start]:#04x})") from None
 
 
 def load_npz(path: str, names: tuple[str, ...] | None = None) -> ForeignArrays:

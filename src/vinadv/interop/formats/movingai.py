@@ -51,6 +51,7 @@ from vinadv.checksums import file_sha256
 from vinadv.errors import InputError, one_line
 from vinadv.grid.mapset import MapSet
 from vinadv.grid.shortest_paths import expert_paths_from, shortest_distances
+from vinadv.interop.formats.files import ascii_text
 from vinadv.interop.formats.mpd import draw_starts, start_bands
 from vinadv.seeds import check_seed
 
@@ -87,11 +88,7 @@ def _lines(path: str) -> list[str]:
     if size > MAX_FILE_BYTES:
         raise InputError(f"{path}: {size} bytes, more than the {MAX_FILE_BYTES} read")
     with open(path, "rb") as fh:
-        data = fh.read()
-    try:
-        text = data.decode("ascii")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: not an ASCII text file (byte {exc.start} is {data[exc.start]:#04x})") from None
+        text = ascii_text(path, fh.read())
     lines = text.replace("\r\n", "\n").split("\n")
     return lines[:-1] if len(lines) > 1 and lines[-1] == "" else lines  # the last line's end ends no line
 

@@ -29,6 +29,7 @@ import numpy as np
 from vinadv.errors import InputError, one_line
 from vinadv.grid.drawn import MAX_SIDE, drawn_map_set
 from vinadv.grid.mapset import MapSet
+from vinadv.interop.formats.files import check_file
 
 #: the largest file read (the authors' 64x64 tasks are about 40 kB)
 MAX_FILE_BYTES = 64 * 2**20
@@ -98,12 +99,7 @@ def _is_float(word: str) -> bool:
 def read_task(path: str) -> tuple[np.ndarray, tuple[int, int], tuple[int, int]]:
     """One task file: `(obstacles (H, W) bool, start (row, col), goal (row, col))` (module doc); InputError naming
     the file otherwise."""
-    if not os.path.exists(path):
-        raise InputError(f"{path}: no such file")
-    if os.path.isdir(path):
-        raise InputError(f"{path}: is a directory, expected a file")
-    if os.path.getsize(path) > MAX_FILE_BYTES:
-        raise InputError(f"{path}: more than the {MAX_FILE_BYTES} bytes read")
+    check_file(path, MAX_FILE_BYTES)
     data = Path(path).read_bytes()
     if _DECLARATION.search(data):
         raise InputError(f"{path}: holds a document type or entity declaration, which TransPath's tasks never do")
