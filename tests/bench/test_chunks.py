@@ -62,13 +62,31 @@ def test_a_stored_chunk_that_is_not_a_result_is_one_line(tiny, tmp_path, monkeyp
 
 
 def test_chunks_of_another_results_format_are_refused_naming_both(tiny, tmp_path, monkeypatch):
-    planner = load_planner("optimal", 28)
+    planner = load_planner("astar", 28)
     db = str(tmp_path / "b.db")
     run_bench(tiny, planner, db=db)
-    monkeypatch.setattr(scoring, "CHUNK_FORMAT", 2)
+    monkeypatch.setattr(scoring, "CHUNK_FORMAT", 3)
     _no_compute(monkeypatch)
-    with pytest.raises(InputError, match="computed with results format 1, this run with results format 2"):
+    with pytest.raises(InputError, match="computed with results format 2, this run with results format 3"):
         run_bench(tiny, planner, db=db, resume=True)
+
+
+def test_chunks_without_efforts_resume_only_for_a_planner_without_expansions(tiny, tmp_path, monkeypatch):
+    # results format 2 added the efforts of a search planner: its chunks of format 1 lack them and are refused, a
+    # policy's chunks (nothing changed for it) keep format 1 and resume
+    policy, search = load_planner("optimal", 28), load_planner("astar", 28)
+    assert scoring.chunk_fingerprint(tiny, policy)["format"] == 1
+    assert scoring.chunk_fingerprint(tiny, search)["format"] == 2
+    db = tmp_path / "b.db"
+    run_bench(tiny, search, db=str(db))
+    _sql(db, "UPDATE bench_chunks SET result = json_set(result, '$.fingerprint.format', 1)")
+    with pytest.raises(InputError, match="computed with results format 1, this run with results format 2"):
+        run_bench(tiny, search, db=str(db), resume=True)
+    other = tmp_path / "p.db"
+    whole = run_bench(tiny, policy, db=str(other))
+    _no_compute(monkeypatch)
+    resumed = run_bench(tiny, policy, db=str(other), resume=True)
+    assert entry_json(deterministic_part(resumed)) == entry_json(deterministic_part(whole))
 
 
 def test_chunks_stored_before_fingerprints_still_resume(tiny, tmp_path, monkeypatch):

@@ -288,7 +288,7 @@ def test_a_chunk_of_a_committed_v2_entry_recomputes_byte_for_byte():
 
 
 def test_worst_efforts_are_the_largest_over_at_most_k_edits_and_verify_checks_them(entry, registered):
-    assert "worst_effort" not in entry["per_map"]  # no suite's chunks carry efforts yet: the slot stays empty
+    assert "worst_effort" not in entry["per_map"]  # a VIN reports no expansions: no efforts, no worst efforts
     assert worst_efforts([[[1.0, None, 2.0]], [[0.5, 3.0, None], [None, None, 4.0]], []]) == [
         [1.0, None, 2.0],
         [1.0, 3.0, 4.0],

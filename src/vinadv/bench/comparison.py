@@ -12,9 +12,11 @@ rows per family of maps, a paired test of two planners on the same maps, and boo
   discordant map (harmful for one planner only) is harmful for A or for B with probability 1/2, so the count of maps
   harmful for A only is binomial(discordant, 1/2); the p-value is two-sided. `ALPHA` is the level at which the
   leaderboard says one is more robust than the other.
-- Means (`mean_intervals`): the worst-case mean regret at each k and the clean mean regret, each with its seeded
-  percentile bootstrap interval over the maps that have a value (`vinadv.intervals.bootstrap_mean_interval`): the
-  same entry gives the same numbers.
+- Means (`mean_intervals`): the worst-case mean regret at each k and the clean mean regret, and for a search
+  planner's entry the mean worst effort ratio at each k (`per_map.worst_effort`: each valid map's largest effort ratio
+  over the attacks of at most k edits) and its clean Exp and cost ratio (`per_map.clean.exp`, `cost_ratio`), each
+  with its seeded percentile bootstrap interval over the maps that have a
+  value (`vinadv.intervals.bootstrap_mean_interval`): the same entry gives the same numbers.
 
 A `vinadv.bench_entry/1` entry holds no per-map outcomes: none of this can be computed from it ("needs a format 2
 entry").
@@ -165,8 +167,10 @@ def compare_entries(a: dict, b: dict) -> list[dict]:
 def mean_intervals(entry: dict) -> dict:
     """The means of `entry` that its per-map values allow, each with its bootstrap interval over the maps that have a
     value (`mean`, `low`, `high`, `maps`): `clean_regret` (the clean paths that reach the goal) and `worst_regret`,
-    per k, the worst case's regret (the valid maps whose worst adversarial path reaches the goal). {} for an entry
-    without per-map outcomes."""
+    per k, the worst case's regret (the valid maps whose worst adversarial path reaches the goal); where the entry
+    holds efforts, `worst_effort`, per k, each valid map's largest effort ratio over the attacks of at most k edits;
+    where it holds a search planner's per-map protocol values, `clean_exp` (Exp, over every map) and
+    `clean_cost_ratio` (over the maps whose clean path reaches the goal). {} for an entry without per-map outcomes."""
     if not has_outcomes(entry):
         return {}
 
@@ -179,7 +183,13 @@ def mean_intervals(entry: dict) -> dict:
     clean = entry["per_map"]["clean"]
     regrets = [r if ok else None for r, ok in zip(clean["regret"], clean["reached"])]
     worst = [{"k": k, **mean(o.regret)} for k, o in enumerate(worst_per_map(entry), start=1)]
-    return {"clean_regret": mean(regrets), "worst_regret": worst}
+    out = {"clean_regret": mean(regrets), "worst_regret": worst}
+    for name in ("exp", "cost_ratio"):  # a search planner's clean protocol, where the entry holds its maps' values
+        if name in clean:
+            out[f"clean_{name}"] = mean(clean[name])
+    if "worst_effort" in entry["per_map"]:  # a search planner's: each map's largest effort ratio at each k
+        out["worst_effort"] = [{"k": k, **mean(v)} for k, v in enumerate(entry["per_map"]["worst_effort"], start=1)]
+    return out
 
 
 def vs_next(a: dict, b: dict) -> dict | None:

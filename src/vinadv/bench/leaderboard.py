@@ -41,6 +41,7 @@ COLUMNS = (
     "worst-case harmful (k = 1)",
     "worst-case paper success (k = 1)",
     "worst-case harmful (largest k)",
+    "worst-case effort-harmful (k = 1)",
     "removal harmful",
     "vs next",
     "flags",
@@ -60,8 +61,9 @@ LEGEND = {
     "clean optimal": "the share of the suite's maps whose clean path is optimal (Neural A*'s Opt). Denominator: the "
     "suite's maps.",
     "Exp": "search planners only: the share of A*'s expansions the planner saves on the clean maps, averaged over the "
-    "maps (the Neural A* authors' Exp); — for a policy, which expands nothing. A mean, shown without an interval "
-    "(the entries hold no per-map values of it to bootstrap).",
+    "maps (the Neural A* authors' Exp); — for a policy, which expands nothing. A mean, with its percentile "
+    "bootstrap 95% interval over the maps where the entry holds each map's value (`per_map.clean.exp`; none in an "
+    "entry computed before).",
     "worst-case harmful (k = 1)": "the share of the valid maps on which some attack of the suite with one edited "
     "cell makes a harmful pair (the adversarial path misses the goal, or its regret exceeds the clean path's by more "
     "than the harm tolerance). A map is valid when a pair was made and the planner reaches the goal on the clean "
@@ -72,6 +74,10 @@ LEGEND = {
     "the valid maps at that k. In a `-v2` suite the worst case at k is over every attack of at most k edited cells, "
     "so it never falls as k grows; in a `-v1` suite it is over the attacks of exactly k cells (only the cheap ones "
     "make k > 1) and can be below the one at k = 1.",
+    "worst-case effort-harmful (k = 1)": "search planners only: the share of the valid maps on which some attack "
+    "with one edited cell makes an effort-harmful pair (the planner's search expands more cells on the adversarial "
+    'map, and its growth is more than twice A*\'s on the same pair: DESIGN.md "Search effort"). Denominator: the '
+    "valid maps. — for a planner that reports no expansions, or an entry computed before entries held efforts.",
     "removal harmful": "the harmful rate at one freed cell of the removal attack that harms the most valid maps. "
     "Denominator: that attack's valid maps.",
     "vs next": "McNemar's exact test (two-sided) of this planner against the next row's on the worst-case harmful "
@@ -282,6 +288,9 @@ def rows(entries: list[tuple[Path, dict]], base: str | os.PathLike | None = None
         _with_interval(row, "harmful", worst[0]["harmful_rate"], worst[0].get("harmful"), worst[0].get("valid"))
         _with_interval(row, "paper", worst[0]["paper_success_rate"], worst[0].get("broken"), worst[0].get("valid"))
         _with_interval(row, "harmful_k", worst[-1]["harmful_rate"], worst[-1].get("harmful"), worst[-1].get("valid"))
+        # a search planner's entry of format 2 holds efforts: the effort-harmful rate (absent elsewhere: None)
+        effort = worst[0].get("effort_harmful_rate")
+        _with_interval(row, "effort", effort, worst[0].get("effort_harmful"), worst[0].get("valid"))
         row["k"] = worst[-1]["k"]
         row["curve"] = [
             {
@@ -340,6 +349,15 @@ def _pct_ci(r: dict, name: str) -> str:
     return f"{display.percent(r[name])} {interval}"
 
 
+def _exp_cell(r: dict) -> str:
+    """Exp with its bootstrap interval in points where the entry holds each map's value: `12.3% [8.1, 16.0]`."""
+    means = (r.get("means") or {}).get("clean_exp")
+    interval = display.NONE if not means else display.points(means["low"], means["high"])
+    if r["exp"] is None or interval == display.NONE:
+        return display.percent(r["exp"])
+    return f"{display.percent(r['exp'])} {interval}"
+
+
 def _name(r: dict) -> str:
     """The row's name: its display name with the planner's label, or the label."""
     return r["planner"] if not r.get("display_name") else f"{r['display_name']} ({r['planner']})"
@@ -351,10 +369,11 @@ def _cells(r: dict) -> list[str]:
         r["weights"],
         _pct_ci(r, "clean"),
         _pct_ci(r, "optimal"),
-        display.percent(r["exp"]),
+        _exp_cell(r),
         _pct_ci(r, "harmful"),
         _pct_ci(r, "paper"),
         f"{_pct_ci(r, 'harmful_k')} (k = {r['k']})",
+        _pct_ci(r, "effort"),
         _pct_ci(r, "removal"),
         "{} ({})".format(*_vs_next_lines(r)) if r.get("vs_next") else display.NONE,
         ", ".join(r["flags"]) or "—",

@@ -7,17 +7,25 @@ checks that they follow), and a recompute of some chunks is compared with the en
 - `per_map.clean`: `reached` (the clean path reaches the goal) and `regret` (its cost minus the optimum; null where
   it does not reach), one value per map, in map order;
 - `per_map.chunks`: per chunk of maps, its `maps` and the means of the clean protocols that are taken per chunk:
-  GPPN's `gppn_percent_optimal` and `gppn_percent_success`, or a search planner's `search` (`join_search`);
+  GPPN's `gppn_percent_optimal` and `gppn_percent_success`, or a search planner's `search` (`join_search`); for a
+  search planner `per_map.clean` also holds each map's values behind those means (optional: entries computed before
+  have none): `cost_ratio` (the path's cost over the optimal one, null where it does not reach) and, where the planner
+  reports its expansions, `exp` (the share of A*'s expansions it saved, `max(0, (E_A* - E) / E_A*)`), so that their
+  means get a bootstrap interval over the maps (`vinadv.bench.comparison.mean_intervals`);
 - `per_map.attacks`: per attack (`edit:strategy`), per k from the group's `first_k`: `k`, `label` (the pair's paper
   label, "" where the map got no pair), `harmful` (true or false) and `regret` (`regret_a`, null where the pair is not
-  valid or its path does not reach); and, where the planner reports its expansions, `effort` (the adversarial search's
-  expansions over the clean one's, null without a valid pair): the slot the effort verdict fills.
+  valid or its path does not reach); and, where the planner reports its expansions (`Capabilities.expansions`; every
+  record of the entry, or none), `effort` (the effort ratio, the adversarial search's expansions over the clean one's,
+  null without a valid pair) and `effort_harmful` (the pair is valid and effort-harmful: DESIGN.md "Search effort",
+  `vinadv.classify.effort`; false without a valid pair).
 
 From them: a map's pair was made where its label is not "", is valid where it is neither "" nor `invalid`, broken
 where valid and UrP or FP; the label counts are those of the pairs. The worst case at k is over every attack of at most
 k edits on a fixed denominator (`worst_case_within`), so its k curve cannot fall; where efforts are
-present, `per_map.worst_effort[k - 1]` is each map's largest effort over those attacks. Means are correctly rounded
-sums (`math.fsum`): the same bits on every CPU.
+present, every figure also counts the effort-harmful maps (`effort_harmful`, `effort_harmful_rate` over the valid
+maps; the worst case: a map effort-harmful for any attack of at most k edits) and `per_map.worst_effort[k - 1]` is each
+map's largest effort ratio over those attacks. Means are correctly rounded sums (`math.fsum`): the same bits on every
+CPU.
 """
 
 from __future__ import annotations
@@ -34,6 +42,33 @@ from vinadv.vocabulary import SUCCESS_LABELS, label_counts
 
 #: a path is optimal when its cost is within this of the optimum
 OPTIMAL_TOL = 1e-9
+#: a search planner's per-map values of its clean protocol (`per_map.clean`): the values behind the chunks' means
+CLEAN_SEARCH_VALUES = ("exp", "cost_ratio")
+#: a chunk's clean values that are per map (the rest: its protocol means, `per_map.chunks`)
+_PER_MAP_CLEAN = ("reached", "regret", *CLEAN_SEARCH_VALUES)
+#: how far a chunk's stored mean may be from the mean of its per-map values (`chunk_mean_problems`): the chunk's mean
+#: was summed by NumPy (pairwise), the check sums exactly
+MEAN_TOL = 1e-12
+
+
+def chunk_mean_problems(per_map: dict) -> list[tuple[str, float, float]]:
+    """`(field, stored, from the per-map values)` for each chunk whose search mean (`exp`: over its maps; `cost_ratio`:
+    over the maps that reach the goal) is not the mean of its maps' values in `per_map.clean` (within `MEAN_TOL`,
+    relative); [] for an entry without them."""
+    out, lo = [], 0
+    for i, chunk in enumerate(per_map["chunks"]):
+        hi = lo + chunk["maps"]
+        for name in CLEAN_SEARCH_VALUES:
+            if name not in per_map["clean"] or "search" not in chunk:
+                continue
+            mean = exact_mean(per_map["clean"][name][lo:hi])
+            stored = chunk["search"].get(name)
+            if (stored is None) != (mean is None) or (
+                mean is not None and abs(stored - mean) > MEAN_TOL * max(1.0, abs(mean))
+            ):
+                out.append((f"per_map.chunks[{i}].search.{name}", stored, mean))
+        lo = hi
+    return out
 
 
 def weighted_mean(weights: Iterable[float], values: Iterable[float]) -> float:
@@ -87,14 +122,17 @@ def chunk_per_map(suite, order: list[dict]) -> dict:
     for group in suite.attacks:
         for key in group.keys():
             attacks[key] = [_attack_record([c["attacks"][key][i] for c in order], k) for i, k in enumerate(group.ks)]
+    clean = {
+        "reached": [v for c in order for v in c["clean"]["reached"]],
+        "regret": _floats(v for c in order for v in c["clean"]["regret"]),
+    }
+    for name in CLEAN_SEARCH_VALUES:  # a search planner's per-map protocol values (chunks computed before: none)
+        if all(name in c["clean"] for c in order):
+            clean[name] = _floats(v for c in order for v in c["clean"][name])
     return {
-        "clean": {
-            "reached": [v for c in order for v in c["clean"]["reached"]],
-            "regret": _floats(v for c in order for v in c["clean"]["regret"]),
-        },
+        "clean": clean,
         "chunks": [
-            {"maps": c["maps"], **{k: v for k, v in c["clean"].items() if k not in ("reached", "regret")}}
-            for c in order
+            {"maps": c["maps"], **{k: v for k, v in c["clean"].items() if k not in _PER_MAP_CLEAN}} for c in order
         ],
         "attacks": attacks,
     }
@@ -110,6 +148,7 @@ def _attack_record(parts: list[dict], k: int) -> dict:
     }
     if all("effort" in p for p in parts):
         record["effort"] = _floats(v for p in parts for v in p["effort"])
+        record["effort_harmful"] = [bool(v) for p in parts for v in p["effort_harmful"]]
     return record
 
 
@@ -119,6 +158,10 @@ def outcome(record: dict) -> MapOutcomes:
     pair = label != ""
     valid = pair & (label != "invalid")
     regret = np.array([np.nan if v is None else v for v in record["regret"]], dtype=np.float64)
+    effort = effort_harmful = None
+    if "effort_harmful" in record:  # a planner that reports its expansions
+        effort_harmful = np.array(record["effort_harmful"], dtype=bool).reshape(len(label))
+        effort = np.array([np.nan if v is None else v for v in record["effort"]], dtype=np.float64)
     return MapOutcomes(
         pair=pair,
         valid=valid,
@@ -126,6 +169,8 @@ def outcome(record: dict) -> MapOutcomes:
         harmful=np.array(record["harmful"], dtype=bool).reshape(len(label)),
         regret=regret.reshape(len(label)),
         label=label,
+        effort_harmful=effort_harmful,
+        effort=effort,
     )
 
 

@@ -57,8 +57,16 @@ from vinadv.robustness import attack_settings, heldout_maps, robustness
 #: an entry's fields that depend on when and where it ran (the rest is deterministic)
 VOLATILE_FIELDS = ("time", "machine")
 #: the results-format version of a stored chunk: bumped whenever what `compute_chunk` computes changes, so that
-#: `--resume` never joins chunks of two computations (chunks stored before fingerprints are this version, 1)
-CHUNK_FORMAT = 1
+#: `--resume` never joins chunks of two computations (chunks stored before fingerprints are version 1). Version 2
+#: added the efforts of a planner that reports its expansions; a planner that reports none computes what it did in
+#: version 1, so its chunks keep version 1 (`chunk_format`) and stay reusable
+CHUNK_FORMAT = 2
+
+
+def chunk_format(planner: Planner) -> int:
+    """The results format of `planner`'s chunks: `CHUNK_FORMAT`, or 1 for a planner that reports no expansions
+    (nothing it computes changed in version 2)."""
+    return CHUNK_FORMAT if planner.capabilities.expansions else 1
 
 
 def suite_maps(suite: Suite, data: str | os.PathLike | None = None) -> MapSet:
@@ -142,10 +150,11 @@ def entry_keys(suite: Suite, planner: Planner) -> list[str]:
 
 def chunk_fingerprint(suite: Suite, planner: Planner) -> dict:
     """What a stored chunk must have been computed with to be reused (`run_bench`): the results format
-    (`CHUNK_FORMAT`), the suite's checksum and the planner's provenance (a bring-your-own planner's: the files it
+    (`chunk_format`), the suite's checksum and the planner's provenance (a bring-your-own planner's: the files it
     imports from beside it, or the version it declares, `vinadv.planners.provenance`; None for vinadv's own, which
     the results format covers). Stored beside the chunk's result (field `fingerprint`), out of the entry key."""
-    return {"format": CHUNK_FORMAT, "suite": suite.checksum, "provenance": getattr(planner, "provenance", None)}
+    provenance = getattr(planner, "provenance", None)
+    return {"format": chunk_format(planner), "suite": suite.checksum, "provenance": provenance}
 
 
 def _describe(fingerprint: dict, other: dict) -> str:
@@ -209,7 +218,12 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     # costs under the maps' movement model (every move 1 on `moore`), as their expert costs
     regret = np.where(plans.reached, path_costs(plans.paths, sub.moves) - sub.expert_costs[:, 0], np.nan)
     if not planner.capabilities.policy:  # no policy at every cell: the Neural A* authors' Opt / Exp instead
-        clean = {"search": dict(evaluate_search(planner, sub))}
+        rows: dict = {}
+        clean = {"search": dict(evaluate_search(planner, sub, rows=rows))}
+        # each map's values behind the means (one start per map): their bootstrap intervals over the maps
+        clean["cost_ratio"] = _floats(rows["cost_ratio"])
+        if rows["exp"] is not None:
+            clean["exp"] = _floats(rows["exp"])
     else:
         gppn = gppn_protocol(planner, sub)
         clean = {"gppn_percent_optimal": gppn["percent_optimal"], "gppn_percent_success": gppn["percent_success"]}
@@ -239,6 +253,12 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
                     "regret": _floats(o.regret),
                     "label": o.label.tolist(),
                     "counts": f.counts,
+                    # a planner that reports its expansions: each valid pair's effort ratio and verdict
+                    **(
+                        {}
+                        if o.effort_harmful is None
+                        else {"effort": _floats(o.effort), "effort_harmful": o.effort_harmful.tolist()}
+                    ),
                 }
                 for o, f in zip(strategy.outcomes, strategy.by_k)
             ]

@@ -25,7 +25,11 @@ An entry of format 2 (`ENTRY_FORMAT_2`) also holds `submission` (`check_submissi
 `authors` a list of at most `MAX_AUTHORS` names, `paper` and `code` null or http/https URLs with a host, `external` true
 or false), `checks` (`gradient_masked` and `non_deterministic` true, false or null) and `per_map` (`check_per_map`:
 one value per map in every list, one record per figure of every attack with its `k`, labels of the vocabulary or "",
-a harmful map or a regret only where the pair is valid, the chunks' maps summing to the maps).
+a harmful map or a regret only where the pair is valid, the chunks' maps summing to the maps; where the planner
+reports its expansions, every record's `effort` (a ratio >= 0 or null) and `effort_harmful` (true or false), neither
+set on a map without a valid pair; a search planner's optional `per_map.clean.exp`, rates or null, and
+`per_map.clean.cost_ratio`, >= 0 where the clean path reaches the goal and null elsewhere). A figure's
+`effort_harmful` is a count and its `effort_harmful_rate` a rate.
 
 Strings are checked for type and length only: the renderers escape them (`vinadv.bench.leaderboard`).
 """
@@ -52,7 +56,7 @@ MAX_DEPTH = 4
 MAX_AUTHORS = 50
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
-_FIGURE_COUNTS = ("maps", "valid", "attacked", "broken", "harmful", "reached", "attacks")
+_FIGURE_COUNTS = ("maps", "valid", "attacked", "broken", "harmful", "reached", "attacks", "effort_harmful")
 
 
 class Bad(Exception):
@@ -163,6 +167,8 @@ def figures(value, field: str) -> dict:
         raise Bad(f"{field}.k", f"is {f['k']}, expected an integer in [1, {MAX_K}]")
     rate(_get(f, "harmful_rate", field), f"{field}.harmful_rate", null=True)
     rate(_get(f, "paper_success_rate", field), f"{field}.paper_success_rate", null=True)
+    if "effort_harmful_rate" in f:  # a planner that reports its expansions
+        rate(f["effort_harmful_rate"], f"{field}.effort_harmful_rate", null=True)
     if "mean_regret" in f:
         _number(f["mean_regret"], f"{field}.mean_regret", null=True)
     for name in _FIGURE_COUNTS:
@@ -308,6 +314,18 @@ def check_per_map(value, attacks: dict, clean: dict) -> None:
     if clean.get("maps", n) != n:
         raise Bad("per_map.clean.reached", f"holds {n} values, expected {clean['maps']} (clean.maps)")
     chunks = _list(_get(p, "chunks", "per_map"), "per_map.chunks", nonempty=True)
+    if "exp" in pc:  # a search planner's per-map protocol values (optional)
+        for i, v in enumerate(_reals(pc["exp"], "per_map.clean.exp", n)):
+            rate(v, f"per_map.clean.exp[{i}]", null=True)
+    if "cost_ratio" in pc:
+        for i, (v, ok) in enumerate(zip(_reals(pc["cost_ratio"], "per_map.clean.cost_ratio", n), reached)):
+            if (v is None) == ok:
+                why = "null where the clean path reaches the goal" if ok else f"{_show(v)} where it does not"
+                raise Bad(f"per_map.clean.cost_ratio[{i}]", f"is {why}")
+            _number(v, f"per_map.clean.cost_ratio[{i}]", lo=0.0, null=True)
+    if ("exp" in pc or "cost_ratio" in pc) and not all(isinstance(c, dict) and "search" in c for c in chunks):
+        name = "cost_ratio" if "cost_ratio" in pc else "exp"
+        raise Bad(f"per_map.clean.{name}", "is a search planner's, where per_map.chunks hold no search")
     for i, c in enumerate(chunks):
         at = f"per_map.chunks[{i}]"
         c = _obj(c, at)
@@ -336,6 +354,21 @@ def check_per_map(value, attacks: dict, clean: dict) -> None:
     if set(records) != set(attacks):
         extra = sorted(set(records) - set(attacks))[0]
         raise Bad(f"per_map.attacks.{extra}", "is an attack the entry has no figures of")
+    with_effort = [
+        f"per_map.attacks.{key}[{i}]"
+        for key in attacks
+        for i, record in enumerate(records[key])
+        if "effort_harmful" in record
+    ]
+    total = sum(len(records[key]) for key in attacks)
+    if with_effort and len(with_effort) != total:  # efforts come from the planner: every record has them, or none
+        field = next(
+            f"per_map.attacks.{key}[{i}]"
+            for key in attacks
+            for i, record in enumerate(records[key])
+            if "effort_harmful" not in record
+        )
+        raise Bad(f"{field}.effort_harmful", f"is missing, where {with_effort[0]} has efforts (all records or none)")
     if "worst_effort" in p:
         for i, values in enumerate(_list(p["worst_effort"], "per_map.worst_effort")):
             _reals(values, f"per_map.worst_effort[{i}]", n)
@@ -355,8 +388,15 @@ def _record(r: dict, at: str, n: int, k: int) -> None:
         if label in ("", "invalid") and (h or g is not None):
             name = "harmful" if h else "regret"
             raise Bad(f"{at}.{name}[{i}]", f"is {_show(h if h else g)} on a map without a valid pair")
-    if "effort" in r:
-        _reals(r["effort"], f"{at}.effort", n)
+    if "effort" in r or "effort_harmful" in r:  # a planner that reports its expansions: both, or neither
+        effort = _reals(_get(r, "effort", at), f"{at}.effort", n)
+        verdict = _bools(_get(r, "effort_harmful", at), f"{at}.effort_harmful", n)
+        for i, (label, e, h) in enumerate(zip(labels, effort, verdict)):
+            if label in ("", "invalid") and (h or e is not None):
+                name = "effort_harmful" if h else "effort"
+                raise Bad(f"{at}.{name}[{i}]", f"is {_show(h if h else e)} on a map without a valid pair")
+            if e is not None and e < 0:
+                raise Bad(f"{at}.effort[{i}]", f"is {_show(e)}, expected a ratio >= 0")
 
 
 def entry_problem(entry) -> str | None:
@@ -403,6 +443,9 @@ def check_chunk(result, suite: Suite, chunk: int) -> None:
     _reals(_get(clean, "regret", "clean"), "clean.regret", n)
     if "search" in clean:
         search = _obj(clean["search"], "clean.search")
+        for name in ("exp", "cost_ratio"):  # each map's values (optional)
+            if name in clean:
+                _reals(clean[name], f"clean.{name}", n)
         count(_get(search, "rows", "clean.search"), "clean.search.rows")
         for name in ("opt", "exp", "success"):
             rate(_get(search, name, "clean.search"), f"clean.search.{name}", null=True)
@@ -430,6 +473,9 @@ def check_chunk(result, suite: Suite, chunk: int) -> None:
                 for i, label in enumerate(labels):
                     if label != "" and label not in LABELS:
                         raise Bad(f"{at}.label[{i}]", f"is {_show(label)}, expected one of {', '.join(LABELS)}")
+                if "effort" in part or "effort_harmful" in part:  # a planner that reports its expansions
+                    _reals(_get(part, "effort", at), f"{at}.effort", n)
+                    _bools(_get(part, "effort_harmful", at), f"{at}.effort_harmful", n)
                 for label, c in _obj(_get(part, "counts", at), f"{at}.counts").items():
                     if label not in LABELS:
                         raise Bad(f"{at}.counts", f"has label {_show(label)}, expected one of {', '.join(LABELS)}")

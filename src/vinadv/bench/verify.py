@@ -4,7 +4,8 @@ Two checks of a `vinadv.bench_entry/2` entry (`verify_entry`), each difference o
 
 1. Every figure follows from the per-map outcomes the entry holds (`vinadv.bench.outcomes.entry_figures`): `clean`,
    every attack's figures at every k, the worst case at every k, the worst efforts and the flags (from the entry's
-   `checks`) are recomputed and compared value for value.
+   `checks`) are recomputed and compared value for value; a search planner's chunk means (`exp`, `cost_ratio`) are
+   compared with the mean of the maps' values where `per_map.clean` holds them (`outcomes.chunk_mean_problems`).
 2. `chunks` chunks of maps, chosen by a seeded draw (`pick_chunks`), are recomputed with the planner
    (`vinadv.bench.scoring.compute_chunk`) and their per-map outcomes compared byte for byte (as JSON) with the
    entry's, as are the planner's checks (gradient masking, determinism) when at least one chunk is recomputed.
@@ -21,7 +22,7 @@ import os
 import numpy as np
 
 from vinadv.bench.flags import raise_flags
-from vinadv.bench.outcomes import chunk_per_map, entry_figures
+from vinadv.bench.outcomes import chunk_mean_problems, chunk_per_map, entry_figures
 from vinadv.bench.suites import ENTRY_FORMAT, ENTRY_FORMAT_2, get_suite
 from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
@@ -72,6 +73,10 @@ def check_figures(entry: dict, suite) -> list[str]:
     for name in ("clean", "attacks", "worst_case"):
         out += differences(name, entry[name], figures[name], source)
     out += differences("per_map.worst_effort", per_map.get("worst_effort"), figures.get("worst_effort"), source)
+    out += [
+        f"field '{field}': {_show(stored)} in the entry, {_show(mean)} from {source} (per_map.clean)"
+        for field, stored, mean in chunk_mean_problems(per_map)
+    ]
     flags = raise_flags(suite, entry["checks"], figures["clean"]["success_rate"], figures["attacks"])
     return out + differences("flags", entry["flags"], flags, "its checks and per-map outcomes")
 
@@ -194,4 +199,4 @@ def _in_chunk(line: str, chunk: int, suite) -> str:
 
 
 #: the per-map lists of an attack record and of the clean outcomes (one value per map)
-_PER_MAP_LISTS = ("label", "harmful", "regret", "effort", "reached")
+_PER_MAP_LISTS = ("label", "harmful", "regret", "effort", "effort_harmful", "reached", "exp", "cost_ratio")

@@ -225,6 +225,12 @@ def cmd_bench_compare(args: argparse.Namespace) -> int:
             parts = [("clean", means["clean_regret"])] + [(f"k = {m['k']}", m) for m in means["worst_regret"]]
             shown = ", ".join(f"{k} {number(m['mean'])} [{number(m['low'])}, {number(m['high'])}]" for k, m in parts)
             print(f"{side.upper()} mean regret (95% bootstrap interval over the maps): {shown}")
+            if "worst_effort" in means:  # a search planner's entry: its worst effort ratio per map at each k
+                shown = ", ".join(
+                    f"k = {m['k']} {number(m['mean'])} [{number(m['low'])}, {number(m['high'])}]"
+                    for m in means["worst_effort"]
+                )
+                print(f"{side.upper()} mean worst effort ratio (95% bootstrap interval over the maps): {shown}")
 
     return emit(args, result, report)
 

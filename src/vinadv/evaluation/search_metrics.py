@@ -110,8 +110,7 @@ def search_metrics(
     if len(reached) != n or len(optimal_costs) != n:
         raise InputError(f"search_metrics: {n} costs, {len(reached)} reached, {len(optimal_costs)} optimal costs")
     optimal = reached & (np.abs(costs - optimal_costs) <= COST_TOL)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = np.where(optimal_costs[reached] > 0, costs[reached] / optimal_costs[reached], 1.0)
+    ratio = row_cost_ratios(costs, reached, optimal_costs)[reached]
     out: SearchMetrics = {
         "rows": n,
         "opt": float(optimal.mean()) if n else None,
@@ -128,7 +127,7 @@ def search_metrics(
     reference = np.asarray(astar_expansions, dtype=np.float64).reshape(-1)
     if len(expansions) != n or len(reference) != n or (reference < 1).any():
         raise InputError(f"search_metrics: expansions and astar_expansions must be {n} counts, A*'s >= 1")
-    saved = np.maximum((reference - expansions) / reference, 0.0)
+    saved = row_exp(expansions, reference)
     out["exp"] = float(saved.mean())
     out["expansions"] = float(expansions.mean())
     out["astar_expansions"] = float(reference.mean())
@@ -140,6 +139,25 @@ def search_metrics(
         per_map = harmonic_mean(np.bincount(owner, weights=optimal) / rows, np.bincount(owner, weights=saved) / rows)
         out["hmean"] = float(per_map.mean())
     return out
+
+
+def row_cost_ratios(costs, reached, optimal_costs) -> np.ndarray:
+    """`(n,)` each row's cost ratio `cost / optimal cost` (1 where both are 0: a start on its goal), NaN where the
+    path does not reach the goal: the values `search_metrics` averages into `cost_ratio`."""
+    costs = np.asarray(costs, dtype=np.float64).reshape(-1)
+    reached = np.asarray(reached, dtype=bool).reshape(-1)
+    optimal_costs = np.asarray(optimal_costs, dtype=np.float64).reshape(-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.where(optimal_costs > 0, costs / optimal_costs, 1.0)
+    return np.where(reached, ratio, np.nan)
+
+
+def row_exp(expansions, astar_expansions) -> np.ndarray:
+    """`(n,)` each row's share of A*'s search saved, `max(0, (E_A* - E) / E_A*)`: the values `search_metrics`
+    averages into Exp (`astar_expansions` >= 1)."""
+    expansions = np.asarray(expansions, dtype=np.float64).reshape(-1)
+    reference = np.asarray(astar_expansions, dtype=np.float64).reshape(-1)
+    return np.maximum((reference - expansions) / reference, 0.0)
 
 
 def harmonic_mean(opt, exp):
@@ -217,12 +235,14 @@ def evaluate_search(
     progress: bool = False,
     theirs: bool = False,
     result: PlanResult | None = None,
+    rows: dict | None = None,
 ) -> SearchMetrics:
     """`search_metrics` of `planner` (any `Planner`, its `plan`) on every start of `maps`, against vanilla A*
     (`astar` on the maps' movement model) from the same starts and the maps' exact expert costs; with `theirs` (a
     search planner on `octile` maps), also TransPath's ratios against their vanilla A* (`transpath_ratios`, under
     the key `transpath`). `result`: the planner's `plan` of every start of `maps` already made, used instead of
-    planning again."""
+    planning again. `rows`: a dict that receives each row's values behind the means (`cost_ratio`,
+    `row_cost_ratios`; `exp`, `row_exp`, None for a planner that reports no expansions), in row order."""
     mask = maps.start_mask.reshape(-1)
     if result is None:
         result = plan_every_start(planner, maps, chunk_size=chunk_size, progress=progress)
@@ -235,6 +255,9 @@ def evaluate_search(
     owner = np.repeat(np.arange(len(maps)), maps.n_starts)[mask]
     costs = path_costs(result.paths, maps.moves)[mask]
     out = search_metrics(costs, result.reached[mask], maps.expert_costs.reshape(-1)[mask], expansions, reference, owner)
+    if rows is not None:
+        rows["cost_ratio"] = row_cost_ratios(costs, result.reached[mask], maps.expert_costs.reshape(-1)[mask])
+        rows["exp"] = None if expansions is None else row_exp(expansions, reference)
     if theirs:
         if expansions is None or maps.moves != "octile":
             raise InputError(f"TransPath's ratios need a search planner on octile maps, not {maps.moves} maps")

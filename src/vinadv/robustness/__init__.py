@@ -325,14 +325,17 @@ def _outcomes(n: int, pairs, labels, harm, regret_a) -> MapOutcomes:
     regret = np.full(n, np.nan)
     regret[map_index] = regret_a
     regret[~valid] = np.nan  # NaN already where the adversarial path misses the goal
-    effort_harmful = None
+    effort_harmful = effort = None
     if pairs.expanded_o is not None and pairs.astar_expansions_a is not None:
-        verdict = effort_figures(
+        figures = effort_figures(
             pairs.expansions_o, pairs.expansions_a, pairs.astar_expansions_o, pairs.astar_expansions_a
-        )["effort_harmful"]
+        )
         effort_harmful = np.zeros(n, dtype=bool)
-        effort_harmful[map_index] = np.equal(verdict, True)
+        effort_harmful[map_index] = np.equal(figures["effort_harmful"], True)
         effort_harmful &= valid
+        effort = np.full(n, np.nan)
+        effort[map_index] = figures["effort_ratio"]
+        effort[~valid] = np.nan  # a pair that is not valid says nothing of the attack
     return MapOutcomes(
         pair=pair,
         valid=valid,
@@ -341,6 +344,7 @@ def _outcomes(n: int, pairs, labels, harm, regret_a) -> MapOutcomes:
         regret=regret,
         label=label,
         effort_harmful=effort_harmful,
+        effort=effort,
     )
 
 

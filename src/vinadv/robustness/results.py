@@ -28,6 +28,8 @@ class MapOutcomes:
         label: the pair's paper label, '' without a pair.
         effort_harmful: valid and the pair is effort-harmful (`vinadv.classify.effort`); None for a planner that
             reports no expansions.
+        effort: the pair's effort ratio `E_a / E_o` (`vinadv.classify.effort`) where the pair is valid, NaN
+            elsewhere (and where a count is missing); None for a planner that reports no expansions.
     """
 
     pair: np.ndarray
@@ -37,6 +39,7 @@ class MapOutcomes:
     regret: np.ndarray
     label: np.ndarray
     effort_harmful: np.ndarray | None = None
+    effort: np.ndarray | None = None
 
 
 def worst_case(outcomes: list[MapOutcomes]) -> MapOutcomes:
@@ -51,6 +54,7 @@ def worst_case(outcomes: list[MapOutcomes]) -> MapOutcomes:
     largest = np.where(reached.any(axis=0), np.where(reached, regrets, -np.inf).max(axis=0), np.nan)
     regret = np.where(valid & ~unreached, largest, np.nan)
     efforts = [o.effort_harmful for o in outcomes if o.effort_harmful is not None]
+    ratios = [o.effort for o in outcomes if o.effort is not None]
     return MapOutcomes(
         pair=pair,
         valid=valid,
@@ -59,6 +63,8 @@ def worst_case(outcomes: list[MapOutcomes]) -> MapOutcomes:
         regret=regret,
         label=np.full(len(pair), ""),
         effort_harmful=np.any(efforts, axis=0) if efforts else None,
+        # each map's largest effort ratio over the strategies (NaN only where none has one)
+        effort=np.fmax.reduce(ratios, axis=0) if ratios else None,
     )
 
 
