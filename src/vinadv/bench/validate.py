@@ -384,19 +384,23 @@ def _record(r: dict, at: str, n: int, k: int) -> None:
             raise Bad(f"{at}.label[{i}]", f'is {_show(label)}, expected "" or one of {", ".join(LABELS)}')
     harmful = _bools(_get(r, "harmful", at), f"{at}.harmful", n)
     regret = _reals(_get(r, "regret", at), f"{at}.regret", n)
-    for i, (label, h, g) in enumerate(zip(labels, harmful, regret)):
-        if label in ("", "invalid") and (h or g is not None):
-            name = "harmful" if h else "regret"
-            raise Bad(f"{at}.{name}[{i}]", f"is {_show(h if h else g)} on a map without a valid pair")
+    _only_with_pairs(labels, (harmful, f"{at}.harmful"), (regret, f"{at}.regret"))
     if "effort" in r or "effort_harmful" in r:  # a planner that reports its expansions: both, or neither
         effort = _reals(_get(r, "effort", at), f"{at}.effort", n)
         verdict = _bools(_get(r, "effort_harmful", at), f"{at}.effort_harmful", n)
-        for i, (label, e, h) in enumerate(zip(labels, effort, verdict)):
-            if label in ("", "invalid") and (h or e is not None):
-                name = "effort_harmful" if h else "effort"
-                raise Bad(f"{at}.{name}[{i}]", f"is {_show(h if h else e)} on a map without a valid pair")
+        _only_with_pairs(labels, (verdict, f"{at}.effort_harmful"), (effort, f"{at}.effort"))
+        for i, e in enumerate(effort):
             if e is not None and e < 0:
                 raise Bad(f"{at}.effort[{i}]", f"is {_show(e)}, expected a ratio >= 0")
+
+
+def _only_with_pairs(labels: list, verdicts: tuple[list, str], values: tuple[list, str]) -> None:
+    """A verdict true or a value not null only on the maps with a valid pair (`verdicts`, `values`: per map, with
+    their fields)."""
+    for i, (label, h, v) in enumerate(zip(labels, verdicts[0], values[0])):
+        if label in ("", "invalid") and (h or v is not None):
+            field = verdicts[1] if h else values[1]
+            raise Bad(f"{field}[{i}]", f"is {_show(h if h else v)} on a map without a valid pair")
 
 
 def entry_problem(entry) -> str | None:
