@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tests.bench.two_maps import heldout_suite
+from tests.bench.two_maps import heldout_suite, register
 from vinadv.bench import suites
 from vinadv.bench.leaderboard import read_entries
 from vinadv.bench.outcomes import entry_figures, worst_case_within, worst_efforts
@@ -105,9 +105,7 @@ def entry(planner):
 
 @pytest.fixture
 def registered(monkeypatch):
-    suite = tiny_suite()
-    monkeypatch.setitem(suites.SUITES, suite.name, suite)
-    return suite
+    return register(monkeypatch, tiny_suite())
 
 
 def test_chains_start_from_the_exhaustive_one_cell_optimum(planner):

@@ -12,8 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.bench.two_maps import heldout_suite
-from vinadv.bench import suites
+from tests.bench.two_maps import heldout_suite, register
 from vinadv.bench.comparison import mean_intervals
 from vinadv.bench.leaderboard import _cells, rows
 from vinadv.bench.outcomes import entry_figures
@@ -121,9 +120,7 @@ def wastar_entry():
 
 @pytest.fixture
 def registered(monkeypatch):
-    suite = small_suite()
-    monkeypatch.setitem(suites.SUITES, suite.name, suite)
-    return suite
+    return register(monkeypatch, small_suite())
 
 
 def test_a_search_planners_entry_holds_its_efforts_and_the_rates_follow_from_them(wastar_entry):

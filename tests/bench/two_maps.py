@@ -3,6 +3,7 @@ attack, one chunk per map: `two_map_suite`)."""
 
 from __future__ import annotations
 
+from vinadv.bench import suites
 from vinadv.bench.suites import AttackGroup, Suite, maps_sha256
 from vinadv.robustness import heldout_maps
 
@@ -27,3 +28,9 @@ def two_map_suite(name: str) -> Suite:
     """A suite named `name`: the first two held-out maps of seed 1000 at 28x28, adding one obstacle by the random
     strategy (budget 2), one chunk per map."""
     return heldout_suite(name, 2, 28, (AttackGroup(("random",), "add", 1),), budget=2, chunk=1)
+
+
+def register(monkeypatch, suite: Suite) -> Suite:
+    """`suite`, registered for the test only (`monkeypatch`): `bench verify` and `bench run --suite` find it."""
+    monkeypatch.setitem(suites.SUITES, suite.name, suite)
+    return suite
