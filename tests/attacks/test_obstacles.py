@@ -97,11 +97,13 @@ def test_every_k_obstacle_pair_keeps_the_rules(seed, k, name, per_map):
 
 def _brute_greedy(model, obstacles, start, goal, k, strength_of):
     """The greedy choice the slow way: at each step every cell of the grid, in row-major order, tried on the map with
-    the cells chosen so far; the pair judged against the ORIGINAL map's path; the first strongest kept."""
+    the cells chosen so far; the pair judged against the ORIGINAL map's path; the first strongest kept. With the
+    chosen cells (None where a step has no valid cell), the strongest value of each step and whether some step's
+    strongest cell came after a weaker valid one (a search that took the first valid cell would differ)."""
     original = plan_reference(obstacles[None], start[None], goal[None], model)
-    chosen, current = [], obstacles.copy()
+    chosen, current, strongest, beat_first = [], obstacles.copy(), [], False
     for _ in range(k):
-        best = None
+        best = first = None
         for r in range(SIZE):
             for c in range(SIZE):
                 cells = [*chosen, (r, c)]
@@ -111,13 +113,16 @@ def _brute_greedy(model, obstacles, start, goal, k, strength_of):
                 adv[r, c] = True
                 planned = plan_reference(adv[None], start[None], goal[None], model)
                 value = strength_of(obstacles, adv, start, goal, original, planned)
+                first = value if first is None else first
                 if best is None or value > best[0]:
                     best = (value, (r, c))
         if best is None:
-            return None
+            return None, strongest, beat_first
         chosen.append(best[1])
         current[best[1]] = True
-    return chosen
+        strongest.append(best[0])
+        beat_first |= best[0] > first
+    return chosen, strongest, beat_first
 
 
 def _label_strength(obstacles, adv, start, goal, original, planned):
@@ -135,22 +140,36 @@ def _harm_value(obstacles, adv, start, goal, original, planned):
     return round(cost - optimum, 9)
 
 
+#: the maps of the brute-force search (a planner call per cell and step): four of the module's, where for both
+#: objectives some step's strongest cell comes after weaker valid ones and some map is harmed (UrP); most maps of
+#: this planner keep the first valid cell under the harm objective, every cell as strong as the next
+GREEDY_MAPS = [7, 17, 18, 20]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("objective", ["paper", "harm"])
 def test_greedy_steps_pick_the_strongest_cell_of_a_brute_force_search(model, maps, objective):
     k = 3
     strength, oracle = (rule_strength, _label_strength) if objective == "paper" else (harm_strength, _harm_value)
+    urp = LABEL_STRENGTH["UrP"] if objective == "paper" else math.inf
+    chosen = maps.take(GREEDY_MAPS)
     result = make_attack("exhaustive", obstacles=k).attack(
-        maps.obstacles[:8], maps.starts[:8, 0], maps.goals[:8], model, strength=strength
+        chosen.obstacles, chosen.starts[:, 0], chosen.goals, model, strength=strength
     )
-    for i in range(8):
-        expected = _brute_greedy(model, maps.obstacles[i], maps.starts[i, 0], maps.goals[i], k, oracle)
+    beaten, harmed = [], []
+    for i in range(len(GREEDY_MAPS)):
+        expected, strongest, beat_first = _brute_greedy(
+            model, chosen.obstacles[i], chosen.starts[i, 0], chosen.goals[i], k, oracle
+        )
+        beaten.append(beat_first)
+        harmed.append(urp in strongest)
         got = np.flatnonzero(result.pairs.map_index == i)
         if expected is None:
             assert len(got) == 0 and i in result.no_valid_cell
             continue
         assert len(got) == 1
         assert [tuple(c) for c in result.pairs.added[got[0]].tolist()] == expected, i
+    assert any(beaten) and any(harmed)  # the maps tell the strongest cell from the first, and harm some
 
 
 @pytest.mark.parametrize("name", sorted(STRATEGIES))

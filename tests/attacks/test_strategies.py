@@ -130,15 +130,22 @@ def test_no_valid_cell_gives_no_pair(name):
     assert result.no_valid_cell.tolist() == [0]
 
 
+#: the maps of the brute-force search (a planner call per cell): three of the module's, whose strongest cells are an
+#: FP among DPs, the first of two FPs, and an UrP; in each a weaker label comes first in row-major order
+EXHAUSTIVE_MAPS = [0, 3, 10]
+
+
 @pytest.mark.slow  # a planner call per cell; tests/test_identify.py checks exhaustive against a brute force quickly
 def test_exhaustive_finds_the_strongest_cell_of_a_brute_force_search(model, maps):
+    chosen = maps.take(EXHAUSTIVE_MAPS)
     result = make_attack("exhaustive").attack(
-        maps.obstacles[:6], maps.starts[:6, 0], maps.goals[:6], model, strength=rule_strength
+        chosen.obstacles, chosen.starts[:, 0], chosen.goals, model, strength=rule_strength
     )
-    for i in range(6):
-        obstacles, start, goal = maps.obstacles[i], maps.starts[i, 0], maps.goals[i]
+    strongest, beaten = [], []
+    for i in range(len(EXHAUSTIVE_MAPS)):
+        obstacles, start, goal = chosen.obstacles[i], chosen.starts[i, 0], chosen.goals[i]
         original = plan_reference(obstacles[None], start[None], goal[None], model)
-        best = None
+        best = first = None
         for r in range(SIZE):  # every cell, the slow way: independent of the attack code
             for c in range(SIZE):
                 if obstacles[r, c] or (r, c) in (tuple(start), tuple(goal)):
@@ -149,11 +156,15 @@ def test_exhaustive_finds_the_strongest_cell_of_a_brute_force_search(model, maps
                     continue
                 planned = plan_reference(adv[None], start[None], goal[None], model)
                 label = label_pairs(original.paths, planned.paths, goal[None], SIZE).labels[0]
+                first = label if first is None else first
                 if best is None or LABEL_STRENGTH[label] > LABEL_STRENGTH[best[0]]:
                     best = (label, (r, c))
+        strongest.append(best[0])
+        beaten.append(LABEL_STRENGTH[best[0]] > LABEL_STRENGTH[first])
         got = np.flatnonzero(result.pairs.map_index == i)
         assert len(got) == 1
         assert tuple(result.pairs.added[got[0], 0]) == best[1]
+    assert all(beaten) and "UrP" in strongest and "FP" in strongest  # the maps still tell the labels apart
 
 
 def test_exhaustive_keeps_every_valid_cell_with_per_map_zero(model, maps):

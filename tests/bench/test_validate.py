@@ -138,46 +138,63 @@ def test_a_fifo_named_like_an_entry_is_refused_by_type(tmp_path, capsys):
     assert len(err) == 1 and "pipe.json" in err[0] and "not a regular file" in err[0]
 
 
-def _mutations(entry, rng, n: int):
-    """`n` mutated copies of `entry`: one field (anywhere) replaced by a hostile value, deleted, or a list emptied."""
-    hostile = [None, True, 0, -1, 7.0, -5.0, float("inf"), float("nan"), 10**30, "", "x" * 1000, "<b>|\n", [], {}, [1]]
-    paths = []
+#: what a mutation puts in place of a field (or of the whole entry); `[]` empties a list
+HOSTILE = [None, True, 0, -1, 7.0, -5.0, float("inf"), float("nan"), 10**30, "", "x" * 1000, "<b>|\n", [], {}, [1]]
+#: the kinds of mutation: a field deleted, the whole entry replaced, or a field replaced by each hostile value
+KINDS = ("delete", "whole", *range(len(HOSTILE)))
 
-    def walk(node, path):
-        paths.append(path)
+
+def _mutations(entry, rng, kinds):
+    """A mutated copy of `entry` for each of `kinds` (`KINDS`), on a field drawn evenly among the entry's fields,
+    where the items of a list count as one field (a -v2 entry's thousands of per-map items would otherwise take
+    nearly every draw): the field deleted (a field of an object), the whole entry replaced by a hostile value, or the
+    field replaced by the hostile value `HOSTILE[kind]`."""
+    fields: dict[tuple, list[tuple]] = {}  # a field's path, list indices as "#" -> the paths of its values
+
+    def walk(node, path, field):
+        if path:
+            fields.setdefault(field, []).append(path)
         if isinstance(node, dict):
             for k, v in node.items():
-                walk(v, (*path, k))
+                walk(v, (*path, k), (*field, k))
         elif isinstance(node, list):
             for i, v in enumerate(node):
-                walk(v, (*path, i))
+                walk(v, (*path, i), (*field, "#"))
 
-    walk(entry, ())
-    for _ in range(n):
-        e = copy.deepcopy(entry)
-        path = paths[rng.integers(len(paths))]
-        if not path:
-            yield hostile[rng.integers(len(hostile))]
+    walk(entry, (), ())
+    names = list(fields)
+    for kind in kinds:
+        if kind == "whole":
+            yield HOSTILE[rng.integers(len(HOSTILE))]
             continue
+        e = copy.deepcopy(entry)
+        # only an object's field can be deleted; a list item is replaced
+        choices = [f for f in names if isinstance(f[-1], str)] if kind == "delete" else names
+        paths = fields[choices[rng.integers(len(choices))]]
+        path = paths[rng.integers(len(paths))]
         node = e
         for p in path[:-1]:
             node = node[p]
-        action = rng.integers(3)
-        if action == 0 and isinstance(node, dict):
+        if kind == "delete":
             del node[path[-1]]
         else:
-            node[path[-1]] = copy.deepcopy(hostile[rng.integers(len(hostile))])
+            node[path[-1]] = copy.deepcopy(HOSTILE[kind])
         yield e
 
 
 @pytest.mark.slow
 def test_fuzz_leaderboard_every_mutation_renders_or_is_one_line(tmp_path, capsys):
     """In-process fuzz of `bench leaderboard` and the entry reader: mutations of the committed entries either render
-    or give one line naming the file and a field; never a traceback."""
+    or give one line naming the file and a field; never a traceback. Five mutations of each entry, their kinds taken
+    in turn across the entries, so that every kind is tried on several entries (a `bench leaderboard` call each:
+    most of the test's time)."""
     rng = np.random.default_rng(45)
+    tried = []
     for i, source in enumerate(sorted(COMMITTED.glob("*.json"))):
         entry = json.loads(source.read_text())
-        for j, mutated in enumerate(_mutations(entry, rng, 25)):
+        kinds = [KINDS[(5 * i + j) % len(KINDS)] for j in range(5)]
+        tried += kinds
+        for j, mutated in enumerate(_mutations(entry, rng, kinds)):
             folder = tmp_path / f"f{i}-{j}"
             folder.mkdir()
             (folder / "m.json").write_text(json.dumps(mutated))
@@ -192,3 +209,4 @@ def test_fuzz_leaderboard_every_mutation_renders_or_is_one_line(tmp_path, capsys
                 assert "inf%" not in md and "nan%" not in md
                 entries, problems = read_entries_checked(folder)
                 render_markdown(rows(entries))
+    assert all(tried.count(kind) >= 3 for kind in KINDS)  # each kind on three entries at least

@@ -149,7 +149,8 @@ def close(a, b):
 
 
 @pytest.mark.slow  # over a second: the quick tier keeps the module's other tests
-@settings(max_examples=150, deadline=None)
+# 100 cases of up to five pairs each, on three movement models: some 300 pairs, every field of each against its oracle
+@settings(max_examples=100, deadline=None)
 @given(harm_cases())
 def test_every_field_matches_the_oracles(case):
     rows, cc, moves = case
@@ -178,7 +179,8 @@ def test_every_field_matches_the_oracles(case):
 
 
 @pytest.mark.slow  # the quick tier checks every field against the oracles (test_every_field_matches_the_oracles)
-@settings(max_examples=100, deadline=None)
+# fewer cases than the oracle test: these bounds hold of any field the oracle test finds right
+@settings(max_examples=50, deadline=None)
 @given(harm_cases())
 def test_harm_properties(case):
     rows, cc, moves = case
@@ -215,8 +217,8 @@ def _dihedral_map(obstacles, k):
     return out
 
 
-@pytest.mark.slow  # 60 generated cases, each run twice (as drawn and flipped or rotated)
-@settings(max_examples=60, deadline=None)
+@pytest.mark.slow  # 30 generated cases, each run twice (as drawn and flipped or rotated)
+@settings(max_examples=30, deadline=None)
 @given(harm_cases(), st.integers(1, 7))
 def test_harm_invariant_under_flips_and_rotations(case, k):
     rows, cc, moves = case

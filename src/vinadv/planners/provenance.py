@@ -21,12 +21,28 @@ from vinadv.checksums import file_sha256
 VERSION_ATTRIBUTE = "PLANNER_VERSION"
 
 
-def _excluded() -> list[Path]:
-    """Folders whose modules are not the planner's: the Python installation and vinadv's own package."""
+def _excluded() -> list[str]:
+    """Folders whose modules are not the planner's: the Python installation and vinadv's own package (resolved)."""
     import vinadv  # noqa: PLC0415 (its folder)
 
     roots = {sys.prefix, sys.base_prefix, sys.exec_prefix, os.path.dirname(vinadv.__file__)}
-    return [Path(r).resolve() for r in roots if r]
+    return [os.path.realpath(r) for r in roots if r]
+
+
+def _under(path: str, folder: str) -> bool:
+    """Whether the resolved `path` lies in the resolved `folder`, at any depth (not the folder itself)."""
+    return path != folder and path.startswith(folder if folder.endswith(os.sep) else folder + os.sep)
+
+
+def _resolved(name: str, folders: dict[str, str]) -> str:
+    """`name` with every link resolved, as `Path(name).resolve()`; the folders resolved once each (`folders`, a
+    cache): a process holds a thousand modules or more from a few hundred folders, and resolving each path afresh
+    (a `stat` per part) took a quarter second for each planner loaded."""
+    head, tail = os.path.split(name)
+    if head not in folders:
+        folders[head] = os.path.realpath(head)
+    path = os.path.join(folders[head], tail)
+    return os.path.realpath(path) if os.path.islink(path) else path
 
 
 def source_provenance(module, folder: str | os.PathLike) -> dict:
@@ -35,17 +51,18 @@ def source_provenance(module, folder: str | os.PathLike) -> dict:
     declared = getattr(module, VERSION_ATTRIBUTE, None)
     if isinstance(declared, str) and declared and len(declared) <= 200:
         return {"version": declared}
-    folder = Path(folder).resolve()
+    folder = os.path.realpath(folder)
     # not a root the folder itself lies in (a planner package installed in site-packages is known by its own files)
-    excluded = [e for e in _excluded() if e != folder and e not in folder.parents]
+    excluded = [e for e in _excluded() if e != folder and not _under(folder, e)]
     files = {}
+    folders: dict[str, str] = {}
     for mod in list(sys.modules.values()):
         name = getattr(mod, "__file__", None)
         if not isinstance(name, str) or not name.endswith(".py"):
             continue
-        path = Path(name).resolve()
-        if folder not in path.parents or any(e == path or e in path.parents for e in excluded):
+        path = _resolved(name, folders)
+        if not _under(path, folder) or any(e == path or _under(path, e) for e in excluded):
             continue
-        if path.is_file():
-            files[path.relative_to(folder).as_posix()] = file_sha256(path)
+        if os.path.isfile(path):
+            files[Path(path).relative_to(folder).as_posix()] = file_sha256(path)
     return {"files": dict(sorted(files.items()))}
