@@ -355,3 +355,66 @@ def test_the_transpath_page_is_read_from_its_json(tmp_path):
     path.write_text(json.dumps(record))
     row = "| forest | `optimal` | 4 of 7 | 0.250 | 1.062 | 1 | 12.0 | 48.0 |"
     assert measured.transpath_ratios(path).splitlines()[2] == row
+
+
+def test_the_transpath_families_render_in_their_order_with_effort_where_measured(tmp_path):
+    measured = docs_module("measured")
+    record = _mpd_record(0.5)
+    forest = record["families"][0]
+    forest |= {"import": ["vinadv maps import A", "vinadv maps concat A B"], "robustness_maps": 20, "seconds": 600}
+    search = {**forest["planners"][0]["search"], "rows": 7, "expansions": 30.0, "astar_expansions": 40.0}
+    astar = {"planner": "astar", "command": "vinadv eval --planner astar", "search": search}
+    record["families"].insert(0, {"family": "zoo", "import": "vinadv maps generate Z", "planners": [astar]})
+    run = record["robustness"][0]
+    effort = [{**point, "effort_harmful_rate": rate} for point, rate in zip(run["figures"]["overall"], (0.5, 0.75))]
+    searched = {**run, "family": "zoo", "planner": "astar", "figures": {**run["figures"], "overall": effort}}
+    run["figures"]["seconds"], searched["figures"]["seconds"] = 12.4, 3.0
+    record["robustness"].append(searched)
+    path = tmp_path / "transpath.json"
+    path.write_text(json.dumps(record))
+    # the JSON's order (zoo first), not the names' (forest first), and A*'s expansions beside its own
+    table = measured.mpd_table(path, "maps", keep_order=True).splitlines()
+    assert [line.split(" | ")[0] for line in table[2:]] == ["| zoo", "| forest"]
+    assert table[2].endswith("| 30.0 (40.0) |")
+    assert measured.mpd_table(path, "maps").splitlines()[2].startswith("| forest |")
+    robustness = measured.mpd_robustness(path, "maps", keep_order=True, seconds=True).splitlines()
+    assert "effort-harmful, k = 1 / 2 / ..." in robustness[0] and robustness[0].endswith("| seconds |")
+    effort = "| 50.0% / 75.0% |"
+    assert robustness[2] == f"| zoo | `astar` | 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% {effort} 1.250 | 3 |"
+    assert robustness[3] == "| forest | `vin` | 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | — | 1.250 | 12 |"
+    strategies = measured.mpd_robustness_strategies(path, keep_order=True).splitlines()
+    assert [line.split(" | ")[0] for line in strategies[2:]] == ["| zoo", "| forest"]
+    families = measured.transpath_families(path).splitlines()
+    assert families[2] == "| zoo | 7 | — | `astar` | — |"
+    assert families[3] == "| forest | 100 | 20 | `optimal` | 10 min |"
+    commands = measured.mpd_commands(path)
+    assert commands.index("vinadv maps generate Z") < commands.index("vinadv maps import A")
+    assert commands.index("vinadv maps import A") < commands.index("vinadv maps concat A B")
+
+
+def test_the_transpath_script_merges_families_and_planners_run_apart(monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT / "perf"))  # the script imports perf/common.py as `common`
+    spec = importlib.util.spec_from_file_location("transpath_table", ROOT / "perf" / "transpath_table.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+
+    def family(name: str, made: str, planners: list[str]) -> dict:
+        entries = [{"planner": p, "command": f"eval {name} {p} {made}"} for p in planners]
+        return {"family": name, "import": [made], "robustness_maps": 5, "planners": entries, "seconds": 60.0}
+
+    def record(families: list[dict], run: str) -> dict:
+        runs = [{"family": f["family"], "planner": e["planner"], "run": run} for f in families for e in f["planners"]]
+        return {"robustness_settings": {"max_obstacles": 3}, "runs": [run], "families": families, "robustness": runs}
+
+    old = record([family("a", "gen 1", ["cf", "astar"]), family("b", "crop 1", ["cf", "astar"])], "old")
+    # a's cf again on the same maps, b on other maps, c new
+    new = record([family("a", "gen 1", ["cf"]), family("b", "crop 2", ["astar"]), family("c", "ex", ["cf"])], "new")
+    merged = script.merge_record(old, new)
+    assert [f["family"] for f in merged["families"]] == ["a", "b", "c"]
+    assert [e["command"] for e in merged["families"][0]["planners"]] == ["eval a cf gen 1", "eval a astar gen 1"]
+    assert [e["planner"] for e in merged["families"][1]["planners"]] == ["astar"]  # b's old maps went with cf
+    # the time of a family's run where it made every planner's figures, not where some come from another run
+    assert [f["seconds"] for f in merged["families"]] == [None, 60.0, 60.0]
+    runs = {(r["family"], r["planner"]): r["run"] for r in merged["robustness"]}
+    assert runs == {("a", "cf"): "new", ("a", "astar"): "old", ("b", "astar"): "new", ("c", "cf"): "new"}
+    assert merged["runs"] == ["old", "new"]
