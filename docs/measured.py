@@ -89,9 +89,12 @@ def _robustness_runs(data: dict, keep_order: bool = False) -> list[dict]:
     """The robustness runs of the MP JSON by family (in the table's order), then in the order they were run."""
     order = {f["family"]: i for i, f in enumerate(_families(data, keep_order))}
     planners = list(dict.fromkeys(r["planner"] for r in data["robustness"] if r.get("family", "mazes") != "mazes"))
+    # with `keep_order`, a family's runs in the order of its planners in the clean table (families differ in them)
+    listed = {f["family"]: [e["planner"] for e in f["planners"]] for f in data["families"]} if keep_order else {}
 
     def key(run: dict) -> tuple[int, int]:
-        planner = planners.index(run["planner"]) if run["planner"] in planners else len(planners)
+        names = listed.get(run.get("family", "mazes"), planners)
+        planner = names.index(run["planner"]) if run["planner"] in names else len(names)
         return order.get(run.get("family", "mazes"), len(order)), planner
 
     return sorted(data["robustness"], key=key)
@@ -106,7 +109,8 @@ def mpd_robustness(
     path: Path = MPD_JSON, first: str = "family (test split)", keep_order: bool = False, seconds: bool = False
 ) -> str:
     """The robustness runs of `perf/mpd_table.py`'s JSON, worst case per map over the strategies: per family
-    and planner, the harmful rate and the paper's success rate at k = 1..K added obstacles; where a run reports it
+    and planner, the maps (the valid ones, which the rates count, where fewer), the harmful rate and the paper's
+    success rate at k = 1..K added obstacles; where a run reports it
     (a planner with expansions), the effort-harmful rate too (a dash for the others); with `seconds`, each run's."""
     data = json.loads(path.read_text())
     runs = _robustness_runs(data, keep_order)
@@ -115,14 +119,16 @@ def mpd_robustness(
     for run in runs:
         figures = run["figures"]
         overall = figures["overall"]
-        row = [run.get("family", "mazes"), f"`{run['planner']}`", str(overall[0]["maps"])]
+        maps, valid = overall[0]["maps"], overall[0].get("valid", overall[0]["maps"])
+        counted = str(maps) if valid == maps else f"{valid} of {maps}"  # the rates are over the valid maps
+        row = [run.get("family", "mazes"), f"`{run['planner']}`", counted]
         row += [percent(figures["clean"]["success_rate"]), _by_k(overall, "harmful_rate")]
         row += [_by_k(overall, "paper_success_rate")]
         if effort:
             row += [_by_k(overall, "effort_harmful_rate") if "effort_harmful_rate" in overall[0] else "—"]
         row += [decimal(overall[-1]["mean_regret"])] + ([f"{figures['seconds']:.0f}"] if seconds else [])
         rows.append(row)
-    header = [first, "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
+    header = [first, "planner", "maps (valid)", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
     header += ["effort-harmful, k = 1 / 2 / ..."] if effort else []
     header += ["mean regret at the largest k"] + (["seconds"] if seconds else [])
     return markdown_table(header, rows)
@@ -176,7 +182,7 @@ def transpath_ratios(path: Path = TRANSPATH_JSON) -> str:
                     + [decimal(fig["expansions_ratio"]), decimal(fig["cost_ratio"]), str(fig["unreached"])]
                     + [decimal(fig["expansions"], 1), decimal(fig["vanilla_expansions"], 1)]
                 )
-    header = ["maps", "planner", "rows kept", "expansions ratio", "cost ratio", "unreached"]
+    header = ["family", "planner", "rows kept", "expansions ratio", "cost ratio", "unreached"]
     return markdown_table([*header, "expansions", "vanilla A*'s"], rows)
 
 
@@ -195,7 +201,7 @@ def transpath_families(path: Path = TRANSPATH_JSON) -> str:
             + [", ".join(f"`{entry['planner']}`" for entry in planners)]
             + ["—" if seconds is None else f"{seconds / 60:.0f} min"]
         )
-    return markdown_table(["maps", "searches", "robustness maps", "planners", "wall time"], rows)
+    return markdown_table(["family", "searches", "robustness maps", "planners", "wall time"], rows)
 
 
 def mpd_commands(path: Path = MPD_JSON) -> str:

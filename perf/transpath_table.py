@@ -21,10 +21,12 @@ worst case per map; for a planner that reports expansions, the effort-harmful ra
 file with the exact commands (the scratch folder written as `<work>`), a list of families each with its planners,
 which `docs/hooks.py` renders on `docs/results/transpath.md`: no number is copied. With `--update`, the families and
 planners run now replace their entries in the existing file (a family whose maps or settings changed is replaced
-whole) and the others are kept, so that the families, and the costly TransPath runs, can go apart.
+whole) and the others are kept, so that the families, and the costly TransPath runs, can go apart; `--join A.json
+B.json ...` runs nothing and writes the records of runs made side by side (each to its own `--out`) as one, merged in
+the order given as `--update` would merge them.
 
     nice python perf/transpath_table.py [--families generated,movingai,examples,moore] [--n 20] [--seed 1000]
-        [--crops 2] [--robustness-n 5] [--planners A,B] [--update]
+        [--crops 2] [--robustness-n 5] [--planners A,B] [--update] [--join A.json B.json ...]
 """
 
 from __future__ import annotations
@@ -128,9 +130,18 @@ def main() -> None:
     parser.add_argument("--max-obstacles", type=int, default=3, help="the robustness runs' largest k")
     parser.add_argument("--planners", default="", help="only these of each family's planners, joined by commas")
     parser.add_argument("--update", action="store_true", help="merge into the existing --out (module doc)")
+    parser.add_argument("--join", nargs="+", type=Path, default=[], help="write these records as one (module doc)")
     args = parser.parse_args()
+    if args.join:
+        records = [json.loads(path.read_text()) for path in args.join]
+        joined = records[0]
+        for record in records[1:]:
+            joined = merge_record(joined, record)
+        args.out.write_text(json.dumps(joined, indent=1) + "\n")
+        print(f"wrote {args.out}", file=sys.stderr)
+        return
     work = scratch_folder(args.work, "transpath_table_")
-    folders = {str(work): "<work>", str(ROOT.parent / "shared" / "data"): "../shared/data"}
+    folders = {str(work): "<work>", str(ROOT.parent / "shared" / "data"): "<data>"}
     only = {p for p in args.planners.split(",") if p}
     load_before = load_average()
     families, robustness, planners_run = [], [], []
@@ -163,7 +174,7 @@ def main() -> None:
         "machine": {"cpu": cpu_model(), "load_average_before": load_before, "load_average_after": load_average()},
     }
     record = {
-        "placeholders": {"<work>": "a scratch folder", "../shared/data": "the public data, beside the repository"},
+        "placeholders": {"<work>": "a scratch folder", "<data>": "the public data: Moving AI maps, TransPath's tasks"},
         "robustness_settings": {"max_obstacles": args.max_obstacles},
         "runs": [run],
         "families": families,

@@ -61,7 +61,7 @@ def test_the_mp_benchmark_page_is_read_from_its_json(tmp_path):
     path = tmp_path / "mpd.json"
     path.write_text(json.dumps(_mpd_record(0.125)))
     assert measured.mpd_table(path).splitlines()[2] == "| forest | `optimal` | 100 | 0.125 | — | — | 50.0% | — |"
-    row = "| forest | `vin` | 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | 1.250 |"
+    row = "| forest | `vin` | 19 of 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | 1.250 |"
     assert measured.mpd_robustness(path).splitlines()[2] == row
     assert measured.mpd_robustness_strategies(path).splitlines()[2] == "| forest | `vin` | 25.0% / 50.0% |"
     commands = measured.mpd_commands(path)
@@ -339,13 +339,33 @@ def test_the_transpath_page_is_read_from_its_json(tmp_path):
     measured = docs_module("measured")
     filled = filled_page("results/transpath.md")
     data = json.loads(measured.TRANSPATH_JSON.read_text())
-    (family,) = data["families"]
-    assert family["import"] in filled and "--size 64" in family["import"]
-    for entry in family["planners"]:
-        assert entry["command"] in filled
+    assert len(data["families"]) == 4
+    for family in data["families"]:
+        assert all(command in filled for command in family["import"])
+        assert any("--size 64" in c or "--crop 64" in c or "--format transpath" in c for c in family["import"])
+        for entry in family["planners"]:
+            assert entry["command"] in filled
     for run in data["robustness"]:
         assert run["command"] in filled and len(run["figures"]["overall"]) == 3
-    assert {"transpath-cf", "transpath-focal", "astar"} <= {run["planner"] for run in data["robustness"]}
+    planners = {"transpath-cf", "transpath-focal", "astar", "wastar:w=2", "optimal", "vin64", "neural-astar"}
+    assert planners == {run["planner"] for run in data["robustness"]}
+    assert {run["family"] for run in data["robustness"]} == {family["family"] for family in data["families"]}
+    # each family keeps its rule, as the page says: the crops without corner cutting, Neural A*'s twin on moore moves
+    rules = {
+        (run["family"].split()[0], run["figures"]["settings"]["moves"], run["figures"]["settings"]["corner_cutting"])
+        for run in data["robustness"]
+    }
+    assert rules == {
+        ("generated", "octile", True),
+        ("Moving", "octile", False),
+        ("TransPath's", "octile", True),
+        ("generated", "moore", True),
+    }
+    assert {run["planner"] for run in data["robustness"] if run["figures"]["settings"]["moves"] == "moore"} == {
+        "neural-astar",
+        "astar",
+    }
+    assert "vin64" not in {run["planner"] for run in data["robustness"] if run["family"].startswith("Moving")}
     # another JSON gives another table of TransPath's ratios: nothing is copied by hand
     record = _mpd_record(0.5)
     ratios = {"rows": 7, "kept": 4, "hardness": 1.05, "expansions_ratio": 0.25, "cost_ratio": 1.0625}
@@ -380,8 +400,8 @@ def test_the_transpath_families_render_in_their_order_with_effort_where_measured
     robustness = measured.mpd_robustness(path, "maps", keep_order=True, seconds=True).splitlines()
     assert "effort-harmful, k = 1 / 2 / ..." in robustness[0] and robustness[0].endswith("| seconds |")
     effort = "| 50.0% / 75.0% |"
-    assert robustness[2] == f"| zoo | `astar` | 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% {effort} 1.250 | 3 |"
-    assert robustness[3] == "| forest | `vin` | 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | — | 1.250 | 12 |"
+    assert robustness[2] == f"| zoo | `astar` | 19 of 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% {effort} 1.250 | 3 |"
+    assert robustness[3] == "| forest | `vin` | 19 of 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | — | 1.250 | 12 |"
     strategies = measured.mpd_robustness_strategies(path, keep_order=True).splitlines()
     assert [line.split(" | ")[0] for line in strategies[2:]] == ["| zoo", "| forest"]
     families = measured.transpath_families(path).splitlines()
