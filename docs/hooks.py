@@ -16,8 +16,10 @@ figure function, inlined as SVG). The others are the benchmark scripts' measurem
 (its docstring names the files): `mpd-table` (Opt / Exp / Hmean per family and planner), `mpd-robustness` (the worst
 case per map: harmful and paper success rates at k = 1..K added obstacles), `mpd-robustness-strategies` (the harmful
 rates per strategy), `mpd-robustness-times` (how long each planner's runs took, a sentence) and `mpd-commands` (the
-commands, and the checksums of the weights files they name); the same five as `transpath-*` from TransPath's JSON,
-with `transpath-ratios` (TransPath's own figures); `map-size-table`; `neural-astar-modes` (the exact against the
+commands, and the checksums of the weights files they name); the same five as `transpath-*` from TransPath's JSON
+(in its families' order, the robustness runs with their seconds and, for planners with expansions, the effort-harmful
+rate), with `transpath-ratios` (TransPath's own figures) and `transpath-families` (each family's maps, planners and
+wall time); `map-size-table`; `neural-astar-modes` (the exact against the
 differentiable search per seed, beside Opt / Exp / Hmean), `neural-astar-speed` (plans/s side by side, and the ratios
 the prose would otherwise copy) and `neural-astar-commands`; `suite-times`; `vin64-transfer` (the 28x28 weights on
 64x64 maps, and the commands), `vin64-reach` (the optimal move counts that set k), `vin64-training` (the epochs' time
@@ -47,6 +49,7 @@ from measured import (
     neural_astar_speed,
     percent,
     suite_times,
+    transpath_families,
     transpath_ratios,
     vin64_held_out,
     vin64_reach,
@@ -208,10 +211,11 @@ BUILDERS = {
     "mpd-robustness": mpd_robustness,
     "mpd-robustness-times": mpd_robustness_times,
     "mpd-commands": mpd_commands,
-    "transpath-table": lambda: mpd_table(TRANSPATH_JSON, "maps"),
+    "transpath-families": transpath_families,
+    "transpath-table": lambda: mpd_table(TRANSPATH_JSON, "family", keep_order=True),
     "transpath-ratios": transpath_ratios,
-    "transpath-robustness-strategies": lambda: mpd_robustness_strategies(TRANSPATH_JSON),
-    "transpath-robustness": lambda: mpd_robustness(TRANSPATH_JSON, "maps"),
+    "transpath-robustness-strategies": lambda: mpd_robustness_strategies(TRANSPATH_JSON, keep_order=True),
+    "transpath-robustness": lambda: mpd_robustness(TRANSPATH_JSON, "family", keep_order=True, seconds=True),
     "transpath-commands": lambda: mpd_commands(TRANSPATH_JSON),
     "map-size-table": map_size_table,
     "neural-astar-modes": neural_astar_modes,

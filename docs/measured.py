@@ -61,12 +61,18 @@ def shell_block(lines: list[str]) -> str:
     return "```sh\n" + "\n".join(lines) + "\n```"
 
 
-def mpd_table(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
+def _families(data: dict, keep_order: bool) -> list[dict]:
+    """The families of a JSON by name, or as the JSON lists them (`keep_order`: TransPath's, in the page's order)."""
+    return list(data["families"]) if keep_order else sorted(data["families"], key=lambda f: f["family"])
+
+
+def mpd_table(path: Path = MPD_JSON, first: str = "family (test split)", keep_order: bool = False) -> str:
     """Opt / Exp / Hmean, success and mean expansions per MP family and planner, from `perf/mpd_table.py`'s
-    JSON; Exp and Hmean are a dash for planners that report no expanded cells."""
+    JSON (families by name, or in the JSON's order with `keep_order`); Exp and Hmean are a dash for planners that
+    report no expanded cells."""
     data = json.loads(path.read_text())
     rows = []
-    for family in sorted(data["families"], key=lambda f: f["family"]):
+    for family in _families(data, keep_order):
         for entry in family["planners"]:
             fig = entry["search"]
             rows.append(
@@ -79,13 +85,16 @@ def mpd_table(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
     return markdown_table(header, rows)
 
 
-def _robustness_runs(data: dict) -> list[dict]:
+def _robustness_runs(data: dict, keep_order: bool = False) -> list[dict]:
     """The robustness runs of the MP JSON by family (in the table's order), then in the order they were run."""
-    order = {f["family"]: i for i, f in enumerate(sorted(data["families"], key=lambda f: f["family"]))}
+    order = {f["family"]: i for i, f in enumerate(_families(data, keep_order))}
     planners = list(dict.fromkeys(r["planner"] for r in data["robustness"] if r.get("family", "mazes") != "mazes"))
+    # with `keep_order`, a family's runs in the order of its planners in the clean table (families differ in them)
+    listed = {f["family"]: [e["planner"] for e in f["planners"]] for f in data["families"]} if keep_order else {}
 
     def key(run: dict) -> tuple[int, int]:
-        planner = planners.index(run["planner"]) if run["planner"] in planners else len(planners)
+        names = listed.get(run.get("family", "mazes"), planners)
+        planner = names.index(run["planner"]) if run["planner"] in names else len(names)
         return order.get(run.get("family", "mazes"), len(order)), planner
 
     return sorted(data["robustness"], key=key)
@@ -96,21 +105,33 @@ def _by_k(curve: list[dict], key: str) -> str:
     return " / ".join(percent(point[key]) for point in curve)
 
 
-def mpd_robustness(path: Path = MPD_JSON, first: str = "family (test split)") -> str:
+def mpd_robustness(
+    path: Path = MPD_JSON, first: str = "family (test split)", keep_order: bool = False, seconds: bool = False
+) -> str:
     """The robustness runs of `perf/mpd_table.py`'s JSON, worst case per map over the strategies: per family
-    and planner, the harmful rate and the paper's success rate at k = 1..K added obstacles."""
+    and planner, the maps (the valid ones, which the rates count, where fewer), the harmful rate and the paper's
+    success rate at k = 1..K added obstacles; where a run reports it
+    (a planner with expansions), the effort-harmful rate too (a dash for the others); with `seconds`, each run's."""
     data = json.loads(path.read_text())
+    runs = _robustness_runs(data, keep_order)
+    effort = any("effort_harmful_rate" in run["figures"]["overall"][0] for run in runs)
     rows = []
-    for run in _robustness_runs(data):
+    for run in runs:
         figures = run["figures"]
         overall = figures["overall"]
-        rows.append(
-            [run.get("family", "mazes"), f"`{run['planner']}`", str(overall[0]["maps"])]
-            + [percent(figures["clean"]["success_rate"]), _by_k(overall, "harmful_rate")]
-            + [_by_k(overall, "paper_success_rate"), decimal(overall[-1]["mean_regret"])]
-        )
-    header = [first, "planner", "maps", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
-    return markdown_table([*header, "mean regret at the largest k"], rows)
+        maps, valid = overall[0]["maps"], overall[0].get("valid", overall[0]["maps"])
+        counted = str(maps) if valid == maps else f"{valid} of {maps}"  # the rates are over the valid maps
+        row = [run.get("family", "mazes"), f"`{run['planner']}`", counted]
+        row += [percent(figures["clean"]["success_rate"]), _by_k(overall, "harmful_rate")]
+        row += [_by_k(overall, "paper_success_rate")]
+        if effort:
+            row += [_by_k(overall, "effort_harmful_rate") if "effort_harmful_rate" in overall[0] else "—"]
+        row += [decimal(overall[-1]["mean_regret"])] + ([f"{figures['seconds']:.0f}"] if seconds else [])
+        rows.append(row)
+    header = [first, "planner", "maps (valid)", "clean success", "harmful, k = 1 / 2 / ...", "paper success"]
+    header += ["effort-harmful, k = 1 / 2 / ..."] if effort else []
+    header += ["mean regret at the largest k"] + (["seconds"] if seconds else [])
+    return markdown_table(header, rows)
 
 
 def mpd_robustness_times(path: Path = MPD_JSON) -> str:
@@ -129,10 +150,10 @@ def mpd_robustness_times(path: Path = MPD_JSON) -> str:
     return f"{', '.join(each)} per family, so the {len(runs)} runs took about {total:.0f} minutes"
 
 
-def mpd_robustness_strategies(path: Path = MPD_JSON) -> str:
-    """The same runs per strategy: the harmful rate at k = 1..K of each strategy, and its seconds."""
+def mpd_robustness_strategies(path: Path = MPD_JSON, keep_order: bool = False) -> str:
+    """The same runs per strategy: the harmful rate at k = 1..K of each strategy."""
     data = json.loads(path.read_text())
-    runs = _robustness_runs(data)
+    runs = _robustness_runs(data, keep_order)
     names = list(dict.fromkeys(name for run in runs for name in run["figures"]["strategies"]))
     rows = [
         [run.get("family", "mazes"), f"`{run['planner']}`"]
@@ -161,16 +182,35 @@ def transpath_ratios(path: Path = TRANSPATH_JSON) -> str:
                     + [decimal(fig["expansions_ratio"]), decimal(fig["cost_ratio"]), str(fig["unreached"])]
                     + [decimal(fig["expansions"], 1), decimal(fig["vanilla_expansions"], 1)]
                 )
-    header = ["maps", "planner", "rows kept", "expansions ratio", "cost ratio", "unreached"]
+    header = ["family", "planner", "rows kept", "expansions ratio", "cost ratio", "unreached"]
     return markdown_table([*header, "expansions", "vanilla A*'s"], rows)
+
+
+def transpath_families(path: Path = TRANSPATH_JSON) -> str:
+    """The families of `perf/transpath_table.py`'s JSON: its maps, the searches of the clean figures, the maps of
+    the robustness runs, its planners and the wall time of the run that made them (maps, evaluations and robustness
+    runs; a dash where planners were merged in from another run)."""
+    data = json.loads(path.read_text())
+    rows = []
+    for family in data["families"]:
+        planners = family["planners"]
+        searches = sorted({str(entry["search"]["rows"]) for entry in planners})
+        seconds = family.get("seconds")
+        rows.append(
+            [family["family"], " / ".join(searches), str(family.get("robustness_maps", "—"))]
+            + [", ".join(f"`{entry['planner']}`" for entry in planners)]
+            + ["—" if seconds is None else f"{seconds / 60:.0f} min"]
+        )
+    return markdown_table(["family", "searches", "robustness maps", "planners", "wall time"], rows)
 
 
 def mpd_commands(path: Path = MPD_JSON) -> str:
     """Every command behind `mpd_table` and `mpd_robustness`, as a shell block."""
     data = json.loads(path.read_text())
     lines = []
-    for family in data["families"]:
-        lines += [family["import"], *(entry["command"] for entry in family["planners"])]
+    for family in data["families"]:  # a family made by one command, or several (crops joined by `maps concat`)
+        made = family["import"] if isinstance(family["import"], list) else [family["import"]]
+        lines += [*made, *(entry["command"] for entry in family["planners"])]
     lines += [run["command"] for run in data["robustness"]]
     weights = {}
     for run in data["robustness"]:  # the checksum the run recorded (a --weighted file's, or a shipped one's)

@@ -61,7 +61,7 @@ def test_the_mp_benchmark_page_is_read_from_its_json(tmp_path):
     path = tmp_path / "mpd.json"
     path.write_text(json.dumps(_mpd_record(0.125)))
     assert measured.mpd_table(path).splitlines()[2] == "| forest | `optimal` | 100 | 0.125 | — | — | 50.0% | — |"
-    row = "| forest | `vin` | 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | 1.250 |"
+    row = "| forest | `vin` | 19 of 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | 1.250 |"
     assert measured.mpd_robustness(path).splitlines()[2] == row
     assert measured.mpd_robustness_strategies(path).splitlines()[2] == "| forest | `vin` | 25.0% / 50.0% |"
     commands = measured.mpd_commands(path)
@@ -339,13 +339,33 @@ def test_the_transpath_page_is_read_from_its_json(tmp_path):
     measured = docs_module("measured")
     filled = filled_page("results/transpath.md")
     data = json.loads(measured.TRANSPATH_JSON.read_text())
-    (family,) = data["families"]
-    assert family["import"] in filled and "--size 64" in family["import"]
-    for entry in family["planners"]:
-        assert entry["command"] in filled
+    assert len(data["families"]) == 4
+    for family in data["families"]:
+        assert all(command in filled for command in family["import"])
+        assert any("--size 64" in c or "--crop 64" in c or "--format transpath" in c for c in family["import"])
+        for entry in family["planners"]:
+            assert entry["command"] in filled
     for run in data["robustness"]:
         assert run["command"] in filled and len(run["figures"]["overall"]) == 3
-    assert {"transpath-cf", "transpath-focal", "astar"} <= {run["planner"] for run in data["robustness"]}
+    planners = {"transpath-cf", "transpath-focal", "astar", "wastar:w=2", "optimal", "vin64", "neural-astar"}
+    assert planners == {run["planner"] for run in data["robustness"]}
+    assert {run["family"] for run in data["robustness"]} == {family["family"] for family in data["families"]}
+    # each family keeps its rule, as the page says: the crops without corner cutting, Neural A*'s twin on moore moves
+    rules = {
+        (run["family"].split()[0], run["figures"]["settings"]["moves"], run["figures"]["settings"]["corner_cutting"])
+        for run in data["robustness"]
+    }
+    assert rules == {
+        ("generated", "octile", True),
+        ("Moving", "octile", False),
+        ("TransPath's", "octile", True),
+        ("generated", "moore", True),
+    }
+    assert {run["planner"] for run in data["robustness"] if run["figures"]["settings"]["moves"] == "moore"} == {
+        "neural-astar",
+        "astar",
+    }
+    assert "vin64" not in {run["planner"] for run in data["robustness"] if run["family"].startswith("Moving")}
     # another JSON gives another table of TransPath's ratios: nothing is copied by hand
     record = _mpd_record(0.5)
     ratios = {"rows": 7, "kept": 4, "hardness": 1.05, "expansions_ratio": 0.25, "cost_ratio": 1.0625}
@@ -355,3 +375,66 @@ def test_the_transpath_page_is_read_from_its_json(tmp_path):
     path.write_text(json.dumps(record))
     row = "| forest | `optimal` | 4 of 7 | 0.250 | 1.062 | 1 | 12.0 | 48.0 |"
     assert measured.transpath_ratios(path).splitlines()[2] == row
+
+
+def test_the_transpath_families_render_in_their_order_with_effort_where_measured(tmp_path):
+    measured = docs_module("measured")
+    record = _mpd_record(0.5)
+    forest = record["families"][0]
+    forest |= {"import": ["vinadv maps import A", "vinadv maps concat A B"], "robustness_maps": 20, "seconds": 600}
+    search = {**forest["planners"][0]["search"], "rows": 7, "expansions": 30.0, "astar_expansions": 40.0}
+    astar = {"planner": "astar", "command": "vinadv eval --planner astar", "search": search}
+    record["families"].insert(0, {"family": "zoo", "import": "vinadv maps generate Z", "planners": [astar]})
+    run = record["robustness"][0]
+    effort = [{**point, "effort_harmful_rate": rate} for point, rate in zip(run["figures"]["overall"], (0.5, 0.75))]
+    searched = {**run, "family": "zoo", "planner": "astar", "figures": {**run["figures"], "overall": effort}}
+    run["figures"]["seconds"], searched["figures"]["seconds"] = 12.4, 3.0
+    record["robustness"].append(searched)
+    path = tmp_path / "transpath.json"
+    path.write_text(json.dumps(record))
+    # the JSON's order (zoo first), not the names' (forest first), and A*'s expansions beside its own
+    table = measured.mpd_table(path, "maps", keep_order=True).splitlines()
+    assert [line.split(" | ")[0] for line in table[2:]] == ["| zoo", "| forest"]
+    assert table[2].endswith("| 30.0 (40.0) |")
+    assert measured.mpd_table(path, "maps").splitlines()[2].startswith("| forest |")
+    robustness = measured.mpd_robustness(path, "maps", keep_order=True, seconds=True).splitlines()
+    assert "effort-harmful, k = 1 / 2 / ..." in robustness[0] and robustness[0].endswith("| seconds |")
+    effort = "| 50.0% / 75.0% |"
+    assert robustness[2] == f"| zoo | `astar` | 19 of 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% {effort} 1.250 | 3 |"
+    assert robustness[3] == "| forest | `vin` | 19 of 20 | 100.0% | 25.0% / 50.0% | 10.0% / 20.0% | — | 1.250 | 12 |"
+    strategies = measured.mpd_robustness_strategies(path, keep_order=True).splitlines()
+    assert [line.split(" | ")[0] for line in strategies[2:]] == ["| zoo", "| forest"]
+    families = measured.transpath_families(path).splitlines()
+    assert families[2] == "| zoo | 7 | — | `astar` | — |"
+    assert families[3] == "| forest | 100 | 20 | `optimal` | 10 min |"
+    commands = measured.mpd_commands(path)
+    assert commands.index("vinadv maps generate Z") < commands.index("vinadv maps import A")
+    assert commands.index("vinadv maps import A") < commands.index("vinadv maps concat A B")
+
+
+def test_the_transpath_script_merges_families_and_planners_run_apart(monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT / "perf"))  # the script imports perf/common.py as `common`
+    spec = importlib.util.spec_from_file_location("transpath_table", ROOT / "perf" / "transpath_table.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+
+    def family(name: str, made: str, planners: list[str]) -> dict:
+        entries = [{"planner": p, "command": f"eval {name} {p} {made}"} for p in planners]
+        return {"family": name, "import": [made], "robustness_maps": 5, "planners": entries, "seconds": 60.0}
+
+    def record(families: list[dict], run: str) -> dict:
+        runs = [{"family": f["family"], "planner": e["planner"], "run": run} for f in families for e in f["planners"]]
+        return {"robustness_settings": {"max_obstacles": 3}, "runs": [run], "families": families, "robustness": runs}
+
+    old = record([family("a", "gen 1", ["cf", "astar"]), family("b", "crop 1", ["cf", "astar"])], "old")
+    # a's cf again on the same maps, b on other maps, c new
+    new = record([family("a", "gen 1", ["cf"]), family("b", "crop 2", ["astar"]), family("c", "ex", ["cf"])], "new")
+    merged = script.merge_record(old, new)
+    assert [f["family"] for f in merged["families"]] == ["a", "b", "c"]
+    assert [e["command"] for e in merged["families"][0]["planners"]] == ["eval a cf gen 1", "eval a astar gen 1"]
+    assert [e["planner"] for e in merged["families"][1]["planners"]] == ["astar"]  # b's old maps went with cf
+    # the time of a family's run where it made every planner's figures, not where some come from another run
+    assert [f["seconds"] for f in merged["families"]] == [None, 60.0, 60.0]
+    runs = {(r["family"], r["planner"]): r["run"] for r in merged["robustness"]}
+    assert runs == {("a", "cf"): "new", ("a", "astar"): "old", ("b", "astar"): "new", ("c", "cf"): "new"}
+    assert merged["runs"] == ["old", "new"]
