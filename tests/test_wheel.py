@@ -1,10 +1,15 @@
 """The release shape: the wheel carries the code, templates and shipped weights, and runs the main job outside the
 repository (issue 35). Built with `pip wheel --no-deps`, installed with `--no-deps` into a fresh venv in a temporary
 folder; the dependencies come from the test's own environment through a `.pth` line (the machine's system Python
-has none), after the wheel's own site-packages, so `import vinadv` can only find the installed wheel."""
+has none), after the wheel's own site-packages, so `import vinadv` can only find the installed wheel.
+
+The installed copy starts with the checkout's compiled Numba kernels (`seed_numba_cache`): compiling a run's kernels
+cold takes half a minute or more on the 2-core machine, for the very code the rest of the suite compiles and runs,
+and it is not what this test checks (the wheel's files, the install, the main job outside the repository)."""
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -16,6 +21,27 @@ import pytest
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def seed_numba_cache(checkout: Path, installed: Path) -> int:
+    """Copy the checkout's Numba cache (`__pycache__/*.nbi`, `*.nbc`: `cache=True` kernels) into the installed package
+    `installed`, for the modules whose installed file is byte for byte the checkout's, and give those files the
+    checkout's modification time; returns how many cache files it copied. Numba keys its in-tree cache by the source
+    file's folder, modification time and size, and each kernel by its bytecode; a module the wheel changed, or one
+    missing, finds no entry and compiles (or fails) as it would without this."""
+    copied = 0
+    for source in checkout.rglob("*.py"):
+        target = installed / source.relative_to(checkout)
+        if not target.is_file() or target.read_bytes() != source.read_bytes():
+            continue
+        stat = source.stat()
+        os.utime(target, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+        caches = sorted(source.parent.glob(f"__pycache__/{source.stem}.*.nb[ic]"))
+        for cache in caches:
+            (target.parent / "__pycache__").mkdir(exist_ok=True)
+            shutil.copy2(cache, target.parent / "__pycache__" / cache.name)
+        copied += len(caches)
+    return copied
 
 
 def test_the_wheel_installs_outside_the_repository_and_runs_the_main_job(tmp_path):
@@ -48,6 +74,7 @@ def test_the_wheel_installs_outside_the_repository_and_runs_the_main_job(tmp_pat
         env=clean_env,
     )
     (site / "zz_test_dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    seed_numba_cache(ROOT / "src" / "vinadv", site / "vinadv")
     work = tmp_path / "elsewhere"
     work.mkdir()
     where = subprocess.run(
