@@ -164,13 +164,18 @@ def test_compiled_training_trains_the_same_weights(tmp_path):
     # one validation map cost three compilations, 46 s): 9 maps are 8 for training, in two equal batches of 4 (one
     # training graph, 4 steps), and 1 for validation (the eval graph). The graph unrolls the k iterations, and its
     # compile time grows with them (cold cache: 37 s of CPU at k = 4, 23 s at k = 2): k = 2 still shares the
-    # iteration's weights between two steps
+    # iteration's weights between two steps. Of the rest, a fifth was inductor probing the C++ compiler: it builds
+    # and loads a test library for each vector ISA the CPU's flags name (six builds, 7 s of CPU of 33 on a cold
+    # cache). `vec_isa_ok` takes the CPU's flags as they are, so the same vectorized kernels are compiled unprobed.
     maps = generate_maps(9, 8, seed=7, n_starts=1)
     config = TrainConfig(planner="gppn", epochs=2, lr=0.01, batch_size=4, k=2, l_h=4, kernel=3, seed=3)
     eager, eager_rec = train_gppn(maps, config, checkpoint=tmp_path / "e.ckpt", progress=False)
     assert (eager_rec["n_train"], eager_rec["n_val"], eager_rec["steps"]) == (8, 1, 4)
     compiled_config = TrainConfig(**{**config.to_dict(), "compile": True})
-    compiled, rec = train_gppn(maps, compiled_config, checkpoint=tmp_path / "c.ckpt", progress=False)
+    from torch._inductor import config as inductor  # noqa: PLC0415 (torch.compile's backend: the training loads it)
+
+    with inductor.patch({"cpp.vec_isa_ok": True}):
+        compiled, rec = train_gppn(maps, compiled_config, checkpoint=tmp_path / "c.ckpt", progress=False)
     assert rec["train_config"]["compile"] is True and eager_rec["train_config"]["compile"] is False
     torch.manual_seed(config.seed)  # the trainer's initial weights
     initial = GPPN(GPPNConfig(k=config.k, l_h=config.l_h, f=config.kernel)).state_dict()
