@@ -31,7 +31,13 @@ def test_the_optimal_planner_is_measured_optimal_on_the_runs_maps_and_the_result
     distinct = {(p.tobytes(), tuple(s), tuple(g)) for p, s, g in zip(pairs.obstacles_o, pairs.starts, pairs.goals)}
     assert metrics["success_rate"] == metrics["optimal_rate"] == 1.0 and metrics["maps"] == len(distinct)
     assert metrics["action_accuracy"] == 1.0  # `optimal` declares a policy: its optimal action at every cell
-    assert result["capabilities"] == {"policy": True, "value_maps": True, "gradients": False, "expansions": False}
+    assert result["capabilities"] == {
+        "policy": True,
+        "value_maps": True,
+        "gradients": False,
+        "expansions": False,
+        "start_values": False,
+    }
     assert result["search"] is None and result["planner"]["name"] == "optimal"
     assert len(result["value_map"]["values"]) == 8  # its value map of the first map, 8x8
     assert result["source"].startswith(f"measured by vinadv evaluate on the first {len(distinct)} distinct maps")
