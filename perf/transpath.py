@@ -19,7 +19,7 @@ turns (`timed_side_by_side`), best of `--rounds`:
 - each strategy (`random`, `near-path`, `key-points`, `saliency`: one added obstacle, per_map 1, budget 8) per map,
   for the two models and `astar` (once, not best of: an attack plans many maps; after one untimed map with each, so
   that no strategy's first compilation is timed); `exhaustive` on the first `--exhaustive-maps` maps only (every
-  valid cell a candidate, about 2,700 on a 64x64 map, each one forward; counted), 0 to skip it.
+  valid cell a candidate, each one forward; their number counted), 0 to skip it.
 """
 
 from __future__ import annotations
