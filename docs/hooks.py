@@ -19,7 +19,9 @@ rates per strategy), `mpd-robustness-times` (how long each planner's runs took, 
 commands, and the checksums of the weights files they name); the same five as `transpath-*` from TransPath's JSON
 (in its families' order, the robustness runs with their seconds and, for planners with expansions, the effort-harmful
 rate), with `transpath-ratios` (TransPath's own figures) and `transpath-families` (each family's maps, planners and
-wall time); `map-size-table`; `neural-astar-modes` (the exact against the
+wall time), `transpath-cost` (a forward, a plan, the searches and each strategy per map beside `astar`'s, with
+the ratios the prose would otherwise copy) and `transpath-exhaustive-cost` (the exhaustive attack's, a sentence);
+`map-size-table`; `neural-astar-modes` (the exact against the
 differentiable search per seed, beside Opt / Exp / Hmean), `neural-astar-speed` (plans/s side by side, and the ratios
 the prose would otherwise copy) and `neural-astar-commands`; `suite-times`; `vin64-transfer` (the 28x28 weights on
 64x64 maps, and the commands), `vin64-reach` (the optimal move counts that set k), `vin64-training` (the epochs' time
@@ -49,6 +51,8 @@ from measured import (
     neural_astar_speed,
     percent,
     suite_times,
+    transpath_cost,
+    transpath_exhaustive_cost,
     transpath_families,
     transpath_ratios,
     vin64_held_out,
@@ -222,6 +226,8 @@ BUILDERS = {
     "neural-astar-speed": neural_astar_speed,
     "neural-astar-commands": neural_astar_commands,
     "suite-times": suite_times,
+    "transpath-cost": transpath_cost,
+    "transpath-exhaustive-cost": transpath_exhaustive_cost,
     "vin64-transfer": vin64_transfer,
     "vin64-reach": vin64_reach,
     "vin64-training": vin64_training,

@@ -10,6 +10,9 @@ benchmark scripts write with the commands they ran, so that no measured number i
 - `docs/guide/neural-astar.md`: `docs/results/neural_astar.json` (`perf/neural_astar_table.py`), the exact against
   the differentiable search per seed, and the plans/s side by side.
 - `docs/development.md`: `docs/results/suite_times.json` (`OUT=docs/results/suite_times.json bash .ci/suite-times`).
+- `docs/guide/transpath.md`, "Cost" (and the exhaustive attack's cost on `docs/results/transpath.md`):
+  `docs/results/transpath_cost.json` (`perf/transpath.py --out`), a forward, a plan, the two searches and each attack
+  strategy per map beside `astar`'s, and their ratios.
 - `docs/guide/planners.md`, the 64x64 VIN: `docs/results/vin64_reach.json` (`perf/vin64_reach.py`) and the committed
   weights records `vin64.json` and `vin64.metrics.json`.
 
@@ -34,6 +37,7 @@ MAP_SIZE_JSON = RESULTS / "map_size.json"
 NEURAL_ASTAR_JSON = RESULTS / "neural_astar.json"
 SUITE_TIMES_JSON = RESULTS / "suite_times.json"
 VIN64_JSON = RESULTS / "vin64_reach.json"
+TRANSPATH_COST_JSON = RESULTS / "transpath_cost.json"
 
 
 def percent(fraction: float | None) -> str:
@@ -489,4 +493,98 @@ def vin64_held_out(folder: Path = WEIGHTS_DIR) -> str:
         f"reaches the goal from {percent(fig['success_rate'])} of the {fig['rollouts']:,} starts (`{fig['command']}`); "
         f"of the {missed} starts it misses, {missed_far} are among the {starts} ({percent(starts / fig['rollouts'])} "
         f"of the starts) whose optimal path has {k - LENGTH_BUCKET} moves or more"
+    )
+
+
+#: the models of `perf/transpath.py`'s record, in the table's column order after `astar`
+TRANSPATH_MODELS = ("transpath-cf", "transpath-focal")
+#: the rows of `transpath_cost` timed side by side: the key's suffix in `seconds_per_map`, and what it times
+TRANSPATH_COST_ROWS = (
+    ("forward", "forward (the network alone)"),
+    ("plan", "plan (forward and compiled search)"),
+    ("replica search", "compiled replica's search (outputs cached)"),
+    ("differentiable search", "differentiable search (outputs cached, no gradient)"),
+)
+
+
+def _duration(seconds: float) -> str:
+    """A time in milliseconds below a second, else seconds, three significant figures (thousands separated)."""
+    if seconds < 1:
+        return f"{seconds * 1000:.3g} ms"
+    return f"{seconds:,.0f} s" if seconds >= 100 else f"{seconds:.3g} s"
+
+
+def _times(ratio: float) -> str:
+    """A ratio of two times: whole above 10, else one decimal."""
+    return f"{ratio:,.0f}" if ratio >= 10 else f"{ratio:.1f}"
+
+
+def _span(ratios: list[float]) -> str:
+    low, high = min(ratios), max(ratios)
+    return _times(low) if _times(low) == _times(high) else f"{_times(low)} to {_times(high)}"
+
+
+def transpath_cost(path: Path = TRANSPATH_COST_JSON) -> str:
+    """The cost of TransPath beside A*'s per 64x64 map (`perf/transpath.py --out`): a forward, a plan, the compiled
+    replica's and the differentiable search on cached outputs, each attack strategy, each TransPath figure with its
+    ratio to `astar`'s (the forward's and plan's to `astar`'s plan); then the ratios the prose would otherwise copy,
+    the machine, its load, the run's wall time and the command."""
+    data = json.loads(path.read_text())
+    fig = data["figures"]
+    per_map, ratios, attacks = fig["seconds_per_map"], fig["ratios"], fig["attack_seconds_per_map"]
+    rows = []
+    for key, label in TRANSPATH_COST_ROWS:
+        astar = per_map["astar plan"] if key == "plan" else None
+        row = [label, "—" if astar is None else _duration(astar)]
+        for model in TRANSPATH_MODELS:
+            cell = _duration(per_map[f"{model} {key}"])
+            if key in ("forward", "plan"):  # both against astar's plan: a forward is what a TransPath plan adds
+                cell += f" ({_times(ratios[f'{model}: {key} / astar plan'])}x)"
+            row.append(cell)
+        rows.append(row)
+    for strategy, times in attacks.items():
+        label = f"`{strategy}` attack"
+        if "candidates_per_map" in times:
+            label += f" ({times['candidates_per_map']:,.0f} candidates a map)"
+        maps = times["maps"]
+        label += f", {maps} map{'s' * (maps != 1)}"
+        row = [label, _duration(times["astar"])]
+        row += [
+            f"{_duration(times[m])} ({_times(ratios[f'{m}: {strategy} / astar {strategy}'])}x)"
+            for m in TRANSPATH_MODELS
+        ]
+        rows.append(row)
+    header = ["per 64x64 map (x `astar`'s)", "`astar`", *(f"`{m}`" for m in TRANSPATH_MODELS)]
+    search = [ratios[f"{m}: differentiable search / replica search"] for m in TRANSPATH_MODELS]
+    same = [fig["identical_searches"][m].replace("/", " of ") for m in TRANSPATH_MODELS]
+    forward = [ratios[f"{m}: forward / astar plan"] for m in TRANSPATH_MODELS]
+    plan = [ratios[f"{m}: plan / astar plan"] for m in TRANSPATH_MODELS]
+    attack = [ratios[f"{m}: {s} / astar {s}"] for m in TRANSPATH_MODELS for s in attacks]
+    m = data["machine"]
+    maps, _, rule = fig["maps"].rpartition(", ")  # `generate_maps(...)`, then the maps' rule
+    text = (
+        f"The compiled replica's search was {_times(search[0])} (`cf`) and {_times(search[1])} (`f`) times as fast as "
+        f"the differentiable search on the same cached outputs, with the same paths and expanded cells on "
+        f"{same[0]} and {same[1]} maps. A plan is the network's forward and then a search: {_span(plan)} times "
+        f"`astar`'s plan, the forward alone {_span(forward)} times; every attack strategy costs {_span(attack)} "
+        f"times `astar`'s per map.\n\n"
+        f"Measured {data['date']} on {m['cpu']} ({m['cores']} cores, {fig['torch_threads']} torch thread"
+        f"{'s' * (fig['torch_threads'] != 1)}, niceness {m['niceness']}), load average {m['load_average_before']} "
+        f"before and {m['load_average_after']} after: a shared machine, so the times are high and noisy; the "
+        f"forwards, plans and searches took turns in one run, best of {fig['rounds']} rounds, on `{maps}` ({rule}), "
+        f"so the ratios are the figures to read; each attack ran once, after one untimed map. The run took "
+        f"{data['seconds']:,.0f} s. Command: `{data['command']}`"
+    )
+    return markdown_table(header, rows) + "\n\n" + text
+
+
+def transpath_exhaustive_cost(path: Path = TRANSPATH_COST_JSON) -> str:
+    """The exhaustive attack's cost per 64x64 map (`perf/transpath.py --out`), as a sentence: its candidates, and the
+    seconds of each TransPath model and of `astar`."""
+    data = json.loads(path.read_text())
+    times = data["figures"]["attack_seconds_per_map"]["exhaustive"]
+    each = " and ".join(f"{_duration(times[m])} with `{m}`" for m in TRANSPATH_MODELS)
+    return (
+        f"{times['candidates_per_map']:,.0f} candidates a map, each one TransPath forward: {each}, against "
+        f"{_duration(times['astar'])} with `astar` (`{data['command']}`, {data['date']})"
     )

@@ -438,3 +438,103 @@ def test_the_transpath_script_merges_families_and_planners_run_apart(monkeypatch
     runs = {(r["family"], r["planner"]): r["run"] for r in merged["robustness"]}
     assert runs == {("a", "cf"): "new", ("a", "astar"): "old", ("b", "astar"): "new", ("c", "cf"): "new"}
     assert merged["runs"] == ["old", "new"]
+
+
+def _transpath_cost_record() -> dict:
+    """A made-up `perf/transpath.py --out` record: every time and ratio other than any measured one."""
+    models = ("transpath-cf", "transpath-focal")
+    per_map = {"astar plan": 0.002}
+    for model, scale in zip(models, (1.0, 2.0), strict=True):
+        per_map |= {f"{model} forward": 0.25 * scale, f"{model} plan": 0.5 * scale}
+        per_map |= {f"{model} replica search": 0.0005 * scale, f"{model} differentiable search": 0.125 * scale}
+    attacks = {
+        "random": {"astar": 0.01, "transpath-cf": 0.5, "transpath-focal": 0.75, "maps": 4},
+        "exhaustive": {"astar": 1.5, "transpath-cf": 250.0, "transpath-focal": 300.0, "maps": 1},
+    }
+    attacks["exhaustive"]["candidates_per_map"] = 2718.0
+    ratios = {}
+    for model, scale in zip(models, (1.0, 2.0), strict=True):
+        ratios[f"{model}: differentiable search / replica search"] = 250.0
+        ratios[f"{model}: forward / astar plan"] = 125.0 * scale
+        ratios[f"{model}: plan / astar plan"] = 250.0 * scale
+        for strategy, row in attacks.items():
+            ratios[f"{model}: {strategy} / astar {strategy}"] = round(row[model] / row["astar"], 1)
+    figures = {"maps": "generate_maps(4, 64, seed=9, n_starts=1), corner cutting", "rounds": 2, "torch_threads": 1}
+    figures |= {"seconds_per_map": per_map, "ratios": ratios, "attack_seconds_per_map": attacks}
+    figures["identical_searches"] = {"transpath-cf": "4/4", "transpath-focal": "3/4"}
+    machine = {"cpu": "C", "cores": 2, "niceness": 10, "load_average_before": 3.5, "load_average_after": 4.25}
+    command = "python perf/transpath.py --n 4 --seed 9 --rounds 2 --exhaustive-maps 1 --out OUT"
+    return {
+        "command": command,
+        "date": "2026-01-02 03:04 UTC",
+        "machine": machine,
+        "seconds": 600.0,
+        "figures": figures,
+    }
+
+
+def test_the_transpath_cost_is_read_from_its_json(tmp_path):
+    measured = docs_module("measured")
+    page = (DOCS / "guide" / "transpath.md").read_text()
+    assert page.count("<!-- vinadv:transpath-cost -->") == 1
+    assert page.count("<!-- vinadv:transpath-exhaustive-cost -->") == 1
+    # the section as written holds no table and no measured number: the hook brings them all
+    section = page.split("**Cost.**", 1)[1].split("\n## ", 1)[0]
+    assert not [line for line in section.splitlines() if line.startswith("|")]
+    assert not re.search(r"\d\.\d|\d ms|\d s\b|times as fast|\d+ of \d+|\d,\d{3}|minutes", section)
+    data = json.loads(measured.TRANSPATH_COST_JSON.read_text())
+    filled = filled_page("guide/transpath.md")
+    assert data["command"] in filled and "/tmp" not in data["command"]
+    assert (
+        data["command"].startswith("python perf/transpath.py ")
+        and "--out docs/results/transpath_cost.json" in data["command"]
+    )
+    exhaustive = data["figures"]["attack_seconds_per_map"]["exhaustive"]  # measured, on at least one map
+    assert exhaustive["maps"] >= 1 and exhaustive["candidates_per_map"] > 1000
+    assert f"load average {data['machine']['load_average_before']} before" in filled
+    assert measured.transpath_exhaustive_cost() in filled_page("results/transpath.md")
+    # another JSON gives another table and other ratios: nothing is copied by hand
+    path = tmp_path / "transpath_cost.json"
+    path.write_text(json.dumps(_transpath_cost_record()))
+    table, text = measured.transpath_cost(path).split("\n\n", 1)
+    lines = table.splitlines()
+    assert lines[0] == "| per 64x64 map (x `astar`'s) | `astar` | `transpath-cf` | `transpath-focal` |"
+    assert lines[2] == "| forward (the network alone) | — | 250 ms (125x) | 500 ms (250x) |"
+    assert lines[3] == "| plan (forward and compiled search) | 2 ms | 500 ms (250x) | 1 s (500x) |"
+    assert lines[4] == "| compiled replica's search (outputs cached) | — | 0.5 ms | 1 ms |"
+    assert lines[5] == "| differentiable search (outputs cached, no gradient) | — | 125 ms | 250 ms |"
+    assert lines[6] == "| `random` attack, 4 maps | 10 ms | 500 ms (50x) | 750 ms (75x) |"
+    assert lines[7] == "| `exhaustive` attack (2,718 candidates a map), 1 map | 1.5 s | 250 s (167x) | 300 s (200x) |"
+    assert "was 250 (`cf`) and 250 (`f`) times as fast as the differentiable search" in text
+    assert "on 4 of 4 and 3 of 4 maps" in text
+    assert "250 to 500 times `astar`'s plan, the forward alone 125 to 250 times" in text
+    assert "every attack strategy costs 50 to 200 times `astar`'s per map" in text
+    assert "Measured 2026-01-02 03:04 UTC on C (2 cores, 1 torch thread, niceness 10), load average 3.5 " in text
+    assert "on `generate_maps(4, 64, seed=9, n_starts=1)` (corner cutting), so" in text
+    assert "best of 2 rounds" in text and "The run took 600 s." in text and "--n 4 --seed 9" in text
+    sentence = measured.transpath_exhaustive_cost(path)
+    assert sentence.startswith("2,718 candidates a map, each one TransPath forward: 250 s with `transpath-cf` and 300")
+    assert "against 1.5 s with `astar`" in sentence
+
+
+def test_the_transpath_cost_script_records_the_command_that_makes_its_record_again(monkeypatch, tmp_path):
+    monkeypatch.syspath_prepend(str(ROOT / "perf"))  # the script imports perf/common.py as `common`
+    spec = importlib.util.spec_from_file_location("transpath_cost", ROOT / "perf" / "transpath.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    out = ROOT / "docs" / "results" / "transpath_cost.json"
+    args = script.argparse.Namespace(n=3, seed=7, rounds=2, exhaustive_maps=1, out=out)
+    written = {}
+    monkeypatch.setattr(script.Path, "write_text", lambda self, text: written.setdefault(self, text))
+    figures = {"maps": "m", "seconds": 12.5, "load_average": {"before": 1.5, "after": 2.0}, "ratios": {}}
+    script.write_record(args, figures, "2026-01-02 03:04 UTC")
+    record = json.loads(written[out])
+    command = (
+        "python perf/transpath.py --n 3 --seed 7 --rounds 2 --exhaustive-maps 1 --out docs/results/transpath_cost.json"
+    )
+    assert record["command"] == command
+    assert record["machine"]["load_average_before"] == 1.5 and record["machine"]["load_average_after"] == 2.0
+    assert record["seconds"] == 12.5 and record["figures"] == {"maps": "m", "ratios": {}}
+    args.out = tmp_path / "elsewhere.json"  # outside the checkout: written as OUT, no private path recorded
+    script.write_record(args, figures, "d")
+    assert json.loads(written[args.out])["command"].endswith("--out OUT")
