@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 from tests.classify.test_harm import optimal_path, path_cost
+from tests.report.formats import PNG
 from tests.report.test_report import _check_complete
 from tests.store.oracle import parse_map, parse_path
 from tests.store.test_store_harm import HARM_COLUMNS, HARM_INDEX
@@ -68,7 +69,7 @@ def _section(page: str) -> str:
     return page.split('<section id="harm">', 1)[1].split("</section>", 1)[0]
 
 
-def test_label_x_harm_and_regret_changes_match_the_stored_rows(db_copy, tmp_path):
+def test_label_x_harm_and_regret_changes_match_the_stored_rows(db_copy, tmp_path, png_only):
     url, (saliency, _) = db_copy
     out = tmp_path / "rep"
     _harm_only(url, saliency, out)
@@ -118,7 +119,7 @@ def test_label_x_harm_and_regret_changes_match_the_stored_rows(db_copy, tmp_path
         assert sum(int(b["harmful"]) + int(b["harmless"]) for b in mine_bins) == len(mine)
 
 
-def test_examples_are_harmless_fp_and_harmful_dp_pairs_with_their_expert_paths(db_copy, tmp_path):
+def test_examples_are_harmless_fp_and_harmful_dp_pairs_with_their_expert_paths(db_copy, tmp_path, png_only):
     url, (saliency, _) = db_copy
     data = _harm_only(url, saliency, tmp_path)
     assert list(data.examples) == ["harmless FP", "harmful DP"] and list(data.example_figures) == list(data.examples)
@@ -172,11 +173,11 @@ def _drop_harm(url: str, run_id: int, below: int | None = None) -> None:
     )
 
 
-def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path):
+def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path, png_only):
     url, (saliency, near_path) = db_copy
     _drop_harm(url, saliency)
     out = write_report(url, tmp_path / "old", run_id=saliency).parent
-    page = _check_complete(out, evaluated=False, harm=False)
+    page = _check_complete(out, evaluated=False, harm=False, formats=PNG)
     harm = _section(page)
     assert 'id="harm-unavailable"' in harm and "Harm is not available for run" in harm
     assert "<table" not in harm and not any((out / name).exists() for name in FILES)
@@ -194,7 +195,7 @@ def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path):
     assert f"{sum(n for _, n in missing)} of the run's" in _section((out / "index.html").read_text())
 
 
-def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_path):
+def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_path, png_only):
     url, (saliency, _) = db_copy
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     with engine.begin() as conn:
@@ -214,7 +215,7 @@ def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_pat
     assert hashlib.sha256(path.read_bytes()).hexdigest() == digest and (not wal.exists() or not wal.stat().st_size)
 
 
-def test_a_moore_run_reports_its_model_and_recomputes_expert_paths_with_it(sqlite_url, tmp_path):
+def test_a_moore_run_reports_its_model_and_recomputes_expert_paths_with_it(sqlite_url, tmp_path, png_only):
     """The run table names the model; the harm examples' expert paths are the model's (a plain Dijkstra of
     `moore`, tests.classify.test_harm), their costs the stored optimal costs."""
     config = RunConfig(n=12, size=9, seed=3, shard_size=12, planner="optimal", attack="exhaustive", per_map=0)
