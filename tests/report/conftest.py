@@ -7,7 +7,7 @@ from __future__ import annotations
 import shutil
 
 import pytest
-from tests.report.formats import png_figures_only
+from tests.report.formats import figures_not_rendered, png_figures_only
 
 from vinadv.cli import main
 from vinadv.evaluation import evaluate_planner_quality, evaluate_timing
@@ -52,9 +52,16 @@ def base_report(base_db, tmp_path_factory):
 
 @pytest.fixture
 def png_only():
-    """Within the test, reports save their figures as PNG only (tests/report/formats.py): for the tests of a report's
-    data and sections, not of its figure files."""
+    """Within the test, reports save their figures as PNG only (tests/report/formats.py): for a test of the PNGs."""
     with png_figures_only():
+        yield
+
+
+@pytest.fixture
+def unrendered():
+    """Within the test, reports draw their figures but render none, every figure file empty (tests/report/formats.py):
+    for the tests of a report's data, sections and links, not of its figures' pixels."""
+    with figures_not_rendered():
         yield
 
 

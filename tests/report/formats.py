@@ -1,8 +1,9 @@
-"""Reports with their figures saved as PNG only, or drawn and not rendered, for the tests that check a report's data,
-sections and links but not its figure files: a figure is saved once per format (`vinadv.report.figures.FORMATS`),
-each save laying the figure out and rendering it, so the saves are most of a report's time and the SVGs about half
-of it. The figure files themselves (PNG and SVG written, linked, their text searchable) are checked on the session
-reports of tests/report/conftest.py (`base_report`, `evaluated`), which keep both formats."""
+"""Reports that skip work on their figures, for the tests that do not check them: a figure is saved once per format
+(`vinadv.report.figures.FORMATS`: PNG and SVG), each save laying the figure out and rendering it, so the saves are
+most of a report's time. `figures_not_rendered`: the figures are drawn (every drawing function runs) and their files
+written empty, for the tests of a report's page, tables and links; `png_figures_only`: PNGs only, for a test of the
+PNGs. The figure files themselves (real PNG and SVG, written, linked, their text searchable) are checked on the
+session reports of tests/report/conftest.py (`base_report`, `evaluated`), which render both formats."""
 
 from __future__ import annotations
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 from tests.classify.test_harm import optimal_path, path_cost
-from tests.report.formats import PNG, png_figures_only
+from tests.report.formats import figures_not_rendered
 from tests.report.test_report import _check_complete
 from tests.store.oracle import parse_map, parse_path
 from tests.store.test_store_harm import HARM_COLUMNS, HARM_INDEX
@@ -76,7 +76,7 @@ def saliency_harm(base_db, tmp_path_factory):
     path, (saliency, _) = base_db
     url = f"sqlite:///{path}"
     out = tmp_path_factory.mktemp("harm")
-    with png_figures_only():
+    with figures_not_rendered():  # the files written and linked; their pixels are the report tests' of the figures
         return url, saliency, out, _harm_only(url, saliency, out)
 
 
@@ -181,11 +181,11 @@ def _drop_harm(url: str, run_id: int, below: int | None = None) -> None:
     )
 
 
-def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path, png_only):
+def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path, unrendered):
     url, (saliency, near_path) = db_copy
     _drop_harm(url, saliency)
     out = write_report(url, tmp_path / "old", run_id=saliency).parent
-    page = _check_complete(out, evaluated=False, harm=False, formats=PNG)
+    page = _check_complete(out, evaluated=False, harm=False, rendered=False)
     harm = _section(page)
     assert 'id="harm-unavailable"' in harm and "Harm is not available for run" in harm
     assert "<table" not in harm and not any((out / name).exists() for name in FILES)
@@ -203,7 +203,7 @@ def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path, png_only):
     assert f"{sum(n for _, n in missing)} of the run's" in _section((out / "index.html").read_text())
 
 
-def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_path, png_only):
+def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_path, unrendered):
     url, (saliency, _) = db_copy
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     with engine.begin() as conn:
@@ -223,7 +223,7 @@ def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_pat
     assert hashlib.sha256(path.read_bytes()).hexdigest() == digest and (not wal.exists() or not wal.stat().st_size)
 
 
-def test_a_moore_run_reports_its_model_and_recomputes_expert_paths_with_it(sqlite_url, tmp_path, png_only):
+def test_a_moore_run_reports_its_model_and_recomputes_expert_paths_with_it(sqlite_url, tmp_path, unrendered):
     """The run table names the model; the harm examples' expert paths are the model's (a plain Dijkstra of
     `moore`, tests.classify.test_harm), their costs the stored optimal costs."""
     config = RunConfig(n=12, size=9, seed=3, shard_size=12, planner="optimal", attack="exhaustive", per_map=0)

@@ -43,7 +43,7 @@ def test_sections_do_not_depend_on_the_order_they_are_gathered_in(evaluated, tmp
 
 
 @pytest.mark.parametrize("sid", [s.id for s in SECTIONS])
-def test_each_section_renders_from_its_gathered_data_alone(evaluated, tmp_path, sid, png_only):
+def test_each_section_renders_from_its_gathered_data_alone(evaluated, tmp_path, sid, unrendered):
     url, (saliency, _), _ = evaluated
     data = _gather(url, tmp_path, [sid], [saliency])
     assert list(data.sections) == [sid]
