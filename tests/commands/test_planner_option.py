@@ -17,7 +17,9 @@ from vinadv.pipeline import PLANNER_SPEC
 from vinadv.planners.classical.optimal import OptimalPlanner
 from vinadv.planners.vin.weights import save_vin
 from vinadv.planners.weights import weights_checksum
-from vinadv.report import write_report
+from vinadv.report.build import report_context
+from vinadv.report.render import render_page
+from vinadv.report.sections import gather_report
 from vinadv.store import Store
 from vinadv.testing.planners import planning_vin
 from vinadv.viewer.app import create_app
@@ -138,7 +140,9 @@ def test_report_and_viewer_show_the_runs_planner(tmp_path):
     assert main([*run, "--quiet"]) == 0
     with Store.open(db) as store:  # the evaluation stage's planner quality, which the report shows
         evaluate_planner_quality(store, store.list_runs()[-1]["id"])
-    html = write_report(db, tmp_path / "rep").read_text()
+    with Store.open(db, readonly=True) as store:  # the sections that show the planner (the figures: tests/report)
+        data = gather_report(report_context(store, tmp_path, None, None), order=["run", "planner"])
+    html = render_page(data)
     assert "<td>planner</td><td>optimal</td>" in html
     assert "planner &#39;optimal&#39;, " in html and "on the first 20 distinct maps" in html  # its quality, on its maps
     with Store.open(db, readonly=True) as store:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import shutil
 
 import pytest
+from tests.report.formats import figures_not_rendered, png_figures_only
 
 from vinadv.cli import main
 from vinadv.evaluation import evaluate_planner_quality, evaluate_timing
@@ -47,6 +48,21 @@ def base_report(base_db, tmp_path_factory):
     url = f"sqlite:///{path}"
     index = write_report(url, tmp_path_factory.mktemp("base_report") / "rep", run_id=ids[0], runs=ids)
     return url, ids, index.parent
+
+
+@pytest.fixture
+def png_only():
+    """Within the test, reports save their figures as PNG only (tests/report/formats.py): for a test of the PNGs."""
+    with png_figures_only():
+        yield
+
+
+@pytest.fixture
+def unrendered():
+    """Within the test, reports draw their figures but render none, every figure file empty (tests/report/formats.py):
+    for the tests of a report's data, sections and links, not of its figures' pixels."""
+    with figures_not_rendered():
+        yield
 
 
 @pytest.fixture

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import sqlalchemy as sa
 from tests.classify.test_harm import optimal_path, path_cost
+from tests.report.formats import figures_not_rendered
 from tests.report.test_report import _check_complete
 from tests.store.oracle import parse_map, parse_path
 from tests.store.test_store_harm import HARM_COLUMNS, HARM_INDEX
@@ -68,10 +69,19 @@ def _section(page: str) -> str:
     return page.split('<section id="harm">', 1)[1].split("</section>", 1)[0]
 
 
-def test_label_x_harm_and_regret_changes_match_the_stored_rows(db_copy, tmp_path):
-    url, (saliency, _) = db_copy
-    out = tmp_path / "rep"
-    _harm_only(url, saliency, out)
+@pytest.fixture(scope="module")
+def saliency_harm(base_db, tmp_path_factory):
+    """The harm section of the base database's saliency run, gathered and rendered once for the two tests that
+    read it (the report only reads the database): (URL, run id, report folder, the section's data)."""
+    path, (saliency, _) = base_db
+    url = f"sqlite:///{path}"
+    out = tmp_path_factory.mktemp("harm")
+    with figures_not_rendered():  # the files written and linked; their pixels are the report tests' of the figures
+        return url, saliency, out, _harm_only(url, saliency, out)
+
+
+def test_label_x_harm_and_regret_changes_match_the_stored_rows(saliency_harm):
+    url, saliency, out, _ = saliency_harm
     rows = _sql(url, "SELECT label, harm, regret_o, regret_a FROM map_pairs WHERE run_id = :r", r=saliency)
     counts = Counter((label, harm) for label, harm, _, _ in rows)
     page = _section((out / "index.html").read_text())
@@ -118,9 +128,8 @@ def test_label_x_harm_and_regret_changes_match_the_stored_rows(db_copy, tmp_path
         assert sum(int(b["harmful"]) + int(b["harmless"]) for b in mine_bins) == len(mine)
 
 
-def test_examples_are_harmless_fp_and_harmful_dp_pairs_with_their_expert_paths(db_copy, tmp_path):
-    url, (saliency, _) = db_copy
-    data = _harm_only(url, saliency, tmp_path)
+def test_examples_are_harmless_fp_and_harmful_dp_pairs_with_their_expert_paths(saliency_harm):
+    url, saliency, out, data = saliency_harm
     assert list(data.examples) == ["harmless FP", "harmful DP"] and list(data.example_figures) == list(data.examples)
     for kind, shown in data.examples.items():
         harm, label = kind.split()
@@ -156,7 +165,7 @@ def test_examples_are_harmless_fp_and_harmful_dp_pairs_with_their_expert_paths(d
             regret_a = path_cost(planner_a) - path_cost(expert_a)
             assert math.isclose(regret_o, e.regret_o, abs_tol=1e-9) and math.isclose(regret_a, e.regret_a, abs_tol=1e-9)
             assert (regret_a > regret_o + TOL) == (harm == "harmful")
-    page = _section((tmp_path / "index.html").read_text())
+    page = _section((out / "index.html").read_text())
     for kind, shown in data.examples.items():
         harm, label = kind.split()
         for e in shown:
@@ -172,11 +181,11 @@ def _drop_harm(url: str, run_id: int, below: int | None = None) -> None:
     )
 
 
-def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path):
+def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path, unrendered):
     url, (saliency, near_path) = db_copy
     _drop_harm(url, saliency)
     out = write_report(url, tmp_path / "old", run_id=saliency).parent
-    page = _check_complete(out, evaluated=False, harm=False)
+    page = _check_complete(out, evaluated=False, harm=False, rendered=False)
     harm = _section(page)
     assert 'id="harm-unavailable"' in harm and "Harm is not available for run" in harm
     assert "<table" not in harm and not any((out / name).exists() for name in FILES)
@@ -194,7 +203,7 @@ def test_a_run_stored_without_harm_still_renders(db_copy, tmp_path):
     assert f"{sum(n for _, n in missing)} of the run's" in _section((out / "index.html").read_text())
 
 
-def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_path):
+def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_path, unrendered):
     url, (saliency, _) = db_copy
     engine = sa.create_engine(url, poolclass=sa.pool.NullPool)
     with engine.begin() as conn:
@@ -214,7 +223,7 @@ def test_a_version_1_database_gets_a_report_and_stays_as_it_was(db_copy, tmp_pat
     assert hashlib.sha256(path.read_bytes()).hexdigest() == digest and (not wal.exists() or not wal.stat().st_size)
 
 
-def test_a_moore_run_reports_its_model_and_recomputes_expert_paths_with_it(sqlite_url, tmp_path):
+def test_a_moore_run_reports_its_model_and_recomputes_expert_paths_with_it(sqlite_url, tmp_path, unrendered):
     """The run table names the model; the harm examples' expert paths are the model's (a plain Dijkstra of
     `moore`, tests.classify.test_harm), their costs the stored optimal costs."""
     config = RunConfig(n=12, size=9, seed=3, shard_size=12, planner="optimal", attack="exhaustive", per_map=0)

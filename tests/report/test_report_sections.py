@@ -26,7 +26,7 @@ def _gather(url, out, order, runs):
         return gather_report(report_context(store, out, None, runs), order=order)
 
 
-def test_sections_do_not_depend_on_the_order_they_are_gathered_in(evaluated, tmp_path):
+def test_sections_do_not_depend_on_the_order_they_are_gathered_in(evaluated, tmp_path, png_only):
     url, (saliency, near_path), _ = evaluated
     ids = [s.id for s in SECTIONS]
     forward = _gather(url, tmp_path / "a", ids, [saliency, near_path])
@@ -35,14 +35,15 @@ def test_sections_do_not_depend_on_the_order_they_are_gathered_in(evaluated, tmp
     for sid in ids:  # every section: the report measures nothing itself, it reads what the evaluation stored
         assert forward.sections[sid] == backward.sections[sid], sid
     assert forward.files() == backward.files()
-    # the same figure bytes whichever order wrote them (PNG: the SVGs carry matplotlib's random ids)
+    # the same figure bytes whichever order wrote them (PNG: the SVGs carry matplotlib's random ids, so the test
+    # saves PNGs only)
     for name in forward.files():
         if name.endswith(".png"):
             assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
 
 
 @pytest.mark.parametrize("sid", [s.id for s in SECTIONS])
-def test_each_section_renders_from_its_gathered_data_alone(evaluated, tmp_path, sid):
+def test_each_section_renders_from_its_gathered_data_alone(evaluated, tmp_path, sid, unrendered):
     url, (saliency, _), _ = evaluated
     data = _gather(url, tmp_path, [sid], [saliency])
     assert list(data.sections) == [sid]
