@@ -56,7 +56,13 @@ def test_an_astar_run_on_mp_mazes_gets_a_report_of_its_own(tmp_path, capsys):
     with Store.open(f"sqlite:///{db}") as store:
         stored = store.read_measurement(store.resolve_run("mp"), PLANNER_QUALITY)
         recorded = store.run_info(store.resolve_run("mp"))["config"]["planner_spec"]
-    assert stored["capabilities"] == {"policy": False, "value_maps": False, "gradients": False, "expansions": True}
+    assert stored["capabilities"] == {
+        "policy": False,
+        "value_maps": False,
+        "gradients": False,
+        "expansions": True,
+        "start_values": False,
+    }
     assert "6 distinct maps of run 1's" in stored["source"]
     # no paper numbers: not the paper's VIN, and the page says why
     assert "paper" not in {row["run"] for row in csv.DictReader(open(out / "table4_categories.csv"))}
