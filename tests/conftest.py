@@ -29,6 +29,19 @@ from vinadv.testing.planners import planning_vin
 # subprocesses keep the defaults.
 set_torch_threads(1)
 
+
+@pytest.fixture(autouse=True)
+def one_torch_thread_after_each_test() -> Iterator[None]:
+    """Back to one torch thread after a test that changed it: a command run in the test process applies its
+    `--threads` for good (`test_cli_fuzz` gave 12), and every later test of that worker then ran its small ops on 12
+    threads over 2 cores; the port-loop oracle of `test_protocols` took 40 s instead of 0.3 s."""
+    yield
+    import torch  # noqa: PLC0415 (loaded already: `save_vin` imports it)
+
+    if torch.get_num_threads() != 1:
+        set_torch_threads(1)
+
+
 # Hypothesis: every property test reproducible. The "ci" profile (loaded where CI=true, or by HYPOTHESIS_PROFILE=ci)
 # draws the same examples on every run (derandomize: seeded by the test itself) and keeps no database, so a CI run
 # fails only on a case anyone can rerun; "dev" (the default elsewhere) draws new examples each run and keeps the ones
