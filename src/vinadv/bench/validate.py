@@ -354,20 +354,14 @@ def check_per_map(value, attacks: dict, clean: dict) -> None:
     if set(records) != set(attacks):
         extra = sorted(set(records) - set(attacks))[0]
         raise Bad(f"per_map.attacks.{extra}", "is an attack the entry has no figures of")
-    with_effort = [
-        f"per_map.attacks.{key}[{i}]"
+    has_effort = {
+        f"per_map.attacks.{key}[{i}]": "effort_harmful" in record
         for key in attacks
         for i, record in enumerate(records[key])
-        if "effort_harmful" in record
-    ]
-    total = sum(len(records[key]) for key in attacks)
-    if with_effort and len(with_effort) != total:  # efforts come from the planner: every record has them, or none
-        field = next(
-            f"per_map.attacks.{key}[{i}]"
-            for key in attacks
-            for i, record in enumerate(records[key])
-            if "effort_harmful" not in record
-        )
+    }
+    with_effort = [field for field, has in has_effort.items() if has]
+    if with_effort and len(with_effort) != len(has_effort):  # from the planner: every record has them, or none
+        field = next(field for field, has in has_effort.items() if not has)
         raise Bad(f"{field}.effort_harmful", f"is missing, where {with_effort[0]} has efforts (all records or none)")
     if "worst_effort" in p:
         for i, values in enumerate(_list(p["worst_effort"], "per_map.worst_effort")):

@@ -254,9 +254,10 @@ def evaluate_search(
         expansions, reference = expansions[mask], reference[mask]
     owner = np.repeat(np.arange(len(maps)), maps.n_starts)[mask]
     costs = path_costs(result.paths, maps.moves)[mask]
-    out = search_metrics(costs, result.reached[mask], maps.expert_costs.reshape(-1)[mask], expansions, reference, owner)
+    reached, optimal_costs = result.reached[mask], maps.expert_costs.reshape(-1)[mask]
+    out = search_metrics(costs, reached, optimal_costs, expansions, reference, owner)
     if rows is not None:
-        rows["cost_ratio"] = row_cost_ratios(costs, result.reached[mask], maps.expert_costs.reshape(-1)[mask])
+        rows["cost_ratio"] = row_cost_ratios(costs, reached, optimal_costs)
         rows["exp"] = None if expansions is None else row_exp(expansions, reference)
     if theirs:
         if expansions is None or maps.moves != "octile":
