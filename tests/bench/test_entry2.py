@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from tests.bench.two_maps import heldout_suite, register
 from vinadv.bench import suites
 from vinadv.bench.leaderboard import read_entries
-from vinadv.bench.outcomes import entry_figures, worst_case_within, worst_efforts
+from vinadv.bench.outcomes import entry_figures, worst_case_within
 from vinadv.bench.scoring import entry_json, run_bench
 from vinadv.bench.suites import FROZEN, AttackGroup, Suite, get_suite
 from vinadv.bench.validate import entry_problem
@@ -285,9 +285,25 @@ def test_a_chunk_of_a_committed_v2_entry_recomputes_byte_for_byte():
     assert verify_entry(entry, chunks=1, seed=0, planner=planner)["differences"] == []
 
 
+def _with_efforts(efforts: list) -> MapOutcomes:
+    """An attack whose three maps each got a valid pair, with the effort ratios `efforts` (None: none)."""
+    valid = np.ones(len(efforts), dtype=bool)
+    return MapOutcomes(
+        pair=valid,
+        valid=valid,
+        broken=~valid,
+        harmful=~valid,
+        regret=np.zeros(len(efforts)),
+        label=np.full(len(efforts), "DP"),
+        effort=np.array([np.nan if e is None else e for e in efforts]),
+    )
+
+
 def test_worst_efforts_are_the_largest_over_at_most_k_edits_and_verify_checks_them(entry, registered):
     assert "worst_effort" not in entry["per_map"]  # a VIN reports no expansions: no efforts, no worst efforts
-    assert worst_efforts([[[1.0, None, 2.0]], [[0.5, 3.0, None], [None, None, 4.0]], []]) == [
+    per_k = [[[1.0, None, 2.0]], [[0.5, 3.0, None], [None, None, 4.0]], []]  # per k, each attack's efforts per map
+    outcomes = [[_with_efforts(efforts) for efforts in attacks] for attacks in per_k]
+    assert [[None if np.isnan(v) else v for v in o.effort.tolist()] for o in worst_case_within(outcomes)] == [
         [1.0, None, 2.0],
         [1.0, 3.0, 4.0],
         [1.0, 3.0, 4.0],

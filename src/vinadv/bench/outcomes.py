@@ -159,9 +159,10 @@ def outcome(record: dict) -> MapOutcomes:
     valid = pair & (label != "invalid")
     regret = np.array([np.nan if v is None else v for v in record["regret"]], dtype=np.float64)
     effort = effort_harmful = None
-    if "effort_harmful" in record:  # a planner that reports its expansions
-        effort_harmful = np.array(record["effort_harmful"], dtype=bool).reshape(len(label))
+    if "effort" in record:  # a planner that reports its expansions
         effort = np.array([np.nan if v is None else v for v in record["effort"]], dtype=np.float64)
+    if "effort_harmful" in record:
+        effort_harmful = np.array(record["effort_harmful"], dtype=bool).reshape(len(label))
     return MapOutcomes(
         pair=pair,
         valid=valid,
@@ -217,31 +218,16 @@ def entry_figures(suite, per_map: dict) -> dict:
             figures = []
             for record in records:
                 o = outcome(record)
-                by_k.setdefault(record["k"], []).append((o, record.get("effort")))
+                by_k.setdefault(record["k"], []).append(o)
                 figures.append(_figures(record["k"], o, label_counts(o.label[o.pair])))
             attacks[key] = {"strategy": key.split(":", 1)[1], "edit": group.edit, "by_obstacles": figures}
-    max_k = max(by_k)
-    per_k = [[o for o, _ in by_k.get(k, [])] for k in range(1, max_k + 1)]
-    worst = [
-        {**_figures(k + 1, o), "attacks": sum(len(outs) for outs in per_k[: k + 1])}
-        for k, o in enumerate(worst_case_within(per_k))
-    ]
+    per_k = [by_k.get(k, []) for k in range(1, max(by_k) + 1)]
+    within = worst_case_within(per_k)
+    worst = [{**_figures(k + 1, o), "attacks": sum(len(outs) for outs in per_k[: k + 1])} for k, o in enumerate(within)]
     out = {"clean": clean_figures(per_map), "attacks": attacks, "worst_case": worst}
-    efforts = [e for items in by_k.values() for _, e in items]
-    if efforts and all(e is not None for e in efforts):
-        out["worst_effort"] = worst_efforts([[e for _, e in by_k.get(k, [])] for k in range(1, max_k + 1)])
-    return out
-
-
-def worst_efforts(per_k: list[list[list]]) -> list[list]:
-    """Per budget k, each map's largest effort over the attacks of at most k edits (`per_k[k - 1]`: the efforts of
-    the attacks of exactly k edits, each one value or null per map); null where none has one."""
-    out, best = [], None
-    for efforts in per_k:
-        for values in efforts:
-            values = np.array([np.nan if v is None else v for v in values], dtype=np.float64)
-            best = values if best is None else np.fmax(best, values)
-        out.append(_floats(best))
+    if all(o.effort is not None for outs in per_k for o in outs):
+        # each map's largest effort ratio over the attacks of at most k edits (`worst_case`), null where none has one
+        out["worst_effort"] = [_floats(o.effort) for o in within]
     return out
 
 
