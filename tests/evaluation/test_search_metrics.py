@@ -8,7 +8,7 @@ import pytest
 
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.evaluation.search_metrics import evaluate_search, path_costs, search_metrics
+from vinadv.evaluation.search_metrics import evaluate_search, path_costs, search_metrics, search_rows
 from vinadv.grid import generate_maps
 from vinadv.grid.paths import PackedPaths
 from vinadv.planners.registry import load_planner
@@ -75,6 +75,25 @@ def test_planners_on_generated_maps():
     weighted = evaluate_search(load_planner("wastar:w=4", 10), maps)
     assert weighted["success"] == 1.0 and weighted["cost_ratio"] >= 1.0 and weighted["exp"] >= 0.0
     assert weighted["opt"] == pytest.approx(np.mean(np.isclose(weighted_costs(maps), maps.expert_costs.ravel())))
+
+
+def test_search_rows_hold_the_values_behind_the_means():
+    maps = generate_maps(4, 10, seed=4, n_starts=2)
+    rows = search_rows(load_planner("wastar:w=4", 10), maps)
+    costs = weighted_costs(maps)
+    # oracle: the weighted planner's own paths, planned here, against the expert costs, row by row
+    assert rows.costs.tolist() == pytest.approx(costs.tolist()) and rows.maps.tolist() == [0, 0, 1, 1, 2, 2, 3, 3]
+    assert rows.cost_ratio.tolist() == pytest.approx((costs / maps.expert_costs.ravel()).tolist())
+    reference = load_planner("astar", 10).plan(
+        maps.obstacles[rows.maps], maps.starts.reshape(-1, 2), maps.goals[rows.maps]
+    )
+    assert rows.astar_expansions.tolist() == reference.expansions.tolist()
+    assert rows.exp.tolist() == pytest.approx(np.maximum(1 - rows.expansions / rows.astar_expansions, 0).tolist())
+    metrics = rows.metrics()
+    assert metrics["cost_ratio"] == pytest.approx(rows.cost_ratio.mean()) and metrics["exp"] == pytest.approx(
+        rows.exp.mean()
+    )
+    assert search_rows(load_planner("optimal", 10), maps).exp is None
 
 
 def weighted_costs(maps):

@@ -47,7 +47,7 @@ from vinadv.bench.outcomes import chunk_per_map, entry_figures, figures_v1
 from vinadv.bench.suites import ENTRY_FORMAT_2, DataSuite, Suite, maps_sha256
 from vinadv.errors import InputError
 from vinadv.evaluation.protocols import gppn_protocol
-from vinadv.evaluation.search_metrics import evaluate_search, path_costs
+from vinadv.evaluation.search_metrics import path_costs, search_rows
 from vinadv.executor import LOCAL, Executor, resolve, shipped
 from vinadv.grid.mapset import MapSet
 from vinadv.planners.interface import Planner
@@ -218,12 +218,12 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     # costs under the maps' movement model (every move 1 on `moore`), as their expert costs
     regret = np.where(plans.reached, path_costs(plans.paths, sub.moves) - sub.expert_costs[:, 0], np.nan)
     if not planner.capabilities.policy:  # no policy at every cell: the Neural A* authors' Opt / Exp instead
-        rows: dict = {}
-        clean = {"search": dict(evaluate_search(planner, sub, rows=rows))}
+        rows = search_rows(planner, sub)
+        clean = {"search": dict(rows.metrics())}
         # each map's values behind the means (one start per map): their bootstrap intervals over the maps
-        clean["cost_ratio"] = _floats(rows["cost_ratio"])
-        if rows["exp"] is not None:
-            clean["exp"] = _floats(rows["exp"])
+        clean["cost_ratio"] = _floats(rows.cost_ratio)
+        if rows.exp is not None:
+            clean["exp"] = _floats(rows.exp)
     else:
         gppn = gppn_protocol(planner, sub)
         clean = {"gppn_percent_optimal": gppn["percent_optimal"], "gppn_percent_success": gppn["percent_success"]}

@@ -36,6 +36,7 @@ than their vanilla A*. Costs are float64 path costs under the maps' movement mod
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import NotRequired, TypedDict
 
 import numpy as np
@@ -228,21 +229,43 @@ def vanilla_transpath(obstacles: np.ndarray, starts: np.ndarray, goals: np.ndarr
     return transpath_search(ones, obstacles, starts, goals, "cf", corner_cutting)
 
 
-def evaluate_search(
-    planner,
-    maps: MapSet,
-    chunk_size: int = 256,
-    progress: bool = False,
-    theirs: bool = False,
-    result: PlanResult | None = None,
-    rows: dict | None = None,
-) -> SearchMetrics:
-    """`search_metrics` of `planner` (any `Planner`, its `plan`) on every start of `maps`, against vanilla A*
-    (`astar` on the maps' movement model) from the same starts and the maps' exact expert costs; with `theirs` (a
-    search planner on `octile` maps), also TransPath's ratios against their vanilla A* (`transpath_ratios`, under
-    the key `transpath`). `result`: the planner's `plan` of every start of `maps` already made, used instead of
-    planning again. `rows`: a dict that receives each row's values behind the means (`cost_ratio`,
-    `row_cost_ratios`; `exp`, `row_exp`, None for a planner that reports no expansions), in row order."""
+@dataclass(frozen=True)
+class SearchRows:
+    """The rows `search_metrics` averages, one per start of a `MapSet` that has one (`search_rows`), in row order:
+    `costs`, `reached` and `optimal_costs` `(n,)`; `expansions` and A*'s `astar_expansions` `(n,)` (None for a
+    planner that reports no expansions); `maps` `(n,)` the map of each row."""
+
+    costs: np.ndarray
+    reached: np.ndarray
+    optimal_costs: np.ndarray
+    expansions: np.ndarray | None
+    astar_expansions: np.ndarray | None
+    maps: np.ndarray
+
+    def metrics(self) -> SearchMetrics:
+        """Opt / Exp / Hmean and the figures beside them (`search_metrics`)."""
+        return search_metrics(
+            self.costs, self.reached, self.optimal_costs, self.expansions, self.astar_expansions, self.maps
+        )
+
+    @property
+    def cost_ratio(self) -> np.ndarray:
+        """`(n,)` each row's cost ratio, NaN where it does not reach (`row_cost_ratios`)."""
+        return row_cost_ratios(self.costs, self.reached, self.optimal_costs)
+
+    @property
+    def exp(self) -> np.ndarray | None:
+        """`(n,)` each row's share of A*'s search saved (`row_exp`); None without expansions."""
+        return None if self.expansions is None else row_exp(self.expansions, self.astar_expansions)
+
+
+def search_rows(
+    planner, maps: MapSet, chunk_size: int = 256, progress: bool = False, result: PlanResult | None = None
+) -> SearchRows:
+    """The rows of `planner` (any `Planner`, its `plan`) on every start of `maps`: its paths' costs, their optimal
+    (expert) costs and, for a search planner, its expansions beside vanilla A*'s (`astar` on the maps' movement
+    model) from the same starts. `result`: the planner's `plan` of every start already made, used instead of
+    planning again."""
     mask = maps.start_mask.reshape(-1)
     if result is None:
         result = plan_every_start(planner, maps, chunk_size=chunk_size, progress=progress)
@@ -250,25 +273,42 @@ def evaluate_search(
     reference = None
     if expansions is not None:
         astar = AStarPlanner(maps.size, maps.moves)
-        reference = plan_every_start(astar, maps, chunk_size=chunk_size).expansions
-        expansions, reference = expansions[mask], reference[mask]
-    owner = np.repeat(np.arange(len(maps)), maps.n_starts)[mask]
-    costs = path_costs(result.paths, maps.moves)[mask]
-    reached, optimal_costs = result.reached[mask], maps.expert_costs.reshape(-1)[mask]
-    out = search_metrics(costs, reached, optimal_costs, expansions, reference, owner)
-    if rows is not None:
-        rows["cost_ratio"] = row_cost_ratios(costs, reached, optimal_costs)
-        rows["exp"] = None if expansions is None else row_exp(expansions, reference)
+        reference = plan_every_start(astar, maps, chunk_size=chunk_size).expansions[mask]
+        expansions = expansions[mask]
+    return SearchRows(
+        costs=path_costs(result.paths, maps.moves)[mask],
+        reached=result.reached[mask],
+        optimal_costs=maps.expert_costs.reshape(-1)[mask],
+        expansions=expansions,
+        astar_expansions=reference,
+        maps=np.repeat(np.arange(len(maps)), maps.n_starts)[mask],
+    )
+
+
+def evaluate_search(
+    planner,
+    maps: MapSet,
+    chunk_size: int = 256,
+    progress: bool = False,
+    theirs: bool = False,
+    result: PlanResult | None = None,
+) -> SearchMetrics:
+    """`search_metrics` of `planner` on every start of `maps` (`search_rows`: against vanilla A* from the same
+    starts and the maps' exact expert costs); with `theirs` (a search planner on `octile` maps), also TransPath's
+    ratios against their vanilla A* (`transpath_ratios`, under the key `transpath`). `result`: the planner's `plan`
+    of every start of `maps` already made, used instead of planning again."""
+    rows = search_rows(planner, maps, chunk_size=chunk_size, progress=progress, result=result)
+    out = rows.metrics()
     if theirs:
-        if expansions is None or maps.moves != "octile":
+        if rows.expansions is None or maps.moves != "octile":
             raise InputError(f"TransPath's ratios need a search planner on octile maps, not {maps.moves} maps")
-        starts = maps.starts.reshape(-1, 2)[mask]
-        goals = maps.goals[owner]
-        vanilla = vanilla_transpath(maps.obstacles[owner], starts, goals, maps.corner_cutting)
+        starts = maps.starts.reshape(-1, 2)[maps.start_mask.reshape(-1)]
+        goals = maps.goals[rows.maps]
+        vanilla = vanilla_transpath(maps.obstacles[rows.maps], starts, goals, maps.corner_cutting)
         out["transpath"] = transpath_ratios(
-            costs,
-            result.reached[mask],
-            expansions,
+            rows.costs,
+            rows.reached,
+            rows.expansions,
             path_costs(vanilla.paths, maps.moves),
             vanilla.reached,
             vanilla.expansions,
