@@ -172,9 +172,13 @@ class AttackContext:
 
 
 class Attack:
-    """Base class: subclasses set `name` and implement `candidate_scores`."""
+    """Base class: subclasses set `name` and implement `candidate_scores`.
+
+    `revision`: bumped whenever a change alters the strategy's results (its pairs, on some planner), so that an entry
+    recomputed from an older one (`vinadv bench run --reuse`, `vinadv.bench.reuse`) recomputes its attacks."""
 
     name = ""
+    revision = 1
     ranked = True  # keep the strongest evaluated candidates; False: keep every evaluated candidate
 
     def __init__(self, per_map: int = 1, budget: int | None = 8, seed: int = 0, obstacles: int = 1, edit: str = ADD):
@@ -467,6 +471,7 @@ class NearPathAttack(Attack):
 
 class KeyPointsAttack(Attack):
     name = "key-points"
+    revision = 2  # 2: the value maps of a planner with `Capabilities.start_values` read the attacked starts
 
     def candidate_scores(self, ctx: AttackContext) -> np.ndarray:
         b, n, _ = ctx.obstacles.shape

@@ -72,15 +72,22 @@ def run(
     resume: bool = False,
     progress: bool = False,
     device: str | None = None,
+    reuse=None,
 ) -> BenchResult:
     """The entry of the planner of `config` on its suite (`run_bench`), its chunks computed on `executor`; with `db`
-    each chunk stored when done, with `resume` the stored ones read. `device`: where the planner's forward runs."""
+    each chunk stored when done, with `resume` the stored ones read. `device`: where the planner's forward runs.
+    `reuse`: an older entry's file (or `vinadv.bench.reuse.ReusedEntry`, as read), whose attack groups that did not
+    change are taken (`vinadv.bench.reuse`)."""
     from vinadv.errors import InputError  # noqa: PLC0415 (light; beside the planners' import)
     from vinadv.planners.registry import PlannerRef, load_planner  # noqa: PLC0415 (loaded when a job runs)
 
     if resume and db is None:
         raise InputError("resume: only with db", "resume", "db")
     suite = config.frozen_suite
+    if reuse is not None:  # read and checked before the planner loads
+        from vinadv.bench.reuse import ReusedEntry  # noqa: PLC0415 (only with an entry to reuse)
+
+        reuse = reuse if isinstance(reuse, ReusedEntry) else ReusedEntry.read(reuse)
     # the planner runs under the suite's rule (a planner trained on other maps too: its entry's `other_rules` flag)
     cuts = suite.cuts_corners()
     planner = load_planner(
@@ -97,6 +104,7 @@ def run(
         executor=executor,
         planner_ref=ref,
         submission=config.submission,
+        reuse=reuse,
     )
     return BenchResult(entry)
 

@@ -208,12 +208,8 @@ def _floats(values) -> list:
     return [None if np.isnan(v) else float(v) for v in np.asarray(values, dtype=np.float64)]
 
 
-def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> dict:
-    """Chunk `chunk` of the suite (maps `chunk * suite.chunk ..`): the clean planner and every attack, per map (the
-    record `vinadv.records.BENCH_CHUNK`, its version included)."""
-    t0 = time.perf_counter()
-    lo = chunk * suite.chunk
-    sub = chunk_maps(maps, lo, min(len(maps), lo + suite.chunk))
+def _clean_part(planner: Planner, sub: MapSet) -> dict:
+    """A chunk's clean part: each map's path reached and regret, and the clean protocol's means (and values)."""
     plans = planner.plan(sub.obstacles, sub.starts[:, 0], sub.goals, sub.corner_cutting, sub.moves)
     # costs under the maps' movement model (every move 1 on `moore`), as their expert costs
     regret = np.where(plans.reached, path_costs(plans.paths, sub.moves) - sub.expert_costs[:, 0], np.nan)
@@ -227,8 +223,26 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     else:
         gppn = gppn_protocol(planner, sub)
         clean = {"gppn_percent_optimal": gppn["percent_optimal"], "gppn_percent_success": gppn["percent_success"]}
+    return {"reached": plans.reached.tolist(), "regret": _floats(regret), **clean}
+
+
+def compute_chunk(
+    suite: Suite, planner: Planner, maps: MapSet, chunk: int, groups=None, reused: dict | None = None
+) -> dict:
+    """Chunk `chunk` of the suite (maps `chunk * suite.chunk ..`): the clean planner and every attack, per map (the
+    record `vinadv.records.BENCH_CHUNK`, its version included). `groups`: the indices of the suite's groups to
+    compute (None: all); `reused`: the chunk's parts taken from an entry instead (`vinadv.bench.reuse`: its `clean`,
+    where given, and the records of every attack of the other groups)."""
+    t0 = time.perf_counter()
+    lo = chunk * suite.chunk
+    sub = chunk_maps(maps, lo, min(len(maps), lo + suite.chunk))
+    reused = reused or {}
+    clean = reused["clean"] if "clean" in reused else _clean_part(planner, sub)
     attacks, cells = {}, {}
-    for group in suite.attacks:
+    for i, group in enumerate(suite.attacks):
+        if groups is not None and i not in groups:
+            attacks.update((key, reused["attacks"][key]) for key in group.keys())
+            continue
         # a group started from an earlier group's one-cell pairs (the exhaustive optimum) chains from its cells
         start = None if group.start is None else cells[f"{group.edit}:{group.start}"]
         result = robustness(
@@ -265,11 +279,7 @@ def compute_chunk(suite: Suite, planner: Planner, maps: MapSet, chunk: int) -> d
     return {
         "first_map": lo,
         "maps": len(sub),
-        "clean": {
-            "reached": plans.reached.tolist(),
-            "regret": _floats(regret),
-            **clean,
-        },
+        "clean": clean,
         "attacks": attacks,
         "seconds": round(time.perf_counter() - t0, 3),
         VERSION_KEY: RECORD_VERSIONS[BENCH_CHUNK],
@@ -306,7 +316,10 @@ def make_entry(
         body = entry_figures(suite, per_map)
         if "worst_effort" in body:
             per_map["worst_effort"] = body.pop("worst_effort")
+        from vinadv.bench.reuse import computed_with  # noqa: PLC0415 (it reads `chunk_format` here)
+
         body = {"submission": submission, "checks": checks, **body, "per_map": per_map}
+        body["computed_with"] = computed_with(suite, planner)
     return {
         **head,
         **body,
@@ -449,9 +462,11 @@ def _same_chunk(db: str, chunk: int, stored: dict, result: dict, fingerprint: di
     return stored
 
 
-def _chunk_task(suite: Suite, planner, maps, chunk: int) -> tuple[int, dict]:
-    """The task of `run_bench`: `(chunk, compute_chunk(...))`, the planner and maps given or by reference."""
-    return chunk, compute_chunk(suite, resolve(planner), resolve(maps), chunk)
+def _chunk_task(suite: Suite, planner, maps, reuse, chunk: int) -> tuple[int, dict]:
+    """The task of `run_bench`: `(chunk, compute_chunk(...))`, the planner and maps given or by reference; `reuse`:
+    None, or what is taken from an older entry (`vinadv.bench.reuse.ReusePlan`)."""
+    args = () if reuse is None else (reuse.groups, reuse.chunk_part(suite, chunk))
+    return chunk, compute_chunk(suite, resolve(planner), resolve(maps), chunk, *args)
 
 
 def run_bench(
@@ -464,6 +479,7 @@ def run_bench(
     executor: Executor = LOCAL,
     planner_ref=None,
     submission: dict | None = None,
+    reuse=None,
 ) -> dict:
     """The entry of `planner` on `suite` (module doc). With `db` each chunk is stored when done; with `resume` the
     chunks stored there are read, not recomputed (without it, a database already holding chunks of this entry is
@@ -472,11 +488,18 @@ def run_bench(
     The chunks are computed on `executor` (`vinadv.executor`: in this process, in order, by default) and stored as
     they come back, in any order; a remote executor needs the planner by reference, `planner_ref`
     (`vinadv.planners.registry.PlannerRef.of`). `submission`: the entry's submission fields (`submission_fields`;
-    an entry of format 2 only), checked before the work."""
+    an entry of format 2 only), checked before the work. `reuse`: an older entry of format 2 of this suite and
+    planner (a dict, or `vinadv.bench.reuse.ReusedEntry`) whose attack groups that did not change are taken from it
+    (`vinadv.bench.reuse.plan_reuse`; InputError naming the field of another suite, planner or format)."""
     t0 = time.perf_counter()
     if executor.remote and planner_ref is None:
         raise InputError("planner_ref: a remote executor needs the planner by reference", "planner_ref")
     submission_fields(suite, submission)  # refused in one line before the work
+    plan = None
+    if reuse is not None:
+        from vinadv.bench.reuse import plan_reuse  # noqa: PLC0415 (only with an entry to reuse)
+
+        plan = plan_reuse(suite, planner, reuse)
     maps = suite_maps(suite, data)
     checks = planner_checks(suite, planner, maps)
     keys = entry_keys(suite, planner)
@@ -506,6 +529,7 @@ def run_bench(
         suite,
         shipped(executor, planner, lambda: planner_ref),
         shipped(executor, maps, lambda: SuiteMaps(suite, suite.checksum, absolute)),
+        plan,
     )
     bar = None
     if progress:
@@ -529,7 +553,10 @@ def run_bench(
             bar.close()
         if store is not None:
             store.close()
-    return make_entry(suite, planner, done, checks, time.perf_counter() - t0, submission)
+    entry = make_entry(suite, planner, done, checks, time.perf_counter() - t0, submission)
+    if plan is not None:  # how it was made: `time` is not part of what must reproduce
+        entry["time"]["reused"] = plan.reused_time()
+    return entry
 
 
 def entry_json(entry: dict) -> str:

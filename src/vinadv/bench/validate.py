@@ -29,7 +29,9 @@ a harmful map or a regret only where the pair is valid, the chunks' maps summing
 reports its expansions, every record's `effort` (a ratio >= 0 or null) and `effort_harmful` (true or false), neither
 set on a map without a valid pair; a search planner's optional `per_map.clean.exp`, rates or null, and
 `per_map.clean.cost_ratio`, >= 0 where the clean path reaches the goal and null elsewhere). A figure's
-`effort_harmful` is a count and its `effort_harmful_rate` a rate.
+`effort_harmful` is a count and its `effort_harmful_rate` a rate. Its optional `computed_with` (`check_computed_with`:
+entries made before it have none) holds `results_format` and `strategies`, integers >= 1; an entry recomputed from
+another (`vinadv.bench.reuse`) has `time.reused`: `entry_sha256` (64 hex digits) and `attacks` (texts).
 
 Strings are checked for type and length only: the renderers escape them (`vinadv.bench.leaderboard`).
 """
@@ -246,6 +248,11 @@ def check_entry(entry) -> None:
         if t.get("chunks_s") is not None:
             for i, s in enumerate(_list(t["chunks_s"], "time.chunks_s")):
                 _number(s, f"time.chunks_s[{i}]", lo=0.0)
+        if t.get("reused") is not None:  # recomputed from an older entry (`vinadv.bench.reuse`)
+            reused = _obj(t["reused"], "time.reused")
+            sha256(_get(reused, "entry_sha256", "time.reused"), "time.reused.entry_sha256")
+            for i, key in enumerate(_list(_get(reused, "attacks", "time.reused"), "time.reused.attacks")):
+                text(key, f"time.reused.attacks[{i}]")
     if e.get("machine") is not None:
         text(_obj(e["machine"], "machine").get("device"), "machine.device", null=True)
     if e["format"] == ENTRY_FORMAT_2:
@@ -255,6 +262,20 @@ def check_entry(entry) -> None:
             if checks.get(name) is not None and not isinstance(checks[name], bool):
                 raise Bad(f"checks.{name}", f"is {_kind(checks[name])}, expected true, false or null")
         check_per_map(_get(e, "per_map", ""), attacks, e["clean"])
+        if "computed_with" in e:  # optional: entries made before it have none (`vinadv.bench.reuse`)
+            check_computed_with(e["computed_with"])
+
+
+def check_computed_with(value, field: str = "computed_with") -> None:
+    """What an entry of format 2 was computed with: `results_format` an integer >= 1, `strategies` an object of
+    strategy names (text) and their revisions (integers >= 1)."""
+    c = _obj(value, field)
+    if count(_get(c, "results_format", field), f"{field}.results_format", MAX_K) < 1:
+        raise Bad(f"{field}.results_format", f"is {c['results_format']}, expected an integer >= 1")
+    for name, revision in _obj(_get(c, "strategies", field), f"{field}.strategies").items():
+        text(name, f"{field}.strategies", nonempty=True)
+        if count(revision, f"{field}.strategies.{name}", MAX_K) < 1:
+            raise Bad(f"{field}.strategies.{name}", f"is {revision}, expected an integer >= 1")
 
 
 def url(value, field: str) -> str | None:

@@ -113,7 +113,8 @@ def read_entry(path: str | os.PathLike, reader: str = "verify") -> dict:
         except InputError:
             raise InputError(f"{path}: not a {ENTRY_FORMAT_2} entry (field 'format', or not readable)") from None
         raise InputError(
-            f"{path}: a {ENTRY_FORMAT} entry, which holds no per-map outcomes: {reader} needs a format 2 entry "
+            f"{path}: a {ENTRY_FORMAT} entry (field 'format'), which holds no per-map outcomes: {reader} needs a "
+            f"format 2 entry "
             f"({ENTRY_FORMAT_2}; a format 1 entry is recomputed whole by `vinadv bench run` of its suite)"
         ) from None
     problem = entry_problem(entry)

@@ -51,6 +51,12 @@ def register(subparsers) -> None:
     )
     run.add_argument("--db", help="store each finished chunk of maps in this database (URL or SQLite file)")
     run.add_argument("--resume", action="store_true", help="with --db: continue, computing only the chunks not stored")
+    run.add_argument(
+        "--reuse",
+        metavar="ENTRY",
+        help="recompute from this older entry of the suite and planner (.json, format 2): its attack groups whose "
+        "strategies did not change are taken from it, the others computed (docs/guide/bench.md)",
+    )
     run.add_argument("--out", help="write the entry to this file (.json; default: print it)")
     share = run.add_argument_group("sharing (entries of the -v2 suites; docs/guide/submit.md)")
     share.add_argument("--display-name", metavar="TEXT", help="the name the leaderboard shows (default: the planner's)")
@@ -130,6 +136,7 @@ def register(subparsers) -> None:
 
 def cmd_bench_run(args: argparse.Namespace) -> int:
     from vinadv.bench.job import BenchConfig, run
+    from vinadv.bench.reuse import ReusedEntry
 
     names = ("suite", "planner", "weights", "data", "display_name", "authors", "paper", "code", "external")
     config = BenchConfig(**option_values(args, *names))  # an unknown suite, a bad link: one line
@@ -142,8 +149,19 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
         check_output_path(args.out, inputs=inputs)
     device = planner_device(args)
     suite = config.frozen_suite
+    reuse = None
+    if args.reuse:  # a file that is not an entry to reuse: one line before the work
+        reuse = ReusedEntry.read(args.reuse)
     with open_args_executor(args) as executor:
-        result = run(config, executor, db=args.db, resume=args.resume, progress=shows_progress(args), device=device)
+        result = run(
+            config,
+            executor,
+            db=args.db,
+            resume=args.resume,
+            progress=shows_progress(args),
+            device=device,
+            reuse=reuse,
+        )
     entry = result.to_dict()
     text = result.json()
     if args.out:
