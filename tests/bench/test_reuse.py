@@ -204,7 +204,10 @@ def test_bench_run_reuse_refuses_what_is_not_an_entry_to_reuse_in_one_line(tmp_p
     assert second["time"]["reused"]["attacks"] == suite.attack_keys()
     assert second["time"]["reused"]["entry_sha256"] == hashlib.sha256(out.read_bytes()).hexdigest()
     assert main(["bench", "verify", str(again), "--chunks", "2", "--quiet"]) == 0
-    assert ReusedEntry.read(again).entry["time"]["reused"] == second["time"]["reused"]
+    bad = {**second, "time": {**second["time"], "reused": {"entry_sha256": "x", "attacks": []}}}
+    assert entry_problem(bad).startswith("field 'time.reused.entry_sha256' is 'x'")
+    assert main([*base, "--reuse", str(again), "--out", str(again)]) == 0  # in place: read before the work
+    assert json.loads(again.read_text())["time"]["reused"]["entry_sha256"] != second["time"]["reused"]["entry_sha256"]
 
 
 def test_a_committed_entry_without_computed_with_recomputes_its_key_points_groups():
