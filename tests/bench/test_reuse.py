@@ -110,11 +110,19 @@ def test_a_bumped_revision_recomputes_its_group_alone_into_a_full_recomputes_ent
     assert entry_problem(reused) is None
 
 
-def test_the_chunks_rebuilt_from_an_entry_are_those_computed(entry, planner, monkeypatch):
-    """Each chunk's records taken from the entry (pair, valid, broken, counts: from the label) and its clean part
-    are those a full computation of the chunk gives, so a chunk made with reuse (stored in a database, resumed) is an
-    ordinary chunk."""
+@pytest.mark.parametrize("search", [False, True])
+def test_the_chunks_rebuilt_from_an_entry_are_those_computed(entry, planner, monkeypatch, search):
+    """Each chunk's records taken from the entry (pair, valid, broken, counts: from the label; a search planner's
+    efforts) and its clean part (a search planner's means and per-map values) are those a full computation of the
+    chunk gives, so a chunk made with reuse (stored in a database, resumed) is an ordinary chunk."""
     suite = reuse_suite()
+    if search:
+        planner = load_planner("astar", SIZE)
+        entry = run_bench(suite, planner)
+        assert (
+            entry["computed_with"]["results_format"] == 2
+            and "effort" in entry["per_map"]["attacks"]["add:exhaustive"][0]
+        )
     monkeypatch.setattr(strategies.STRATEGIES["near-path"], "revision", 2)
     plan = plan_reuse(suite, planner, entry)
     assert plan.groups == {0} and plan.clean
