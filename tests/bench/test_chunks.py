@@ -1,6 +1,7 @@
 """Resume that mixes computations (issue 45): a stored chunk is checked on read (its result's schema) and reused only
-when its fingerprint (results format, suite checksum, planner provenance) is this run's; a mismatch is one line
-naming both. Chunks stored before fingerprints still resume; the provenance stays out of the entry key."""
+when its fingerprint (results format, suite checksum, strategy revisions, planner provenance) is this run's; a
+mismatch is one line naming both. Chunks stored before fingerprints still resume; the provenance stays out of the
+entry key."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import sqlalchemy as sa
 import tqdm
 
 from tests.bench.two_maps import two_map_suite
+from vinadv.attacks.strategies import STRATEGIES
 from vinadv.bench import scoring, suites
 from vinadv.bench.scoring import deterministic_part, entry_json, entry_key, run_bench
 from vinadv.bench.suites import Suite
@@ -87,6 +89,21 @@ def test_chunks_without_efforts_resume_only_for_a_planner_without_expansions(tin
     _no_compute(monkeypatch)
     resumed = run_bench(tiny, policy, db=str(other), resume=True)
     assert entry_json(deterministic_part(resumed)) == entry_json(deterministic_part(whole))
+
+
+def test_chunks_of_another_strategy_revision_are_refused_naming_it(tiny, tmp_path, monkeypatch):
+    # a strategy whose results changed (its revision bumped) makes other pairs: its stored chunks must not join
+    planner = load_planner("optimal", 28)
+    db = tmp_path / "b.db"
+    whole = run_bench(tiny, planner, db=str(db))
+    # stored before revisions were recorded: every strategy at revision 1, as now for `random`
+    _sql(db, "UPDATE bench_chunks SET result = json_remove(result, '$.fingerprint.strategies')")
+    resumed = run_bench(tiny, planner, db=str(db), resume=True)
+    assert entry_json(deterministic_part(resumed)) == entry_json(deterministic_part(whole))
+    monkeypatch.setattr(STRATEGIES["random"], "revision", 2)
+    _no_compute(monkeypatch)
+    with pytest.raises(InputError, match="computed with random revision 1, this run with random revision 2"):
+        run_bench(tiny, planner, db=str(db), resume=True)
 
 
 def test_chunks_stored_before_fingerprints_still_resume(tiny, tmp_path, monkeypatch):

@@ -28,18 +28,12 @@ from pathlib import Path
 
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.bench.outcomes import outcome
-from vinadv.bench.scoring import chunk_format, entry_json
+from vinadv.bench.scoring import chunk_format, entry_json, strategy_revisions
 from vinadv.bench.suites import ENTRY_FORMAT_2, Suite
 from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
 from vinadv.planners.interface import Planner
 from vinadv.vocabulary import label_counts
-
-
-def strategy_revisions(suite: Suite) -> dict[str, int]:
-    """The revision of every strategy `suite` runs, by name."""
-    names = sorted({s for group in suite.attacks for s in group.strategies})
-    return {name: STRATEGIES[name].revision for name in names}
 
 
 def computed_with(suite: Suite, planner: Planner) -> dict:

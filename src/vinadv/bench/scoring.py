@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from vinadv import __version__
+from vinadv.attacks.strategies import STRATEGIES
 from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags, trained_rules
 from vinadv.bench.outcomes import chunk_per_map, entry_figures, figures_v1
 from vinadv.bench.suites import ENTRY_FORMAT_2, DataSuite, Suite, maps_sha256
@@ -148,13 +149,33 @@ def entry_keys(suite: Suite, planner: Planner) -> list[str]:
     return keys
 
 
+def strategy_revisions(suite: Suite) -> dict[str, int]:
+    """The revision of every strategy `suite` runs, by name (`vinadv.attacks.strategies.Attack.revision`)."""
+    names = sorted({s for group in suite.attacks for s in group.strategies})
+    return {name: STRATEGIES[name].revision for name in names}
+
+
 def chunk_fingerprint(suite: Suite, planner: Planner) -> dict:
     """What a stored chunk must have been computed with to be reused (`run_bench`): the results format
-    (`chunk_format`), the suite's checksum and the planner's provenance (a bring-your-own planner's: the files it
-    imports from beside it, or the version it declares, `vinadv.planners.provenance`; None for vinadv's own, which
-    the results format covers). Stored beside the chunk's result (field `fingerprint`), out of the entry key."""
+    (`chunk_format`), the suite's checksum, the revision of each of its strategies (`strategy_revisions`) and the
+    planner's provenance (a bring-your-own planner's: the files it imports from beside it, or the version it
+    declares, `vinadv.planners.provenance`; None for vinadv's own, which the results format covers). Stored beside
+    the chunk's result (field `fingerprint`), out of the entry key."""
     provenance = getattr(planner, "provenance", None)
-    return {"format": chunk_format(planner), "suite": suite.checksum, "provenance": provenance}
+    return {
+        "format": chunk_format(planner),
+        "suite": suite.checksum,
+        "strategies": strategy_revisions(suite),
+        "provenance": provenance,
+    }
+
+
+def stored_fingerprint(stored: dict | None, fingerprint: dict) -> dict:
+    """The fingerprint a stored chunk was computed with, in full: a chunk stored before fingerprints (`stored`
+    None) is results format 1 of its entry's suite (the suite is in the entry key), its provenance unknown; one
+    stored before strategy revisions were recorded ran every strategy at revision 1."""
+    stored = {**fingerprint, "format": 1} if stored is None else stored
+    return {"strategies": dict.fromkeys(fingerprint["strategies"], 1), **stored}
 
 
 def _describe(fingerprint: dict, other: dict) -> str:
@@ -164,6 +185,12 @@ def _describe(fingerprint: dict, other: dict) -> str:
         parts.append(f"results format {fingerprint.get('format')}")
     if fingerprint.get("suite") != other.get("suite"):
         parts.append(f"suite checksum {str(fingerprint.get('suite'))[:12]}")
+    revisions, others = fingerprint.get("strategies") or {}, other.get("strategies") or {}
+    parts += [
+        f"{n} revision {revisions.get(n)}"
+        for n in sorted(set(revisions) | set(others))
+        if revisions.get(n) != others.get(n)
+    ]
     mine, theirs = fingerprint.get("provenance") or {}, other.get("provenance") or {}
     if mine != theirs:
         if "version" in mine or "version" in theirs:
@@ -176,11 +203,8 @@ def _describe(fingerprint: dict, other: dict) -> str:
 
 def reusable(stored: dict | None, fingerprint: dict) -> bool:
     """Whether a chunk stored with the fingerprint `stored` may join an entry computed with `fingerprint`: the same
-    results format, suite checksum and planner provenance. A chunk stored before fingerprints (`stored` None) is
-    results format 1 of its entry's suite (the suite is in the entry key), its provenance unknown."""
-    if stored is None:
-        stored = {**fingerprint, "format": 1}
-    return stored == fingerprint
+    results format, suite checksum, strategy revisions and planner provenance (`stored_fingerprint`)."""
+    return stored_fingerprint(stored, fingerprint) == fingerprint
 
 
 def _check_stored(suite: Suite, n_chunks: int):
@@ -425,7 +449,7 @@ def _refuse_other_computation(db: str, chunk: int, stored: dict, fingerprint: di
     chunks had one, results format 1) is not `reusable` by this run's `fingerprint`; `how` says how it was stored."""
     if reusable(stored.get("fingerprint"), fingerprint):
         return
-    theirs = stored.get("fingerprint") or {**fingerprint, "format": 1}
+    theirs = stored_fingerprint(stored.get("fingerprint"), fingerprint)
     raise InputError(
         f"database {db}: chunk {chunk} of this entry {how} {_describe(theirs, fingerprint)}, this run with "
         f"{_describe(fingerprint, theirs)}; the entry would mix two computations: use another database",
