@@ -40,6 +40,16 @@ def test_each_line_has_the_palettes_colour_and_marker_and_the_rates_in_percent()
     plt.close(fig)
 
 
+def test_the_legend_names_every_line_beside_the_axes_never_over_a_point():
+    fig = k_curve(SERIES * 4)  # eight lines: an inner legend would cover some
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    legend = ax.get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == [name for name, _ in SERIES * 4]
+    assert legend.get_window_extent().x0 >= ax.get_window_extent().x1
+    plt.close(fig)
+
+
 def test_dodged_lines_move_apart_along_k_and_draw_their_intervals_as_bars():
     fig = k_curve(SERIES, dodge=0.1)
     ax = fig.axes[0]

@@ -90,7 +90,8 @@ def k_curve(
     dodge: float = 0.0,
 ):
     """Draw the k curve (`draw_k_curve`): `rate` (`harmful_rate`, `paper_success_rate`, any rate column) against k,
-    one line per planner, on `ax` or a new figure (`xlabel`, `dodge`: as `draw_k_curve`); returns the figure.
+    one line per planner, on `ax` or a new figure (`xlabel`, `dodge`: as `draw_k_curve`), its legend beside the axes;
+    returns the figure.
 
         with vinadv.open("results.db") as results:
             vinadv.plot.k_curve(results.robustness())
@@ -100,5 +101,7 @@ def k_curve(
     ax.set_ylabel(f"{rate.replace('_', ' ')} (% of valid maps)")
     ax.set_ylim(-2, 102)  # a point at 0% or 100% drawn whole
     ax.set_title(title or rate.replace("_", " "), fontsize=9)
-    ax.legend(fontsize=8)
+    # beside the axes, not on them: with several planners an inner legend hides points (a saved figure's tight
+    # bounding box takes it in)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     return fig
