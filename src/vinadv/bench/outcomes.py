@@ -17,7 +17,11 @@ checks that they follow), and a recompute of some chunks is compared with the en
   valid or its path does not reach); and, where the planner reports its expansions (`Capabilities.expansions`; every
   record of the entry, or none), `effort` (the effort ratio, the adversarial search's expansions over the clean one's,
   null without a valid pair) and `effort_harmful` (the pair is valid and effort-harmful: DESIGN.md "Search effort",
-  `vinadv.classify.effort`; false without a valid pair).
+  `vinadv.classify.effort`; false without a valid pair);
+- `per_map.start_cells` (optional: a suite with chains, `AttackGroup.start`, and every chunk computed since the field
+  exists; an entry made before has none): per attack a chain starts from (`edit:start`, say `add:exhaustive`), the
+  one cell it kept on each map, `[row, column]`, or null where the map got no pair (`cells_json`); what a recompute of
+  a changed chain starts from without running its start again (`vinadv.bench.reuse`).
 
 From them: a map's pair was made where its label is not "", is valid where it is neither "" nor `invalid`, broken
 where valid and UrP or FP; the label counts are those of the pairs. The worst case at k is over every attack of at most
@@ -115,9 +119,24 @@ def _floats(values) -> list:
     return [None if v is None or math.isnan(v) else float(v) for v in values]
 
 
+def cells_json(cells: np.ndarray) -> list:
+    """One-cell cells `(n, 1, 2)` (`vinadv.robustness.StrategyResult.cells[0]`: integers, -1 where a map got no pair)
+    as `per_map.start_cells` holds them: per map `[row, column]`, or None."""
+    return [None if c[0, 0] < 0 else [int(c[0, 0]), int(c[0, 1])] for c in np.asarray(cells)]
+
+
+def cells_array(values: list) -> np.ndarray:
+    """`cells_json`'s per-map values back as the `(n, 1, 2)` int64 cells, -1 where None."""
+    out = np.full((len(values), 1, 2), -1, dtype=np.int64)
+    for i, cell in enumerate(values):
+        if cell is not None:
+            out[i, 0] = cell
+    return out
+
+
 def chunk_per_map(suite, order: list[dict]) -> dict:
     """The `per_map` of an entry of `suite` from its chunks' results (`vinadv.bench.scoring.compute_chunk`), in map
-    order."""
+    order; `start_cells` where every chunk holds them."""
     attacks = {}
     for group in suite.attacks:
         for key in group.keys():
@@ -129,13 +148,17 @@ def chunk_per_map(suite, order: list[dict]) -> dict:
     for name in CLEAN_SEARCH_VALUES:  # a search planner's per-map protocol values (chunks computed before: none)
         if all(name in c["clean"] for c in order):
             clean[name] = _floats(v for c in order for v in c["clean"][name])
-    return {
+    out = {
         "clean": clean,
         "chunks": [
             {"maps": c["maps"], **{k: v for k, v in c["clean"].items() if k not in _PER_MAP_CLEAN}} for c in order
         ],
         "attacks": attacks,
     }
+    starts = suite.start_keys()
+    if starts and all(key in c.get("start_cells", {}) for c in order for key in starts):
+        out["start_cells"] = {key: [v for c in order for v in c["start_cells"][key]] for key in starts}
+    return out
 
 
 def _attack_record(parts: list[dict], k: int) -> dict:

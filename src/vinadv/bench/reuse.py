@@ -1,5 +1,5 @@
-"""Recomputing an entry of format 2 from an older one (`vinadv bench run --reuse ENTRY`): the attack groups that did
-not change are taken from its per-map outcomes, the others computed again.
+"""Recomputing an entry of format 2 from an older one (`vinadv bench run --reuse ENTRY`): the attacks whose
+strategies did not change are taken from its per-map outcomes, the others computed again.
 
 An entry of format 2 records what it was computed with (`computed_with`): the results format of its chunks
 (`vinadv.bench.scoring.chunk_format`) and the revision of every strategy the suite runs
@@ -8,14 +8,18 @@ before the field existed reads as results format 2 where its attack records carr
 1 (`recorded_computation`).
 
 The older entry must be of format 2, of this suite (its checksum) and of this planner (its spec, weights included):
-InputError naming the field otherwise. A group of the suite is taken from it (`plan_reuse`) when the recorded results
-format is this run's and every strategy of the group has the recorded revision, and, for a group started from
-another's one-cell cells (`AttackGroup.start`: the entry does not hold the cells), when that group is taken too; the
-clean part of each chunk (`per_map.clean`, `per_map.chunks`) when the results format is this run's. Every other group
-is computed, and the start group of a computed chain with it (for its cells). Each chunk is then an ordinary chunk
-(`compute_chunk` with the groups to compute and the records rebuilt from the entry in a chunk's shape: `chunk_part`),
-stored with `--db` and resumed as usual; the entry's deterministic part is that of a full recompute, and its `time`
-says what was taken (`reused`: the older file's sha256 and the attacks taken).
+InputError naming the field otherwise. The unit is the attack, a strategy within its group (`edit:strategy`, or
+`edit:start+strategy` for a chain, `AttackGroup.start`): each strategy of a group runs alone, with the group's edit,
+k and settings (`vinadv.robustness.robustness` makes one attack per strategy), so a group runs only its strategies
+to compute (`plan_reuse`). An attack is taken when the recorded results format is this run's and its strategy has the
+recorded revision, and, for a chain, its start strategy too (the chain's pairs depend on both). A computed chain
+starts from its start's one-cell cells: those the entry holds (`per_map.start_cells`, where its start strategy is
+unchanged), else from its start strategy computed again in its group (an entry made before the field). The clean part
+of each chunk (`per_map.clean`, `per_map.chunks`) is taken when the results format is this run's. Each chunk is then
+an ordinary chunk (`compute_chunk` with the strategies to compute and the records and start cells rebuilt from the
+entry in a chunk's shape: `chunk_part`), stored with `--db` and resumed as usual; the entry's deterministic part is
+that of a full recompute (but `per_map.start_cells`, absent where neither the older entry held them nor a start ran),
+and its `time` says what was taken (`reused`: the older file's sha256 and the attacks taken).
 """
 
 from __future__ import annotations
@@ -75,19 +79,26 @@ class ReusedEntry:
 
 @dataclasses.dataclass(frozen=True)
 class ReusePlan:
-    """What a recompute takes from an older entry: the indices of the suite's groups to compute (`groups`), whether
-    the chunks' clean parts are taken (`clean`), the attacks taken (`reused`, their keys in suite order), the older
-    entry's `per_map` and its file's sha256."""
+    """What a recompute takes from an older entry: the strategies to compute per group (`computed`, {group index:
+    strategies in the group's order}; a group absent is taken whole), whether the chunks' clean parts are taken
+    (`clean`), the attacks taken (`reused`, their keys in suite order), the chains' starts whose one-cell cells are
+    taken (`start_cells`, `edit:start` keys), the older entry's `per_map` and its file's sha256."""
 
-    groups: frozenset[int]
+    computed: dict[int, tuple[str, ...]]
     clean: bool
     reused: tuple[str, ...]
     per_map: dict = dataclasses.field(repr=False)
     entry_sha256: str = ""
+    start_cells: tuple[str, ...] = ()
+
+    @property
+    def groups(self) -> frozenset[int]:
+        """The indices of the groups that compute at least one strategy."""
+        return frozenset(self.computed)
 
     def chunk_part(self, suite: Suite, chunk: int) -> dict:
         """The parts of chunk `chunk` taken from the entry, in a chunk's shape (`compute_chunk`'s `reused`): `clean`
-        (where taken) and `attacks`, each reused attack's records of the chunk's maps."""
+        (where taken), `attacks`, each reused attack's records of the chunk's maps, and `start_cells` (where taken)."""
         lo, hi = chunk * suite.chunk, min(suite.n, (chunk + 1) * suite.chunk)
         part: dict = {
             "attacks": {key: [_chunk_record(r, lo, hi) for r in self.per_map["attacks"][key]] for key in self.reused}
@@ -95,6 +106,8 @@ class ReusePlan:
         if self.clean:
             means = {k: v for k, v in self.per_map["chunks"][chunk].items() if k != "maps"}
             part["clean"] = {**{name: values[lo:hi] for name, values in self.per_map["clean"].items()}, **means}
+        if self.start_cells:
+            part["start_cells"] = {key: self.per_map["start_cells"][key][lo:hi] for key in self.start_cells}
         return part
 
     def reused_time(self) -> dict:
@@ -152,20 +165,40 @@ def plan_reuse(suite: Suite, planner: Planner, reuse) -> ReusePlan:
     recorded = recorded_computation(entry, suite)
     same_format = recorded.get("results_format") == chunk_format(planner)
     revisions = recorded.get("strategies") or {}
-    taken: list[bool] = []
-    for i, group in enumerate(suite.attacks):
-        same = same_format and all(revisions.get(s) == STRATEGIES[s].revision for s in group.strategies)
-        taken.append(same and (group.start is None or taken[_start_group(suite, i)]))
-    computed = {i for i, t in enumerate(taken) if not t}
-    computed |= {_start_group(suite, i) for i in computed if suite.attacks[i].start is not None}  # for their cells
-    reused = tuple(key for i, g in enumerate(suite.attacks) if i not in computed for key in g.keys())
-    for i, group in enumerate(suite.attacks):
-        for key in group.keys() if i not in computed else ():
+
+    def unchanged(name: str) -> bool:
+        return same_format and revisions.get(name) == STRATEGIES[name].revision
+
+    todo: dict[int, set[str]] = {}
+    for i, group in enumerate(suite.attacks):  # a chain's pairs depend on its strategy and its start's
+        for name in group.strategies:
+            if not (unchanged(name) and (group.start is None or unchanged(group.start))):
+                todo.setdefault(i, set()).add(name)
+    stored = per_map.get("start_cells") or {}
+    starts = {f"{g.edit}:{g.start}": (_start_group(suite, i), g.start) for i, g in enumerate(suite.attacks) if g.start}
+    cells = tuple(key for key, (j, name) in starts.items() if key in stored and name not in todo.get(j, ()))
+    for i, group in enumerate(suite.attacks):  # a computed chain without its start's cells: its start runs again
+        key = f"{group.edit}:{group.start}"
+        if group.start is not None and i in todo and key not in cells:
+            todo.setdefault(starts[key][0], set()).add(group.start)
+    computed = {i: tuple(s for s in suite.attacks[i].strategies if s in names) for i, names in sorted(todo.items())}
+    reused = tuple(
+        key
+        for i, g in enumerate(suite.attacks)
+        for name, key in zip(g.strategies, g.keys())
+        if name not in computed.get(i, ())
+    )
+    for group in suite.attacks:
+        for key in (k for k in group.keys() if k in reused):
             if [r["k"] for r in per_map["attacks"].get(key, [])] != list(group.ks):
                 raise InputError(f"reuse: field 'per_map.attacks.{key}' is not the records of that attack", "reuse")
+    for key in cells:  # a chain starts from them: cells of the suite's maps
+        values = stored[key]
+        if len(values) != suite.n or any(c is not None and max(c) >= suite.size for c in values):
+            raise InputError(f"reuse: field 'per_map.start_cells.{key}' is not cells of the suite's maps", "reuse")
     # a search planner's clean part holds each map's cost ratio since results format 2 (`compute_chunk`)
     clean = same_format and ("search" not in per_map["chunks"][0] or "cost_ratio" in per_map["clean"])
-    return ReusePlan(frozenset(computed), clean, reused, per_map, reuse.sha256)
+    return ReusePlan(computed, clean, reused, per_map, reuse.sha256, cells)
 
 
 def _check_planner(stored: dict, spec: dict) -> None:

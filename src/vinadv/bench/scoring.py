@@ -6,8 +6,8 @@ cells edited greedily, labelled and judged for harm), keeping every map's outcom
 chunk is stored in one transaction (`Store.add_bench_chunk`), so `--resume` after a crash, even kill -9, recomputes
 only the chunks not stored; the randomised strategies draw as they would over the whole suite (`first_map`), so the
 chunks make the whole suite's pairs. Two runs resuming one entry at once may both compute a chunk: the first stores
-it, the other checks its own is the same and uses the stored one (`_same_chunk`). The entry (`make_entry`) is then
-computed from the per-map outcomes of all chunks, in map order:
+it, the other checks its own is the same and uses the stored one (`vinadv.bench.chunkstore`). The entry
+(`make_entry`) is then computed from the per-map outcomes of all chunks, in map order:
 
 - `clean`: the unattacked maps. vinadv's convention: rollout success from the start (`success_rate`), the share of
   maps whose path is optimal (`percent_optimal`), the mean regret of the reached paths; GPPN's convention (`gppn`:
@@ -44,7 +44,7 @@ import numpy as np
 from vinadv import __version__
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.bench.flags import CHECK_MAPS, differs_between_passes, gradient_is_masked, raise_flags, trained_rules
-from vinadv.bench.outcomes import chunk_per_map, entry_figures, figures_v1
+from vinadv.bench.outcomes import cells_array, cells_json, chunk_per_map, entry_figures, figures_v1
 from vinadv.bench.suites import ENTRY_FORMAT_2, DataSuite, Suite, maps_sha256
 from vinadv.errors import InputError
 from vinadv.evaluation.protocols import gppn_protocol
@@ -170,59 +170,6 @@ def chunk_fingerprint(suite: Suite, planner: Planner) -> dict:
     }
 
 
-def stored_fingerprint(stored: dict | None, fingerprint: dict) -> dict:
-    """The fingerprint a stored chunk was computed with, in full: a chunk stored before fingerprints (`stored`
-    None) is results format 1 of its entry's suite (the suite is in the entry key), its provenance unknown; one
-    stored before strategy revisions were recorded ran every strategy at revision 1."""
-    stored = {**fingerprint, "format": 1} if stored is None else stored
-    return {"strategies": dict.fromkeys(fingerprint["strategies"], 1), **stored}
-
-
-def _describe(fingerprint: dict, other: dict) -> str:
-    """The parts of `fingerprint` that differ from `other`, in words."""
-    parts = []
-    if fingerprint.get("format") != other.get("format"):
-        parts.append(f"results format {fingerprint.get('format')}")
-    if fingerprint.get("suite") != other.get("suite"):
-        parts.append(f"suite checksum {str(fingerprint.get('suite'))[:12]}")
-    revisions, others = fingerprint.get("strategies") or {}, other.get("strategies") or {}
-    parts += [
-        f"{n} revision {revisions.get(n)}"
-        for n in sorted(set(revisions) | set(others))
-        if revisions.get(n) != others.get(n)
-    ]
-    mine, theirs = fingerprint.get("provenance") or {}, other.get("provenance") or {}
-    if mine != theirs:
-        if "version" in mine or "version" in theirs:
-            parts.append(f"planner version {mine.get('version')!r}")
-        files, others = mine.get("files") or {}, theirs.get("files") or {}
-        changed = sorted(n for n in set(files) | set(others) if files.get(n) != others.get(n))
-        parts += [f"{n} {files[n][:12] if n in files else '(not imported)'}" for n in changed[:4]]
-    return ", ".join(parts) or "the same"
-
-
-def reusable(stored: dict | None, fingerprint: dict) -> bool:
-    """Whether a chunk stored with the fingerprint `stored` may join an entry computed with `fingerprint`: the same
-    results format, suite checksum, strategy revisions and planner provenance (`stored_fingerprint`)."""
-    return stored_fingerprint(stored, fingerprint) == fingerprint
-
-
-def _check_stored(suite: Suite, n_chunks: int):
-    """The check of a stored chunk's result (`Store.read_bench_chunks`): the chunk schema
-    (`vinadv.bench.validate.check_chunk`) and a fingerprint that is an object; chunks past the suite are not read."""
-    from vinadv.bench.validate import chunk_problem  # noqa: PLC0415 (only with --db)
-
-    def check(chunk: int, result) -> str | None:
-        if not 0 <= chunk < n_chunks:
-            return None
-        problem = chunk_problem(result, suite, chunk)
-        if problem is None and not isinstance(result.get("fingerprint", {}), dict):
-            problem = "field 'fingerprint' is not an object"
-        return problem
-
-    return check
-
-
 def chunk_maps(maps: MapSet, lo: int, hi: int) -> MapSet:
     """Maps `lo:hi` of `maps` (with their starts and expert paths, frozen cells and provenance)."""
     return maps.take(np.arange(lo, min(hi, len(maps))))
@@ -251,62 +198,66 @@ def _clean_part(planner: Planner, sub: MapSet) -> dict:
 
 
 def compute_chunk(
-    suite: Suite, planner: Planner, maps: MapSet, chunk: int, groups=None, reused: dict | None = None
+    suite: Suite, planner: Planner, maps: MapSet, chunk: int, compute=None, reused: dict | None = None
 ) -> dict:
     """Chunk `chunk` of the suite (maps `chunk * suite.chunk ..`): the clean planner and every attack, per map (the
-    record `vinadv.records.BENCH_CHUNK`, its version included). `groups`: the indices of the suite's groups to
-    compute (None: all); `reused`: the chunk's parts taken from an entry instead (`vinadv.bench.reuse`: its `clean`,
-    where given, and the records of every attack of the other groups)."""
+    record `vinadv.records.BENCH_CHUNK`, its version included), and `start_cells`: the one-cell cells each start of a
+    chain kept on each map (`Suite.start_keys`, `vinadv.bench.outcomes.cells_json`; absent in a suite without chains,
+    or where some start's cells were neither computed nor given). `compute`: {group index: the group's strategies to
+    compute} (None: all of every group); `reused`: the chunk's parts taken from an entry instead
+    (`vinadv.bench.reuse`: its `clean`, where given, the records of every attack not computed and, where given,
+    `start_cells`)."""
     t0 = time.perf_counter()
     lo = chunk * suite.chunk
     sub = chunk_maps(maps, lo, min(len(maps), lo + suite.chunk))
     reused = reused or {}
     clean = reused["clean"] if "clean" in reused else _clean_part(planner, sub)
-    attacks, cells = {}, {}
+    attacks = dict(reused.get("attacks", {}))
+    cells = {key: cells_array(values) for key, values in reused.get("start_cells", {}).items()}
     for i, group in enumerate(suite.attacks):
-        if groups is not None and i not in groups:
-            attacks.update((key, reused["attacks"][key]) for key in group.keys())
+        names = group.strategies if compute is None else tuple(compute.get(i, ()))
+        if not names:
             continue
+        # each strategy runs alone (its own attack, seed and settings): a subset of the group makes the same pairs
         # a group started from an earlier group's one-cell pairs (the exhaustive optimum) chains from its cells
         start = None if group.start is None else cells[f"{group.edit}:{group.start}"]
         result = robustness(
             planner,
             sub,
-            group.strategies,
+            names,
             group.max_obstacles,
             edit=group.edit,
             first_map=lo,
             start=start,
             **attack_settings(suite),
         )
-        for key, strategy in zip(group.keys(), result.strategies.values()):
+        keys = dict(zip(group.strategies, group.keys()))
+        for name, strategy in result.strategies.items():
             if group.start is None:
-                cells[key] = strategy.cells[0]
-            attacks[key] = [
-                {
-                    "pair": o.pair.tolist(),
-                    "valid": o.valid.tolist(),
-                    "broken": o.broken.tolist(),
-                    "harmful": o.harmful.tolist(),
-                    "regret": _floats(o.regret),
-                    "label": o.label.tolist(),
-                    "counts": f.counts,
-                    # a planner that reports its expansions: each valid pair's effort ratio and verdict
-                    **(
-                        {}
-                        if o.effort_harmful is None
-                        else {"effort": _floats(o.effort), "effort_harmful": o.effort_harmful.tolist()}
-                    ),
-                }
-                for o, f in zip(strategy.outcomes, strategy.by_k)
-            ]
+                cells[keys[name]] = strategy.cells[0]
+            attacks[keys[name]] = [_attack_part(o, f) for o, f in zip(strategy.outcomes, strategy.by_k)]
+    out = {"first_map": lo, "maps": len(sub), "clean": clean, "attacks": attacks}
+    if suite.start_keys() and all(key in cells for key in suite.start_keys()):
+        out["start_cells"] = {key: cells_json(cells[key]) for key in suite.start_keys()}
+    return {**out, "seconds": round(time.perf_counter() - t0, 3), VERSION_KEY: RECORD_VERSIONS[BENCH_CHUNK]}
+
+
+def _attack_part(o, f) -> dict:
+    """One attack's part of a chunk at one k: its outcomes `o` (`vinadv.robustness.MapOutcomes`) and figures `f`."""
     return {
-        "first_map": lo,
-        "maps": len(sub),
-        "clean": clean,
-        "attacks": attacks,
-        "seconds": round(time.perf_counter() - t0, 3),
-        VERSION_KEY: RECORD_VERSIONS[BENCH_CHUNK],
+        "pair": o.pair.tolist(),
+        "valid": o.valid.tolist(),
+        "broken": o.broken.tolist(),
+        "harmful": o.harmful.tolist(),
+        "regret": _floats(o.regret),
+        "label": o.label.tolist(),
+        "counts": f.counts,
+        # a planner that reports its expansions: each valid pair's effort ratio and verdict
+        **(
+            {}
+            if o.effort_harmful is None
+            else {"effort": _floats(o.effort), "effort_harmful": o.effort_harmful.tolist()}
+        ),
     }
 
 
@@ -418,78 +369,10 @@ class SuiteMaps:
         return suite_maps(self.suite, self.data)
 
 
-def _stored_chunks(
-    store, db: str, keys: list[str], suite: Suite, n_chunks: int, fingerprint: dict, resume: bool
-) -> tuple[dict[int, dict], str]:
-    """The chunks of this entry stored in `db` ({chunk: result}, each checked: `_check_stored`) and the key they are
-    stored under (the first of `keys` when none); InputError for chunks stored without `resume`, or one whose
-    fingerprint is not this run's (`reusable`), naming both."""
-    done: dict[int, dict] = {}
-    for key in keys:  # continued under the key its chunks are stored under
-        try:
-            stored = store.read_bench_chunks(key, _check_stored(suite, n_chunks))
-        except InputError as exc:
-            raise InputError(f"database {db}: {exc}", "db") from None
-        done = {c: r for c, r in stored.items() if 0 <= c < n_chunks}
-        if done:
-            break
-    else:
-        key = keys[0]
-    if done and not resume:
-        raise InputError(
-            f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
-        )
-    for c, r in sorted(done.items()):  # one computation per entry: every chunk's fingerprint is this run's
-        _refuse_other_computation(db, c, r, fingerprint, "was computed with")
-    return done, key
-
-
-def _refuse_other_computation(db: str, chunk: int, stored: dict, fingerprint: dict, how: str) -> None:
-    """InputError naming both computations where the stored chunk `chunk`'s fingerprint (none: a chunk stored before
-    chunks had one, results format 1) is not `reusable` by this run's `fingerprint`; `how` says how it was stored."""
-    if reusable(stored.get("fingerprint"), fingerprint):
-        return
-    theirs = stored_fingerprint(stored.get("fingerprint"), fingerprint)
-    raise InputError(
-        f"database {db}: chunk {chunk} of this entry {how} {_describe(theirs, fingerprint)}, this run with "
-        f"{_describe(fingerprint, theirs)}; the entry would mix two computations: use another database",
-        "resume",
-    )
-
-
-#: the fields of a chunk's result that are not a function of the suite and the planner (`_same_chunk`)
-_CHUNK_VOLATILE = ("seconds", "fingerprint")
-
-
-def _same_chunk(db: str, chunk: int, stored: dict, result: dict, fingerprint: dict) -> dict:
-    """The chunk `chunk` another run stored while this one computed it (`stored`, read back), where it is the same
-    as this run's `result` but for the time taken; InputError naming both where it was computed otherwise (another
-    fingerprint) or came out otherwise (a planner that is not deterministic): the entry would mix two computations."""
-    _refuse_other_computation(db, chunk, stored, fingerprint, "was stored meanwhile by another run computed with")
-
-    def kept(part: dict) -> dict:
-        return {k: v for k, v in part.items() if k not in _CHUNK_VOLATILE}
-
-    mine, theirs = kept(result), kept(stored)
-    if json.dumps(mine, sort_keys=True) != json.dumps(theirs, sort_keys=True):
-        fields = sorted(
-            k
-            for k in set(mine) | set(theirs)
-            if json.dumps(mine.get(k), sort_keys=True) != json.dumps(theirs.get(k), sort_keys=True)
-        )
-        raise InputError(
-            f"database {db}: chunk {chunk} of this entry was stored meanwhile by another run, with another result "
-            f"than this run's (field {', '.join(map(repr, fields[:3])) or '?'}): the planner does not compute the "
-            "same result twice; the stored chunk is kept (--resume uses it)",
-            "resume",
-        )
-    return stored
-
-
 def _chunk_task(suite: Suite, planner, maps, reuse, chunk: int) -> tuple[int, dict]:
     """The task of `run_bench`: `(chunk, compute_chunk(...))`, the planner and maps given or by reference; `reuse`:
     None, or what is taken from an older entry (`vinadv.bench.reuse.ReusePlan`)."""
-    args = () if reuse is None else (reuse.groups, reuse.chunk_part(suite, chunk))
+    args = () if reuse is None else (reuse.computed, reuse.chunk_part(suite, chunk))
     return chunk, compute_chunk(suite, resolve(planner), resolve(maps), chunk, *args)
 
 
@@ -533,11 +416,12 @@ def run_bench(
     done: dict[int, dict] = {}
     store = None
     if db is not None:
+        from vinadv.bench.chunkstore import check_stored, same_chunk, stored_chunks  # noqa: PLC0415 (only with --db)
         from vinadv.store import Store  # noqa: PLC0415 (SQLAlchemy: only with --db)
 
         store = Store.open(db)
         try:
-            done, key = _stored_chunks(store, db, keys, suite, n_chunks, fingerprint, resume)
+            done, key = stored_chunks(store, db, keys, suite, n_chunks, fingerprint, resume)
         except InputError:
             store.close()
             raise
@@ -565,10 +449,10 @@ def run_bench(
         for chunk, result in executor.map(task, todo, ordered=False):
             if store is not None:
                 stored = store.add_bench_chunk(
-                    key, chunk, {**result, "fingerprint": fingerprint}, check=_check_stored(suite, n_chunks)
+                    key, chunk, {**result, "fingerprint": fingerprint}, check=check_stored(suite, n_chunks)
                 )
                 if stored is not None:  # stored meanwhile (another run resuming this entry): the same, or refused
-                    result = _same_chunk(db, chunk, stored, result, fingerprint)
+                    result = same_chunk(db, chunk, stored, result, fingerprint)
             done[chunk] = result
             if bar is not None:
                 bar.update(chunk_maps(chunk))
@@ -591,11 +475,14 @@ def entry_json(entry: dict) -> str:
     return json.dumps(entry, sort_keys=True, indent=2) + "\n"
 
 
-def _compact(value, indent: str) -> str:
-    """`value` as `json.dumps(sort_keys=True, indent=2)` writes it, but for its lists of plain values, one line each."""
+def _compact(value, indent: str, cells: bool = False) -> str:
+    """`value` as `json.dumps(sort_keys=True, indent=2)` writes it, but for its lists of plain values, one line each;
+    `cells`: `value` is `per_map.start_cells`, each of its lists of cells on one line."""
     inner = indent + "  "
     if isinstance(value, dict) and value:
-        items = [f"{inner}{json.dumps(k)}: {_compact(value[k], inner)}" for k in sorted(value)]
+        # per_map.start_cells: per map a cell or null, on one line as the other per-map lists
+        shown = {k: json.dumps(v) if cells else _compact(v, inner, k == "start_cells") for k, v in value.items()}
+        items = [f"{inner}{json.dumps(k)}: {shown[k]}" for k in sorted(value)]
         return "{\n" + ",\n".join(items) + f"\n{indent}}}"
     if isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value):
         return "[\n" + ",\n".join(inner + _compact(v, inner) for v in value) + f"\n{indent}]"

@@ -138,6 +138,12 @@ class Suite:
     def attack_keys(self) -> list[str]:
         return [k for g in self.attacks for k in g.keys()]
 
+    def start_keys(self) -> list[str]:
+        """The attacks whose one-cell cells a later group's chain starts from (`AttackGroup.start`: `edit:start`,
+        say `add:exhaustive`), in suite order, each once; [] for a suite without chains."""
+        keys = [f"{g.edit}:{g.start}" for g in self.attacks if g.start is not None]
+        return list(dict.fromkeys(keys))
+
     def movement(self) -> str:
         """The movement model of the suite's maps (`vinadv.grid.moves`): the generator's `octile`."""
         return "octile"

@@ -31,7 +31,8 @@ set on a map without a valid pair; a search planner's optional `per_map.clean.ex
 `per_map.clean.cost_ratio`, >= 0 where the clean path reaches the goal and null elsewhere). A figure's
 `effort_harmful` is a count and its `effort_harmful_rate` a rate. Its optional `computed_with` (`check_computed_with`:
 entries made before it have none) holds `results_format` and `strategies`, integers >= 1; an entry recomputed from
-another (`vinadv.bench.reuse`) has `time.reused`: `entry_sha256` (64 hex digits) and `attacks` (texts).
+another (`vinadv.bench.reuse`) has `time.reused`: `entry_sha256` (64 hex digits) and `attacks` (texts). Its optional
+`per_map.start_cells` holds, per attack of the entry, one cell per map: `[row, column]` (counts) or null.
 
 Strings are checked for type and length only: the renderers escape them (`vinadv.bench.leaderboard`).
 """
@@ -387,6 +388,23 @@ def check_per_map(value, attacks: dict, clean: dict) -> None:
     if "worst_effort" in p:
         for i, values in enumerate(_list(p["worst_effort"], "per_map.worst_effort")):
             _reals(values, f"per_map.worst_effort[{i}]", n)
+    if "start_cells" in p:  # the one-cell cells the chains start from (optional)
+        for key, values in _obj(p["start_cells"], "per_map.start_cells").items():
+            if key not in attacks:
+                raise Bad(f"per_map.start_cells.{key}", "is an attack the entry has no figures of")
+            _cells(values, f"per_map.start_cells.{key}", n)
+
+
+def _cells(value, field: str, n: int, hi: int = MAX_COUNT) -> list:
+    """Per map, a cell `[row, column]` (integers in [0, `hi`]) or null (no pair)."""
+    values = _per_map(value, field, n)
+    for i, cell in enumerate(values):
+        if cell is not None:
+            if not isinstance(cell, list) or len(cell) != 2:
+                raise Bad(f"{field}[{i}]", f"is {_show(cell)}, expected [row, column] or null")
+            for j, v in enumerate(cell):
+                count(v, f"{field}[{i}][{j}]", hi=hi)
+    return values
 
 
 def _record(r: dict, at: str, n: int, k: int) -> None:
@@ -448,7 +466,8 @@ def _reals(value, field: str, n: int) -> list:
 def check_chunk(result, suite: Suite, chunk: int) -> None:
     """Raise `Bad` for the first field of the stored result of chunk `chunk` of `suite` (`compute_chunk`) that is
     not what `make_entry` reads: its maps, the clean planner's per-map outcomes and means, every attack of the suite
-    at every k with one value per map, the labels, the counts."""
+    at every k with one value per map, the labels, the counts; the optional `start_cells`: a cell of the map or null
+    per map for each start of a chain (`Suite.start_keys`)."""
     r = _obj(result, "(result)")
     lo = chunk * suite.chunk
     expected = min(suite.n, lo + suite.chunk) - lo
@@ -499,6 +518,12 @@ def check_chunk(result, suite: Suite, chunk: int) -> None:
                     if label not in LABELS:
                         raise Bad(f"{at}.counts", f"has label {_show(label)}, expected one of {', '.join(LABELS)}")
                     count(c, f"{at}.counts.{label}")
+    if "start_cells" in r:  # the one-cell cells the chains start from (optional: chunks stored before have none)
+        cells = _obj(r["start_cells"], "start_cells")
+        if sorted(cells) != sorted(suite.start_keys()):
+            raise Bad("start_cells", f"holds {_show(sorted(cells))}, expected {_show(suite.start_keys())}")
+        for key, values in cells.items():
+            _cells(values, f"start_cells.{key}", n, hi=suite.size - 1)
     _number(_get(r, "seconds", ""), "seconds", lo=0.0)
 
 

@@ -8,7 +8,8 @@ Two checks of a `vinadv.bench_entry/2` entry (`verify_entry`), each difference o
    compared with the mean of the maps' values where `per_map.clean` holds them (`outcomes.chunk_mean_problems`).
 2. `chunks` chunks of maps, chosen by a seeded draw (`pick_chunks`), are recomputed with the planner
    (`vinadv.bench.scoring.compute_chunk`) and their per-map outcomes compared byte for byte (as JSON) with the
-   entry's, as are the planner's checks (gradient masking, determinism) when at least one chunk is recomputed.
+   entry's, as are the planner's checks (gradient masking, determinism) when at least one chunk is recomputed, and,
+   where the entry holds them (`per_map.start_cells`: optional), the one-cell cells the chains start from.
 
 An entry that is not a valid entry of format 2, of a suite this vinadv does not have (another checksum), or whose
 planner is not the one loaded, is bad input (InputError), not a difference.
@@ -179,11 +180,36 @@ def verify_entry(
                 found = differences(f"per_map.{name}", stored[name], again[name], source)
                 lines += [_in_chunk(line, chunk, suite) for line in found]
             lines += differences(f"per_map.chunks[{chunk}]", stored["chunks"][0], again["chunks"][0], source)
+            if "start_cells" in entry["per_map"]:
+                lines += _start_cell_differences(entry["per_map"]["start_cells"], again, suite, chunk)
             if bar is not None:
                 bar.update(1)
         if bar is not None:
             bar.close()
     return {"differences": lines, "chunks": picked}
+
+
+def _start_cell_differences(stored: dict, again: dict, suite, chunk: int) -> list[str]:
+    """One line per start of a chain whose cells in the entry (`stored`: `per_map.start_cells`) differ from those of
+    the recomputed chunk (`again`: its `chunk_per_map`), named at the first map that differs."""
+    lo, hi = chunk * suite.chunk, min(suite.n, (chunk + 1) * suite.chunk)
+    source = f"the recomputed chunk {chunk}"
+    theirs = again.get("start_cells") or {}
+    out = []
+    for key in sorted(set(stored) | set(theirs)):
+        if key not in theirs:
+            out.append(f"field 'per_map.start_cells.{key}': in the entry, not in what {source} give")
+        elif key not in stored:
+            out.append(f"field 'per_map.start_cells.{key}': not in the entry, {_show(theirs[key])} from {source}")
+        else:
+            mine = stored[key][lo:hi]
+            i = next((i for i, (a, b) in enumerate(zip(mine, theirs[key])) if a != b), None)
+            if i is not None:
+                out.append(
+                    f"field 'per_map.start_cells.{key}[{lo + i}]': {_show(mine[i])} in the entry, "
+                    f"{_show(theirs[key][i])} from {source}"
+                )
+    return out
 
 
 def _same_name(spec: dict, stored: dict) -> bool:
