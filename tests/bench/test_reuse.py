@@ -1,6 +1,6 @@
-"""`vinadv bench run --reuse ENTRY` (`vinadv.bench.reuse`): the attack groups of an older entry whose strategies did
-not change are taken from it, the others computed; the entry is a full recompute's (deterministic part), and only
-the changed groups (and the start group of a changed chain) run."""
+"""`vinadv bench run --reuse ENTRY` (`vinadv.bench.reuse`): the attacks of an older entry whose strategies did not
+change are taken from it, the others computed; the entry is a full recompute's (deterministic part), and only the
+changed strategies run, each in its group (and a changed chain's start, where the entry holds no start cells)."""
 
 from __future__ import annotations
 
@@ -25,15 +25,15 @@ from vinadv.testing.planners import planning_vin
 
 SIZE = 10
 GROUPS = (
-    AttackGroup(("near-path",), "add", 2),
+    AttackGroup(("near-path", "random"), "add", 2),
     AttackGroup(("exhaustive",), "add", 1),
-    AttackGroup(("random",), "add", 3, start="exhaustive"),
+    AttackGroup(("random", "near-path"), "add", 3, start="exhaustive"),
     AttackGroup(("key-points",), "remove", 1),
 )
 
 
 def reuse_suite(name: str = "reuse2"):
-    """Three 10x10 maps in two chunks; a chain started from exhaustive's one-cell optimum."""
+    """Three 10x10 maps in two chunks; groups of two strategies; chains started from exhaustive's one-cell optimum."""
     return heldout_suite(name, 3, SIZE, GROUPS, "a test suite of definitions 2", budget=3, chunk=2, definitions=2)
 
 
@@ -81,30 +81,54 @@ def test_an_entry_records_the_revisions_it_was_computed_with(entry):
     assert entry_problem(old) is None  # optional: entries made before it have none
 
 
+def _without_start_cells(entry: dict) -> dict:
+    """`entry` as made before entries held the chains' start cells."""
+    return {**entry, "per_map": {k: v for k, v in entry["per_map"].items() if k != "start_cells"}}
+
+
 @pytest.mark.parametrize(
-    ("bumped", "ran"),
+    ("bumped", "cells", "ran", "computed"),
     [
-        ("key-points", [("key-points",)]),
-        ("near-path", [("near-path",)]),
-        ("exhaustive", [("exhaustive",), ("random",)]),  # the chain started from its cells too
-        ("random", [("exhaustive",), ("random",)]),  # exhaustive's cells, which the entry does not hold
+        # one strategy of a group of two: that strategy alone, in each group that runs it
+        ("key-points", True, [("key-points",)], ["remove:key-points"]),
+        ("near-path", True, [("near-path",), ("near-path",)], ["add:near-path", "add:exhaustive+near-path"]),
+        # a chain's strategy: it starts from the start cells the entry holds, exhaustive does not run
+        ("random", True, [("random",), ("random",)], ["add:random", "add:exhaustive+random"]),
+        # the start strategy: its chains start from other cells, all of them run
+        (
+            "exhaustive",
+            True,
+            [("exhaustive",), ("random", "near-path")],
+            ["add:exhaustive", "add:exhaustive+random", "add:exhaustive+near-path"],
+        ),
+        # an entry made before the start cells: a changed chain runs its start again, for its cells
+        (
+            "random",
+            False,
+            [("random",), ("exhaustive",), ("random",)],
+            ["add:random", "add:exhaustive", "add:exhaustive+random"],
+        ),
+        ("key-points", False, [("key-points",)], ["remove:key-points"]),
     ],
 )
-def test_a_bumped_revision_recomputes_its_group_alone_into_a_full_recomputes_entry(
-    entry, planner, runs, monkeypatch, bumped, ran
+def test_a_bumped_revision_recomputes_that_strategy_alone_into_a_full_recomputes_entry(
+    entry, planner, runs, monkeypatch, bumped, cells, ran, computed
 ):
     suite = reuse_suite()
+    older = entry if cells else _without_start_cells(entry)
     monkeypatch.setattr(strategies.STRATEGIES[bumped], "revision", strategies.STRATEGIES[bumped].revision + 1)
-    reused = run_bench(suite, planner, reuse=entry)
-    assert runs["groups"] == ran * 2 and runs["clean"] == 0  # per chunk: only those groups, no clean planner
+    reused = run_bench(suite, planner, reuse=older)
+    assert runs["groups"] == ran * 2 and runs["clean"] == 0  # per chunk: only those strategies, no clean planner
     runs["groups"].clear()
     full = run_bench(suite, planner)
-    assert len(runs["groups"]) == 2 * len(GROUPS)
+    assert runs["groups"] == [g.strategies for g in GROUPS] * 2
+    if not cells and bumped == "key-points":  # neither the older entry nor this run has exhaustive's cells
+        assert "start_cells" not in reused["per_map"]
+        reused["per_map"]["start_cells"] = full["per_map"]["start_cells"]
     assert entry_json(deterministic_part(reused)) == entry_json(deterministic_part(full))
     assert reused["computed_with"]["strategies"][bumped] == entry["computed_with"]["strategies"][bumped] + 1
-    computed = {key for group in GROUPS if group.strategies in ran for key in group.keys()}
     assert reused["time"]["reused"] == {
-        "entry_sha256": hashlib.sha256(entry_json(entry).encode()).hexdigest(),
+        "entry_sha256": hashlib.sha256(entry_json(older).encode()).hexdigest(),
         "attacks": [key for key in suite.attack_keys() if key not in computed],
     }
     assert entry_problem(reused) is None
@@ -125,12 +149,14 @@ def test_the_chunks_rebuilt_from_an_entry_are_those_computed(entry, planner, mon
         )
     monkeypatch.setattr(strategies.STRATEGIES["near-path"], "revision", 2)
     plan = plan_reuse(suite, planner, entry)
-    assert plan.groups == {0} and plan.clean
+    assert plan.computed == {0: ("near-path",), 2: ("near-path",)} and plan.clean
+    assert plan.start_cells == ("add:exhaustive",)
     maps = suite_maps(suite)
     for chunk in range(2):
         part = plan.chunk_part(suite, chunk)
-        assert set(part["attacks"]) == {"add:exhaustive", "add:exhaustive+random", "remove:key-points"}
-        rebuilt = compute_chunk(suite, planner, maps, chunk, plan.groups, part)
+        assert set(part["attacks"]) == {"add:random", "add:exhaustive", "add:exhaustive+random", "remove:key-points"}
+        assert len(part["start_cells"]["add:exhaustive"]) == (2, 1)[chunk]
+        rebuilt = compute_chunk(suite, planner, maps, chunk, plan.computed, part)
         whole = compute_chunk(suite, planner, maps, chunk)
         for result in (rebuilt, whole):
             result.pop("seconds")
@@ -145,8 +171,8 @@ def test_an_entry_without_computed_with_is_of_revision_1_and_its_inferred_format
         "strategies": {"exhaustive": 1, "key-points": 1, "near-path": 1, "random": 1},
     }
     plan = plan_reuse(suite, planner, old)
-    assert plan.groups == {3} and plan.clean  # key-points is revision 2 since it reads the starts
-    assert plan.reused == ("add:near-path", "add:exhaustive", "add:exhaustive+random")
+    assert plan.computed == {3: ("key-points",)} and plan.clean  # key-points is revision 2 since it reads the starts
+    assert plan.reused == tuple(k for k in suite.attack_keys() if k != "remove:key-points")
     efforts = json.loads(json.dumps(old))
     for records in efforts["per_map"]["attacks"].values():
         for record in records:
@@ -218,14 +244,16 @@ def test_bench_run_reuse_refuses_what_is_not_an_entry_to_reuse_in_one_line(tmp_p
     assert json.loads(again.read_text())["time"]["reused"]["entry_sha256"] != second["time"]["reused"]["entry_sha256"]
 
 
-def test_a_committed_entry_without_computed_with_recomputes_its_key_points_groups():
+def test_a_committed_entry_without_computed_with_recomputes_its_key_points_attacks():
     """The committed entries were made before `computed_with` (revision 1 everywhere): astar's is results format 2
-    (its records carry efforts), so its clean parts are taken, and every group with key-points (revision 2) is
-    computed."""
+    (its records carry efforts), so its clean parts are taken, and key-points (revision 2) is computed in each group
+    that runs it, the group's other strategies taken."""
     path = COMMITTED / "vin28-quick-v2.astar.json"
     reused = ReusedEntry.read(path)
     assert "computed_with" not in reused.entry and reused.sha256 == hashlib.sha256(path.read_bytes()).hexdigest()
     suite = get_suite("vin28-quick-v2")
     plan = plan_reuse(suite, load_planner("astar", suite.size), reused)
-    assert plan.clean and plan.groups == {i for i, g in enumerate(suite.attacks) if "key-points" in g.strategies}
-    assert plan.reused == tuple(k for i, g in enumerate(suite.attacks) if i not in plan.groups for k in g.keys())
+    with_key_points = [i for i, g in enumerate(suite.attacks) if "key-points" in g.strategies]
+    assert plan.clean and plan.computed == dict.fromkeys(with_key_points, ("key-points",)) and len(with_key_points) == 2
+    assert plan.reused == tuple(k for k in suite.attack_keys() if not k.endswith(":key-points"))
+    assert len(plan.reused) == 6 and plan.start_cells == ()  # the quick suite has no chains
