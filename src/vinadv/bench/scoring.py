@@ -22,7 +22,8 @@ it, the other checks its own is the same and uses the stored one (`vinadv.bench.
 That is the entry of a suite of definitions 1 (`vinadv.bench_entry/1`). A suite of definitions 2 writes
 `vinadv.bench_entry/2` (`vinadv.bench.outcomes`): the per-map outcomes of the chunks (`per_map`), every figure computed
 from them, the worst case at k over every attack of at most k edits; and its `checks` and `submission`. A group with a
-`start` (`AttackGroup.start`) chains from the cells the named strategy's group kept on each map in the same chunk.
+`start` (`AttackGroup.start`) chains from the cells the named strategy's group kept on each map in the same chunk
+(kept in the chunk and the entry, `start_cells`, for a recompute: `vinadv.bench.reuse`).
 
 Everything but `time` and `machine` is a function of the suite, the planner and its weights: the same on the same
 device type, byte for byte (`entry_json` writes sorted keys, fixed indentation).
