@@ -397,7 +397,7 @@ def run_bench(
     they come back, in any order; a remote executor needs the planner by reference, `planner_ref`
     (`vinadv.planners.registry.PlannerRef.of`). `submission`: the entry's submission fields (`submission_fields`;
     an entry of format 2 only), checked before the work. `reuse`: an older entry of format 2 of this suite and
-    planner (a dict, or `vinadv.bench.reuse.ReusedEntry`) whose attack groups that did not change are taken from it
+    planner (a dict, or `vinadv.bench.reuse.ReusedEntry`) whose attacks that did not change are taken from it
     (`vinadv.bench.reuse.plan_reuse`; InputError naming the field of another suite, planner or format)."""
     t0 = time.perf_counter()
     if executor.remote and planner_ref is None:
