@@ -24,10 +24,12 @@ ROOT = Path(__file__).resolve().parents[1]
 GALLERY = ROOT / "examples" / "gallery"
 QUICKSTART = ROOT / "examples" / "quickstart.ipynb"
 
+#: the committed entries of the suite compare_planners reads (every one of them)
+QUICK_V2_ENTRIES = len(list((ROOT / "docs" / "results" / "bench").glob("vin28-quick-v2.*.json")))
 #: per notebook: the public data files it reads, how many figures it draws, and texts its outputs must hold
 SHOWS = {
     "neural_astar_mp_mazes": (["mpd/mazes_032_moore_c8.npz"], 1, ["8 maps of 32x32, movement model moore", "label "]),
-    "compare_planners": ([], 1, ["4 entries", "wastar:w=2", "harmful_k_low", "vin vs wastar:w=2"]),
+    "compare_planners": ([], 1, [f"{QUICK_V2_ENTRIES} entries", "wastar:w=2", "harmful_k_low", "vin vs wastar:w=2"]),
     "own_planner_leaderboard": ([], 0, ["gallery-tiny", "not a released suite", "my_search_planner.py:make"]),
     "attack_transfer": ([], 1, ["24 pairs found on VIN", "gppn", "harmful 95%", "harmful on both VIN and GPPN"]),
     "city_map": (["movingai/Berlin_1_256.map"], 2, ["12 windows of 32x32, moves octile, corner cutting False"]),
