@@ -180,7 +180,7 @@ def test_an_entry_without_computed_with_is_of_revision_1_and_its_inferred_format
             record["effort_harmful"] = [False] * 3
     assert recorded_computation(efforts, suite)["results_format"] == 2  # a planner's that reports expansions
     plan = plan_reuse(suite, planner, efforts)  # not this planner's results format: nothing is taken
-    assert plan.groups == set(range(len(GROUPS))) and not plan.clean and plan.reused == ()
+    assert set(plan.computed) == set(range(len(GROUPS))) and not plan.clean and plan.reused == ()
 
 
 def _other_weights(entry: dict) -> dict:

@@ -30,20 +30,13 @@ import json
 import os
 from pathlib import Path
 
-from vinadv.attacks.strategies import STRATEGIES
 from vinadv.bench.outcomes import outcome
-from vinadv.bench.scoring import chunk_format, entry_json, strategy_revisions
+from vinadv.bench.scoring import computed_with, entry_json, strategy_revisions
 from vinadv.bench.suites import ENTRY_FORMAT_2, Suite
 from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
 from vinadv.planners.interface import Planner
 from vinadv.vocabulary import label_counts
-
-
-def computed_with(suite: Suite, planner: Planner) -> dict:
-    """What an entry of format 2 of `planner` on `suite` is computed with (its field `computed_with`): the chunks'
-    `results_format` and the suite's `strategies` with their revisions."""
-    return {"results_format": chunk_format(planner), "strategies": strategy_revisions(suite)}
 
 
 def recorded_computation(entry: dict, suite: Suite) -> dict:
@@ -90,11 +83,6 @@ class ReusePlan:
     per_map: dict = dataclasses.field(repr=False)
     entry_sha256: str = ""
     start_cells: tuple[str, ...] = ()
-
-    @property
-    def groups(self) -> frozenset[int]:
-        """The indices of the groups that compute at least one strategy."""
-        return frozenset(self.computed)
 
     def chunk_part(self, suite: Suite, chunk: int) -> dict:
         """The parts of chunk `chunk` taken from the entry, in a chunk's shape (`compute_chunk`'s `reused`): `clean`
@@ -162,12 +150,12 @@ def plan_reuse(suite: Suite, planner: Planner, reuse) -> ReusePlan:
     expected = [min(suite.n, lo + suite.chunk) - lo for lo in range(0, suite.n, suite.chunk)]
     if [c["maps"] for c in per_map["chunks"]] != expected:
         raise InputError(f"reuse: field 'per_map.chunks' does not cut the maps as suite {suite.name} does", "reuse")
-    recorded = recorded_computation(entry, suite)
-    same_format = recorded.get("results_format") == chunk_format(planner)
+    recorded, now = recorded_computation(entry, suite), computed_with(suite, planner)
+    same_format = recorded.get("results_format") == now["results_format"]
     revisions = recorded.get("strategies") or {}
 
     def unchanged(name: str) -> bool:
-        return same_format and revisions.get(name) == STRATEGIES[name].revision
+        return same_format and revisions.get(name) == now["strategies"][name]
 
     todo: dict[int, set[str]] = {}
     for i, group in enumerate(suite.attacks):  # a chain's pairs depend on its strategy and its start's

@@ -156,6 +156,12 @@ def strategy_revisions(suite: Suite) -> dict[str, int]:
     return {name: STRATEGIES[name].revision for name in names}
 
 
+def computed_with(suite: Suite, planner: Planner) -> dict:
+    """What an entry of format 2 of `planner` on `suite` is computed with (its field `computed_with`,
+    `vinadv.bench.reuse`): the chunks' `results_format` and the suite's `strategies` with their revisions."""
+    return {"results_format": chunk_format(planner), "strategies": strategy_revisions(suite)}
+
+
 def chunk_fingerprint(suite: Suite, planner: Planner) -> dict:
     """What a stored chunk must have been computed with to be reused (`run_bench`): the results format
     (`chunk_format`), the suite's checksum, the revision of each of its strategies (`strategy_revisions`) and the
@@ -292,8 +298,6 @@ def make_entry(
         body = entry_figures(suite, per_map)
         if "worst_effort" in body:
             per_map["worst_effort"] = body.pop("worst_effort")
-        from vinadv.bench.reuse import computed_with  # noqa: PLC0415 (it reads `chunk_format` here)
-
         body = {"submission": submission, "checks": checks, **body, "per_map": per_map}
         body["computed_with"] = computed_with(suite, planner)
     return {

@@ -14,9 +14,10 @@ Two checks of a `vinadv.bench_entry/2` entry (`verify_entry`), each difference o
 An entry that is not a valid entry of format 2, of a suite this vinadv does not have (another checksum), or whose
 planner is not the one loaded, is bad input (InputError), not a difference.
 
-The entry's `computed_with` (`vinadv.bench.reuse`; optional) is not compared: the chunks are recomputed whole with this
-vinadv's strategies, so an entry recomputed from another (`bench run --reuse`) is checked as any other, and one
-computed with an older revision of a strategy differs in that strategy's attacks (recompute it with `--reuse`).
+The entry's `computed_with` (`vinadv.bench.scoring.computed_with`; optional) is not compared: the chunks are
+recomputed whole with this vinadv's strategies, so an entry recomputed from another (`bench run --reuse`) is checked
+as any other, and one computed with an older revision of a strategy differs in that strategy's attacks (recompute it
+with `--reuse`).
 """
 
 from __future__ import annotations
