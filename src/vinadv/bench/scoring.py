@@ -196,8 +196,9 @@ def _clean_part(planner: Planner, sub: MapSet) -> dict:
         clean = {"search": dict(rows.metrics())}
         # each map's values behind the means (one start per map): their bootstrap intervals over the maps
         clean["cost_ratio"] = _floats(rows.cost_ratio)
-        if rows.exp is not None:
-            clean["exp"] = _floats(rows.exp)
+        exp = rows.exp
+        if exp is not None:
+            clean["exp"] = _floats(exp)
     else:
         gppn = gppn_protocol(planner, sub)
         clean = {"gppn_percent_optimal": gppn["percent_optimal"], "gppn_percent_success": gppn["percent_success"]}
