@@ -54,7 +54,7 @@ def register(subparsers) -> None:
     run.add_argument(
         "--reuse",
         metavar="ENTRY",
-        help="recompute from this older entry of the suite and planner (.json, format 2): its attack groups whose "
+        help="recompute from this older entry of the suite and planner (.json, format 2): its attacks whose "
         "strategies did not change are taken from it, the others computed (docs/guide/bench.md)",
     )
     run.add_argument("--out", help="write the entry to this file (.json; default: print it)")
