@@ -85,20 +85,24 @@ def stored_chunks(
             f"database {db} holds {len(done)} chunks of this entry already: pass --resume to continue it", "resume"
         )
     for c, r in sorted(done.items()):  # one computation per entry: every chunk's fingerprint is this run's
-        _refuse_other_computation(db, c, r, fingerprint, "was computed with")
+        refuse_other_computation(f"database {db}", c, r, fingerprint, "was computed with")
     return done, key
 
 
-def _refuse_other_computation(db: str, chunk: int, stored: dict, fingerprint: dict, how: str) -> None:
-    """InputError naming both computations where the stored chunk `chunk`'s fingerprint (none: a chunk stored before
-    chunks had one, results format 1) is not `reusable` by this run's `fingerprint`; `how` says how it was stored."""
+def refuse_other_computation(
+    where: str, chunk: int, stored: dict, fingerprint: dict, how: str, field: str = "resume", advice: str = ""
+) -> None:
+    """InputError naming both computations (and `field`) where the stored chunk `chunk`'s fingerprint (none: a chunk
+    stored before chunks had one, results format 1) is not `reusable` by this run's `fingerprint`; `where` names the
+    store ("database D", "parts: FILE"), `how` says how the chunk was stored; `advice` ends the message (default:
+    use another database)."""
     if reusable(stored.get("fingerprint"), fingerprint):
         return
     theirs = stored_fingerprint(stored.get("fingerprint"), fingerprint)
     raise InputError(
-        f"database {db}: chunk {chunk} of this entry {how} {_describe(theirs, fingerprint)}, this run with "
-        f"{_describe(fingerprint, theirs)}; the entry would mix two computations: use another database",
-        "resume",
+        f"{where}: chunk {chunk} of this entry {how} {_describe(theirs, fingerprint)}, this run with "
+        f"{_describe(fingerprint, theirs)}; the entry would mix two computations: {advice or 'use another database'}",
+        field,
     )
 
 
@@ -106,11 +110,21 @@ def _refuse_other_computation(db: str, chunk: int, stored: dict, fingerprint: di
 _CHUNK_VOLATILE = ("seconds", "fingerprint")
 
 
-def same_chunk(db: str, chunk: int, stored: dict, result: dict, fingerprint: dict) -> dict:
-    """The chunk `chunk` another run stored while this one computed it (`stored`, read back), where it is the same
-    as this run's `result` but for the time taken; InputError naming both where it was computed otherwise (another
-    fingerprint) or came out otherwise (a planner that is not deterministic): the entry would mix two computations."""
-    _refuse_other_computation(db, chunk, stored, fingerprint, "was stored meanwhile by another run computed with")
+def same_chunk(
+    where: str,
+    chunk: int,
+    stored: dict,
+    result: dict,
+    fingerprint: dict,
+    field: str = "resume",
+    how: str = "stored meanwhile by another run",
+    than: str = "this run's",
+) -> dict:
+    """The chunk `chunk` stored before (`stored`, read back: by another run while this one computed it, where `how`
+    says so), where it is the same as `result` (`than` names it) but for the time taken; InputError naming `field`
+    and both where it was computed otherwise (another fingerprint) or came out otherwise (a planner that is not
+    deterministic): the entry would mix two computations. `where` names the store ("database D", "parts: FILE")."""
+    refuse_other_computation(where, chunk, stored, fingerprint, f"was {how} computed with", field)
 
     def kept(part: dict) -> dict:
         return {k: v for k, v in part.items() if k not in _CHUNK_VOLATILE}
@@ -123,9 +137,9 @@ def same_chunk(db: str, chunk: int, stored: dict, result: dict, fingerprint: dic
             if json.dumps(mine.get(k), sort_keys=True) != json.dumps(theirs.get(k), sort_keys=True)
         )
         raise InputError(
-            f"database {db}: chunk {chunk} of this entry was stored meanwhile by another run, with another result "
-            f"than this run's (field {', '.join(map(repr, fields[:3])) or '?'}): the planner does not compute the "
-            "same result twice; the stored chunk is kept (--resume uses it)",
-            "resume",
+            f"{where}: chunk {chunk} of this entry was {how}, with another result than {than} (field "
+            f"{', '.join(map(repr, fields[:3])) or '?'}): the planner does not compute the same result twice; the "
+            "first is kept",
+            field,
         )
     return stored

@@ -1,11 +1,11 @@
 """`vinadv bench run` as a job: `BenchConfig` (a suite by name, the planner by its spec), `run(config, executor)`
-and `BenchResult` (the entry, `to_dict()`; `vinadv.bench.scoring`)."""
+and `BenchResult` (the entry, or a part of it, `to_dict()`; `vinadv.bench.scoring`, `vinadv.bench.parts`)."""
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from vinadv.bench.scoring import entry_json, run_bench, submission_fields
+from vinadv.bench.scoring import entry_json, run_bench, run_part, submission_fields
 from vinadv.bench.suites import Suite, get_suite
 from vinadv.executor import LOCAL, Executor
 
@@ -52,7 +52,7 @@ class BenchConfig:
 
 @dataclass
 class BenchResult:
-    """A bench entry (`vinadv.bench.scoring.make_entry`)."""
+    """A bench entry (`vinadv.bench.scoring.make_entry`), or a part of one (`vinadv.bench.parts.make_part`)."""
 
     entry: dict
 
@@ -60,8 +60,10 @@ class BenchResult:
         return self.entry
 
     def json(self) -> str:
-        """The entry as written (`entry_json`)."""
-        return entry_json(self.entry)
+        """The entry as written (`entry_json`), or the part (`vinadv.bench.parts.part_json`)."""
+        from vinadv.bench.parts import PART_FORMAT, part_json  # noqa: PLC0415 (light)
+
+        return part_json(self.entry) if self.entry.get("format") == PART_FORMAT else entry_json(self.entry)
 
 
 def run(
@@ -73,11 +75,15 @@ def run(
     progress: bool = False,
     device: str | None = None,
     reuse=None,
+    chunks: str | list[int] | None = None,
+    parts=(),
 ) -> BenchResult:
     """The entry of the planner of `config` on its suite (`run_bench`), its chunks computed on `executor`; with `db`
     each chunk stored when done, with `resume` the stored ones read. `device`: where the planner's forward runs.
     `reuse`: an older entry's file (or `vinadv.bench.reuse.ReusedEntry`, as read), whose attack groups that did not
-    change are taken (`vinadv.bench.reuse`)."""
+    change are taken (`vinadv.bench.reuse`). `chunks`: only these chunks (a list, or a text such as "0-4,9":
+    `vinadv.bench.parts.parse_chunks`), the result a part of the entry (`run_part`); `parts`: part files (or
+    `vinadv.bench.parts.Part`, as read) whose chunks are taken."""
     from vinadv.errors import InputError  # noqa: PLC0415 (light; beside the planners' import)
     from vinadv.planners.registry import PlannerRef, load_planner  # noqa: PLC0415 (loaded when a job runs)
 
@@ -88,25 +94,25 @@ def run(
         from vinadv.bench.reuse import ReusedEntry  # noqa: PLC0415 (only with an entry to reuse)
 
         reuse = reuse if isinstance(reuse, ReusedEntry) else ReusedEntry.read(reuse)
+    if chunks is not None or parts:  # read and checked before the planner loads
+        from vinadv.bench.parts import Part, parse_chunks  # noqa: PLC0415 (only in parts)
+
+        if chunks is not None:
+            text = chunks if isinstance(chunks, str) else ",".join(map(str, chunks))
+            chunks = parse_chunks(text, -(-suite.n // suite.chunk))
+        parts = [p if isinstance(p, Part) else Part.read(p, suite) for p in parts]
     # the planner runs under the suite's rule (a planner trained on other maps too: its entry's `other_rules` flag)
     cuts = suite.cuts_corners()
     planner = load_planner(
         config.planner, suite.size, weights=config.weights, corner_cutting=cuts, device=device, moves=suite.movement()
     )
     ref = PlannerRef.of(planner, config.planner, config.weights, corner_cutting=cuts) if executor.remote else None
-    entry = run_bench(
-        suite,
-        planner,
-        db=db,
-        resume=resume,
-        progress=progress,
-        data=config.data,
-        executor=executor,
-        planner_ref=ref,
-        submission=config.submission,
-        reuse=reuse,
+    common = dict(
+        db=db, resume=resume, progress=progress, data=config.data, executor=executor, planner_ref=ref, reuse=reuse
     )
-    return BenchResult(entry)
+    if chunks is not None:
+        return BenchResult(run_part(suite, planner, chunks, parts=parts, **common))
+    return BenchResult(run_bench(suite, planner, submission=config.submission, parts=parts, **common))
 
 
 __all__ = ["BenchConfig", "BenchResult", "run"]

@@ -6,7 +6,8 @@ cells edited greedily, labelled and judged for harm), keeping every map's outcom
 chunk is stored in one transaction (`Store.add_bench_chunk`), so `--resume` after a crash, even kill -9, recomputes
 only the chunks not stored; the randomised strategies draw as they would over the whole suite (`first_map`), so the
 chunks make the whole suite's pairs. Two runs resuming one entry at once may both compute a chunk: the first stores
-it, the other checks its own is the same and uses the stored one (`vinadv.bench.chunkstore`). The entry
+it, the other checks its own is the same and uses the stored one (`vinadv.bench.chunkstore`). Without a shared
+database the chunks may be computed in parts, files joined later (`run_part`, `vinadv.bench.parts`). The entry
 (`make_entry`) is then computed from the per-map outcomes of all chunks, in map order:
 
 - `clean`: the unattacked maps. vinadv's convention: rollout success from the start (`success_rate`), the share of
@@ -393,6 +394,7 @@ def run_bench(
     planner_ref=None,
     submission: dict | None = None,
     reuse=None,
+    parts=(),
 ) -> dict:
     """The entry of `planner` on `suite` (module doc). With `db` each chunk is stored when done; with `resume` the
     chunks stored there are read, not recomputed (without it, a database already holding chunks of this entry is
@@ -403,23 +405,78 @@ def run_bench(
     (`vinadv.planners.registry.PlannerRef.of`). `submission`: the entry's submission fields (`submission_fields`;
     an entry of format 2 only), checked before the work. `reuse`: an older entry of format 2 of this suite and
     planner (a dict, or `vinadv.bench.reuse.ReusedEntry`) whose attacks that did not change are taken from it
-    (`vinadv.bench.reuse.plan_reuse`; InputError naming the field of another suite, planner or format)."""
+    (`vinadv.bench.reuse.plan_reuse`; InputError naming the field of another suite, planner or format). `parts`:
+    parts of the entry computed before (`vinadv.bench.parts.Part`, read), whose chunks are taken."""
     t0 = time.perf_counter()
-    if executor.remote and planner_ref is None:
-        raise InputError("planner_ref: a remote executor needs the planner by reference", "planner_ref")
+    _check_remote(executor, planner_ref)
     submission_fields(suite, submission)  # refused in one line before the work
-    plan = None
-    if reuse is not None:
-        from vinadv.bench.reuse import plan_reuse  # noqa: PLC0415 (only with an entry to reuse)
-
-        plan = plan_reuse(suite, planner, reuse)
+    plan = _reuse_plan(suite, planner, reuse)
     maps = suite_maps(suite, data)
     checks = planner_checks(suite, planner, maps)
+    done = _chunks(suite, planner, maps, None, db, resume, progress, data, executor, planner_ref, plan, parts)
+    entry = make_entry(suite, planner, done, checks, time.perf_counter() - t0, submission)
+    if plan is not None:  # how it was made: `time` is not part of what must reproduce
+        entry["time"]["reused"] = plan.reused_time()
+    if parts:
+        entry["time"]["parts"] = [{"sha256": p.sha256, "chunks": sorted(p.part["chunks"])} for p in parts]
+    return entry
+
+
+def run_part(
+    suite: Suite,
+    planner: Planner,
+    chunks: list[int],
+    db: str | None = None,
+    resume: bool = False,
+    progress: bool = False,
+    data: str | os.PathLike | None = None,
+    executor: Executor = LOCAL,
+    planner_ref=None,
+    reuse=None,
+    parts=(),
+) -> dict:
+    """The part of the entry of `planner` on `suite` that holds the chunks numbered in `chunks`
+    (`vinadv.bench.parts`): each computed as `run_bench` computes it (the arguments are `run_bench`'s), or taken from
+    `db` with `resume`, or from `parts`."""
+    from vinadv.bench.parts import make_part  # noqa: PLC0415 (only for a part)
+
+    t0 = time.perf_counter()
+    _check_remote(executor, planner_ref)
+    plan = _reuse_plan(suite, planner, reuse)
+    maps = suite_maps(suite, data)
+    done = _chunks(suite, planner, maps, chunks, db, resume, progress, data, executor, planner_ref, plan, parts)
+    kept = {c: done[c] for c in chunks}
+    return make_part(suite, planner.spec(), chunk_fingerprint(suite, planner), kept, time.perf_counter() - t0)
+
+
+def _check_remote(executor: Executor, planner_ref) -> None:
+    """InputError naming `planner_ref` where a remote executor is not given the planner by reference."""
+    if executor.remote and planner_ref is None:
+        raise InputError("planner_ref: a remote executor needs the planner by reference", "planner_ref")
+
+
+def _reuse_plan(suite: Suite, planner: Planner, reuse):
+    """What is taken from the older entry `reuse` (`vinadv.bench.reuse.plan_reuse`), or None without one."""
+    if reuse is None:
+        return None
+    from vinadv.bench.reuse import plan_reuse  # noqa: PLC0415 (only with an entry to reuse)
+
+    return plan_reuse(suite, planner, reuse)
+
+
+def _chunks(suite, planner, maps, only, db, resume, progress, data, executor, planner_ref, plan, parts):
+    """The chunks of `run_bench` and `run_part` ({chunk: result}): those numbered in `only` (None: all of them),
+    taken from `parts` and, with `resume`, from `db`, the others computed (and stored in `db`); `plan`: what is taken
+    from an older entry (`_reuse_plan`)."""
     keys = entry_keys(suite, planner)
     key = keys[0]
     fingerprint = chunk_fingerprint(suite, planner)
     n_chunks = -(-suite.n // suite.chunk)
     done: dict[int, dict] = {}
+    if parts:
+        from vinadv.bench.parts import part_chunks  # noqa: PLC0415 (only with parts)
+
+        done = part_chunks(list(parts), fingerprint)
     store = None
     if db is not None:
         from vinadv.bench.chunkstore import check_stored, same_chunk, stored_chunks  # noqa: PLC0415 (only with --db)
@@ -427,11 +484,25 @@ def run_bench(
 
         store = Store.open(db)
         try:
-            done, key = stored_chunks(store, db, keys, suite, n_chunks, fingerprint, resume)
+            stored, key = stored_chunks(store, db, keys, suite, n_chunks, fingerprint, resume)
+            for chunk, result in stored.items():  # a chunk in a part and in the database: the same in both
+                if chunk in done:
+                    same_chunk(
+                        f"database {db}",
+                        chunk,
+                        done[chunk],
+                        result,
+                        fingerprint,
+                        "resume",
+                        "in a part",
+                        "the database's",
+                    )
+                done.setdefault(chunk, result)
         except InputError:
             store.close()
             raise
-    todo = [c for c in range(n_chunks) if c not in done]
+    wanted = range(n_chunks) if only is None else only
+    todo = [c for c in wanted if c not in done]
 
     def chunk_maps(chunk: int) -> int:
         """The maps of chunk `chunk` (the last one may be short)."""
@@ -450,7 +521,8 @@ def run_bench(
         from tqdm import tqdm  # noqa: PLC0415 (only with a progress bar)
 
         # counts maps (a chunk's at once as it completes), so that tqdm's time left reads in maps
-        bar = tqdm(desc=f"bench {suite.name}", unit="map", initial=sum(map(chunk_maps, done)), total=suite.n)
+        total = sum(map(chunk_maps, wanted))
+        bar = tqdm(desc=f"bench {suite.name}", unit="map", initial=total - sum(map(chunk_maps, todo)), total=total)
     try:
         for chunk, result in executor.map(task, todo, ordered=False):
             if store is not None:
@@ -458,7 +530,7 @@ def run_bench(
                     key, chunk, {**result, "fingerprint": fingerprint}, check=check_stored(suite, n_chunks)
                 )
                 if stored is not None:  # stored meanwhile (another run resuming this entry): the same, or refused
-                    result = same_chunk(db, chunk, stored, result, fingerprint)
+                    result = same_chunk(f"database {db}", chunk, stored, result, fingerprint)
             done[chunk] = result
             if bar is not None:
                 bar.update(chunk_maps(chunk))
@@ -467,10 +539,7 @@ def run_bench(
             bar.close()
         if store is not None:
             store.close()
-    entry = make_entry(suite, planner, done, checks, time.perf_counter() - t0, submission)
-    if plan is not None:  # how it was made: `time` is not part of what must reproduce
-        entry["time"]["reused"] = plan.reused_time()
-    return entry
+    return done
 
 
 def entry_json(entry: dict) -> str:

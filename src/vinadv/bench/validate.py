@@ -31,7 +31,8 @@ set on a map without a valid pair; a search planner's optional `per_map.clean.ex
 `per_map.clean.cost_ratio`, >= 0 where the clean path reaches the goal and null elsewhere). A figure's
 `effort_harmful` is a count and its `effort_harmful_rate` a rate. Its optional `computed_with` (`check_computed_with`:
 entries made before it have none) holds `results_format` and `strategies`, integers >= 1; an entry recomputed from
-another (`vinadv.bench.reuse`) has `time.reused`: `entry_sha256` (64 hex digits) and `attacks` (texts). Its optional
+another (`vinadv.bench.reuse`) has `time.reused`: `entry_sha256` (64 hex digits) and `attacks` (texts); one made from
+parts (`vinadv.bench.parts`) has `time.parts`: per part its file's `sha256` and its `chunks` (counts). Its optional
 `per_map.start_cells` holds, per attack of the entry, one cell per map: `[row, column]` (counts) or null.
 
 Strings are checked for type and length only: the renderers escape them (`vinadv.bench.leaderboard`).
@@ -254,6 +255,11 @@ def check_entry(entry) -> None:
             sha256(_get(reused, "entry_sha256", "time.reused"), "time.reused.entry_sha256")
             for i, key in enumerate(_list(_get(reused, "attacks", "time.reused"), "time.reused.attacks")):
                 text(key, f"time.reused.attacks[{i}]")
+        for i, part in enumerate(_list(t.get("parts") or [], "time.parts")):  # made from parts (`vinadv.bench.parts`)
+            part = _obj(part, f"time.parts[{i}]")
+            sha256(_get(part, "sha256", f"time.parts[{i}]"), f"time.parts[{i}].sha256")
+            for j, chunk in enumerate(_list(_get(part, "chunks", f"time.parts[{i}]"), f"time.parts[{i}].chunks")):
+                count(chunk, f"time.parts[{i}].chunks[{j}]")
     if e.get("machine") is not None:
         text(_obj(e["machine"], "machine").get("device"), "machine.device", null=True)
     if e["format"] == ENTRY_FORMAT_2:

@@ -57,7 +57,23 @@ def register(subparsers) -> None:
         help="recompute from this older entry of the suite and planner (.json, format 2): its attacks whose "
         "strategies did not change are taken from it, the others computed (docs/guide/bench.md)",
     )
-    run.add_argument("--out", help="write the entry to this file (.json; default: print it)")
+    run.add_argument("--out", help="write the entry (with --chunks, the part) to this file (.json; default: print it)")
+    parts = run.add_argument_group(
+        "an entry in parts (machines or sittings that share no database; docs/guide/bench.md)"
+    )
+    parts.add_argument(
+        "--chunks",
+        metavar="LIST",
+        help="compute only these chunks of maps (numbers and ranges: 0-4,9) and write them as a part of the entry, "
+        "not the entry",
+    )
+    parts.add_argument(
+        "--parts",
+        nargs="+",
+        default=[],
+        metavar="PART",
+        help="take the chunks of these parts (files written with --chunks); the chunks none of them holds are computed",
+    )
     share = run.add_argument_group("sharing (entries of the -v2 suites; docs/guide/submit.md)")
     share.add_argument("--display-name", metavar="TEXT", help="the name the leaderboard shows (default: the planner's)")
     share.add_argument(
@@ -145,7 +161,12 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     if args.out:  # before the suite is computed: writable, and not the database or a file the planner reads
         folder = args.data and Path(args.data).is_dir()
         data = sorted([*Path(args.data).glob("*.npz"), *Path(args.data).glob("*.map")]) if folder else args.data
-        inputs = {"--db": db_file(args.db) if args.db else None, "--data": data, **planner_inputs(args)}
+        inputs = {
+            "--db": db_file(args.db) if args.db else None,
+            "--data": data,
+            "--parts": args.parts,
+            **planner_inputs(args),
+        }
         check_output_path(args.out, inputs=inputs)
     device = planner_device(args)
     suite = config.frozen_suite
@@ -161,6 +182,8 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
             progress=shows_progress(args),
             device=device,
             reuse=reuse,
+            chunks=args.chunks,
+            parts=args.parts,
         )
     entry = result.to_dict()
     text = result.json()
@@ -171,6 +194,13 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     def report() -> None:
         if not args.out:
             print(text, end="")
+            return
+        if args.chunks is not None:
+            n_maps = sum(c["maps"] for c in entry["chunks"].values())
+            print(
+                f"{suite.name} on planner {entry['planner']['name']}: chunks {args.chunks} ({n_maps} maps) in "
+                f"{entry['wall_s']:.1f} s -> {args.out} (a part: `vinadv bench run --parts` makes the entry)"
+            )
             return
         worst = entry["worst_case"][0]
         flags = [name for name, f in entry["flags"].items() if f["raised"]]
