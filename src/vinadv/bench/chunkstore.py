@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 
-from vinadv.bench.suites import Suite
+from vinadv.bench.suites import UNRECORDED_REVISION, Suite
 from vinadv.errors import InputError
 
 
@@ -15,7 +15,7 @@ def stored_fingerprint(stored: dict | None, fingerprint: dict) -> dict:
     None) is results format 1 of its entry's suite (the suite is in the entry key), its provenance unknown; one
     stored before strategy revisions were recorded ran every strategy at revision 1."""
     stored = {**fingerprint, "format": 1} if stored is None else stored
-    return {"strategies": dict.fromkeys(fingerprint["strategies"], 1), **stored}
+    return {"strategies": dict.fromkeys(fingerprint["strategies"], UNRECORDED_REVISION), **stored}
 
 
 def _describe(fingerprint: dict, other: dict) -> str:

@@ -32,7 +32,7 @@ from pathlib import Path
 
 from vinadv.bench.outcomes import outcome
 from vinadv.bench.scoring import computed_with, entry_json, strategy_revisions
-from vinadv.bench.suites import ENTRY_FORMAT_2, Suite
+from vinadv.bench.suites import ENTRY_FORMAT_2, UNRECORDED_REVISION, Suite
 from vinadv.bench.validate import entry_problem
 from vinadv.errors import InputError
 from vinadv.planners.interface import Planner
@@ -46,7 +46,10 @@ def recorded_computation(entry: dict, suite: Suite) -> dict:
         return entry["computed_with"]
     records = [r for records in entry["per_map"]["attacks"].values() for r in records]
     efforts = bool(records) and all("effort" in r for r in records)
-    return {"results_format": 2 if efforts else 1, "strategies": dict.fromkeys(strategy_revisions(suite), 1)}
+    return {
+        "results_format": 2 if efforts else 1,
+        "strategies": dict.fromkeys(strategy_revisions(suite), UNRECORDED_REVISION),
+    }
 
 
 @dataclasses.dataclass(frozen=True)

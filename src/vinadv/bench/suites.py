@@ -45,6 +45,8 @@ SUITE_FORMAT = "vinadv.bench_suite/1"
 #: (per-map outcomes, budgets of at most k edits: `vinadv.bench.outcomes`)
 ENTRY_FORMAT = "vinadv.bench_entry/1"
 ENTRY_FORMAT_2 = "vinadv.bench_entry/2"
+#: the revision of every strategy of a chunk or an entry made before revisions were recorded (the first one)
+UNRECORDED_REVISION = 1
 #: every entry format this vinadv reads
 ENTRY_FORMATS = (ENTRY_FORMAT, ENTRY_FORMAT_2)
 
