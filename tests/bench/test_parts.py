@@ -145,6 +145,7 @@ def test_bad_chunks_and_parts_are_one_line(suite, planner, tmp_path, monkeypatch
     register(monkeypatch, suite)
     run = ["bench", "run", "--suite", suite.name, "--planner", "astar", "--quiet"]
     assert "--chunks" in _refused([*run, "--chunks", "3"], capsys)
+    assert "--paper: a part" in _refused([*run, "--chunks", "0", "--paper", "https://example.org"], capsys)
     part = run_part(suite, planner, [0])
     good = _write(tmp_path, "good.json", part)
     cases = {
