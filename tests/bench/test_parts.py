@@ -5,6 +5,7 @@ computed; a part of another suite, computation or result, or a bad chunk list, i
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -12,11 +13,14 @@ from tests.bench.two_maps import heldout_suite, register
 from vinadv.bench import scoring
 from vinadv.bench.parts import PART_FORMAT, Part, parse_chunks, part_chunks, part_json
 from vinadv.bench.scoring import chunk_fingerprint, deterministic_part, entry_json, run_bench, run_part
-from vinadv.bench.suites import AttackGroup
+from vinadv.bench.suites import AttackGroup, get_suite
 from vinadv.bench.validate import entry_problem
 from vinadv.cli import main
 from vinadv.errors import InputError
 from vinadv.planners.registry import load_planner
+
+#: the parts of entries in progress, committed until `--parts` joins them (docs/results/bench.md)
+COMMITTED_PARTS = Path(__file__).resolve().parents[2] / "docs" / "results" / "bench" / "parts"
 
 
 def parts_suite(name: str = "parts3"):
@@ -115,6 +119,7 @@ def test_a_part_takes_its_chunks_from_a_database_with_resume(suite, planner, tmp
     computed.clear()
     part = run_part(suite, planner, [1, 2], db=db, resume=True)
     assert computed == [2] and sorted(part["chunks"]) == ["1", "2"]
+    assert not any("fingerprint" in chunk for chunk in part["chunks"].values())
 
 
 def test_the_cli_computes_parts_and_joins_them(suite, whole, tmp_path, monkeypatch, capsys):
@@ -193,3 +198,15 @@ def test_a_chunk_in_two_parts_must_be_the_same(suite, planner, tmp_path):
         "than this part's \\(field 'clean'\\)",
     ):
         part_chunks([Part.read(p, suite) for p in (paths[0], paths[2])], fingerprint)
+
+
+@pytest.mark.parametrize("path", sorted(COMMITTED_PARTS.glob("*.json")), ids=lambda p: p.name)
+def test_the_committed_parts_are_parts_of_their_suites(path):
+    """Each committed part reads as a part of its suite (this vinadv's checksum, every chunk's schema), is named after
+    its suite, planner and chunks, and holds chunks computed with a fingerprint of this vinadv's results format."""
+    raw = json.loads(path.read_text(encoding="utf-8"))
+    suite = get_suite(raw["suite"]["name"])
+    part = Part.read(path, suite)
+    chunks = sorted(part.part["chunks"])
+    assert path.name.startswith(f"{suite.name}.{raw['planner']['name']}.chunks-{chunks[0]}-{chunks[-1]}")
+    assert raw["fingerprint"]["suite"] == suite.checksum and raw["fingerprint"]["format"] == scoring.CHUNK_FORMAT

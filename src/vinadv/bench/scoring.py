@@ -445,7 +445,8 @@ def run_part(
     plan = _reuse_plan(suite, planner, reuse)
     maps = suite_maps(suite, data)
     done = _chunks(suite, planner, maps, chunks, db, resume, progress, data, executor, planner_ref, plan, parts)
-    kept = {c: done[c] for c in chunks}
+    # a chunk read from the database carries its fingerprint: the part holds it once, for all of its chunks
+    kept = {c: {k: v for k, v in done[c].items() if k != "fingerprint"} for c in chunks}
     return make_part(suite, planner.spec(), chunk_fingerprint(suite, planner), kept, time.perf_counter() - t0)
 
 
