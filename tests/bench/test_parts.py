@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from tests.bench.two_maps import heldout_suite, register
-from vinadv.bench import scoring
+from vinadv.bench import job, scoring
 from vinadv.bench.parts import PART_FORMAT, Part, parse_chunks, part_chunks, part_json
 from vinadv.bench.scoring import chunk_fingerprint, deterministic_part, entry_json, run_bench, run_part
 from vinadv.bench.suites import AttackGroup, get_suite
@@ -151,6 +151,7 @@ def test_bad_chunks_and_parts_are_one_line(suite, planner, tmp_path, monkeypatch
     run = ["bench", "run", "--suite", suite.name, "--planner", "astar", "--quiet"]
     assert "--chunks" in _refused([*run, "--chunks", "3"], capsys)
     assert "--paper: a part" in _refused([*run, "--chunks", "0", "--paper", "https://example.org"], capsys)
+    assert "--author: a part" in _refused([*run, "--chunks", "0", "--author", "Ada"], capsys)
     part = run_part(suite, planner, [0])
     good = _write(tmp_path, "good.json", part)
     cases = {
@@ -210,3 +211,11 @@ def test_the_committed_parts_are_parts_of_their_suites(path):
     chunks = sorted(part.part["chunks"])
     assert path.name.startswith(f"{suite.name}.{raw['planner']['name']}.chunks-{chunks[0]}-{chunks[-1]}")
     assert raw["fingerprint"]["suite"] == suite.checksum and raw["fingerprint"]["format"] == scoring.CHUNK_FORMAT
+
+
+def test_a_part_refuses_submission_fields(suite, monkeypatch):
+    register(monkeypatch, suite)
+    config = job.BenchConfig(suite.name, "astar", authors=("Ada Lovelace",))
+    with pytest.raises(InputError, match="authors: a part holds no submission") as info:
+        job.run(config, chunks="0")
+    assert info.value.parameters == ("authors", "chunks", "parts")

@@ -83,7 +83,8 @@ def run(
     `reuse`: an older entry's file (or `vinadv.bench.reuse.ReusedEntry`, as read), whose attack groups that did not
     change are taken (`vinadv.bench.reuse`). `chunks`: only these chunks (a list, or a text such as "0-4,9":
     `vinadv.bench.parts.parse_chunks`), the result a part of the entry (`run_part`); `parts`: part files (or
-    `vinadv.bench.parts.Part`, as read) whose chunks are taken."""
+    `vinadv.bench.parts.Part`, as read) whose chunks are taken. A part holds no submission: InputError naming the
+    first of `config`'s submission fields given with `chunks`."""
     from vinadv.errors import InputError  # noqa: PLC0415 (light; beside the planners' import)
     from vinadv.planners.registry import PlannerRef, load_planner  # noqa: PLC0415 (loaded when a job runs)
 
@@ -100,6 +101,15 @@ def run(
         if chunks is not None:
             text = chunks if isinstance(chunks, str) else ",".join(map(str, chunks))
             chunks = parse_chunks(text, -(-suite.n // suite.chunk))
+            given = [name for name, value in config.submission.items() if value]
+            if given:  # what is shared is given where the entry is made from the parts
+                raise InputError(
+                    f"{given[0]}: a part holds no submission (chunks writes one); give it with parts, where the "
+                    "entry is made",
+                    given[0],
+                    "chunks",
+                    "parts",
+                )
         parts = [p if isinstance(p, Part) else Part.read(p, suite) for p in parts]
     # the planner runs under the suite's rule (a planner trained on other maps too: its entry's `other_rules` flag)
     cuts = suite.cuts_corners()

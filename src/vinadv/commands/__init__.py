@@ -203,7 +203,13 @@ def add_db_argument(parser, when: str = "") -> None:
 
 
 #: library parameters whose flag is not `--` plus the name with dashes
-FLAG_NAMES = {"n_starts": "--starts", "run_id": "--run", "harm_tol": "--harm-tolerance", "warmup_steps": "--warmup"}
+FLAG_NAMES = {
+    "n_starts": "--starts",
+    "run_id": "--run",
+    "harm_tol": "--harm-tolerance",
+    "warmup_steps": "--warmup",
+    "authors": "--author",
+}
 
 
 def flag(parameter: str) -> str:

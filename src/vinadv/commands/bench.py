@@ -158,13 +158,6 @@ def cmd_bench_run(args: argparse.Namespace) -> int:
     config = BenchConfig(**option_values(args, *names))  # an unknown suite, a bad link: one line
     if args.resume and args.db is None:
         raise InputError("--resume: only with --db")
-    if args.chunks is not None:  # a part holds chunks only: what is shared is given where the parts are joined
-        given = [f for f in ("display_name", "authors", "paper", "code", "external") if getattr(args, f)]
-        if given:
-            flag = "--author" if given[0] == "authors" else "--" + given[0].replace("_", "-")
-            raise InputError(
-                f"{flag}: a part (--chunks) holds no submission; give it where the parts are joined (--parts)"
-            )
     if args.out:  # before the suite is computed: writable, and not the database or a file the planner reads
         folder = args.data and Path(args.data).is_dir()
         data = sorted([*Path(args.data).glob("*.npz"), *Path(args.data).glob("*.map")]) if folder else args.data
