@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import sqlite3
 import subprocess
+import threading
 import uuid
 from pathlib import Path
 
@@ -192,3 +193,27 @@ def test_sqlite_created_file_uses_wal_and_large_pages(tmp_path):
     assert conn.execute("PRAGMA page_size").fetchone()[0] == 32768
     conn.close()
     assert os.path.getsize(path) % 32768 == 0
+
+
+def test_a_switch_to_wal_waits_for_another_connections_write_lock(tmp_path):
+    """A vinadv file in rollback-journal mode (another tool's setting) whose write lock another connection holds
+    while vinadv opens it: SQLite refuses the switch to WAL at once ("database is locked", without its busy
+    timeout), and the switch is tried again until the lock is let go, not raised. Two first uses of one new
+    database at once met this: one switching while the other held the schema lock (a CI failure)."""
+    path = tmp_path / "old-journal.db"
+    with Store.open(str(path)):
+        pass
+    other = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+    other.execute("PRAGMA journal_mode=DELETE")
+    other.execute("BEGIN IMMEDIATE")
+    released = threading.Timer(0.3, other.execute, args=("COMMIT",))
+    released.start()
+    try:
+        with Store.open(str(path)):
+            pass
+    finally:
+        released.join()
+        other.close()
+    conn = sqlite3.connect(path)
+    assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    conn.close()

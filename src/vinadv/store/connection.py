@@ -272,17 +272,19 @@ _WAL_WAIT_S = 30.0
 
 def switch_to_wal(conn: sa.Connection) -> None:
     """`PRAGMA journal_mode=WAL` on the SQLite file behind `conn`. The switch needs the file to itself, and SQLite
-    answers "database is locked" at once, without its busy timeout, while another connection reads it (a second
-    process opening a database the first is creating): tried again until `_WAL_WAIT_S` has passed."""
+    answers "database is locked" at once, without its busy timeout, while another connection holds its write lock
+    (a second process opening a database while the first creates its tables): tried again until `_WAL_WAIT_S` has
+    passed, then OutputError naming the database."""
+    # on the driver's connection: the engine's `handle_error` turns a lock into OutputError, not to be tried again
+    driver = conn.connection.driver_connection
     deadline = time.monotonic() + _WAL_WAIT_S
     while True:
         try:
-            conn.exec_driver_sql("PRAGMA journal_mode=WAL")
+            driver.execute("PRAGMA journal_mode=WAL").fetchall()
             return
-        except sa_exc.OperationalError as exc:
+        except sqlite3.OperationalError as exc:
             if "locked" not in str(exc) or time.monotonic() > deadline:
-                raise
-            conn.rollback()
+                raise OutputError(f"database {safe_url(conn.engine.url)}: {first_line(exc)}") from None
             time.sleep(0.02)
 
 
