@@ -204,13 +204,15 @@ def test_a_chunk_in_two_parts_must_be_the_same(suite, planner, tmp_path):
 @pytest.mark.parametrize("path", sorted(COMMITTED_PARTS.glob("*.json")), ids=lambda p: p.name)
 def test_the_committed_parts_are_parts_of_their_suites(path):
     """Each committed part reads as a part of its suite (this vinadv's checksum, every chunk's schema), is named after
-    its suite, planner and chunks, and holds chunks computed with a fingerprint of this vinadv's results format."""
+    its suite, planner and chunks, and holds chunks computed as this vinadv computes them for that planner (the
+    fingerprint: results format, 1 for a planner that reports no expansions, and strategy revisions)."""
     raw = json.loads(path.read_text(encoding="utf-8"))
     suite = get_suite(raw["suite"]["name"])
     part = Part.read(path, suite)
     chunks = sorted(part.part["chunks"])
     assert path.name.startswith(f"{suite.name}.{raw['planner']['name']}.chunks-{chunks[0]}-{chunks[-1]}")
-    assert raw["fingerprint"]["suite"] == suite.checksum and raw["fingerprint"]["format"] == scoring.CHUNK_FORMAT
+    planner = load_planner(raw["planner"]["name"], suite.size, moves=suite.movement())
+    assert raw["fingerprint"] == chunk_fingerprint(suite, planner)
 
 
 def test_a_part_refuses_submission_fields(suite, monkeypatch):
