@@ -28,8 +28,8 @@
 # 7. (ENTRY_SECONDS, default 570) issue 34's bench entry of the GPPN on vin28-v1 on cuda (vin28-v1.gppn.json): a
 #    call of its own, `STEPS=7`; commit the entry under docs/results/bench/ and refresh the leaderboard's index;
 # 8. (ENTRY_SECONDS each) the same for the MP learned planners on mpd32-v2 (`STEPS=8`, MPD_DIR the six MP files:
-#    copy them to the git-ignored .mpd/ and carry it; MPD_PLANNERS, default neural-astar-mpd5
-#    gppn-mpd32, one call each where the time allows one; MPD_SUITE, default mpd32-v2).
+#    copy them to the git-ignored .mpd/ and carry it; MPD_PLANNERS, default gppn-mpd32 (the one without a full
+#    entry), one call each where the time allows one; MPD_SUITE, default mpd32-v2).
 # STEPS picks some (default "1 2 3 4").
 #
 # A dry run on any machine (the GPU tests left out, small sizes):
@@ -139,7 +139,7 @@ fi
 if step 8; then
     # MPD_DIR: the six MP files, e.g. copied to the git-ignored .mpd/ and carried (run(carry=[".mpd"]));
     # MPD_PLANNERS: the MP learned planners without a full entry (one call each if ENTRY_SECONDS allows only one)
-    for planner in ${MPD_PLANNERS:-neural-astar-mpd5 gppn-mpd32}; do
+    for planner in ${MPD_PLANNERS:-gppn-mpd32}; do
         echo "== 8. issue 46's GPU entry: $planner on the full ${MPD_SUITE:-mpd32-v2} suite, on $DEVICE (hours on the 2-core CPU)"
         timeout "${ENTRY_SECONDS:-570}" "$PY" -m vinadv.cli bench run --suite "${MPD_SUITE:-mpd32-v2}" \
             --planner "$planner" --data "${MPD_DIR:-.mpd}" --device "$DEVICE" \
