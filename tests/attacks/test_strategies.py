@@ -205,8 +205,8 @@ class _Bar:
 
     made: list = []
 
-    def __init__(self, total=None, desc=None, unit=None):
-        self.total, self.desc, self.unit, self.updates = total, desc, unit, []
+    def __init__(self, total=None, desc=None, unit=None, leave=True):
+        self.total, self.desc, self.unit, self.leave, self.updates = total, desc, unit, leave, []
         _Bar.made.append(self)
 
     def update(self, n):

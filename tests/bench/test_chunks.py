@@ -18,7 +18,8 @@ from vinadv.bench.scoring import deterministic_part, entry_json, entry_key, run_
 from vinadv.bench.suites import Suite
 from vinadv.cli import main
 from vinadv.errors import InputError
-from vinadv.planners.registry import load_planner
+from vinadv.executor import LocalExecutor
+from vinadv.planners.registry import PlannerRef, load_planner
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +35,7 @@ def _sql(db_file, statement: str) -> None:
 
 
 def _no_compute(monkeypatch):
-    def computed(*args):
+    def computed(*args, **kw):
         raise AssertionError("a stored chunk was computed again")
 
     monkeypatch.setattr(scoring, "compute_chunk", computed)
@@ -160,27 +161,57 @@ def test_a_declared_planner_version_is_its_provenance(tmp_path):
     assert load_planner(f"{tmp_path / 'versioned.py'}:make", 28).provenance == {"version": "2.1"}
 
 
+class _Bar:
+    """A stand-in for tqdm that records what each bar was told (`made`)."""
+
+    made: list = []
+
+    def __init__(self, total=None, desc=None, unit=None, initial=0, leave=True):
+        self.desc, self.unit, self.initial, self.total, self.leave, self.updates = desc, unit, initial, total, leave, []
+        _Bar.made.append(self)
+
+    def update(self, n):
+        self.updates.append(n)
+
+    def close(self):
+        pass
+
+
 @pytest.mark.slow  # two bench runs of the two-map suite: about two seconds
 def test_the_progress_bar_counts_maps_the_stored_ones_done(tiny, tmp_path, monkeypatch):
-    """`--resume`'s bar starts at the maps of the stored chunks and moves by each computed chunk's maps."""
-    bars = []
-
-    class Bar:
-        def __init__(self, desc=None, unit=None, initial=0, total=None):
-            self.unit, self.initial, self.total, self.updates = unit, initial, total, []
-            bars.append(self)
-
-        def update(self, n):
-            self.updates.append(n)
-
-        def close(self):
-            pass
-
+    """`--resume`'s bar starts at the maps of the stored chunks and moves by each computed chunk's maps; under it the
+    computed chunk's attack counts that chunk's maps, its bar cleared when done."""
     planner = load_planner("optimal", 28)
     db = tmp_path / "b.db"
     run_bench(tiny, planner, db=str(db))
     _sql(db, "DELETE FROM bench_chunks WHERE chunk = 1")
-    monkeypatch.setattr(tqdm, "tqdm", Bar)
+    monkeypatch.setattr(tqdm, "tqdm", _Bar)
+    _Bar.made = []
     run_bench(tiny, planner, db=str(db), resume=True, progress=True)
-    (bar,) = bars
-    assert (bar.unit, bar.initial, bar.total, bar.updates) == ("map", 1, 2, [1])
+    run, attack = _Bar.made  # the random attack of the one chunk computed
+    assert (run.desc, run.unit, run.initial, run.total, run.updates) == ("bench tiny-chunks", "map", 1, 2, [1])
+    assert (attack.desc, attack.unit, attack.total, sum(attack.updates), attack.leave) == (
+        "attack random",
+        "map",
+        1,
+        1,
+        None,
+    )
+
+
+class _RemoteHere(LocalExecutor):
+    """A remote executor that runs its tasks in this process: what a remote worker would be told."""
+
+    remote = True
+
+
+def test_a_remote_chunk_shows_no_bar_of_its_attacks(tiny, monkeypatch):
+    """A chunk run on a remote worker draws no bar there: only the run's bar, counting the chunks' maps."""
+    planner = load_planner("optimal", 28)
+    monkeypatch.setattr(tqdm, "tqdm", _Bar)
+    _Bar.made = []
+    run_bench(
+        tiny, planner, progress=True, executor=_RemoteHere(), planner_ref=PlannerRef.of(planner, "optimal", None, True)
+    )
+    (run,) = _Bar.made
+    assert (run.desc, run.total, run.updates) == ("bench tiny-chunks", 2, [1, 1])

@@ -84,8 +84,8 @@ def _stored_meanwhile(monkeypatch, db: str, change) -> list[dict]:
     in, once stored."""
     original, kept = scoring.compute_chunk, []
 
-    def compute(suite, planner, maps, chunk):
-        result = original(suite, planner, maps, chunk)
+    def compute(suite, planner, maps, chunk, **kw):
+        result = original(suite, planner, maps, chunk, **kw)
         if chunk == 0:
             other = change(json.loads(json.dumps({**result, "fingerprint": scoring.chunk_fingerprint(suite, planner)})))
             with Store.open(db) as store:

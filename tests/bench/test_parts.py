@@ -50,9 +50,9 @@ def computed(monkeypatch):
     ran = []
     compute = scoring.compute_chunk
 
-    def spy(suite, planner, maps, chunk, *args):
+    def spy(suite, planner, maps, chunk, *args, **kw):
         ran.append(chunk)
-        return compute(suite, planner, maps, chunk, *args)
+        return compute(suite, planner, maps, chunk, *args, **kw)
 
     monkeypatch.setattr(scoring, "compute_chunk", spy)
     return ran

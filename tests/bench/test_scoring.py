@@ -76,11 +76,11 @@ def test_resume_after_a_crash_gives_the_same_entry(planner, tmp_path, monkeypatc
     real = scoring.compute_chunk
     calls = []
 
-    def crash_on_third(*args):
+    def crash_on_third(*args, **kw):
         calls.append(args[-1])
         if len(calls) == 3:
             raise KeyboardInterrupt  # killed during the third chunk
-        return real(*args)
+        return real(*args, **kw)
 
     monkeypatch.setattr(scoring, "compute_chunk", crash_on_third)
     with pytest.raises(KeyboardInterrupt):
@@ -88,7 +88,7 @@ def test_resume_after_a_crash_gives_the_same_entry(planner, tmp_path, monkeypatc
     with pytest.raises(InputError, match="pass --resume"):
         run_bench(suite, planner, db=db)
     calls.clear()
-    monkeypatch.setattr(scoring, "compute_chunk", lambda *a: calls.append(a[-1]) or real(*a))
+    monkeypatch.setattr(scoring, "compute_chunk", lambda *a, **kw: calls.append(a[-1]) or real(*a, **kw))
     resumed = run_bench(suite, planner, db=db, resume=True)
     assert calls == [2]  # only the chunk not stored
     assert entry_json(deterministic_part(resumed)) == entry_json(deterministic_part(whole))
@@ -165,7 +165,7 @@ def test_bench_run_resumes_the_chunks_of_old_and_new_names_of_one_planner(tiny28
     first = json.loads((tmp_path / "old.json").read_text())
     assert first["planner"]["name"] == "vin-robust"
 
-    def computed(*args):
+    def computed(*args, **kw):
         raise AssertionError("a stored chunk was computed again")
 
     monkeypatch.setattr(scoring, "compute_chunk", computed)

@@ -349,7 +349,8 @@ class Attack:
         if progress:
             from tqdm import tqdm
 
-            bar = tqdm(total=n_maps, desc=progress, unit="map")
+            # leave=None: kept on its own, cleared under another bar (a bench run's, at position 0)
+            bar = tqdm(total=n_maps, desc=progress, unit="map", leave=None)
         parts = []
         try:
             for m0, m1 in zip(first_maps[:-1], first_maps[1:]):

@@ -207,7 +207,13 @@ def _clean_part(planner: Planner, sub: MapSet) -> dict:
 
 
 def compute_chunk(
-    suite: Suite, planner: Planner, maps: MapSet, chunk: int, compute=None, reused: dict | None = None
+    suite: Suite,
+    planner: Planner,
+    maps: MapSet,
+    chunk: int,
+    compute=None,
+    reused: dict | None = None,
+    progress: bool = False,
 ) -> dict:
     """Chunk `chunk` of the suite (maps `chunk * suite.chunk ..`): the clean planner and every attack, per map (the
     record `vinadv.records.BENCH_CHUNK`, its version included), and `start_cells`: the one-cell cells each start of a
@@ -215,7 +221,8 @@ def compute_chunk(
     or where some start's cells were neither computed nor given). `compute`: {group index: the group's strategies to
     compute} (None: all of every group); `reused`: the chunk's parts taken from an entry instead
     (`vinadv.bench.reuse`: its `clean`, where given, the records of every attack not computed and, where given,
-    `start_cells`)."""
+    `start_cells`). `progress`: a bar per attack counting the chunk's maps, each cleared when done (under the
+    run's bar)."""
     t0 = time.perf_counter()
     lo = chunk * suite.chunk
     sub = chunk_maps(maps, lo, min(len(maps), lo + suite.chunk))
@@ -238,6 +245,7 @@ def compute_chunk(
             edit=group.edit,
             first_map=lo,
             start=start,
+            progress=progress,
             **attack_settings(suite),
         )
         keys = dict(zip(group.strategies, group.keys()))
@@ -376,11 +384,11 @@ class SuiteMaps:
         return suite_maps(self.suite, self.data)
 
 
-def _chunk_task(suite: Suite, planner, maps, reuse, chunk: int) -> tuple[int, dict]:
+def _chunk_task(suite: Suite, planner, maps, reuse, progress: bool, chunk: int) -> tuple[int, dict]:
     """The task of `run_bench`: `(chunk, compute_chunk(...))`, the planner and maps given or by reference; `reuse`:
-    None, or what is taken from an older entry (`vinadv.bench.reuse.ReusePlan`)."""
+    None, or what is taken from an older entry (`vinadv.bench.reuse.ReusePlan`); `progress`: `compute_chunk`'s."""
     args = () if reuse is None else (reuse.computed, reuse.chunk_part(suite, chunk))
-    return chunk, compute_chunk(suite, resolve(planner), resolve(maps), chunk, *args)
+    return chunk, compute_chunk(suite, resolve(planner), resolve(maps), chunk, *args, progress=progress)
 
 
 def run_bench(
@@ -516,12 +524,15 @@ def _chunks(suite, planner, maps, only, db, resume, progress, data, executor, pl
         shipped(executor, planner, lambda: planner_ref),
         shipped(executor, maps, lambda: SuiteMaps(suite, suite.checksum, absolute)),
         plan,
+        # a chunk's attacks show their maps where the chunk runs here: a remote worker's bar would be seen by no one
+        bool(progress) and not executor.remote,
     )
     bar = None
     if progress:
         from tqdm import tqdm  # noqa: PLC0415 (only with a progress bar)
 
-        # counts maps (a chunk's at once as it completes), so that tqdm's time left reads in maps
+        # counts maps (a chunk's at once as it completes), so that tqdm's time left reads in maps; the bars of the
+        # chunk's attacks show the maps in between
         total = sum(map(chunk_maps, wanted))
         bar = tqdm(desc=f"bench {suite.name}", unit="map", initial=total - sum(map(chunk_maps, todo)), total=total)
     try:

@@ -173,7 +173,7 @@ def verify_entry(
 
             bar = tqdm(total=len(picked), desc=f"verify {suite.name}", unit="chunk")
         for chunk in picked:
-            result = compute_chunk(suite, planner, maps, chunk)
+            result = compute_chunk(suite, planner, maps, chunk, progress=progress)
             again = chunk_per_map(suite, [result])
             source = f"the recomputed chunk {chunk}"
             stored = _chunk_slice(entry["per_map"], suite, chunk)
