@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
-import tqdm
 
 from tests.grid.oracle import reachable
+from tests.progress_bars import recorded_bars
 from vinadv.attacks import strategies
 from vinadv.attacks.pairs import PairSet
 from vinadv.attacks.strategies import STRATEGIES, make_attack, within_distance
@@ -200,30 +200,13 @@ def test_within_distance_is_the_chebyshev_neighbourhood(radius):
         assert got[b, r, c] == want, (b, r, c)
 
 
-class _Bar:
-    """A stand-in for tqdm that records what the bar was told."""
-
-    made: list = []
-
-    def __init__(self, total=None, desc=None, unit=None, leave=True):
-        self.total, self.desc, self.unit, self.leave, self.updates = total, desc, unit, leave, []
-        _Bar.made.append(self)
-
-    def update(self, n):
-        self.updates.append(n)
-
-    def close(self):
-        pass
-
-
 def test_the_progress_bar_counts_maps_chunk_by_chunk_and_the_chunks_change_no_pair(model, maps, monkeypatch):
     args = (maps.obstacles[:5], maps.starts[:5, 0], maps.goals[:5], model)
     whole = make_attack("exhaustive").attack(*args).pairs
-    monkeypatch.setattr(tqdm, "tqdm", _Bar)
+    bars = recorded_bars(monkeypatch)
     monkeypatch.setattr(strategies, "EVAL_CHUNK", 1)  # a chunk per map
-    _Bar.made = []
     per_map = make_attack("exhaustive").attack(*args, progress=True).pairs
-    (bar,) = _Bar.made
+    (bar,) = bars
     assert (bar.total, bar.unit, bar.updates) == (5, "map", [1] * 5)
     for name in ("map_index", "added", "obstacles_a", "term_a"):
         np.testing.assert_array_equal(getattr(per_map, name), getattr(whole, name))

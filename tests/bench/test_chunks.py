@@ -9,9 +9,9 @@ import json
 
 import pytest
 import sqlalchemy as sa
-import tqdm
 
 from tests.bench.two_maps import two_map_suite
+from tests.progress_bars import recorded_bars
 from vinadv.attacks.strategies import STRATEGIES
 from vinadv.bench import scoring, suites
 from vinadv.bench.scoring import deterministic_part, entry_json, entry_key, run_bench
@@ -161,22 +161,6 @@ def test_a_declared_planner_version_is_its_provenance(tmp_path):
     assert load_planner(f"{tmp_path / 'versioned.py'}:make", 28).provenance == {"version": "2.1"}
 
 
-class _Bar:
-    """A stand-in for tqdm that records what each bar was told (`made`)."""
-
-    made: list = []
-
-    def __init__(self, total=None, desc=None, unit=None, initial=0, leave=True):
-        self.desc, self.unit, self.initial, self.total, self.leave, self.updates = desc, unit, initial, total, leave, []
-        _Bar.made.append(self)
-
-    def update(self, n):
-        self.updates.append(n)
-
-    def close(self):
-        pass
-
-
 @pytest.mark.slow  # two bench runs of the two-map suite: about two seconds
 def test_the_progress_bar_counts_maps_the_stored_ones_done(tiny, tmp_path, monkeypatch):
     """`--resume`'s bar starts at the maps of the stored chunks and moves by each computed chunk's maps; under it the
@@ -185,10 +169,9 @@ def test_the_progress_bar_counts_maps_the_stored_ones_done(tiny, tmp_path, monke
     db = tmp_path / "b.db"
     run_bench(tiny, planner, db=str(db))
     _sql(db, "DELETE FROM bench_chunks WHERE chunk = 1")
-    monkeypatch.setattr(tqdm, "tqdm", _Bar)
-    _Bar.made = []
+    bars = recorded_bars(monkeypatch)
     run_bench(tiny, planner, db=str(db), resume=True, progress=True)
-    run, attack = _Bar.made  # the random attack of the one chunk computed
+    run, attack = bars  # the random attack of the one chunk computed
     assert (run.desc, run.unit, run.initial, run.total, run.updates) == ("bench tiny-chunks", "map", 1, 2, [1])
     assert (attack.desc, attack.unit, attack.total, sum(attack.updates), attack.leave) == (
         "attack random",
@@ -208,10 +191,9 @@ class _RemoteHere(LocalExecutor):
 def test_a_remote_chunk_shows_no_bar_of_its_attacks(tiny, monkeypatch):
     """A chunk run on a remote worker draws no bar there: only the run's bar, counting the chunks' maps."""
     planner = load_planner("optimal", 28)
-    monkeypatch.setattr(tqdm, "tqdm", _Bar)
-    _Bar.made = []
+    bars = recorded_bars(monkeypatch)
     run_bench(
         tiny, planner, progress=True, executor=_RemoteHere(), planner_ref=PlannerRef.of(planner, "optimal", None, True)
     )
-    (run,) = _Bar.made
+    (run,) = bars
     assert (run.desc, run.total, run.updates) == ("bench tiny-chunks", 2, [1, 1])
